@@ -1,0 +1,129 @@
+// sflsh motion list | export
+#include "commands.hpp"
+
+#include <sflsh/body/motion.hpp>
+#include <sflsh/core/error.hpp>
+#include <sflsh/core/log.hpp>
+#include <sflsh/core/progress.hpp>
+#include <sflsh/core/run_folder.hpp>
+#include <sflsh/core/summary.hpp>
+#include <sflsh/core/vtk_io.hpp>
+
+#include <chrono>
+#include <iostream>
+
+namespace sflsh::app {
+
+namespace {
+
+struct ExportOptions {
+  SubjectOptions subject;
+  std::string motion;
+  int frames = 0;
+  double fps = 60.0;
+  std::string out;
+};
+
+Eigen::MatrixXd argmax_weights(const body::BodyModel& model) {
+  Eigen::MatrixXd labels(model.num_vertices(), 1);
+  for (Eigen::Index i = 0; i < model.num_vertices(); ++i) {
+    Eigen::Index k = 0;
+    model.weights.row(i).maxCoeff(&k);
+    labels(i, 0) = static_cast<double>(k);
+  }
+  return labels;
+}
+
+void run_export(const ExportOptions& opt, const Invocation& invocation) {
+  const auto t0 = std::chrono::steady_clock::now();
+  require(opt.fps > 0.0, "--fps must be positive, got {}", opt.fps);
+  require(opt.frames >= 0, "--frames must be non-negative, got {}", opt.frames);
+  const body::BodyModel model = load_selected_body(opt.subject);
+  std::string subject_label;
+  const body::Betas beta = selected_betas(opt.subject, subject_label, "motion export");
+  const body::Motion motion = body::load_motion(opt.motion, opt.fps, opt.frames);
+  motion.validate();
+
+  const body::Poser poser(model, beta);
+  const Eigen::MatrixXd labels = argmax_weights(model);
+  vtk::Cells faces = model.faces;
+
+  RunFolder run(opt.out);
+  vtk::PvdSeries series(run.stage("body.pvd"));
+  Progress progress("posing frames", motion.num_frames());
+  body::RowMatrixX3d previous;
+  for (std::size_t t = 0; t < motion.num_frames(); ++t) {
+    body::RowMatrixX3d posed = poser.pose(motion.poses[t], motion.trans[t]);
+    posed = (posed * motion.world_from_body.transpose()).eval();
+    require(posed.allFinite(), "frame {}: posed body has non-finite coordinates", t);
+    vtk::Fields fields;
+    fields.point_data.push_back({"displacement", posed - poser.shaped(), false});
+    Eigen::MatrixXd velocity = Eigen::MatrixXd::Zero(posed.rows(), 3);
+    if (t > 0) velocity = (posed - previous) * motion.fps;
+    fields.point_data.push_back({"velocity", velocity, false});
+    fields.point_data.push_back({"skin_weights_argmax", labels, true});
+    fields.field_data.push_back({"TimeValue", Eigen::MatrixXd::Constant(1, 1, motion.time(t)), false});
+    const std::string name = fmt::format("body_{:06d}.vtp", t);
+    vtk::write_surface(run.stage(name), posed, faces, fields);
+    series.add(motion.time(t), name);
+    previous = std::move(posed);
+    progress.advance();
+  }
+  progress.finish();
+  series.write();
+
+  nlohmann::json summary = summary_header("motion export", invocation.argc, invocation.argv);
+  summary["body"] = opt.subject.body_path.empty() ? "open_body" : opt.subject.body_path;
+  summary["subject"] = subject_label;
+  summary["beta"] = std::vector<double>(beta.data(), beta.data() + beta.size());
+  summary["motion"] = {{"name", motion.name},
+                       {"source", motion.source},
+                       {"fps", motion.fps},
+                       {"frames", motion.num_frames()},
+                       {"duration_s", motion.duration()}};
+  summary["vertices"] = model.num_vertices();
+  summary["faces"] = model.num_faces();
+  summary["series"] = "body.pvd";
+  summary["frame_files"] = fmt::format("body_000000.vtp … body_{:06d}.vtp", motion.num_frames() - 1);
+  summary["point_data"] = {"displacement", "velocity", "skin_weights_argmax"};
+  summary["wall_time_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  write_json(run.stage("summary.json"), summary);
+  run.commit();
+  logger()->info("wrote {} frames of '{}' for {} to {}/body.pvd", motion.num_frames(), motion.name, subject_label,
+                 opt.out);
+}
+
+}  // namespace
+
+void register_motion_commands(CLI::App& app, const Invocation& invocation) {
+  CLI::App* motion = app.add_subcommand("motion", "Motions: procedural DYNA-like motions and AMASS files");
+  motion->require_subcommand(1);
+
+  CLI::App* list = motion->add_subcommand("list", "List the procedural motions");
+  auto json = std::make_shared<bool>(false);
+  list->add_flag("--json", *json, "Print as JSON");
+  list->callback([json] {
+    if (*json) {
+      nlohmann::json out = nlohmann::json::array();
+      for (const std::string& name : body::procedural_motion_names())
+        out.push_back({{"name", name}, {"description", body::procedural_motion_description(name)}});
+      std::cout << out.dump(2) << "\n";
+      return;
+    }
+    for (const std::string& name : body::procedural_motion_names())
+      std::cout << fmt::format("{:<18} {}\n", name, body::procedural_motion_description(name));
+  });
+
+  auto opt = std::make_shared<ExportOptions>();
+  CLI::App* exp = motion->add_subcommand(
+      "export", "Pose a body along a motion and write a ParaView series (one .vtp per frame + body.pvd)");
+  add_body_option(*exp, opt->subject);
+  exp->add_option("--motion", opt->motion, "Procedural motion name (see `motion list`) or an AMASS .npz")->required();
+  add_subject_options(*exp, opt->subject);
+  exp->add_option("--frames", opt->frames, "Number of frames (default: the motion's own length)");
+  exp->add_option("--fps", opt->fps, "Frame rate of the output [1/s]")->capture_default_str();
+  exp->add_option("--out", opt->out, "Output folder")->required();
+  exp->callback([opt, invocation] { run_export(*opt, invocation); });
+}
+
+}  // namespace sflsh::app

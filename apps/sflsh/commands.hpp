@@ -1,0 +1,38 @@
+#pragma once
+// The sflsh command-line interface: each command group registers its subcommands on the app.
+#include <sflsh/body/body_model.hpp>
+#include <sflsh/body/skinning.hpp>
+
+#include <CLI/CLI.hpp>
+
+#include <functional>
+#include <optional>
+#include <string>
+
+namespace sflsh::app {
+
+/// argc/argv of the process, for summary.json.
+struct Invocation {
+  int argc = 0;
+  const char* const* argv = nullptr;
+};
+
+void register_body_commands(CLI::App& app, const Invocation& invocation);
+void register_motion_commands(CLI::App& app, const Invocation& invocation);
+
+/// Options that choose a body model and a subject: --body PATH, --subject NAME | --betas "…".
+struct SubjectOptions {
+  std::string body_path;   ///< empty: the open body
+  std::string subject;
+  std::string betas;
+};
+void add_body_option(CLI::App& cmd, SubjectOptions& options);
+/// Adds --subject and --betas (mutually exclusive).
+void add_subject_options(CLI::App& cmd, SubjectOptions& options);
+
+body::BodyModel load_selected_body(const SubjectOptions& options);
+/// The β of --subject or --betas; `label` receives a name for summaries. When neither is given:
+/// an error naming `required_by` if it is not null, else β = 0.
+body::Betas selected_betas(const SubjectOptions& options, std::string& label, const char* required_by = nullptr);
+
+}  // namespace sflsh::app

@@ -1,0 +1,54 @@
+#pragma once
+// Motions: sequences of SMPL poses θ(t) and root translations at a fixed frame rate.
+// Procedural versions of the five DYNA motion kinds (DESIGN.md §2) and AMASS .npz files.
+#include <sflsh/body/skinning.hpp>
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace sflsh::body {
+
+struct Motion {
+  std::string name;
+  std::string source;          ///< "procedural" or the file path it was read from
+  double fps = 60.0;           ///< frames per second of `poses` / `trans`
+  std::vector<Pose> poses;     ///< θ per frame (72 axis-angle values)
+  std::vector<Eigen::Vector3d> trans;  ///< root translation per frame [m], in the body's frame
+  /// Rotation applied to posed positions to bring them into the world frame (Y up). Identity for
+  /// procedural motions; AMASS data is Z-up, so loading it sets a −90° rotation about X.
+  Eigen::Matrix3d world_from_body = Eigen::Matrix3d::Identity();
+
+  std::size_t num_frames() const { return poses.size(); }
+  double duration() const { return num_frames() > 1 ? static_cast<double>(num_frames() - 1) / fps : 0.0; }
+  double time(std::size_t frame) const { return static_cast<double>(frame) / fps; }
+  /// Throws sflsh::Error when sizes disagree, fps is not positive, or a value is not finite.
+  void validate() const;
+};
+
+/// The procedural motion kinds, in DYNA order: one_leg_jump, running_on_spot, shake_hips
+/// (training) and jiggle_on_toes, shake_shoulders (testing).
+const std::vector<std::string>& procedural_motion_names();
+/// One-line description of a procedural motion (for `sflsh motion list`).
+std::string procedural_motion_description(const std::string& name);
+
+/// Generates a procedural motion at `fps`. frames ≤ 0 selects the motion's default length.
+/// Throws sflsh::Error for an unknown name (listing the known ones).
+Motion make_procedural_motion(const std::string& name, double fps = 60.0, int frames = 0);
+
+/// Reads an AMASS .npz (poses T×156 or T×72, trans T×3, mocap_framerate or mocap_frame_rate)
+/// and maps it onto SMPL's 24 joints (SMPL-H body joints 0..21; SMPL hand joints 22, 23 get zero).
+/// The result is resampled to `fps` (quaternion slerp per joint, linear translation); a file whose
+/// rate equals `fps` is used frame for frame. Errors name the file and the key.
+Motion load_amass(const std::filesystem::path& path, double fps = 60.0);
+
+/// Writes a motion in AMASS layout (poses T×72, trans T×3, mocap_framerate, gender) atomically.
+void save_amass(const std::filesystem::path& path, const Motion& motion);
+
+/// Resamples a motion to a new frame rate (slerp per joint, linear translation).
+Motion resample(const Motion& motion, double fps);
+
+/// Loads a motion by name (procedural) or by path (a .npz file).
+Motion load_motion(const std::string& name_or_path, double fps = 60.0, int frames = 0);
+
+}  // namespace sflsh::body

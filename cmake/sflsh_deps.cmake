@@ -1,0 +1,42 @@
+# Every dependency comes from Debian 12 packages (scripts/setup.sh); nothing is downloaded.
+# Versions pinned by what bookworm ships: PETSc 3.18, SUNDIALS 6.4, CGAL 5.5, gmsh 4.8, VTK 9.1, HDF5 1.10.
+if(TARGET sflsh::deps_done)
+  return()
+endif()
+
+# MPI first: PETSc.pc carries no MPI include path and SUNDIALS' targets reference MPI::MPI_C.
+find_package(MPI REQUIRED COMPONENTS C CXX)
+find_package(Eigen3 3.3 REQUIRED NO_MODULE)
+find_package(PkgConfig REQUIRED)
+# Pin the real-double 32-bit-index PETSc build (the .pc is an alternatives link).
+set(ENV{PKG_CONFIG_PATH} "/usr/lib/petscdir/petsc3.18/x86_64-linux-gnu-real/lib/pkgconfig:$ENV{PKG_CONFIG_PATH}")
+pkg_check_modules(PETSC REQUIRED IMPORTED_TARGET PETSc)
+find_package(SUNDIALS 6 REQUIRED CONFIG)
+set(CGAL_DO_NOT_WARN_ABOUT_CMAKE_BUILD_TYPE TRUE)
+find_package(CGAL REQUIRED)
+
+find_path(GMSH_INCLUDE_DIR gmsh.h REQUIRED)
+find_library(GMSH_LIBRARY NAMES gmsh REQUIRED)
+if(NOT TARGET gmsh::gmsh)
+  add_library(gmsh::gmsh UNKNOWN IMPORTED)
+  set_target_properties(gmsh::gmsh PROPERTIES
+    IMPORTED_LOCATION "${GMSH_LIBRARY}" INTERFACE_INCLUDE_DIRECTORIES "${GMSH_INCLUDE_DIR}")
+endif()
+
+find_package(VTK 9 REQUIRED COMPONENTS
+  CommonCore CommonDataModel CommonExecutionModel IOXML IOLegacy FiltersGeometry
+  RenderingCore RenderingOpenGL2 InteractionStyle RenderingFreeType IOImage)
+find_package(HDF5 REQUIRED COMPONENTS C CXX)   # serial flavour: /usr/include/hdf5/serial
+
+find_package(CLI11 2 REQUIRED CONFIG)
+find_package(nlohmann_json 3.11 REQUIRED CONFIG)
+find_package(tomlplusplus 3 REQUIRED CONFIG)
+find_package(fmt 9 REQUIRED CONFIG)
+find_package(spdlog 1.10 REQUIRED CONFIG)
+pkg_check_modules(LIBZIP REQUIRED IMPORTED_TARGET libzip)  # libzip's CMake config is broken on bookworm
+find_package(ZLIB REQUIRED)
+find_package(TBB REQUIRED CONFIG)
+find_package(OpenMP REQUIRED COMPONENTS CXX)
+
+add_library(sflsh_deps_done INTERFACE)
+add_library(sflsh::deps_done ALIAS sflsh_deps_done)

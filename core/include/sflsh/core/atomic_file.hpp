@@ -1,0 +1,25 @@
+#pragma once
+// Atomic output: every file the project writes goes to "<path>.tmp-<pid>-<n>" first and is renamed
+// onto <path> only when complete, so a failed run never leaves a partial or corrupted file.
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <string_view>
+
+namespace sflsh {
+
+/// A temporary sibling path of `target`, unique within this process.
+std::filesystem::path temporary_sibling(const std::filesystem::path& target);
+
+/// Calls write(tmp) with a temporary sibling path, then renames it onto `target`.
+/// If write throws, the temporary is removed and the exception propagates; `target` is untouched.
+void write_atomically(const std::filesystem::path& target,
+                      const std::function<void(const std::filesystem::path& tmp)>& write);
+
+/// Writes `contents` to `target` atomically.
+void write_text_atomically(const std::filesystem::path& target, std::string_view contents);
+
+/// Creates `dir` (and parents); throws sflsh::Error naming the path when it is not a writable directory.
+void ensure_directory(const std::filesystem::path& dir);
+
+}  // namespace sflsh

@@ -1,0 +1,32 @@
+#pragma once
+// Offscreen pictures of triangle surfaces with VTK (PNG). Debian's VTK renders through X, so on a
+// machine without a display run the command under `xvfb-run -a` (scripts/render_subjects.sh does).
+#include <sflsh/core/vtk_io.hpp>
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace sflsh::render {
+
+struct Surface {
+  vtk::Points points;
+  vtk::Cells triangles;
+  std::optional<Eigen::VectorXd> scalars;  ///< per-point values to colour by (else a skin tone)
+  std::array<double, 3> color = {0.87, 0.72, 0.62};
+  Eigen::Vector3d offset = Eigen::Vector3d::Zero();  ///< translation applied when drawing (for line-ups)
+};
+
+struct View {
+  std::string name = "front";   ///< front (+Z toward the camera), side (from +X), back, three_quarter, top
+  int width = 800;
+  int height = 1000;
+  std::string title;            ///< drawn in the top-left corner when not empty
+  std::optional<std::pair<double, double>> scalar_range;
+};
+
+/// Renders the surfaces into one PNG (atomic write). Throws sflsh::Error when no X display is available.
+void render_png(const std::filesystem::path& path, const std::vector<Surface>& surfaces, const View& view);
+
+}  // namespace sflsh::render

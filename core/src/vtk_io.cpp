@@ -1,0 +1,171 @@
+#include <sflsh/core/atomic_file.hpp>
+#include <sflsh/core/error.hpp>
+#include <sflsh/core/vtk_io.hpp>
+
+#include <vtkCellArray.h>
+#include <vtkCellData.h>
+#include <vtkDataArray.h>
+#include <vtkDoubleArray.h>
+#include <vtkFieldData.h>
+#include <vtkIntArray.h>
+#include <vtkNew.h>
+#include <vtkPointData.h>
+#include <vtkPointSet.h>
+#include <vtkPoints.h>
+#include <vtkPolyData.h>
+#include <vtkSmartPointer.h>
+#include <vtkUnstructuredGrid.h>
+#include <vtkXMLPolyDataReader.h>
+#include <vtkXMLPolyDataWriter.h>
+#include <vtkXMLUnstructuredGridReader.h>
+#include <vtkXMLUnstructuredGridWriter.h>
+#include <vtkZLibDataCompressor.h>
+
+#include <cmath>
+#include <sstream>
+
+namespace sflsh::vtk {
+
+namespace {
+
+vtkSmartPointer<vtkPoints> make_points(const Eigen::Ref<const Points>& points) {
+  require(points.allFinite(), "refusing to write non-finite point coordinates");
+  auto out = vtkSmartPointer<vtkPoints>::New();
+  out->SetDataTypeToDouble();
+  out->SetNumberOfPoints(points.rows());
+  for (Eigen::Index i = 0; i < points.rows(); ++i) out->SetPoint(i, points(i, 0), points(i, 1), points(i, 2));
+  return out;
+}
+
+vtkSmartPointer<vtkDataArray> make_array(const Field& field, Eigen::Index expected_rows, const char* where) {
+  require(field.values.rows() == expected_rows, "{} array '{}' has {} rows, expected {}", where, field.name,
+          field.values.rows(), expected_rows);
+  require(field.values.allFinite(), "{} array '{}' holds non-finite values", where, field.name);
+  vtkSmartPointer<vtkDataArray> array;
+  if (field.integer) array = vtkSmartPointer<vtkIntArray>::New();
+  else array = vtkSmartPointer<vtkDoubleArray>::New();
+  array->SetName(field.name.c_str());
+  array->SetNumberOfComponents(static_cast<int>(field.values.cols()));
+  array->SetNumberOfTuples(field.values.rows());
+  for (Eigen::Index r = 0; r < field.values.rows(); ++r)
+    for (Eigen::Index c = 0; c < field.values.cols(); ++c)
+      array->SetComponent(r, static_cast<int>(c), field.values(r, c));
+  return array;
+}
+
+vtkSmartPointer<vtkCellArray> make_cells(const Eigen::Ref<const Cells>& cells, Eigen::Index num_points) {
+  auto out = vtkSmartPointer<vtkCellArray>::New();
+  if (cells.rows() > 0) {
+    require(cells.minCoeff() >= 0 && cells.maxCoeff() < num_points, "cell indexes point {}..{}, expected 0..{}",
+            cells.minCoeff(), cells.maxCoeff(), num_points - 1);
+  }
+  std::vector<vtkIdType> ids(static_cast<std::size_t>(cells.cols()));
+  for (Eigen::Index r = 0; r < cells.rows(); ++r) {
+    for (Eigen::Index c = 0; c < cells.cols(); ++c) ids[static_cast<std::size_t>(c)] = cells(r, c);
+    out->InsertNextCell(static_cast<vtkIdType>(ids.size()), ids.data());
+  }
+  return out;
+}
+
+void attach_fields(vtkDataSet* data, const Fields& fields, Eigen::Index num_points, Eigen::Index num_cells) {
+  for (const Field& f : fields.point_data) data->GetPointData()->AddArray(make_array(f, num_points, "point-data"));
+  for (const Field& f : fields.cell_data) data->GetCellData()->AddArray(make_array(f, num_cells, "cell-data"));
+  for (const Field& f : fields.field_data) data->GetFieldData()->AddArray(make_array(f, 1, "field-data"));
+}
+
+template <typename Writer>
+void write_with(Writer* writer, vtkDataObject* data, const std::filesystem::path& path) {
+  write_atomically(path, [&](const std::filesystem::path& tmp) {
+    writer->SetFileName(tmp.c_str());
+    writer->SetInputData(data);
+    writer->SetDataModeToAppended();
+    writer->EncodeAppendedDataOff();
+    vtkNew<vtkZLibDataCompressor> compressor;
+    writer->SetCompressor(compressor);
+    require(writer->Write() == 1, "{}: VTK writer failed", path.string());
+  });
+}
+
+vtkSmartPointer<vtkPointSet> read_any(const std::filesystem::path& path) {
+  require(std::filesystem::exists(path), "{}: file not found", path.string());
+  if (path.extension() == ".vtp") {
+    vtkNew<vtkXMLPolyDataReader> reader;
+    reader->SetFileName(path.c_str());
+    reader->Update();
+    require(reader->GetErrorCode() == 0 && reader->GetOutput(), "{}: VTK could not read the file", path.string());
+    return reader->GetOutput();
+  }
+  require(path.extension() == ".vtu", "{}: expected a .vtp or .vtu file", path.string());
+  vtkNew<vtkXMLUnstructuredGridReader> reader;
+  reader->SetFileName(path.c_str());
+  reader->Update();
+  require(reader->GetErrorCode() == 0 && reader->GetOutput(), "{}: VTK could not read the file", path.string());
+  return reader->GetOutput();
+}
+
+}  // namespace
+
+void write_surface(const std::filesystem::path& path, const Eigen::Ref<const Points>& points,
+                   const Eigen::Ref<const Cells>& triangles, const Fields& fields) {
+  require(triangles.cols() == 3, "{}: surface cells need 3 vertices, got {}", path.string(), triangles.cols());
+  vtkNew<vtkPolyData> poly;
+  poly->SetPoints(make_points(points));
+  poly->SetPolys(make_cells(triangles, points.rows()));
+  attach_fields(poly, fields, points.rows(), triangles.rows());
+  vtkNew<vtkXMLPolyDataWriter> writer;
+  write_with(writer.Get(), poly, path);
+}
+
+void write_unstructured(const std::filesystem::path& path, const Eigen::Ref<const Points>& points,
+                        const Eigen::Ref<const Cells>& cells, const Fields& fields) {
+  require(cells.cols() == 3 || cells.cols() == 4, "{}: cells need 3 (triangle) or 4 (tetrahedron) vertices, got {}",
+          path.string(), cells.cols());
+  vtkNew<vtkUnstructuredGrid> grid;
+  grid->SetPoints(make_points(points));
+  grid->SetCells(cells.cols() == 4 ? VTK_TETRA : VTK_TRIANGLE, make_cells(cells, points.rows()));
+  attach_fields(grid, fields, points.rows(), cells.rows());
+  vtkNew<vtkXMLUnstructuredGridWriter> writer;
+  write_with(writer.Get(), grid, path);
+}
+
+void PvdSeries::write() const {
+  std::ostringstream xml;
+  xml << "<?xml version=\"1.0\"?>\n"
+      << "<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n  <Collection>\n";
+  for (const Entry& e : entries_) {
+    xml << fmt::format("    <DataSet timestep=\"{:.9g}\" group=\"\" part=\"0\" file=\"{}\"/>\n", e.time, e.file);
+  }
+  xml << "  </Collection>\n</VTKFile>\n";
+  write_text_atomically(path_, xml.str());
+}
+
+Points read_points(const std::filesystem::path& path) {
+  auto data = read_any(path);
+  Points out(data->GetNumberOfPoints(), 3);
+  for (vtkIdType i = 0; i < data->GetNumberOfPoints(); ++i) {
+    double p[3];
+    data->GetPoint(i, p);
+    out.row(i) << p[0], p[1], p[2];
+  }
+  return out;
+}
+
+std::vector<std::string> read_point_array_names(const std::filesystem::path& path) {
+  auto data = read_any(path);
+  std::vector<std::string> names;
+  for (int i = 0; i < data->GetPointData()->GetNumberOfArrays(); ++i)
+    names.emplace_back(data->GetPointData()->GetArrayName(i));
+  return names;
+}
+
+Eigen::MatrixXd read_point_array(const std::filesystem::path& path, const std::string& name) {
+  auto data = read_any(path);
+  vtkDataArray* array = data->GetPointData()->GetArray(name.c_str());
+  require(array != nullptr, "{}: no point-data array '{}'", path.string(), name);
+  Eigen::MatrixXd out(array->GetNumberOfTuples(), array->GetNumberOfComponents());
+  for (vtkIdType r = 0; r < array->GetNumberOfTuples(); ++r)
+    for (int c = 0; c < array->GetNumberOfComponents(); ++c) out(r, c) = array->GetComponent(r, c);
+  return out;
+}
+
+}  // namespace sflsh::vtk

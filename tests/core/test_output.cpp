@@ -1,0 +1,108 @@
+#include "scratch_dir.hpp"
+
+#include <sflsh/core/atomic_file.hpp>
+#include <sflsh/core/error.hpp>
+#include <sflsh/core/run_folder.hpp>
+#include <sflsh/core/summary.hpp>
+#include <sflsh/core/vtk_io.hpp>
+
+#include <gmock/gmock.h>
+
+#include <fstream>
+
+using namespace sflsh;
+
+TEST(AtomicFile, FailedWriterLeavesTargetUntouched) {
+  const auto dir = sflsh::testing::scratch_dir();
+  write_text_atomically(dir / "a.txt", "first");
+  EXPECT_THROW(write_atomically(dir / "a.txt",
+                                [](const std::filesystem::path& tmp) {
+                                  std::ofstream(tmp) << "partial";
+                                  throw_error("writer failed");
+                                }),
+               Error);
+  std::ifstream in(dir / "a.txt");
+  std::string content;
+  in >> content;
+  EXPECT_EQ(content, "first");
+  EXPECT_EQ(sflsh::testing::count_entries(dir), 1u);  // no temporary left behind
+}
+
+TEST(RunFolder, NothingAppearsUntilCommit) {
+  const auto dir = sflsh::testing::scratch_dir() / "run";
+  {
+    RunFolder run(dir);
+    write_text_atomically(run.stage("x.txt"), "x");
+    write_text_atomically(run.stage("sub/y.txt"), "y");
+    EXPECT_FALSE(std::filesystem::exists(dir / "x.txt"));
+    // destroyed without commit: as if the run failed
+  }
+  EXPECT_EQ(sflsh::testing::count_entries(dir), 0u);
+  {
+    RunFolder run(dir);
+    write_text_atomically(run.stage("x.txt"), "x");
+    write_text_atomically(run.stage("sub/y.txt"), "y");
+    run.commit();
+  }
+  EXPECT_TRUE(std::filesystem::exists(dir / "x.txt"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "sub/y.txt"));
+  EXPECT_EQ(sflsh::testing::count_entries(dir), 3u);  // x.txt, sub, sub/y.txt
+}
+
+TEST(VtkOutput, SurfaceAndTetsReadBackWithVtkReaders) {
+  const auto dir = sflsh::testing::scratch_dir();
+  vtk::Points points(4, 3);
+  points << 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1;
+  vtk::Cells triangles(4, 3);
+  triangles << 0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3;
+  vtk::Fields fields;
+  fields.point_data.push_back({"displacement", Eigen::MatrixXd::Constant(4, 3, 0.5), false});
+  fields.point_data.push_back({"label", (Eigen::MatrixXd(4, 1) << 0, 1, 2, 3).finished(), true});
+  vtk::write_surface(dir / "s.vtp", points, triangles, fields);
+  EXPECT_TRUE(vtk::read_points(dir / "s.vtp").isApprox(points));
+  EXPECT_THAT(vtk::read_point_array_names(dir / "s.vtp"), ::testing::ElementsAre("displacement", "label"));
+  EXPECT_EQ(vtk::read_point_array(dir / "s.vtp", "label")(3, 0), 3.0);
+
+  vtk::Cells tet(1, 4);
+  tet << 0, 1, 2, 3;
+  vtk::write_unstructured(dir / "t.vtu", points, tet, fields);
+  EXPECT_TRUE(vtk::read_points(dir / "t.vtu").isApprox(points));
+  EXPECT_TRUE(vtk::read_point_array(dir / "t.vtu", "displacement").isApprox(Eigen::MatrixXd::Constant(4, 3, 0.5)));
+
+  vtk::PvdSeries series(dir / "series.pvd");
+  series.add(0.0, "s.vtp");
+  series.add(1.0 / 60.0, "t.vtu");
+  series.write();
+  std::ifstream in(dir / "series.pvd");
+  const std::string xml((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_THAT(xml, ::testing::HasSubstr("timestep=\"0.0166666667\""));
+  EXPECT_THAT(xml, ::testing::HasSubstr("file=\"t.vtu\""));
+}
+
+TEST(VtkOutput, RefusesNonFiniteDataAndWritesNothing) {
+  const auto dir = sflsh::testing::scratch_dir();
+  vtk::Points points = vtk::Points::Zero(3, 3);
+  points(1, 0) = std::nan("");
+  vtk::Cells tri(1, 3);
+  tri << 0, 1, 2;
+  EXPECT_THROW(vtk::write_surface(dir / "bad.vtp", points, tri), Error);
+  vtk::Points ok = vtk::Points::Identity(3, 3);
+  vtk::Fields fields;
+  fields.point_data.push_back({"short", Eigen::MatrixXd::Zero(2, 1), false});
+  EXPECT_THROW(vtk::write_surface(dir / "bad.vtp", ok, tri, fields), Error);
+  tri(0, 2) = 7;
+  EXPECT_THROW(vtk::write_surface(dir / "bad.vtp", ok, tri), Error);
+  EXPECT_EQ(sflsh::testing::count_entries(dir), 0u);
+}
+
+TEST(Summary, JsonRoundTripAndParseErrors) {
+  const auto dir = sflsh::testing::scratch_dir();
+  const char* argv[] = {"sflsh", "motion", "export"};
+  nlohmann::json s = summary_header("motion export", 3, argv);
+  s["frames"] = 12;
+  write_json(dir / "summary.json", s);
+  EXPECT_EQ(read_json(dir / "summary.json")["frames"], 12);
+  EXPECT_EQ(read_json(dir / "summary.json")["command"], "motion export");
+  std::ofstream(dir / "bad.json") << "{\"a\": ";
+  EXPECT_THAT([&] { read_json(dir / "bad.json"); }, ::testing::ThrowsMessage<Error>(::testing::HasSubstr("bad.json: invalid JSON")));
+}
