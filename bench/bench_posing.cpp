@@ -6,6 +6,8 @@
 #include <sflsh/body/subjects.hpp>
 #include <sflsh/core/summary.hpp>
 
+#include <fmt/format.h>
+
 #include <chrono>
 #include <cstring>
 #include <iostream>
@@ -18,7 +20,7 @@ int main(int argc, char** argv) {
   }
   try {
     using namespace sflsh;
-    const body::BodyModel model = body::load_body(body_path.empty() ? body::default_body_path() : body_path);
+    const body::BodyModel model = body::load_body(body_path.empty() ? body::default_body_path() : std::filesystem::path(body_path));
     nlohmann::json results = nlohmann::json::array();
     std::cout << fmt::format("{:<18} {:>8} {:>8} {:>12} {:>12}\n", "motion", "vertices", "frames", "ms/frame", "frames/s");
     for (const std::string& name : body::procedural_motion_names()) {

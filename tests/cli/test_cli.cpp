@@ -10,6 +10,7 @@
 #include <sflsh/core/summary.hpp>
 #include <sflsh/core/vtk_io.hpp>
 
+#include <fmt/format.h>
 #include <gmock/gmock.h>
 
 #include <fstream>

@@ -22,9 +22,18 @@ struct Motion {
   std::size_t num_frames() const { return poses.size(); }
   double duration() const { return num_frames() > 1 ? static_cast<double>(num_frames() - 1) / fps : 0.0; }
   double time(std::size_t frame) const { return static_cast<double>(frame) / fps; }
-  /// Throws sflsh::Error when sizes disagree, fps is not positive, or a value is not finite.
+  /// Throws sflsh::Error when sizes disagree, fps is not positive, a value is not finite, there are
+  /// no frames, or world_from_body is not a rotation.
   void validate() const;
 };
+
+/// Per-joint spherical interpolation of two poses along the shortest arc (u ∈ [0, 1], u = 0 gives a):
+/// each joint's axis-angle vector is turned into a unit quaternion, q_b is negated when q_a·q_b < 0,
+/// and the result is returned as axis-angle with angle ∈ [0, π].
+Pose slerp_pose(const Pose& a, const Pose& b, double u);
+
+/// The world_from_body of AMASS data: −90° about X, mapping AMASS's up axis +Z to +Y.
+Eigen::Matrix3d amass_world_from_body();
 
 /// The procedural motion kinds, in DYNA order: one_leg_jump, running_on_spot, shake_hips
 /// (training) and jiggle_on_toes, shake_shoulders (testing).
@@ -39,16 +48,22 @@ Motion make_procedural_motion(const std::string& name, double fps = 60.0, int fr
 /// Reads an AMASS .npz (poses T×156 or T×72, trans T×3, mocap_framerate or mocap_frame_rate)
 /// and maps it onto SMPL's 24 joints (SMPL-H body joints 0..21; SMPL hand joints 22, 23 get zero).
 /// The result is resampled to `fps` (quaternion slerp per joint, linear translation); a file whose
-/// rate equals `fps` is used frame for frame. Errors name the file and the key.
+/// rate equals `fps` is used frame for frame. world_from_body is amass_world_from_body() unless the
+/// file carries "sflsh_world_from_body" (written by save_amass). Errors name the file and the key.
 Motion load_amass(const std::filesystem::path& path, double fps = 60.0);
 
-/// Writes a motion in AMASS layout (poses T×72, trans T×3, mocap_framerate, gender) atomically.
+/// Writes a motion in AMASS layout (poses T×72, trans T×3, mocap_framerate, gender) atomically, plus
+/// the motion's world_from_body as "sflsh_world_from_body" (3×3) so that a round trip through
+/// load_amass keeps the frame (files without that key are taken as AMASS's Z-up).
 void save_amass(const std::filesystem::path& path, const Motion& motion);
 
-/// Resamples a motion to a new frame rate (slerp per joint, linear translation).
+/// Resamples a motion to a new frame rate (slerp per joint, linear translation). Output frame i is at
+/// t = i / fps and the output covers the input's duration: floor(duration · fps) + 1 frames. Returns
+/// the motion unchanged (apart from fps) when the rates agree within 1e-9 relative.
 Motion resample(const Motion& motion, double fps);
 
-/// Loads a motion by name (procedural) or by path (a .npz file).
+/// Loads a motion by name (procedural) or by path (a .npz file). frames > 0 sets the length of a
+/// procedural motion and truncates a file's motion (a warning is logged when the file is shorter).
 Motion load_motion(const std::string& name_or_path, double fps = 60.0, int frames = 0);
 
 }  // namespace sflsh::body

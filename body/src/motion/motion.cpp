@@ -1,0 +1,131 @@
+// Motion::validate, the procedural-motion registry, and load_motion.
+#include <sflsh/body/motion.hpp>
+
+#include "procedural.hpp"
+
+#include <sflsh/core/error.hpp>
+#include <sflsh/core/log.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+namespace sflsh::body {
+
+namespace motion_detail {
+
+std::span<const ProceduralSpec> procedural_specs() {
+  static constexpr std::array<ProceduralSpec, 5> specs{{
+      {"one_leg_jump",
+       "hopping on the left leg at 2 hops/s, right leg lifted; ballistic flight, ≈4 g landings", 4.0,
+       &sample_one_leg_jump},
+      {"running_on_spot",
+       "jogging in place at 2.7 steps/s: hips to 45°, knees to 90°, 4 cm bounce, arms swinging", 4.0,
+       &sample_running_on_spot},
+      {"shake_hips",
+       "pelvis roll ±17° (yaw ±8°) at 2 Hz, spine counter-rotating, feet planted", 4.0,
+       &sample_shake_hips},
+      {"jiggle_on_toes",
+       "bouncing on the balls of the feet at 2.75 Hz, ≈3 cm up and down, ankles plantar-flexing", 4.0,
+       &sample_jiggle_on_toes},
+      {"shake_shoulders",
+       "alternating shoulder shimmy: collars ±12° forward/back at 3.5 Hz, arms hanging", 4.0,
+       &sample_shake_shoulders},
+  }};
+  return specs;
+}
+
+PoseSample scaled_from_rest(const PoseSample& steady, double weight) {
+  PoseSample out;
+  out.theta = weight * steady.theta;
+  out.trans = weight * steady.trans;
+  return out;
+}
+
+namespace {
+
+const ProceduralSpec* find_spec(const std::string& name) {
+  for (const ProceduralSpec& spec : procedural_specs())
+    if (spec.name == name) return &spec;
+  return nullptr;
+}
+
+std::string known_names() {
+  std::string out;
+  for (const std::string& n : procedural_motion_names()) out += (out.empty() ? "" : ", ") + n;
+  return out;
+}
+
+}  // namespace
+}  // namespace motion_detail
+
+void Motion::validate() const {
+  const std::string who = name.empty() ? std::string("motion") : fmt::format("motion '{}'", name);
+  require(std::isfinite(fps) && fps > 0.0, "{}: fps must be a positive number, got {}", who, fps);
+  require(!poses.empty(), "{}: has no frames", who);
+  require(poses.size() == trans.size(), "{}: {} poses but {} root translations", who, poses.size(), trans.size());
+  for (std::size_t i = 0; i < poses.size(); ++i) {
+    require(poses[i].allFinite(), "{}: frame {} has a non-finite pose value", who, i);
+    require(trans[i].allFinite(), "{}: frame {} has a non-finite root translation", who, i);
+  }
+  require(world_from_body.allFinite() &&
+              (world_from_body * world_from_body.transpose() - Eigen::Matrix3d::Identity()).norm() < 1e-6 &&
+              world_from_body.determinant() > 0.0,
+          "{}: world_from_body is not a rotation matrix", who);
+}
+
+const std::vector<std::string>& procedural_motion_names() {
+  static const std::vector<std::string> names = [] {
+    std::vector<std::string> out;
+    for (const auto& spec : motion_detail::procedural_specs()) out.emplace_back(spec.name);
+    return out;
+  }();
+  return names;
+}
+
+std::string procedural_motion_description(const std::string& name) {
+  const motion_detail::ProceduralSpec* spec = motion_detail::find_spec(name);
+  require(spec != nullptr, "unknown procedural motion '{}' (known: {})", name, motion_detail::known_names());
+  return std::string(spec->description);
+}
+
+Motion make_procedural_motion(const std::string& name, double fps, int frames) {
+  const motion_detail::ProceduralSpec* spec = motion_detail::find_spec(name);
+  require(spec != nullptr, "unknown procedural motion '{}' (known: {})", name, motion_detail::known_names());
+  require(std::isfinite(fps) && fps > 0.0, "motion '{}': fps must be a positive number, got {}", name, fps);
+  const long count = frames > 0 ? frames : std::max(1L, std::lround(spec->default_seconds * fps));
+  Motion motion;
+  motion.name = name;
+  motion.source = "procedural";
+  motion.fps = fps;
+  motion.poses.reserve(static_cast<std::size_t>(count));
+  motion.trans.reserve(static_cast<std::size_t>(count));
+  for (long i = 0; i < count; ++i) {
+    const motion_detail::PoseSample s = spec->sample(static_cast<double>(i) / fps);
+    motion.poses.push_back(s.theta);
+    motion.trans.push_back(s.trans);
+  }
+  return motion;
+}
+
+Motion load_motion(const std::string& name_or_path, double fps, int frames) {
+  if (motion_detail::find_spec(name_or_path) != nullptr) return make_procedural_motion(name_or_path, fps, frames);
+  const std::filesystem::path path(name_or_path);
+  std::error_code ec;
+  require(std::filesystem::is_regular_file(path, ec), "motion '{}': not a procedural motion ({}) and no such file",
+          name_or_path, motion_detail::known_names());
+  Motion motion = load_amass(path, fps);
+  if (frames > 0) {
+    const auto wanted = static_cast<std::size_t>(frames);
+    if (wanted < motion.num_frames()) {
+      motion.poses.resize(wanted);
+      motion.trans.resize(wanted);
+    } else if (wanted > motion.num_frames()) {
+      logger()->warn("motion '{}': {} frames requested, the file has {} at {} fps; using all of them", name_or_path,
+                     frames, motion.num_frames(), motion.fps);
+    }
+  }
+  return motion;
+}
+
+}  // namespace sflsh::body
