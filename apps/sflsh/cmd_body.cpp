@@ -30,7 +30,10 @@ void run_info(const SubjectOptions& opt, bool json) {
   const body::Betas beta = selected_betas(opt, label);
   const body::RowMatrixX3d shaped = body::shaped_template(model, beta);
   const body::JointPositions joints = body::regress_joints(model, shaped);
-  const body::SurfaceReport report = body::check_surface(shaped, model.faces, true);
+  // Self-intersection tests need a closed manifold; check the topology first.
+  body::SurfaceReport report = body::check_surface(shaped, model.faces, false);
+  if (report.closed && report.edge_manifold && report.vertex_manifold)
+    report = body::check_surface(shaped, model.faces, true);
   const Eigen::RowVector3d lo = shaped.colwise().minCoeff(), hi = shaped.colwise().maxCoeff();
   nlohmann::json out;
   out["name"] = model.name;

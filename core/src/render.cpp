@@ -22,6 +22,8 @@
 #include <vtkTextProperty.h>
 #include <vtkWindowToImageFilter.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdlib>
 
 namespace sflsh::render {
@@ -126,8 +128,19 @@ void render_png(const std::filesystem::path& path, const std::vector<Surface>& s
   } else {
     throw_error("render: unknown view '{}' (front, back, side, three_quarter, top)", view.name);
   }
+  // Orthographic framing that fills the picture: half the visible extent along the view-up axis,
+  // or along the horizontal axis scaled by the aspect ratio, whichever is larger.
+  camera->ParallelProjectionOn();
   renderer->ResetCamera();
-  camera->Zoom(1.1);
+  double b[6];
+  renderer->ComputeVisiblePropBounds(b);
+  const double extent_x = b[1] - b[0], extent_y = b[3] - b[2], extent_z = b[5] - b[4];
+  const double aspect = static_cast<double>(view.width) / view.height;
+  double vertical = extent_y, horizontal = extent_x;
+  if (view.name == "side") horizontal = extent_z;
+  if (view.name == "top") vertical = extent_z;
+  if (view.name == "three_quarter") horizontal = std::hypot(extent_x, extent_z);
+  camera->SetParallelScale(0.53 * std::max(vertical, horizontal / aspect));
   renderer->ResetCameraClippingRange();
 
   vtkNew<vtkRenderWindow> window;

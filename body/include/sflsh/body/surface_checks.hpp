@@ -9,7 +9,7 @@ namespace sflsh::body {
 struct SurfaceReport {
   bool closed = false;              ///< every edge has exactly two incident faces
   bool edge_manifold = false;       ///< no edge with more than two faces
-  bool vertex_manifold = false;     ///< every vertex's link is one cycle
+  bool vertex_manifold = false;     ///< every vertex's link is one cycle (one path on a boundary)
   bool consistently_oriented = false;
   bool outward = false;             ///< signed volume positive
   int connected_components = 0;
