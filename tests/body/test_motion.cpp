@@ -10,6 +10,8 @@
 #include "../../body/src/motion/curves.hpp"
 #include "../../body/src/motion/rig.hpp"
 
+#include "error_of.hpp"
+
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
@@ -137,15 +139,7 @@ std::vector<std::vector<double>> all_channels(const Motion& m) {
   return out;
 }
 
-template <typename F>
-std::string error_of(F&& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "(no sflsh::Error thrown)";
-}
+using sflsh::testing::error_of;
 
 // ---------------------------------------------------------------------------------------------
 // Registry

@@ -11,6 +11,8 @@
 #include "../../body/src/motion/curves.hpp"
 #include "../../body/src/motion/rig.hpp"
 
+#include "error_of.hpp"
+
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
@@ -52,15 +54,7 @@ class TempDirCleanup : public ::testing::Environment {
 [[maybe_unused]] ::testing::Environment* const kTempDirCleanup =
     ::testing::AddGlobalTestEnvironment(new TempDirCleanup);
 
-template <typename F>
-std::string error_of(F&& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "(no sflsh::Error thrown)";
-}
+using sflsh::testing::error_of;
 
 // ---------------------------------------------------------------------------------------------
 // Motion::validate and load_motion
