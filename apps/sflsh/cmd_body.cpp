@@ -122,13 +122,7 @@ void run_export(const ExportOptions& opt, const Invocation& invocation) {
   vtk::Fields fields;
   fields.point_data.push_back({"shape_offset", shaped - model.v_template, false});
   fields.point_data.push_back({"skin_weights", model.weights, false});
-  Eigen::MatrixXd argmax(model.num_vertices(), 1);
-  for (Eigen::Index i = 0; i < model.num_vertices(); ++i) {
-    Eigen::Index k = 0;
-    model.weights.row(i).maxCoeff(&k);
-    argmax(i, 0) = static_cast<double>(k);
-  }
-  fields.point_data.push_back({"skin_weights_argmax", argmax, true});
+  fields.point_data.push_back({"skin_weights_argmax", dominant_joint(model), true});
   RunFolder run(opt.out);
   vtk::write_surface(run.stage("body.vtp"), shaped, vtk::Cells(model.faces), fields);
   nlohmann::json summary = summary_header("body export", invocation.argc, invocation.argv);

@@ -24,16 +24,6 @@ struct ExportOptions {
   std::string out;
 };
 
-Eigen::MatrixXd argmax_weights(const body::BodyModel& model) {
-  Eigen::MatrixXd labels(model.num_vertices(), 1);
-  for (Eigen::Index i = 0; i < model.num_vertices(); ++i) {
-    Eigen::Index k = 0;
-    model.weights.row(i).maxCoeff(&k);
-    labels(i, 0) = static_cast<double>(k);
-  }
-  return labels;
-}
-
 void run_export(const ExportOptions& opt, const Invocation& invocation) {
   const auto t0 = std::chrono::steady_clock::now();
   require(opt.fps > 0.0, "--fps must be positive, got {}", opt.fps);
@@ -45,7 +35,7 @@ void run_export(const ExportOptions& opt, const Invocation& invocation) {
   motion.validate();
 
   const body::Poser poser(model, beta);
-  const Eigen::MatrixXd labels = argmax_weights(model);
+  const Eigen::MatrixXd labels = dominant_joint(model);
   vtk::Cells faces = model.faces;
 
   RunFolder run(opt.out);

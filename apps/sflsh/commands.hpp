@@ -35,4 +35,7 @@ body::BodyModel load_selected_body(const SubjectOptions& options);
 /// an error naming `required_by` if it is not null, else β = 0.
 body::Betas selected_betas(const SubjectOptions& options, std::string& label, const char* required_by = nullptr);
 
+/// Index of each vertex's largest skinning weight (n×1), for the `skin_weights_argmax` field.
+Eigen::MatrixXd dominant_joint(const body::BodyModel& model);
+
 }  // namespace sflsh::app

@@ -46,4 +46,14 @@ body::Betas selected_betas(const SubjectOptions& options, std::string& label, co
   return body::Betas::Zero();
 }
 
+Eigen::MatrixXd dominant_joint(const body::BodyModel& model) {
+  Eigen::MatrixXd labels(model.num_vertices(), 1);
+  for (Eigen::Index i = 0; i < model.num_vertices(); ++i) {
+    Eigen::Index k = 0;
+    model.weights.row(i).maxCoeff(&k);
+    labels(i, 0) = static_cast<double>(k);
+  }
+  return labels;
+}
+
 }  // namespace sflsh::app
