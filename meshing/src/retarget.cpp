@@ -1,0 +1,175 @@
+// Retargeting the template layer to a shape and thickness (DESIGN.md §3).
+#include <sflsh/core/error.hpp>
+#include <sflsh/meshing/retarget.hpp>
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <limits>
+#include <map>
+
+namespace sflsh::meshing {
+namespace {
+
+std::vector<char> boundary_flags(const LayerMesh& mesh) {
+  std::vector<char> fixed(mesh.anchor.size(), 0);
+  for (std::size_t i = 0; i < mesh.anchor.size(); ++i) fixed[i] = mesh.anchor[i].valid() ? 1 : 0;
+  return fixed;
+}
+
+double signed_volume(const RowMatrixX3d& x, const RowMatrixX4i& tets, Eigen::Index e) {
+  Eigen::Matrix3d dm;
+  for (int k = 0; k < 3; ++k) dm.col(k) = (x.row(tets(e, k + 1)) - x.row(tets(e, 0))).transpose();
+  return dm.determinant() / 6.0;
+}
+
+// Local untangling: interior nodes of inverted tets are moved towards the centroid of their
+// neighbours (in steps of 1, ½, ¼) whenever that raises the smallest signed volume around them.
+// Boundary nodes never move. Returns the number of nodes moved.
+int untangle(RowMatrixX3d& x, const RowMatrixX4i& tets, const std::vector<SurfaceAnchor>& anchors,
+             const std::vector<std::vector<int>>& tets_of, int sweeps) {
+  int moved = 0;
+  for (int sweep = 0; sweep < sweeps; ++sweep) {
+    std::vector<int> candidates;
+    for (Eigen::Index e = 0; e < tets.rows(); ++e)
+      if (signed_volume(x, tets, e) <= 0.0)
+        for (int c = 0; c < 4; ++c)
+          if (!anchors[static_cast<std::size_t>(tets(e, c))].valid()) candidates.push_back(tets(e, c));
+    if (candidates.empty()) break;
+    std::sort(candidates.begin(), candidates.end());
+    candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+    for (int node : candidates) {
+      const auto& around = tets_of[static_cast<std::size_t>(node)];
+      const auto worst = [&] {
+        double v = std::numeric_limits<double>::infinity();
+        for (int e : around) v = std::min(v, signed_volume(x, tets, e));
+        return v;
+      };
+      Eigen::RowVector3d centroid = Eigen::RowVector3d::Zero();
+      int count = 0;
+      for (int e : around)
+        for (int c = 0; c < 4; ++c)
+          if (tets(e, c) != node) {
+            centroid += x.row(tets(e, c));
+            ++count;
+          }
+      centroid /= count;
+      const Eigen::RowVector3d start = x.row(node);
+      double best = worst();
+      Eigen::RowVector3d best_position = start;
+      for (double step : {1.0, 0.5, 0.25}) {
+        x.row(node) = start + step * (centroid - start);
+        const double value = worst();
+        if (value > best) {
+          best = value;
+          best_position = x.row(node);
+        }
+      }
+      x.row(node) = best_position;
+      if (best_position != start) ++moved;
+    }
+  }
+  return moved;
+}
+
+}  // namespace
+
+Retargeter::Retargeter(const body::BodyModel& model, const LayerMesh& mesh, double stiffening)
+    : model_(model), mesh_(mesh), interpolator_(mesh.nodes, mesh.tets, boundary_flags(mesh), stiffening) {
+  require(model.num_vertices() == static_cast<Eigen::Index>(mesh.region_surface.local_of.size()),
+          "retarget: the body model '{}' has {} vertices but the layer mesh was built for {} ('{}')", model.name,
+          model.num_vertices(), mesh.region_surface.local_of.size(), mesh.body_name);
+  depth_ = depth_field();
+  tets_of_.resize(static_cast<std::size_t>(mesh.num_nodes()));
+  for (Eigen::Index e = 0; e < mesh.tets.rows(); ++e)
+    for (int c = 0; c < 4; ++c) tets_of_[static_cast<std::size_t>(mesh.tets(e, c))].push_back(static_cast<int>(e));
+  const LayerGeometry geometry = layer_geometry(model, mesh.region_surface, mesh.correspondence, body::Betas::Zero(),
+                                                mesh.template_thickness_field());
+  const Eigen::MatrixXd coordinates = interpolator_.extend(layer_coordinates(geometry));
+  residual_ = mesh.nodes - coordinates.leftCols<3>() - coordinates.rightCols<3>().cwiseProduct(depth_.replicate(1, 3));
+  for (int i = 0; i < mesh.num_nodes(); ++i)
+    if (mesh.anchor[static_cast<std::size_t>(i)].valid()) residual_.row(i).setZero();   // round-off only
+}
+
+Eigen::MatrixXd Retargeter::layer_coordinates(const LayerGeometry& geometry) const {
+  Eigen::MatrixXd values = Eigen::MatrixXd::Zero(mesh_.num_nodes(), 6);
+  for (int i = 0; i < mesh_.num_nodes(); ++i) {
+    const auto& anchor = mesh_.anchor[static_cast<std::size_t>(i)];
+    if (!anchor.valid()) continue;
+    for (int k = 0; k < 3; ++k) {
+      const int v = anchor.vertex[k];
+      const double w = anchor.weight(k);
+      values.block<1, 3>(i, 0) += w * geometry.skin.row(v);
+      values.block<1, 3>(i, 3) += w * geometry.thickness(v) * (geometry.skeleton.row(v) - geometry.skin.row(v));
+    }
+  }
+  return values;
+}
+
+RetargetedLayer Retargeter::retarget(const body::Betas& beta, double uniform_thickness) const {
+  return retarget(beta, Eigen::VectorXd::Constant(mesh_.region_surface.num_vertices(), uniform_thickness));
+}
+
+RetargetedLayer Retargeter::retarget(const body::Betas& beta, const Eigen::VectorXd& thickness) const {
+  const auto start = std::chrono::steady_clock::now();
+  require(beta.allFinite(), "retarget: β has non-finite entries");
+  RetargetedLayer result;
+  result.geometry = layer_geometry(model_, mesh_.region_surface, mesh_.correspondence, beta, thickness);
+
+  // Layer coordinates (S, C) from the anchors, carried inside harmonically; x = S + δ C + r.
+  const int n = mesh_.num_nodes();
+  const Eigen::MatrixXd coordinates = interpolator_.extend(layer_coordinates(result.geometry));
+  result.nodes = coordinates.leftCols<3>() + coordinates.rightCols<3>().cwiseProduct(depth_.replicate(1, 3)) + residual_;
+  for (int i = 0; i < n; ++i) {   // boundary nodes exactly on their anchors (the formula above is exact up to round-off)
+    const auto& anchor = mesh_.anchor[static_cast<std::size_t>(i)];
+    if (anchor.valid()) result.nodes.row(i) = result.geometry.position(anchor).transpose();
+  }
+  if (quality_report(result.nodes, mesh_.tets).inverted > 0) result.untangled_nodes = untangle(result.nodes, mesh_.tets, mesh_.anchor, tets_of_, 20);
+  result.quality = layer_quality(mesh_, result.nodes, result.geometry);
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+  if (result.quality.inverted > 0 || result.quality.degenerate > 0) {
+    const TetQuality per_tet = tet_quality(result.nodes, mesh_.tets);
+    std::map<std::string, long> by_part;
+    Eigen::Index worst = 0;
+    per_tet.volume.minCoeff(&worst);
+    for (Eigen::Index e = 0; e < per_tet.volume.size(); ++e)
+      if (per_tet.volume(e) <= 0.0) ++by_part[part_name(mesh_.tet_part[static_cast<std::size_t>(e)])];
+    std::string parts;
+    for (const auto& [name, count] : by_part) parts += fmt::format("{}{}: {}", parts.empty() ? "" : ", ", name, count);
+    Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+    for (int c = 0; c < 4; ++c) centre += 0.25 * result.nodes.row(mesh_.tets(worst, c)).transpose();
+    throw_error(
+        "retarget: shape β = [{:.2f}] with h in [{:.2f}, {:.2f}] inverts {} tets ({}) and leaves {} degenerate; worst "
+        "tet {} ({}) at ({:.3f}, {:.3f}, {:.3f}) m",
+        fmt::join(beta.data(), beta.data() + beta.size(), ", "), thickness.minCoeff(), thickness.maxCoeff(),
+        result.quality.inverted, parts.empty() ? "none" : parts, result.quality.degenerate, worst,
+        part_name(mesh_.tet_part[static_cast<std::size_t>(worst)]), centre(0), centre(1), centre(2));
+  }
+  return result;
+}
+
+Eigen::MatrixXd Retargeter::extend_surface_field(const Eigen::MatrixXd& per_region_vertex) const {
+  require(per_region_vertex.rows() == mesh_.region_surface.num_vertices(),
+          "surface field: {} rows, expected one per region vertex ({})", per_region_vertex.rows(),
+          mesh_.region_surface.num_vertices());
+  Eigen::MatrixXd values = Eigen::MatrixXd::Zero(mesh_.num_nodes(), per_region_vertex.cols());
+  for (int i = 0; i < mesh_.num_nodes(); ++i) {
+    const auto& anchor = mesh_.anchor[static_cast<std::size_t>(i)];
+    if (!anchor.valid()) continue;
+    for (int s = 0; s < 3; ++s) values.row(i) += anchor.weight(s) * per_region_vertex.row(anchor.vertex[s]);
+  }
+  return interpolator_.extend(values);
+}
+
+Eigen::VectorXd Retargeter::depth_field() const {
+  Eigen::MatrixXd depth = Eigen::MatrixXd::Zero(mesh_.num_nodes(), 1);
+  for (int i = 0; i < mesh_.num_nodes(); ++i) {
+    const auto& anchor = mesh_.anchor[static_cast<std::size_t>(i)];
+    if (anchor.valid()) depth(i) = anchor.depth;
+  }
+  return interpolator_.extend(depth).col(0);
+}
+
+}  // namespace sflsh::meshing

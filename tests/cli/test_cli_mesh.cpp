@@ -1,0 +1,95 @@
+// `sflsh mesh`: the layer-mesh contract (files, fields, summary) and its one-line errors.
+#include "run_command.hpp"
+#include "scratch_dir.hpp"
+
+#include <sflsh/core/summary.hpp>
+#include <sflsh/core/vtk_io.hpp>
+
+#include <fmt/format.h>
+#include <gmock/gmock.h>
+
+#include <fstream>
+
+using namespace sflsh;
+using sflsh::testing::count_entries;
+using sflsh::testing::run_sflsh;
+using ::testing::HasSubstr;
+
+namespace {
+
+// The coarse gmsh layer of the open body, cached in the build tree (shared with the meshing tests).
+std::string common_args() { return fmt::format("--mesher gmsh --size coarse --cache {}", SFLSH_TEST_CACHE); }
+
+}  // namespace
+
+TEST(CliMesh, WritesTheLayerSurfacesAndSummary) {
+  const auto dir = sflsh::testing::scratch_dir();
+  const auto out = dir / "layer";
+  const auto result =
+      run_sflsh(fmt::format("-q mesh --subject OPEN_TRAIN_2 --thickness 0.4 {} --out {}", common_args(), out.string()), dir);
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  for (const char* file : {"layer.vtu", "outer.vtp", "inner.vtp", "summary.json"})
+    EXPECT_TRUE(std::filesystem::exists(out / file)) << file;
+  const auto names = vtk::read_point_array_names(out / "layer.vtu");
+  for (const char* field : {"node_kind", "part", "thickness_fraction", "local_thickness"})
+    EXPECT_THAT(names, ::testing::Contains(std::string(field)));
+  const auto h = vtk::read_point_array(out / "layer.vtu", "thickness_fraction");
+  EXPECT_NEAR(h.minCoeff(), 0.4, 1e-9);
+  EXPECT_NEAR(h.maxCoeff(), 0.4, 1e-9);
+  const auto summary = read_json(out / "summary.json");
+  EXPECT_EQ(summary["subject"], "OPEN_TRAIN_2");
+  EXPECT_EQ(summary["mesher"], "gmsh");
+  EXPECT_EQ(summary["skin_mapping"], "nodes");
+  EXPECT_EQ(summary["quality"]["inverted"], 0);
+  EXPECT_GT(summary["quality"]["tets"].get<long>(), 1000);
+  EXPECT_TRUE(summary["quality_template"].contains("min_dihedral_deg"));
+  EXPECT_GT(summary["quality"]["thickness_max"].get<double>(), summary["quality"]["thickness_min"].get<double>());
+  EXPECT_TRUE(summary["timings_s"].contains("retarget"));
+  // The outer surface has one point per skin vertex of the region.
+  EXPECT_EQ(vtk::read_points(out / "outer.vtp").rows(), summary["skin_vertices"].get<long>());
+}
+
+TEST(CliMesh, BadInputGivesOneLineAndWritesNothing) {
+  const auto dir = sflsh::testing::scratch_dir();
+  const auto out = dir / "layer";
+  struct Case {
+    std::string args;
+    std::string message;
+  };
+  const std::vector<Case> cases = {
+      {"--thickness 1.5", "--thickness 1.5: expected a fraction 0 < h < 1"},
+      {"--thickness 0", "expected a fraction 0 < h < 1"},
+      {"--region torso,tail", "unknown name 'tail'"},
+      {"--subject NOBODY", "NOBODY"},
+  };
+  for (const auto& c : cases) {
+    const auto result = run_sflsh(fmt::format("mesh {} {} --out {}", common_args(), c.args, out.string()), dir);
+    EXPECT_NE(result.exit_code, 0) << c.args;
+    EXPECT_THAT(result.err, HasSubstr(c.message)) << c.args;
+    EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
+    EXPECT_EQ(count_entries(out), 0u) << c.args;
+  }
+}
+
+TEST(CliMesh, CorruptCacheIsReportedWithTheFile) {
+  const auto dir = sflsh::testing::scratch_dir();
+  const auto cache = dir / "cache";
+  std::filesystem::create_directories(cache);
+  // Find the file name the command uses by building once, then corrupt it.
+  auto result = run_sflsh(fmt::format("-q mesh --region left_thigh --mesher gmsh --size coarse --cache {} --out {}",
+                                      cache.string(), (dir / "a").string()),
+                          dir);
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const std::string path = read_json(dir / "a" / "summary.json")["cache"]["path"];
+  { std::ofstream(path) << "garbage"; }
+  result = run_sflsh(fmt::format("mesh --region left_thigh --mesher gmsh --size coarse --cache {} --out {}", cache.string(),
+                                 (dir / "b").string()),
+                     dir);
+  EXPECT_NE(result.exit_code, 0);
+  EXPECT_THAT(result.err, HasSubstr(path));
+  EXPECT_THAT(result.err, HasSubstr("--rebuild-cache"));
+  result = run_sflsh(fmt::format("-q mesh --region left_thigh --mesher gmsh --size coarse --cache {} --rebuild-cache --out {}",
+                                 cache.string(), (dir / "c").string()),
+                     dir);
+  EXPECT_EQ(result.exit_code, 0) << result.err;
+}
