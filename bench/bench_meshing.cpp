@@ -96,6 +96,7 @@ int main(int argc, char** argv) {
         const auto mesher = meshing::parse_mesher(mesher_name);
         const auto size = meshing::parse_size_preset(size_name);
         const auto result_file = std::filesystem::temp_directory_path() / fmt::format("bench_meshing_{}.json", ::getpid());
+        std::cout.flush();   // the child inherits unflushed output otherwise
         const pid_t child = ::fork();
         if (child == 0) {
           int code = 0;

@@ -19,6 +19,10 @@ struct Invocation {
 
 void register_body_commands(CLI::App& app, const Invocation& invocation);
 void register_motion_commands(CLI::App& app, const Invocation& invocation);
+void register_mesh_commands(CLI::App& app, const Invocation& invocation);
+void register_material_commands(CLI::App& app, const Invocation& invocation);
+/// `material show` (cmd_material_show.cpp), added to the `material` group by register_material_commands.
+void add_material_show_command(CLI::App& material, const Invocation& invocation);
 
 /// Options that choose a body model and a subject: --body PATH, --subject NAME | --betas "…".
 struct SubjectOptions {

@@ -21,6 +21,8 @@ int main(int argc, char** argv) {
   const sflsh::app::Invocation invocation{argc, argv};
   sflsh::app::register_body_commands(app, invocation);
   sflsh::app::register_motion_commands(app, invocation);
+  sflsh::app::register_mesh_commands(app, invocation);
+  sflsh::app::register_material_commands(app, invocation);
 
   app.parse_complete_callback([&] {
     sflsh::logger()->set_level(quiet ? spdlog::level::warn : spdlog::level::from_str(log_level));

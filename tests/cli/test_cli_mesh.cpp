@@ -43,7 +43,7 @@ TEST(CliMesh, WritesTheLayerSurfacesAndSummary) {
   EXPECT_EQ(summary["quality"]["inverted"], 0);
   EXPECT_GT(summary["quality"]["tets"].get<long>(), 1000);
   EXPECT_TRUE(summary["quality_template"].contains("min_dihedral_deg"));
-  EXPECT_GT(summary["quality"]["thickness_max"].get<double>(), summary["quality"]["thickness_min"].get<double>());
+  EXPECT_GT(summary["quality"]["thickness_max_m"].get<double>(), summary["quality"]["thickness_min_m"].get<double>());
   EXPECT_TRUE(summary["timings_s"].contains("retarget"));
   // The outer surface has one point per skin vertex of the region.
   EXPECT_EQ(vtk::read_points(out / "outer.vtp").rows(), summary["skin_vertices"].get<long>());
@@ -76,19 +76,19 @@ TEST(CliMesh, CorruptCacheIsReportedWithTheFile) {
   const auto cache = dir / "cache";
   std::filesystem::create_directories(cache);
   // Find the file name the command uses by building once, then corrupt it.
-  auto result = run_sflsh(fmt::format("-q mesh --region left_thigh --mesher gmsh --size coarse --cache {} --out {}",
+  auto result = run_sflsh(fmt::format("-q mesh --region left_thigh --mesher layered --size coarse --cache {} --out {}",
                                       cache.string(), (dir / "a").string()),
                           dir);
   ASSERT_EQ(result.exit_code, 0) << result.err;
   const std::string path = read_json(dir / "a" / "summary.json")["cache"]["path"];
   { std::ofstream(path) << "garbage"; }
-  result = run_sflsh(fmt::format("mesh --region left_thigh --mesher gmsh --size coarse --cache {} --out {}", cache.string(),
+  result = run_sflsh(fmt::format("mesh --region left_thigh --mesher layered --size coarse --cache {} --out {}", cache.string(),
                                  (dir / "b").string()),
                      dir);
   EXPECT_NE(result.exit_code, 0);
   EXPECT_THAT(result.err, HasSubstr(path));
   EXPECT_THAT(result.err, HasSubstr("--rebuild-cache"));
-  result = run_sflsh(fmt::format("-q mesh --region left_thigh --mesher gmsh --size coarse --cache {} --rebuild-cache --out {}",
+  result = run_sflsh(fmt::format("-q mesh --region left_thigh --mesher layered --size coarse --cache {} --rebuild-cache --out {}",
                                  cache.string(), (dir / "c").string()),
                      dir);
   EXPECT_EQ(result.exit_code, 0) << result.err;

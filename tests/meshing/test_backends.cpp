@@ -313,6 +313,18 @@ TEST(SizeCalibration, DISABLED_PresetsOnLayerLikeShells) {
         for (Eigen::Index e = 0; e < mesh.tets.rows(); ++e)
           for (int i = 0; i < 4; ++i)
             for (int j = i + 1; j < 4; ++j) edge_sum += (mesh.nodes.row(mesh.tets(e, i)) - mesh.nodes.row(mesh.tets(e, j))).norm();
+        {  // TEMP diagnostic: boundary nodes of the worst tets
+          const auto per = meshing::tet_quality(mesh.nodes, mesh.tets);
+          const auto loc = meshing::locate_boundary_nodes(mesh, shell.surface);
+          int hist[5] = {0, 0, 0, 0, 0};
+          for (Eigen::Index e = 0; e < mesh.tets.rows(); ++e) {
+            if (per.min_dihedral_deg(e) > 5.0) continue;
+            int b = 0;
+            for (int k = 0; k < 4; ++k) b += loc.triangle[static_cast<std::size_t>(mesh.tets(e, k))] >= 0;
+            ++hist[b];
+          }
+          std::printf("  tets < 5deg by boundary nodes: %d %d %d %d %d\n", hist[0], hist[1], hist[2], hist[3], hist[4]);
+        }
         std::printf("  mean tet edge / a = %.3f\n", edge_sum / (6.0 * static_cast<double>(mesh.tets.rows())) / a);
         std::printf("%-20s %-5s %8ld %7.1f %8ld %8ld %7.2f %6.2f %6.1f %6.1f %7.2f %6.2f%% %6.3f\n", shape.name,
                     meshing::mesher_name(mesher), target, 1e3 * a, q.tets, q.nodes, seconds, q.min_dihedral_deg,

@@ -19,12 +19,15 @@
 #include <CGAL/Random.h>
 #include <CGAL/Surface_mesh.h>
 #include <CGAL/make_mesh_3.h>
+#include <CGAL/refine_mesh_3.h>
 
 #ifdef CGAL_LINKED_WITH_TBB
 #include <tbb/global_control.h>
 #endif
 
 #include <chrono>
+#include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <unordered_map>
 #include <vector>
@@ -68,6 +71,63 @@ SurfaceMesh to_surface_mesh(const ClosedSurface& surface) {
   }
   require(CGAL::is_closed(mesh), "cgal: the input surface is not closed");
   return mesh;
+}
+
+/// Seeds the refinement with input vertices (dimension 2) at least `spacing` apart and away from the
+/// protected features. Mesh_3 otherwise starts from the feature points plus a few ray-shot surface
+/// points; with coplanar rims that start can be a flat triangulation from which it refines nothing
+/// and returns an empty mesh (seen on a hemispherical shell whose two rims lie in one plane).
+int add_surface_seeds(Complex& complex, const Domain& domain, const ClosedSurface& surface, double spacing) {
+  std::vector<Eigen::Vector3d> normal(static_cast<std::size_t>(surface.vertices.rows()), Eigen::Vector3d::Zero());
+  for (Eigen::Index t = 0; t < surface.triangles.rows(); ++t) {
+    const Eigen::Vector3d a = surface.vertices.row(surface.triangles(t, 0)).transpose();
+    const Eigen::Vector3d n = (surface.vertices.row(surface.triangles(t, 1)).transpose() - a)
+                                  .cross(surface.vertices.row(surface.triangles(t, 2)).transpose() - a);
+    for (int k = 0; k < 3; ++k) normal[static_cast<std::size_t>(surface.triangles(t, k))] += n;
+  }
+  // Greedy selection on a hash grid of cell `spacing`: a vertex is taken when no taken vertex (or
+  // feature point) lies within `spacing`.
+  std::unordered_map<std::uint64_t, std::vector<Eigen::Vector3d>> grid;
+  const auto cell = [&](const Eigen::Vector3d& p, int dx, int dy, int dz) {
+    const auto c = [&](double x, int d) { return static_cast<std::uint64_t>(static_cast<std::int64_t>(std::floor(x / spacing)) + d + (1 << 20)) & 0x1fffff; };
+    return (c(p.x(), dx) << 42) | (c(p.y(), dy) << 21) | c(p.z(), dz);
+  };
+  const auto near_taken = [&](const Eigen::Vector3d& p) {
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz) {
+          const auto it = grid.find(cell(p, dx, dy, dz));
+          if (it == grid.end()) continue;
+          for (const auto& q : it->second)
+            if ((p - q).norm() < spacing) return true;
+        }
+    return false;
+  };
+  for (const auto& feature : surface.features)
+    for (const auto& p : feature) grid[cell(p, 0, 0, 0)].push_back(p);
+
+  const auto weighted = complex.triangulation().geom_traits().construct_weighted_point_3_object();
+  const auto intersect = domain.construct_intersection_object();
+  const auto crosses = domain.do_intersect_surface_object();
+  int seeds = 0;
+  for (Eigen::Index v = 0; v < surface.vertices.rows(); ++v) {
+    const Eigen::Vector3d p = surface.vertices.row(v).transpose();
+    const Eigen::Vector3d n = normal[static_cast<std::size_t>(v)];
+    if (n.norm() == 0.0 || near_taken(p)) continue;
+    // The domain's own intersection gives the point its surface index.
+    const Eigen::Vector3d d = 0.05 * spacing * n.normalized();
+    const Kernel::Segment_3 segment(Point((p - d).x(), (p - d).y(), (p - d).z()), Point((p + d).x(), (p + d).y(), (p + d).z()));
+    if (!crosses(segment)) continue;
+    const auto hit = intersect(segment);
+    if (std::get<2>(hit) == 0) continue;
+    const auto vertex = complex.triangulation().insert(weighted(std::get<0>(hit)));
+    if (vertex == Triangulation::Vertex_handle()) continue;   // hidden by a protecting ball
+    complex.set_dimension(vertex, 2);
+    complex.set_index(vertex, std::get<1>(hit));
+    grid[cell(p, 0, 0, 0)].push_back(p);
+    ++seeds;
+  }
+  return seeds;
 }
 
 // Nodes: the vertices of the cells in the complex, numbered in order of first use.
@@ -121,16 +181,21 @@ TetMesh mesh_with_cgal(const ClosedSurface& surface, const SizeControl& size) {
                           params::cell_size = bound);
 
   TetMesh mesh;
+  int seeds = 0;
   try {
 #ifdef CGAL_LINKED_WITH_TBB
     const tbb::global_control threads(tbb::global_control::max_allowed_parallelism,
                                       static_cast<std::size_t>(std::max(1, size.threads)));
 #endif
-    const Complex complex = CGAL::make_mesh_3<Complex>(domain, criteria,
-                                                       params::perturb(params::time_limit = perturb_seconds),
-                                                       params::exude(params::time_limit = exude_seconds),
-                                                       params::mesh_3_options(params::number_of_initial_points =
-                                                                                  static_cast<int>(knob("SFLSH_CGAL_INIT", -1))));
+    // make_mesh_3, unrolled (CGAL 5.5.1 make_mesh_3_impl): protect the features, then our seeds, then refine.
+    Complex complex;
+    CGAL::Mesh_3::internal::C3t3_initializer<Complex, Domain, Criteria,
+                                             CGAL::Mesh_3::internal::has_Has_features<Domain>::value>()(
+        complex, domain, criteria, use_features && !surface.features.empty());
+    seeds = add_surface_seeds(complex, domain, surface, knob("SFLSH_CGAL_SEED", 3.0) * size.edge_length);
+    const auto perturb = perturb_seconds < 0 ? params::no_perturb() : params::perturb(params::time_limit = perturb_seconds);
+    const auto exude = exude_seconds < 0 ? params::no_exude() : params::exude(params::time_limit = exude_seconds);
+    CGAL::refine_mesh_3(complex, domain, criteria, perturb, exude, params::no_reset_c3t3());
     require(complex.number_of_cells_in_complex() > 0,
             "cgal: Mesh_3 returned no tets ({} vertices, {} surface facets, {} feature edges in the complex)",
             complex.triangulation().number_of_vertices(), complex.number_of_facets_in_complex(),
@@ -141,8 +206,8 @@ TetMesh mesh_with_cgal(const ClosedSurface& surface, const SizeControl& size) {
   } catch (const std::exception& e) {
     throw_error("cgal: Mesh_3 failed: {}", e.what());
   }
-  logger()->debug("cgal: {} tets, {} nodes in {:.2f} s ({} feature polylines{})", mesh.tets.rows(), mesh.nodes.rows(),
-                  std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
+  logger()->debug("cgal: {} tets, {} nodes in {:.2f} s ({} seeds, {} feature polylines{})", mesh.tets.rows(), mesh.nodes.rows(),
+                  std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), seeds,
                   use_features ? surface.features.size() : 0, kParallel ? ", parallel" : "");
   return mesh;
 }

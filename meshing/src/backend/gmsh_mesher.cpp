@@ -121,10 +121,11 @@ std::string last_gmsh_error() {
 TetMesh run_gmsh(const Boundary& boundary, int input_count, const SizeControl& size) {
   gmsh::model::add("sflsh_layer");
   gmsh::option::setNumber("General.NumThreads", std::max(1, size.threads));
-  gmsh::option::setNumber("Mesh.MaxNumThreads3D", std::max(1, size.threads));
+  gmsh::option::setNumber("Mesh.MaxNumThreads3D", knob("SFLSH_GMSH_THREADS", std::max(1, size.threads)));
   gmsh::option::setNumber("Mesh.Algorithm3D", knob("SFLSH_GMSH_ALGO", 10));   // 10 HXT, 1 Delaunay
   gmsh::option::setNumber("Mesh.MeshSizeMax", size.edge_length);
   gmsh::option::setNumber("Mesh.Optimize", 1);
+  gmsh::option::setNumber("Mesh.MeshSizeExtendFromBoundary", knob("SFLSH_GMSH_EXTEND", 1));
   gmsh::option::setNumber("Mesh.Renumber", 0);   // keep our node tags: tag − 1 is the boundary vertex index
 
   // One discrete surface per patch; a node is classified on the first patch that uses it.

@@ -143,8 +143,8 @@ void register_mesh_commands(CLI::App& app, const Invocation& invocation) {
   add_body_option(*cmd, opt->subject);
   add_subject_options(*cmd, opt->subject);
   cmd->add_option("--thickness", opt->thickness, "Thickness fraction h of the layer, 0 < h < 1")->capture_default_str();
-  cmd->add_option("--mesher", opt->mesher, "Tet mesher: cgal | gmsh")
-      ->check(CLI::IsMember({"cgal", "gmsh"}))
+  cmd->add_option("--mesher", opt->mesher, "Tet mesher: cgal | gmsh | layered (extruded prisms, valid for any h)")
+      ->check(CLI::IsMember({"cgal", "gmsh", "layered"}))
       ->capture_default_str();
   cmd->add_option("--size", opt->size, "Size preset: coarse (~10k tets) | default (~50k) | fine (~200k)")
       ->check(CLI::IsMember({"coarse", "default", "fine"}))

@@ -1,0 +1,177 @@
+// Orthotropic StVK with Fung saturation (physics.md §1.2). The derivation, step by step:
+//
+//   Ψ₀(F) = μ₀ Ê:Ê + (λ₀/2)(tr Ê)²,   Ê = P_Y E P_Y,   E = ½(FᵀF − I)
+//   dΨ₀   = (2μ₀ Ê + λ₀ tr(Ê) I) : dÊ = S₀ : dE          (P_Y symmetric, so A:P_Y dE P_Y = P_Y A P_Y : dE)
+//   dE    = sym(Fᵀ dF),  S₀ symmetric  ⇒  S₀ : dE = (F S₀) : dF,  so P₀ = ∂Ψ₀/∂F = F S₀
+//   dP₀   = dF S₀ + F dS₀,  dS₀ = P_Y (2μ₀ dÊ + λ₀ tr(dÊ) I) P_Y,  dÊ = P_Y dE P_Y
+//
+//   Ψ = (c/2) φ(x),  x = 2Ψ₀/c,  φ(x) = eˣ − 1 (up to the cap; see overflow below)
+//   ∂Ψ/∂F   = φ'(x) P₀                                   (c/2 · φ' · 2/c = φ')
+//   ∂²Ψ/∂F² = φ'(x) ∂P₀/∂F + (2/c) φ''(x) vec(P₀) vec(P₀)ᵀ
+//
+// Overflow: beyond x_cap = kFungExponentCap either throw, or continue φ by its tangent,
+// φ(x) = e^{x_cap}(1 + x − x_cap) − 1, φ' = e^{x_cap}, φ'' = 0 (C¹ and consistent derivatives).
+#include <sflsh/core/error.hpp>
+#include <sflsh/material/orthotropic_fung.hpp>
+
+#include <Eigen/LU>
+
+#include <cmath>
+
+namespace sflsh::material {
+
+namespace {
+
+/// The shared intermediate quantities of one evaluation.
+struct Strain {
+  Eigen::Matrix3d E_hat;
+  Eigen::Matrix3d S0;  ///< ∂Ψ₀/∂E
+  double psi0 = 0.0;
+};
+
+void require_finite(const Eigen::Matrix3d& F) {
+  if (!F.allFinite()) {
+    throw_error("orthotropic Fung: non-finite deformation gradient [{} {} {}; {} {} {}; {} {} {}]", F(0, 0), F(0, 1),
+                F(0, 2), F(1, 0), F(1, 1), F(1, 2), F(2, 0), F(2, 1), F(2, 2));
+  }
+}
+
+Strain strain_of(const Eigen::Matrix3d& F, const OrthotropicFung& m) {
+  require_finite(F);
+  Strain s;
+  const Eigen::Matrix3d E = green_strain(F);
+  s.E_hat = m.scaling * E * m.scaling;                 // Ê = P_Y E P_Y (physics.md §1.2)
+  const double tr = s.E_hat.trace();
+  s.psi0 = m.mu0 * s.E_hat.squaredNorm() + 0.5 * m.lambda0 * tr * tr;  // tr(Ê²) = ‖Ê‖²_F (Ê symmetric)
+  require(std::isfinite(s.psi0), "orthotropic Fung: the StVK energy overflows (‖F‖ = {:.4g})", F.norm());
+  s.S0 = m.scaling * (2.0 * m.mu0 * s.E_hat + m.lambda0 * tr * Eigen::Matrix3d::Identity()) * m.scaling;
+  return s;
+}
+
+/// φ(x) = (eˣ − 1) and its first two derivatives, with the overflow policy applied.
+struct Fung {
+  double phi = 0.0;
+  double dphi = 1.0;
+  double d2phi = 0.0;
+};
+
+Fung fung_factor(double x, const OrthotropicFung& m) {
+  Fung f;
+  if (m.inv_c == 0.0) return f;  // Fung factor off: Ψ = Ψ₀, handled by the caller
+  if (x <= kFungExponentCap) {   // false for NaN, which then reaches the checks below
+    f.phi = std::expm1(x);
+    f.dphi = std::exp(x);
+    f.d2phi = f.dphi;
+    return f;
+  }
+  if (m.overflow == ExponentOverflow::kThrow || !std::isfinite(x)) {
+    throw_error("orthotropic Fung: exponent 2Ψ₀/c = {:.4g} exceeds the cap {} (c = {:.4g} Pa); the strain is far "
+                "outside the material's range",
+                x, kFungExponentCap, m.c);
+  }
+  const double e_cap = std::exp(kFungExponentCap);
+  f.phi = e_cap * (1.0 + (x - kFungExponentCap)) - 1.0;
+  f.dphi = e_cap;
+  f.d2phi = 0.0;
+  return f;
+}
+
+double psi_from(const Strain& s, const Fung& f, const OrthotropicFung& m) {
+  return m.inv_c == 0.0 ? s.psi0 : 0.5 * m.c * f.phi;  // Ψ = (c/2)(exp(2Ψ₀/c) − 1) (physics.md §1.2)
+}
+
+/// ∂²Ψ₀/∂F² column by column: column k is dP₀ for dF = e_i e_jᵀ, k = i + 3j.
+Matrix9d stvk_hessian(const Eigen::Matrix3d& F, const Strain& s, const OrthotropicFung& m) {
+  Matrix9d H;
+  for (int j = 0; j < 3; ++j) {
+    for (int i = 0; i < 3; ++i) {
+      // Fᵀ dF has one non-zero column, j, equal to row i of F.
+      Eigen::Matrix3d FtdF = Eigen::Matrix3d::Zero();
+      FtdF.col(j) = F.row(i).transpose();
+      const Eigen::Matrix3d dE = 0.5 * (FtdF + FtdF.transpose());       // dE = sym(FᵀdF)
+      const Eigen::Matrix3d dE_hat = m.scaling * dE * m.scaling;        // dÊ = P_Y dE P_Y
+      const Eigen::Matrix3d dS0 =                                        // ℂ₀:dE (physics.md §1.2)
+          m.scaling * (2.0 * m.mu0 * dE_hat + m.lambda0 * dE_hat.trace() * Eigen::Matrix3d::Identity()) * m.scaling;
+      Eigen::Matrix3d dP = F * dS0;                                      // F dS₀
+      dP.row(i) += s.S0.row(j);                                          // + dF S₀ = e_i (row j of S₀)
+      H.col(i + 3 * j) = Eigen::Map<const Vector9d>(dP.data());
+    }
+  }
+  return H;
+}
+
+}  // namespace
+
+OrthotropicFung make_orthotropic_fung(const SkinMaterial& material, const Eigen::Vector3d& normal) {
+  validate(material);
+  require(normal.allFinite() && std::abs(normal.norm() - 1.0) < 1e-6,
+          "orthotropic Fung: the normal must be a unit vector, got ({}, {}, {}) of length {}", normal.x(), normal.y(),
+          normal.z(), normal.norm());
+  OrthotropicFung m;
+  m.normal = normal.normalized();
+  const Eigen::Matrix3d nn = m.normal * m.normal.transpose();
+  // P_Y = Y_t^{1/4}(I − nnᵀ) + Y_n^{1/4} nnᵀ (physics.md §1.2)
+  m.scaling = std::pow(material.young_tangent, 0.25) * (Eigen::Matrix3d::Identity() - nn) +
+              std::pow(material.young_normal, 0.25) * nn;
+  m.mu0 = unit_lame_mu(material.poisson);
+  m.lambda0 = unit_lame_lambda(material.poisson);
+  m.c = fung_scale_c(material);
+  m.inv_c = std::isinf(m.c) ? 0.0 : 1.0 / m.c;
+  m.overflow = material.overflow;
+  return m;
+}
+
+Eigen::Matrix3d green_strain(const Eigen::Matrix3d& F) {
+  return 0.5 * (F.transpose() * F - Eigen::Matrix3d::Identity());
+}
+
+double psi_ortho_stvk(const Eigen::Matrix3d& F, const OrthotropicFung& m) { return strain_of(F, m).psi0; }
+
+Eigen::Matrix3d dpsi_ortho_stvk_dF(const Eigen::Matrix3d& F, const OrthotropicFung& m) {
+  return F * strain_of(F, m).S0;
+}
+
+Matrix9d d2psi_ortho_stvk_dF2(const Eigen::Matrix3d& F, const OrthotropicFung& m) {
+  return stvk_hessian(F, strain_of(F, m), m);
+}
+
+double fung_exponent(const Eigen::Matrix3d& F, const OrthotropicFung& m) {
+  return 2.0 * strain_of(F, m).psi0 * m.inv_c;
+}
+
+// The three share eval_ortho_fung so that they return bit-identical numbers to one combined evaluation.
+double psi_ortho_fung(const Eigen::Matrix3d& F, const OrthotropicFung& m) { return eval_ortho_fung(F, m, false).psi; }
+
+Eigen::Matrix3d dpsi_ortho_fung_dF(const Eigen::Matrix3d& F, const OrthotropicFung& m) {
+  return eval_ortho_fung(F, m, false).P;
+}
+
+Matrix9d d2psi_ortho_fung_dF2(const Eigen::Matrix3d& F, const OrthotropicFung& m) {
+  return eval_ortho_fung(F, m, true).dPdF;
+}
+
+OrthoFungValues eval_ortho_fung(const Eigen::Matrix3d& F, const OrthotropicFung& m, bool with_hessian) {
+  const Strain s = strain_of(F, m);
+  const Fung f = fung_factor(2.0 * s.psi0 * m.inv_c, m);
+  OrthoFungValues v;
+  v.psi = psi_from(s, f, m);
+  const Eigen::Matrix3d P0 = F * s.S0;
+  v.P = f.dphi * P0;
+  if (with_hessian) {
+    // dP = g[dF S₀ + F ℂ₀:dE] + (2g/c)(P₀:dF) P₀ (physics.md §1.2, dS = g[ℂ₀:dE + (2/c)(S₀:dE)S₀])
+    v.dPdF = f.dphi * stvk_hessian(F, s, m);
+    if (m.inv_c != 0.0) {
+      const Eigen::Map<const Vector9d> p0(P0.data());
+      v.dPdF.noalias() += (2.0 * m.inv_c * f.d2phi) * p0 * p0.transpose();
+    }
+  }
+  return v;
+}
+
+Eigen::Matrix3d cauchy_stress(const Eigen::Matrix3d& F, const Eigen::Matrix3d& P) {
+  const double J = F.determinant();
+  require(J > 0.0, "Cauchy stress: det F = {} is not positive (inverted element)", J);
+  return P * F.transpose() / J;  // σ = J⁻¹ P Fᵀ
+}
+
+}  // namespace sflsh::material

@@ -1,0 +1,165 @@
+// Reading material files (material_file.hpp, docs/material_file.md), errors as "<file>:<line>: …".
+#include <sflsh/core/error.hpp>
+#include <sflsh/material/material_file.hpp>
+
+#include <toml++/toml.h>
+
+#include <cmath>
+#include <initializer_list>
+#include <limits>
+#include <map>
+
+namespace sflsh::material {
+
+namespace {
+
+class Reader {
+ public:
+  explicit Reader(std::filesystem::path path) : path_(std::move(path)) {}
+
+  std::string at(const toml::node& node) const {
+    return fmt::format("{}:{}", path_.string(), node.source().begin.line);
+  }
+
+  // Every key of `table` must be one of `allowed`.
+  void check_keys(const toml::table& table, std::initializer_list<std::string_view> allowed,
+                  std::string_view context) const {
+    for (const auto& [key, node] : table) {
+      bool known = false;
+      for (const std::string_view a : allowed) known = known || key.str() == a;
+      if (known) continue;
+      std::string list;
+      for (const std::string_view a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
+      throw_error("{}: unknown key '{}'{} (expected {})", at(node), key.str(), context, list);
+    }
+  }
+
+  const toml::node& required(const toml::table& table, std::string_view key, std::string_view context) const {
+    const toml::node* node = table.get(key);
+    require(node != nullptr, "{}: missing key '{}'{}", at(table), key, context);
+    return *node;
+  }
+
+  std::string string_value(const toml::node& node, std::string_view key) const {
+    const auto value = node.value_exact<std::string>();
+    require(value.has_value(), "{}: '{}' must be a string", at(node), key);
+    require(!value->empty(), "{}: '{}' must not be empty", at(node), key);
+    return *value;
+  }
+
+  double number(const toml::node& node, std::string_view key, std::string_view context) const {
+    require(node.is_number(), "{}: '{}'{} must be a number", at(node), key, context);
+    const double value = *node.value<double>();
+    require(std::isfinite(value), "{}: '{}'{} is not finite", at(node), key, context);
+    return value;
+  }
+
+  std::vector<double> numbers(const toml::node& node, std::string_view key, std::size_t count,
+                              std::string_view context) const {
+    const toml::array* array = node.as_array();
+    require(array != nullptr && array->size() == count, "{}: '{}'{} must be an array of {} numbers", at(node), key,
+            context, count);
+    std::vector<double> out;
+    for (const toml::node& item : *array) out.push_back(number(item, key, context));
+    return out;
+  }
+
+  void read_bounds(const toml::node& node, ParameterBounds& bounds) const {
+    const toml::table* table = node.as_table();
+    require(table != nullptr, "{}: 'bounds' must be a table", at(node));
+    check_keys(*table, {"thickness", "young_tangent", "young_normal"}, " in [bounds]");
+    ParameterRange* ranges[kNumKappa] = {&bounds.thickness, &bounds.young_tangent, &bounds.young_normal};
+    for (int c = 0; c < kNumKappa; ++c) {
+      const std::string_view name = kKappaNames[static_cast<std::size_t>(c)];
+      const toml::node* entry = table->get(name);
+      if (entry == nullptr) continue;
+      const std::vector<double> range = numbers(*entry, name, 2, " in [bounds]");
+      *ranges[c] = {range[0], range[1]};
+      try {
+        validate(bounds);
+      } catch (const Error& e) {
+        throw_error("{}: {}", at(*entry), e.what());
+      }
+    }
+  }
+
+  MaterialControlPoint read_point(const toml::node& node, std::size_t index, const ParameterBounds& bounds,
+                                  std::map<int, std::size_t>& seen) const {
+    const toml::table* table = node.as_table();
+    require(table != nullptr, "{}: 'control_point' must be an array of tables ([[control_point]])", at(node));
+    const std::string context = fmt::format(" in control_point #{}", index);
+    check_keys(*table, {"vertex", "position", "thickness", "young_tangent", "young_normal"}, context);
+    MaterialControlPoint point;
+    point.line = static_cast<int>(table->source().begin.line);
+    const toml::node& vertex = required(*table, "vertex", context);
+    const auto v = vertex.value_exact<std::int64_t>();
+    require(v.has_value(), "{}: 'vertex'{} must be an integer", at(vertex), context);
+    require(*v >= 0 && *v <= std::numeric_limits<int>::max(), "{}: 'vertex'{} = {} must be a vertex index >= 0",
+            at(vertex), context, *v);
+    point.vertex = static_cast<int>(*v);
+    const auto [first, inserted] = seen.emplace(point.vertex, index);
+    require(inserted, "{}: 'vertex'{} repeats vertex {} of control_point #{}", at(vertex), context, point.vertex,
+            first->second);
+    if (const toml::node* position = table->get("position")) {
+      const std::vector<double> p = numbers(*position, "position", 3, context);
+      point.position = Eigen::Vector3d(p[0], p[1], p[2]);
+    }
+    double* values[kNumKappa] = {&point.kappa.thickness, &point.kappa.young_tangent, &point.kappa.young_normal};
+    for (int c = 0; c < kNumKappa; ++c) {
+      const std::string_view name = kKappaNames[static_cast<std::size_t>(c)];
+      const toml::node& field = required(*table, name, context);
+      *values[c] = number(field, name, context);
+      const ParameterRange& range = bounds[c];
+      require(*values[c] >= range.min && *values[c] <= range.max, "{}: '{}'{} = {} is outside the bounds [{}, {}]{}",
+              at(field), name, context, *values[c], range.min, range.max, c == kThickness ? "" : " Pa");
+    }
+    return point;
+  }
+
+  MaterialFile read() const {
+    require(std::filesystem::exists(path_), "{}: material file not found", path_.string());
+    toml::table root;
+    try {
+      root = toml::parse_file(path_.string());
+    } catch (const toml::parse_error& e) {
+      throw_error("{}:{}: {}", path_.string(), e.source().begin.line, e.description());
+    }
+    check_keys(root, {"version", "body", "subject", "poisson", "saturation", "bounds", "control_point"}, "");
+    MaterialFile file;
+    if (const toml::node* version = root.get("version")) {
+      const auto value = version->value_exact<std::int64_t>();
+      require(value.has_value() && *value == kMaterialFileVersion,
+              "{}: 'version' must be the integer {} (this reader's format)", at(*version), kMaterialFileVersion);
+    }
+    file.body = string_value(required(root, "body", ""), "body");
+    file.subject = string_value(required(root, "subject", ""), "subject");
+    const toml::node& poisson = required(root, "poisson", "");
+    file.poisson = number(poisson, "poisson", "");
+    require(file.poisson > -1.0 && file.poisson < 0.5, "{}: 'poisson' = {} is outside (-1, 0.5)", at(poisson),
+            file.poisson);
+    const toml::node& saturation = required(root, "saturation", "");
+    file.saturation = number(saturation, "saturation", "");
+    require(file.saturation > 0.0, "{}: 'saturation' = {} must be > 0", at(saturation), file.saturation);
+    if (const toml::node* bounds = root.get("bounds")) read_bounds(*bounds, file.bounds);
+
+    const toml::node* list = root.get("control_point");
+    require(list != nullptr, "{}: no [[control_point]] tables", path_.string());
+    const toml::array* points = list->as_array();
+    require(points != nullptr && !points->empty(), "{}: 'control_point' must be a non-empty array of tables",
+            at(*list));
+    std::map<int, std::size_t> seen;  // vertex → its first control point
+    for (std::size_t i = 0; i < points->size(); ++i)
+      file.control_points.push_back(read_point((*points)[i], i, file.bounds, seen));
+    validate(file, path_.string());  // everything again (with each point's table line); nothing should be left
+    return file;
+  }
+
+ private:
+  std::filesystem::path path_;
+};
+
+}  // namespace
+
+MaterialFile load_material_file(const std::filesystem::path& path) { return Reader(path).read(); }
+
+}  // namespace sflsh::material
