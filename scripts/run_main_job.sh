@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The main job on the embedded default data (no licensed data needed):
 # installs the Debian packages, builds sflsh (release), and poses the open body along a
-# procedural motion, writing a ParaView series to out/main_job/body.pvd.
+# procedural motion, writing a ParaView series to out/main_job/body.pvd; then meshes the soft-tissue
+# layer of the same subject and writes its material fields.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -10,5 +11,9 @@ cmake --preset release >/dev/null
 cmake --build --preset release -j"$(nproc)"
 
 out=${SFLSH_OUT:-out/main_job}
-build/release/apps/sflsh/sflsh motion export --motion jiggle_on_toes --subject OPEN_TRAIN_1 --out "$out"
-echo "main job done: open $out/body.pvd in ParaView (summary in $out/summary.json)"
+sflsh=build/release/apps/sflsh/sflsh
+"$sflsh" motion export --motion jiggle_on_toes --subject OPEN_TRAIN_1 --out "$out"
+# The soft-tissue layer (the template mesh is cached in ~/.cache/sflsh after the first run) and its material.
+"$sflsh" mesh --subject OPEN_TRAIN_1 --thickness 0.5 --mesher cgal --size default --out "$out/layer"
+"$sflsh" material show --subject OPEN_TRAIN_1 --control-points 24 --out "$out/material"
+echo "main job done: open $out/body.pvd, $out/layer/layer.vtu and $out/material/layer.vtu in ParaView"
