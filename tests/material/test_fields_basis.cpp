@@ -226,7 +226,6 @@ TEST(BiharmonicBasis, IsMaximalAtItsControlPointAndDecaysWithDistance) {
     Eigen::Index argmax = 0;
     basis.phi.col(col).maxCoeff(&argmax);
     EXPECT_EQ(basis.phi(argmax, col), 1.0);
-    EXPECT_EQ(basis.phi.col(col).cwiseEqual(1.0).count(), 1) << "φ_" << i << " reaches 1 only at its point";
     // Mean φ_i over vertices closer to s_i than the nearest other control point (its own cell) is far above
     // its mean beyond twice that distance. A factor 5 is loose: smooth local bumps give ratios of ~10–100.
     const std::vector<int> source = {s[i]};
@@ -240,6 +239,10 @@ TEST(BiharmonicBasis, IsMaximalAtItsControlPointAndDecaysWithDistance) {
       if (d(v) < 0.5 * r) near += basis.phi(v, col), ++n_near;
       if (d(v) > 2.0 * r) far += basis.phi(v, col), ++n_far;
     }
+    // φ_i may plateau at 1 next to its point (bounded weights clamp the others to 0 there, and the
+    // normalization makes φ_i exactly 1), but only nearer to s_i than to any other control point.
+    for (Eigen::Index v = 0; v < d.size(); ++v)
+      if (basis.phi(v, col) == 1.0) EXPECT_LT(d(v), r) << "φ_" << i << " reaches 1 far from its point at vertex " << v;
     ASSERT_GT(n_near, 0);
     ASSERT_GT(n_far, 0);
     EXPECT_GT(near / n_near, 5.0 * far / n_far) << "function " << i;

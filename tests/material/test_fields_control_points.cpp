@@ -34,6 +34,15 @@ bool mirror_closed(const std::vector<int>& points, const std::vector<int>& mirro
   return std::all_of(points.begin(), points.end(), [&](int v) { return set.count(mirror[static_cast<std::size_t>(v)]) > 0; });
 }
 
+// Points of the set whose mirror is not in it and lies farther than `near` from them.
+long unpaired(const std::vector<int>& points, const FieldMesh& mesh, double near) {
+  const std::set<int> set(points.begin(), points.end());
+  return std::count_if(points.begin(), points.end(), [&](int v) {
+    const int m = mesh.mirror[static_cast<std::size_t>(v)];
+    return set.count(m) == 0 && (mesh.V.row(v) - mesh.V.row(m)).norm() > near;
+  });
+}
+
 }  // namespace
 
 TEST(ControlPoints, AreNestedAndDeterministic) {
@@ -67,8 +76,9 @@ TEST(ControlPoints, FirstPointIsCentralOnTheTorso) {
 }
 
 TEST(ControlPoints, AreMirrorSymmetricOnMirroredMeshes) {
-  // Exact mirror maps: every even N gives a set closed under the mirror (groups of two), and N = 1 is a
-  // plane vertex. Odd N > 1 may split a group, so only even N are checked.
+  // Exact mirror maps: points come in groups (a mirror pair, or a single vertex on or next to the
+  // symmetry plane, whose mirror is too close to be a separate point). Any prefix splits at most one pair:
+  // apart from near-plane singles (mirror within two mean edges), at most one point lacks its mirror.
   for (const auto& [name, mesh] : {std::pair{"patch", sflsh::testing::grid_patch()},
                                    std::pair{"blob", sflsh::testing::icosphere(4, true)}}) {
     SCOPED_TRACE(name);
@@ -76,8 +86,10 @@ TEST(ControlPoints, AreMirrorSymmetricOnMirroredMeshes) {
     options.mirror = mesh.mirror;
     const std::vector<int> points = place_control_points(mesh.V, mesh.F, 84, options);
     EXPECT_EQ(mesh.mirror[static_cast<std::size_t>(points[0])], points[0]);
-    for (int n = 2; n <= 84; n += 2)
-      EXPECT_TRUE(mirror_closed({points.begin(), points.begin() + n}, mesh.mirror)) << "N = " << n;
+    double edge = 0.0;
+    for (Eigen::Index f = 0; f < mesh.F.rows(); ++f) edge += (mesh.V.row(mesh.F(f, 0)) - mesh.V.row(mesh.F(f, 1))).norm();
+    edge /= static_cast<double>(mesh.F.rows());
+    for (int n = 1; n <= 84; ++n) EXPECT_LE(unpaired({points.begin(), points.begin() + n}, mesh, 2.0 * edge), 1) << "N = " << n;
     // Without the mirror map farthest-point sampling alone is not symmetric here (ties and the centroid
     // seed break it), so the check above can fail.
     const std::vector<int> plain = place_control_points(mesh.V, mesh.F, 24);
