@@ -242,7 +242,9 @@ TEST(BiharmonicBasis, IsMaximalAtItsControlPointAndDecaysWithDistance) {
     // φ_i may plateau at 1 next to its point (bounded weights clamp the others to 0 there, and the
     // normalization makes φ_i exactly 1), but only nearer to s_i than to any other control point.
     for (Eigen::Index v = 0; v < d.size(); ++v)
-      if (basis.phi(v, col) == 1.0) EXPECT_LT(d(v), r) << "φ_" << i << " reaches 1 far from its point at vertex " << v;
+      if (basis.phi(v, col) == 1.0) {
+        EXPECT_LT(d(v), r) << "φ_" << i << " reaches 1 far from its point at vertex " << v;
+      }
     ASSERT_GT(n_near, 0);
     ASSERT_GT(n_far, 0);
     EXPECT_GT(near / n_near, 5.0 * far / n_far) << "function " << i;

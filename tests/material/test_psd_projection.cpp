@@ -37,10 +37,12 @@ void check_projection(std::mt19937& rng) {
     const double removed = before.eigenvalues().cwiseMin(0.0).squaredNorm();
     EXPECT_NEAR((A - B).squaredNorm(), removed, 1e-10 * removed);
     // Positive eigenpairs are kept: B v = λ v.
-    for (int i = 0; i < N; ++i)
-      if (before.eigenvalues()(i) > 1e-6)
+    for (int i = 0; i < N; ++i) {
+      if (before.eigenvalues()(i) > 1e-6) {
         EXPECT_LT((B * before.eigenvectors().col(i) - before.eigenvalues()(i) * before.eigenvectors().col(i)).norm(),
                   1e-12 * scale);
+      }
+    }
   }
   for (int k = 0; k < 5; ++k) {  // PSD in → the same matrix out, bit for bit
     const Matrix A = random_symmetric<N>(rng, 3.0 * N);
