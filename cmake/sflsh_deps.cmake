@@ -37,6 +37,7 @@ pkg_check_modules(LIBZIP REQUIRED IMPORTED_TARGET libzip)  # libzip's CMake conf
 find_package(ZLIB REQUIRED)
 find_package(TBB REQUIRED CONFIG)
 find_package(OpenMP REQUIRED COMPONENTS CXX)
+find_package(muparser 2 REQUIRED CONFIG)           # muparser::muparser (expressions in verify problems)
 
 add_library(sflsh_deps_done INTERFACE)
 add_library(sflsh::deps_done ALIAS sflsh_deps_done)

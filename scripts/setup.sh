@@ -9,7 +9,7 @@ packages=(
   libeigen3-dev libhdf5-dev petsc-dev libsundials-dev libcgal-dev libgmsh-dev gmsh
   libvtk9-dev
   libcli11-dev nlohmann-json3-dev libtomlplusplus-dev libspdlog-dev libfmt-dev
-  libzip-dev zlib1g-dev libtbb-dev
+  libzip-dev zlib1g-dev libtbb-dev libmuparser-dev
   googletest libgtest-dev libgmock-dev
   xvfb xauth
 )

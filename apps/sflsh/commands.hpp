@@ -8,6 +8,7 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace sflsh::app {
 
@@ -15,6 +16,7 @@ namespace sflsh::app {
 struct Invocation {
   int argc = 0;
   const char* const* argv = nullptr;
+  std::vector<std::string> petsc_options;   ///< -snes_*, -ksp_*, -pc_*, … tokens (main.cpp splits them off)
 };
 
 void register_body_commands(CLI::App& app, const Invocation& invocation);
@@ -23,6 +25,14 @@ void register_mesh_commands(CLI::App& app, const Invocation& invocation);
 void register_material_commands(CLI::App& app, const Invocation& invocation);
 /// `material show` (cmd_material_show.cpp), added to the `material` group by register_material_commands.
 void add_material_show_command(CLI::App& material, const Invocation& invocation);
+/// `sflsh verify PROBLEM.toml --out DIR` (cmd_verify.cpp).
+void register_verify_commands(CLI::App& app, const Invocation& invocation);
+/// `sflsh simulate --solver full …` (cmd_simulate.cpp).
+void register_simulate_commands(CLI::App& app, const Invocation& invocation);
+
+/// Runs `body` with PETSc (and MPI) initialized from the invocation's PETSc options. Under mpirun, an
+/// error on any rank is printed with the rank and stops every rank (MPI_Abort) instead of deadlocking.
+void with_petsc(const Invocation& invocation, const std::function<void(int rank, int size)>& body);
 
 /// Options that choose a body model and a subject: --body PATH, --subject NAME | --betas "…".
 struct SubjectOptions {

@@ -4,8 +4,30 @@
 #include <sflsh/body/subjects.hpp>
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
+#include <sflsh/fullspace/petsc_session.hpp>
+
+#include <mpi.h>
+
+#include <iostream>
 
 namespace sflsh::app {
+
+void with_petsc(const Invocation& invocation, const std::function<void(int rank, int size)>& body) {
+  fullspace::PetscSession session(invocation.petsc_options);
+  const int rank = session.rank();
+  const int size = session.size();
+  if (rank != 0) logger()->set_level(spdlog::level::warn);
+  try {
+    body(rank, size);
+  } catch (const std::exception& e) {
+    if (size > 1) {
+      std::cerr << "sflsh: error (rank " << rank << "): " << e.what() << std::endl;
+      MPI_Abort(MPI_COMM_WORLD, 1);
+    }
+    throw;
+  }
+  for (const auto& unused : session.unused_options()) logger()->warn("PETSc option {} was not used", unused);
+}
 
 void add_body_option(CLI::App& cmd, SubjectOptions& options) {
   cmd.add_option("--body", options.body_path,

@@ -1,0 +1,201 @@
+// sflsh simulate --solver full: the full-space reference solver on a subject's soft-tissue layer driven by
+// a motion. Writes the posed body surface per frame exactly as `sflsh motion export` does (same points,
+// same order, same .pvd layout), so that subtracting the two gives the soft-tissue motion.
+#include "commands.hpp"
+
+#include <sflsh/body/motion.hpp>
+#include <sflsh/core/error.hpp>
+#include <sflsh/core/log.hpp>
+#include <sflsh/core/progress.hpp>
+#include <sflsh/core/run_folder.hpp>
+#include <sflsh/core/summary.hpp>
+#include <sflsh/core/vtk_io.hpp>
+#include <sflsh/fullspace/backward_euler.hpp>
+#include <sflsh/fullspace/body_layer.hpp>
+#include <sflsh/fullspace/reference_integrator.hpp>
+#include <sflsh/fullspace/simulation_output.hpp>
+#include <sflsh/material/material_file.hpp>
+#include <sflsh/meshing/layer_cache.hpp>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <optional>
+
+namespace sflsh::app {
+
+namespace {
+
+struct SimulateOptions {
+  std::string solver = "full";
+  SubjectOptions subject;
+  std::string motion;
+  int frames = 0;
+  double fps = 60.0;
+  int substeps = 1;
+  std::string mesh = "default";
+  std::string mesher = "layered";
+  std::string material;
+  int control_points = 12;
+  std::string cache;
+  double density = 1000.0;
+  bool gravity = false;
+  double stiffness_scale = 1.0;
+  bool write_layer = false;
+  bool no_output = false;
+  std::string out;
+};
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+void run_simulate(const SimulateOptions& opt, const Invocation& invocation, int rank, int size) {
+  const auto t_start = Clock::now();
+  require(opt.solver == "full", "--solver {}: only the full-space solver (full) is available", opt.solver);
+  require(opt.fps > 0.0, "--fps must be positive, got {}", opt.fps);
+  require(opt.substeps >= 1, "--substeps must be at least 1, got {}", opt.substeps);
+  require(opt.frames >= 0, "--frames must be non-negative, got {}", opt.frames);
+  require(opt.density > 0.0, "--density must be positive, got {}", opt.density);
+  require(opt.stiffness_scale > 0.0, "--stiffness-scale must be positive, got {}", opt.stiffness_scale);
+
+  const body::BodyModel model = load_selected_body(opt.subject);
+  std::string subject_label;
+  const body::Betas beta = selected_betas(opt.subject, subject_label, "simulate");
+  const body::Motion motion = body::load_motion(opt.motion, opt.fps, opt.frames);
+  motion.validate();
+
+  std::optional<material::MaterialFile> material_file;
+  if (!opt.material.empty()) material_file = material::load_material_file(opt.material);
+
+  fullspace::BodyLayerOptions layer_options;
+  layer_options.mesher = meshing::parse_mesher(opt.mesher);
+  layer_options.size = meshing::parse_size_preset(opt.mesh);
+  if (!opt.cache.empty()) layer_options.cache_dir = opt.cache;
+  layer_options.density = opt.density;
+  layer_options.gravity = opt.gravity;
+  layer_options.stiffness_scale = opt.stiffness_scale;
+  const auto t_build = Clock::now();
+  fullspace::BodyLayer layer = fullspace::build_body_layer(model, beta, motion, material_file ? &*material_file : nullptr,
+                                                           opt.control_points, layer_options);
+  const double build_seconds = seconds_since(t_build);
+  const fullspace::Problem& problem = layer.problem;
+  logger()->info("simulate: {} nodes ({} free), {} tets, {} frames at {} fps, {} substep(s), {} process(es)",
+                 problem.num_nodes(), problem.num_nodes() - static_cast<int>(problem.dirichlet.dof.size() / 3),
+                 problem.num_tets(), motion.num_frames(), motion.fps, opt.substeps, size);
+
+  fullspace::BackwardEuler integrator(problem, MPI_COMM_WORLD);
+  integrator.initialize(fullspace::initial_state(problem, 0.0));
+
+  const bool write = rank == 0 && !opt.no_output;
+  std::optional<RunFolder> run;
+  if (rank == 0) run.emplace(opt.out);
+  fullspace::SimulationWriter writer(layer, write ? &*run : nullptr, opt.write_layer);
+  writer.add_frame(0.0, integrator.state());
+
+  nlohmann::json frames = nlohmann::json::array();
+  frames.push_back({{"frame", 0}, {"t", 0.0}, {"newton_iterations", 0}, {"linear_iterations", 0}, {"seconds", 0.0}});
+  const double h = 1.0 / (motion.fps * opt.substeps);
+  Progress progress("frames", motion.num_frames() > 0 ? motion.num_frames() - 1 : 0, rank == 0);
+  long newton_total = 0, linear_total = 0, retries_total = 0;
+  double solve_seconds = 0.0, function_seconds = 0.0, jacobian_seconds = 0.0;
+  for (std::size_t f = 1; f < motion.num_frames(); ++f) {
+    int newton = 0, linear = 0, retries = 0;
+    double seconds = 0.0;
+    for (int k = 0; k < opt.substeps; ++k) {
+      const fullspace::StepStats st = integrator.step(h);
+      newton += st.newton_iterations;
+      linear += st.linear_iterations;
+      retries += st.failed_attempts;
+      seconds += st.seconds;
+      function_seconds += st.function_seconds;
+      jacobian_seconds += st.jacobian_seconds;
+    }
+    newton_total += newton;
+    linear_total += linear;
+    retries_total += retries;
+    solve_seconds += seconds;
+    const fullspace::Energies e = fullspace::energies(problem, integrator.state());
+    writer.add_frame(motion.time(f), integrator.state());
+    frames.push_back({{"frame", f},
+                      {"t", motion.time(f)},
+                      {"newton_iterations", newton},
+                      {"linear_iterations", linear},
+                      {"failed_attempts", retries},
+                      {"seconds", seconds},
+                      {"energy", {{"kinetic", e.kinetic}, {"elastic", e.elastic}, {"gravity", e.gravity}}}});
+    progress.advance();
+  }
+  progress.finish();
+  if (rank != 0) return;
+
+  writer.finish();
+  nlohmann::json summary = summary_header("simulate", invocation.argc, invocation.argv);
+  summary["solver"] = {{"name", "full"},
+                       {"integrator", "backward_euler"},
+                       {"processes", size},
+                       {"step", h},
+                       {"substeps", opt.substeps},
+                       {"newton_iterations", newton_total},
+                       {"linear_iterations", linear_total},
+                       {"failed_attempts", retries_total}};
+  summary["body"] = opt.subject.body_path.empty() ? "open_body" : opt.subject.body_path;
+  summary["subject"] = subject_label;
+  summary["beta"] = std::vector<double>(beta.data(), beta.data() + beta.size());
+  summary["motion"] = {{"name", motion.name}, {"source", motion.source}, {"fps", motion.fps}, {"frames", motion.num_frames()}};
+  summary["mesh"] = {{"mesher", opt.mesher}, {"size", opt.mesh}, {"nodes", problem.num_nodes()},
+                     {"tets", problem.num_tets()}, {"constrained_dofs", problem.dirichlet.dof.size()}};
+  summary["material"] = {{"file", opt.material}, {"control_points", material_file ? material_file->control_points.size()
+                                                                                    : static_cast<std::size_t>(opt.control_points)},
+                         {"density", opt.density}, {"gravity", opt.gravity}, {"stiffness_scale", opt.stiffness_scale}};
+  summary["dynamics"] = writer.dynamics_summary();
+  summary["frames"] = frames;
+  summary["timings"] = {{"build_seconds", build_seconds},
+                        {"solve_seconds", solve_seconds},
+                        {"function_seconds", function_seconds},
+                        {"jacobian_seconds", jacobian_seconds},
+                        {"seconds_per_frame", motion.num_frames() > 1 ? solve_seconds / static_cast<double>(motion.num_frames() - 1) : 0.0},
+                        {"total_seconds", seconds_since(t_start)}};
+  summary["output"] = opt.no_output ? nlohmann::json("summary.json only")
+                                    : nlohmann::json({{"series", "body.pvd"}, {"layer", opt.write_layer ? "layer.pvd" : ""}});
+  write_json(run->stage("summary.json"), summary);
+  run->commit();
+  logger()->info("simulated {} frames in {:.1f} s ({:.3f} s per frame); mean σ = {:.2f} mm", motion.num_frames(),
+                 solve_seconds, motion.num_frames() > 1 ? solve_seconds / static_cast<double>(motion.num_frames() - 1) : 0.0,
+                 writer.dynamics_summary().value("sigma_mean_mm", 0.0));
+}
+
+}  // namespace
+
+void register_simulate_commands(CLI::App& app, const Invocation& invocation) {
+  auto opt = std::make_shared<SimulateOptions>();
+  auto* cmd = app.add_subcommand(
+      "simulate",
+      "Simulate a subject's soft tissue along a motion and write the posed body surface per frame (as "
+      "`sflsh motion export` does). PETSc options (-snes_*, -ksp_*, -pc_*) may follow; parallel with mpirun -n P.");
+  cmd->add_option("--solver", opt->solver, "Solver: full (the full-space reference)")->check(CLI::IsMember({"full"}));
+  add_body_option(*cmd, opt->subject);
+  add_subject_options(*cmd, opt->subject);
+  cmd->add_option("--motion", opt->motion, "Motion: a procedural name (sflsh motion list) or an AMASS .npz path")->required();
+  cmd->add_option("--frames", opt->frames, "Number of frames (0: the motion's length)");
+  cmd->add_option("--fps", opt->fps, "Frame rate of the output (and of the motion sampling)");
+  cmd->add_option("--substeps", opt->substeps, "Backward-Euler steps per frame (step = 1 / (fps · substeps))");
+  cmd->add_option("--mesh", opt->mesh, "Layer resolution: coarse | default | fine")
+      ->check(CLI::IsMember({"coarse", "default", "fine"}));
+  cmd->add_option("--mesher", opt->mesher, "Layer mesher: layered (default: fast, robust retargeting) | cgal | gmsh")
+      ->check(CLI::IsMember({"layered", "cgal", "gmsh"}));
+  cmd->add_option("--material", opt->material, "Material file (TOML); default: the project defaults at --control-points");
+  cmd->add_option("--control-points", opt->control_points, "Control points N when no --material is given");
+  cmd->add_option("--cache", opt->cache, "Cache folder for template meshes (default $SFLSH_CACHE or ~/.cache/sflsh)");
+  cmd->add_option("--density", opt->density, "Tissue density [kg/m³]");
+  cmd->add_flag("--gravity", opt->gravity, "Apply gravity (off by default: the body's rest shape already includes sag)");
+  cmd->add_option("--stiffness-scale", opt->stiffness_scale, "Multiply Y_t and Y_n by this factor");
+  cmd->add_flag("--write-layer", opt->write_layer, "Also write the tet layer per frame (layer.pvd)");
+  cmd->add_flag("--no-output", opt->no_output, "Write only summary.json");
+  cmd->add_option("--out", opt->out, "Output folder")->required();
+  cmd->callback([opt, invocation] {
+    with_petsc(invocation, [&](int rank, int size) { run_simulate(*opt, invocation, rank, size); });
+  });
+}
+
+}  // namespace sflsh::app

@@ -1,0 +1,179 @@
+// sflsh verify PROBLEM.toml --out DIR: a canonical static or dynamic problem on a given gmsh mesh with a
+// homogeneous material, for checking the full-space solver against other FEM codes.
+#include "commands.hpp"
+
+#include <sflsh/core/atomic_file.hpp>
+#include <sflsh/core/error.hpp>
+#include <sflsh/core/log.hpp>
+#include <sflsh/core/progress.hpp>
+#include <sflsh/core/run_folder.hpp>
+#include <sflsh/core/summary.hpp>
+#include <sflsh/core/vtk_io.hpp>
+#include <sflsh/fullspace/backward_euler.hpp>
+#include <sflsh/fullspace/reference_integrator.hpp>
+#include <sflsh/fullspace/verify_problem.hpp>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <cmath>
+#include <sstream>
+
+namespace sflsh::app {
+
+namespace {
+
+struct VerifyOptions {
+  std::string problem;
+  std::string out;
+  bool no_vtk = false;
+};
+
+/// One recorded sample of the whole mesh.
+struct Record {
+  double t = 0.0;
+  Eigen::VectorXd x;
+};
+
+void write_history(const std::filesystem::path& path, const fullspace::Problem& problem, const std::vector<int>& nodes,
+                   const std::vector<Record>& records) {
+  std::ostringstream csv;
+  csv << "t,node,ux,uy,uz\n";
+  for (const Record& r : records) {
+    for (int v : nodes) {
+      csv << fmt::format("{:.12g},{},{:.12g},{:.12g},{:.12g}\n", r.t, v, r.x[3 * v] - problem.rest(v, 0),
+                         r.x[3 * v + 1] - problem.rest(v, 1), r.x[3 * v + 2] - problem.rest(v, 2));
+    }
+  }
+  write_text_atomically(path, csv.str());
+}
+
+void run_verify(const VerifyOptions& opt, const Invocation& invocation, int rank, int size) {
+  const auto t_start = std::chrono::steady_clock::now();
+  const fullspace::VerifyProblem spec = fullspace::load_verify_problem(opt.problem);
+  fullspace::Problem problem = fullspace::make_problem(spec);
+  problem.validate();
+  const std::vector<int> record_nodes = fullspace::record_nodes(spec);
+  const bool reference = spec.integrator == fullspace::VerifyProblem::Integrator::reference;
+  const bool dynamic = problem.dynamic();
+  require(!reference || dynamic, "{}: integrator \"reference\" needs a dynamic problem (density > 0)", opt.problem);
+  require(!reference || size == 1, "{}: the SUNDIALS reference integrator runs on one process (got {})", opt.problem, size);
+
+  const double step = spec.step;
+  const auto steps = static_cast<long>(std::llround(spec.duration / step));
+  require(std::abs(static_cast<double>(steps) * step - spec.duration) <= 1e-9 * std::max(1.0, spec.duration),
+          "{}: time.duration = {} is not a whole number of steps of {}", opt.problem, spec.duration, step);
+  logger()->info("verify {}: {} nodes, {} tets, {} {} steps of {:.6g} s, recording {} nodes of '{}' every {} steps",
+                 spec.file.filename().string(), problem.num_nodes(), problem.num_tets(), steps,
+                 reference ? "reference (SUNDIALS)" : (dynamic ? "backward Euler" : "static"), step, record_nodes.size(),
+                 spec.record_group, spec.record_every);
+
+  std::vector<Record> records;
+  nlohmann::json steps_json = nlohmann::json::array();
+  fullspace::State state = fullspace::initial_state(problem, 0.0);
+  nlohmann::json solver_json;
+  Progress progress("time steps", static_cast<std::size_t>(steps), rank == 0);
+
+  if (reference) {
+    fullspace::ReferenceOptions ref;
+    ref.rtol = spec.rtol;
+    ref.atol = spec.atol;
+    fullspace::ReferenceIntegrator integrator(problem, ref);
+    integrator.initialize(state);
+    records.push_back({0.0, state.x});
+    for (long k = spec.record_every; k <= steps; k += spec.record_every) {
+      const fullspace::State s = integrator.advance_to(static_cast<double>(k) * step);
+      records.push_back({s.t, s.x});
+      progress.advance(static_cast<std::size_t>(spec.record_every));
+    }
+    const fullspace::ReferenceStats& st = integrator.stats();
+    solver_json = {{"integrator", "reference"},
+                   {"rtol", spec.rtol},
+                   {"atol", spec.atol},
+                   {"steps", st.steps},
+                   {"rhs_evals", st.rhs_evals},
+                   {"jacobian_evals", st.jac_evals},
+                   {"nonlinear_iterations", st.nonlin_iters},
+                   {"error_test_failures", st.error_test_fails},
+                   {"seconds", st.seconds}};
+  } else {
+    fullspace::BackwardEulerOptions be;
+    be.quasi_static = !dynamic;
+    fullspace::BackwardEuler integrator(problem, MPI_COMM_WORLD, be);
+    if (!dynamic) {
+      // A static problem starts at equilibrium with the drives at t = 0.
+      state.w.setZero();
+    }
+    integrator.initialize(state);
+    records.push_back({0.0, state.x});
+    long newton = 0, linear = 0;
+    for (long k = 1; k <= steps; ++k) {
+      const fullspace::StepStats st = integrator.step(step);
+      newton += st.newton_iterations;
+      linear += st.linear_iterations;
+      steps_json.push_back({{"t", integrator.state().t},
+                            {"newton_iterations", st.newton_iterations},
+                            {"linear_iterations", st.linear_iterations},
+                            {"substeps", st.substeps},
+                            {"seconds", st.seconds}});
+      if (k % spec.record_every == 0) records.push_back({integrator.state().t, integrator.state().x});
+      progress.advance();
+    }
+    solver_json = {{"integrator", dynamic ? "backward_euler" : "static"},
+                   {"processes", size},
+                   {"newton_iterations", newton},
+                   {"linear_iterations", linear}};
+  }
+  progress.finish();
+  if (rank != 0) return;
+
+  RunFolder run(opt.out);
+  write_history(run.stage("history.csv"), problem, record_nodes, records);
+  if (!opt.no_vtk) {
+    vtk::PvdSeries series(run.stage("solution.pvd"));
+    const vtk::Cells cells = problem.tets;
+    for (std::size_t k = 0; k < records.size(); ++k) {
+      const Record& r = records[k];
+      const Eigen::Map<const vtk::Points> x(r.x.data(), problem.num_nodes(), 3);
+      vtk::Fields fields;
+      fields.point_data.push_back({"displacement", Eigen::MatrixXd(x - problem.rest), false});
+      fields.field_data.push_back({"TimeValue", Eigen::MatrixXd::Constant(1, 1, r.t), false});
+      const std::string name = fmt::format("solution_{:06d}.vtu", k);
+      vtk::write_unstructured(run.stage(name), x, cells, fields);
+      series.add(r.t, name);
+    }
+    series.write();
+  }
+  nlohmann::json summary = summary_header("verify", invocation.argc, invocation.argv);
+  summary["problem"] = std::filesystem::absolute(spec.file).string();
+  summary["mesh"] = {{"file", spec.mesh_path.string()}, {"nodes", problem.num_nodes()}, {"tets", problem.num_tets()},
+                     {"flipped_tets", spec.mesh.flipped_tets}};
+  summary["record"] = {{"group", spec.record_group}, {"nodes", record_nodes.size()}, {"every", spec.record_every},
+                       {"samples", records.size()}};
+  summary["solver"] = solver_json;
+  summary["steps"] = steps_json;
+  summary["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+  write_json(run.stage("summary.json"), summary);
+  run.commit();
+  logger()->info("wrote {} samples of {} nodes to {}/history.csv", records.size(), record_nodes.size(), opt.out);
+}
+
+}  // namespace
+
+void register_verify_commands(CLI::App& app, const Invocation& invocation) {
+  auto opt = std::make_shared<VerifyOptions>();
+  auto* cmd = app.add_subcommand(
+      "verify",
+      "Solve a canonical problem (gmsh .msh mesh, homogeneous material, TOML description) and write the "
+      "displacement history of a node group, for comparison with other FEM codes. PETSc options "
+      "(-snes_*, -ksp_*, -pc_*) may follow; run in parallel with mpirun -n P.");
+  cmd->add_option("problem", opt->problem, "Problem description (.toml)")->required();
+  cmd->add_option("--out", opt->out, "Output folder (history.csv, summary.json, solution.pvd)")->required();
+  cmd->add_flag("--no-vtk", opt->no_vtk, "Skip the .vtu series of the whole mesh");
+  cmd->callback([opt, invocation] {
+    with_petsc(invocation, [&](int rank, int size) { run_verify(*opt, invocation, rank, size); });
+  });
+}
+
+}  // namespace sflsh::app

@@ -1,0 +1,159 @@
+// Benchmark: seconds per 1/60 s step of the full-space solver on the coarse, default and fine layers with
+// 1 and 2 MPI processes, Newton and KSP iterations per step, peak memory, and the scaling exponent of the
+// time per step in the tet count. Each configuration is one `sflsh simulate --solver full --no-output`
+// run (under mpiexec for P > 1); its summary.json gives the timings, wait4 the peak RSS.
+// Usage: bench_fullspace [--sflsh PATH] [--sizes coarse,default,fine] [--procs 1,2] [--frames 20]
+//                        [--subject NAME] [--motion NAME] [--mesher layered] [--out bench_fullspace.json]
+#include <sflsh/core/summary.hpp>
+
+#include <fmt/format.h>
+
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <iostream>
+#include <map>
+#include <sstream>
+
+namespace {
+
+using namespace sflsh;
+
+std::vector<std::string> split(const std::string& csv) {
+  std::vector<std::string> out;
+  std::stringstream stream(csv);
+  for (std::string item; std::getline(stream, item, ',');)
+    if (!item.empty()) out.push_back(item);
+  return out;
+}
+
+/// Runs a shell command in a child and returns its exit status and the peak RSS of its largest descendant.
+std::pair<int, double> run_measured(const std::string& command) {
+  std::cout.flush();
+  const pid_t child = ::fork();
+  if (child == 0) {
+    ::execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  int status = 0;
+  rusage usage{};
+  ::wait4(child, &status, 0, &usage);
+  const int code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return {code, static_cast<double>(usage.ru_maxrss) / 1024.0};
+}
+
+/// Least-squares slope of log(y) against log(x).
+double loglog_slope(const std::vector<double>& x, const std::vector<double>& y) {
+  const auto n = static_cast<double>(x.size());
+  double sx = 0, sy = 0, sxx = 0, sxy = 0;
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    const double lx = std::log(x[i]), ly = std::log(y[i]);
+    sx += lx;
+    sy += ly;
+    sxx += lx * lx;
+    sxy += lx * ly;
+  }
+  const double den = n * sxx - sx * sx;
+  return den > 0 ? (n * sxy - sx * sy) / den : 0.0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string sflsh_path = SFLSH_CLI, out = "bench_fullspace.json", sizes = "coarse,default,fine", procs = "1,2";
+  std::string subject = "OPEN_TRAIN_1", motion = "running_on_spot", mesher = "layered";
+  int frames = 20;
+  for (int i = 1; i + 1 < argc; i += 2) {
+    if (std::strcmp(argv[i], "--sflsh") == 0) sflsh_path = argv[i + 1];
+    else if (std::strcmp(argv[i], "--out") == 0) out = argv[i + 1];
+    else if (std::strcmp(argv[i], "--sizes") == 0) sizes = argv[i + 1];
+    else if (std::strcmp(argv[i], "--procs") == 0) procs = argv[i + 1];
+    else if (std::strcmp(argv[i], "--frames") == 0) frames = std::stoi(argv[i + 1]);
+    else if (std::strcmp(argv[i], "--subject") == 0) subject = argv[i + 1];
+    else if (std::strcmp(argv[i], "--motion") == 0) motion = argv[i + 1];
+    else if (std::strcmp(argv[i], "--mesher") == 0) mesher = argv[i + 1];
+    else {
+      std::cerr << "bench_fullspace: unknown option " << argv[i] << "\n";
+      return 2;
+    }
+  }
+  try {
+    nlohmann::json results = nlohmann::json::array();
+    std::cout << fmt::format("{:<8} {:>5} {:>8} {:>8} {:>10} {:>9} {:>9} {:>9} {:>9} {:>9}\n", "size", "procs", "tets",
+                             "nodes", "s/step", "newton", "ksp/step", "assem %", "build s", "peak MB");
+    std::map<int, std::pair<std::vector<double>, std::vector<double>>> scaling;   // procs → (tets, s/step)
+    const auto scratch = std::filesystem::temp_directory_path() / fmt::format("bench_fullspace_{}", ::getpid());
+    for (const std::string& size : split(sizes)) {
+      for (const std::string& p : split(procs)) {
+        const int np = std::stoi(p);
+        const auto dir = scratch / fmt::format("{}_{}", size, np);
+        std::string command = fmt::format(
+            "{} simulate --solver full --mesh {} --mesher {} --subject {} --motion {} --frames {} --no-output -q --out {}",
+            sflsh_path, size, mesher, subject, motion, frames + 1, dir.string());
+        if (np > 1) {
+          command = fmt::format(
+              "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 mpiexec -n {} {}",
+              np, command);
+        }
+        // Warm the layer cache outside the measurement (meshing is benchmarked by bench_meshing).
+        const auto [code, peak_mb] = run_measured(command);
+        if (code != 0) {
+          std::cerr << "bench_fullspace: " << size << " with " << np << " processes failed (exit " << code << ")\n";
+          results.push_back({{"size", size}, {"procs", np}, {"error", fmt::format("exit code {}", code)}});
+          continue;
+        }
+        const nlohmann::json summary = read_json(dir / "summary.json");
+        const double steps = static_cast<double>(summary["motion"]["frames"].get<long>() - 1) *
+                             summary["solver"]["substeps"].get<double>();
+        const double solve_s = summary["timings"]["solve_seconds"].get<double>();
+        const double per_step = solve_s / steps;
+        const double newton = summary["solver"]["newton_iterations"].get<double>() / steps;
+        const double ksp = summary["solver"]["linear_iterations"].get<double>() / steps;
+        const double assembly = summary["timings"]["jacobian_seconds"].get<double>() + summary["timings"]["function_seconds"].get<double>();
+        const long tets = summary["mesh"]["tets"].get<long>();
+        nlohmann::json r = {{"size", size},
+                            {"procs", np},
+                            {"mesher", mesher},
+                            {"tets", tets},
+                            {"nodes", summary["mesh"]["nodes"]},
+                            {"steps", steps},
+                            {"seconds_per_step", per_step},
+                            {"newton_per_step", newton},
+                            {"ksp_per_step", ksp},
+                            {"assembly_fraction", solve_s > 0 ? assembly / solve_s : 0.0},
+                            {"build_seconds", summary["timings"]["build_seconds"]},
+                            {"peak_rss_mb", peak_mb}};
+        std::cout << fmt::format("{:<8} {:>5} {:>8} {:>8} {:>10.3f} {:>9.2f} {:>9.1f} {:>9.0f} {:>9.1f} {:>9.0f}\n", size, np,
+                                 tets, summary["mesh"]["nodes"].get<long>(), per_step, newton, ksp,
+                                 100.0 * r["assembly_fraction"].get<double>(), r["build_seconds"].get<double>(), peak_mb);
+        scaling[np].first.push_back(static_cast<double>(tets));
+        scaling[np].second.push_back(per_step);
+        results.push_back(r);
+      }
+    }
+    std::filesystem::remove_all(scratch);
+    nlohmann::json exponents = nlohmann::json::object();
+    for (const auto& [np, data] : scaling) {
+      if (data.first.size() < 2) continue;
+      const double slope = loglog_slope(data.first, data.second);
+      exponents[std::to_string(np)] = slope;
+      std::cout << fmt::format("scaling exponent (s/step ∝ tets^k) with {} process(es): k = {:.2f}\n", np, slope);
+    }
+    write_json(out, {{"benchmark", "fullspace"},
+                     {"subject", subject},
+                     {"motion", motion},
+                     {"frames", frames},
+                     {"mesher", mesher},
+                     {"results", results},
+                     {"scaling_exponent", exponents}});
+    std::cout << "wrote " << out << "\n";
+  } catch (const std::exception& e) {
+    std::cerr << "bench_fullspace: error: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}

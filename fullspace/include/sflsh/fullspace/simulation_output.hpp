@@ -1,0 +1,81 @@
+#pragma once
+// Frame output of a body simulation: the posed body surface per frame as `sflsh motion export` writes it
+// (same points, same order, body.pvd), optionally the tet layer (layer.pvd), and the per-vertex dynamics
+// amplitude σ of physics.md §4 accumulated on the fly (the elastic displacement u of the skin is what
+// inverse skinning returns for a simulation driven by the same poses).
+#include <sflsh/core/run_folder.hpp>
+#include <sflsh/core/vtk_io.hpp>
+#include <sflsh/fullspace/body_layer.hpp>
+
+#include <nlohmann/json.hpp>
+
+#include <memory>
+
+namespace sflsh::fullspace {
+
+/// Per-vertex σ, σ_n, σ_t (physics.md §4 steps 4–6) from a stream of displacement fields.
+class DynamicsAmplitude {
+ public:
+  /// `normals`: unit normals per vertex (n×3) for the normal/tangential split.
+  explicit DynamicsAmplitude(RowMatrixX3d normals);
+  /// Adds one frame's displacement (n×3) [m].
+  void add(const RowMatrixX3d& displacement);
+  int frames() const { return frames_; }
+  /// σ_i = sqrt(mean_t ‖u_i − ū_i‖²) [m] per vertex.
+  Eigen::VectorXd sigma() const;
+  Eigen::VectorXd sigma_normal() const;
+  Eigen::VectorXd sigma_tangent() const;
+
+ private:
+  RowMatrixX3d normals_;
+  RowMatrixX3d sum_;
+  Eigen::VectorXd sum_sq_, sum_n_, sum_sq_n_;
+  int frames_ = 0;
+};
+
+/// Area-weighted unit vertex normals of a triangle surface.
+RowMatrixX3d vertex_normals(const RowMatrixX3d& vertices, const Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor>& faces);
+
+/// Strain-energy density ψ = E_e / V_e per tet [J/m³] at elastic state x.
+Eigen::VectorXd strain_energy_density(const Problem& problem, const Eigen::VectorXd& x);
+
+/// Writes a body simulation frame by frame into a run folder and accumulates σ.
+/// body.pvd / body_NNNNNN.vtp: the posed body surface (all vertices, model order) with point data
+///   displacement (posed − shaped template, as `sflsh motion export`), velocity (finite difference of
+///   posed positions between written frames, as the export), skin_weights_argmax, and in the region
+///   soft_tissue_displacement (posed − skinned, world frame), elastic_displacement (unposed frame),
+///   strain_energy_density (of the tet under the vertex) [J/m³] and the κ fields thickness,
+///   young_tangent, young_normal (zero outside the region).
+/// layer.pvd / layer_NNNNNN.vtu (on request): the posed tet layer with displacement (posed − rest),
+///   elastic_displacement, velocity (ṗ of the state), κ per node and per tet, strain_energy_density per tet.
+/// dynamics.vtp (at finish): the shaped neutral surface with sigma, sigma_normal, sigma_tangent [mm].
+class SimulationWriter {
+ public:
+  /// `run` null: nothing is written (σ is still accumulated). The layer must outlive the writer.
+  SimulationWriter(const BodyLayer& layer, RunFolder* run, bool write_layer);
+  /// Records (and writes) the frame at time t.
+  void add_frame(double t, const State& state);
+  /// Writes the .pvd collections and dynamics.vtp.
+  void finish();
+  /// σ statistics over the region's vertices in mm: sigma_mean_mm, sigma_median_mm, sigma_max_mm,
+  /// sigma_normal_mean_mm, sigma_tangent_mean_mm, frames.
+  nlohmann::json dynamics_summary() const;
+  /// Per body vertex σ in metres (zero outside the region).
+  Eigen::VectorXd sigma_per_vertex() const;
+  /// The posed surface of the last frame added (n×3).
+  const RowMatrixX3d& last_posed() const { return previous_posed_; }
+
+ private:
+  const BodyLayer& layer_;
+  RunFolder* run_;
+  bool write_layer_;
+  std::unique_ptr<vtk::PvdSeries> body_series_, layer_series_;
+  Eigen::MatrixXd dominant_joint_;      ///< per body vertex: argmax of the skinning weights
+  Eigen::MatrixXd vertex_kappa_;        ///< per body vertex (h, Y_t, Y_n), zero outside the region
+  DynamicsAmplitude amplitude_;
+  RowMatrixX3d previous_posed_;
+  double previous_t_ = 0.0;
+  int frame_ = 0;
+};
+
+}  // namespace sflsh::fullspace

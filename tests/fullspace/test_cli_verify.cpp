@@ -1,0 +1,227 @@
+// `sflsh verify` end to end: the history.csv contract, serial vs 2 MPI processes, PETSc's Jacobian
+// check, backward Euler vs the SUNDIALS reference on a free oscillation, and bad input.
+#include <sflsh/fullspace/msh_reader.hpp>
+
+#include "run_command.hpp"
+#include "scratch_dir.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <map>
+#include <regex>
+#include <sstream>
+
+namespace sflsh::fullspace {
+namespace {
+
+namespace fs = std::filesystem;
+using sflsh::testing::run_sflsh;
+using sflsh::testing::scratch_dir;
+
+/// A bar 10 cm × 2 cm × 2 cm, node groups for its faces, written as .msh 4.1 (or 2.2).
+fs::path write_bar(const fs::path& dir, MshVersion version = MshVersion::v41, std::array<int, 3> cells = {5, 1, 1}) {
+  const MshMesh mesh = box_tet_mesh(Eigen::Vector3d(0.1, 0.02, 0.02), cells);
+  const fs::path path = dir / "bar.msh";
+  write_msh(path, mesh.nodes, mesh.tets, mesh.node_groups, version);
+  return path;
+}
+
+void write_text(const fs::path& path, const std::string& text) {
+  std::ofstream out(path);
+  out << text;
+}
+
+/// The bar clamped at x = 0, its far end pulled along y by a smooth drive; records the far end.
+std::string bar_problem(const std::string& extra_time = "", const std::string& extra = "") {
+  return R"(mesh = "bar.msh"
+density = 1000.0
+)" + extra + R"(
+[material]
+young_tangent = 5000.0
+young_normal = 2000.0
+poisson = 0.2
+saturation = 4.0
+normal = [0.0, 0.0, 1.0]
+
+[[fix]]
+group = "xmin"
+components = "xyz"
+
+[[drive]]
+group = "xmax"
+component = "y"
+expression = "0.01*sin(2*pi*2*t)"
+
+[time]
+duration = 0.25
+step = 0.0083333333333333333
+integrator = "backward_euler"
+rtol = 1e-6
+atol = 1e-9
+)" + extra_time + R"(
+[record]
+group = "xmax"
+every = 3
+)";
+}
+
+struct History {
+  std::vector<double> t;
+  std::vector<int> node;
+  std::vector<Eigen::Vector3d> u;
+};
+
+History read_history(const fs::path& path) {
+  std::ifstream in(path);
+  std::string line;
+  std::getline(in, line);
+  EXPECT_EQ(line, "t,node,ux,uy,uz");
+  History h;
+  while (std::getline(in, line)) {
+    std::stringstream ss(line);
+    std::string cell;
+    std::vector<double> v;
+    while (std::getline(ss, cell, ',')) v.push_back(std::stod(cell));
+    EXPECT_EQ(v.size(), 5u);
+    if (v.size() != 5) continue;
+    h.t.push_back(v[0]);
+    h.node.push_back(static_cast<int>(v[1]));
+    h.u.emplace_back(v[2], v[3], v[4]);
+  }
+  return h;
+}
+
+TEST(CliVerify, WritesHistoryWithTheContractHeaderAndDrivenValues) {
+  const fs::path dir = scratch_dir();
+  write_bar(dir);
+  write_text(dir / "problem.toml", bar_problem());
+  const auto r = run_sflsh("verify " + (dir / "problem.toml").string() + " --out " + (dir / "out").string() + " -q", dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const History h = read_history(dir / "out" / "history.csv");
+  // 30 steps recorded every 3: t = 0 plus 10 samples, 4 nodes on the x = 0.1 face.
+  ASSERT_EQ(h.t.size(), 11u * 4u);
+  for (std::size_t k = 0; k < h.t.size(); ++k) {
+    EXPECT_NEAR(h.u[k].y(), 0.01 * std::sin(2 * M_PI * 2 * h.t[k]), 1e-12);   // the drive itself
+  }
+  EXPECT_TRUE(fs::exists(dir / "out" / "summary.json"));
+  EXPECT_TRUE(fs::exists(dir / "out" / "solution.pvd"));
+}
+
+bool have_mpiexec() { return std::system("command -v mpiexec >/dev/null 2>&1") == 0; }
+
+TEST(CliVerify, TwoMpiProcessesMatchOneWithinSolverTolerance) {
+  if (!have_mpiexec()) GTEST_SKIP() << "mpiexec not found";
+  const fs::path dir = scratch_dir();
+  write_bar(dir, MshVersion::v41, {8, 2, 2});
+  // Recording the free middle of the bar: the nodes that actually move by dynamics.
+  write_text(dir / "problem.toml", bar_problem());
+  const std::string tight = " -snes_rtol 1e-12 -snes_atol 1e-14 -ksp_rtol 1e-12";
+  const auto serial = run_sflsh("verify " + (dir / "problem.toml").string() + " --out " + (dir / "one").string() +
+                                    " --no-vtk -q" + tight,
+                                dir);
+  ASSERT_EQ(serial.exit_code, 0) << serial.err;
+  const std::string mpi = "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 mpiexec -n 2 " +
+                          std::string(SFLSH_CLI) + " verify " + (dir / "problem.toml").string() + " --out " +
+                          (dir / "two").string() + " --no-vtk -q" + tight + " >" + (dir / "mpi.log").string() + " 2>&1";
+  ASSERT_EQ(std::system(mpi.c_str()), 0) << "mpiexec -n 2 failed; see " << (dir / "mpi.log");
+  const History a = read_history(dir / "one" / "history.csv");
+  const History b = read_history(dir / "two" / "history.csv");
+  ASSERT_EQ(a.t.size(), b.t.size());
+  double worst = 0.0;
+  for (std::size_t k = 0; k < a.t.size(); ++k) {
+    EXPECT_EQ(a.node[k], b.node[k]);
+    worst = std::max(worst, (a.u[k] - b.u[k]).norm());
+  }
+  // Both solve each step to ‖∇Φ‖ ≤ 1e-12 relative; the parallel sum order differs only in round-off,
+  // amplified by at most the step count: 1e-10 m against 1 cm of motion.
+  EXPECT_LT(worst, 1e-10);
+}
+
+TEST(CliVerify, PetscJacobianTestAgreesWithFiniteDifferences) {
+  const fs::path dir = scratch_dir();
+  write_bar(dir);
+  write_text(dir / "problem.toml", bar_problem("", "[solver]\nhessian = \"exact\"\n"));
+  const auto r = run_sflsh("verify " + (dir / "problem.toml").string() + " --out " + (dir / "out").string() +
+                               " --no-vtk -q -snes_test_jacobian",
+                           dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  // PETSc prints ||J - Jfd||_F/||J||_F = r per Jacobian evaluation.
+  const std::regex ratio(R"(\|\|J - Jfd\|\|_F/\|\|J\|\|_F = ([0-9.eE+-]+))");
+  int found = 0;
+  double worst = 0.0;
+  for (auto it = std::sregex_iterator(r.out.begin(), r.out.end(), ratio); it != std::sregex_iterator(); ++it) {
+    worst = std::max(worst, std::stod((*it)[1].str()));
+    ++found;
+  }
+  ASSERT_GT(found, 0) << r.out.substr(0, 2000);
+  // Finite differences with PETSc's default h ≈ 1e-8 relative are accurate to ~1e-7 of ‖J‖.
+  EXPECT_LT(worst, 1e-5);
+}
+
+TEST(CliVerify, FreeOscillationDecaysUnderBackwardEulerAndIsKeptByTheReference) {
+  // The bar clamped at one end, released from a bent shape (driven for 0.05 s, then free): compare the
+  // amplitude of the free end over the last half of the run.
+  const fs::path dir = scratch_dir();
+  write_bar(dir);
+  const std::string drive = "0.01*(t<0.05)*sin(pi*t/0.05)^2";
+  auto problem = [&](const std::string& integrator) {
+    std::string text = bar_problem();
+    text = std::regex_replace(text, std::regex("group = \"xmax\"\ncomponent"), "group = \"xmin\"\ncomponent");
+    text = std::regex_replace(text, std::regex("components = \"xyz\""), "components = \"xz\"");
+    text = std::regex_replace(text, std::regex("0.01\\*sin\\(2\\*pi\\*2\\*t\\)"), drive);
+    text = std::regex_replace(text, std::regex("duration = 0.25"), "duration = 1.0");
+    text = std::regex_replace(text, std::regex("integrator = \"backward_euler\""), "integrator = \"" + integrator + "\"");
+    text = std::regex_replace(text, std::regex("every = 3"), "every = 1");
+    // Ten times stiffer: the first bending mode at a few Hz, several periods in one second.
+    text = std::regex_replace(text, std::regex("young_tangent = 5000.0"), "young_tangent = 50000.0");
+    text = std::regex_replace(text, std::regex("young_normal = 2000.0"), "young_normal = 20000.0");
+    return text;
+  };
+  write_text(dir / "be.toml", problem("backward_euler"));
+  write_text(dir / "ref.toml", problem("reference"));
+  ASSERT_EQ(run_sflsh("verify " + (dir / "be.toml").string() + " --out " + (dir / "be").string() + " --no-vtk -q", dir).exit_code, 0);
+  const auto ref = run_sflsh("verify " + (dir / "ref.toml").string() + " --out " + (dir / "ref").string() + " --no-vtk -q", dir);
+  ASSERT_EQ(ref.exit_code, 0) << ref.err;
+  auto late_amplitude = [](const History& h) {
+    double a = 0.0;
+    for (std::size_t k = 0; k < h.t.size(); ++k) {
+      if (h.t[k] > 0.5) a = std::max(a, std::abs(h.u[k].y()));
+    }
+    return a;
+  };
+  auto early_amplitude = [](const History& h) {
+    double a = 0.0;
+    for (std::size_t k = 0; k < h.t.size(); ++k) {
+      if (h.t[k] > 0.05 && h.t[k] < 0.3) a = std::max(a, std::abs(h.u[k].y()));
+    }
+    return a;
+  };
+  const History be = read_history(dir / "be" / "history.csv");
+  const History rf = read_history(dir / "ref" / "history.csv");
+  const double be_ratio = late_amplitude(be) / early_amplitude(be);
+  const double ref_ratio = late_amplitude(rf) / early_amplitude(rf);
+  // Backward Euler at 120 fps damps the bar's first mode (~4 Hz) visibly over 0.5 s; the adaptive
+  // reference keeps at least 90% of its amplitude and far more than backward Euler does.
+  EXPECT_LT(be_ratio, 0.9 * ref_ratio);
+  EXPECT_GT(ref_ratio, 0.9);
+}
+
+TEST(CliVerify, BadFilesGiveOneLineErrorsAndNoOutput) {
+  const fs::path dir = scratch_dir();
+  write_bar(dir);
+  write_text(dir / "typo.toml", bar_problem("", "densty = 3.0\n"));
+  const auto r = run_sflsh("verify " + (dir / "typo.toml").string() + " --out " + (dir / "out").string(), dir);
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("densty"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+  const auto missing = run_sflsh("verify " + (dir / "nope.toml").string() + " --out " + (dir / "out").string(), dir);
+  EXPECT_NE(missing.exit_code, 0);
+  EXPECT_NE(missing.err.find("nope.toml"), std::string::npos) << missing.err;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+}
+
+}  // namespace
+}  // namespace sflsh::fullspace
