@@ -1,6 +1,5 @@
 #include <sflsh/material/psd_projection.hpp>
 
-#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 
 namespace sflsh::material {
@@ -11,12 +10,6 @@ template <int N>
 Eigen::Matrix<double, N, N> project_psd_fixed(const Eigen::Matrix<double, N, N>& A) {
   using Matrix = Eigen::Matrix<double, N, N>;
   const Matrix sym = 0.5 * (A + A.transpose());
-  // Fast path: a Cholesky factorization of sym + δI exists exactly when every eigenvalue of sym exceeds −δ.
-  // With δ = 1e-12 · max|diag| (round-off of the eigen-decomposition itself) the result is the same as
-  // clamping up to that round-off, at a tenth of the cost; an unstressed element (whose rotation modes
-  // have eigenvalue 0) and a stretched one take this path.
-  const double delta = 1e-12 * sym.diagonal().cwiseAbs().maxCoeff();
-  if (Eigen::LLT<Matrix>(sym + delta * Matrix::Identity()).info() == Eigen::Success) return A;
   const Eigen::SelfAdjointEigenSolver<Matrix> eig(sym);  // fixed size: no heap allocation
   const auto& lambda = eig.eigenvalues();
   if (lambda.minCoeff() >= 0.0) return A;  // already PSD: unchanged
