@@ -10,6 +10,7 @@
 #include <sflsh/body/body_io.hpp>
 #include <sflsh/body/motion.hpp>
 #include <sflsh/body/subjects.hpp>
+#include <sflsh/core/error.hpp>
 #include <sflsh/core/summary.hpp>
 #include <sflsh/fullspace/backward_euler.hpp>
 #include <sflsh/fullspace/body_layer.hpp>

@@ -29,15 +29,14 @@ void check(PetscErrorCode code, const char* what) {
 }
 #define SFLSH_PETSC(call) check((call), #call)
 
-/// Options set only when the user did not give them (the user's options database always wins).
-void set_default_option(const std::string& prefix, const std::string& name, const std::string& value) {
-  const std::string full = "-" + prefix + name;
-  PetscBool set = PETSC_FALSE;
-  PetscOptionsHasName(nullptr, nullptr, full.c_str(), &set);
-  if (!set) PetscOptionsSetValue(nullptr, full.c_str(), value.c_str());
-}
 
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
+
+material::TetNodes problem_rest_nodes(const Problem& problem, int e) {
+  material::TetNodes nodes;
+  for (int a = 0; a < 4; ++a) nodes.col(a) = problem.rest.row(problem.tets(e, a)).transpose();
+  return nodes;
+}
 
 }  // namespace
 
@@ -73,6 +72,10 @@ struct BackwardEuler::Impl {
   /// The elastic Hessian of this attempt: exact first in dynamic steps when options.exact_hessian_first,
   /// problem.projection otherwise and on every retry.
   material::HessianProjection projection_now = material::HessianProjection::kStressDerivative;
+  /// Diagonal value of constrained rows: the mean elastic diagonal at rest, so that these rows do not
+  /// spoil the spectrum the multigrid smoothers estimate (a 1 beside entries of 10²–10⁴ made GAMG's
+  /// Chebyshev smoother indefinite).
+  double dirichlet_diagonal = 1.0;
 
   /// Direct refill of the assembled AIJ arrays: after the first assembly fixed the pattern, every 3×3 block
   /// (I, J) of an owned row maps to three offsets (one per scalar row) into the diagonal or off-diagonal
@@ -97,6 +100,16 @@ struct BackwardEuler::Impl {
   void destroy();
 
   void gather(Vec v, Eigen::VectorXd& out);
+  Eigen::VectorXd x_prescribed_buffer;
+  /// x with its constrained components replaced by their prescribed values (x itself before the first step).
+  const Eigen::VectorXd& with_prescribed(const Eigen::VectorXd& x) {
+    if (prescribed.size() != x.size()) return x;
+    x_prescribed_buffer = x;
+    for (std::size_t d = 0; d < constrained.size(); ++d) {
+      if (constrained[d]) x_prescribed_buffer[static_cast<Eigen::Index>(d)] = prescribed[static_cast<Eigen::Index>(d)];
+    }
+    return x_prescribed_buffer;
+  }
   double objective(const Eigen::VectorXd& x);
   bool residual(const Eigen::VectorXd& x, Vec out);
   bool jacobian(const Eigen::VectorXd& x);
@@ -198,21 +211,48 @@ void BackwardEuler::Impl::setup() {
     SFLSH_PETSC(VecDestroy(&coords));
   }
 
-  set_default_option(prefix, "snes_type", "newtonls");
-  set_default_option(prefix, "ksp_type", "cg");
-  set_default_option(prefix, "pc_type", "gamg");
-  set_default_option(prefix, "snes_rtol", fmt::format("{:.17g}", options.default_snes_rtol));
-  set_default_option(prefix, "snes_atol", fmt::format("{:.17g}", options.default_snes_atol));
-  set_default_option(prefix, "snes_max_it", std::to_string(options.default_snes_max_it));
-  set_default_option(prefix, "ksp_rtol", fmt::format("{:.17g}", options.default_ksp_rtol));
-  set_default_option(prefix, "snes_divergence_tolerance", "-1");
-  set_default_option(prefix, "snes_linesearch_type", "shell");
-
+  {
+    double sum = 0.0, count = 0.0;
+    for (int e : my_tets) {
+      const auto se = static_cast<std::size_t>(e);
+      const material::Matrix12d K = material::tet_elastic_dq2(problem.tet_rest[se], problem_rest_nodes(problem, e),
+                                                              problem.tet_material[se], material::HessianProjection::kNone);
+      if (K.allFinite()) {
+        sum += K.diagonal().sum();
+        count += 12.0;
+      }
+    }
+    double mine[2] = {sum, count}, global[2] = {0.0, 0.0};
+    MPI_Allreduce(mine, global, 2, MPI_DOUBLE, MPI_SUM, comm);
+    if (global[1] > 0.0 && global[0] > 0.0) dirichlet_diagonal = global[0] / global[1];
+  }
+  // The project's defaults are set on the objects before SNESSetFromOptions, so any -snes_*, -ksp_*, -pc_*
+  // option (command line, PETSC_OPTIONS, -options_file) overrides them, and nothing leaks into the global
+  // options database that a later solver in the same process would mistake for a user choice.
   SFLSH_PETSC(SNESCreate(comm, &snes));
   if (!prefix.empty()) SFLSH_PETSC(SNESSetOptionsPrefix(snes, prefix.c_str()));
   SFLSH_PETSC(SNESSetFunction(snes, F, &Impl::function_cb, this));
   SFLSH_PETSC(SNESSetJacobian(snes, J, J, &Impl::jacobian_cb, this));
   SFLSH_PETSC(SNESSetObjective(snes, &Impl::objective_cb, this));
+  SFLSH_PETSC(SNESSetType(snes, SNESNEWTONLS));
+  SFLSH_PETSC(SNESSetTolerances(snes, options.default_snes_atol, options.default_snes_rtol, PETSC_DEFAULT,
+                                options.default_snes_max_it, PETSC_DEFAULT));
+  SFLSH_PETSC(SNESSetDivergenceTolerance(snes, -1.0));
+  KSP ksp = nullptr;
+  PC pc = nullptr;
+  SFLSH_PETSC(SNESGetKSP(snes, &ksp));
+  SFLSH_PETSC(KSPSetType(ksp, KSPCG));
+  SFLSH_PETSC(KSPSetTolerances(ksp, options.default_ksp_rtol, PETSC_DEFAULT, PETSC_DEFAULT, PETSC_DEFAULT));
+  SFLSH_PETSC(KSPGetPC(ksp, &pc));
+  // Algebraic multigrid pays off on layers (10⁴–10⁶ dofs); below kDirectDofs a sparse direct factorization is
+  // faster and immune to the smoother trouble AMG has on a handful of aggregates (GAMG's Chebyshev smoother
+  // came out indefinite on 72-dof verification bars).
+  constexpr int kDirectDofs = 6000;
+  if (3 * n <= kDirectDofs) {
+    SFLSH_PETSC(PCSetType(pc, size == 1 ? PCCHOLESKY : PCREDUNDANT));
+  } else {
+    SFLSH_PETSC(PCSetType(pc, PCGAMG));
+  }
   SNESLineSearch linesearch = nullptr;
   SFLSH_PETSC(SNESGetLineSearch(snes, &linesearch));
   SFLSH_PETSC(SNESLineSearchSetType(linesearch, SNESLINESEARCHSHELL));
@@ -248,8 +288,16 @@ material::TetNodes tet_nodes(const Problem& problem, const Eigen::VectorXd& x, i
 
 }  // namespace
 
-double BackwardEuler::Impl::objective(const Eigen::VectorXd& x) {
+// The potential sees constrained components at their prescribed values (so the free rows do not depend on
+// them) plus the penalty ½ D (x_d − x̄_d)², which is zero at every Newton iterate; its gradient and Hessian are
+// then exactly what residual() and jacobian() assemble.
+double BackwardEuler::Impl::objective(const Eigen::VectorXd& x_in) {
   const auto t0 = Clock::now();
+  const Eigen::VectorXd& x = with_prescribed(x_in);
+  double penalty = 0.0;
+  for (int d = 3 * begin; d < 3 * end; ++d) {
+    if (constrained[static_cast<std::size_t>(d)]) penalty += 0.5 * dirichlet_diagonal * std::pow(x_in[d] - x[d], 2);
+  }
   tbb::enumerable_thread_specific<double> partial(0.0);
   arena->execute([&] {
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, my_tets.size(), 256), [&](const auto& range) {
@@ -266,7 +314,7 @@ double BackwardEuler::Impl::objective(const Eigen::VectorXd& x) {
       }
     });
   });
-  double local = partial.combine(std::plus<double>());
+  double local = partial.combine(std::plus<double>()) + penalty;
   for (int i = begin; i < end; ++i) {
     const double m = problem.mass[i];
     if (m == 0.0) continue;
@@ -282,8 +330,9 @@ double BackwardEuler::Impl::objective(const Eigen::VectorXd& x) {
   return global;
 }
 
-bool BackwardEuler::Impl::residual(const Eigen::VectorXd& x, Vec out) {
+bool BackwardEuler::Impl::residual(const Eigen::VectorXd& x_in, Vec out) {
   const auto t0 = Clock::now();
+  const Eigen::VectorXd& x = with_prescribed(x_in);
   const int n = problem.num_nodes();
   tbb::enumerable_thread_specific<Eigen::VectorXd> partial([n] { return Eigen::VectorXd::Zero(3 * n); });
   tbb::enumerable_thread_specific<int> failed(0);
@@ -316,8 +365,10 @@ bool BackwardEuler::Impl::residual(const Eigen::VectorXd& x, Vec out) {
     if (inertia) force += m / (h * h) * (p - p_tilde.row(i).transpose());
     g.segment<3>(3 * i) += frame.A[si].transpose() * force;
   }
+  // Constrained rows: D (x_d − x̄_d), zero at every iterate (x starts on the prescribed values and the Jacobian row
+  // D e_d keeps it there), so that the residual's derivative is the assembled row (PETSc's Jacobian test).
   for (int d = 0; d < 3 * n; ++d) {
-    if (constrained[static_cast<std::size_t>(d)]) g[d] = 0.0;
+    if (constrained[static_cast<std::size_t>(d)]) g[d] = dirichlet_diagonal * (x_in[d] - prescribed[d]);
   }
   if (!g.allFinite()) ++local_failed;
   int any_failed = 0;
@@ -424,7 +475,7 @@ bool BackwardEuler::Impl::jacobian(const Eigen::VectorXd& x) {
       if (!constrained[3 * si + static_cast<std::size_t>(k)]) continue;
       B.row(k).setZero();
       B.col(k).setZero();
-      B(k, k) = 1.0;
+      B(k, k) = dirichlet_diagonal;
     }
     if (refill.ready) {
       add_rows(refill.node_offset.data() + 3 * (i - begin), B);
@@ -445,7 +496,7 @@ bool BackwardEuler::Impl::jacobian(const Eigen::VectorXd& x) {
   }
   SFLSH_PETSC(MatAssemblyBegin(J, MAT_FINAL_ASSEMBLY));
   SFLSH_PETSC(MatAssemblyEnd(J, MAT_FINAL_ASSEMBLY));
-  if (!refill.ready) build_refill();
+  if (!refill.ready && !std::getenv("SFLSH_NO_REFILL")) build_refill();
   int any_failed = 0;
   MPI_Allreduce(&local_failed, &any_failed, 1, MPI_INT, MPI_SUM, comm);
   if (stats) stats->jacobian_seconds += seconds_since(t0);
@@ -639,6 +690,7 @@ bool BackwardEuler::Impl::solve_substep(State& s, double t0, double dt) {
   // Start from the previous state, or from the inertial prediction pulled back through the maps.
   Eigen::VectorXd start = s.x;
   problem.apply_dirichlet(t1, start);
+  prescribed = start;
   if (inertia && options.use_predictor) {
     Eigen::VectorXd predicted = start;
     for (int i = 0; i < problem.num_nodes(); ++i) {

@@ -111,11 +111,12 @@ TEST(BodyLayer, ShortRunStaysFiniteAndProducesSoftTissueMotion) {
   integrator.initialize(initial_state(layer.problem, 0.0));
   SimulationWriter writer(layer, nullptr, false);
   writer.add_frame(0.0, integrator.state());
+  long newton = 0;
   for (std::size_t f = 1; f < motion.num_frames(); ++f) {
-    const StepStats st = integrator.step(1.0 / 60.0);
-    EXPECT_GT(st.newton_iterations, 0);
+    newton += integrator.step(1.0 / 60.0).newton_iterations;
     writer.add_frame(motion.time(f), integrator.state());
   }
+  EXPECT_GT(newton, 0);
   const Energies e = energies(layer.problem, integrator.state());
   EXPECT_TRUE(std::isfinite(e.kinetic) && std::isfinite(e.elastic));
   const nlohmann::json d = writer.dynamics_summary();

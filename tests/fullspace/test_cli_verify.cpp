@@ -36,9 +36,9 @@ void write_text(const fs::path& path, const std::string& text) {
 
 /// The bar clamped at x = 0, its far end pulled along y by a smooth drive; records the far end.
 std::string bar_problem(const std::string& extra_time = "", const std::string& extra = "") {
-  return R"(mesh = "bar.msh"
+  return R"toml(mesh = "bar.msh"
 density = 1000.0
-)" + extra + R"(
+)toml" + extra + R"toml(
 [material]
 young_tangent = 5000.0
 young_normal = 2000.0
@@ -61,11 +61,11 @@ step = 0.0083333333333333333
 integrator = "backward_euler"
 rtol = 1e-6
 atol = 1e-9
-)" + extra_time + R"(
+)toml" + extra_time + R"toml(
 [record]
 group = "xmax"
 every = 3
-)";
+)toml";
 }
 
 struct History {
@@ -123,7 +123,10 @@ TEST(CliVerify, TwoMpiProcessesMatchOneWithinSolverTolerance) {
                                     " --no-vtk -q" + tight,
                                 dir);
   ASSERT_EQ(serial.exit_code, 0) << serial.err;
-  const std::string mpi = "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 mpiexec -n 2 " +
+  // This test process is itself an MPI singleton (PETSc is initialized): its OMPI_*/PMIX_* variables must not
+  // leak into the nested mpiexec, which would otherwise try to join the singleton's session.
+  const std::string mpi = "for v in $(env | sed -n 's/^\\(OMPI_[^=]*\\|PMIX_[^=]*\\)=.*/\\1/p'); do unset $v; done; "
+                          "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 mpiexec -n 2 " +
                           std::string(SFLSH_CLI) + " verify " + (dir / "problem.toml").string() + " --out " +
                           (dir / "two").string() + " --no-vtk -q" + tight + " >" + (dir / "mpi.log").string() + " 2>&1";
   ASSERT_EQ(std::system(mpi.c_str()), 0) << "mpiexec -n 2 failed; see " << (dir / "mpi.log");
@@ -185,28 +188,28 @@ TEST(CliVerify, FreeOscillationDecaysUnderBackwardEulerAndIsKeptByTheReference) 
   ASSERT_EQ(run_sflsh("verify " + (dir / "be.toml").string() + " --out " + (dir / "be").string() + " --no-vtk -q", dir).exit_code, 0);
   const auto ref = run_sflsh("verify " + (dir / "ref.toml").string() + " --out " + (dir / "ref").string() + " --no-vtk -q", dir);
   ASSERT_EQ(ref.exit_code, 0) << ref.err;
-  auto late_amplitude = [](const History& h) {
-    double a = 0.0;
+  // RMS of u_y at one node of the free end over a window of several periods: insensitive to the phase of the
+  // modes (a windowed maximum is not: beating between the bending modes moves it by ±30%).
+  auto rms = [](const History& h, double from, double to) {
+    double sum = 0.0;
+    int count = 0;
     for (std::size_t k = 0; k < h.t.size(); ++k) {
-      if (h.t[k] > 0.5) a = std::max(a, std::abs(h.u[k].y()));
+      if (h.node[k] != h.node[0] || h.t[k] <= from || h.t[k] >= to) continue;
+      sum += h.u[k].y() * h.u[k].y();
+      ++count;
     }
-    return a;
-  };
-  auto early_amplitude = [](const History& h) {
-    double a = 0.0;
-    for (std::size_t k = 0; k < h.t.size(); ++k) {
-      if (h.t[k] > 0.05 && h.t[k] < 0.3) a = std::max(a, std::abs(h.u[k].y()));
-    }
-    return a;
+    return count > 0 ? std::sqrt(sum / count) : 0.0;
   };
   const History be = read_history(dir / "be" / "history.csv");
   const History rf = read_history(dir / "ref" / "history.csv");
-  const double be_ratio = late_amplitude(be) / early_amplitude(be);
-  const double ref_ratio = late_amplitude(rf) / early_amplitude(rf);
-  // Backward Euler at 120 fps damps the bar's first mode (~4 Hz) visibly over 0.5 s; the adaptive
-  // reference keeps at least 90% of its amplitude and far more than backward Euler does.
-  EXPECT_LT(be_ratio, 0.9 * ref_ratio);
-  EXPECT_GT(ref_ratio, 0.9);
+  const double be_ratio = rms(be, 0.5, 1.0) / rms(be, 0.05, 0.3);
+  const double ref_ratio = rms(rf, 0.5, 1.0) / rms(rf, 0.05, 0.3);
+  // Measured: backward Euler at 120 fps keeps 8% of the early RMS (the bar's modes are 4–40 Hz, heavily damped
+  // at h ω ≈ 0.2–2); the reference keeps 74% (no dissipation; energy moves between modes whose shapes weigh
+  // this node differently). The bounds leave a factor ~2 on each side.
+  EXPECT_LT(be_ratio, 0.2);
+  EXPECT_GT(ref_ratio, 0.5);
+  EXPECT_GT(ref_ratio, 4.0 * be_ratio);
 }
 
 TEST(CliVerify, BadFilesGiveOneLineErrorsAndNoOutput) {
