@@ -97,6 +97,7 @@ int main(int argc, char** argv) {
     }
     std::cout << fmt::format("{} on {} ({} tets, {} nodes), {} s of {}, reference rtol {:g} atol {:g}\n", subject, mesh,
                              problem.num_tets(), problem.num_nodes(), seconds, motion_name, rtol, atol);
+    std::cout.flush();
 
     // The reference, sampled on the finest grid.
     ReferenceOptions ref_options;
@@ -107,10 +108,18 @@ int main(int argc, char** argv) {
     reference.initialize(start);
     Samples ref_samples{layer.surface_displacement(start.x)};
     const auto t_ref = Clock::now();
-    for (int k = 1; k < frames; ++k) ref_samples.push_back(layer.surface_displacement(reference.advance_to(static_cast<double>(k) / finest).x));
+    for (int k = 1; k < frames; ++k) {
+      ref_samples.push_back(layer.surface_displacement(reference.advance_to(static_cast<double>(k) / finest).x));
+      if (k % std::max(1, finest / 10) == 0 || k == frames - 1) {
+        std::cout << fmt::format("  reference at t = {:.3f} s: {} steps, {:.1f} s\n", static_cast<double>(k) / finest,
+                                 reference.stats().steps, std::chrono::duration<double>(Clock::now() - t_ref).count());
+        std::cout.flush();
+      }
+    }
     const double ref_seconds = std::chrono::duration<double>(Clock::now() - t_ref).count();
     const ReferenceStats& st = reference.stats();
     std::cout << fmt::format("reference: {} steps, {} Jacobians, {:.1f} s\n\n", st.steps, st.jac_evals, ref_seconds);
+    std::cout.flush();
 
     std::cout << fmt::format("{:>6} {:>12} {:>14} {:>14} {:>14} {:>12} {:>10}\n", "fps", "sigma mm", "ref sigma mm",
                              "sigma ratio", "damping %", "traj err %", "s / sim s");

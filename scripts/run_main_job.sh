@@ -2,7 +2,8 @@
 # The main job on the embedded default data (no licensed data needed):
 # installs the Debian packages, builds sflsh (release), and poses the open body along a
 # procedural motion, writing a ParaView series to out/main_job/body.pvd; then meshes the soft-tissue
-# layer of the same subject and writes its material fields.
+# layer of the same subject, writes its material fields, and simulates its soft tissue with the
+# full-space reference solver.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -16,4 +17,8 @@ sflsh=build/release/apps/sflsh/sflsh
 # The soft-tissue layer (the template mesh is cached in ~/.cache/sflsh after the first run) and its material.
 "$sflsh" mesh --subject OPEN_TRAIN_1 --thickness 0.5 --mesher cgal --size default --out "$out/layer"
 "$sflsh" material show --subject OPEN_TRAIN_1 --control-points 24 --out "$out/material"
-echo "main job done: open $out/body.pvd, $out/layer/layer.vtu and $out/material/layer.vtu in ParaView"
+# The full-space reference solver on the same subject and motion (coarse layer, 2 s): soft tissue in motion.
+"$sflsh" simulate --solver full --mesh coarse --subject OPEN_TRAIN_1 --motion jiggle_on_toes --frames 121 \
+  --write-layer --out "$out/fullspace"
+echo "main job done: open $out/body.pvd, $out/layer/layer.vtu, $out/material/layer.vtu and"
+echo "$out/fullspace/body.pvd (with $out/fullspace/layer.pvd and dynamics.vtp) in ParaView"

@@ -496,7 +496,7 @@ bool BackwardEuler::Impl::jacobian(const Eigen::VectorXd& x) {
   }
   SFLSH_PETSC(MatAssemblyBegin(J, MAT_FINAL_ASSEMBLY));
   SFLSH_PETSC(MatAssemblyEnd(J, MAT_FINAL_ASSEMBLY));
-  if (!refill.ready && !std::getenv("SFLSH_NO_REFILL")) build_refill();
+  if (!refill.ready) build_refill();
   int any_failed = 0;
   MPI_Allreduce(&local_failed, &any_failed, 1, MPI_INT, MPI_SUM, comm);
   if (stats) stats->jacobian_seconds += seconds_since(t0);
