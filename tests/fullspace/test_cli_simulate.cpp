@@ -1,0 +1,87 @@
+// The `sflsh simulate --solver full` contract: the posed surface per frame in `sflsh motion export`'s layout
+// (same points, same order, same .pvd), the extra fields, summary.json, --no-output, and clear errors.
+#include <sflsh/core/summary.hpp>
+#include <sflsh/core/vtk_io.hpp>
+
+#include "run_command.hpp"
+#include "scratch_dir.hpp"
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+
+namespace sflsh::fullspace {
+namespace {
+
+namespace fs = std::filesystem;
+using sflsh::testing::run_sflsh;
+using sflsh::testing::scratch_dir;
+
+std::string common() {
+  return fmt::format("--subject OPEN_TRAIN_2 --motion shake_hips --frames 4 --cache {} -q", SFLSH_TEST_CACHE);
+}
+
+TEST(CliSimulate, SurfaceMatchesMotionExportLayoutAndCarriesTheSoftTissueFields) {
+  const fs::path dir = scratch_dir();
+  const auto sim = run_sflsh("simulate --solver full --mesh coarse " + common() + " --write-layer --out " +
+                                 (dir / "sim").string(),
+                             dir);
+  ASSERT_EQ(sim.exit_code, 0) << sim.err;
+  const auto exp = run_sflsh("motion export --subject OPEN_TRAIN_2 --motion shake_hips --frames 4 -q --out " +
+                                 (dir / "exp").string(),
+                             dir);
+  ASSERT_EQ(exp.exit_code, 0) << exp.err;
+  for (const char* file : {"body.pvd", "body_000000.vtp", "body_000003.vtp", "layer.pvd", "layer_000003.vtu",
+                           "dynamics.vtp", "summary.json"}) {
+    EXPECT_TRUE(fs::exists(dir / "sim" / file)) << file;
+  }
+  // Frame 0 is the rest state: the same points as the export to round-off. Later frames differ by the soft
+  // tissue only, and soft_tissue_displacement is exactly that difference.
+  const vtk::Points rest_sim = vtk::read_points(dir / "sim" / "body_000000.vtp");
+  const vtk::Points rest_exp = vtk::read_points(dir / "exp" / "body_000000.vtp");
+  ASSERT_EQ(rest_sim.rows(), rest_exp.rows());
+  EXPECT_LT((rest_sim - rest_exp).cwiseAbs().maxCoeff(), 1e-9);
+  const vtk::Points last_sim = vtk::read_points(dir / "sim" / "body_000003.vtp");
+  const vtk::Points last_exp = vtk::read_points(dir / "exp" / "body_000003.vtp");
+  const Eigen::MatrixXd soft = vtk::read_point_array(dir / "sim" / "body_000003.vtp", "soft_tissue_displacement");
+  EXPECT_LT(((last_sim - last_exp) - soft).cwiseAbs().maxCoeff(), 1e-9);
+  EXPECT_GT(soft.cwiseAbs().maxCoeff(), 0.0);   // the tissue moved
+  const std::vector<std::string> names = vtk::read_point_array_names(dir / "sim" / "body_000003.vtp");
+  for (const char* field : {"displacement", "velocity", "skin_weights_argmax", "soft_tissue_displacement",
+                            "elastic_displacement", "strain_energy_density", "thickness", "young_tangent", "young_normal"}) {
+    EXPECT_NE(std::find(names.begin(), names.end(), field), names.end()) << field;
+  }
+  const nlohmann::json summary = read_json(dir / "sim" / "summary.json");
+  ASSERT_EQ(summary["frames"].size(), 4u);
+  EXPECT_GT(summary["solver"]["newton_iterations"].get<int>(), 0);
+  EXPECT_TRUE(summary["frames"][3].contains("linear_iterations"));
+  EXPECT_TRUE(summary["frames"][3]["energy"].contains("kinetic"));
+  EXPECT_TRUE(summary["timings"].contains("seconds_per_frame"));
+  EXPECT_GE(summary["dynamics"]["sigma_mean_mm"].get<double>(), 0.0);
+}
+
+TEST(CliSimulate, NoOutputWritesOnlyTheSummary) {
+  const fs::path dir = scratch_dir();
+  const auto r = run_sflsh("simulate --solver full --mesh coarse " + common() + " --no-output --out " + (dir / "o").string(), dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::vector<std::string> files;
+  for (const auto& entry : fs::directory_iterator(dir / "o")) files.push_back(entry.path().filename().string());
+  EXPECT_EQ(files, std::vector<std::string>{"summary.json"});
+}
+
+TEST(CliSimulate, BadArgumentsGiveOneLineErrorsAndNoOutput) {
+  const fs::path dir = scratch_dir();
+  const auto motion = run_sflsh("simulate --solver full --subject OPEN_TRAIN_2 --motion no_such_motion --out " +
+                                    (dir / "a").string(),
+                                dir);
+  EXPECT_NE(motion.exit_code, 0);
+  EXPECT_NE(motion.err.find("no_such_motion"), std::string::npos) << motion.err;
+  EXPECT_FALSE(fs::exists(dir / "a" / "summary.json"));
+  const auto density = run_sflsh("simulate --solver full " + common() + " --density -1 --out " + (dir / "b").string(), dir);
+  EXPECT_NE(density.exit_code, 0);
+  EXPECT_NE(density.err.find("--density"), std::string::npos) << density.err;
+}
+
+}  // namespace
+}  // namespace sflsh::fullspace
