@@ -69,6 +69,33 @@ struct BackwardEuler::Impl {
   Eigen::VectorXd prescribed;       ///< x values at t1 (full), valid on constrained dofs
 
   StepStats* stats = nullptr;
+  bool linear_failure = false;      ///< the last substep failed in the linear solver
+  std::string saved_pc_type;        ///< the configured PC while the fallback is in use (empty otherwise)
+
+  /// Switches the KSP to CG + Jacobi, which cannot break down on a positive definite system: AMG smoothers
+  /// occasionally come out indefinite on stiff or strongly heterogeneous states.
+  void use_fallback_pc() {
+    KSP ksp = nullptr;
+    PC pc = nullptr;
+    SFLSH_PETSC(SNESGetKSP(snes, &ksp));
+    SFLSH_PETSC(KSPGetPC(ksp, &pc));
+    PCType type = nullptr;
+    SFLSH_PETSC(PCGetType(pc, &type));
+    saved_pc_type = type ? type : PCGAMG;
+    SFLSH_PETSC(PCSetType(pc, PCJACOBI));
+    if (stats) ++stats->fallback_preconditioner;
+  }
+  /// Restores the configured preconditioner (and re-reads its -pc_* options).
+  void restore_pc() {
+    if (saved_pc_type.empty()) return;
+    KSP ksp = nullptr;
+    PC pc = nullptr;
+    SFLSH_PETSC(SNESGetKSP(snes, &ksp));
+    SFLSH_PETSC(KSPGetPC(ksp, &pc));
+    SFLSH_PETSC(PCSetType(pc, saved_pc_type.c_str()));
+    SFLSH_PETSC(PCSetFromOptions(pc));
+    saved_pc_type.clear();
+  }
   /// The elastic Hessian of this attempt: exact first in dynamic steps when options.exact_hessian_first,
   /// problem.projection otherwise and on every retry.
   material::HessianProjection projection_now = material::HessianProjection::kStressDerivative;
@@ -720,6 +747,7 @@ bool BackwardEuler::Impl::solve_substep(State& s, double t0, double dt) {
   stats->newton_iterations += static_cast<int>(its);
   stats->linear_iterations += static_cast<int>(lits);
   stats->converged_reason = code != 0 ? fmt::format("PETSc error {}", static_cast<int>(code)) : SNESConvergedReasons[reason];
+  linear_failure = code == 0 && reason == SNES_DIVERGED_LINEAR_SOLVE;
   if (code != 0 || reason <= 0) {
     logger()->debug("t = {:.6g}: substep of {:.3g} s failed ({})", t1, dt, stats->converged_reason);
     return false;
@@ -789,6 +817,7 @@ StepStats BackwardEuler::step(double h) {
       ok = impl_->solve_substep(s, t_start, t_end - t_start);
     }
     if (ok) {
+      impl_->restore_pc();
       impl_->state = std::move(s);
       stats.substeps = substeps;
       stats.seconds = seconds_since(t0);
@@ -803,8 +832,14 @@ StepStats BackwardEuler::step(double h) {
       ++stats.projected_retries;
     } else {
       ++stats.failed_attempts;
+      if (impl_->linear_failure && impl_->saved_pc_type.empty()) {
+        // The same attempt again with the fallback preconditioner before halving the step.
+        impl_->use_fallback_pc();
+        --level;
+      }
     }
   }
+  impl_->restore_pc();
   impl_->stats = nullptr;
   throw_error("backward Euler failed at t = {:.6g} s: no convergence even with {} substeps of {:.3g} s (last reason: {})",
               saved.t + h, 1 << impl_->options.max_halvings, h / (1 << impl_->options.max_halvings),

@@ -39,6 +39,7 @@ struct StepStats {
   int substeps = 1;            ///< 1 unless the step had to be split
   int failed_attempts = 0;     ///< attempts rejected (divergence, NaN/Inf, failed line search)
   int projected_retries = 0;   ///< exact-Hessian attempts that failed and were repeated with the projection
+  int fallback_preconditioner = 0;  ///< attempts repeated with CG + Jacobi after a linear-solver failure
   double seconds = 0.0;
   double function_seconds = 0.0;   ///< residual and objective evaluations
   double jacobian_seconds = 0.0;   ///< Hessian assembly
