@@ -1,5 +1,5 @@
-// sflsh simulate --solver full: the full-space reference solver on a subject's soft-tissue layer driven by
-// a motion. Writes the posed body surface per frame exactly as `sflsh motion export` does (same points,
+// sflsh simulate --solver full|reduced: the full-space reference solver or the reduced model on a subject's
+// soft-tissue layer driven by a motion. Both write the posed body surface per frame exactly as `sflsh motion export` does (same points,
 // same order, same .pvd layout), so that subtracting the two gives the soft-tissue motion.
 #include "commands.hpp"
 
@@ -16,11 +16,14 @@
 #include <sflsh/fullspace/simulation_output.hpp>
 #include <sflsh/material/material_file.hpp>
 #include <sflsh/meshing/layer_cache.hpp>
+#include <sflsh/reduced/reduced_integrator.hpp>
+#include <sflsh/reduced/reduced_model.hpp>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include <chrono>
+#include <memory>
 #include <optional>
 
 namespace sflsh::app {
@@ -45,6 +48,11 @@ struct SimulateOptions {
   bool write_layer = false;
   bool no_output = false;
   std::string out;
+  // Reduced model.
+  int handles = 86;
+  int cubature = 200;
+  std::string cubature_weights = "nnls";
+  bool affine = false;
 };
 
 using Clock = std::chrono::steady_clock;
@@ -52,7 +60,9 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 
 void run_simulate(const SimulateOptions& opt, const Invocation& invocation, int rank, int size) {
   const auto t_start = Clock::now();
-  require(opt.solver == "full", "--solver {}: only the full-space solver (full) is available", opt.solver);
+  require(opt.solver == "full" || opt.solver == "reduced", "--solver {}: expected full or reduced", opt.solver);
+  require(opt.handles >= 1, "--handles must be at least 1, got {}", opt.handles);
+  require(opt.cubature >= 0, "--cubature must be non-negative (0 = every tet), got {}", opt.cubature);
   require(opt.fps > 0.0, "--fps must be positive, got {}", opt.fps);
   require(opt.substeps >= 1, "--substeps must be at least 1, got {}", opt.substeps);
   require(opt.frames >= 0, "--frames must be non-negative, got {}", opt.frames);
@@ -84,14 +94,34 @@ void run_simulate(const SimulateOptions& opt, const Invocation& invocation, int 
                  problem.num_nodes(), problem.num_nodes() - static_cast<int>(problem.dirichlet.dof.size() / 3),
                  problem.num_tets(), motion.num_frames(), motion.fps, opt.substeps, size);
 
-  fullspace::BackwardEuler integrator(problem, MPI_COMM_WORLD);
-  integrator.initialize(fullspace::initial_state(problem, 0.0));
+  const bool use_reduced = opt.solver == "reduced";
+  require(!use_reduced || size == 1, "--solver reduced runs on one process (got {}); parallelize over bodies instead", size);
+  std::optional<reduced::ReducedModel> reduced_model;
+  std::unique_ptr<fullspace::BackwardEuler> full;
+  std::unique_ptr<reduced::ReducedBackwardEuler> fast;
+  const auto t_model = Clock::now();
+  if (use_reduced) {
+    reduced::ReducedModelOptions ro;
+    ro.point_handles = opt.handles;
+    ro.cubature = opt.cubature;
+    ro.weighting = opt.cubature_weights == "voronoi" ? reduced::CubatureWeighting::voronoi : reduced::CubatureWeighting::nnls;
+    ro.basis.affine = opt.affine;
+    if (!opt.cache.empty()) ro.cache_dir = opt.cache;
+    reduced_model = reduced::build_reduced_model(layer, ro);
+    fast = std::make_unique<reduced::ReducedBackwardEuler>(problem, reduced_model->subspace, reduced_model->cubature);
+    fast->initialize(fullspace::initial_state(problem, 0.0));
+  } else {
+    full = std::make_unique<fullspace::BackwardEuler>(problem, MPI_COMM_WORLD);
+    full->initialize(fullspace::initial_state(problem, 0.0));
+  }
+  const double model_seconds = seconds_since(t_model);
+  auto current_state = [&]() { return use_reduced ? fast->full_state() : full->state(); };
 
   const bool write = rank == 0 && !opt.no_output;
   std::optional<RunFolder> run;
   if (rank == 0) run.emplace(opt.out);
   fullspace::SimulationWriter writer(layer, write ? &*run : nullptr, opt.write_layer);
-  writer.add_frame(0.0, integrator.state());
+  writer.add_frame(0.0, current_state());
 
   nlohmann::json frames = nlohmann::json::array();
   frames.push_back({{"frame", 0}, {"t", 0.0}, {"newton_iterations", 0}, {"linear_iterations", 0}, {"seconds", 0.0}});
@@ -99,24 +129,38 @@ void run_simulate(const SimulateOptions& opt, const Invocation& invocation, int 
   Progress progress("frames", motion.num_frames() > 0 ? motion.num_frames() - 1 : 0, rank == 0);
   long newton_total = 0, linear_total = 0, retries_total = 0;
   double solve_seconds = 0.0, function_seconds = 0.0, jacobian_seconds = 0.0;
+  double elastic_seconds = 0.0, inertia_seconds = 0.0, dense_seconds = 0.0, output_seconds = 0.0;
   for (std::size_t f = 1; f < motion.num_frames(); ++f) {
     int newton = 0, linear = 0, retries = 0;
     double seconds = 0.0;
     for (int k = 0; k < opt.substeps; ++k) {
-      const fullspace::StepStats st = integrator.step(h);
-      newton += st.newton_iterations;
-      linear += st.linear_iterations;
-      retries += st.failed_attempts;
-      seconds += st.seconds;
-      function_seconds += st.function_seconds;
-      jacobian_seconds += st.jacobian_seconds;
+      if (use_reduced) {
+        const reduced::ReducedStepStats st = fast->step(h);
+        newton += st.newton_iterations;
+        retries += st.failed_attempts;
+        seconds += st.seconds;
+        elastic_seconds += st.elastic_seconds;
+        inertia_seconds += st.inertia_seconds;
+        dense_seconds += st.solve_seconds;
+      } else {
+        const fullspace::StepStats st = full->step(h);
+        newton += st.newton_iterations;
+        linear += st.linear_iterations;
+        retries += st.failed_attempts;
+        seconds += st.seconds;
+        function_seconds += st.function_seconds;
+        jacobian_seconds += st.jacobian_seconds;
+      }
     }
     newton_total += newton;
     linear_total += linear;
     retries_total += retries;
     solve_seconds += seconds;
-    const fullspace::Energies e = fullspace::energies(problem, integrator.state());
-    writer.add_frame(motion.time(f), integrator.state());
+    const auto t_output = Clock::now();
+    const fullspace::State state = current_state();
+    const fullspace::Energies e = fullspace::energies(problem, state);
+    writer.add_frame(motion.time(f), state);
+    output_seconds += seconds_since(t_output);
     frames.push_back({{"frame", f},
                       {"t", motion.time(f)},
                       {"newton_iterations", newton},
@@ -131,7 +175,7 @@ void run_simulate(const SimulateOptions& opt, const Invocation& invocation, int 
 
   writer.finish();
   nlohmann::json summary = summary_header("simulate", invocation.argc, invocation.argv);
-  summary["solver"] = {{"name", "full"},
+  summary["solver"] = {{"name", opt.solver},
                        {"integrator", "backward_euler"},
                        {"processes", size},
                        {"step", h},
@@ -148,12 +192,29 @@ void run_simulate(const SimulateOptions& opt, const Invocation& invocation, int 
   summary["material"] = {{"file", opt.material}, {"control_points", material_file ? material_file->control_points.size()
                                                                                     : static_cast<std::size_t>(opt.control_points)},
                          {"density", opt.density}, {"gravity", opt.gravity}, {"stiffness_scale", opt.stiffness_scale}};
+  if (reduced_model) {
+    summary["reduced"] = {{"point_handles", reduced_model->handles.point_nodes.size()},
+                          {"bone_handles", reduced_model->handles.bone_joints().size()},
+                          {"affine", opt.affine},
+                          {"coordinates", reduced_model->subspace.num_dofs()},
+                          {"basis_nonzeros", reduced_model->subspace.basis.nonZeros()},
+                          {"cubature", reduced_model->cubature.size()},
+                          {"cubature_method", reduced_model->cubature.method},
+                          {"cache", reduced_model->cache_outcome},
+                          {"model_seconds", reduced_model->build_seconds}};
+  }
   summary["dynamics"] = writer.dynamics_summary();
   summary["frames"] = frames;
   summary["timings"] = {{"build_seconds", build_seconds},
                         {"solve_seconds", solve_seconds},
                         {"function_seconds", function_seconds},
                         {"jacobian_seconds", jacobian_seconds},
+                        {"model_seconds", model_seconds},
+                        {"elastic_seconds", elastic_seconds},
+                        {"inertia_seconds", inertia_seconds},
+                        {"dense_solve_seconds", dense_seconds},
+                        {"output_seconds", output_seconds},
+                        {"frames_per_second", solve_seconds > 0 ? static_cast<double>(motion.num_frames() - 1) / solve_seconds : 0.0},
                         {"seconds_per_frame", motion.num_frames() > 1 ? solve_seconds / static_cast<double>(motion.num_frames() - 1) : 0.0},
                         {"total_seconds", seconds_since(t_start)}};
   summary["output"] = opt.no_output ? nlohmann::json("summary.json only")
@@ -173,7 +234,13 @@ void register_simulate_commands(CLI::App& app, const Invocation& invocation) {
       "simulate",
       "Simulate a subject's soft tissue along a motion and write the posed body surface per frame (as "
       "`sflsh motion export` does). PETSc options (-snes_*, -ksp_*, -pc_*) may follow; parallel with mpirun -n P.");
-  cmd->add_option("--solver", opt->solver, "Solver: full (the full-space reference)")->check(CLI::IsMember({"full"}));
+  cmd->add_option("--solver", opt->solver, "Solver: full (the full-space reference) | reduced (handles + cubature)")
+      ->check(CLI::IsMember({"full", "reduced"}));
+  cmd->add_option("--handles", opt->handles, "Reduced: point handles inside the layer (plus the 24 bone handles)");
+  cmd->add_option("--cubature", opt->cubature, "Reduced: cubature tets K (0 = every tet, exact integration)");
+  cmd->add_option("--cubature-weights", opt->cubature_weights, "Reduced: nnls (training-free force matching) | voronoi")
+      ->check(CLI::IsMember({"nnls", "voronoi"}));
+  cmd->add_flag("--affine", opt->affine, "Reduced: affine point handles (12 coordinates each instead of 3)");
   add_body_option(*cmd, opt->subject);
   add_subject_options(*cmd, opt->subject);
   cmd->add_option("--motion", opt->motion, "Motion: a procedural name (sflsh motion list) or an AMASS .npz path")->required();

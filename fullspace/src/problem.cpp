@@ -81,6 +81,17 @@ std::vector<char> Dirichlet::mask(int num_nodes) const {
   return m;
 }
 
+void NodeTrajectory::evaluate_nodes(double t, const std::vector<int>& nodes, NodeFrame& frame) const {
+  NodeFrame all;
+  evaluate(t, all);
+  frame.A.resize(nodes.size());
+  frame.d.resize(static_cast<Eigen::Index>(nodes.size()), 3);
+  for (std::size_t k = 0; k < nodes.size(); ++k) {
+    frame.A[k] = all.A[static_cast<std::size_t>(nodes[k])];
+    frame.d.row(static_cast<Eigen::Index>(k)) = all.d.row(nodes[k]);
+  }
+}
+
 void Problem::validate() {
   const int n = num_nodes();
   const int m = num_tets();

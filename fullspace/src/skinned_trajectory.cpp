@@ -174,6 +174,28 @@ void SkinnedTrajectory::evaluate(double t, NodeFrame& frame, NodeFrame* rate) co
   }
 }
 
+void SkinnedTrajectory::evaluate_nodes(double t, const std::vector<int>& nodes, NodeFrame& frame) const {
+  JointTransforms m;
+  curve_->transforms(t, m);
+  frame.A.resize(nodes.size());
+  frame.d.resize(static_cast<Eigen::Index>(nodes.size()), 3);
+  Eigen::VectorXd b;
+  if (pose_dirs_.size() > 0) {
+    PoseFeatures f;
+    curve_->features(t, f);
+    b = pose_dirs_ * f;
+  }
+  for (std::size_t k = 0; k < nodes.size(); ++k) {
+    const auto si = static_cast<std::size_t>(nodes[k]);
+    Matrix34d blend = Matrix34d::Zero();
+    for (const auto& [joint, w] : weights_[si]) blend += w * m[static_cast<std::size_t>(joint)];
+    frame.A[k] = blend.leftCols<3>();
+    Eigen::Vector3d d = blend.col(3);
+    if (b.size() > 0) d += frame.A[k] * b.segment<3>(3 * nodes[k]);
+    frame.d.row(static_cast<Eigen::Index>(k)) = d.transpose();
+  }
+}
+
 std::vector<std::vector<std::pair<int, double>>> sparse_blend_weights(const Eigen::MatrixXd& dense, double drop) {
   std::vector<std::vector<std::pair<int, double>>> out(static_cast<std::size_t>(dense.rows()));
   for (Eigen::Index i = 0; i < dense.rows(); ++i) {

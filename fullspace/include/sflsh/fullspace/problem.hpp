@@ -35,6 +35,9 @@ class NodeTrajectory {
   virtual int num_nodes() const = 0;
   /// The maps at time t [s]; `rate`, when not null, receives dA/dt and dd/dt.
   virtual void evaluate(double t, NodeFrame& frame, NodeFrame* rate = nullptr) const = 0;
+  /// The maps of the listed nodes only (entry k of `frame` is node nodes[k]); the default evaluates all
+  /// nodes and gathers. Reduced models call it every step on the nodes their basis moves.
+  virtual void evaluate_nodes(double t, const std::vector<int>& nodes, NodeFrame& frame) const;
 };
 
 /// A scalar prescribed displacement u(t) [m] and its time derivative.

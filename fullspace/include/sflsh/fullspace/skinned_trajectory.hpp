@@ -48,6 +48,7 @@ class SkinnedTrajectory final : public NodeTrajectory {
                     Eigen::MatrixXd pose_dirs);
   int num_nodes() const override { return static_cast<int>(weights_.size()); }
   void evaluate(double t, NodeFrame& frame, NodeFrame* rate = nullptr) const override;
+  void evaluate_nodes(double t, const std::vector<int>& nodes, NodeFrame& frame) const override;
   const MotionCurve& curve() const { return *curve_; }
   const std::vector<std::pair<int, double>>& node_weights(int node) const { return weights_[static_cast<std::size_t>(node)]; }
 

@@ -1,0 +1,49 @@
+#pragma once
+// The elastic energy of the reduced model by cubature, with its gradient and Hessian in q (cubature.hpp).
+// Per cubature tet c with nodes a and rest shape-function gradients g_a (rows of the 4 × 3 matrix G):
+//   F_c(q) = F_D,c + Σ_{s ∈ S_c} t_s c_sᵀ,   c_s = Σ_a B_{a s} g_a     (c_s: row s of C_c = W_cᵀ G),
+// where S_c are the basis functions touching the tet's nodes and F_D,c the deformation gradient of the
+// prescribed state x_D. Hence
+//   ∂E/∂t_s = ω V P c_s,     ∂²E/∂t_s∂t_r (i, k) = ω V Σ_{j,l} (∂P/∂F)_{(i j),(k l)} c_s(j) c_r(l),
+// with (i j) the column-major vec index i + 3j (orthotropic_fung.hpp). No allocation per point.
+#include <sflsh/fullspace/problem.hpp>
+#include <sflsh/reduced/cubature.hpp>
+#include <sflsh/reduced/subspace.hpp>
+
+#include <vector>
+
+namespace sflsh::reduced {
+
+class CubatureElastic {
+ public:
+  CubatureElastic(const fullspace::Problem& problem, const Subspace& subspace, const Cubature& cubature);
+
+  /// F_D per point from the prescribed state x_D (3N). Call before the first evaluation and whenever x_D changes.
+  void set_prescribed_state(const Eigen::VectorXd& x_prescribed);
+  /// E(q) [J]. Throws sflsh::Error on a non-finite F or a Fung exponent over the cap.
+  double energy(const Eigen::VectorXd& q) const;
+  /// E(q); adds ∂E/∂q to `gradient` (3S).
+  double add_gradient(const Eigen::VectorXd& q, Eigen::VectorXd& gradient) const;
+  /// Adds ∂²E/∂q² (3S × 3S, full symmetric) to `hessian`, with dP/dF projected to PSD when asked.
+  void add_hessian(const Eigen::VectorXd& q, Eigen::MatrixXd& hessian, material::HessianProjection projection) const;
+  /// One point's contribution weight · ω V ∂Ψ/∂q, added to `gradient` (for cubature fitting).
+  void add_point_gradient(int point, const Eigen::VectorXd& q, Eigen::VectorXd& gradient, double weight) const;
+
+  int num_points() const { return static_cast<int>(point_tet_.size()); }
+  /// Largest number of basis functions touching one point (the size of its local Hessian / 3).
+  int max_local_functions() const { return max_local_; }
+
+ private:
+  Eigen::Matrix3d deformation_gradient(int point, const Eigen::VectorXd& q) const;
+
+  const fullspace::Problem& problem_;
+  std::vector<int> point_tet_;
+  std::vector<double> point_weight_;   ///< ω_c V_c (· energy scale)
+  std::vector<int> offset_;            ///< point p's functions are function_[offset_[p] .. offset_[p+1])
+  std::vector<int> function_;
+  std::vector<Eigen::Vector3d> c_;     ///< c_s per (point, function), parallel to function_
+  std::vector<Eigen::Matrix3d> f_prescribed_;
+  int max_local_ = 0;
+};
+
+}  // namespace sflsh::reduced

@@ -1,0 +1,87 @@
+#pragma once
+// Backward Euler for the reduced model: the full-space incremental potential (physics.md §5, Kane et al.
+// 2000) restricted to x = x_D + (B ⊗ I₃) q,
+//   Φ(q) = Σ_i m_i/(2h²) |p_i(q) − p̃_i|² − Σ_i m_i gᵀp_i(q) + Σ_c ω_c V_c Ψ(F_c(q)),   p̃ = p_n + h w_n,
+// minimized by dense Newton (Cholesky of the 3S × 3S Hessian) with a backtracking (Armijo) line search on Φ.
+// The inertia part is exactly quadratic (reduced_inertia.hpp), the elastic part comes from the cubature
+// (cubature_elastic.hpp) with κ per cubature tet. Robustness as in the full-space solver: the exact
+// Hessian first, a failed attempt (indefinite Hessian, failed line search, non-finite or over-cap
+// state) is repeated with PSD-projected dP/dF, then as 2, 4, … 2^max_halvings substeps, then a one-line
+// sflsh::Error naming the time and the reason; the state is never left half-updated.
+// Single-threaded on purpose: crowds parallelize over bodies.
+#include <sflsh/fullspace/problem.hpp>
+#include <sflsh/reduced/cubature.hpp>
+#include <sflsh/reduced/cubature_elastic.hpp>
+#include <sflsh/reduced/reduced_inertia.hpp>
+#include <sflsh/reduced/subspace.hpp>
+
+#include <string>
+
+namespace sflsh::reduced {
+
+struct ReducedOptions {
+  bool quasi_static = false;   ///< drop inertia (gravity still acts through mass)
+  int max_halvings = 6;
+  int max_newton = 30;
+  double gradient_rtol = 1e-8;     ///< ‖∇Φ‖ ≤ rtol·‖∇Φ₀‖ …
+  double gradient_atol = 1e-9;     ///< … or ≤ atol [N]
+  double step_tolerance = 1e-8;    ///< or a full Newton step with ‖Δq‖∞ below this [m]
+  bool exact_hessian_first = true;
+  bool use_predictor = true;       ///< start Newton from q_n + h q̇_n when its Φ is lower than at q_n
+};
+
+struct ReducedStepStats {
+  int newton_iterations = 0;
+  int substeps = 1;
+  int failed_attempts = 0;
+  int projected_retries = 0;
+  double seconds = 0.0;
+  double elastic_seconds = 0.0;    ///< cubature energies, forces and Hessians
+  double inertia_seconds = 0.0;    ///< node maps, prediction, mass Hessian
+  double solve_seconds = 0.0;      ///< dense Cholesky factorizations and solves
+  double final_gradient = 0.0;     ///< ‖∇Φ‖ at the last Newton iterate [N]
+  std::string converged_reason;
+};
+
+class ReducedBackwardEuler {
+ public:
+  /// The problem, subspace and cubature must outlive the integrator; the problem must be validated and its
+  /// constrained nodes fully constrained (all three components) with zero basis rows.
+  ReducedBackwardEuler(const fullspace::Problem& problem, const Subspace& subspace, const Cubature& cubature,
+                       const ReducedOptions& options = {});
+
+  /// Sets the state from a full one (x projected onto the subspace by least squares on the active nodes,
+  /// w taken at the active nodes).
+  void initialize(const fullspace::State& state);
+  /// Advances by h [s]; throws sflsh::Error (state unchanged) when even 2^max_halvings substeps fail.
+  ReducedStepStats step(double h);
+
+  double time() const { return t_; }
+  const Eigen::VectorXd& q() const { return q_; }
+  /// The full-space state: x = x_D + (B ⊗ I₃) q on every node; w from the steps at the active nodes and the
+  /// skinned velocity ẋ of the prescribed motion elsewhere.
+  fullspace::State full_state() const;
+  /// Φ's elastic part at the current state (cubature) [J].
+  double elastic_energy() const;
+  const Subspace& subspace() const { return subspace_; }
+  const Cubature& cubature() const { return cubature_; }
+
+ private:
+  struct Attempt;
+  Eigen::VectorXd prescribed_state(double t) const;
+  bool solve_substep(double t0, double dt, material::HessianProjection projection, ReducedStepStats& stats, std::string& reason);
+
+  const fullspace::Problem& problem_;
+  const Subspace& subspace_;
+  const Cubature& cubature_;
+  ReducedOptions options_;
+  CubatureElastic elastic_;
+  ReducedInertia inertia_;
+  bool has_drives_ = false;
+
+  double t_ = 0.0;
+  Eigen::VectorXd q_, q_rate_;            ///< q and its backward difference (for the predictor)
+  meshing::RowMatrixX3d p_, w_;           ///< posed positions and velocities of the active nodes
+};
+
+}  // namespace sflsh::reduced

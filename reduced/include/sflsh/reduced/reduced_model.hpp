@@ -1,0 +1,56 @@
+#pragma once
+// The reduced model of a subject's layer (SFLSH §3, paper Fig. 2 middle): the 24 skeleton bones as bone
+// handles (the attached inner and side nodes, grouped by their dominant joint) and P point handles inside
+// the layer (mesh nodes at mid-depth under the material control-point sites: deterministic, nested in P,
+// left/right symmetric, denser on the torso), linearly precise biharmonic weights, the reduced basis, and
+// the data-oblivious cubature. Handles, weights and cubature are one common discretization built on the
+// template layer (β = 0) and cached beside the template mesh; handle positions follow retargeting because
+// handles are mesh nodes.
+#include <sflsh/fullspace/body_layer.hpp>
+#include <sflsh/reduced/cubature.hpp>
+#include <sflsh/reduced/subspace.hpp>
+#include <sflsh/reduced/weights.hpp>
+
+#include <filesystem>
+#include <string>
+
+namespace sflsh::reduced {
+
+struct ReducedModelOptions {
+  int point_handles = 86;
+  int cubature = 200;                   ///< K; 0 = exact (every tet)
+  CubatureWeighting weighting = CubatureWeighting::nnls;
+  BasisOptions basis;
+  std::filesystem::path cache_dir;      ///< empty: meshing::default_cache_dir()
+  bool use_cache = true;
+};
+
+struct BodyHandles {
+  std::vector<int> point_nodes;         ///< P mesh nodes
+  std::vector<int> point_vertices;      ///< the body vertex each point handle sits under
+  std::vector<int> bone_of_node;        ///< per node: joint of an attached node, −1 for free nodes
+  /// Point handles first (one node each), then one set per joint that has attached nodes.
+  HandleSets sets() const;
+  std::vector<int> bone_joints() const; ///< the joints of the bone sets, in order
+};
+
+/// Places the handles on a body layer (template mesh, its depth field and node skinning weights).
+BodyHandles place_body_handles(const fullspace::BodyLayer& layer, int point_handles);
+
+struct ReducedModel {
+  BodyHandles handles;
+  Subspace subspace;
+  Cubature cubature;
+  std::string cache_key;
+  std::string cache_outcome;            ///< "hit" | "built" | "off"
+  double build_seconds = 0.0;
+};
+
+/// The reduced model of `layer`. Throws naming the cause (too many handles for the mesh, a failed solve, an
+/// unreadable cache entry — which is then rebuilt, with a warning).
+ReducedModel build_reduced_model(const fullspace::BodyLayer& layer, const ReducedModelOptions& options);
+
+/// The template problem the cubature is fitted on: template nodes and tets, isotropic default tissue.
+fullspace::Problem template_problem(const fullspace::BodyLayer& layer);
+
+}  // namespace sflsh::reduced

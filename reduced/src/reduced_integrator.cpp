@@ -1,0 +1,274 @@
+#include <sflsh/reduced/reduced_integrator.hpp>
+
+#include <sflsh/core/error.hpp>
+#include <sflsh/core/log.hpp>
+#include <sflsh/fullspace/reference_integrator.hpp>
+
+#include <Eigen/Cholesky>
+#include <Eigen/SparseCholesky>
+
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+namespace sflsh::reduced {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
+
+}  // namespace
+
+ReducedBackwardEuler::ReducedBackwardEuler(const fullspace::Problem& problem, const Subspace& subspace, const Cubature& cubature,
+                                           const ReducedOptions& options)
+    : problem_(problem),
+      subspace_(subspace),
+      cubature_(cubature),
+      options_(options),
+      elastic_(problem, subspace, cubature),
+      inertia_(problem, subspace) {
+  require(options.max_halvings >= 0 && options.max_newton >= 1, "reduced: max_halvings must be ≥ 0 and max_newton ≥ 1");
+  // Attached nodes must be attached as a whole and carry no basis functions.
+  std::vector<int> constrained_axes(static_cast<std::size_t>(problem.num_nodes()), 0);
+  for (int d : problem.dirichlet.dof) ++constrained_axes[static_cast<std::size_t>(d / 3)];
+  for (int i = 0; i < problem.num_nodes(); ++i) {
+    const int c = constrained_axes[static_cast<std::size_t>(i)];
+    require(c == 0 || c == 3, "reduced: node {} has {} of 3 components prescribed; the reduced model attaches whole nodes only", i, c);
+    if (c == 3) require(subspace.basis.row(i).nonZeros() == 0, "reduced: attached node {} has basis functions", i);
+  }
+  for (int id : problem.dirichlet.drive) has_drives_ = has_drives_ || id >= 0;
+  q_ = Eigen::VectorXd::Zero(subspace.num_dofs());
+  q_rate_ = q_;
+}
+
+Eigen::VectorXd ReducedBackwardEuler::prescribed_state(double t) const {
+  Eigen::VectorXd x = Eigen::Map<const Eigen::VectorXd>(problem_.rest.data(), problem_.num_dofs());
+  problem_.apply_dirichlet(t, x);
+  return x;
+}
+
+void ReducedBackwardEuler::initialize(const fullspace::State& state) {
+  require(state.x.size() == problem_.num_dofs() && state.w.size() == problem_.num_dofs(),
+          "reduced: initial state has {} / {} entries, expected {}", state.x.size(), state.w.size(), problem_.num_dofs());
+  require(state.x.allFinite() && state.w.allFinite(), "reduced: initial state is not finite");
+  t_ = state.t;
+  const Eigen::VectorXd x_prescribed = prescribed_state(t_);
+  const Eigen::VectorXd u = state.x - x_prescribed;
+  q_.setZero();
+  if (u.cwiseAbs().maxCoeff() > 0.0 && subspace_.num_functions() > 0) {
+    // Least squares on the nodes: (BᵀB) t = Bᵀ u per axis.
+    const Eigen::SparseMatrix<double> gram = Eigen::SparseMatrix<double>(subspace_.basis.transpose()) * subspace_.basis;
+    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(gram);
+    require(ldlt.info() == Eigen::Success, "reduced: the basis has a function without support; cannot project the initial state");
+    for (int axis = 0; axis < 3; ++axis) {
+      Eigen::VectorXd ua(problem_.num_nodes());
+      for (int i = 0; i < problem_.num_nodes(); ++i) ua[i] = u[3 * i + axis];
+      const Eigen::VectorXd ta = ldlt.solve(Eigen::VectorXd(subspace_.basis.transpose() * ua));
+      for (int s = 0; s < subspace_.num_functions(); ++s) q_[3 * s + axis] = ta[s];
+    }
+  }
+  q_rate_.setZero();
+  if (has_drives_) elastic_.set_prescribed_state(x_prescribed);
+  inertia_.set_time(t_, x_prescribed);
+  inertia_.posed(q_, p_);
+  const std::vector<int>& active = inertia_.active_nodes();
+  w_.resize(static_cast<Eigen::Index>(active.size()), 3);
+  for (std::size_t a = 0; a < active.size(); ++a) w_.row(static_cast<Eigen::Index>(a)) = state.w.segment<3>(3 * active[a]).transpose();
+}
+
+bool ReducedBackwardEuler::solve_substep(double t0, double dt, material::HessianProjection projection, ReducedStepStats& stats,
+                                         std::string& reason) {
+  const double t1 = t0 + dt;
+  const bool inertia_on = !options_.quasi_static && problem_.dynamic();
+  auto clock = Clock::now();
+  const Eigen::VectorXd x_prescribed = prescribed_state(t1);
+  inertia_.set_time(t1, x_prescribed);
+  const meshing::RowMatrixX3d p_tilde = p_ + dt * w_;
+  const Eigen::VectorXd c = inertia_.linear_term(p_tilde, dt, inertia_on);
+  Eigen::MatrixXd mass_hessian;
+  if (inertia_on) inertia_.mass_hessian(dt, mass_hessian);
+  else mass_hessian.setZero(subspace_.num_dofs(), subspace_.num_dofs());
+  stats.inertia_seconds += seconds_since(clock);
+  clock = Clock::now();
+  if (has_drives_) elastic_.set_prescribed_state(x_prescribed);
+  stats.elastic_seconds += seconds_since(clock);
+
+  // Φ(q) = cᵀq + ½ qᵀ H_m q + E(q); +∞ where the material refuses the state.
+  auto potential = [&](const Eigen::VectorXd& q) {
+    const auto t = Clock::now();
+    double value = kInfinity;
+    try {
+      value = c.dot(q) + 0.5 * q.dot(mass_hessian * q) + elastic_.energy(q);
+    } catch (const Error&) {
+      value = kInfinity;
+    }
+    stats.elastic_seconds += seconds_since(t);
+    return std::isfinite(value) ? value : kInfinity;
+  };
+
+  Eigen::VectorXd q = q_;
+  double phi = potential(q);
+  if (options_.use_predictor && q_rate_.size() == q_.size()) {
+    const Eigen::VectorXd predicted = q_ + dt * q_rate_;
+    const double phi_predicted = potential(predicted);
+    if (phi_predicted < phi) {
+      q = predicted;
+      phi = phi_predicted;
+    }
+  }
+  if (!std::isfinite(phi)) {
+    reason = "the start of the step is outside the material's domain";
+    return false;
+  }
+
+  Eigen::VectorXd gradient(subspace_.num_dofs());
+  Eigen::MatrixXd hessian;
+  Eigen::LLT<Eigen::MatrixXd> llt;
+  double g0 = 0.0;
+  bool converged = false;
+  for (int it = 0; it < options_.max_newton && !converged; ++it) {
+    clock = Clock::now();
+    gradient = c + mass_hessian * q;
+    try {
+      elastic_.add_gradient(q, gradient);
+    } catch (const Error& e) {
+      reason = e.what();
+      return false;
+    }
+    stats.elastic_seconds += seconds_since(clock);
+    const double g = gradient.norm();
+    stats.final_gradient = g;
+    if (!std::isfinite(g)) {
+      reason = "non-finite gradient";
+      return false;
+    }
+    if (it == 0) g0 = g;
+    if (g <= options_.gradient_atol || (it > 0 && g <= options_.gradient_rtol * g0)) {
+      converged = true;
+      reason = "gradient";
+      break;
+    }
+    clock = Clock::now();
+    hessian = mass_hessian;
+    try {
+      elastic_.add_hessian(q, hessian, projection);
+    } catch (const Error& e) {
+      reason = e.what();
+      return false;
+    }
+    stats.elastic_seconds += seconds_since(clock);
+    clock = Clock::now();
+    llt.compute(hessian);
+    if (llt.info() != Eigen::Success) {
+      stats.solve_seconds += seconds_since(clock);
+      reason = "indefinite Hessian";
+      return false;
+    }
+    const Eigen::VectorXd delta = -llt.solve(gradient);
+    stats.solve_seconds += seconds_since(clock);
+    ++stats.newton_iterations;
+    if (!delta.allFinite()) {
+      reason = "non-finite Newton step";
+      return false;
+    }
+    // Backtracking on Φ (Armijo); a decrease below round-off of Φ counts as converged.
+    const double slope = gradient.dot(delta);
+    double alpha = 1.0;
+    bool accepted = false;
+    for (int ls = 0; ls < 40; ++ls, alpha *= 0.5) {
+      const Eigen::VectorXd trial = q + alpha * delta;
+      const double phi_trial = potential(trial);
+      const bool roundoff = std::isfinite(phi_trial) && std::abs(phi_trial - phi) <= 1e-13 * std::max(1.0, std::abs(phi));
+      if (phi_trial <= phi + 1e-4 * alpha * slope || (alpha == 1.0 && roundoff && std::abs(slope) <= 1e-10 * std::max(1.0, std::abs(phi)))) {
+        q = trial;
+        phi = phi_trial;
+        accepted = true;
+        break;
+      }
+    }
+    if (!accepted) {
+      reason = "line search failed";
+      return false;
+    }
+    if (alpha == 1.0 && delta.cwiseAbs().maxCoeff() <= options_.step_tolerance) {
+      converged = true;
+      reason = "step";
+    }
+  }
+  if (!converged) {
+    reason = fmt::format("no convergence in {} Newton iterations (‖∇Φ‖ = {:.3e})", options_.max_newton, stats.final_gradient);
+    return false;
+  }
+  if (!q.allFinite()) {
+    reason = "non-finite state";
+    return false;
+  }
+  clock = Clock::now();
+  meshing::RowMatrixX3d p_new;
+  inertia_.posed(q, p_new);
+  w_ = (p_new - p_) / dt;
+  p_ = std::move(p_new);
+  q_rate_ = (q - q_) / dt;
+  q_ = q;
+  t_ = t1;
+  stats.inertia_seconds += seconds_since(clock);
+  return true;
+}
+
+ReducedStepStats ReducedBackwardEuler::step(double h) {
+  require(h > 0.0 && std::isfinite(h), "reduced: step must be positive, got {}", h);
+  const auto start = Clock::now();
+  ReducedStepStats stats;
+  const double t_save = t_;
+  const Eigen::VectorXd q_save = q_, rate_save = q_rate_;
+  const meshing::RowMatrixX3d p_save = p_, w_save = w_;
+  std::vector<material::HessianProjection> ladder;
+  if (options_.exact_hessian_first && !options_.quasi_static) ladder.push_back(material::HessianProjection::kNone);
+  ladder.push_back(problem_.projection == material::HessianProjection::kNone ? material::HessianProjection::kStressDerivative
+                                                                              : problem_.projection);
+  std::string reason;
+  for (int halvings = 0; halvings <= options_.max_halvings; ++halvings) {
+    const int substeps = 1 << halvings;
+    const double dt = h / substeps;
+    bool ok = true;
+    for (int k = 0; k < substeps && ok; ++k) {
+      bool done = false;
+      for (std::size_t attempt = 0; attempt < ladder.size() && !done; ++attempt) {
+        done = solve_substep(t_save + k * dt, dt, ladder[attempt], stats, reason);
+        if (!done) {
+          ++stats.failed_attempts;
+          if (attempt + 1 < ladder.size()) ++stats.projected_retries;
+        }
+      }
+      ok = done;
+    }
+    if (ok) {
+      stats.substeps = substeps;
+      stats.converged_reason = reason;
+      stats.seconds = seconds_since(start);
+      return stats;
+    }
+    logger()->debug("reduced: step at t = {:.6f} s failed with {} substep(s): {}", t_save, substeps, reason);
+    t_ = t_save;
+    q_ = q_save;
+    q_rate_ = rate_save;
+    p_ = p_save;
+    w_ = w_save;
+  }
+  throw_error("reduced: the step from t = {:.6f} s (h = {:.3e} s) failed even as {} substeps: {}", t_save, h, 1 << options_.max_halvings,
+              reason);
+}
+
+fullspace::State ReducedBackwardEuler::full_state() const {
+  fullspace::State s = fullspace::initial_state(problem_, t_);
+  subspace_.add_displacement(q_, s.x);
+  const std::vector<int>& active = inertia_.active_nodes();
+  for (std::size_t a = 0; a < active.size(); ++a) s.w.segment<3>(3 * active[a]) = w_.row(static_cast<Eigen::Index>(a)).transpose();
+  return s;
+}
+
+double ReducedBackwardEuler::elastic_energy() const { return elastic_.energy(q_); }
+
+}  // namespace sflsh::reduced

@@ -1,0 +1,255 @@
+#include <sflsh/reduced/reduced_model.hpp>
+
+#include <sflsh/core/error.hpp>
+#include <sflsh/core/log.hpp>
+#include <sflsh/core/npz.hpp>
+#include <sflsh/material/layer_material.hpp>
+#include <sflsh/material/orthotropic_fung.hpp>
+#include <sflsh/meshing/layer_cache.hpp>
+
+#include <fmt/format.h>
+
+#include <chrono>
+#include <cstring>
+
+namespace sflsh::reduced {
+
+namespace {
+
+/// Bump when what a cache entry holds changes.
+constexpr int kReducedFormat = 1;
+
+std::uint64_t fnv1a(std::uint64_t hash, const void* data, std::size_t bytes) {
+  const auto* p = static_cast<const unsigned char*>(data);
+  for (std::size_t k = 0; k < bytes; ++k) {
+    hash ^= p[k];
+    hash *= 1099511628211ULL;
+  }
+  return hash;
+}
+
+std::string cache_key(const meshing::LayerMesh& mesh, const ReducedModelOptions& options) {
+  std::uint64_t h = 1469598103934665603ULL;
+  h = fnv1a(h, mesh.nodes.data(), sizeof(double) * static_cast<std::size_t>(mesh.nodes.size()));
+  h = fnv1a(h, mesh.tets.data(), sizeof(int) * static_cast<std::size_t>(mesh.tets.size()));
+  const std::string settings =
+      fmt::format("v{} P{} K{} w{} drop{} max{} affine{} len{}", kReducedFormat, options.point_handles, options.cubature,
+                  options.weighting == CubatureWeighting::nnls ? "nnls" : "voronoi", options.basis.drop_below,
+                  options.basis.max_influences, options.basis.affine ? 1 : 0, options.basis.affine_length);
+  h = fnv1a(h, settings.data(), settings.size());
+  return fmt::format("{:016x} {}", h, settings);
+}
+
+std::filesystem::path cache_file(const std::filesystem::path& dir, const std::string& key) {
+  return dir / fmt::format("reduced_{}.npz", key.substr(0, 16));
+}
+
+std::vector<std::int64_t> to_i64(const std::vector<int>& v) { return {v.begin(), v.end()}; }
+std::vector<int> to_int(const std::vector<std::int64_t>& v) {
+  std::vector<int> out;
+  for (auto x : v) out.push_back(static_cast<int>(x));
+  return out;
+}
+
+void save_model(const std::filesystem::path& path, const ReducedModel& m) {
+  std::vector<std::int64_t> rows, cols;
+  std::vector<double> values;
+  for (int i = 0; i < m.subspace.num_nodes(); ++i)
+    for (SparseRowMatrix::InnerIterator it(m.subspace.basis, i); it; ++it) {
+      rows.push_back(i);
+      cols.push_back(it.col());
+      values.push_back(it.value());
+    }
+  npz::write(path, {{"key", npz::make_string(m.cache_key)},
+                    {"shape", npz::make_i64({2}, {m.subspace.num_nodes(), m.subspace.num_functions()})},
+                    {"basis_rows", npz::make_i64({rows.size()}, rows)},
+                    {"basis_cols", npz::make_i64({cols.size()}, cols)},
+                    {"basis_values", npz::make_f64({values.size()}, values)},
+                    {"point_nodes", npz::make_i64({m.handles.point_nodes.size()}, to_i64(m.handles.point_nodes))},
+                    {"point_vertices", npz::make_i64({m.handles.point_vertices.size()}, to_i64(m.handles.point_vertices))},
+                    {"cubature_tets", npz::make_i64({m.cubature.tets.size()}, to_i64(m.cubature.tets))},
+                    {"cubature_weights", npz::make_f64({m.cubature.weights.size()}, m.cubature.weights)},
+                    {"cubature_method", npz::make_string(m.cubature.method)}});
+}
+
+/// Reads a cache entry into `m` (handles' bone map is recomputed by the caller). False when stale.
+bool load_model(const std::filesystem::path& path, const std::string& key, ReducedModel& m) {
+  const npz::Reader reader(path);
+  if (reader.read("key").to_string() != key) return false;
+  const auto shape = reader.read("shape").to_int64();
+  require(shape.size() == 2, "{}: key 'shape' must hold 2 numbers", path.string());
+  const auto rows = reader.read("basis_rows").to_int64(), cols = reader.read("basis_cols").to_int64();
+  const auto values = reader.read("basis_values").to_doubles();
+  require(rows.size() == cols.size() && rows.size() == values.size(), "{}: basis arrays differ in length", path.string());
+  std::vector<Eigen::Triplet<double>> entries;
+  for (std::size_t k = 0; k < rows.size(); ++k) {
+    require(rows[k] >= 0 && rows[k] < shape[0] && cols[k] >= 0 && cols[k] < shape[1], "{}: basis entry {} out of range", path.string(), k);
+    entries.emplace_back(static_cast<int>(rows[k]), static_cast<int>(cols[k]), values[k]);
+  }
+  m.subspace.basis.resize(shape[0], shape[1]);
+  m.subspace.basis.setFromTriplets(entries.begin(), entries.end());
+  m.subspace.basis.makeCompressed();
+  m.handles.point_nodes = to_int(reader.read("point_nodes").to_int64());
+  m.handles.point_vertices = to_int(reader.read("point_vertices").to_int64());
+  m.cubature.tets = to_int(reader.read("cubature_tets").to_int64());
+  m.cubature.weights = reader.read("cubature_weights").to_doubles();
+  m.cubature.method = reader.read("cubature_method").to_string();
+  require(m.cubature.tets.size() == m.cubature.weights.size(), "{}: cubature arrays differ in length", path.string());
+  return true;
+}
+
+int dominant_joint(const std::vector<std::pair<int, double>>& weights) {
+  int best = -1;
+  double value = -1.0;
+  for (const auto& [joint, w] : weights)
+    if (w > value) {
+      value = w;
+      best = joint;
+    }
+  return best;
+}
+
+}  // namespace
+
+HandleSets BodyHandles::sets() const {
+  HandleSets s;
+  for (int node : point_nodes) s.handle_nodes.push_back({node});
+  for (int joint : bone_joints()) {
+    std::vector<int> nodes;
+    for (std::size_t i = 0; i < bone_of_node.size(); ++i)
+      if (bone_of_node[i] == joint) nodes.push_back(static_cast<int>(i));
+    s.handle_nodes.push_back(std::move(nodes));
+  }
+  return s;
+}
+
+std::vector<int> BodyHandles::bone_joints() const {
+  std::vector<char> used(body::kNumJoints, 0);
+  for (int j : bone_of_node)
+    if (j >= 0) used[static_cast<std::size_t>(j)] = 1;
+  std::vector<int> out;
+  for (int j = 0; j < body::kNumJoints; ++j)
+    if (used[static_cast<std::size_t>(j)]) out.push_back(j);
+  return out;
+}
+
+BodyHandles place_body_handles(const fullspace::BodyLayer& layer, int point_handles) {
+  const meshing::LayerMesh& mesh = *layer.mesh;
+  const int n = mesh.num_nodes();
+  BodyHandles h;
+  h.bone_of_node.assign(static_cast<std::size_t>(n), -1);
+  const std::vector<char> attached = layer.problem.dirichlet.mask(n);
+  for (int i = 0; i < n; ++i)
+    if (attached[static_cast<std::size_t>(3 * i)]) h.bone_of_node[static_cast<std::size_t>(i)] = dominant_joint(layer.trajectory->node_weights(i));
+  if (point_handles == 0) return h;
+  const int region_vertices = mesh.region_surface.num_vertices();
+  require(point_handles > 0 && point_handles <= region_vertices / 4, "reduced: {} point handles requested; the layer allows 1 to {}",
+          point_handles, region_vertices / 4);
+  // Sites: the material control-point placement (nested, symmetric, denser on the torso), then the free node
+  // nearest below each site at mid-depth.
+  const std::vector<int> sites = material::layer_control_points(*layer.model, mesh, point_handles);
+  const meshing::RowMatrixX3d skin = mesh.skin_positions(mesh.nodes);
+  std::vector<char> taken(static_cast<std::size_t>(n), 0);
+  for (int v : sites) {
+    const int r = mesh.region_surface.local_of[static_cast<std::size_t>(v)];
+    const Eigen::RowVector3d s = skin.row(r);
+    int best = -1;
+    double best_d = std::numeric_limits<double>::infinity();
+    for (int pass = 0; pass < 2 && best < 0; ++pass) {
+      for (int i = 0; i < n; ++i) {
+        if (attached[static_cast<std::size_t>(3 * i)] || taken[static_cast<std::size_t>(i)]) continue;
+        const double depth = layer.depth[i];
+        if (pass == 0 && (depth < 0.3 || depth > 0.7)) continue;   // mid-depth first, any free node otherwise
+        const double d = (mesh.nodes.row(i) - s).squaredNorm();
+        if (d < best_d) {
+          best_d = d;
+          best = i;
+        }
+      }
+    }
+    require(best >= 0, "reduced: no free node left for point handle {} of {}", h.point_nodes.size(), point_handles);
+    taken[static_cast<std::size_t>(best)] = 1;
+    h.point_nodes.push_back(best);
+    h.point_vertices.push_back(v);
+  }
+  return h;
+}
+
+fullspace::Problem template_problem(const fullspace::BodyLayer& layer) {
+  fullspace::Problem p;
+  p.rest = layer.mesh->nodes;
+  p.tets = layer.mesh->tets;
+  material::SkinMaterial m;
+  const material::Kappa kappa = material::default_kappa();
+  m.young_tangent = kappa.young_tangent;
+  m.young_normal = kappa.young_tangent;   // isotropic: the fit must not depend on per-subject normals
+  m.poisson = layer.material.poisson;
+  m.saturation = layer.material.saturation;
+  p.tet_material.assign(static_cast<std::size_t>(p.num_tets()), material::make_orthotropic_fung(m, Eigen::Vector3d::UnitZ()));
+  p.dirichlet = layer.problem.dirichlet;
+  p.mass = fullspace::lumped_masses(p.rest, p.tets, layer.problem.density > 0 ? layer.problem.density : 1000.0);
+  p.validate();
+  return p;
+}
+
+ReducedModel build_reduced_model(const fullspace::BodyLayer& layer, const ReducedModelOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  const meshing::LayerMesh& mesh = *layer.mesh;
+  require(options.cubature >= 0 && options.cubature <= mesh.num_tets(), "reduced: --cubature {} must be between 0 (exact) and {} tets",
+          options.cubature, mesh.num_tets());
+  ReducedModel m;
+  m.cache_key = cache_key(mesh, options);
+  const std::filesystem::path dir = options.cache_dir.empty() ? meshing::default_cache_dir() : options.cache_dir;
+  const std::filesystem::path path = cache_file(dir, m.cache_key);
+  bool loaded = false;
+  if (options.use_cache && std::filesystem::exists(path)) {
+    try {
+      loaded = load_model(path, m.cache_key, m);
+      if (!loaded) logger()->info("reduced: cache entry {} is stale; rebuilding", path.string());
+    } catch (const Error& e) {
+      logger()->warn("reduced: cache entry unreadable ({}); rebuilding", e.what());
+    }
+  }
+  if (loaded) {
+    require(m.subspace.num_nodes() == mesh.num_nodes(), "reduced: cache entry {} has {} nodes, the mesh {}", path.string(),
+            m.subspace.num_nodes(), mesh.num_nodes());
+    const BodyHandles placed = place_body_handles(layer, 0);   // bone map only (cheap)
+    m.handles.bone_of_node = placed.bone_of_node;
+    m.cache_outcome = "hit";
+  } else {
+    m.handles = place_body_handles(layer, options.point_handles);
+    const Eigen::MatrixXd weights =
+        handle_weights(mesh.nodes, mesh.tets, m.handles.sets(), static_cast<int>(m.handles.point_nodes.size()));
+    const std::vector<char> mask = layer.problem.dirichlet.mask(mesh.num_nodes());
+    std::vector<char> attached(static_cast<std::size_t>(mesh.num_nodes()));
+    for (int i = 0; i < mesh.num_nodes(); ++i) attached[static_cast<std::size_t>(i)] = mask[static_cast<std::size_t>(3 * i)];
+    m.subspace = point_handle_subspace(weights, attached, mesh.nodes, m.handles.point_nodes, options.basis);
+    if (options.cubature == 0) {
+      m.cubature = exact_cubature(mesh.num_tets());
+    } else {
+      CubatureOptions co;
+      co.count = options.cubature;
+      co.weighting = options.weighting;
+      co.density.resize(static_cast<std::size_t>(mesh.num_tets()));
+      for (int e = 0; e < mesh.num_tets(); ++e)
+        co.density[static_cast<std::size_t>(e)] = mesh.tet_part[static_cast<std::size_t>(e)] == meshing::Part::torso ? material::kTorsoDensity : 1.0;
+      m.cubature = select_cubature(template_problem(layer), m.subspace, co);
+    }
+    m.cache_outcome = options.use_cache ? "built" : "off";
+    if (options.use_cache) {
+      try {
+        std::filesystem::create_directories(dir);
+        save_model(path, m);
+      } catch (const std::exception& e) {
+        logger()->warn("reduced: could not write the cache entry {} ({})", path.string(), e.what());
+      }
+    }
+  }
+  m.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  logger()->info("reduced model: {} point handles ({} coordinates), {} bone handles, {} cubature tets ({}), cache {}, {:.2f} s",
+                 m.handles.point_nodes.size(), m.subspace.num_dofs(), m.handles.bone_joints().size(), m.cubature.size(),
+                 m.cubature.method, m.cache_outcome, m.build_seconds);
+  return m;
+}
+
+}  // namespace sflsh::reduced
