@@ -50,7 +50,7 @@ struct SimulateOptions {
   std::string out;
   // Reduced model.
   int handles = 86;
-  int cubature = 200;
+  int cubature = -1;
   std::string cubature_weights = "nnls";
   bool affine = false;
 };
@@ -62,7 +62,7 @@ void run_simulate(const SimulateOptions& opt, const Invocation& invocation, int 
   const auto t_start = Clock::now();
   require(opt.solver == "full" || opt.solver == "reduced", "--solver {}: expected full or reduced", opt.solver);
   require(opt.handles >= 1, "--handles must be at least 1, got {}", opt.handles);
-  require(opt.cubature >= 0, "--cubature must be non-negative (0 = every tet), got {}", opt.cubature);
+  require(opt.cubature >= -1, "--cubature must be −1 (auto), 0 (every tet) or a tet count, got {}", opt.cubature);
   require(opt.fps > 0.0, "--fps must be positive, got {}", opt.fps);
   require(opt.substeps >= 1, "--substeps must be at least 1, got {}", opt.substeps);
   require(opt.frames >= 0, "--frames must be non-negative, got {}", opt.frames);
@@ -237,7 +237,7 @@ void register_simulate_commands(CLI::App& app, const Invocation& invocation) {
   cmd->add_option("--solver", opt->solver, "Solver: full (the full-space reference) | reduced (handles + cubature)")
       ->check(CLI::IsMember({"full", "reduced"}));
   cmd->add_option("--handles", opt->handles, "Reduced: point handles inside the layer (plus the 24 bone handles)");
-  cmd->add_option("--cubature", opt->cubature, "Reduced: cubature tets K (0 = every tet, exact integration)");
+  cmd->add_option("--cubature", opt->cubature, "Reduced: cubature tets K (default −1 = auto: max(200, 0.8 × coordinates); 0 = every tet, exact)");
   cmd->add_option("--cubature-weights", opt->cubature_weights, "Reduced: nnls (training-free force matching) | voronoi")
       ->check(CLI::IsMember({"nnls", "voronoi"}));
   cmd->add_flag("--affine", opt->affine, "Reduced: affine point handles (12 coordinates each instead of 3)");

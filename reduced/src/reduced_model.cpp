@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 
 #include <chrono>
+#include <cmath>
 #include <cstring>
 
 namespace sflsh::reduced {
@@ -192,11 +193,24 @@ fullspace::Problem template_problem(const fullspace::BodyLayer& layer) {
   return p;
 }
 
-ReducedModel build_reduced_model(const fullspace::BodyLayer& layer, const ReducedModelOptions& options) {
+int resolved_cubature_count(const ReducedModelOptions& options) {
+  if (options.cubature >= 0) return options.cubature;
+  const int coordinates = options.point_handles * (options.basis.affine ? 12 : 3);
+  return std::max(200, static_cast<int>(std::ceil(0.8 * coordinates)));
+}
+
+ReducedModel build_reduced_model(const fullspace::BodyLayer& layer, const ReducedModelOptions& requested) {
   const auto start = std::chrono::steady_clock::now();
   const meshing::LayerMesh& mesh = *layer.mesh;
-  require(options.cubature >= 0 && options.cubature <= mesh.num_tets(), "reduced: --cubature {} must be between 0 (exact) and {} tets",
-          options.cubature, mesh.num_tets());
+  ReducedModelOptions options = requested;
+  options.cubature = std::min(resolved_cubature_count(requested), mesh.num_tets());
+  const int coordinates = options.point_handles * (options.basis.affine ? 12 : 3);
+  if (options.cubature > 0 && options.cubature < 0.75 * coordinates)
+    logger()->warn("reduced: {} cubature tets for {} coordinates: below ≈ 0.75 per coordinate unsampled tets can leave the "
+                   "material's range (docs/reduced.md)",
+                   options.cubature, coordinates);
+  require(requested.cubature >= -1 && requested.cubature <= mesh.num_tets(),
+          "reduced: --cubature {} must be between 0 (exact) and {} tets, or −1 (auto)", requested.cubature, mesh.num_tets());
   ReducedModel m;
   m.cache_key = cache_key(mesh, options);
   const std::filesystem::path dir = options.cache_dir.empty() ? meshing::default_cache_dir() : options.cache_dir;

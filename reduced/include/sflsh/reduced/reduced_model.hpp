@@ -18,7 +18,10 @@ namespace sflsh::reduced {
 
 struct ReducedModelOptions {
   int point_handles = 86;
-  int cubature = 200;                   ///< K; 0 = exact (every tet)
+  /// K cubature tets; 0 = exact (every tet); −1 = auto, max(200, ⌈0.8 · coordinates⌉). Measured on the
+  /// coarse layer (sflsh compare): with K below ≈ 0.75 · coordinates the subspace finds deformations the
+  /// cubature does not see — stable on the sampled tets while unsampled ones leave the material's range.
+  int cubature = -1;
   CubatureWeighting weighting = CubatureWeighting::nnls;
   BasisOptions basis;
   std::filesystem::path cache_dir;      ///< empty: meshing::default_cache_dir()
@@ -49,6 +52,9 @@ struct ReducedModel {
 /// The reduced model of `layer`. Throws naming the cause (too many handles for the mesh, a failed solve, an
 /// unreadable cache entry — which is then rebuilt, with a warning).
 ReducedModel build_reduced_model(const fullspace::BodyLayer& layer, const ReducedModelOptions& options);
+
+/// The cubature count that `options` asks for (resolves −1 = auto).
+int resolved_cubature_count(const ReducedModelOptions& options);
 
 /// The template problem the cubature is fitted on: template nodes and tets, isotropic default tissue.
 fullspace::Problem template_problem(const fullspace::BodyLayer& layer);

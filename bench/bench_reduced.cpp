@@ -1,0 +1,181 @@
+// Benchmark: frames per second of the reduced model for one body on one thread, and for a crowd of bodies
+// with random shapes (each its own shape-dependent layer and material) and per-body time offsets on T
+// threads (parallel over bodies, as the paper's Fig. 1), with the per-frame breakdown: cubature forces and
+// Hessians, inertia (node maps, mass Hessian), dense solve, and skinning of the output surface.
+// A frame = one backward-Euler step of 1/60 s + the posed skin of the whole body (what a renderer needs).
+// Usage: bench_reduced [--mesh coarse] [--handles 86] [--cubature 200] [--frames 120] [--crowd 25]
+//                      [--threads 2] [--motion shake_hips] [--out bench_reduced.json]
+#include <sflsh/body/body_io.hpp>
+#include <sflsh/body/motion.hpp>
+#include <sflsh/core/log.hpp>
+#include <sflsh/core/summary.hpp>
+#include <sflsh/fullspace/body_layer.hpp>
+#include <sflsh/fullspace/reference_integrator.hpp>
+#include <sflsh/reduced/reduced_integrator.hpp>
+#include <sflsh/reduced/reduced_model.hpp>
+
+#include <fmt/format.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <chrono>
+#include <cstring>
+#include <iostream>
+#include <memory>
+#include <random>
+
+namespace {
+
+using namespace sflsh;
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+struct Body {
+  fullspace::BodyLayer layer;
+  reduced::ReducedModel model;
+  std::unique_ptr<reduced::ReducedBackwardEuler> integrator;
+  double t0 = 0.0;
+};
+
+struct Breakdown {
+  double step = 0, elastic = 0, inertia = 0, solve = 0, output = 0;
+  long newton = 0;
+  void add(const reduced::ReducedStepStats& s) {
+    step += s.seconds;
+    elastic += s.elastic_seconds;
+    inertia += s.inertia_seconds;
+    solve += s.solve_seconds;
+    newton += s.newton_iterations;
+  }
+};
+
+std::unique_ptr<Body> make_body(const body::BodyModel& model, const body::Betas& beta, const body::Motion& motion, double t0,
+                                const fullspace::BodyLayerOptions& layer_options, const reduced::ReducedModelOptions& options) {
+  auto b = std::make_unique<Body>();
+  b->layer = fullspace::build_body_layer(model, beta, motion, nullptr, 12, layer_options);
+  b->model = reduced::build_reduced_model(b->layer, options);
+  b->integrator = std::make_unique<reduced::ReducedBackwardEuler>(b->layer.problem, b->model.subspace, b->model.cubature);
+  b->integrator->initialize(fullspace::initial_state(b->layer.problem, t0));
+  b->t0 = t0;
+  return b;
+}
+
+/// One frame of one body: a step and the posed skin surface.
+void advance(Body& b, double h, Breakdown& breakdown) {
+  breakdown.add(b.integrator->step(h));
+  const auto t = Clock::now();
+  Eigen::VectorXd x = Eigen::Map<const Eigen::VectorXd>(b.layer.problem.rest.data(), b.layer.problem.num_dofs());
+  b.model.subspace.add_displacement(b.integrator->q(), x);
+  const meshing::RowMatrixX3d posed = b.layer.posed_surface(x, b.integrator->time());
+  if (!posed.allFinite()) throw std::runtime_error("non-finite posed surface");
+  breakdown.output += seconds_since(t);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string mesh = "coarse", motion_name = "shake_hips", out = "bench_reduced.json";
+  int handles = 86, cubature = 200, frames = 120, crowd = 25, threads = 2;
+  for (int i = 1; i + 1 < argc; i += 2) {
+    if (std::strcmp(argv[i], "--mesh") == 0) mesh = argv[i + 1];
+    else if (std::strcmp(argv[i], "--handles") == 0) handles = std::stoi(argv[i + 1]);
+    else if (std::strcmp(argv[i], "--cubature") == 0) cubature = std::stoi(argv[i + 1]);
+    else if (std::strcmp(argv[i], "--frames") == 0) frames = std::stoi(argv[i + 1]);
+    else if (std::strcmp(argv[i], "--crowd") == 0) crowd = std::stoi(argv[i + 1]);
+    else if (std::strcmp(argv[i], "--threads") == 0) threads = std::stoi(argv[i + 1]);
+    else if (std::strcmp(argv[i], "--motion") == 0) motion_name = argv[i + 1];
+    else if (std::strcmp(argv[i], "--out") == 0) out = argv[i + 1];
+    else {
+      std::cerr << "bench_reduced: unknown option " << argv[i] << "\n";
+      return 2;
+    }
+  }
+  try {
+    logger()->set_level(spdlog::level::warn);
+    const body::BodyModel model = body::load_body(std::filesystem::path(SFLSH_DATA_DIR) / "open_body.npz");
+    fullspace::BodyLayerOptions layer_options;
+    layer_options.size = meshing::parse_size_preset(mesh);
+    reduced::ReducedModelOptions options;
+    options.point_handles = handles;
+    options.cubature = cubature;
+    const double h = 1.0 / 60.0;
+    const int offset_frames = 60;   // crowd members start up to 1 s apart
+    const body::Motion motion = body::make_procedural_motion(motion_name, 60.0, frames + offset_frames + 2);
+
+    // One body, one thread.
+    Breakdown one;
+    double one_wall = 0.0;
+    int coordinates = 0;
+    {
+      auto body = make_body(model, body::Betas::Zero(), motion, 0.0, layer_options, options);
+      coordinates = body->model.subspace.num_dofs();
+      const auto t = Clock::now();
+      for (int f = 0; f < frames; ++f) advance(*body, h, one);
+      one_wall = seconds_since(t);
+    }
+    // The crowd: random shapes (β ~ N(0, 1), clamped to ±2.5) and time offsets, parallel over bodies.
+    std::mt19937 rng(20231212);
+    std::normal_distribution<double> normal(0.0, 1.0);
+    std::uniform_int_distribution<int> offset(0, offset_frames);
+    std::vector<std::unique_ptr<Body>> bodies;
+    const auto t_build = Clock::now();
+    for (int b = 0; b < crowd; ++b) {
+      body::Betas beta;
+      for (int k = 0; k < beta.size(); ++k) beta[k] = std::clamp(normal(rng), -2.5, 2.5);
+      bodies.push_back(make_body(model, beta, motion, offset(rng) / 60.0, layer_options, options));
+    }
+    const double build_seconds = seconds_since(t_build);
+    std::vector<Breakdown> per_body(bodies.size());
+    tbb::task_arena arena(threads);
+    const auto t_crowd = Clock::now();
+    for (int f = 0; f < frames; ++f)
+      arena.execute([&] {
+        tbb::parallel_for(std::size_t{0}, bodies.size(), [&](std::size_t b) { advance(*bodies[b], h, per_body[b]); });
+      });
+    const double crowd_wall = seconds_since(t_crowd);
+    Breakdown total;
+    for (const Breakdown& b : per_body) {
+      total.step += b.step;
+      total.elastic += b.elastic;
+      total.inertia += b.inertia;
+      total.solve += b.solve;
+      total.output += b.output;
+      total.newton += b.newton;
+    }
+
+    const double one_fps = frames / one_wall, crowd_fps = frames / crowd_wall;
+    const auto ms = [&](double s, double n) { return 1e3 * s / n; };
+    std::cout << fmt::format("reduced model: {} mesh, {} point handles ({} coordinates), {} cubature tets, {} frames of 1/60 s\n\n", mesh,
+                             handles, coordinates, cubature, frames);
+    std::cout << fmt::format("{:<26} {:>8} {:>10} {:>10} {:>10} {:>10} {:>10} {:>8} {:>12}\n", "case", "fps", "ms/frame", "elastic",
+                             "inertia", "solve", "output", "newton", "paper fps");
+    std::cout << fmt::format("{:<26} {:>8.1f} {:>10.3f} {:>10.3f} {:>10.3f} {:>10.3f} {:>10.3f} {:>8.2f} {:>12}\n", "1 body, 1 thread", one_fps,
+                             ms(one_wall, frames), ms(one.elastic, frames), ms(one.inertia, frames), ms(one.solve, frames),
+                             ms(one.output, frames), static_cast<double>(one.newton) / frames, "30 (1 thr)");
+    const double n = static_cast<double>(frames) * crowd;
+    std::cout << fmt::format("{:<26} {:>8.1f} {:>10.3f} {:>10.3f} {:>10.3f} {:>10.3f} {:>10.3f} {:>8.2f} {:>12}\n",
+                             fmt::format("{} bodies, {} threads", crowd, threads), crowd_fps, ms(crowd_wall, frames), ms(total.elastic, n),
+                             ms(total.inertia, n), ms(total.solve, n), ms(total.output, n), static_cast<double>(total.newton) / n,
+                             "1.2 (1 thr)");
+    std::cout << "\n(crowd breakdown columns are per body and frame; crowd built in " << fmt::format("{:.1f}", build_seconds) << " s)\n";
+    write_json(out, {{"benchmark", "reduced"},
+                     {"mesh", mesh},
+                     {"point_handles", handles},
+                     {"coordinates", coordinates},
+                     {"cubature", cubature},
+                     {"frames", frames},
+                     {"one_body", {{"threads", 1}, {"fps", one_fps}, {"ms_per_frame", ms(one_wall, frames)},
+                                   {"elastic_ms", ms(one.elastic, frames)}, {"inertia_ms", ms(one.inertia, frames)},
+                                   {"solve_ms", ms(one.solve, frames)}, {"output_ms", ms(one.output, frames)},
+                                   {"newton_per_frame", static_cast<double>(one.newton) / frames}, {"paper_fps", 30.0}}},
+                     {"crowd", {{"bodies", crowd}, {"threads", threads}, {"fps", crowd_fps}, {"ms_per_frame", ms(crowd_wall, frames)},
+                                {"elastic_ms_per_body", ms(total.elastic, n)}, {"inertia_ms_per_body", ms(total.inertia, n)},
+                                {"solve_ms_per_body", ms(total.solve, n)}, {"output_ms_per_body", ms(total.output, n)},
+                                {"build_seconds", build_seconds}, {"paper_fps", 1.2}}}});
+    std::cout << "wrote " << out << "\n";
+  } catch (const std::exception& e) {
+    std::cerr << "bench_reduced: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,109 @@
+#pragma once
+// Small problems for the reduced-model tests: a structured box with a homogeneous material, its bottom face
+// attached (every component), and a handful of interior point handles.
+#include <sflsh/fullspace/msh_reader.hpp>
+#include <sflsh/fullspace/problem.hpp>
+#include <sflsh/material/skin_material.hpp>
+#include <sflsh/reduced/subspace.hpp>
+#include <sflsh/reduced/weights.hpp>
+
+#include <algorithm>
+
+namespace sflsh::reduced::testing {
+
+inline material::SkinMaterial skin(double young_tangent = 5000.0, double young_normal = 2000.0) {
+  material::SkinMaterial m;
+  m.young_tangent = young_tangent;
+  m.young_normal = young_normal;
+  return m;
+}
+
+struct BoxCase {
+  fullspace::MshMesh mesh;
+  fullspace::Problem problem;
+  std::vector<int> attached;       ///< the zmin face
+  std::vector<int> point_handles;  ///< interior nodes
+};
+
+/// A box of size (0.12, 0.1, 0.06) m with `cells`, density ρ, zmin attached (zero displacement, or driven
+/// in z by `drive` when given), point handles at the interior nodes nearest to a few fixed sites.
+inline BoxCase box_case(std::array<int, 3> cells = {4, 4, 3}, double density = 1000.0,
+                        const fullspace::ScalarDrive* drive = nullptr) {
+  BoxCase c;
+  const Eigen::Vector3d size(0.12, 0.1, 0.06);
+  c.mesh = fullspace::box_tet_mesh(size, cells);
+  fullspace::Problem& p = c.problem;
+  p.rest = c.mesh.nodes;
+  p.tets = c.mesh.tets;
+  p.tet_material.assign(static_cast<std::size_t>(p.num_tets()), material::make_orthotropic_fung(skin(), Eigen::Vector3d::UnitZ()));
+  p.mass = fullspace::lumped_masses(p.rest, p.tets, density);
+  p.density = density;
+  c.attached = c.mesh.node_groups.at("zmin");
+  int drive_index = -1;
+  if (drive) {
+    p.dirichlet.drives.push_back(*drive);
+    drive_index = 0;
+  }
+  for (int v : c.attached) {
+    p.dirichlet.add(v, 0b011u);
+    p.dirichlet.add(v, 0b100u, drive_index);
+  }
+  p.validate();
+  const std::vector<char> fixed = p.dirichlet.mask(p.num_nodes());
+  const std::vector<Eigen::Vector3d> sites{{0.03, 0.025, 0.04}, {0.09, 0.025, 0.04}, {0.03, 0.075, 0.04},
+                                           {0.09, 0.075, 0.04}, {0.06, 0.05, 0.06}, {0.06, 0.05, 0.02}};
+  for (const Eigen::Vector3d& s : sites) {
+    int best = -1;
+    double best_d = 1e30;
+    for (int i = 0; i < p.num_nodes(); ++i) {
+      if (fixed[static_cast<std::size_t>(3 * i)] || std::find(c.point_handles.begin(), c.point_handles.end(), i) != c.point_handles.end())
+        continue;
+      const double d = (p.rest.row(i).transpose() - s).norm();
+      if (d < best_d) {
+        best_d = d;
+        best = i;
+      }
+    }
+    c.point_handles.push_back(best);
+  }
+  return c;
+}
+
+/// Point handles first (one node each), the attached face as one bone handle.
+inline HandleSets box_handle_sets(const BoxCase& c) {
+  HandleSets sets;
+  for (int v : c.point_handles) sets.handle_nodes.push_back({v});
+  sets.handle_nodes.push_back(c.attached);
+  return sets;
+}
+
+inline std::vector<char> attached_flags(const BoxCase& c) {
+  std::vector<char> flags(static_cast<std::size_t>(c.problem.num_nodes()), 0);
+  for (int v : c.attached) flags[static_cast<std::size_t>(v)] = 1;
+  return flags;
+}
+
+/// The handle subspace of the box (translational point handles, no truncation).
+inline Subspace box_subspace(const BoxCase& c, bool affine = false) {
+  const Eigen::MatrixXd W = handle_weights(c.problem.rest, c.problem.tets, box_handle_sets(c), static_cast<int>(c.point_handles.size()));
+  BasisOptions options;
+  options.drop_below = 0.0;
+  options.max_influences = 1000;
+  options.affine = affine;
+  return point_handle_subspace(W, attached_flags(c), c.problem.rest, c.point_handles, options);
+}
+
+/// B = identity on every free node: the subspace is the whole free space.
+inline Subspace full_basis(const fullspace::Problem& p) {
+  const std::vector<char> fixed = p.dirichlet.mask(p.num_nodes());
+  std::vector<Eigen::Triplet<double>> entries;
+  int s = 0;
+  for (int i = 0; i < p.num_nodes(); ++i)
+    if (!fixed[static_cast<std::size_t>(3 * i)]) entries.emplace_back(i, s++, 1.0);
+  Subspace sub;
+  sub.basis.resize(p.num_nodes(), s);
+  sub.basis.setFromTriplets(entries.begin(), entries.end());
+  return sub;
+}
+
+}  // namespace sflsh::reduced::testing
