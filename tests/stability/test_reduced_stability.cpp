@@ -151,12 +151,27 @@ TEST(ReducedStability, LandingOfAJump) {
 }
 
 TEST(ReducedStability, ElementInvertedByTheInitialState) {
-  // One point handle pushed 6 cm towards the bone: the tets between it and the inner surface turn inside out.
+  // The first point handle pushed through the bone to 1.5× its distance from the nearest attached node: the
+  // tets between it and the inner surface turn inside out.
   const body::Motion motion = body::make_procedural_motion("running_on_spot", 60.0, 20);
   int inverted = 0;
   const auto push = [&](const fullspace::Problem& p, const Subspace& s, fullspace::State& state) {
+    int handle = -1;
+    for (int i = 0; i < p.num_nodes() && handle < 0; ++i)
+      if (s.basis.coeff(i, 0) == 1.0) handle = i;
+    const std::vector<char> fixed = p.dirichlet.mask(p.num_nodes());
+    Eigen::Vector3d towards = Eigen::Vector3d::Zero();
+    double nearest = 1e30;
+    for (int i = 0; i < p.num_nodes(); ++i) {
+      if (!fixed[static_cast<std::size_t>(3 * i)]) continue;
+      const Eigen::Vector3d d = p.rest.row(i) - p.rest.row(handle);
+      if (d.norm() < nearest) {
+        nearest = d.norm();
+        towards = d;
+      }
+    }
     Eigen::VectorXd q = Eigen::VectorXd::Zero(s.num_dofs());
-    q.segment<3>(0) = Eigen::Vector3d(0.0, 0.0, -0.06);
+    q.segment<3>(0) = 1.5 * towards;
     s.add_displacement(q, state.x);
     for (int e = 0; e < p.num_tets(); ++e) {
       Eigen::Matrix3d ds;
