@@ -1,5 +1,6 @@
-// The `sflsh simulate --solver full` contract: the posed surface per frame in `sflsh motion export`'s layout
-// (same points, same order, same .pvd), the extra fields, summary.json, --no-output, and clear errors.
+// The `sflsh simulate --solver full|reduced` contract, the same for both solvers: the posed surface per frame
+// in `sflsh motion export`'s layout (same points, same order, same .pvd), the extra fields, summary.json,
+// --no-output, and clear errors.
 #include <sflsh/core/summary.hpp>
 #include <sflsh/core/vtk_io.hpp>
 
@@ -22,9 +23,14 @@ std::string common() {
   return fmt::format("--subject OPEN_TRAIN_2 --motion shake_hips --frames 4 --cache {} -q", SFLSH_TEST_CACHE);
 }
 
-TEST(CliSimulate, SurfaceMatchesMotionExportLayoutAndCarriesTheSoftTissueFields) {
+class CliSimulate : public ::testing::TestWithParam<const char*> {
+ protected:
+  std::string solver() const { return std::string("simulate --solver ") + GetParam() + " "; }
+};
+
+TEST_P(CliSimulate, SurfaceMatchesMotionExportLayoutAndCarriesTheSoftTissueFields) {
   const fs::path dir = scratch_dir();
-  const auto sim = run_sflsh("simulate --solver full --mesh coarse " + common() + " --write-layer --out " +
+  const auto sim = run_sflsh(solver() + "--mesh coarse " + common() + " --write-layer --out " +
                                  (dir / "sim").string(),
                              dir);
   ASSERT_EQ(sim.exit_code, 0) << sim.err;
@@ -59,29 +65,44 @@ TEST(CliSimulate, SurfaceMatchesMotionExportLayoutAndCarriesTheSoftTissueFields)
   EXPECT_TRUE(summary["frames"][3]["energy"].contains("kinetic"));
   EXPECT_TRUE(summary["timings"].contains("seconds_per_frame"));
   EXPECT_GE(summary["dynamics"]["sigma_mean_mm"].get<double>(), 0.0);
+  EXPECT_EQ(summary["solver"]["name"].get<std::string>(), GetParam());
+  if (std::string(GetParam()) == "reduced") {
+    EXPECT_EQ(summary["reduced"]["point_handles"].get<int>(), 86);
+    EXPECT_EQ(summary["reduced"]["coordinates"].get<int>(), 258);
+    EXPECT_GE(summary["reduced"]["cubature"].get<int>(), 200);
+    EXPECT_TRUE(summary["timings"].contains("elastic_seconds"));
+  }
 }
 
-TEST(CliSimulate, NoOutputWritesOnlyTheSummary) {
+TEST_P(CliSimulate, NoOutputWritesOnlyTheSummary) {
   const fs::path dir = scratch_dir();
-  const auto r = run_sflsh("simulate --solver full --mesh coarse " + common() + " --no-output --out " + (dir / "o").string(), dir);
+  const auto r = run_sflsh(solver() + "--mesh coarse " + common() + " --no-output --out " + (dir / "o").string(), dir);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   std::vector<std::string> files;
   for (const auto& entry : fs::directory_iterator(dir / "o")) files.push_back(entry.path().filename().string());
   EXPECT_EQ(files, std::vector<std::string>{"summary.json"});
 }
 
-TEST(CliSimulate, BadArgumentsGiveOneLineErrorsAndNoOutput) {
+TEST_P(CliSimulate, BadArgumentsGiveOneLineErrorsAndNoOutput) {
   const fs::path dir = scratch_dir();
-  const auto motion = run_sflsh("simulate --solver full --subject OPEN_TRAIN_2 --motion no_such_motion --out " +
+  const auto motion = run_sflsh(solver() + "--subject OPEN_TRAIN_2 --motion no_such_motion --out " +
                                     (dir / "a").string(),
                                 dir);
   EXPECT_NE(motion.exit_code, 0);
   EXPECT_NE(motion.err.find("no_such_motion"), std::string::npos) << motion.err;
   EXPECT_FALSE(fs::exists(dir / "a" / "summary.json"));
-  const auto density = run_sflsh("simulate --solver full " + common() + " --density -1 --out " + (dir / "b").string(), dir);
+  const auto density = run_sflsh(solver() + common() + " --density -1 --out " + (dir / "b").string(), dir);
   EXPECT_NE(density.exit_code, 0);
   EXPECT_NE(density.err.find("--density"), std::string::npos) << density.err;
+  if (std::string(GetParam()) == "reduced") {
+    const auto handles = run_sflsh(solver() + "--mesh coarse " + common() + " --handles 100000 --out " + (dir / "c").string(), dir);
+    EXPECT_NE(handles.exit_code, 0);
+    EXPECT_NE(handles.err.find("point handles"), std::string::npos) << handles.err;
+    EXPECT_FALSE(fs::exists(dir / "c" / "summary.json"));
+  }
 }
+
+INSTANTIATE_TEST_SUITE_P(Solvers, CliSimulate, ::testing::Values("full", "reduced"));
 
 }  // namespace
 }  // namespace sflsh::fullspace
