@@ -127,7 +127,7 @@ void run_simulate(const SimulateOptions& opt, const Invocation& invocation, int 
   frames.push_back({{"frame", 0}, {"t", 0.0}, {"newton_iterations", 0}, {"linear_iterations", 0}, {"seconds", 0.0}});
   const double h = 1.0 / (motion.fps * opt.substeps);
   Progress progress("frames", motion.num_frames() > 0 ? motion.num_frames() - 1 : 0, rank == 0);
-  long newton_total = 0, linear_total = 0, retries_total = 0;
+  long newton_total = 0, linear_total = 0, retries_total = 0, factorizations_total = 0;
   double solve_seconds = 0.0, function_seconds = 0.0, jacobian_seconds = 0.0;
   double elastic_seconds = 0.0, inertia_seconds = 0.0, dense_seconds = 0.0, output_seconds = 0.0;
   for (std::size_t f = 1; f < motion.num_frames(); ++f) {
@@ -142,6 +142,7 @@ void run_simulate(const SimulateOptions& opt, const Invocation& invocation, int 
         elastic_seconds += st.elastic_seconds;
         inertia_seconds += st.inertia_seconds;
         dense_seconds += st.solve_seconds;
+        factorizations_total += st.factorizations;
       } else {
         const fullspace::StepStats st = full->step(h);
         newton += st.newton_iterations;
@@ -201,6 +202,7 @@ void run_simulate(const SimulateOptions& opt, const Invocation& invocation, int 
                           {"cubature", reduced_model->cubature.size()},
                           {"cubature_method", reduced_model->cubature.method},
                           {"cache", reduced_model->cache_outcome},
+                          {"factorizations", factorizations_total},
                           {"model_seconds", reduced_model->build_seconds}};
   }
   summary["dynamics"] = writer.dynamics_summary();

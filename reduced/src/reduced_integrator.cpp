@@ -125,8 +125,10 @@ bool ReducedBackwardEuler::solve_substep(double t0, double dt, material::Hessian
 
   Eigen::VectorXd gradient(subspace_.num_dofs());
   Eigen::MatrixXd hessian;
-  Eigen::LLT<Eigen::MatrixXd> llt;
-  double g0 = 0.0;
+  if (!factor_valid_ || factor_h_ != dt || factor_projection_ != projection || !options_.reuse_factorization) factor_valid_ = false;
+  bool fresh = false;          // the factor was computed at this step's current iterate
+  bool refresh = !factor_valid_;
+  double g0 = 0.0, g_previous = kInfinity;
   bool converged = false;
   for (int it = 0; it < options_.max_newton && !converged; ++it) {
     clock = Clock::now();
@@ -150,54 +152,77 @@ bool ReducedBackwardEuler::solve_substep(double t0, double dt, material::Hessian
       reason = "gradient";
       break;
     }
-    clock = Clock::now();
-    hessian = mass_hessian;
-    try {
-      elastic_.add_hessian(q, hessian, projection);
-    } catch (const Error& e) {
-      reason = e.what();
-      return false;
-    }
-    stats.elastic_seconds += seconds_since(clock);
-    clock = Clock::now();
-    llt.compute(hessian);
-    if (llt.info() != Eigen::Success) {
-      stats.solve_seconds += seconds_since(clock);
-      reason = "indefinite Hessian";
-      return false;
-    }
-    const Eigen::VectorXd delta = -llt.solve(gradient);
-    stats.solve_seconds += seconds_since(clock);
-    ++stats.newton_iterations;
-    if (!delta.allFinite()) {
-      reason = "non-finite Newton step";
-      return false;
-    }
-    // Backtracking on Φ (Armijo); a decrease below round-off of Φ counts as converged.
-    const double slope = gradient.dot(delta);
-    double alpha = 1.0;
-    bool accepted = false;
-    for (int ls = 0; ls < 40; ++ls, alpha *= 0.5) {
-      const Eigen::VectorXd trial = q + alpha * delta;
-      const double phi_trial = potential(trial);
-      const bool roundoff = std::isfinite(phi_trial) && std::abs(phi_trial - phi) <= 1e-13 * std::max(1.0, std::abs(phi));
-      if (phi_trial <= phi + 1e-4 * alpha * slope || (alpha == 1.0 && roundoff && std::abs(slope) <= 1e-10 * std::max(1.0, std::abs(phi)))) {
-        q = trial;
-        phi = phi_trial;
-        accepted = true;
-        break;
+    // A stale factor that no longer contracts the gradient fast enough is replaced.
+    if (!fresh && g > options_.refresh_ratio * g_previous) refresh = true;
+    g_previous = g;
+    for (int attempt = 0; attempt < 2; ++attempt) {
+      if (refresh) {
+        clock = Clock::now();
+        hessian = mass_hessian;
+        try {
+          elastic_.add_hessian(q, hessian, projection);
+        } catch (const Error& e) {
+          reason = e.what();
+          return false;
+        }
+        stats.elastic_seconds += seconds_since(clock);
+        clock = Clock::now();
+        factor_.compute(hessian);
+        stats.solve_seconds += seconds_since(clock);
+        ++stats.factorizations;
+        factor_valid_ = factor_.info() == Eigen::Success;
+        factor_h_ = dt;
+        factor_projection_ = projection;
+        if (!factor_valid_) {
+          reason = "indefinite Hessian";
+          return false;
+        }
+        fresh = true;
+        refresh = false;
       }
-    }
-    if (!accepted) {
-      reason = "line search failed";
-      return false;
-    }
-    if (alpha == 1.0 && delta.cwiseAbs().maxCoeff() <= options_.step_tolerance) {
-      converged = true;
-      reason = "step";
+      clock = Clock::now();
+      const Eigen::VectorXd delta = -factor_.solve(gradient);
+      stats.solve_seconds += seconds_since(clock);
+      ++stats.newton_iterations;
+      if (!delta.allFinite()) {
+        reason = "non-finite Newton step";
+        factor_valid_ = false;
+        return false;
+      }
+      // Backtracking on Φ (Armijo); a decrease below round-off of Φ counts as converged.
+      const double slope = gradient.dot(delta);
+      double alpha = 1.0;
+      bool accepted = false;
+      for (int ls = 0; ls < 40; ++ls, alpha *= 0.5) {
+        const Eigen::VectorXd trial = q + alpha * delta;
+        const double phi_trial = potential(trial);
+        const bool roundoff = std::isfinite(phi_trial) && std::abs(phi_trial - phi) <= 1e-13 * std::max(1.0, std::abs(phi));
+        if (phi_trial <= phi + 1e-4 * alpha * slope ||
+            (alpha == 1.0 && roundoff && std::abs(slope) <= 1e-10 * std::max(1.0, std::abs(phi)))) {
+          q = trial;
+          phi = phi_trial;
+          accepted = true;
+          break;
+        }
+      }
+      if (!accepted) {
+        if (!fresh) {   // a stale factor may point badly: retry the iteration with a fresh Hessian
+          refresh = true;
+          continue;
+        }
+        reason = "line search failed";
+        return false;
+      }
+      fresh = false;
+      if (alpha == 1.0 && delta.cwiseAbs().maxCoeff() <= options_.step_tolerance) {
+        converged = true;
+        reason = "step";
+      }
+      break;
     }
   }
   if (!converged) {
+    factor_valid_ = false;
     reason = fmt::format("no convergence in {} Newton iterations (‖∇Φ‖ = {:.3e})", options_.max_newton, stats.final_gradient);
     return false;
   }

@@ -181,18 +181,22 @@ TEST(ReducedModel, BodyRunStaysFiniteAndMovesTheSkin) {
   ReducedBackwardEuler integrator(layer.problem, model.subspace, model.cubature);
   integrator.initialize(fullspace::initial_state(layer.problem, 0.0));
   double largest = 0.0;
-  long newton = 0;
+  long newton = 0, factorizations = 0;
   for (std::size_t f = 1; f < motion.num_frames(); ++f) {
     const ReducedStepStats st = integrator.step(1.0 / 60.0);
-    EXPECT_LE(st.newton_iterations, 12);
+    EXPECT_LE(st.newton_iterations, 20);
     EXPECT_EQ(st.failed_attempts, 0);
     newton += st.newton_iterations;
+    factorizations += st.factorizations;
     const fullspace::State s = integrator.full_state();
     ASSERT_TRUE(s.x.allFinite() && s.w.allFinite());
     largest = std::max(largest, layer.surface_displacement(s.x).cwiseAbs().maxCoeff());
   }
-  // Newton converges fast from the predictor: a few iterations per 1/60 s step on average.
-  EXPECT_LE(static_cast<double>(newton) / static_cast<double>(motion.num_frames() - 1), 4.0);
+  // From the predictor, Newton with a reused factor needs a few cheap iterations per 1/60 s step (measured
+  // ≈ 7) and rarely a new factorization (measured < 1 per step): bounds with a margin of ~1.5×.
+  const double steps = static_cast<double>(motion.num_frames() - 1);
+  EXPECT_LE(static_cast<double>(newton) / steps, 11.0);
+  EXPECT_LE(static_cast<double>(factorizations) / steps, 1.5);
   // Jiggling on the toes shakes the tissue by millimetres to centimetres, not microns and not metres.
   EXPECT_GT(largest, 1e-3);
   EXPECT_LT(largest, 0.1);

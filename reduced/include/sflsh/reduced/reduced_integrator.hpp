@@ -15,6 +15,8 @@
 #include <sflsh/reduced/reduced_inertia.hpp>
 #include <sflsh/reduced/subspace.hpp>
 
+#include <Eigen/Cholesky>
+
 #include <string>
 
 namespace sflsh::reduced {
@@ -26,6 +28,12 @@ struct ReducedOptions {
   double gradient_rtol = 1e-8;     ///< ‖∇Φ‖ ≤ rtol·‖∇Φ₀‖ …
   double gradient_atol = 1e-9;     ///< … or ≤ atol [N]
   double step_tolerance = 1e-8;    ///< or a full Newton step with ‖Δq‖∞ below this [m]
+  /// Reuse the Cholesky factor of an earlier Hessian (from earlier iterations or steps of the same h and
+  /// projection) while it keeps reducing ‖∇Φ‖ by at least `refresh_ratio` per iteration; M/h² dominates
+  /// the dynamic Hessian, so it changes slowly and a refactorization (the dense O(n³) part) is rarely due.
+  /// The minimizer is the same; only the path to it changes. Off: plain Newton.
+  bool reuse_factorization = true;
+  double refresh_ratio = 0.25;
   bool exact_hessian_first = true;
   bool use_predictor = true;       ///< start Newton from q_n + h q̇_n when its Φ is lower than at q_n
 };
@@ -35,6 +43,7 @@ struct ReducedStepStats {
   int substeps = 1;
   int failed_attempts = 0;
   int projected_retries = 0;
+  int factorizations = 0;          ///< Hessians assembled and factorized (≤ newton_iterations when reused)
   double seconds = 0.0;
   double elastic_seconds = 0.0;    ///< cubature energies, forces and Hessians
   double inertia_seconds = 0.0;    ///< node maps, prediction, mass Hessian
@@ -78,6 +87,11 @@ class ReducedBackwardEuler {
   CubatureElastic elastic_;
   ReducedInertia inertia_;
   bool has_drives_ = false;
+  // The reusable factorization and what it was computed for.
+  Eigen::LLT<Eigen::MatrixXd> factor_;
+  bool factor_valid_ = false;
+  double factor_h_ = 0.0;
+  material::HessianProjection factor_projection_ = material::HessianProjection::kNone;
 
   double t_ = 0.0;
   Eigen::VectorXd q_, q_rate_;            ///< q and its backward difference (for the predictor)
