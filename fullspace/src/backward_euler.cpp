@@ -39,6 +39,21 @@ material::TetNodes problem_rest_nodes(const Problem& problem, int e) {
   return nodes;
 }
 
+/// The preconditioner unless -pc_type says otherwise (measurements: docs/fullspace.md, docs/decisions.md).
+/// Up to kDirectDofs a sparse direct factorization: faster there, and immune to the smoother trouble AMG has on
+/// a handful of aggregates (GAMG's Chebyshev smoother came out indefinite on 72-dof verification bars).
+/// Dynamic steps: M/h² keeps the system well conditioned, so CG converges in ~15 iterations with an incomplete
+/// Cholesky factor (one block per rank in parallel), which costs a fraction of GAMG's setup; on the default
+/// layer ICC took 0.43 s per step against GAMG's 1.2 s. Without the mass term (quasi-static and static
+/// problems) the ICC iteration count grows with the mesh and GAMG, with the rigid-body near-null space, wins.
+PCType default_pc_type(int dofs, int size, bool dynamic) {
+  constexpr int kDirectDofs = 6000;
+  if (dofs <= kDirectDofs) return size == 1 ? PCCHOLESKY : PCREDUNDANT;
+  if (!dynamic) return PCGAMG;
+  // Block Jacobi's blocks default to ICC for a matrix marked symmetric (MAT_SYMMETRIC below).
+  return size == 1 ? PCICC : PCBJACOBI;
+}
+
 }  // namespace
 
 struct BackwardEuler::Impl {
@@ -149,6 +164,7 @@ struct BackwardEuler::Impl {
   bool residual(const Eigen::VectorXd& x, Vec out);
   bool jacobian(const Eigen::VectorXd& x);
   void build_refill();
+  void mark_diagonal_block_symmetric();
   bool solve_substep(State& s, double t0, double dt);
 
   static PetscErrorCode function_cb(SNES, Vec x, Vec f, void* ctx);
@@ -283,15 +299,8 @@ void BackwardEuler::Impl::setup() {
   SFLSH_PETSC(KSPSetType(ksp, KSPCG));
   SFLSH_PETSC(KSPSetTolerances(ksp, options.default_ksp_rtol, PETSC_DEFAULT, PETSC_DEFAULT, PETSC_DEFAULT));
   SFLSH_PETSC(KSPGetPC(ksp, &pc));
-  // Algebraic multigrid pays off on layers (10⁴–10⁶ dofs); below kDirectDofs a sparse direct factorization is
-  // faster and immune to the smoother trouble AMG has on a handful of aggregates (GAMG's Chebyshev smoother
-  // came out indefinite on 72-dof verification bars).
-  constexpr int kDirectDofs = 6000;
-  if (3 * n <= kDirectDofs) {
-    SFLSH_PETSC(PCSetType(pc, size == 1 ? PCCHOLESKY : PCREDUNDANT));
-  } else {
-    SFLSH_PETSC(PCSetType(pc, PCGAMG));
-  }
+  const bool dynamic = !options.quasi_static && problem.dynamic();
+  SFLSH_PETSC(PCSetType(pc, default_pc_type(3 * n, size, dynamic)));
   SNESLineSearch linesearch = nullptr;
   SFLSH_PETSC(SNESGetLineSearch(snes, &linesearch));
   SFLSH_PETSC(SNESLineSearchSetType(linesearch, SNESLINESEARCHSHELL));
@@ -537,11 +546,28 @@ bool BackwardEuler::Impl::jacobian(const Eigen::VectorXd& x) {
   }
   SFLSH_PETSC(MatAssemblyBegin(J, MAT_FINAL_ASSEMBLY));
   SFLSH_PETSC(MatAssemblyEnd(J, MAT_FINAL_ASSEMBLY));
-  if (!refill.ready) build_refill();
+  if (!refill.ready) {
+    mark_diagonal_block_symmetric();
+    build_refill();
+  }
   int any_failed = 0;
   MPI_Allreduce(&local_failed, &any_failed, 1, MPI_INT, MPI_SUM, comm);
   if (stats) stats->jacobian_seconds += seconds_since(t0);
   return any_failed == 0;
+}
+
+// J is marked symmetric, but the symmetry flag of the whole matrix does not reach its local diagonal block,
+// which is what block Jacobi hands to each block's preconditioner: marked too, its blocks default to ICC
+// (PETSc's choice for a matrix known to be symmetric) instead of ILU, at half the factorization cost.
+// An explicit -sub_pc_type still wins.
+void BackwardEuler::Impl::mark_diagonal_block_symmetric() {
+  PetscBool has_block = PETSC_FALSE;
+  SFLSH_PETSC(MatHasOperation(J, MATOP_GET_DIAGONAL_BLOCK, &has_block));
+  if (!has_block) return;
+  Mat block = nullptr;
+  SFLSH_PETSC(MatGetDiagonalBlock(J, &block));
+  SFLSH_PETSC(MatSetOption(block, MAT_SYMMETRIC, PETSC_TRUE));
+  SFLSH_PETSC(MatSetOption(block, MAT_SYMMETRY_ETERNAL, PETSC_TRUE));
 }
 
 // Offsets of every block of the assembled pattern (see Refill). Only for PETSc's own AIJ storage; any other
