@@ -8,7 +8,8 @@
 // matrix or vector entry is sent between ranks) and counts in Φ the tets whose lowest node it owns; every
 // rank keeps the full state (meshes here are ≤ 10⁶ dofs).
 // Defaults (all overridable with -snes_*, -ksp_*, -pc_* or an options file): newtonls with an energy
-// backtracking line search, KSP CG with GAMG, rtol 1e-8; the exact Hessian first, then each tet's projected to PSD.
+// backtracking line search, KSP CG with ICC (block Jacobi + ICC in parallel) in dynamic steps and GAMG without
+// inertia, a direct solve up to 6000 dofs; rtol 1e-8; the exact Hessian first, then each tet's projected to PSD.
 #include <sflsh/fullspace/problem.hpp>
 
 #include <mpi.h>
