@@ -3,16 +3,20 @@
 // (physics.md §5, Kane et al. 2000), solved by Newton with an energy line search on PETSc SNES:
 //   Φ(x) = Σ_i m_i/(2h²) |A_i x_i + d_i − p̃_i|² + E(x) − Σ_i m_i gᵀ(A_i x_i + d_i),   p̃ = p_n + h w_n,
 //   ∇Φ = Aᵀ M (p(x) − p̃)/h² + ∇E(x) − Aᵀ M g,    ∇²Φ = Aᵀ M A/h² + ∇²E(x)   (3×3 blocks per node pair).
-// Distributed over MPI_COMM_WORLD: nodes are split in contiguous ranges, each rank assembles the tets
-// whose first node it owns; every rank keeps the full state (meshes here are ≤ 10⁶ dofs).
+// Distributed over MPI_COMM_WORLD: nodes are renumbered (reverse Cuthill–McKee, node_partition.hpp) and split
+// in contiguous ranges; each rank assembles the complete rows of its nodes from every tet touching them (so no
+// matrix or vector entry is sent between ranks) and counts in Φ the tets whose lowest node it owns; every
+// rank keeps the full state (meshes here are ≤ 10⁶ dofs).
 // Defaults (all overridable with -snes_*, -ksp_*, -pc_* or an options file): newtonls with an energy
-// backtracking line search, KSP CG with GAMG, rtol 1e-8; the exact Hessian first, then each tet's projected to PSD.
+// backtracking line search, KSP CG with ICC (block Jacobi + ICC in parallel) in dynamic steps and GAMG without
+// inertia, a direct solve up to 6000 dofs; rtol 1e-8; the exact Hessian first, then each tet's projected to PSD.
 #include <sflsh/fullspace/problem.hpp>
 
 #include <mpi.h>
 
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace sflsh::fullspace {
 
@@ -61,8 +65,8 @@ class BackwardEuler {
   /// Advances by h [s]. Retries failed solves with smaller substeps; throws sflsh::Error (on every rank)
   /// naming the time and the reason when even 2^max_halvings substeps fail. The state is unchanged then.
   StepStats step(double h);
-  /// Local ownership (for reporting): the node range [begin, end) of this rank.
-  std::pair<int, int> owned_nodes() const;
+  /// Local ownership (for reporting): the mesh nodes this rank owns, ascending.
+  std::vector<int> owned_nodes() const;
 
  private:
   struct Impl;
