@@ -202,6 +202,9 @@ int resolved_cubature_count(const ReducedModelOptions& options) {
 ReducedModel build_reduced_model(const fullspace::BodyLayer& layer, const ReducedModelOptions& requested) {
   const auto start = std::chrono::steady_clock::now();
   const meshing::LayerMesh& mesh = *layer.mesh;
+  const int region_vertices = mesh.region_surface.num_vertices();
+  require(requested.point_handles > 0 && requested.point_handles <= region_vertices / 4,
+          "reduced: {} point handles requested; the layer allows 1 to {}", requested.point_handles, region_vertices / 4);
   ReducedModelOptions options = requested;
   options.cubature = std::min(resolved_cubature_count(requested), mesh.num_tets());
   const int coordinates = options.point_handles * (options.basis.affine ? 12 : 3);
