@@ -96,13 +96,18 @@ BodyLayer build_body_layer(const body::BodyModel& model, const body::Betas& beta
     for (int v : mesh.nodes_of_kind(kind)) p.dirichlet.add(v, 0b111u);
   p.trajectory = out.trajectory;
   p.validate();
+  out.rest_skin = mesh.skin_positions(p.rest);
+  out.vertex_weights.resize(static_cast<std::size_t>(model.num_vertices()));
+  for (Eigen::Index v = 0; v < model.num_vertices(); ++v)
+    for (int k = 0; k < body::kNumJoints; ++k)
+      if (model.weights(v, k) != 0.0) out.vertex_weights[static_cast<std::size_t>(v)].emplace_back(k, model.weights(v, k));
   return out;
 }
 
 RowMatrixX3d BodyLayer::surface_displacement(const Eigen::VectorXd& x) const {
   require(x.size() == problem.num_dofs(), "body layer: state has {} entries, expected {}", x.size(), problem.num_dofs());
   const Eigen::Map<const RowMatrixX3d> nodes(x.data(), problem.num_nodes(), 3);
-  return mesh->skin_positions(nodes) - mesh->skin_positions(problem.rest);
+  return mesh->skin_positions(nodes) - (rest_skin.rows() ? rest_skin : mesh->skin_positions(problem.rest));
 }
 
 RowMatrixX3d BodyLayer::posed_surface(const Eigen::VectorXd& x, double t) const {
@@ -119,11 +124,16 @@ RowMatrixX3d BodyLayer::posed_surface(const Eigen::VectorXd& x, double t) const 
   const std::vector<int>& region = mesh->region_surface.vertices;
   for (std::size_t r = 0; r < region.size(); ++r) unposed.row(region[r]) += u.row(static_cast<Eigen::Index>(r));
   RowMatrixX3d posed(unposed.rows(), 3);
+  const bool sparse = static_cast<Eigen::Index>(vertex_weights.size()) == unposed.rows();
   for (Eigen::Index v = 0; v < unposed.rows(); ++v) {
     Matrix34d blend = Matrix34d::Zero();
-    for (int k = 0; k < body::kNumJoints; ++k) {
-      const double w = model->weights(v, k);
-      if (w != 0.0) blend += w * m[static_cast<std::size_t>(k)];
+    if (sparse) {
+      for (const auto& [k, w] : vertex_weights[static_cast<std::size_t>(v)]) blend += w * m[static_cast<std::size_t>(k)];
+    } else {
+      for (int k = 0; k < body::kNumJoints; ++k) {
+        const double w = model->weights(v, k);
+        if (w != 0.0) blend += w * m[static_cast<std::size_t>(k)];
+      }
     }
     posed.row(v) = (blend.leftCols<3>() * unposed.row(v).transpose() + blend.col(3)).transpose();
   }

@@ -39,6 +39,8 @@ struct BodyLayer {
   std::shared_ptr<const SkinnedTrajectory> trajectory;
   Problem problem;                                   ///< validated
   const body::BodyModel* model = nullptr;
+  RowMatrixX3d rest_skin;                            ///< the region's skin at the rest state (R×3)
+  std::vector<std::vector<std::pair<int, double>>> vertex_weights;   ///< per body vertex: its non-zero skinning weights
 
   /// Unposed elastic displacement of the region's skin vertices (R×3) at state x (3N).
   RowMatrixX3d surface_displacement(const Eigen::VectorXd& x) const;
