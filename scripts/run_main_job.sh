@@ -3,7 +3,7 @@
 # installs the Debian packages, builds sflsh (release), and poses the open body along a
 # procedural motion, writing a ParaView series to out/main_job/body.pvd; then meshes the soft-tissue
 # layer of the same subject, writes its material fields, and simulates its soft tissue with the
-# full-space reference solver.
+# full-space reference solver and with the reduced model.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -20,5 +20,8 @@ sflsh=build/release/apps/sflsh/sflsh
 # The full-space reference solver on the same subject and motion (coarse layer, 2 s): soft tissue in motion.
 "$sflsh" simulate --solver full --mesh coarse --subject OPEN_TRAIN_1 --motion jiggle_on_toes --frames 121 \
   --write-layer --out "$out/fullspace"
+# The reduced model (86 point handles + bone handles, cubature) on the same subject, motion and layer.
+"$sflsh" simulate --solver reduced --mesh coarse --subject OPEN_TRAIN_1 --motion jiggle_on_toes --frames 121 \
+  --out "$out/reduced"
 echo "main job done: open $out/body.pvd, $out/layer/layer.vtu, $out/material/layer.vtu and"
-echo "$out/fullspace/body.pvd (with $out/fullspace/layer.pvd and dynamics.vtp) in ParaView"
+echo "$out/fullspace/body.pvd (with $out/fullspace/layer.pvd and dynamics.vtp) and $out/reduced/body.pvd in ParaView"
