@@ -8,6 +8,7 @@
 #include <sflsh/reduced/weights.hpp>
 
 #include <algorithm>
+#include <random>
 
 namespace sflsh::reduced::testing {
 
@@ -104,6 +105,15 @@ inline Subspace full_basis(const fullspace::Problem& p) {
   sub.basis.resize(p.num_nodes(), s);
   sub.basis.setFromTriplets(entries.begin(), entries.end());
   return sub;
+}
+
+/// Reduced coordinates with i.i.d. N(0, amplitude²) entries [m], reproducible from the seed.
+inline Eigen::VectorXd random_q(int n, double amplitude, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> normal(0.0, amplitude);
+  Eigen::VectorXd q(n);
+  for (int k = 0; k < n; ++k) q[k] = normal(rng);
+  return q;
 }
 
 }  // namespace sflsh::reduced::testing

@@ -14,13 +14,7 @@
 namespace sflsh::reduced {
 namespace {
 
-Eigen::VectorXd random_q(int n, double amplitude, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> normal(0.0, amplitude);
-  Eigen::VectorXd q(n);
-  for (int k = 0; k < n; ++k) q[k] = normal(rng);
-  return q;
-}
+using testing::random_q;
 
 TEST(Cubature, EveryTetEqualsExactIntegration) {
   const auto c = testing::box_case();

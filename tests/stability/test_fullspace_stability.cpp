@@ -11,6 +11,8 @@
 #include <sflsh/material/layer_material.hpp>
 #include <sflsh/meshing/layer_cache.hpp>
 
+#include "stability_support.hpp"
+
 #include <gtest/gtest.h>
 #include <mpi.h>
 
@@ -22,38 +24,8 @@
 namespace sflsh::fullspace {
 namespace {
 
-const body::BodyModel& open_body() {
-  static const body::BodyModel model = body::load_body(std::filesystem::path(SFLSH_DATA_DIR) / "open_body.npz");
-  return model;
-}
+using namespace sflsh::stability;
 
-BodyLayerOptions coarse() {
-  BodyLayerOptions options;
-  options.size = meshing::SizePreset::coarse;
-  options.cache_dir = SFLSH_TEST_CACHE;
-  return options;
-}
-
-/// The default material at 12 control points with each control point's κ set by `kappa_of(i)`.
-material::MaterialFile material_with(const std::function<material::Kappa(int)>& kappa_of) {
-  meshing::LayerMeshOptions mesh_options;
-  mesh_options.mesher = coarse().mesher;
-  mesh_options.size = coarse().size;
-  const meshing::LayerMesh mesh = meshing::cached_layer_mesh(open_body(), mesh_options, SFLSH_TEST_CACHE);
-  material::MaterialFile file = material::default_material(open_body(), mesh, 12, "stability");
-  file.bounds.thickness = {0.05, 0.95};
-  for (std::size_t i = 0; i < file.control_points.size(); ++i) file.control_points[i].kappa = kappa_of(static_cast<int>(i));
-  return file;
-}
-
-struct Outcome {
-  double max_kinetic = 0.0;          ///< max over frames of ½ Σ m |ṗ|² [J]
-  double max_elastic = 0.0;          ///< max over frames of E(x) [J]
-  double skinned_kinetic = 0.0;      ///< max over frames of the kinetic energy of the purely skinned layer [J]
-  double initial_elastic = 0.0;
-  long failed_attempts = 0;
-  int frames = 0;
-};
 
 /// Runs backward Euler along the motion, checking every frame's state and energies for finiteness.
 Outcome run_case(const body::Betas& beta, const body::Motion& motion, const material::MaterialFile* material,
@@ -67,7 +39,6 @@ Outcome run_case(const body::Betas& beta, const body::Motion& motion, const mate
   if (std::getenv("SFLSH_PROBE")) std::cerr << fmt::format("{} nodes {} tets {} constrained\n", p.num_nodes(), p.num_tets(), p.dirichlet.dof.size());
   Outcome out;
   out.initial_elastic = energies(p, integrator.state()).elastic;
-  const Eigen::Map<const Eigen::VectorXd> rest(p.rest.data(), p.num_dofs());
   for (std::size_t f = 0; f < motion.num_frames(); ++f) {
     if (f > 0) {
       for (int k = 0; k < substeps; ++k) {
@@ -79,41 +50,9 @@ Outcome run_case(const body::Betas& beta, const body::Motion& motion, const mate
                                    st.function_seconds, st.jacobian_seconds, st.converged_reason);
       }
     }
-    const State& s = integrator.state();
-    EXPECT_TRUE(s.x.allFinite() && s.w.allFinite()) << "frame " << f;
-    const Energies e = energies(p, s);
-    EXPECT_TRUE(std::isfinite(e.kinetic) && std::isfinite(e.elastic)) << "frame " << f;
-    out.max_kinetic = std::max(out.max_kinetic, e.kinetic);
-    out.max_elastic = std::max(out.max_elastic, e.elastic);
-    // The skinned layer's kinetic energy: the energy scale the skeleton feeds into the tissue.
-    NodeFrame frame, rate;
-    p.frame(motion.time(f), frame, &rate);
-    double kinetic = 0.0;
-    for (int i = 0; i < p.num_nodes(); ++i) {
-      const Eigen::Vector3d v = rate.A[static_cast<std::size_t>(i)] * rest.segment<3>(3 * i) + rate.d.row(i).transpose();
-      kinetic += 0.5 * p.mass[i] * v.squaredNorm();
-    }
-    out.skinned_kinetic = std::max(out.skinned_kinetic, kinetic);
-    ++out.frames;
+    record_frame(p, integrator.state(), motion.time(f), f, out);
   }
   return out;
-}
-
-/// Bounded energy: backward Euler only dissipates, so the tissue's kinetic and elastic energy stay within
-/// what the skeleton's motion (whose skinned kinetic energy is the scale) and the initial state put in.
-/// A factor 10 leaves room for the relative motion of tissue against bone (it is ≈ 0.1–2 in these runs);
-/// an instability grows without bound and exceeds it by orders of magnitude.
-void expect_bounded(const Outcome& o) {
-  const double budget = 10.0 * o.skinned_kinetic + 2.0 * o.initial_elastic;
-  EXPECT_GT(o.skinned_kinetic, 0.0);
-  EXPECT_LT(o.max_kinetic, budget) << "skinned kinetic energy " << o.skinned_kinetic;
-  EXPECT_LT(o.max_elastic, budget) << "skinned kinetic energy " << o.skinned_kinetic;
-}
-
-body::Betas beta_with(int component, double value) {
-  body::Betas beta = body::Betas::Zero();
-  beta[component] = value;
-  return beta;
 }
 
 TEST(FullspaceStability, ExtremeShapesBetaPlusMinusFour) {

@@ -12,6 +12,8 @@
 #include <sflsh/reduced/reduced_integrator.hpp>
 #include <sflsh/reduced/reduced_model.hpp>
 
+#include "stability_support.hpp"
+
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
@@ -21,33 +23,8 @@
 namespace sflsh::reduced {
 namespace {
 
-const body::BodyModel& open_body() {
-  static const body::BodyModel model = body::load_body(std::filesystem::path(SFLSH_DATA_DIR) / "open_body.npz");
-  return model;
-}
+using namespace sflsh::stability;
 
-fullspace::BodyLayerOptions coarse() {
-  fullspace::BodyLayerOptions options;
-  options.size = meshing::SizePreset::coarse;
-  options.cache_dir = SFLSH_TEST_CACHE;
-  return options;
-}
-
-material::MaterialFile material_with(const std::function<material::Kappa(int)>& kappa_of) {
-  meshing::LayerMeshOptions mesh_options;
-  mesh_options.mesher = coarse().mesher;
-  mesh_options.size = coarse().size;
-  const meshing::LayerMesh mesh = meshing::cached_layer_mesh(open_body(), mesh_options, SFLSH_TEST_CACHE);
-  material::MaterialFile file = material::default_material(open_body(), mesh, 12, "stability");
-  file.bounds.thickness = {0.05, 0.95};
-  for (std::size_t i = 0; i < file.control_points.size(); ++i) file.control_points[i].kappa = kappa_of(static_cast<int>(i));
-  return file;
-}
-
-struct Outcome {
-  double max_kinetic = 0.0, max_elastic = 0.0, skinned_kinetic = 0.0, initial_elastic = 0.0;
-  long failed_attempts = 0;
-};
 
 /// Runs the reduced model (86 handles, 200 cubature tets) along the motion; `perturb` may change q₀.
 Outcome run_case(const body::Betas& beta, const body::Motion& motion, const material::MaterialFile* material,
@@ -63,41 +40,11 @@ Outcome run_case(const body::Betas& beta, const body::Motion& motion, const mate
   integrator.initialize(state);
   Outcome out;
   out.initial_elastic = fullspace::energies(p, integrator.full_state()).elastic;
-  const Eigen::Map<const Eigen::VectorXd> rest(p.rest.data(), p.num_dofs());
   for (std::size_t f = 0; f < motion.num_frames(); ++f) {
     if (f > 0) out.failed_attempts += integrator.step(1.0 / motion.fps).failed_attempts;
-    const fullspace::State s = integrator.full_state();
-    EXPECT_TRUE(s.x.allFinite() && s.w.allFinite()) << "frame " << f;
-    const fullspace::Energies e = fullspace::energies(p, s);
-    EXPECT_TRUE(std::isfinite(e.kinetic) && std::isfinite(e.elastic)) << "frame " << f;
-    out.max_kinetic = std::max(out.max_kinetic, e.kinetic);
-    out.max_elastic = std::max(out.max_elastic, e.elastic);
-    fullspace::NodeFrame frame, rate;
-    p.frame(motion.time(f), frame, &rate);
-    double kinetic = 0.0;
-    for (int i = 0; i < p.num_nodes(); ++i) {
-      const Eigen::Vector3d v = rate.A[static_cast<std::size_t>(i)] * rest.segment<3>(3 * i) + rate.d.row(i).transpose();
-      kinetic += 0.5 * p.mass[i] * v.squaredNorm();
-    }
-    out.skinned_kinetic = std::max(out.skinned_kinetic, kinetic);
+    record_frame(p, integrator.full_state(), motion.time(f), f, out);
   }
   return out;
-}
-
-/// Bounded energy, with the same budget as the full-space suite: backward Euler only dissipates, so the
-/// tissue's energy stays within a small multiple of the skeleton's skinned kinetic energy and the initial
-/// elastic energy; an instability exceeds it by orders of magnitude.
-void expect_bounded(const Outcome& o) {
-  const double budget = 10.0 * o.skinned_kinetic + 2.0 * o.initial_elastic;
-  EXPECT_GT(o.skinned_kinetic, 0.0);
-  EXPECT_LT(o.max_kinetic, budget) << "skinned kinetic energy " << o.skinned_kinetic;
-  EXPECT_LT(o.max_elastic, budget) << "skinned kinetic energy " << o.skinned_kinetic;
-}
-
-body::Betas beta_with(int component, double value) {
-  body::Betas beta = body::Betas::Zero();
-  beta[component] = value;
-  return beta;
 }
 
 TEST(ReducedStability, ExtremeShapesBetaPlusMinusFour) {
