@@ -141,6 +141,9 @@ void run_compare(const CompareOptions& opt, const Invocation& invocation, int ra
   // fails here, before the expensive reference run.
   std::vector<std::unique_ptr<Configuration>> configs;
   const auto t_models = Clock::now();
+  for (int handles : handle_sweep)   // all counts checked before any model is built (one message, no output)
+    require(handles <= reduced::max_point_handles(layer), "reduced: {} point handles requested; the layer allows 1 to {}", handles,
+            reduced::max_point_handles(layer));
   if (rank == 0) {
     for (int handles : handle_sweep) {
       for (int k : cubature_sweep) {

@@ -143,9 +143,8 @@ BodyHandles place_body_handles(const fullspace::BodyLayer& layer, int point_hand
   for (int i = 0; i < n; ++i)
     if (attached[static_cast<std::size_t>(3 * i)]) h.bone_of_node[static_cast<std::size_t>(i)] = dominant_joint(layer.trajectory->node_weights(i));
   if (point_handles == 0) return h;
-  const int region_vertices = mesh.region_surface.num_vertices();
-  require(point_handles > 0 && point_handles <= region_vertices / 4, "reduced: {} point handles requested; the layer allows 1 to {}",
-          point_handles, region_vertices / 4);
+  require(point_handles > 0 && point_handles <= max_point_handles(layer), "reduced: {} point handles requested; the layer allows 1 to {}",
+          point_handles, max_point_handles(layer));
   // Sites: the material control-point placement (nested, symmetric, denser on the torso), then the free node
   // nearest below each site at mid-depth.
   const std::vector<int> sites = material::layer_control_points(*layer.model, mesh, point_handles);
@@ -193,6 +192,8 @@ fullspace::Problem template_problem(const fullspace::BodyLayer& layer) {
   return p;
 }
 
+int max_point_handles(const fullspace::BodyLayer& layer) { return layer.mesh->region_surface.num_vertices() / 4; }
+
 int resolved_cubature_count(const ReducedModelOptions& options) {
   if (options.cubature >= 0) return options.cubature;
   const int coordinates = options.point_handles * (options.basis.affine ? 12 : 3);
@@ -202,9 +203,8 @@ int resolved_cubature_count(const ReducedModelOptions& options) {
 ReducedModel build_reduced_model(const fullspace::BodyLayer& layer, const ReducedModelOptions& requested) {
   const auto start = std::chrono::steady_clock::now();
   const meshing::LayerMesh& mesh = *layer.mesh;
-  const int region_vertices = mesh.region_surface.num_vertices();
-  require(requested.point_handles > 0 && requested.point_handles <= region_vertices / 4,
-          "reduced: {} point handles requested; the layer allows 1 to {}", requested.point_handles, region_vertices / 4);
+  require(requested.point_handles > 0 && requested.point_handles <= max_point_handles(layer),
+          "reduced: {} point handles requested; the layer allows 1 to {}", requested.point_handles, max_point_handles(layer));
   ReducedModelOptions options = requested;
   options.cubature = std::min(resolved_cubature_count(requested), mesh.num_tets());
   const int coordinates = options.point_handles * (options.basis.affine ? 12 : 3);

@@ -53,6 +53,9 @@ struct ReducedModel {
 /// unreadable cache entry — which is then rebuilt, with a warning).
 ReducedModel build_reduced_model(const fullspace::BodyLayer& layer, const ReducedModelOptions& options);
 
+/// The largest point-handle count a layer takes (a quarter of its skin vertices).
+int max_point_handles(const fullspace::BodyLayer& layer);
+
 /// The cubature count that `options` asks for (resolves −1 = auto).
 int resolved_cubature_count(const ReducedModelOptions& options);
 
