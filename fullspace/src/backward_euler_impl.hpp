@@ -1,0 +1,180 @@
+#pragma once
+// Internal to the backward-Euler integrator: its state (BackwardEuler::Impl) and the helpers shared by
+// backward_euler.cpp (setup, PETSc callbacks, the step) and backward_euler_assembly.cpp (potential,
+// residual and Hessian assembly, the direct refill of the AIJ arrays).
+#include <sflsh/fullspace/backward_euler.hpp>
+#include <sflsh/fullspace/node_partition.hpp>
+
+#include <sflsh/core/error.hpp>
+#include <sflsh/core/log.hpp>
+
+#include <Eigen/LU>
+#include <petscsnes.h>
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+namespace sflsh::fullspace {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+inline double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+/// PETSc calls inside the integrator: a non-zero code becomes sflsh::Error naming the call.
+inline void check(PetscErrorCode code, const char* what) {
+  if (code != 0) throw_error("PETSc call {} failed with error code {}", what, static_cast<int>(code));
+}
+#define SFLSH_PETSC(call) check((call), #call)
+
+
+inline constexpr double kInfinity = std::numeric_limits<double>::infinity();
+
+inline material::TetNodes problem_rest_nodes(const Problem& problem, int e) {
+  material::TetNodes nodes;
+  for (int a = 0; a < 4; ++a) nodes.col(a) = problem.rest.row(problem.tets(e, a)).transpose();
+  return nodes;
+}
+
+/// The preconditioner unless -pc_type says otherwise (measurements: docs/fullspace.md, docs/decisions.md).
+/// Up to kDirectDofs a sparse direct factorization: faster there, and immune to the smoother trouble AMG has on
+/// a handful of aggregates (GAMG's Chebyshev smoother came out indefinite on 72-dof verification bars).
+/// Dynamic steps: M/h² keeps the system well conditioned, so CG converges in ~15 iterations with an incomplete
+/// Cholesky factor (one block per rank in parallel), which costs a fraction of GAMG's setup; on the default
+/// layer ICC took 0.43 s per step against GAMG's 1.2 s. Without the mass term (quasi-static and static
+/// problems) the ICC iteration count grows with the mesh and GAMG, with the rigid-body near-null space, wins.
+inline PCType default_pc_type(int dofs, int size, bool dynamic) {
+  constexpr int kDirectDofs = 6000;
+  if (dofs <= kDirectDofs) return size == 1 ? PCCHOLESKY : PCREDUNDANT;
+  if (!dynamic) return PCGAMG;
+  // Block Jacobi's blocks default to ICC for a matrix marked symmetric (MAT_SYMMETRIC below).
+  return size == 1 ? PCICC : PCBJACOBI;
+}
+
+}  // namespace
+
+struct BackwardEuler::Impl {
+  const Problem& problem;
+  MPI_Comm comm;
+  BackwardEulerOptions options;
+  int rank = 0;
+  int size = 1;
+  /// PETSc's numbering of the nodes (see node_partition.hpp): rows, vector entries and ownership ranges are
+  /// in solver indices; the problem's vectors (x_full, prescribed, the Eigen state) stay in mesh order.
+  NodePartition partition;
+  int begin = 0, end = 0;           ///< this rank's solver indices
+  std::vector<int> my_tets;         ///< tets whose lowest solver index is owned: each counted once in Φ
+  /// Tets with at least one owned node: the gradient and Hessian rows of the owned nodes are complete from
+  /// these alone, so no entry is sent to another rank (interface tets are evaluated on both sides).
+  std::vector<int> row_tets;
+  std::vector<char> constrained;    ///< per dof (mesh order)
+  std::unique_ptr<tbb::task_arena> arena;
+
+  Vec X = nullptr, F = nullptr, x_all = nullptr;
+  VecScatter to_all = nullptr;
+  Mat J = nullptr;
+  SNES snes = nullptr;
+
+  State state;
+
+  // The step being solved.
+  double t1 = 0.0, h = 0.0;
+  bool inertia = true;
+  NodeFrame frame;
+  RowMatrixX3d p_tilde;
+  Eigen::VectorXd x_full;
+  Eigen::VectorXd prescribed;       ///< x values at t1 (full), valid on constrained dofs
+
+  StepStats* stats = nullptr;
+  bool linear_failure = false;      ///< the last substep failed in the linear solver
+  std::string saved_pc_type;        ///< the configured PC while the fallback is in use (empty otherwise)
+
+  /// Switches the KSP to CG + Jacobi, which cannot break down on a positive definite system: AMG smoothers
+  /// occasionally come out indefinite on stiff or strongly heterogeneous states.
+  void use_fallback_pc() {
+    KSP ksp = nullptr;
+    PC pc = nullptr;
+    SFLSH_PETSC(SNESGetKSP(snes, &ksp));
+    SFLSH_PETSC(KSPGetPC(ksp, &pc));
+    PCType type = nullptr;
+    SFLSH_PETSC(PCGetType(pc, &type));
+    saved_pc_type = type ? type : PCGAMG;
+    SFLSH_PETSC(PCSetType(pc, PCJACOBI));
+    if (stats) ++stats->fallback_preconditioner;
+  }
+  /// Restores the configured preconditioner (and re-reads its -pc_* options).
+  void restore_pc() {
+    if (saved_pc_type.empty()) return;
+    KSP ksp = nullptr;
+    PC pc = nullptr;
+    SFLSH_PETSC(SNESGetKSP(snes, &ksp));
+    SFLSH_PETSC(KSPGetPC(ksp, &pc));
+    SFLSH_PETSC(PCSetType(pc, saved_pc_type.c_str()));
+    SFLSH_PETSC(PCSetFromOptions(pc));
+    saved_pc_type.clear();
+  }
+  /// The elastic Hessian of this attempt: exact first in dynamic steps when options.exact_hessian_first,
+  /// problem.projection otherwise and on every retry.
+  material::HessianProjection projection_now = material::HessianProjection::kStressDerivative;
+  /// Diagonal value of constrained rows: the mean elastic diagonal at rest, so that these rows do not
+  /// spoil the spectrum the multigrid smoothers estimate (a 1 beside entries of 10²–10⁴ made GAMG's
+  /// Chebyshev smoother indefinite).
+  double dirichlet_diagonal = 1.0;
+
+  /// Direct refill of the assembled AIJ arrays: after the first assembly fixed the pattern, every 3×3 block
+  /// (I, J) of an owned row maps to three offsets (one per scalar row) into the diagonal or off-diagonal
+  /// SeqAIJ value array; MatSetValues' per-entry search is then skipped (it cost more than the kernels).
+  struct Refill {
+    bool ready = false;
+    Mat diag = nullptr, offdiag = nullptr;     ///< borrowed from J
+    std::ptrdiff_t diag_nnz = 0, offdiag_nnz = 0;
+    /// Per row tet, 16 blocks (a, b) × 3 rows: ≥ 0 offset into diag, < −1 offset −(o + 2) into offdiag,
+    /// −1: the row belongs to another rank (which assembles it from its own row tets).
+    std::vector<PetscInt> tet_offset;
+    std::vector<PetscInt> node_offset;         ///< per owned node, 3 rows: offsets of its diagonal block
+  } refill;
+
+  Impl(const Problem& p, MPI_Comm c, const BackwardEulerOptions& o) : problem(p), comm(c), options(o) {}
+
+  int index_of(int node) const { return partition.index_of[static_cast<std::size_t>(node)]; }
+  int node_of(int index) const { return partition.node_of[static_cast<std::size_t>(index)]; }
+  bool owns(int node) const {
+    const int k = index_of(node);
+    return k >= begin && k < end;
+  }
+
+  void setup();
+  void destroy();
+
+  void gather(Vec v, Eigen::VectorXd& out);
+  Eigen::VectorXd x_prescribed_buffer;
+  /// x with its constrained components replaced by their prescribed values (x itself before the first step).
+  const Eigen::VectorXd& with_prescribed(const Eigen::VectorXd& x) {
+    if (prescribed.size() != x.size()) return x;
+    x_prescribed_buffer = x;
+    for (std::size_t d = 0; d < constrained.size(); ++d) {
+      if (constrained[d]) x_prescribed_buffer[static_cast<Eigen::Index>(d)] = prescribed[static_cast<Eigen::Index>(d)];
+    }
+    return x_prescribed_buffer;
+  }
+  double objective(const Eigen::VectorXd& x);
+  bool residual(const Eigen::VectorXd& x, Vec out);
+  bool jacobian(const Eigen::VectorXd& x);
+  void build_refill();
+  void mark_diagonal_block_symmetric();
+  bool solve_substep(State& s, double t0, double dt);
+
+  static PetscErrorCode function_cb(SNES, Vec x, Vec f, void* ctx);
+  static PetscErrorCode objective_cb(SNES, Vec x, PetscReal* value, void* ctx);
+  static PetscErrorCode jacobian_cb(SNES, Vec x, Mat, Mat, void* ctx);
+  static PetscErrorCode linesearch_cb(SNESLineSearch ls, void* ctx);
+};
+
+}  // namespace sflsh::fullspace
