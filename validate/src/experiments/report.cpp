@@ -269,7 +269,7 @@ void Report::write(RunFolder& run, nlohmann::json& summary) const {
     try {
       chart::write_chart_png(run.stage("lambda_sweep.png"), chart);
     } catch (const Error& e) {
-      logger()->warn("validate: lambda_sweep.png not written ({}); run under xvfb-run for the picture", e.what());
+      logger()->warn("validate: lambda_sweep.png not written ({})", e.what());
     }
   }
   // ---- Parameter covariance per control point (Fig. 7) and parameter recovery ------------------------------
