@@ -92,7 +92,7 @@ Eigen::MatrixXd SensitivityIntegrator::elastic_gradient_dyoung(const Eigen::Vect
   return out;
 }
 
-void SensitivityIntegrator::substep_sensitivity(const ReducedSubstep& substep) {
+void SensitivityIntegrator::substep_sensitivity(const ReducedSubstep& substep, SensitivityStepStats& stats) {
   const double dt = substep.dt, t1 = substep.t0 + substep.dt;
   Eigen::VectorXd x_prescribed = Eigen::Map<const Eigen::VectorXd>(problem_.rest.data(), problem_.num_dofs());
   problem_.apply_dirichlet(t1, x_prescribed);
@@ -100,7 +100,10 @@ void SensitivityIntegrator::substep_sensitivity(const ReducedSubstep& substep) {
   if (has_drives_) elastic_.set_prescribed_state(x_prescribed);
 
   // Right-hand side −(∂G/∂Y + ∂G/∂q_n S_n + ∂G/∂q_{n−1} S_{n−1}).
+  auto clock = Clock::now();
   Eigen::MatrixXd rhs = -elastic_gradient_dyoung(substep.q);
+  stats.young_seconds += seconds_since(clock);
+  clock = Clock::now();
   Eigen::MatrixXd hessian;
   if (inertia_on_) {
     const double r = has_previous_ ? dt / (t_current_ - t_previous_) : 0.0;   // h / h_prev
@@ -111,12 +114,17 @@ void SensitivityIntegrator::substep_sensitivity(const ReducedSubstep& substep) {
       inertia_.cross_mass(t_previous_, cross);
       rhs.noalias() -= (r / (dt * dt)) * (cross * previous_);
     }
+    stats.history_seconds += seconds_since(clock);
+    clock = Clock::now();
     inertia_.mass_hessian(dt, hessian);
   } else {
     hessian.setZero(substep.q.size(), substep.q.size());
   }
   elastic_.add_hessian(substep.q, hessian, material::HessianProjection::kNone);   // exact, at the converged q
+  stats.hessian_seconds += seconds_since(clock);
+  clock = Clock::now();
   Eigen::MatrixXd next = solve_step_sensitivity(hessian, rhs, t1);
+  stats.solve_seconds += seconds_since(clock);
   previous_ = std::move(sensitivity_);
   sensitivity_ = std::move(next);
   t_previous_ = t_current_;
@@ -131,7 +139,7 @@ SensitivityStepStats SensitivityIntegrator::step(double h) {
   const auto start = Clock::now();
   valid_ = false;
   for (const ReducedSubstep& substep : integrator_.last_substeps()) {
-    substep_sensitivity(substep);
+    substep_sensitivity(substep, stats);
     ++stats.factorizations;
   }
   valid_ = true;

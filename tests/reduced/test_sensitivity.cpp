@@ -78,9 +78,9 @@ INSTANTIATE_TEST_SUITE_P(Regimes, YoungStressFd,
                                                               Regime{"near_inversion", 0.2, 0.05}, Regime{"large_shear", 1.0, 0.4}),
                                             ::testing::Values(material::FungScale::kTangentOverSaturation,
                                                               material::FungScale::kTangentTimesSaturation, material::FungScale::kNone)),
-                         [](const ::testing::TestParamInfo<YoungStressFd::ParamType>& info) {
-                           const material::FungScale scale = std::get<1>(info.param);
-                           return std::string(std::get<0>(info.param).name) +
+                         [](const ::testing::TestParamInfo<YoungStressFd::ParamType>& param) {
+                           const material::FungScale scale = std::get<1>(param.param);
+                           return std::string(std::get<0>(param.param).name) +
                                   (scale == material::FungScale::kNone                   ? "_no_fung"
                                    : scale == material::FungScale::kTangentTimesSaturation ? "_c_times_s"
                                                                                            : "_c_over_s");

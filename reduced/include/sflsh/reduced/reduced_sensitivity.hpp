@@ -33,7 +33,11 @@ Eigen::MatrixXd solve_step_sensitivity(const Eigen::MatrixXd& hessian, const Eig
 
 struct SensitivityStepStats {
   ReducedStepStats step;         ///< the integrator's own step
-  double seconds = 0.0;          ///< the sensitivity solves (assembly, factorization, solves)
+  double seconds = 0.0;          ///< the sensitivity work (all of the below)
+  double young_seconds = 0.0;    ///< ∂∇Φ/∂Y at the cubature points
+  double history_seconds = 0.0;  ///< cross-time masses and their products with S_n, S_{n−1}
+  double hessian_seconds = 0.0;  ///< the exact Hessian
+  double solve_seconds = 0.0;    ///< Cholesky and the 2N-column solve
   int factorizations = 0;        ///< one per substep
 };
 
@@ -66,7 +70,7 @@ class SensitivityIntegrator {
   Eigen::MatrixXd elastic_gradient_dyoung(const Eigen::VectorXd& q) const;
 
  private:
-  void substep_sensitivity(const ReducedSubstep& substep);
+  void substep_sensitivity(const ReducedSubstep& substep, SensitivityStepStats& stats);
 
   const fullspace::Problem& problem_;
   ReducedBackwardEuler integrator_;
