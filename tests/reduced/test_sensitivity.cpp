@@ -324,6 +324,47 @@ TEST(YoungSensitivity, BoxTrajectoryMatchesFiniteDifferencesOfCompleteSimulation
   }
 }
 
+// Steps of changing size (as substeps make them): the prediction's velocity w_n = (p_n − p_{n−1})/h_prev then
+// enters with r = h/h_prev ≠ 1.
+TEST(YoungSensitivity, VariableStepTrajectoryMatchesFiniteDifferences) {
+  const fullspace::ScalarDrive drive = shake(0.006, 4.0);
+  auto c = testing::box_case({4, 4, 3}, 1000.0, &drive);
+  const Eigen::MatrixX2d base = box_control_young();
+  set_box_young(c.problem, base);
+  const Subspace s = testing::box_subspace(c);
+  const Cubature cub = exact_cubature(c.problem.num_tets());
+  const fullspace::State start = fullspace::initial_state(c.problem, 0.0);
+  const std::vector<double> steps{1.0 / 60, 1.0 / 120, 1.0 / 120, 1.0 / 40, 1.0 / 90, 1.0 / 60, 1.0 / 30, 1.0 / 240, 1.0 / 60, 1.0 / 60};
+  SensitivityIntegrator integrator(c.problem, s, cub, box_young_map(c.problem, cub.tets));
+  integrator.initialize(start);
+  std::vector<Eigen::MatrixXd> analytic{integrator.dq_dyoung()};
+  for (double h : steps) {
+    integrator.step(h);
+    analytic.push_back(integrator.dq_dyoung());
+  }
+  const auto run = [&](const Eigen::MatrixX2d& young) {
+    set_box_young(c.problem, young);
+    ReducedBackwardEuler plain(c.problem, s, cub, sensitivity_solver_options());
+    plain.initialize(start);
+    std::vector<Eigen::VectorXd> q{plain.q()};
+    for (double h : steps) {
+      plain.step(h);
+      q.push_back(plain.q());
+    }
+    set_box_young(c.problem, base);
+    return q;
+  };
+  for (int column : {0, 3}) {
+    const int control = column % 2, modulus = column / 2;
+    const double delta = 1e-4 * base(control, modulus);
+    Eigen::MatrixX2d plus = base, minus = base;
+    plus(control, modulus) += delta;
+    minus(control, modulus) -= delta;
+    const auto fd = central_difference(run(plus), run(minus), delta);
+    EXPECT_LE(trajectory_error(analytic, column, fd), kTrajectoryTolerance) << "column " << column;   // budget as above
+  }
+}
+
 TEST(YoungSensitivity, BodyLayerTrajectoryMatchesFiniteDifferencesOfCompleteSimulations) {
   const int frames = 20;
   const body::Motion motion = body::make_procedural_motion("jiggle_on_toes", 60.0, frames + 2);
