@@ -5,7 +5,6 @@
 #include <sflsh/material/through_thickness.hpp>
 
 namespace sflsh::material {
-namespace {
 
 meshing::RowMatrixX3d region_positions(const body::BodyModel& model, const meshing::LayerMesh& mesh) {
   const auto& region = mesh.region_surface;
@@ -13,8 +12,6 @@ meshing::RowMatrixX3d region_positions(const body::BodyModel& model, const meshi
   for (int v = 0; v < region.num_vertices(); ++v) V.row(v) = model.v_template.row(region.vertices[static_cast<std::size_t>(v)]);
   return V;
 }
-
-}  // namespace
 
 std::vector<int> region_mirror_map(const meshing::LayerMesh& mesh, const body::BodyModel& model, double tolerance) {
   const meshing::RowMatrixX3d V = region_positions(model, mesh);

@@ -16,6 +16,9 @@ inline constexpr double kTorsoDensity = 1.5;
 /// vertex lies within `tolerance` [m] of the mirrored position (SMPL-like bodies are symmetric).
 std::vector<int> region_mirror_map(const meshing::LayerMesh& mesh, const body::BodyModel& model, double tolerance = 2e-3);
 
+/// The template positions of the layer's region vertices (R × 3), the surface κ and φ live on.
+meshing::RowMatrixX3d region_positions(const body::BodyModel& model, const meshing::LayerMesh& mesh);
+
 /// `count` control points on the layer's region (nested in count, symmetric pairs, denser on the
 /// torso), as BODY vertex indices.
 std::vector<int> layer_control_points(const body::BodyModel& model, const meshing::LayerMesh& mesh, int count);
