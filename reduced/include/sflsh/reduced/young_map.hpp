@@ -13,7 +13,8 @@
 
 namespace sflsh::reduced {
 
-/// W for the listed tets (tets.size() × N): row k gives the modulus of tet tets[k] from the N control values.
+/// W for the listed tets (tets.size() × N): row k gives the modulus of tet tets[k] from the N control values. With a
+/// LayerParameterization p (layer_parameterization.hpp): young_tet_map(p.retargeter(), p.phi(), tets, scale).
 /// @param[in] retargeter       the layer's retargeter (its harmonic extension)
 /// @param[in] phi              #region vertices by N basis
 /// @param[in] tets             mesh tets (e.g. Cubature::tets)
