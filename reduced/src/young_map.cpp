@@ -5,6 +5,9 @@
 #include <sflsh/material/layer_material.hpp>
 #include <sflsh/material/orthotropic_fung.hpp>
 
+#include <algorithm>
+#include <vector>
+
 namespace sflsh::reduced {
 
 Eigen::MatrixXd young_tet_map(const meshing::Retargeter& retargeter, const Eigen::MatrixXd& phi, const std::vector<int>& tets,
@@ -74,17 +77,21 @@ SkinDisplacementMap::SkinDisplacementMap(const fullspace::BodyLayer& layer, cons
     : layer_(layer), subspace_(subspace) {
   require(subspace.num_nodes() == layer.problem.num_nodes(), "skin map: subspace has {} nodes, the layer {}", subspace.num_nodes(),
           layer.problem.num_nodes());
-  // K B column by column, three basis functions per call of the (linear) skin embedding.
+  // K B column by column, three basis functions per call of the (linear) skin embedding; exact zeros dropped.
   const int S = subspace.num_functions();
-  skin_basis_.resize(layer.mesh->region_surface.num_vertices(), S);
   const Eigen::MatrixXd dense = Eigen::MatrixXd(subspace.basis);
+  std::vector<Eigen::Triplet<double>> entries;
   for (int s = 0; s < S; s += 3) {
     meshing::RowMatrixX3d columns = meshing::RowMatrixX3d::Zero(subspace.num_nodes(), 3);
     const int count = std::min(3, S - s);
     columns.leftCols(count) = dense.middleCols(s, count);
     const meshing::RowMatrixX3d skin = layer.mesh->skin_positions(columns);
-    skin_basis_.middleCols(s, count) = skin.leftCols(count);
+    for (Eigen::Index r = 0; r < skin.rows(); ++r)
+      for (int k = 0; k < count; ++k)
+        if (skin(r, k) != 0.0) entries.emplace_back(static_cast<int>(r), s + k, skin(r, k));
   }
+  skin_basis_.resize(layer.mesh->region_surface.num_vertices(), S);
+  skin_basis_.setFromTriplets(entries.begin(), entries.end());
 }
 
 meshing::RowMatrixX3d SkinDisplacementMap::displacement(const Eigen::VectorXd& q, double t) const {
@@ -100,10 +107,7 @@ Eigen::MatrixXd SkinDisplacementMap::derivative(const Eigen::MatrixXd& dq) const
   const Eigen::Index R = skin_basis_.rows();
   Eigen::MatrixXd du = Eigen::MatrixXd::Zero(3 * R, dq.cols());
   for (Eigen::Index r = 0; r < R; ++r)
-    for (Eigen::Index s = 0; s < skin_basis_.cols(); ++s) {
-      const double k = skin_basis_(r, s);
-      if (k != 0.0) du.middleRows<3>(3 * r) += k * dq.middleRows<3>(3 * s);
-    }
+    for (SparseRowMatrix::InnerIterator it(skin_basis_, r); it; ++it) du.middleRows<3>(3 * r) += it.value() * dq.middleRows<3>(3 * it.col());
   return du;
 }
 

@@ -9,7 +9,9 @@
 #include <sflsh/body/motion.hpp>
 #include <sflsh/fullspace/body_layer.hpp>
 #include <sflsh/fullspace/reference_integrator.hpp>
+#include <sflsh/fullspace/simulation_output.hpp>
 #include <sflsh/material/layer_material.hpp>
+#include <sflsh/reduced/dynamics_sensitivity.hpp>
 #include <sflsh/reduced/reduced_model.hpp>
 #include <sflsh/reduced/reduced_sensitivity.hpp>
 #include <sflsh/reduced/young_derivative.hpp>
@@ -380,6 +382,29 @@ TEST(YoungSensitivity, BodyLayerTrajectoryMatchesFiniteDifferencesOfCompleteSimu
   const int N = map.num_controls();
   const Eigen::MatrixX2d base = map.control_young();
   fullspace::Problem perturbed = layer.problem;
+  // σ_n, σ_t of the region skin (the fit's measurement) and their derivatives through the skin map.
+  const SkinDisplacementMap skin(layer, model.subspace);
+  const meshing::RowMatrixX3d all_normals = fullspace::vertex_normals(layer.shaped, open_body().faces);
+  meshing::RowMatrixX3d normals(layer.mesh->region_surface.num_vertices(), 3);
+  for (Eigen::Index r = 0; r < normals.rows(); ++r) normals.row(r) = all_normals.row(layer.mesh->region_surface.vertices[static_cast<std::size_t>(r)]);
+  DynamicsAmplitudeSensitivity dynamics(normals, 2 * N);
+  for (std::size_t f = 0; f < result.q.size(); ++f)
+    dynamics.add(skin.displacement(result.q[f], result.t[f]), skin.derivative(result.dq_dyoung[f]));
+  const auto sigma_of = [&](const std::vector<Eigen::VectorXd>& q) {
+    fullspace::DynamicsAmplitude amplitude(normals);
+    for (std::size_t f = 0; f < q.size(); ++f) amplitude.add(skin.displacement(q[f], result.t[f]));
+    Eigen::VectorXd sigma(2 * normals.rows());
+    sigma << amplitude.sigma_normal(), amplitude.sigma_tangent();
+    return sigma;
+  };
+  {
+    fullspace::DynamicsAmplitude amplitude(normals);
+    for (std::size_t f = 0; f < result.q.size(); ++f) amplitude.add(skin.displacement(result.q[f], result.t[f]));
+    EXPECT_LE((amplitude.sigma_normal() - dynamics.sigma_normal()).cwiseAbs().maxCoeff(), 1e-12);   // same sums [m]
+    EXPECT_LE((amplitude.sigma_tangent() - dynamics.sigma_tangent()).cwiseAbs().maxCoeff(), 1e-12);
+  }
+  Eigen::MatrixXd dsigma(2 * normals.rows(), 2 * N);
+  dsigma << dynamics.sigma_normal_derivative(), dynamics.sigma_tangent_derivative();
   // Y_t of control 0 and Y_n of control 3 (torso and limb sites of the 6-point material).
   for (const auto& [control, modulus] : {std::pair{0, 0}, std::pair{3, 1}}) {
     const double delta = 1e-4 * base(control, modulus);
@@ -394,9 +419,13 @@ TEST(YoungSensitivity, BodyLayerTrajectoryMatchesFiniteDifferencesOfCompleteSimu
     EXPECT_GT(fd.back().norm(), 0.0);
     EXPECT_LE(trajectory_error(result.dq_dyoung, modulus * N + control, fd), kTrajectoryTolerance)
         << "control " << control << ", modulus " << modulus;
+    // σ is a smooth function of the trajectory where σ > 0: the same budget, over all vertices at once.
+    const Eigen::VectorXd sigma_fd = (sigma_of(plus) - sigma_of(minus)) / (2 * delta);
+    ASSERT_GT(sigma_fd.norm(), 0.0);
+    EXPECT_LE((dsigma.col(modulus * N + control) - sigma_fd).norm(), kTrajectoryTolerance * sigma_fd.norm())
+        << "control " << control << ", modulus " << modulus;
   }
   // The skin map: du/dY = (K B ⊗ I₃) dq/dY, and u itself is BodyLayer::surface_displacement.
-  const SkinDisplacementMap skin(layer, model.subspace);
   const Eigen::MatrixXd du = skin.derivative(result.dq_dyoung.back());
   const double eps = 1e-3;   // u is linear in q: any step gives the exact derivative up to round-off
   const Eigen::VectorXd dq = result.dq_dyoung.back().col(0);

@@ -63,7 +63,7 @@ class SkinDisplacementMap {
  private:
   const fullspace::BodyLayer& layer_;
   const Subspace& subspace_;
-  Eigen::MatrixXd skin_basis_;   ///< K B (R × S)
+  SparseRowMatrix skin_basis_;   ///< K B (R × S), a few non-zeros per row
 };
 
 }  // namespace sflsh::reduced
