@@ -29,16 +29,20 @@ CaseDynamics DynamicsCase::simulate(const LayerParameterization& parameterizatio
                                     const ReducedModel& model, const ReducedOptions& options) const {
   const auto start = std::chrono::steady_clock::now();
   try {
-    meshing::RowMatrixX3d rest_skin;
-    const fullspace::Problem problem = parameterization.problem(*layer_, kappa, options_, &rest_skin);
+    const fullspace::Problem problem = parameterization.problem(*layer_, kappa, options_);
     ReducedBackwardEuler integrator(problem, model.subspace, model.cubature, options);
     integrator.initialize(fullspace::initial_state(problem, 0.0));
     fullspace::DynamicsAmplitude amplitude(normals_);
     const meshing::LayerMesh& mesh = *layer_->mesh;
+    // The attached nodes carry no elastic displacement (x_D = X), so u = (B ⊗ I₃) q; the skin embedding is
+    // affine with weights summing to one, hence linear in u. No pass over the skinned trajectory per frame.
+    require(!problem.dirichlet.drives.size(), "fit cases take fixed attachments only");
+    Eigen::VectorXd u(problem.num_dofs());
     auto add_frame = [&] {
-      const fullspace::State s = integrator.full_state();
-      const Eigen::Map<const meshing::RowMatrixX3d> nodes(s.x.data(), problem.num_nodes(), 3);
-      amplitude.add(mesh.skin_positions(nodes) - rest_skin);
+      u.setZero();
+      model.subspace.add_displacement(integrator.q(), u);
+      const Eigen::Map<const meshing::RowMatrixX3d> nodes(u.data(), problem.num_nodes(), 3);
+      amplitude.add(mesh.skin_positions(nodes));
     };
     add_frame();
     for (int f = 1; f < frames_; ++f) {

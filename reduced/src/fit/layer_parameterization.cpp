@@ -34,9 +34,18 @@ fullspace::Problem LayerParameterization::problem(const fullspace::BodyLayer& la
   require(kappa.rows() == num_controls(), "layer parameterization: {} control values for {} control points", kappa.rows(),
           num_controls());
   material::validate(kappa, bounds_, "layer parameterization: control point");
-  const Eigen::VectorXd thickness = field(kappa).col(material::kThickness);
+  return problem_from_field(layer, field(kappa), options, rest_skin);
+}
+
+fullspace::Problem LayerParameterization::problem_from_field(const fullspace::BodyLayer& layer,
+                                                             const material::KappaMatrix& kappa_vertex,
+                                                             const fullspace::BodyLayerOptions& options,
+                                                             meshing::RowMatrixX3d* rest_skin) const {
+  require(layer.mesh && layer.mesh->num_nodes() == mesh_->num_nodes() && layer.mesh->num_tets() == mesh_->num_tets(),
+          "layer parameterization: the layer is not on the template mesh the parameterization was built for");
+  const Eigen::VectorXd thickness = kappa_vertex.col(material::kThickness);
   const meshing::RetargetedLayer retargeted = retargeter_->retarget(layer.beta, thickness);
-  const material::LayerMaterialFields fields = material::layer_material_fields(*retargeter_, phi_, kappa, retargeted.nodes);
+  const material::LayerMaterialFields fields = material::layer_material_fields(*retargeter_, kappa_vertex, retargeted.nodes);
 
   fullspace::Problem p = layer.problem;   // tets, Dirichlet set and trajectory do not depend on κ
   p.rest = retargeted.nodes;

@@ -47,5 +47,8 @@ struct LayerMaterialFields {
 /// whose node positions are `nodes` (retargeted with the thickness field `fields.vertex.col(0)`).
 LayerMaterialFields layer_material_fields(const meshing::Retargeter& retargeter, const Eigen::MatrixXd& phi,
                                           const KappaMatrix& kappa_control, const meshing::RowMatrixX3d& nodes);
+/// The same from κ given at every region vertex (R × 3), e.g. a field not spanned by any control points.
+LayerMaterialFields layer_material_fields(const meshing::Retargeter& retargeter, const KappaMatrix& kappa_vertex,
+                                          const meshing::RowMatrixX3d& nodes);
 
 }  // namespace sflsh::material

@@ -35,6 +35,11 @@ class LayerParameterization {
   fullspace::Problem problem(const fullspace::BodyLayer& layer, const material::KappaMatrix& kappa,
                              const fullspace::BodyLayerOptions& options, meshing::RowMatrixX3d* rest_skin = nullptr) const;
 
+  /// The same for κ given at every region vertex (R × 3, physical): any field, not only the span of φ.
+  fullspace::Problem problem_from_field(const fullspace::BodyLayer& layer, const material::KappaMatrix& kappa_vertex,
+                                        const fullspace::BodyLayerOptions& options,
+                                        meshing::RowMatrixX3d* rest_skin = nullptr) const;
+
   /// κ per region vertex (R × 3) for control values κ (N × 3): φ κ.
   material::KappaMatrix field(const material::KappaMatrix& kappa) const;
 
