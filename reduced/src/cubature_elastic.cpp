@@ -87,6 +87,12 @@ void CubatureElastic::add_point_gradient(int p, const Eigen::VectorXd& q, Eigen:
     gradient.segment<3>(3 * function_[static_cast<std::size_t>(k)]).noalias() += P * c_[static_cast<std::size_t>(k)];
 }
 
+void CubatureElastic::add_point_stress(int p, const Eigen::Matrix3d& stress, double scale, Eigen::Ref<Eigen::VectorXd> gradient) const {
+  const Eigen::Matrix3d P = scale * point_weight_[static_cast<std::size_t>(p)] * stress;
+  for (int k = offset_[static_cast<std::size_t>(p)]; k < offset_[static_cast<std::size_t>(p) + 1]; ++k)
+    gradient.segment<3>(3 * function_[static_cast<std::size_t>(k)]).noalias() += P * c_[static_cast<std::size_t>(k)];
+}
+
 double CubatureElastic::add_gradient(const Eigen::VectorXd& q, Eigen::VectorXd& gradient) const {
   double total = 0.0;
   for (int p = 0; p < num_points(); ++p) {

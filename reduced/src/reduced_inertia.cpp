@@ -103,6 +103,44 @@ void ReducedInertia::mass_hessian(double h, Eigen::MatrixXd& H) const {
   }
 }
 
+void ReducedInertia::cross_mass(double t_other, Eigen::MatrixXd& M) const {
+  const int n = subspace_.num_dofs();
+  M.setZero(n, n);
+  if (skinned_) {
+    // A_i(t)ᵀA_i(t') = Σ_{k,l} w_ik w_il R_k(t)ᵀ R_l(t'); T_kl is symmetric in (k, l) and in (s, r), and the
+    // (s, r) and (r, s) blocks are equal (not transposed: b_is b_ir is symmetric, the 3×3 factor is not).
+    fullspace::JointTransforms other;
+    skinned_->curve().transforms(t_other, other);
+    for (const PairTerm& pair : pairs_) {
+      const Eigen::Matrix3d Rk = joints_[static_cast<std::size_t>(pair.k)].leftCols<3>();
+      const Eigen::Matrix3d Rl = joints_[static_cast<std::size_t>(pair.l)].leftCols<3>();
+      const Eigen::Matrix3d Rk_other = other[static_cast<std::size_t>(pair.k)].leftCols<3>();
+      const Eigen::Matrix3d Rl_other = other[static_cast<std::size_t>(pair.l)].leftCols<3>();
+      const Eigen::Matrix3d G = pair.k == pair.l ? Eigen::Matrix3d(Rk.transpose() * Rk_other)
+                                                 : Eigen::Matrix3d(Rk.transpose() * Rl_other + Rl.transpose() * Rk_other);
+      for (std::size_t e = 0; e < pair.value.size(); ++e) {
+        const int s = pair.s[e], r = pair.r[e];
+        M.block<3, 3>(3 * s, 3 * r) += pair.value[e] * G;
+        if (r != s) M.block<3, 3>(3 * r, 3 * s) += pair.value[e] * G;
+      }
+    }
+    return;
+  }
+  fullspace::NodeFrame other;
+  if (problem_.trajectory) {
+    problem_.trajectory->evaluate_nodes(t_other, active_, other);
+  } else {
+    other.A.assign(active_.size(), Eigen::Matrix3d::Identity());
+  }
+  for (std::size_t a = 0; a < active_.size(); ++a) {
+    if (mass_[a] == 0.0) continue;
+    const Eigen::Matrix3d G = mass_[a] * (frame_.A[a].transpose() * other.A[a]);
+    for (SparseRowMatrix::InnerIterator si(subspace_.basis, active_[a]); si; ++si)
+      for (SparseRowMatrix::InnerIterator ri(subspace_.basis, active_[a]); ri; ++ri)
+        M.block<3, 3>(3 * si.col(), 3 * ri.col()) += (si.value() * ri.value()) * G;
+  }
+}
+
 void ReducedInertia::displacement(const Eigen::VectorXd& q, meshing::RowMatrixX3d& u) const {
   u.resize(static_cast<Eigen::Index>(active_.size()), 3);
   for (std::size_t a = 0; a < active_.size(); ++a) {

@@ -54,6 +54,7 @@ void ReducedBackwardEuler::initialize(const fullspace::State& state) {
           "reduced: initial state has {} / {} entries, expected {}", state.x.size(), state.w.size(), problem_.num_dofs());
   require(state.x.allFinite() && state.w.allFinite(), "reduced: initial state is not finite");
   t_ = state.t;
+  substeps_.clear();
   const Eigen::VectorXd x_prescribed = prescribed_state(t_);
   const Eigen::VectorXd u = state.x - x_prescribed;
   q_.setZero();
@@ -238,6 +239,7 @@ bool ReducedBackwardEuler::solve_substep(double t0, double dt, material::Hessian
   q_rate_ = (q - q_) / dt;
   q_ = q;
   t_ = t1;
+  if (options_.record_substeps) substeps_.push_back({t0, dt, q_});
   stats.inertia_seconds += seconds_since(clock);
   return true;
 }
@@ -249,6 +251,7 @@ ReducedStepStats ReducedBackwardEuler::step(double h) {
   const double t_save = t_;
   const Eigen::VectorXd q_save = q_, rate_save = q_rate_;
   const meshing::RowMatrixX3d p_save = p_, w_save = w_;
+  substeps_.clear();
   std::vector<material::HessianProjection> ladder;
   if (options_.exact_hessian_first && !options_.quasi_static) ladder.push_back(material::HessianProjection::kNone);
   ladder.push_back(problem_.projection == material::HessianProjection::kNone ? material::HessianProjection::kStressDerivative
@@ -281,6 +284,7 @@ ReducedStepStats ReducedBackwardEuler::step(double h) {
     q_rate_ = rate_save;
     p_ = p_save;
     w_ = w_save;
+    substeps_.clear();
   }
   throw_error("reduced: the step from t = {:.6f} s (h = {:.3e} s) failed even as {} substeps: {}", t_save, h, 1 << options_.max_halvings,
               reason);

@@ -30,6 +30,14 @@ class CubatureElastic {
   void add_point_gradient(int point, const Eigen::VectorXd& q, Eigen::VectorXd& gradient, double weight) const;
 
   int num_points() const { return static_cast<int>(point_tet_.size()); }
+  /// F_c(q) of one point.
+  Eigen::Matrix3d point_deformation_gradient(int point, const Eigen::VectorXd& q) const { return deformation_gradient(point, q); }
+  /// The mesh tet of one point and its weight ω V (· energy scale).
+  int point_tet(int point) const { return point_tet_[static_cast<std::size_t>(point)]; }
+  double point_weight(int point) const { return point_weight_[static_cast<std::size_t>(point)]; }
+  /// Adds scale · ω V · stress · c_s to the slots t_s of `gradient` (3S) for the point's functions: the reduced
+  /// gradient of a stress-like 3×3 field at that point (∂E/∂t_s = ω V P c_s with stress = P).
+  void add_point_stress(int point, const Eigen::Matrix3d& stress, double scale, Eigen::Ref<Eigen::VectorXd> gradient) const;
   /// Largest number of basis functions touching one point (the size of its local Hessian / 3).
   int max_local_functions() const { return max_local_; }
 

@@ -26,6 +26,10 @@ class ReducedInertia {
   Eigen::VectorXd linear_term(const meshing::RowMatrixX3d& p_tilde, double h, bool inertia) const;
   /// H (3S × 3S) at the current time for step h; zero when inertia is off.
   void mass_hessian(double h, Eigen::MatrixXd& H) const;
+  /// The cross-time mass M(t, t') = Σ_i m_i b_is b_ir A_i(t)ᵀ A_i(t') (3S × 3S, not symmetric) between the current
+  /// time t and `t_other`: ∂p_i(t')/∂q = A_i(t') b_i, so M(t, t') dq' is the reduced inertia pull-back of a posed
+  /// displacement made at t'. M(t, t)/h² = mass_hessian(h). Used by forward sensitivities (reduced_sensitivity.hpp).
+  void cross_mass(double t_other, Eigen::MatrixXd& M) const;
   /// Posed positions of the active nodes at the current time for coordinates q.
   void posed(const Eigen::VectorXd& q, meshing::RowMatrixX3d& p) const;
   /// u_i = Σ_s b_is t_s at the active nodes (active × 3).

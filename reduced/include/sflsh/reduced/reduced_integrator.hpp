@@ -18,6 +18,7 @@
 #include <Eigen/Cholesky>
 
 #include <string>
+#include <vector>
 
 namespace sflsh::reduced {
 
@@ -36,6 +37,15 @@ struct ReducedOptions {
   double refresh_ratio = 0.25;
   bool exact_hessian_first = true;
   bool use_predictor = true;       ///< start Newton from q_n + h q̇_n when its Φ is lower than at q_n
+  /// Keep the converged substeps of the last step (last_substeps()), for forward sensitivities.
+  bool record_substeps = false;
+};
+
+/// One converged substep of an accepted step: from t0 over dt to coordinates q.
+struct ReducedSubstep {
+  double t0 = 0.0;
+  double dt = 0.0;
+  Eigen::VectorXd q;
 };
 
 struct ReducedStepStats {
@@ -74,6 +84,9 @@ class ReducedBackwardEuler {
   double elastic_energy() const;
   const Subspace& subspace() const { return subspace_; }
   const Cubature& cubature() const { return cubature_; }
+  const ReducedOptions& options() const { return options_; }
+  /// The substeps of the last successful step(), in order (empty unless options.record_substeps).
+  const std::vector<ReducedSubstep>& last_substeps() const { return substeps_; }
 
  private:
   struct Attempt;
@@ -96,6 +109,7 @@ class ReducedBackwardEuler {
   double t_ = 0.0;
   Eigen::VectorXd q_, q_rate_;            ///< q and its backward difference (for the predictor)
   meshing::RowMatrixX3d p_, w_;           ///< posed positions and velocities of the active nodes
+  std::vector<ReducedSubstep> substeps_;
 };
 
 }  // namespace sflsh::reduced

@@ -1,0 +1,174 @@
+// Forward sensitivities of the reduced backward Euler with respect to the control points' Young moduli
+// (reduced_sensitivity.hpp has the derivation; docs/reduced.md, "Sensitivities").
+#include <sflsh/reduced/reduced_sensitivity.hpp>
+
+#include <sflsh/core/error.hpp>
+#include <sflsh/reduced/young_derivative.hpp>
+
+#include <Eigen/Cholesky>
+
+#include <algorithm>
+#include <chrono>
+
+namespace sflsh::reduced {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+}  // namespace
+
+ReducedOptions sensitivity_solver_options(ReducedOptions base) {
+  // ‖∇Φ‖ cannot fall much below ~1e-16 × the size of its terms (M/h² times posed positions of ~1 m: ~1e-11 N
+  // on a body layer), so the absolute floor sits there; the relative and step criteria do the rest.
+  base.gradient_rtol = std::min(base.gradient_rtol, 1e-12);
+  base.gradient_atol = std::min(base.gradient_atol, 1e-11);
+  base.step_tolerance = std::min(base.step_tolerance, 1e-12);
+  base.max_newton = std::max(base.max_newton, 60);
+  base.record_substeps = true;
+  return base;
+}
+
+Eigen::MatrixXd solve_step_sensitivity(const Eigen::MatrixXd& hessian, const Eigen::MatrixXd& rhs, double t) {
+  require(hessian.rows() == hessian.cols() && hessian.rows() == rhs.rows(), "sensitivity: Hessian is {}×{}, right-hand side has {} rows",
+          hessian.rows(), hessian.cols(), rhs.rows());
+  if (!hessian.allFinite()) throw_error("sensitivity: non-finite Hessian at t = {:.6f} s", t);
+  if (!rhs.allFinite()) throw_error("sensitivity: non-finite right-hand side (∂∇Φ/∂Y or history) at t = {:.6f} s", t);
+  const Eigen::LLT<Eigen::MatrixXd> factor(hessian);
+  if (factor.info() != Eigen::Success)
+    throw_error("sensitivity: the exact Hessian of the step potential is not positive definite at the converged state at t = {:.6f} s: "
+                "dq/dY is not defined there",
+                t);
+  Eigen::MatrixXd solution = factor.solve(rhs);
+  if (!solution.allFinite()) throw_error("sensitivity: non-finite dq/dY at t = {:.6f} s", t);
+  return solution;
+}
+
+SensitivityIntegrator::SensitivityIntegrator(const fullspace::Problem& problem, const Subspace& subspace, const Cubature& cubature,
+                                             Eigen::MatrixXd young_map, const ReducedOptions& options)
+    : problem_(problem),
+      integrator_(problem, subspace, cubature,
+                  [&] {
+                    ReducedOptions o = options;
+                    o.record_substeps = true;
+                    return o;
+                  }()),
+      elastic_(problem, subspace, cubature),
+      inertia_(problem, subspace),
+      young_map_(std::move(young_map)) {
+  require(young_map_.rows() == cubature.size(), "sensitivity: the Young map has {} rows, expected one per cubature tet ({})",
+          young_map_.rows(), cubature.size());
+  require(young_map_.cols() >= 1 && young_map_.allFinite(), "sensitivity: the Young map must have ≥ 1 finite column");
+  inertia_on_ = !options.quasi_static && problem.dynamic();
+  for (int id : problem.dirichlet.drive) has_drives_ = has_drives_ || id >= 0;
+  sensitivity_ = Eigen::MatrixXd::Zero(subspace.num_dofs(), 2 * young_map_.cols());
+}
+
+void SensitivityIntegrator::initialize(const fullspace::State& state) {
+  integrator_.initialize(state);
+  sensitivity_.setZero();   // the initial state does not depend on Y
+  previous_.resize(0, 0);
+  has_previous_ = false;
+  t_current_ = integrator_.time();
+  t_previous_ = t_current_;
+  valid_ = true;
+}
+
+Eigen::MatrixXd SensitivityIntegrator::elastic_gradient_dyoung(const Eigen::VectorXd& q) const {
+  const Eigen::Index N = young_map_.cols();
+  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(q.size(), 2 * N);
+  for (int p = 0; p < elastic_.num_points(); ++p) {
+    if (elastic_.point_weight(p) == 0.0) continue;
+    const material::OrthotropicFung& m = problem_.tet_material[static_cast<std::size_t>(elastic_.point_tet(p))];
+    const YoungStressDerivative d = d2psi_ortho_fung_dF_dyoung(elastic_.point_deformation_gradient(p, q), m);
+    for (Eigen::Index i = 0; i < N; ++i) {
+      const double w = young_map_(p, i);   // ∂Y_c/∂Y_i
+      if (w == 0.0) continue;
+      elastic_.add_point_stress(p, d.tangent, w, out.col(i));
+      elastic_.add_point_stress(p, d.normal, w, out.col(N + i));
+    }
+  }
+  return out;
+}
+
+void SensitivityIntegrator::substep_sensitivity(const ReducedSubstep& substep, SensitivityStepStats& stats) {
+  const double dt = substep.dt, t1 = substep.t0 + substep.dt;
+  Eigen::VectorXd x_prescribed = Eigen::Map<const Eigen::VectorXd>(problem_.rest.data(), problem_.num_dofs());
+  problem_.apply_dirichlet(t1, x_prescribed);
+  inertia_.set_time(t1, x_prescribed);
+  if (has_drives_) elastic_.set_prescribed_state(x_prescribed);
+
+  // Right-hand side −(∂G/∂Y + ∂G/∂q_n S_n + ∂G/∂q_{n−1} S_{n−1}).
+  auto clock = Clock::now();
+  Eigen::MatrixXd rhs = -elastic_gradient_dyoung(substep.q);
+  stats.young_seconds += seconds_since(clock);
+  clock = Clock::now();
+  Eigen::MatrixXd hessian;
+  if (inertia_on_) {
+    const double r = has_previous_ ? dt / (t_current_ - t_previous_) : 0.0;   // h / h_prev
+    Eigen::MatrixXd cross;
+    inertia_.cross_mass(t_current_, cross);
+    rhs.noalias() += ((1.0 + r) / (dt * dt)) * (cross * sensitivity_);
+    if (has_previous_) {
+      inertia_.cross_mass(t_previous_, cross);
+      rhs.noalias() -= (r / (dt * dt)) * (cross * previous_);
+    }
+    stats.history_seconds += seconds_since(clock);
+    clock = Clock::now();
+    inertia_.mass_hessian(dt, hessian);
+  } else {
+    hessian.setZero(substep.q.size(), substep.q.size());
+  }
+  elastic_.add_hessian(substep.q, hessian, material::HessianProjection::kNone);   // exact, at the converged q
+  stats.hessian_seconds += seconds_since(clock);
+  clock = Clock::now();
+  Eigen::MatrixXd next = solve_step_sensitivity(hessian, rhs, t1);
+  stats.solve_seconds += seconds_since(clock);
+  previous_ = std::move(sensitivity_);
+  sensitivity_ = std::move(next);
+  t_previous_ = t_current_;
+  t_current_ = t1;
+  has_previous_ = true;
+}
+
+SensitivityStepStats SensitivityIntegrator::step(double h) {
+  require(valid_, "sensitivity: the integrator is not initialized or an earlier step failed; call initialize()");
+  SensitivityStepStats stats;
+  stats.step = integrator_.step(h);   // on failure the state (and S) are unchanged
+  const auto start = Clock::now();
+  valid_ = false;
+  for (const ReducedSubstep& substep : integrator_.last_substeps()) {
+    substep_sensitivity(substep, stats);
+    ++stats.factorizations;
+  }
+  valid_ = true;
+  stats.seconds = seconds_since(start);
+  return stats;
+}
+
+SensitivityResult simulate_with_sensitivities(const fullspace::Problem& problem, const Subspace& subspace, const Cubature& cubature,
+                                              const Eigen::MatrixXd& young_map, const fullspace::State& start, double h, int frames,
+                                              const ReducedOptions& options) {
+  require(frames >= 0, "sensitivity: frame count must be ≥ 0, got {}", frames);
+  const auto t0 = Clock::now();
+  SensitivityIntegrator integrator(problem, subspace, cubature, young_map, options);
+  integrator.initialize(start);
+  SensitivityResult out;
+  const auto record = [&] {
+    out.t.push_back(integrator.time());
+    out.q.push_back(integrator.q());
+    out.dq_dyoung.push_back(integrator.dq_dyoung());
+  };
+  record();
+  for (int f = 0; f < frames; ++f) {
+    const SensitivityStepStats s = integrator.step(h);
+    out.sensitivity_seconds += s.seconds;
+    out.newton_iterations += s.step.newton_iterations;
+    record();
+  }
+  out.seconds = seconds_since(t0);
+  return out;
+}
+
+}  // namespace sflsh::reduced
