@@ -106,7 +106,9 @@ void run_metrics(const MetricsOptions& opt, const Invocation& invocation) {
                          {"status", f.status}});
   summary["fit"] = {{"solver", "Levenberg-Marquardt (Eigen, MINPACK lmder)"},
                     {"soft_weight", opt.soft_weight},
-                    {"shape_rounds", fit.shape_rounds},
+                    {"shape_iterations", fit.shape_iterations},
+                    {"shape_converged", fit.shape_converged},
+                    {"vertex_stride", fit_options.vertex_stride},
                     {"mean_rms_mm", 1e3 * fit.mean_rms},
                     {"max_rms_mm", 1e3 * fit.max_rms},
                     {"unconverged_frames", fit.unconverged_frames},

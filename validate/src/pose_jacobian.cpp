@@ -64,7 +64,8 @@ RowMatrixX3d PosedModel::posed(const PoseParameters& parameters) const {
   return out;
 }
 
-void PosedModel::posed_and_jacobian(const PoseParameters& parameters, RowMatrixX3d& posed, Eigen::MatrixXd& jacobian) const {
+void PosedModel::posed_and_jacobian(const PoseParameters& parameters, RowMatrixX3d& posed, Eigen::MatrixXd& jacobian,
+                                    const std::vector<int>* rows) const {
   constexpr int J = body::kNumJoints;
   const body::Pose theta = pose_of(parameters);
   const body::Kinematics kin = body::forward_kinematics(model_, joints_, theta, trans_of(parameters));
@@ -98,9 +99,11 @@ void PosedModel::posed_and_jacobian(const PoseParameters& parameters, RowMatrixX
     }
   }
 
-  posed.resize(n, 3);
-  jacobian.setZero(3 * n, kNumPoseParameters);
-  for (Eigen::Index i = 0; i < n; ++i) {
+  posed = this->posed(parameters);
+  const Eigen::Index count = rows ? static_cast<Eigen::Index>(rows->size()) : n;
+  jacobian.setZero(3 * count, kNumPoseParameters);
+  for (Eigen::Index s = 0; s < count; ++s) {
+    const Eigen::Index i = rows ? (*rows)[static_cast<std::size_t>(s)] : s;
     const Eigen::Vector3d x = unposed.row(i).transpose();
     Eigen::Matrix<double, 3, 4> a = Eigen::Matrix<double, 3, 4>::Zero();
     std::array<Eigen::Vector3d, J> p_sum;   // P_ij
@@ -119,8 +122,6 @@ void PosedModel::posed_and_jacobian(const PoseParameters& parameters, RowMatrixX
           w_sum[static_cast<std::size_t>(j)] += w;
         }
     }
-    const Eigen::Vector3d v = a.leftCols<3>() * x + a.col(3);
-    posed.row(i) = (world_from_body_ * v).transpose();
     for (int j = 0; j < J; ++j) {
       Eigen::Matrix3d block = Eigen::Matrix3d::Zero();
       if (touched & (1u << j)) {
@@ -129,11 +130,11 @@ void PosedModel::posed_and_jacobian(const PoseParameters& parameters, RowMatrixX
         block.noalias() -= skew(lever) * g[sj];
       }
       if (correctives && j > 0) block.noalias() += a.leftCols<3>() * corrective_jacobian.block<3, 3>(3 * i, 3 * (j - 1));
-      jacobian.block<3, 3>(3 * i, 3 * j) = world_from_body_ * block;
+      jacobian.block<3, 3>(3 * s, 3 * j) = world_from_body_ * block;
     }
     double total = 0.0;
     for (const auto& [k, w] : weights_[static_cast<std::size_t>(i)]) total += w;
-    jacobian.block<3, 3>(3 * i, 3 * J) = total * world_from_body_;
+    jacobian.block<3, 3>(3 * s, 3 * J) = total * world_from_body_;
   }
 }
 

@@ -6,9 +6,12 @@
 // so that the soft tissue's dynamics is not explained by pose. Solved with Eigen's Levenberg–Marquardt
 // (unsupported/Eigen/LevenbergMarquardt, MINPACK's lmder): per frame with the analytic Jacobian of
 // pose_jacobian.hpp, warm-started from the previous frame (frame 0 from a weighted Kabsch alignment of the
-// rest shape). When β is not given it is shared over frames and found by alternation on a subset of
-// frames: poses with β fixed, then β (numerical central-difference Jacobian) with those poses fixed,
-// until β stops changing.
+// rest shape). When β is not given it is shared over frames and fitted jointly with the poses of a few
+// evenly spaced frames by variable projection (Golub & Pereyra 1973; Kaufman 1975): the outer LM over β
+// sees the residual with each frame's pose re-optimized for that β, and its Jacobian is the β-Jacobian
+// (central differences) projected onto the orthogonal complement of the pose Jacobian's range,
+//   J_proj = (I − Q_θ Q_θᵀ) J_β.
+// The fit uses every `vertex_stride`-th vertex (the dense QR inside LM costs 6·n_fit·75² flops).
 #include <sflsh/body/motion.hpp>
 #include <sflsh/body/skinning.hpp>
 #include <sflsh/validate/pose_jacobian.hpp>
@@ -24,11 +27,12 @@ using body::RowMatrixX3d;
 struct PoseFitOptions {
   std::vector<int> soft_vertices;   ///< body vertices whose residuals are down-weighted
   double soft_weight = 0.05;        ///< w_i of the soft vertices (squared-residual weight; 1 elsewhere)
-  int max_evaluations = 200;        ///< per Levenberg–Marquardt solve (residual evaluations)
-  double tolerance = 1e-10;         ///< relative tolerance on the parameters and on the residual reduction
-  int shape_frames = 6;             ///< frames used for the β fit (evenly spaced, first and last included)
-  int shape_rounds = 8;             ///< maximum alternations pose ↔ β
-  double shape_tolerance = 1e-5;    ///< stop alternating when max |Δβ| falls below this
+  int max_evaluations = 100;        ///< per Levenberg–Marquardt solve (residual evaluations)
+  double tolerance = 1e-7;          ///< relative tolerance on the step and on the reduction of the sum of squares
+  double absolute_tolerance = 1e-10;  ///< [m] a fit whose weighted RMS residual falls below this is exact
+  int vertex_stride = 2;            ///< fit on vertices 0, s, 2s, … (1: every vertex)
+  int shape_frames = 4;             ///< frames used for the β fit (evenly spaced, first and last included)
+  int shape_evaluations = 60;       ///< outer LM evaluations of the β fit (each re-fits the shape frames' poses)
   Eigen::Matrix3d world_from_body = Eigen::Matrix3d::Identity();  ///< applied to posed vertices before comparing
   bool progress = false;            ///< show a progress line
 };
@@ -47,7 +51,8 @@ struct FrameFitReport {
 struct PoseFitResult {
   body::Betas beta = body::Betas::Zero();
   bool beta_fitted = false;
-  int shape_rounds = 0;                   ///< alternations used when β was fitted
+  int shape_iterations = 0;               ///< outer LM iterations of the β fit
+  bool shape_converged = true;
   body::Motion motion;                    ///< fitted θ_t, trans_t; fps as given; world_from_body of the options
   std::vector<FrameFitReport> frames;
   int unconverged_frames = 0;

@@ -32,8 +32,10 @@ class PosedModel {
 
   /// World positions (n×3) for parameters [θ; trans].
   RowMatrixX3d posed(const PoseParameters& parameters) const;
-  /// World positions and ∂v/∂[θ; trans] (3n × 75, row 3i + c).
-  void posed_and_jacobian(const PoseParameters& parameters, RowMatrixX3d& posed, Eigen::MatrixXd& jacobian) const;
+  /// World positions (all n×3) and ∂v/∂[θ; trans] (3n × 75, row 3i + c); with `rows`, only the listed
+  /// vertices' rows, in that order (3·rows.size() × 75, row 3s + c for vertex rows[s]).
+  void posed_and_jacobian(const PoseParameters& parameters, RowMatrixX3d& posed, Eigen::MatrixXd& jacobian,
+                          const std::vector<int>* rows = nullptr) const;
 
   const body::BodyModel& model() const { return model_; }
   const RowMatrixX3d& shaped() const { return shaped_; }
