@@ -60,8 +60,10 @@ TEST(DynamicsMetrics, RotatedWorldFrameAndStaticOffsetAreRemoved) {
     s.frames[t] = body::linear_blend_skinning(open_body(), kin, unposed) * s.motion.world_from_body.transpose();
   }
   const DynamicsResult offset = dynamics_metrics(open_body(), s.beta, s.motion, s.frames, soft());
-  // The offset is removed by step 4; the re-skinning round trip adds round-off only.
-  EXPECT_LT(max_abs(offset.sigma - s.sigma), 1e-10);
+  // The offset is removed by step 4. Two skinning round trips and the one-pass variance (mean‖d‖² − ‖mean d‖²,
+  // cancelling a 5 mm mean against mm-scale σ) leave ~1e-10 m of round-off (measured 1.5e-10); 1e-9 m is
+  // still a 1e-6 relative error of the amplitudes.
+  EXPECT_LT(max_abs(offset.sigma - s.sigma), 1e-9);
 }
 
 TEST(DynamicsMetrics, FractionRecoveredIsTheRatioOfMeans) {
@@ -76,7 +78,7 @@ TEST(DynamicsMetrics, FractionRecoveredIsTheRatioOfMeans) {
 }
 
 TEST(DynamicsMetrics, FittedPosesRecoverTheAmplitudesClosely) {
-  // 2 mm-scale displacements on the soft region; the pose is fitted with the soft vertices down-weighted.
+  // 1–4 mm displacements on the soft region; the pose is fitted with the soft vertices down-weighted.
   const auto s = synthetic_sequence(open_body(), some_beta(), "jiggle_on_toes", 16, soft(), 0.004, 4);
   PoseFitOptions options;
   options.soft_vertices = soft();
@@ -85,9 +87,9 @@ TEST(DynamicsMetrics, FittedPosesRecoverTheAmplitudesClosely) {
   const DynamicsResult r = dynamics_metrics(open_body(), fit.beta, fit.motion, s.frames, soft());
   const double truth = s.sigma.sum() / static_cast<double>(soft().size());
   // The pose (75 parameters per frame) can absorb only the part of the random per-vertex waves that looks
-  // like a joint motion; measured 0.3 % on the mean and 0.05 mm on the worst vertex (docs/validate.md).
-  // 2 % and 0.3 mm leave room for other platforms while any systematic pull-back error (wrong frame,
-  // missing correctives, static offset left in) is far larger.
+  // like a joint motion; measured 0.01 % on the mean, 0.3 % on the normal/tangential means and 0.08 mm on
+  // the worst vertex (docs/validate.md). 2 % / 3 % and 0.3 mm leave room for other platforms while any
+  // systematic pull-back error (wrong frame, missing correctives, static offset left in) is far larger.
   EXPECT_NEAR(r.mean_sigma_soft() / truth, 1.0, 0.02);
   EXPECT_LT(max_abs(r.sigma - s.sigma), 3e-4);
   EXPECT_NEAR(r.mean_sigma_normal_soft() / (s.sigma_normal.sum() / static_cast<double>(soft().size())), 1.0, 0.03);
