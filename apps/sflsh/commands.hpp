@@ -31,6 +31,8 @@ void register_verify_commands(CLI::App& app, const Invocation& invocation);
 void register_simulate_commands(CLI::App& app, const Invocation& invocation);
 /// `sflsh compare`: full space against a sweep of reduced models (cmd_compare.cpp).
 void register_compare_commands(CLI::App& app, const Invocation& invocation);
+/// `sflsh validate`: the paper's experiments on synthetic ground truth (cmd_validate.cpp).
+void register_validate_commands(CLI::App& app, const Invocation& invocation);
 /// `sflsh metrics --dyna FILE.h5 --sequence KEY … --out DIR` and `--list` (cmd_metrics.cpp).
 void register_metrics_commands(CLI::App& app, const Invocation& invocation);
 

@@ -111,7 +111,12 @@ RowMatrixX3d BodyLayer::surface_displacement(const Eigen::VectorXd& x) const {
 }
 
 RowMatrixX3d BodyLayer::posed_surface(const Eigen::VectorXd& x, double t) const {
-  const RowMatrixX3d u = surface_displacement(x);
+  return posed_surface_from_displacement(surface_displacement(x), t);
+}
+
+RowMatrixX3d BodyLayer::posed_surface_from_displacement(const RowMatrixX3d& u, double t) const {
+  require(u.rows() == mesh->region_surface.num_vertices(), "body layer: {} displacements for {} region vertices", u.rows(),
+          mesh->region_surface.num_vertices());
   JointTransforms m;
   curve->transforms(t, m);
   RowMatrixX3d unposed = shaped;

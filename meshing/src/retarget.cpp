@@ -125,7 +125,9 @@ RetargetedLayer Retargeter::retarget(const body::Betas& beta, const Eigen::Vecto
     const auto& anchor = mesh_.anchor[static_cast<std::size_t>(i)];
     if (anchor.valid()) result.nodes.row(i) = result.geometry.position(anchor).transpose();
   }
-  if (quality_report(result.nodes, mesh_.tets).inverted > 0) result.untangled_nodes = untangle(result.nodes, mesh_.tets, mesh_.anchor, tets_of_, 20);
+  bool inverted = false;   // a signed-volume pass: the full quality report below is needed once, not twice
+  for (Eigen::Index e = 0; e < mesh_.tets.rows() && !inverted; ++e) inverted = signed_volume(result.nodes, mesh_.tets, e) <= 0.0;
+  if (inverted) result.untangled_nodes = untangle(result.nodes, mesh_.tets, mesh_.anchor, tets_of_, 20);
   result.quality = layer_quality(mesh_, result.nodes, result.geometry);
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 

@@ -5,7 +5,6 @@
 #include <sflsh/material/through_thickness.hpp>
 
 namespace sflsh::material {
-namespace {
 
 meshing::RowMatrixX3d region_positions(const body::BodyModel& model, const meshing::LayerMesh& mesh) {
   const auto& region = mesh.region_surface;
@@ -13,8 +12,6 @@ meshing::RowMatrixX3d region_positions(const body::BodyModel& model, const meshi
   for (int v = 0; v < region.num_vertices(); ++v) V.row(v) = model.v_template.row(region.vertices[static_cast<std::size_t>(v)]);
   return V;
 }
-
-}  // namespace
 
 std::vector<int> region_mirror_map(const meshing::LayerMesh& mesh, const body::BodyModel& model, double tolerance) {
   const meshing::RowMatrixX3d V = region_positions(model, mesh);
@@ -89,8 +86,16 @@ LayerMaterialFields layer_material_fields(const meshing::Retargeter& retargeter,
   require(phi.rows() == mesh.region_surface.num_vertices() && phi.cols() == kappa_control.rows(),
           "material fields: basis is {}×{}, expected {} region vertices × {} control points", phi.rows(), phi.cols(),
           mesh.region_surface.num_vertices(), kappa_control.rows());
+  return layer_material_fields(retargeter, evaluate_field(phi, kappa_control), nodes);   // κ(s) = Σ φ_i(s) κ_i
+}
+
+LayerMaterialFields layer_material_fields(const meshing::Retargeter& retargeter, const KappaMatrix& kappa_vertex,
+                                          const meshing::RowMatrixX3d& nodes) {
+  const meshing::LayerMesh& mesh = retargeter.mesh();
+  require(kappa_vertex.rows() == mesh.region_surface.num_vertices(), "material fields: {} vertex values for {} region vertices",
+          kappa_vertex.rows(), mesh.region_surface.num_vertices());
   LayerMaterialFields fields;
-  fields.vertex = evaluate_field(phi, kappa_control);   // κ(s) = Σ φ_i(s) κ_i
+  fields.vertex = kappa_vertex;
   fields.node = retargeter.extend_surface_field(fields.vertex);
   fields.tet.resize(mesh.num_tets(), kNumKappa);
   for (int e = 0; e < mesh.num_tets(); ++e) {

@@ -47,6 +47,8 @@ struct BodyLayer {
   /// The whole posed body surface (n×3) at time t with the region's skin displaced by x: exactly the
   /// `sflsh motion export` positions when x is the rest state and t a frame time.
   RowMatrixX3d posed_surface(const Eigen::VectorXd& x, double t) const;
+  /// The whole posed body surface (n×3) at time t with the region's skin displaced by u (R×3, unposed).
+  RowMatrixX3d posed_surface_from_displacement(const RowMatrixX3d& u, double t) const;
 };
 
 /// Builds the layer of subject β for a motion. `material` null: material::default_material at

@@ -16,6 +16,9 @@ inline constexpr double kTorsoDensity = 1.5;
 /// vertex lies within `tolerance` [m] of the mirrored position (SMPL-like bodies are symmetric).
 std::vector<int> region_mirror_map(const meshing::LayerMesh& mesh, const body::BodyModel& model, double tolerance = 2e-3);
 
+/// The template positions of the layer's region vertices (R × 3), the surface κ and φ live on.
+meshing::RowMatrixX3d region_positions(const body::BodyModel& model, const meshing::LayerMesh& mesh);
+
 /// `count` control points on the layer's region (nested in count, symmetric pairs, denser on the
 /// torso), as BODY vertex indices.
 std::vector<int> layer_control_points(const body::BodyModel& model, const meshing::LayerMesh& mesh, int count);
@@ -44,5 +47,8 @@ struct LayerMaterialFields {
 /// whose node positions are `nodes` (retargeted with the thickness field `fields.vertex.col(0)`).
 LayerMaterialFields layer_material_fields(const meshing::Retargeter& retargeter, const Eigen::MatrixXd& phi,
                                           const KappaMatrix& kappa_control, const meshing::RowMatrixX3d& nodes);
+/// The same from κ given at every region vertex (R × 3), e.g. a field not spanned by any control points.
+LayerMaterialFields layer_material_fields(const meshing::Retargeter& retargeter, const KappaMatrix& kappa_vertex,
+                                          const meshing::RowMatrixX3d& nodes);
 
 }  // namespace sflsh::material

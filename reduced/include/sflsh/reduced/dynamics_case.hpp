@@ -1,0 +1,54 @@
+#pragma once
+// One (subject, motion) pair of the fit (SFLSH §5): the subject's layer built once for the motion, and the
+// reduced simulation of it for any control-point material κ, measured as the paper's per-vertex dynamics
+// of the region skin in the neutral pose (physics.md §4; for a simulation driven by the motion's own poses
+// inverse skinning returns the elastic displacement exactly, so d̃ = u − mean_t u).
+#include <sflsh/fullspace/body_layer.hpp>
+#include <sflsh/reduced/layer_parameterization.hpp>
+#include <sflsh/reduced/reduced_integrator.hpp>
+#include <sflsh/reduced/reduced_model.hpp>
+
+#include <memory>
+#include <string>
+
+namespace sflsh::reduced {
+
+/// Per-vertex dynamics of one simulation over the region's skin vertices, in mm.
+struct CaseDynamics {
+  Eigen::VectorXd sigma_normal;    ///< σ_n (R)
+  Eigen::VectorXd sigma_tangent;   ///< σ_t (R)
+  Eigen::VectorXd sigma() const;   ///< √(σ_n² + σ_t²)
+  double mean_sigma() const;       ///< mean over the region vertices [mm] (the Table 2 entry of one motion)
+  double seconds = 0.0;
+  int frames = 0;
+};
+
+class DynamicsCase {
+ public:
+  /// Builds the layer of subject `beta` for `motion` (the first `frames` frames; 0 = all).
+  DynamicsCase(const body::BodyModel& model, std::string subject, const body::Betas& beta, const body::Motion& motion,
+               const fullspace::BodyLayerOptions& options);
+
+  const std::string& subject() const { return subject_; }
+  const std::string& motion() const { return motion_; }
+  const body::Betas& beta() const { return layer_->beta; }
+  const fullspace::BodyLayer& layer() const { return *layer_; }
+  int num_region_vertices() const { return static_cast<int>(normals_.rows()); }
+  /// Unit normals of the shaped template at the region vertices (the σ_n / σ_t split).
+  const meshing::RowMatrixX3d& normals() const { return normals_; }
+
+  /// Simulates the clip with the reduced model for control values κ (N × 3, physical). Thread-safe.
+  /// Throws sflsh::Error (naming subject, motion and the cause) when the simulation fails.
+  CaseDynamics simulate(const LayerParameterization& parameterization, const material::KappaMatrix& kappa,
+                        const ReducedModel& model, const ReducedOptions& options = {}) const;
+
+ private:
+  std::string subject_, motion_;
+  fullspace::BodyLayerOptions options_;
+  std::unique_ptr<fullspace::BodyLayer> layer_;
+  meshing::RowMatrixX3d normals_;
+  int frames_ = 0;
+  double fps_ = 60.0;
+};
+
+}  // namespace sflsh::reduced

@@ -1,0 +1,98 @@
+#pragma once
+// The fit of SFLSH §5: the elasticity parameters that make the reduced model's per-vertex dynamics match
+// target dynamics σ* (eq. 6), either
+//   - independently per subject ("optimal targets", §3): p = the normalized κ̂_i of one subject (3N), or
+//   - shape-dependent (§4): p = (A_i, b_i) for all control points (33N), κ̂_ij = A_iᵀβ_j + b_i (eq. 1),
+//     regularized with L² or the local shape metric (eq. 7),
+// by bounded trust-region least squares (bounded_least_squares.hpp) on
+//   r = [ w (σ(q(p)) − σ*) ; √λ L p ],   w = 1/√(number of σ entries)  (so ‖r_fit‖² is a mean square in mm²),
+// with dr_fit/dp = (dσ/dq)(dq/dp) (eq. 8): dσ/dq by one-sided finite differences over the (1 + 3N)
+// simulations of every case (run by a SimulationPool), dq/dp analytic. q is clamped into the parameter
+// ranges (a clamped entry has dq/dp = 0). The number of control points grows over stages (1 → 12 → 24 → 84),
+// each warm-started from the previous one's field; a checkpoint after every iteration lets an interrupted
+// fit resume where it stopped.
+#include <sflsh/reduced/bounded_least_squares.hpp>
+#include <sflsh/reduced/shape_elasticity.hpp>
+#include <sflsh/reduced/simulation_pool.hpp>
+
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace sflsh::reduced {
+
+/// What the fit must reproduce for one case: σ*_n and σ*_t per region vertex (stacked, 2R, mm).
+struct FitTarget {
+  const DynamicsCase* simulation = nullptr;
+  int subject = 0;                  ///< index into FitSpec::betas
+  Eigen::VectorXd sigma;            ///< [σ*_n; σ*_t]
+};
+
+enum class FitKind { independent, shape };
+
+struct FitSpec {
+  std::string name;                         ///< for logs, checkpoints and reports
+  FitKind kind = FitKind::shape;
+  Regularizer regularizer = Regularizer::local;
+  double lambda = 1.0;                      ///< λ of eq. 7 (shape fits)
+  std::vector<body::Betas> betas;           ///< per subject (independent: exactly one)
+  std::vector<int> stages{1, 12, 24, 84};   ///< control-point counts, ascending
+  int iterations = 8;                       ///< trust-region iterations per stage
+  double fd_step = 2e-3;                    ///< one-sided step in normalized κ̂
+  double a_max = 0.25;                      ///< |A_i(k, c)| bound (normalized κ̂ per unit β)
+  std::filesystem::path checkpoint;         ///< empty: none
+};
+
+/// Shared by every fit of an experiment.
+struct FitContext {
+  const body::BodyModel* body = nullptr;
+  const ReducedModel* model = nullptr;
+  ReducedOptions reduced;
+  material::ParameterBounds bounds;
+  SimulationPool* pool = nullptr;
+  /// The parameterization for N control points (kept alive by the caller, e.g. a ParameterizationCache).
+  std::function<const LayerParameterization&(int)> parameterization;
+  bool progress = true;
+};
+
+struct FitStageReport {
+  int controls = 0;
+  int iterations = 0;
+  double loss_fit = 0.0;     ///< ‖r_fit‖² [mm²]
+  double loss_reg = 0.0;     ///< ‖r_reg‖²
+  double seconds = 0.0;
+  long simulations = 0;
+  int jacobians = 0;
+  std::string reason;
+  bool resumed = false;
+};
+
+struct FitResult {
+  std::string name;
+  FitKind kind = FitKind::shape;
+  int controls = 0;
+  Eigen::VectorXd p;                     ///< final parameters (layout of the kind)
+  std::vector<FitStageReport> stages;
+  /// κ̂ (N × 3, clamped) the fit gives a subject of shape β (independent fits ignore β).
+  material::KappaMatrix kappa_normalized(const body::Betas& beta, const material::ParameterBounds& bounds) const;
+  material::KappaMatrix kappa(const body::Betas& beta, const material::ParameterBounds& bounds) const;  ///< physical
+  ShapeElasticity shape() const;         ///< shape fits only
+};
+
+FitResult fit_elasticity(const FitContext& context, const std::vector<FitTarget>& targets, const FitSpec& spec);
+
+/// Parameterizations per control-point count, built on demand from one base layer.
+class ParameterizationCache {
+ public:
+  explicit ParameterizationCache(const fullspace::BodyLayer& base) : base_(base) {}
+  const LayerParameterization& get(int controls);
+
+ private:
+  const fullspace::BodyLayer& base_;
+  std::map<int, std::unique_ptr<LayerParameterization>> cache_;
+};
+
+}  // namespace sflsh::reduced

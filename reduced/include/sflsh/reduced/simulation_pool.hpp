@@ -1,0 +1,43 @@
+#pragma once
+// Batches of independent reduced simulations (the fit's (1 + 3N)·M finite-difference runs, SFLSH §5),
+// shared among MPI ranks (job k runs on rank k mod size) and, within a rank, among threads (TBB).
+// Every rank returns the same results: each entry is computed by exactly one rank and summed with zeros.
+#include <sflsh/reduced/dynamics_case.hpp>
+
+#include <mpi.h>
+
+#include <vector>
+
+namespace sflsh::reduced {
+
+struct SimulationJob {
+  int case_index = 0;              ///< into the cases given to run()
+  material::KappaMatrix kappa;     ///< physical control values (N × 3)
+};
+
+class SimulationPool {
+ public:
+  /// threads ≤ 0: all hardware threads. comm = MPI_COMM_NULL (or MPI not initialized): this process only.
+  explicit SimulationPool(int threads = 0, MPI_Comm comm = MPI_COMM_WORLD);
+
+  /// Per job the stacked dynamics [σ_n; σ_t] (2R, mm). The first failing job's error is rethrown on
+  /// every rank (naming subject and motion).
+  std::vector<Eigen::VectorXd> run(const std::vector<const DynamicsCase*>& cases, const std::vector<SimulationJob>& jobs,
+                                   const LayerParameterization& parameterization, const ReducedModel& model,
+                                   const ReducedOptions& options);
+
+  int threads() const { return threads_; }
+  int ranks() const { return size_; }
+  int rank() const { return rank_; }
+  long simulations() const { return simulations_; }   ///< jobs run so far (all ranks)
+  double seconds() const { return seconds_; }         ///< wall time spent in run()
+
+ private:
+  int threads_ = 1;
+  MPI_Comm comm_ = MPI_COMM_NULL;
+  int rank_ = 0, size_ = 1;
+  long simulations_ = 0;
+  double seconds_ = 0.0;
+};
+
+}  // namespace sflsh::reduced

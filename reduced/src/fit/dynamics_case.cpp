@@ -1,0 +1,64 @@
+#include <sflsh/reduced/dynamics_case.hpp>
+
+#include <sflsh/core/error.hpp>
+#include <sflsh/fullspace/reference_integrator.hpp>
+#include <sflsh/fullspace/simulation_output.hpp>
+
+#include <chrono>
+
+namespace sflsh::reduced {
+
+Eigen::VectorXd CaseDynamics::sigma() const {
+  return (sigma_normal.array().square() + sigma_tangent.array().square()).sqrt().matrix();
+}
+
+double CaseDynamics::mean_sigma() const { return sigma_normal.size() ? sigma().mean() : 0.0; }
+
+DynamicsCase::DynamicsCase(const body::BodyModel& model, std::string subject, const body::Betas& beta,
+                           const body::Motion& motion, const fullspace::BodyLayerOptions& options)
+    : subject_(std::move(subject)), motion_(motion.name), options_(options), fps_(motion.fps) {
+  layer_ = std::make_unique<fullspace::BodyLayer>(fullspace::build_body_layer(model, beta, motion, nullptr, 1, options));
+  frames_ = static_cast<int>(motion.num_frames());
+  const meshing::RowMatrixX3d all = fullspace::vertex_normals(layer_->shaped, model.faces);
+  const std::vector<int>& region = layer_->mesh->region_surface.vertices;
+  normals_.resize(static_cast<Eigen::Index>(region.size()), 3);
+  for (std::size_t r = 0; r < region.size(); ++r) normals_.row(static_cast<Eigen::Index>(r)) = all.row(region[r]);
+}
+
+CaseDynamics DynamicsCase::simulate(const LayerParameterization& parameterization, const material::KappaMatrix& kappa,
+                                    const ReducedModel& model, const ReducedOptions& options) const {
+  const auto start = std::chrono::steady_clock::now();
+  try {
+    const fullspace::Problem problem = parameterization.problem(*layer_, kappa, options_);
+    ReducedBackwardEuler integrator(problem, model.subspace, model.cubature, options);
+    integrator.initialize(fullspace::initial_state(problem, 0.0));
+    fullspace::DynamicsAmplitude amplitude(normals_);
+    const meshing::LayerMesh& mesh = *layer_->mesh;
+    // The attached nodes carry no elastic displacement (x_D = X), so u = (B ⊗ I₃) q; the skin embedding is
+    // affine with weights summing to one, hence linear in u. No pass over the skinned trajectory per frame.
+    require(!problem.dirichlet.drives.size(), "fit cases take fixed attachments only");
+    Eigen::VectorXd u(problem.num_dofs());
+    auto add_frame = [&] {
+      u.setZero();
+      model.subspace.add_displacement(integrator.q(), u);
+      const Eigen::Map<const meshing::RowMatrixX3d> nodes(u.data(), problem.num_nodes(), 3);
+      amplitude.add(mesh.skin_positions(nodes));
+    };
+    add_frame();
+    for (int f = 1; f < frames_; ++f) {
+      integrator.step(1.0 / fps_);
+      add_frame();
+    }
+    CaseDynamics out;
+    out.sigma_normal = 1e3 * amplitude.sigma_normal();
+    out.sigma_tangent = 1e3 * amplitude.sigma_tangent();
+    require(out.sigma_normal.allFinite() && out.sigma_tangent.allFinite(), "non-finite dynamics amplitude");
+    out.frames = frames_;
+    out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return out;
+  } catch (const Error& e) {
+    throw Error(fmt::format("{} / {}: {}", subject_, motion_, e.what()));
+  }
+}
+
+}  // namespace sflsh::reduced

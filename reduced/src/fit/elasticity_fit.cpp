@@ -1,0 +1,436 @@
+#include <sflsh/reduced/elasticity_fit.hpp>
+
+#include <sflsh/core/atomic_file.hpp>
+#include <sflsh/core/error.hpp>
+#include <sflsh/core/log.hpp>
+#include <sflsh/material/layer_material.hpp>
+#include <sflsh/material/surface_operators.hpp>
+
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <fstream>
+
+namespace sflsh::reduced {
+
+namespace {
+
+constexpr int kK = material::kNumKappa;
+
+int params_per_control(FitKind kind) { return kind == FitKind::shape ? kParamsPerControl : kK; }
+
+/// p of an independent fit: κ̂ row-major (control i, column c at 3i + c).
+material::KappaMatrix independent_kappa(const Eigen::VectorXd& p) {
+  return Eigen::Map<const material::KappaMatrix>(p.data(), p.size() / kK, kK);
+}
+
+Eigen::VectorXd flatten(const material::KappaMatrix& k) {
+  return Eigen::Map<const Eigen::VectorXd>(k.data(), k.size());
+}
+
+/// Everything one stage needs, fixed while TAO iterates.
+struct Stage {
+  const FitContext* context = nullptr;
+  const FitSpec* spec = nullptr;
+  const std::vector<FitTarget>* targets = nullptr;
+  const LayerParameterization* parameterization = nullptr;
+  int controls = 0;
+  std::vector<Eigen::SparseMatrix<double>> dq_dp;   ///< per subject (3N × P)
+  Eigen::SparseMatrix<double> L;                    ///< eq. 7 without √λ (shape fits)
+  double weight = 1.0;                              ///< w of r_fit
+  int fit_rows = 0;
+  std::vector<const DynamicsCase*> cases;
+  std::vector<std::vector<int>> targets_of_subject;
+  long simulations = 0;
+  int jacobians = 0;
+
+  int num_subjects() const { return static_cast<int>(spec->betas.size()); }
+
+  material::KappaMatrix q(int subject, const Eigen::VectorXd& p, Eigen::VectorXd* active = nullptr) const {
+    const Eigen::VectorXd raw = dq_dp[static_cast<std::size_t>(subject)] * p;
+    const material::KappaMatrix unclamped = Eigen::Map<const material::KappaMatrix>(raw.data(), controls, kK);
+    const material::KappaMatrix clamped = clamp_normalized(unclamped, context->bounds);
+    if (active) {
+      active->resize(raw.size());
+      for (Eigen::Index i = 0; i < raw.size(); ++i)
+        (*active)[i] = clamped(i / kK, i % kK) == unclamped(i / kK, i % kK) ? 1.0 : 0.0;
+    }
+    return clamped;
+  }
+
+  std::vector<Eigen::VectorXd> simulate(std::vector<SimulationJob>& jobs) {
+    simulations += static_cast<long>(jobs.size());
+    return context->pool->run(cases, jobs, *parameterization, *context->model, context->reduced);
+  }
+
+  Eigen::VectorXd residual(const Eigen::VectorXd& p) {
+    std::vector<SimulationJob> jobs;
+    std::vector<material::KappaMatrix> kappa(static_cast<std::size_t>(num_subjects()));
+    for (int j = 0; j < num_subjects(); ++j) kappa[static_cast<std::size_t>(j)] = material::denormalize(q(j, p), context->bounds);
+    for (std::size_t t = 0; t < targets->size(); ++t)
+      jobs.push_back({static_cast<int>(t), kappa[static_cast<std::size_t>((*targets)[t].subject)]});
+    const std::vector<Eigen::VectorXd> sigma = simulate(jobs);
+    Eigen::VectorXd r(fit_rows + (spec->kind == FitKind::shape ? L.rows() : 0));
+    int at = 0;
+    for (std::size_t t = 0; t < targets->size(); ++t) {
+      const auto n = sigma[t].size();
+      r.segment(at, n) = weight * (sigma[t] - (*targets)[t].sigma);   // eq. 6
+      at += static_cast<int>(n);
+    }
+    if (spec->kind == FitKind::shape) r.tail(L.rows()) = std::sqrt(spec->lambda) * (L * p);   // eq. 7
+    return r;
+  }
+
+  NormalEquations normal_equations(const Eigen::VectorXd& p, const Eigen::VectorXd& r) {
+    ++jacobians;
+    const auto P = p.size();
+    NormalEquations ne;
+    ne.JtJ = Eigen::MatrixXd::Zero(P, P);
+    ne.Jtr = Eigen::VectorXd::Zero(P);
+    const double step = spec->fd_step;
+    const material::ParameterBounds nb = material::normalized_bounds(context->bounds);
+    // Residual offsets per target.
+    std::vector<int> offset(targets->size() + 1, 0);
+    for (std::size_t t = 0; t < targets->size(); ++t)
+      offset[t + 1] = offset[t] + static_cast<int>((*targets)[t].sigma.size());
+    for (int j = 0; j < num_subjects(); ++j) {
+      const std::vector<int>& mine = targets_of_subject[static_cast<std::size_t>(j)];
+      if (mine.empty()) continue;
+      Eigen::VectorXd active;
+      const material::KappaMatrix q0 = q(j, p, &active);
+      // One-sided differences in each of the 3N entries of q_j (backwards at an upper bound).
+      std::vector<SimulationJob> jobs;
+      std::vector<double> h(static_cast<std::size_t>(3 * controls));
+      for (int k = 0; k < 3 * controls; ++k) {
+        material::KappaMatrix qk = q0;
+        const int i = k / kK, c = k % kK;
+        h[static_cast<std::size_t>(k)] = q0(i, c) + step <= nb[c].max ? step : -step;
+        qk(i, c) += h[static_cast<std::size_t>(k)];
+        const material::KappaMatrix kappa = material::denormalize(qk, context->bounds);
+        for (int t : mine) jobs.push_back({t, kappa});
+      }
+      const std::vector<Eigen::VectorXd> sigma = simulate(jobs);
+      // G_t = dσ_t/dq_j; accumulate H_q = Σ w² G_tᵀG_t and g_q = Σ w G_tᵀ r_t.
+      Eigen::MatrixXd Hq = Eigen::MatrixXd::Zero(3 * controls, 3 * controls);
+      Eigen::VectorXd gq = Eigen::VectorXd::Zero(3 * controls);
+      for (std::size_t m = 0; m < mine.size(); ++m) {
+        const int t = mine[m];
+        const Eigen::VectorXd rt = r.segment(offset[static_cast<std::size_t>(t)], offset[static_cast<std::size_t>(t) + 1] - offset[static_cast<std::size_t>(t)]);
+        const Eigen::VectorXd sigma_t = rt / weight + (*targets)[static_cast<std::size_t>(t)].sigma;
+        Eigen::MatrixXd G(sigma_t.size(), 3 * controls);
+        for (int k = 0; k < 3 * controls; ++k)
+          G.col(k) = (sigma[static_cast<std::size_t>(k) * mine.size() + m] - sigma_t) / h[static_cast<std::size_t>(k)];
+        G *= weight;
+        Hq.noalias() += G.transpose() * G;
+        gq.noalias() += G.transpose() * rt;
+      }
+      // Chain rule through the clamp and dq/dp (eq. 8).
+      const Eigen::SparseMatrix<double> Jq = active.asDiagonal() * dq_dp[static_cast<std::size_t>(j)];
+      const Eigen::MatrixXd JqD = Jq;
+      ne.JtJ.noalias() += JqD.transpose() * Hq * JqD;
+      ne.Jtr.noalias() += JqD.transpose() * gq;
+    }
+    if (spec->kind == FitKind::shape) {
+      const Eigen::MatrixXd LtL = Eigen::MatrixXd(L.transpose() * L);
+      ne.JtJ += spec->lambda * LtL;
+      ne.Jtr += std::sqrt(spec->lambda) * (L.transpose() * r.tail(L.rows()));
+    }
+    return ne;
+  }
+};
+
+std::string kind_name(FitKind k) { return k == FitKind::shape ? "shape" : "independent"; }
+
+/// A fingerprint of what the fit depends on, so a checkpoint of a different fit is never resumed.
+std::string spec_fingerprint(const FitSpec& spec, const std::vector<FitTarget>& targets) {
+  nlohmann::json j;
+  j["name"] = spec.name;
+  j["kind"] = kind_name(spec.kind);
+  j["regularizer"] = regularizer_name(spec.regularizer);
+  j["lambda"] = spec.lambda;
+  j["stages"] = spec.stages;
+  j["fd_step"] = spec.fd_step;
+  j["a_max"] = spec.a_max;
+  std::vector<std::vector<double>> betas;
+  for (const auto& b : spec.betas) betas.emplace_back(b.data(), b.data() + b.size());
+  j["betas"] = betas;
+  std::vector<std::string> cases;
+  double target_sum = 0.0;
+  for (const FitTarget& t : targets) {
+    cases.push_back(t.simulation->subject() + "/" + t.simulation->motion());
+    target_sum += t.sigma.sum();
+  }
+  j["cases"] = cases;
+  j["target_sum"] = target_sum;
+  return j.dump();
+}
+
+struct Checkpoint {
+  bool finished = false;   ///< the whole fit is done: p is the result, `done` has every stage
+  int stage = 0;
+  int iteration = 0;
+  Eigen::VectorXd p;
+  std::vector<FitStageReport> done;
+};
+
+void save_checkpoint(const std::filesystem::path& path, const std::string& fingerprint, const Checkpoint& c) {
+  nlohmann::json j;
+  j["fingerprint"] = fingerprint;
+  j["finished"] = c.finished;
+  j["stage"] = c.stage;
+  j["iteration"] = c.iteration;
+  j["p"] = std::vector<double>(c.p.data(), c.p.data() + c.p.size());
+  for (const FitStageReport& s : c.done)
+    j["done"].push_back({{"controls", s.controls}, {"iterations", s.iterations}, {"loss_fit", s.loss_fit},
+                         {"loss_reg", s.loss_reg}, {"seconds", s.seconds}, {"simulations", s.simulations},
+                         {"jacobians", s.jacobians}, {"reason", s.reason}});
+  write_text_atomically(path, j.dump(1));
+}
+
+std::optional<Checkpoint> load_checkpoint(const std::filesystem::path& path, const std::string& fingerprint) {
+  if (path.empty() || !std::filesystem::exists(path)) return std::nullopt;
+  try {
+    std::ifstream in(path);
+    const nlohmann::json j = nlohmann::json::parse(in);
+    if (j.at("fingerprint").get<std::string>() != fingerprint) {
+      logger()->warn("fit: checkpoint {} belongs to a different fit; starting over", path.string());
+      return std::nullopt;
+    }
+    Checkpoint c;
+    c.finished = j.value("finished", false);
+    c.stage = j.at("stage").get<int>();
+    c.iteration = j.at("iteration").get<int>();
+    const auto p = j.at("p").get<std::vector<double>>();
+    c.p = Eigen::Map<const Eigen::VectorXd>(p.data(), static_cast<Eigen::Index>(p.size()));
+    if (j.contains("done"))
+      for (const auto& s : j["done"]) {
+        FitStageReport r;
+        r.controls = s.at("controls");
+        r.iterations = s.at("iterations");
+        r.loss_fit = s.at("loss_fit");
+        r.loss_reg = s.at("loss_reg");
+        r.seconds = s.at("seconds");
+        r.simulations = s.at("simulations");
+        r.jacobians = s.at("jacobians");
+        r.reason = s.at("reason");
+        r.resumed = true;
+        c.done.push_back(r);
+      }
+    return c;
+  } catch (const std::exception& e) {
+    logger()->warn("fit: checkpoint {} is unreadable ({}); starting over", path.string(), e.what());
+    return std::nullopt;
+  }
+}
+
+/// Per-control parameter rows (N × k) of p, and back.
+Eigen::MatrixXd rows_of(const Eigen::VectorXd& p, int k) {
+  return Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(p.data(), p.size() / k, k);
+}
+Eigen::VectorXd from_rows(const Eigen::MatrixXd& rows) {
+  const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> r = rows;
+  return Eigen::Map<const Eigen::VectorXd>(r.data(), r.size());
+}
+
+}  // namespace
+
+material::KappaMatrix FitResult::kappa_normalized(const body::Betas& beta, const material::ParameterBounds& bounds) const {
+  if (kind == FitKind::independent) return clamp_normalized(independent_kappa(p), bounds);
+  return clamp_normalized(ShapeElasticity::unpack(p, controls).kappa_normalized(beta), bounds);
+}
+
+material::KappaMatrix FitResult::kappa(const body::Betas& beta, const material::ParameterBounds& bounds) const {
+  return material::denormalize(kappa_normalized(beta, bounds), bounds);
+}
+
+ShapeElasticity FitResult::shape() const {
+  require(kind == FitKind::shape, "fit {}: an independent fit has no shape model", name);
+  return ShapeElasticity::unpack(p, controls);
+}
+
+const LayerParameterization& ParameterizationCache::get(int controls) {
+  auto it = cache_.find(controls);
+  if (it == cache_.end()) it = cache_.emplace(controls, std::make_unique<LayerParameterization>(base_, controls)).first;
+  return *it->second;
+}
+
+FitResult fit_elasticity(const FitContext& context, const std::vector<FitTarget>& targets, const FitSpec& spec) {
+  require(context.body && context.model && context.pool && context.parameterization, "fit {}: incomplete context", spec.name);
+  require(!targets.empty(), "fit {}: no targets", spec.name);
+  require(!spec.stages.empty() && spec.stages.front() >= 1, "fit {}: stages must start at ≥ 1 control point", spec.name);
+  for (std::size_t s = 1; s < spec.stages.size(); ++s)
+    require(spec.stages[s] > spec.stages[s - 1], "fit {}: stages must grow, got {} after {}", spec.name, spec.stages[s],
+            spec.stages[s - 1]);
+  require(!spec.betas.empty(), "fit {}: no subjects", spec.name);
+  require(spec.kind == FitKind::shape || spec.betas.size() == 1, "fit {}: an independent fit has one subject, got {}",
+          spec.name, spec.betas.size());
+  require(spec.lambda >= 0.0 && std::isfinite(spec.lambda), "fit {}: λ must be ≥ 0, got {}", spec.name, spec.lambda);
+  require(spec.fd_step > 0.0 && spec.fd_step < 0.1, "fit {}: finite-difference step {} outside (0, 0.1)", spec.name, spec.fd_step);
+  for (const FitTarget& t : targets) {
+    require(t.simulation && t.subject >= 0 && t.subject < static_cast<int>(spec.betas.size()),
+            "fit {}: a target names subject {} of {}", spec.name, t.subject, spec.betas.size());
+    require(t.sigma.size() == 2 * t.simulation->num_region_vertices() && t.sigma.allFinite(),
+            "fit {}: target {}/{} has {} values, expected 2 × {} finite", spec.name, t.simulation->subject(),
+            t.simulation->motion(), t.sigma.size(), t.simulation->num_region_vertices());
+  }
+  const auto start_time = std::chrono::steady_clock::now();
+  const std::string fingerprint = spec_fingerprint(spec, targets);
+  std::optional<Checkpoint> checkpoint = load_checkpoint(spec.checkpoint, fingerprint);
+
+  FitResult result;
+  result.name = spec.name;
+  result.kind = spec.kind;
+  const int k = params_per_control(spec.kind);
+  if (checkpoint && checkpoint->finished) {
+    require(checkpoint->p.size() == k * spec.stages.back(), "fit {}: checkpoint {} does not match the stages", spec.name,
+            spec.checkpoint.string());
+    logger()->info("fit {}: finished earlier (checkpoint {})", spec.name, spec.checkpoint.string());
+    result.p = checkpoint->p;
+    result.controls = spec.stages.back();
+    result.stages = checkpoint->done;
+    return result;
+  }
+  const material::Kappa initial = material::initial_kappa(context.bounds);
+  Eigen::VectorXd p;
+  const LayerParameterization* previous = nullptr;
+  std::size_t first_stage = 0;
+  if (checkpoint) {
+    first_stage = static_cast<std::size_t>(checkpoint->stage);
+    result.stages = checkpoint->done;
+    p = checkpoint->p;
+    require(first_stage < spec.stages.size() && p.size() == k * spec.stages[first_stage],
+            "fit {}: checkpoint {} does not match the stages", spec.name, spec.checkpoint.string());
+    logger()->info("fit {}: resuming at N = {} after iteration {}", spec.name, spec.stages[first_stage], checkpoint->iteration);
+  }
+  for (std::size_t s = first_stage; s < spec.stages.size(); ++s) {
+    const int N = spec.stages[s];
+    const LayerParameterization& parameterization = context.parameterization(N);
+    // Warm start: the previous stage's field at the new control points; the first stage starts neutral.
+    const bool resumed_here = checkpoint && s == first_stage;
+    if (!resumed_here) {
+      if (previous) {
+        p = from_rows(transfer_control_values(*previous, parameterization, rows_of(p, k)));
+      } else {
+        material::KappaMatrix k0(N, kK);
+        for (int i = 0; i < N; ++i) k0.row(i) = material::to_row(initial);
+        const material::KappaMatrix kn = material::normalize(k0, context.bounds);
+        p = spec.kind == FitKind::shape ? ShapeElasticity::constant(kn).pack() : flatten(kn);
+      }
+    }
+    previous = &parameterization;
+
+    Stage stage;
+    stage.context = &context;
+    stage.spec = &spec;
+    stage.targets = &targets;
+    stage.parameterization = &parameterization;
+    stage.controls = N;
+    stage.targets_of_subject.resize(spec.betas.size());
+    for (std::size_t t = 0; t < targets.size(); ++t) {
+      stage.cases.push_back(targets[t].simulation);
+      stage.targets_of_subject[static_cast<std::size_t>(targets[t].subject)].push_back(static_cast<int>(t));
+      stage.fit_rows += static_cast<int>(targets[t].sigma.size());
+    }
+    stage.weight = 1.0 / std::sqrt(static_cast<double>(stage.fit_rows));
+    for (const body::Betas& beta : spec.betas) {
+      if (spec.kind == FitKind::shape) {
+        stage.dq_dp.push_back(kappa_jacobian(beta, N));
+      } else {
+        Eigen::SparseMatrix<double> I(3 * N, 3 * N);
+        I.setIdentity();
+        stage.dq_dp.push_back(I);
+      }
+    }
+    if (spec.kind == FitKind::shape) {
+      std::vector<ShapeMetric> metric;
+      if (spec.regularizer == Regularizer::local) {
+        const meshing::LayerMesh& mesh = parameterization.mesh();
+        const Eigen::VectorXd area =
+            material::lumped_mass(material::region_positions(*context.body, mesh), mesh.region_surface.faces);
+        metric = local_shape_metric(*context.body, mesh.region_surface.vertices, area, parameterization.phi());
+      }
+      stage.L = regularizer_matrix(metric, N);
+    }
+
+    LeastSquaresProblem problem;
+    problem.residual = [&](const Eigen::VectorXd& x) { return stage.residual(x); };
+    problem.normal_equations = [&](const Eigen::VectorXd& x, const Eigen::VectorXd& r) { return stage.normal_equations(x, r); };
+    if (spec.kind == FitKind::shape) {
+      parameter_bounds(context.bounds, N, spec.a_max, problem.lower, problem.upper);
+    } else {
+      const material::ParameterBounds nb = material::normalized_bounds(context.bounds);
+      problem.lower.resize(3 * N);
+      problem.upper.resize(3 * N);
+      for (int i = 0; i < N; ++i)
+        for (int c = 0; c < kK; ++c) {
+          problem.lower[kK * i + c] = nb[c].min;
+          problem.upper[kK * i + c] = nb[c].max;
+        }
+    }
+    LeastSquaresOptions lso;
+    lso.max_iterations = resumed_here ? std::max(0, spec.iterations - checkpoint->iteration) : spec.iterations;
+    lso.gradient_ttol = 1e-3;
+    lso.gradient_rtol = 1e-8;
+    const auto stage_start = std::chrono::steady_clock::now();
+    const int done_before = resumed_here ? checkpoint->iteration : 0;
+    lso.monitor = [&](int iteration, const Eigen::VectorXd& x, double loss, double gnorm) {
+      const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - stage_start).count();
+      const int it = done_before + iteration;
+      const double eta = iteration > 0 ? elapsed / iteration * std::max(0, lso.max_iterations - iteration) : 0.0;
+      if (context.progress)
+        logger()->info("fit {} · N = {} · iteration {}/{} · loss {:.5g} · |g| {:.3g} · {} simulations · ETA {:.0f} s",
+                       spec.name, N, it, spec.iterations, 2.0 * loss, gnorm, stage.simulations, eta);
+      if (!spec.checkpoint.empty() && context.pool->rank() == 0) {
+        Checkpoint c;
+        c.stage = static_cast<int>(s);
+        c.iteration = it;
+        c.p = x;
+        c.done = result.stages;
+        save_checkpoint(spec.checkpoint, fingerprint, c);
+      }
+    };
+    const LeastSquaresResult ls = lso.max_iterations > 0
+                                      ? solve_bounded_least_squares(problem, p, lso)
+                                      : LeastSquaresResult{p, 0.5 * stage.residual(p).squaredNorm(), 0, 0, 0, 0, "resumed", true};
+    p = ls.p;
+    const Eigen::VectorXd r = stage.residual(p);
+    FitStageReport report;
+    report.controls = N;
+    report.iterations = done_before + ls.iterations;
+    report.loss_fit = r.head(stage.fit_rows).squaredNorm();
+    report.loss_reg = r.size() > stage.fit_rows ? r.tail(r.size() - stage.fit_rows).squaredNorm() : 0.0;
+    report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - stage_start).count();
+    report.simulations = stage.simulations;
+    report.jacobians = stage.jacobians;
+    report.reason = ls.reason;
+    result.stages.push_back(report);
+    logger()->info("fit {}: N = {} done: loss fit {:.5g} mm², reg {:.4g}, {} iterations ({}), {} simulations, {:.1f} s",
+                   spec.name, N, report.loss_fit, report.loss_reg, report.iterations, report.reason, report.simulations,
+                   report.seconds);
+    if (!spec.checkpoint.empty() && context.pool->rank() == 0 && s + 1 < spec.stages.size()) {
+      Checkpoint c;
+      c.stage = static_cast<int>(s + 1);
+      c.iteration = 0;
+      c.p = from_rows(transfer_control_values(parameterization, context.parameterization(spec.stages[s + 1]), rows_of(p, k)));
+      c.done = result.stages;
+      save_checkpoint(spec.checkpoint, fingerprint, c);
+    }
+    checkpoint.reset();
+    result.controls = N;
+  }
+  if (!spec.checkpoint.empty() && context.pool->rank() == 0) {
+    Checkpoint c;
+    c.finished = true;
+    c.stage = static_cast<int>(spec.stages.size()) - 1;
+    c.iteration = result.stages.back().iterations;
+    c.p = p;
+    c.done = result.stages;
+    save_checkpoint(spec.checkpoint, fingerprint, c);
+  }
+  result.p = p;
+  logger()->debug("fit {}: {:.1f} s in total", spec.name,
+                  std::chrono::duration<double>(std::chrono::steady_clock::now() - start_time).count());
+  return result;
+}
+
+}  // namespace sflsh::reduced

@@ -1,0 +1,91 @@
+#include <sflsh/reduced/simulation_pool.hpp>
+
+#include <sflsh/core/error.hpp>
+
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <chrono>
+#include <mutex>
+#include <thread>
+
+namespace sflsh::reduced {
+
+SimulationPool::SimulationPool(int threads, MPI_Comm comm) {
+  threads_ = threads > 0 ? threads : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  int initialized = 0;
+  MPI_Initialized(&initialized);
+  if (initialized && comm != MPI_COMM_NULL) {
+    comm_ = comm;
+    MPI_Comm_rank(comm_, &rank_);
+    MPI_Comm_size(comm_, &size_);
+  }
+}
+
+std::vector<Eigen::VectorXd> SimulationPool::run(const std::vector<const DynamicsCase*>& cases,
+                                                 const std::vector<SimulationJob>& jobs,
+                                                 const LayerParameterization& parameterization, const ReducedModel& model,
+                                                 const ReducedOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  const auto J = static_cast<int>(jobs.size());
+  std::vector<int> length(jobs.size());
+  for (int j = 0; j < J; ++j) {
+    const int c = jobs[static_cast<std::size_t>(j)].case_index;
+    require(c >= 0 && c < static_cast<int>(cases.size()), "simulation pool: job {} names case {} of {}", j, c, cases.size());
+    length[static_cast<std::size_t>(j)] = 2 * cases[static_cast<std::size_t>(c)]->num_region_vertices();
+  }
+  std::vector<int> offset(jobs.size() + 1, 0);
+  for (int j = 0; j < J; ++j) offset[static_cast<std::size_t>(j) + 1] = offset[static_cast<std::size_t>(j)] + length[static_cast<std::size_t>(j)];
+  Eigen::VectorXd buffer = Eigen::VectorXd::Zero(offset.back());
+  std::vector<int> mine;
+  for (int j = rank_; j < J; j += size_) mine.push_back(j);
+
+  std::mutex mutex;
+  std::string error;
+  tbb::task_arena arena(threads_);
+  arena.execute([&] {
+    tbb::parallel_for(0, static_cast<int>(mine.size()), [&](int k) {
+      const int j = mine[static_cast<std::size_t>(k)];
+      const SimulationJob& job = jobs[static_cast<std::size_t>(j)];
+      try {
+        const CaseDynamics d = cases[static_cast<std::size_t>(job.case_index)]->simulate(parameterization, job.kappa, model, options);
+        const auto R = d.sigma_normal.size();
+        buffer.segment(offset[static_cast<std::size_t>(j)], R) = d.sigma_normal;
+        buffer.segment(offset[static_cast<std::size_t>(j)] + R, R) = d.sigma_tangent;
+      } catch (const std::exception& e) {
+        std::lock_guard<std::mutex> lock(mutex);
+        if (error.empty()) error = e.what();
+      }
+    });
+  });
+  // Errors and results reach every rank.
+  int failed = error.empty() ? 0 : 1, any_failed = failed;
+  if (comm_ != MPI_COMM_NULL) MPI_Allreduce(&failed, &any_failed, 1, MPI_INT, MPI_MAX, comm_);
+  if (any_failed) {
+    if (comm_ != MPI_COMM_NULL) {
+      // The lowest failing rank's message.
+      int root = failed ? rank_ : size_, lowest = size_;
+      MPI_Allreduce(&root, &lowest, 1, MPI_INT, MPI_MIN, comm_);
+      int n = static_cast<int>(error.size());
+      MPI_Bcast(&n, 1, MPI_INT, lowest, comm_);
+      error.resize(static_cast<std::size_t>(n));
+      MPI_Bcast(error.data(), n, MPI_CHAR, lowest, comm_);
+    }
+    throw Error(error);
+  }
+  if (comm_ != MPI_COMM_NULL && size_ > 1) {
+    constexpr int kChunk = 1 << 24;   // stay far below int counts
+    for (Eigen::Index at = 0; at < buffer.size(); at += kChunk) {
+      const int n = static_cast<int>(std::min<Eigen::Index>(kChunk, buffer.size() - at));
+      MPI_Allreduce(MPI_IN_PLACE, buffer.data() + at, n, MPI_DOUBLE, MPI_SUM, comm_);
+    }
+  }
+  std::vector<Eigen::VectorXd> out(jobs.size());
+  for (int j = 0; j < J; ++j) out[static_cast<std::size_t>(j)] = buffer.segment(offset[static_cast<std::size_t>(j)], length[static_cast<std::size_t>(j)]);
+  simulations_ += J;
+  seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return out;
+}
+
+}  // namespace sflsh::reduced

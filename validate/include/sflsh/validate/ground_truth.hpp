@@ -1,0 +1,47 @@
+#pragma once
+// Synthetic ground truth (DESIGN.md §5): the full-space backward-Euler solver run on a subject of the open
+// body with the hidden material of true_material.hpp, recorded as the paper measures captured data —
+// posed whole-body surfaces per frame (the DYNA layout) and the per-vertex dynamics σ*_n, σ*_t of the
+// region's skin in the neutral pose (physics.md §4) that the fits try to reproduce.
+#include <sflsh/body/motion.hpp>
+#include <sflsh/fullspace/body_layer.hpp>
+#include <sflsh/reduced/layer_parameterization.hpp>
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace sflsh::validate {
+
+struct GroundTruthCase {
+  std::string subject, motion;
+  body::Betas beta = body::Betas::Zero();
+  double fps = 60.0;
+  Eigen::VectorXd sigma_normal, sigma_tangent;   ///< per region vertex [mm]
+  material::KappaMatrix kappa;                   ///< the true κ per region vertex (physical)
+  std::vector<body::RowMatrixX3d> posed;         ///< whole posed body per frame [m] (empty unless asked)
+  double seconds = 0.0;
+  int newton_iterations = 0;
+
+  Eigen::VectorXd sigma() const;                 ///< [σ*_n; σ*_t] (2R), the fit's target layout
+  double mean_sigma() const;                     ///< mean over region vertices of √(σ_n² + σ_t²) [mm]
+};
+
+struct GroundTruthOptions {
+  material::ParameterBounds bounds;
+  bool keep_frames = true;       ///< fill GroundTruthCase::posed
+};
+
+/// Runs the full-space solver (one process, PETSc on MPI_COMM_SELF) over the layer's motion with the true
+/// material of `layer.beta`. `parameterization` supplies the retargeter of the layer's template.
+GroundTruthCase simulate_ground_truth(const fullspace::BodyLayer& layer, const body::Motion& motion, const std::string& subject,
+                                      const reduced::LayerParameterization& parameterization,
+                                      const fullspace::BodyLayerOptions& layer_options, const GroundTruthOptions& options);
+
+/// Per-case cache (npz: sigma_normal, sigma_tangent, kappa, beta, posed frames when kept), so that runs
+/// can resume and several commands can share one ground truth. load returns false for a missing or
+/// unreadable file.
+void save_ground_truth_case(const std::filesystem::path& path, const GroundTruthCase& c);
+bool load_ground_truth_case(const std::filesystem::path& path, GroundTruthCase& c);
+
+}  // namespace sflsh::validate

@@ -1,0 +1,55 @@
+#include <sflsh/validate/experiments.hpp>
+
+#include <sflsh/core/error.hpp>
+#include <sflsh/meshing/layer_mesh.hpp>
+
+namespace sflsh::validate {
+
+ValidateConfig ValidateConfig::from_preset(const std::string& name) {
+  ValidateConfig c;
+  c.preset = name;
+  if (name == "quick") {
+    c.train_subjects = {"OPEN_TRAIN_1", "OPEN_TRAIN_2", "OPEN_TRAIN_3"};
+    c.test_subjects = {"OPEN_TEST_1", "OPEN_TEST_2"};
+    c.train_motions = {"running_on_spot"};
+    c.test_motions = {"jiggle_on_toes"};
+    c.frames = 40;
+    c.stages = {1, 4};
+    c.iterations = 5;
+    c.lambdas = {0.01, 1.0};
+    c.point_handles = 30;
+  } else if (name == "paper") {
+    c.train_subjects = {"OPEN_TRAIN_1", "OPEN_TRAIN_2", "OPEN_TRAIN_3", "OPEN_TRAIN_4", "OPEN_TRAIN_5"};
+    c.test_subjects = {"OPEN_TEST_1", "OPEN_TEST_2", "OPEN_TEST_3", "OPEN_TEST_4", "OPEN_TEST_5"};
+    c.frames = 60;
+    c.stages = {1, 12, 24, 84};
+    c.iterations = 8;
+    c.lambdas = {0.001, 0.01, 0.1, 1.0, 10.0};
+    c.point_handles = 86;
+  } else {
+    throw_error("validate: unknown preset '{}' (expected quick or paper)", name);
+  }
+  return c;
+}
+
+nlohmann::json ValidateConfig::to_json() const {
+  nlohmann::json j;
+  j["preset"] = preset;
+  j["mesh"] = meshing::size_preset_name(mesh);
+  j["point_handles"] = point_handles;
+  j["cubature"] = cubature;
+  j["train_subjects"] = train_subjects;
+  j["test_subjects"] = test_subjects;
+  j["train_motions"] = train_motions;
+  j["test_motions"] = test_motions;
+  j["frames"] = frames;
+  j["stages"] = stages;
+  j["iterations"] = iterations;
+  j["lambdas"] = lambdas;
+  j["cross_validation"] = cross_validation;
+  j["threads"] = threads;
+  j["thickness_max"] = thickness_max;
+  return j;
+}
+
+}  // namespace sflsh::validate

@@ -1,0 +1,425 @@
+#include "report.hpp"
+
+#include <sflsh/core/atomic_file.hpp>
+#include <sflsh/core/chart.hpp>
+#include <sflsh/core/error.hpp>
+#include <sflsh/core/log.hpp>
+#include <sflsh/core/vtk_io.hpp>
+#include <sflsh/material/material_file.hpp>
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+namespace sflsh::validate {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+std::string key_of(const std::string& fit, const std::string& subject, const std::string& motion) {
+  return fit + "|" + subject + "|" + motion;
+}
+
+std::string cell(double v) { return std::isfinite(v) ? fmt::format("{:.3f}", v) : ""; }
+
+double mean_of(const std::vector<double>& v) {
+  double s = 0.0;
+  int n = 0;
+  for (double x : v)
+    if (std::isfinite(x)) {
+      s += x;
+      ++n;
+    }
+  return n ? s / n : kNaN;
+}
+
+/// Region field (R) → one value per body vertex (0 outside the region).
+Eigen::MatrixXd on_body(const body::BodyModel& model, const meshing::LayerMesh& mesh, const Eigen::VectorXd& region_values) {
+  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(model.num_vertices(), 1);
+  const std::vector<int>& region = mesh.region_surface.vertices;
+  for (std::size_t r = 0; r < region.size(); ++r) out(region[r], 0) = region_values[static_cast<Eigen::Index>(r)];
+  return out;
+}
+
+}  // namespace
+
+std::vector<std::string> Report::evaluated_subjects(const std::string& fit) const {
+  if (fit.rfind("independent/", 0) == 0) return {fit.substr(12)};
+  if (fit.rfind("cv/", 0) == 0) return {fit.substr(fit.rfind('/') + 1)};
+  std::vector<std::string> all = config.train_subjects;
+  all.insert(all.end(), config.test_subjects.begin(), config.test_subjects.end());
+  return all;
+}
+
+void Report::evaluate(reduced::SimulationPool& pool, const reduced::ReducedModel& reduced_model, const reduced::ReducedOptions& options,
+                      const std::map<std::string, std::unique_ptr<reduced::DynamicsCase>>& cases) {
+  std::vector<const reduced::DynamicsCase*> case_list;
+  std::map<std::string, int> case_index;
+  for (const auto& [key, c] : cases) {
+    case_index[key] = static_cast<int>(case_list.size());
+    case_list.push_back(c.get());
+  }
+  std::vector<reduced::SimulationJob> jobs;
+  std::vector<std::string> job_keys, job_truth;
+  std::vector<std::string> motions = config.train_motions;
+  motions.insert(motions.end(), config.test_motions.begin(), config.test_motions.end());
+  for (const auto& [name, fit] : fits)
+    for (const std::string& s : evaluated_subjects(name))
+      for (const std::string& m : motions) {
+        const std::string k = key_of(name, s, m);
+        if (evaluations.count(k)) continue;
+        const reduced::DynamicsCase& c = *cases.at(s + "_" + m);
+        jobs.push_back({case_index.at(s + "_" + m), fit.kappa(c.beta(), bounds)});
+        job_keys.push_back(k);
+        job_truth.push_back(s + "_" + m);
+      }
+  if (jobs.empty()) return;
+  logger()->info("validate: evaluating {} (fit, subject, motion) simulations", jobs.size());
+  const std::vector<Eigen::VectorXd> sigma = pool.run(case_list, jobs, *parameterization, reduced_model, options);
+  for (std::size_t j = 0; j < jobs.size(); ++j) {
+    const auto R = sigma[j].size() / 2;
+    Evaluation e;
+    e.sigma = (sigma[j].head(R).array().square() + sigma[j].tail(R).array().square()).sqrt().matrix();
+    e.mean_sigma = e.sigma.mean();
+    const GroundTruthCase& t = truth->at(job_truth[j]);
+    const Eigen::VectorXd ts = (t.sigma_normal.array().square() + t.sigma_tangent.array().square()).sqrt().matrix();
+    e.rms_error = std::sqrt((e.sigma - ts).squaredNorm() / static_cast<double>(R));
+    evaluations.emplace(job_keys[j], std::move(e));
+  }
+}
+
+double Report::table_entry(const std::string& fit, const std::string& subject, const std::vector<std::string>& motions) const {
+  std::vector<double> v;
+  for (const std::string& m : motions) {
+    const auto it = evaluations.find(key_of(fit, subject, m));
+    v.push_back(it == evaluations.end() ? kNaN : it->second.mean_sigma);
+  }
+  return mean_of(v);
+}
+
+double Report::table_error(const std::string& fit, const std::string& subject, const std::vector<std::string>& motions) const {
+  std::vector<double> v;
+  for (const std::string& m : motions) {
+    const auto it = evaluations.find(key_of(fit, subject, m));
+    v.push_back(it == evaluations.end() ? kNaN : it->second.rms_error);
+  }
+  return mean_of(v);
+}
+
+double Report::truth_entry(const std::string& subject, const std::vector<std::string>& motions) const {
+  std::vector<double> v;
+  for (const std::string& m : motions) v.push_back(truth->at(subject + "_" + m).mean_sigma());
+  return mean_of(v);
+}
+
+double Report::best_lambda(const std::string& tag) const {
+  double chosen = config.lambdas.front(), best_error = std::numeric_limits<double>::infinity();
+  for (double lambda : config.lambdas) {
+    std::vector<double> errors;
+    for (const std::string& s : config.train_subjects)
+      errors.push_back(table_error(fmt::format("cv/{}/{:g}/{}", tag, lambda, s), s, config.train_motions));
+    const double e = mean_of(errors);
+    if (std::isfinite(e) && e < best_error) {
+      best_error = e;
+      chosen = lambda;
+    }
+  }
+  return chosen;
+}
+
+void Report::write(RunFolder& run, nlohmann::json& summary) const {
+  const meshing::LayerMesh& mesh = parameterization->mesh();
+  const std::size_t columns = std::max(config.train_subjects.size(), config.test_subjects.size());
+  // ---- Table 2 -------------------------------------------------------------------------------------------
+  struct Row {
+    std::string label;
+    std::vector<std::string> subjects;
+    std::function<double(const std::string&, const std::vector<std::string>&)> value;
+    std::function<double(const std::string&, const std::vector<std::string>&)> error;
+  };
+  auto fit_row = [&](const std::string& label, std::function<std::string(const std::string&)> fit_of,
+                     const std::vector<std::string>& subjects) {
+    return Row{label, subjects,
+               [this, fit_of](const std::string& s, const std::vector<std::string>& m) { return table_entry(fit_of(s), s, m); },
+               [this, fit_of](const std::string& s, const std::vector<std::string>& m) { return table_error(fit_of(s), s, m); }};
+  };
+  const std::string l2 = fmt::format("{:g}", best.count("l2") ? best.at("l2") : config.lambdas.front());
+  const std::string ours = fmt::format("{:g}", best.count("ours") ? best.at("ours") : config.lambdas.front());
+  std::vector<Row> rows;
+  rows.push_back({"Ground truth", config.train_subjects,
+                  [this](const std::string& s, const std::vector<std::string>& m) { return truth_entry(s, m); },
+                  [](const std::string&, const std::vector<std::string>&) { return 0.0; }});
+  rows.push_back(fit_row("Independent", [](const std::string& s) { return "independent/" + s; }, config.train_subjects));
+  if (config.cross_validation) {
+    rows.push_back(fit_row("Cross-val. L2", [l2](const std::string& s) { return "cv/l2/" + l2 + "/" + s; }, config.train_subjects));
+    rows.push_back(fit_row("Cross-val. ours", [ours](const std::string& s) { return "cv/ours/" + ours + "/" + s; },
+                           config.train_subjects));
+  }
+  rows.push_back(fit_row("Full opt. L2", [](const std::string&) { return std::string("full/l2"); }, config.train_subjects));
+  rows.push_back(fit_row("Full opt. ours", [](const std::string&) { return std::string("full/ours"); }, config.train_subjects));
+  if (!config.test_subjects.empty()) {
+    rows.push_back(fit_row("Generaliz. L2", [](const std::string&) { return std::string("full/l2"); }, config.test_subjects));
+    rows.push_back(fit_row("Generaliz. ours", [](const std::string&) { return std::string("full/ours"); }, config.test_subjects));
+    rows.push_back({"Ground truth (test subjects)", config.test_subjects,
+                    [this](const std::string& s, const std::vector<std::string>& m) { return truth_entry(s, m); },
+                    [](const std::string&, const std::vector<std::string>&) { return 0.0; }});
+  }
+  auto table = [&](bool error) {
+    std::ostringstream csv;
+    csv << "row,subjects";
+    for (const char* split : {"train_motions", "test_motions"}) {
+      for (std::size_t c = 0; c < columns; ++c) csv << "," << split << "_subject_" << c + 1;
+      csv << "," << split << "_avg";
+    }
+    csv << "\n";
+    std::ostringstream md;
+    md << "| " << (error ? "RMS error of σ vs ground truth [mm]" : "σ [mm]") << " | subjects |";
+    for (const char* split : {"train", "test"}) {
+      for (std::size_t c = 0; c < columns; ++c) md << " " << split << " " << c + 1 << " |";
+      md << " " << split << " avg |";
+    }
+    md << "\n|---|---|";
+    for (std::size_t c = 0; c < 2 * (columns + 1); ++c) md << "---|";
+    md << "\n";
+    nlohmann::json rows_json = nlohmann::json::array();
+    for (const Row& row : rows) {
+      std::string names;
+      for (const std::string& s : row.subjects) names += (names.empty() ? "" : ";") + s;
+      csv << '"' << row.label << "\"," << names;
+      md << "| " << row.label << " | " << names << " |";
+      nlohmann::json rj = {{"row", row.label}, {"subjects", row.subjects}};
+      for (const auto* motions : {&config.train_motions, &config.test_motions}) {
+        std::vector<double> values;
+        for (std::size_t c = 0; c < columns; ++c) {
+          const double v = c < row.subjects.size() ? (error ? row.error(row.subjects[c], *motions) : row.value(row.subjects[c], *motions)) : kNaN;
+          if (c < row.subjects.size()) values.push_back(v);
+          csv << "," << cell(v);
+          md << " " << cell(v) << " |";
+        }
+        const double avg = mean_of(values);
+        csv << "," << cell(avg);
+        md << " **" << cell(avg) << "** |";
+        rj[motions == &config.train_motions ? "train_motions" : "test_motions"] = {{"values", values}, {"avg", avg}};
+      }
+      csv << "\n";
+      md << "\n";
+      rows_json.push_back(rj);
+    }
+    return std::make_tuple(csv.str(), md.str(), rows_json);
+  };
+  {
+    const auto [csv, md, js] = table(false);
+    write_text_atomically(run.stage("table2.csv"), csv);
+    std::ostringstream doc;
+    doc << "# Table 2: standard deviation of per-vertex dynamics [mm]\n\n"
+        << "Mean over the soft region's skin vertices of σ_i (physics.md §4), averaged over the motions of each split.\n"
+        << "Train motions: ";
+    for (const auto& m : config.train_motions) doc << m << " ";
+    doc << "· test motions: ";
+    for (const auto& m : config.test_motions) doc << m << " ";
+    doc << "· λ (L2) = " << l2 << ", λ (ours) = " << ours << " (chosen by cross-validation).\n\n" << md;
+    const auto [csv_e, md_e, js_e] = table(true);
+    doc << "\n## RMS error of the per-vertex σ against the ground truth [mm]\n\n" << md_e;
+    write_text_atomically(run.stage("table2.md"), doc.str());
+    write_text_atomically(run.stage("table2_error.csv"), csv_e);
+    summary["table2"] = js;
+    summary["table2_error"] = js_e;
+  }
+  // ---- Cross-validation and the λ sweep (Fig. 5) -----------------------------------------------------------
+  if (config.cross_validation) {
+    std::ostringstream cv, sweep;
+    cv << "regularizer,lambda,left_out,train_motions_rms_error_mm,test_motions_rms_error_mm,train_motions_mean_sigma_mm,"
+          "test_motions_mean_sigma_mm\n";
+    sweep << "regularizer,lambda,cv_train_motions_rms_error_mm,cv_test_motions_rms_error_mm\n";
+    chart::Chart chart;
+    chart.title = "Cross-validation error vs lambda";
+    chart.x_label = "lambda";
+    chart.y_label = "RMS error of sigma on left-out subjects [mm]";
+    chart.log_x = true;
+    nlohmann::json sweep_json = nlohmann::json::array();
+    std::size_t colour = 0;
+    for (const std::string tag : {"l2", "ours"}) {
+      chart::Series series;
+      series.label = tag == std::string("l2") ? "L2" : "ours";
+      series.line = chart::Line::solid;
+      series.color = chart::palette(colour++);
+      for (double lambda : config.lambdas) {
+        std::vector<double> tr, te;
+        for (const std::string& s : config.train_subjects) {
+          const std::string fit = fmt::format("cv/{}/{:g}/{}", tag, lambda, s);
+          tr.push_back(table_error(fit, s, config.train_motions));
+          te.push_back(table_error(fit, s, config.test_motions));
+          cv << tag << "," << lambda << "," << s << "," << cell(tr.back()) << "," << cell(te.back()) << ","
+             << cell(table_entry(fit, s, config.train_motions)) << "," << cell(table_entry(fit, s, config.test_motions)) << "\n";
+        }
+        sweep << tag << "," << lambda << "," << cell(mean_of(tr)) << "," << cell(mean_of(te)) << "\n";
+        series.x.push_back(lambda);
+        series.y.push_back(mean_of(tr));
+        sweep_json.push_back({{"regularizer", tag}, {"lambda", lambda}, {"train_motions", mean_of(tr)}, {"test_motions", mean_of(te)}});
+      }
+      chart.series.push_back(series);
+    }
+    write_text_atomically(run.stage("cross_validation.csv"), cv.str());
+    write_text_atomically(run.stage("lambda_sweep.csv"), sweep.str());
+    summary["lambda_sweep"] = sweep_json;
+    summary["lambda"] = best;
+    try {
+      chart::write_chart_png(run.stage("lambda_sweep.png"), chart);
+    } catch (const Error& e) {
+      logger()->warn("validate: lambda_sweep.png not written ({})", e.what());
+    }
+  }
+  // ---- Parameter covariance per control point (Fig. 7) and parameter recovery ------------------------------
+  const int N = parameterization->num_controls();
+  auto normalized_truth = [&](const std::string& subject) {
+    const GroundTruthCase& t = truth->at(subject + "_" + config.train_motions.front());
+    return material::normalize(t.kappa, bounds);
+  };
+  std::map<std::string, std::string> methods{{"independent", ""}, {"l2", "full/l2"}, {"ours", "full/ours"}};
+  vtk::Fields cov_fields;
+  std::ostringstream cov_csv;
+  cov_csv << "control_point,vertex,covariance_truth,covariance_independent,covariance_l2,covariance_ours\n";
+  std::map<std::string, Eigen::VectorXd> cov_norm;
+  auto covariance_norms = [&](const std::vector<material::KappaMatrix>& per_subject) {
+    Eigen::VectorXd norms(N);
+    for (int i = 0; i < N; ++i) {
+      Eigen::MatrixXd pts(static_cast<Eigen::Index>(per_subject.size()), 3);
+      for (std::size_t s = 0; s < per_subject.size(); ++s) pts.row(static_cast<Eigen::Index>(s)) = per_subject[s].row(i);
+      const Eigen::MatrixXd centred = pts.rowwise() - pts.colwise().mean();
+      norms[i] = (centred.transpose() * centred / static_cast<double>(pts.rows())).norm();
+    }
+    return norms;
+  };
+  {
+    std::vector<material::KappaMatrix> truth_k, indep_k, l2_k, ours_k;
+    for (const std::string& s : config.train_subjects) {
+      const material::KappaMatrix t = normalized_truth(s);
+      material::KappaMatrix at_controls(N, 3);
+      for (int i = 0; i < N; ++i) at_controls.row(i) = t.row(parameterization->control_region_vertices()[static_cast<std::size_t>(i)]);
+      truth_k.push_back(at_controls);
+      const body::Betas& beta = truth->at(s + "_" + config.train_motions.front()).beta;
+      indep_k.push_back(fits.at("independent/" + s).kappa_normalized(beta, bounds));
+      l2_k.push_back(fits.at("full/l2").kappa_normalized(beta, bounds));
+      ours_k.push_back(fits.at("full/ours").kappa_normalized(beta, bounds));
+    }
+    cov_norm["truth"] = covariance_norms(truth_k);
+    cov_norm["independent"] = covariance_norms(indep_k);
+    cov_norm["l2"] = covariance_norms(l2_k);
+    cov_norm["ours"] = covariance_norms(ours_k);
+    for (int i = 0; i < N; ++i)
+      cov_csv << i << "," << parameterization->control_vertices()[static_cast<std::size_t>(i)] << ","
+              << fmt::format("{:.6g},{:.6g},{:.6g},{:.6g}", cov_norm["truth"][i], cov_norm["independent"][i], cov_norm["l2"][i],
+                             cov_norm["ours"][i])
+              << "\n";
+    for (const auto& [tag, norms] : cov_norm)
+      cov_fields.point_data.push_back({"covariance_" + tag, on_body(*model, mesh, parameterization->phi() * norms)});
+    write_text_atomically(run.stage("covariance.csv"), cov_csv.str());
+    summary["covariance_mean"] = {{"truth", cov_norm["truth"].mean()}, {"independent", cov_norm["independent"].mean()},
+                                  {"l2", cov_norm["l2"].mean()}, {"ours", cov_norm["ours"].mean()}};
+  }
+  // Parameter recovery: the fitted field φ κ̂ against the true κ̂ on the region vertices.
+  {
+    std::ostringstream pe;
+    pe << "method,subject,split,thickness_rms,young_tangent_rms,young_normal_rms,young_tangent_log_rms,young_normal_log_rms\n";
+    nlohmann::json pj = nlohmann::json::array();
+    auto add = [&](const std::string& method, const std::string& fit, const std::string& subject, const std::string& split) {
+      const GroundTruthCase& t = truth->at(subject + "_" + config.train_motions.front());
+      const material::KappaMatrix fitted = parameterization->field(fits.at(fit).kappa(t.beta, bounds));
+      const material::KappaMatrix fn = material::normalize(fitted, bounds), tn = material::normalize(t.kappa, bounds);
+      const auto R = static_cast<double>(fn.rows());
+      const Eigen::RowVector3d rms = ((fn - tn).array().square().colwise().sum() / R).sqrt().matrix();
+      const double lt = std::sqrt((fitted.col(1).array() / t.kappa.col(1).array()).log().square().mean());
+      const double ln = std::sqrt((fitted.col(2).array() / t.kappa.col(2).array()).log().square().mean());
+      pe << method << "," << subject << "," << split << fmt::format(",{:.4f},{:.4f},{:.4f},{:.4f},{:.4f}\n", rms[0], rms[1], rms[2], lt, ln);
+      pj.push_back({{"method", method}, {"subject", subject}, {"split", split}, {"thickness_rms", rms[0]},
+                    {"young_tangent_rms", rms[1]}, {"young_normal_rms", rms[2]}, {"young_tangent_log_rms", lt},
+                    {"young_normal_log_rms", ln}});
+    };
+    for (const std::string& s : config.train_subjects) {
+      add("Independent", "independent/" + s, s, "train");
+      add("Full opt. L2", "full/l2", s, "train");
+      add("Full opt. ours", "full/ours", s, "train");
+    }
+    for (const std::string& s : config.test_subjects) {
+      add("Generaliz. L2", "full/l2", s, "test");
+      add("Generaliz. ours", "full/ours", s, "test");
+    }
+    write_text_atomically(run.stage("parameter_error.csv"), pe.str());
+    summary["parameter_error"] = pj;
+  }
+  // ---- Dynamics fields on the template (Figures 3, 4, 6, 8) -------------------------------------------------
+  {
+    vtk::Fields fields = cov_fields;
+    auto motion_mean = [&](const std::string& fit, const std::string& subject) {
+      Eigen::VectorXd sum;
+      int n = 0;
+      for (const std::string& m : config.train_motions) {
+        const auto it = evaluations.find(key_of(fit, subject, m));
+        if (it == evaluations.end()) continue;
+        sum = n == 0 ? it->second.sigma : Eigen::VectorXd(sum + it->second.sigma);
+        ++n;
+      }
+      return n ? Eigen::VectorXd(sum / n) : Eigen::VectorXd();
+    };
+    std::vector<std::string> all = config.train_subjects;
+    all.insert(all.end(), config.test_subjects.begin(), config.test_subjects.end());
+    for (const std::string& s : all) {
+      Eigen::VectorXd t = Eigen::VectorXd::Zero(truth->at(s + "_" + config.train_motions.front()).sigma_normal.size());
+      for (const std::string& m : config.train_motions) {
+        const GroundTruthCase& c = truth->at(s + "_" + m);
+        t += (c.sigma_normal.array().square() + c.sigma_tangent.array().square()).sqrt().matrix();
+      }
+      fields.point_data.push_back({"sigma_truth_" + s, on_body(*model, mesh, t / static_cast<double>(config.train_motions.size()))});
+      std::vector<std::pair<std::string, std::string>> fit_list{{"full_l2", "full/l2"}, {"full_ours", "full/ours"}};
+      if (fits.count("independent/" + s)) fit_list.emplace_back("independent", "independent/" + s);
+      if (config.cross_validation && fits.count("cv/l2/" + l2 + "/" + s)) fit_list.emplace_back("cv_l2", "cv/l2/" + l2 + "/" + s);
+      if (config.cross_validation && fits.count("cv/ours/" + ours + "/" + s))
+        fit_list.emplace_back("cv_ours", "cv/ours/" + ours + "/" + s);
+      for (const auto& [tag, fit] : fit_list) {
+        const Eigen::VectorXd v = motion_mean(fit, s);
+        if (v.size()) fields.point_data.push_back({"sigma_" + tag + "_" + s, on_body(*model, mesh, v)});
+      }
+    }
+    vtk::write_surface(run.stage("dynamics.vtp"), model->v_template, model->faces, fields);
+  }
+  // ---- Fits and fitted materials ----------------------------------------------------------------------------
+  {
+    std::ostringstream fc;
+    fc << "fit,controls,iterations,loss_fit_mm2,loss_reg,simulations,jacobians,seconds,reason\n";
+    nlohmann::json fj = nlohmann::json::array();
+    for (const auto& [name, fit] : fits)
+      for (const reduced::FitStageReport& s : fit.stages) {
+        fc << name << "," << s.controls << "," << s.iterations << fmt::format(",{:.6g},{:.6g},", s.loss_fit, s.loss_reg)
+           << s.simulations << "," << s.jacobians << fmt::format(",{:.2f},", s.seconds) << s.reason << "\n";
+        fj.push_back({{"fit", name}, {"controls", s.controls}, {"iterations", s.iterations}, {"loss_fit", s.loss_fit},
+                      {"loss_reg", s.loss_reg}, {"simulations", s.simulations}, {"seconds", s.seconds}, {"reason", s.reason}});
+      }
+    write_text_atomically(run.stage("fits.csv"), fc.str());
+    summary["fits"] = fj;
+    std::vector<std::string> all = config.train_subjects;
+    all.insert(all.end(), config.test_subjects.begin(), config.test_subjects.end());
+    for (const std::string tag : {"l2", "ours"})
+      for (const std::string& s : all) {
+        const GroundTruthCase& t = truth->at(s + "_" + config.train_motions.front());
+        material::MaterialFile file;
+        file.body = model->name;
+        file.subject = s;
+        file.bounds = bounds;
+        const material::KappaMatrix k = fits.at("full/" + tag).kappa(t.beta, bounds);
+        for (int i = 0; i < N; ++i) {
+          material::MaterialControlPoint cp;
+          cp.vertex = parameterization->control_vertices()[static_cast<std::size_t>(i)];
+          cp.kappa = material::from_row(k.row(i));
+          file.control_points.push_back(cp);
+        }
+        material::save_material_file(run.stage("materials/" + tag + "/" + s + ".toml"), file,
+                                     fmt::format("Fitted by sflsh validate (full optimization, {} regularizer, λ = {:g})",
+                                                 tag == std::string("l2") ? "L2" : "local", best.count(tag) ? best.at(tag) : 0.0));
+      }
+  }
+}
+
+}  // namespace sflsh::validate

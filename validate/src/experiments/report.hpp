@@ -1,0 +1,47 @@
+#pragma once
+// Evaluations of fitted models and the report files of `sflsh validate` (Table 2, cross-validation and λ
+// sweep, parameter covariance, parameter recovery, dynamics fields). Private to the experiments.
+#include <sflsh/core/run_folder.hpp>
+#include <sflsh/reduced/elasticity_fit.hpp>
+#include <sflsh/validate/experiments.hpp>
+#include <sflsh/validate/ground_truth.hpp>
+
+#include <map>
+#include <memory>
+#include <string>
+
+namespace sflsh::validate {
+
+struct Evaluation {
+  Eigen::VectorXd sigma;      ///< per region vertex [mm]
+  double mean_sigma = 0.0;    ///< [mm]
+  double rms_error = 0.0;     ///< RMS over region vertices of σ − σ* [mm]
+};
+
+struct Report {
+  ValidateConfig config;
+  material::ParameterBounds bounds;
+  const body::BodyModel* model = nullptr;
+  const reduced::LayerParameterization* parameterization = nullptr;   ///< of the final stage
+  const std::map<std::string, GroundTruthCase>* truth = nullptr;      ///< key "<subject>_<motion>"
+  std::map<std::string, reduced::FitResult> fits;   ///< "independent/S", "cv/<reg>/<λ>/S", "full/<reg>"
+  std::map<std::string, double> best;               ///< λ chosen per regularizer tag
+  std::map<std::string, Evaluation> evaluations;    ///< "<fit>|<subject>|<motion>"
+
+  /// Simulates every (fit, subject, motion) the report needs and has not evaluated yet.
+  void evaluate(reduced::SimulationPool& pool, const reduced::ReducedModel& reduced_model, const reduced::ReducedOptions& options,
+                const std::map<std::string, std::unique_ptr<reduced::DynamicsCase>>& cases);
+  /// λ with the least cross-validation error (train motions of the left-out subjects) for "l2" / "ours".
+  double best_lambda(const std::string& tag) const;
+  /// Writes every report file into the run folder and adds their key numbers to `summary`.
+  void write(RunFolder& run, nlohmann::json& summary) const;
+
+  /// Subjects a fit is evaluated on.
+  std::vector<std::string> evaluated_subjects(const std::string& fit) const;
+  /// Mean of the per-motion mean σ over `motions` (a Table 2 entry) [mm]; NaN when missing.
+  double table_entry(const std::string& fit, const std::string& subject, const std::vector<std::string>& motions) const;
+  double table_error(const std::string& fit, const std::string& subject, const std::vector<std::string>& motions) const;
+  double truth_entry(const std::string& subject, const std::vector<std::string>& motions) const;
+};
+
+}  // namespace sflsh::validate
