@@ -1,0 +1,184 @@
+// DYNA HDF5 files: the writer/reader round trip, float32 input as h5py writes it, attributes, listing, and
+// one clear one-line error per kind of malformed file.
+#include <sflsh/validate/dyna_file.hpp>
+
+#include "error_of.hpp"
+#include "scratch_dir.hpp"
+#include "synthetic_body.hpp"
+
+#include <H5Cpp.h>
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <limits>
+
+namespace sflsh::validate {
+namespace {
+
+using ::testing::HasSubstr;
+using sflsh::testing::error_of;
+
+RowMatrixX3i small_faces() {
+  RowMatrixX3i f(2, 3);
+  f << 0, 1, 2, 1, 3, 2;
+  return f;
+}
+
+DynaSequence ramp(const std::string& key, int vertices, int frames, double offset = 0.0) {
+  DynaSequence s;
+  s.key = key;
+  for (int t = 0; t < frames; ++t) {
+    RowMatrixX3d f(vertices, 3);
+    for (int v = 0; v < vertices; ++v)
+      for (int c = 0; c < 3; ++c) f(v, c) = offset + 100.0 * t + 10.0 * v + c + 0.125;
+    s.frames.push_back(f);
+  }
+  return s;
+}
+
+/// Writes a raw HDF5 file: `faces` (unless empty) and one dataset of arbitrary shape and type.
+void write_raw(const std::filesystem::path& path, const RowMatrixX3i& faces, const std::string& name, const std::vector<hsize_t>& dims,
+               const std::vector<double>& values, const H5::PredType& file_type = H5::PredType::IEEE_F64LE) {
+  H5::H5File file(path.string(), H5F_ACC_TRUNC);
+  if (faces.rows() > 0) {
+    const hsize_t fd[2] = {static_cast<hsize_t>(faces.rows()), 3};
+    file.createDataSet("faces", H5::PredType::STD_I64LE, H5::DataSpace(2, fd)).write(faces.data(), H5::PredType::NATIVE_INT);
+  }
+  if (!name.empty())
+    file.createDataSet(name, file_type, H5::DataSpace(static_cast<int>(dims.size()), dims.data()))
+        .write(values.data(), H5::PredType::NATIVE_DOUBLE);
+}
+
+TEST(DynaFile, WriterAndReaderRoundTripWithAttributes) {
+  const auto dir = sflsh::testing::scratch_dir();
+  const auto path = dir / "dyna_female.h5";
+  Attributes file_attributes;
+  file_attributes.strings["gender"] = "female";
+  file_attributes.numbers["fps"] = {120.0};
+  DynaSequence a = ramp("50004_jiggle_on_toes", 4, 3);
+  a.attributes.numbers["beta"] = {1, 2, 3, 4, 5, 6, 7, 8, 9, 10};
+  a.attributes.strings["source"] = "synthetic";
+  DynaSequence b = ramp("50004_shake_hips", 4, 5, 7.0);
+  b.fps = 30.0;
+  const DynaSequence c = ramp("50020_one_leg_jump", 4, 2);
+  write_dyna_file(path, small_faces(), {a, b, c}, file_attributes);
+
+  const DynaFile file(path);
+  EXPECT_EQ(file.keys(), (std::vector<std::string>{"50004_jiggle_on_toes", "50004_shake_hips", "50020_one_leg_jump"}));
+  EXPECT_EQ(file.subjects(), (std::vector<std::string>{"50004", "50020"}));
+  EXPECT_EQ(file.sequences("50004"), (std::vector<std::string>{"jiggle_on_toes", "shake_hips"}));
+  EXPECT_EQ(file.num_vertices(), 4);
+  EXPECT_EQ(file.faces(), small_faces());
+  EXPECT_EQ(file.attributes().strings.at("gender"), "female");
+  EXPECT_EQ(file.info("50004_shake_hips").frames, 5);
+  EXPECT_EQ(file.info("50004_shake_hips").dtype, "float64");
+
+  const DynaSequence ra = file.read("50004_jiggle_on_toes");
+  ASSERT_EQ(ra.num_frames(), 3);
+  for (int t = 0; t < 3; ++t) EXPECT_EQ(ra.frames[static_cast<std::size_t>(t)], a.frames[static_cast<std::size_t>(t)]);  // float64: bit-exact
+  EXPECT_EQ(ra.attributes.numbers.at("beta"), a.attributes.numbers.at("beta"));
+  EXPECT_EQ(ra.attributes.strings.at("source"), "synthetic");
+  EXPECT_EQ(ra.fps, 120.0);                       // from the file attribute
+  EXPECT_EQ(file.read("50004_shake_hips").fps, 30.0);  // the dataset's own attribute wins
+  EXPECT_EQ(file.read("50004_shake_hips").frames[4], b.frames[4]);
+}
+
+TEST(DynaFile, ReadsFloat32VertexMajorLayoutAndDefaultsTo60Fps) {
+  const auto path = sflsh::testing::scratch_dir() / "f32.h5";
+  // (V, 3, T) = (4, 3, 2): value = 10v + c + 0.5t, exactly representable in float32.
+  std::vector<double> values;
+  for (int v = 0; v < 4; ++v)
+    for (int c = 0; c < 3; ++c)
+      for (int t = 0; t < 2; ++t) values.push_back(10.0 * v + c + 0.5 * t);
+  write_raw(path, small_faces(), "50002_hips", {4, 3, 2}, values, H5::PredType::IEEE_F32LE);
+  const DynaFile file(path);
+  EXPECT_EQ(file.info("50002_hips").dtype, "float32");
+  const DynaSequence s = file.read("50002_hips");
+  EXPECT_EQ(s.fps, kDynaFps);
+  ASSERT_EQ(s.num_frames(), 2);
+  EXPECT_EQ(s.frames[1](3, 2), 32.5);
+  EXPECT_EQ(s.frames[0](2, 1), 21.0);
+}
+
+TEST(DynaFile, MalformedFilesGiveOneLineErrors) {
+  const auto dir = sflsh::testing::scratch_dir();
+  auto one_line = [](const std::string& message) { return message.find('\n') == std::string::npos; };
+
+  const auto text = dir / "text.h5";
+  std::ofstream(text) << "not hdf5\n";
+  std::string e = error_of([&] { DynaFile f(text); });
+  EXPECT_THAT(e, HasSubstr("not an HDF5 file"));
+  EXPECT_TRUE(one_line(e)) << e;
+
+  EXPECT_THAT(error_of([&] { DynaFile f(dir / "missing.h5"); }), HasSubstr("no such file"));
+
+  const auto no_faces = dir / "no_faces.h5";
+  write_raw(no_faces, RowMatrixX3i(), "50002_hips", {4, 3, 2}, std::vector<double>(24, 0.0));
+  e = error_of([&] { DynaFile f(no_faces); });
+  EXPECT_THAT(e, HasSubstr("no 'faces' dataset"));
+  EXPECT_TRUE(one_line(e)) << e;
+
+  const auto rank2 = dir / "rank2.h5";
+  write_raw(rank2, small_faces(), "50002_hips", {4, 3}, std::vector<double>(12, 0.0));
+  e = error_of([&] { DynaFile f(rank2); });
+  EXPECT_THAT(e, HasSubstr("dataset '50002_hips' has shape (4, 3), expected (V, 3, T)"));
+  EXPECT_TRUE(one_line(e)) << e;
+
+  const auto transposed = dir / "transposed.h5";
+  write_raw(transposed, small_faces(), "50002_hips", {2, 4, 3}, std::vector<double>(24, 0.0));
+  EXPECT_THAT(error_of([&] { DynaFile f(transposed); }), HasSubstr("has shape (2, 4, 3), expected (V, 3, T)"));
+
+  const auto out_of_range = dir / "range.h5";
+  RowMatrixX3i faces = small_faces();
+  faces(1, 1) = 9;
+  write_raw(out_of_range, faces, "50002_hips", {4, 3, 2}, std::vector<double>(24, 0.0));
+  EXPECT_THAT(error_of([&] { DynaFile f(out_of_range); }), HasSubstr("refers to vertex 9, but the sequences have 4 vertices"));
+
+  const auto nan = dir / "nan.h5";
+  std::vector<double> values(24, 0.0);
+  values[(3 * 2 + 1) * 2 + 1] = std::numeric_limits<double>::quiet_NaN();  // vertex 2, y, frame 1
+  write_raw(nan, small_faces(), "50002_hips", {4, 3, 2}, values);
+  const DynaFile with_nan(nan);
+  e = error_of([&] { with_nan.read("50002_hips"); });
+  EXPECT_THAT(e, HasSubstr("dataset '50002_hips' has a non-finite value in frame 1 (vertex 2)"));
+  EXPECT_TRUE(one_line(e)) << e;
+
+  e = error_of([&] { with_nan.read("50002_knees"); });
+  EXPECT_THAT(e, HasSubstr("no sequence '50002_knees'; available: 50002_hips"));
+  EXPECT_TRUE(one_line(e)) << e;
+
+  const body::BodyModel model = sflsh::testing::synthetic_body();
+  e = error_of([&] { with_nan.require_vertices(model); });
+  EXPECT_THAT(e, HasSubstr(fmt::format("the registrations have 4 vertices, but the body model 'synthetic' has {}", model.num_vertices())));
+  EXPECT_TRUE(one_line(e)) << e;
+}
+
+TEST(DynaFile, WriterRejectsBadSequencesAndLeavesNoFileBehind) {
+  const auto dir = sflsh::testing::scratch_dir();
+  const auto path = dir / "out.h5";
+  {
+    DynaWriter writer(path, small_faces());
+    writer.add(ramp("50004_hips", 4, 2));
+    DynaSequence bad = ramp("50004_knees", 4, 2);
+    bad.frames[1](0, 0) = std::numeric_limits<double>::infinity();
+    EXPECT_THAT(error_of([&] { writer.add(bad); }), HasSubstr("sequence '50004_knees' frame 1 has a non-finite value"));
+    EXPECT_THAT(error_of([&] { writer.add(ramp("50004_punching", 5, 2)); }), HasSubstr("has 5 vertices, earlier sequences have 4"));
+    EXPECT_THAT(error_of([&] { writer.add(ramp("faces", 4, 2)); }), HasSubstr("not a valid sequence key"));
+  }  // destroyed without commit
+  EXPECT_FALSE(std::filesystem::exists(path));
+  EXPECT_EQ(sflsh::testing::count_entries(dir), 0u);  // the temporary is gone too
+  EXPECT_THAT(error_of([&] { write_dyna_file(path, small_faces(), {ramp("50004_hips", 3, 2)}); }),
+              HasSubstr("the faces refer to vertex 3, but sequence '50004_hips' has 3 vertices"));
+  EXPECT_FALSE(std::filesystem::exists(path));
+}
+
+TEST(DynaFile, KeysSplitIntoSubjectAndSequence) {
+  EXPECT_EQ(subject_of("50004_one_leg_jump"), "50004");
+  EXPECT_EQ(sequence_of("50004_one_leg_jump"), "one_leg_jump");
+  EXPECT_EQ(subject_of("plain"), "plain");
+  EXPECT_EQ(sequence_of("plain"), "");
+}
+
+}  // namespace
+}  // namespace sflsh::validate

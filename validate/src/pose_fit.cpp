@@ -1,0 +1,324 @@
+// Per-frame pose fit and shared-β fit by Levenberg–Marquardt (Eigen's MINPACK port); see pose_fit.hpp.
+#include <sflsh/validate/pose_fit.hpp>
+
+#include "lm_status.hpp"
+
+#include <sflsh/core/error.hpp>
+#include <sflsh/core/log.hpp>
+#include <sflsh/core/progress.hpp>
+
+#include <unsupported/Eigen/LevenbergMarquardt>
+
+#include <Eigen/QR>
+#include <Eigen/SVD>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+namespace sflsh::validate {
+
+namespace {
+
+/// The vertices the fit uses (every stride-th) and √w of each.
+struct FitRows {
+  std::vector<int> vertices;
+  Eigen::VectorXd scales;
+};
+
+FitRows fit_rows(Eigen::Index n, const PoseFitOptions& options) {
+  std::vector<char> soft(static_cast<std::size_t>(n), 0);
+  for (int v : options.soft_vertices) {
+    require(v >= 0 && v < n, "pose fit: soft-region vertex {} outside the body's {} vertices", v, n);
+    soft[static_cast<std::size_t>(v)] = 1;
+  }
+  FitRows rows;
+  for (Eigen::Index i = 0; i < n; i += options.vertex_stride) rows.vertices.push_back(static_cast<int>(i));
+  rows.scales.resize(static_cast<Eigen::Index>(rows.vertices.size()));
+  for (std::size_t s = 0; s < rows.vertices.size(); ++s)
+    rows.scales[static_cast<Eigen::Index>(s)] = soft[static_cast<std::size_t>(rows.vertices[s])] ? std::sqrt(options.soft_weight) : 1.0;
+  return rows;
+}
+
+/// r_s = √w_s (v_i − y_i) for the fit rows i = vertices[s].
+void frame_residual(const RowMatrixX3d& target, const FitRows& rows, const RowMatrixX3d& v, Eigen::VectorXd& r) {
+  r.resize(3 * static_cast<Eigen::Index>(rows.vertices.size()));
+  for (std::size_t s = 0; s < rows.vertices.size(); ++s) {
+    const int i = rows.vertices[s];
+    const auto e = static_cast<Eigen::Index>(s);
+    r.segment<3>(3 * e) = rows.scales[e] * (v.row(i) - target.row(i)).transpose();
+  }
+}
+
+/// r(δ) for parameters base + δ. LM works on the offset δ from the warm start, starting at δ = 0 exactly:
+/// MINPACK bounds its first step by factor·‖D x₀‖ (factor itself only when x₀ = 0), so a start with tiny
+/// non-zero entries (a rest pose, a pose ~1e-17 from zero) would crawl for dozens of iterations.
+struct FrameResidual : Eigen::DenseFunctor<double> {
+  const PosedModel* model;
+  const RowMatrixX3d* target;
+  const FitRows* rows;
+  PoseParameters base;
+  FrameResidual(const PosedModel& m, const RowMatrixX3d& y, const FitRows& fr, const PoseParameters& start)
+      : DenseFunctor<double>(kNumPoseParameters, static_cast<int>(3 * fr.vertices.size())), model(&m), target(&y), rows(&fr), base(start) {}
+
+  int operator()(const Eigen::VectorXd& delta, Eigen::VectorXd& r) const {
+    frame_residual(*target, *rows, model->posed(base + delta), r);
+    return r.allFinite() ? 0 : -1;  // a negative value stops LM with UserAsked
+  }
+  int df(const Eigen::VectorXd& delta, Eigen::MatrixXd& jacobian) const {
+    RowMatrixX3d v;
+    model->posed_and_jacobian(base + delta, v, jacobian, &rows->vertices);
+    for (Eigen::Index s = 0; s < rows->scales.size(); ++s) jacobian.middleRows<3>(3 * s) *= rows->scales[s];
+    return jacobian.allFinite() ? 0 : -1;
+  }
+};
+
+template <typename Solver>
+void configure(Solver& lm, const PoseFitOptions& options, int max_evaluations) {
+  lm.setMaxfev(max_evaluations);
+  lm.setXtol(options.tolerance);
+  lm.setFtol(options.tolerance);
+}
+
+double rms_over(const RowMatrixX3d& v, const RowMatrixX3d& y, const std::vector<char>* exclude) {
+  double sum = 0.0;
+  Eigen::Index count = 0;
+  for (Eigen::Index i = 0; i < v.rows(); ++i) {
+    if (exclude && (*exclude)[static_cast<std::size_t>(i)]) continue;
+    sum += (v.row(i) - y.row(i)).squaredNorm();
+    ++count;
+  }
+  return count ? std::sqrt(sum / static_cast<double>(count)) : 0.0;
+}
+
+/// ‖r‖ below which a fit over `vertices` rows counts as exact: RMS absolute_tolerance per vertex.
+double absolute_norm(const PoseFitOptions& options, std::size_t vertices) {
+  return options.absolute_tolerance * std::sqrt(static_cast<double>(vertices));
+}
+
+/// One LM solve of a frame's pose on the fit rows; `parameters` in/out.
+FrameFitReport solve_frame(const PosedModel& model, const RowMatrixX3d& target, const FitRows& rows, const PoseFitOptions& options,
+                           PoseParameters& parameters) {
+  FrameResidual residual(model, target, rows, parameters);
+  Eigen::LevenbergMarquardt<FrameResidual> lm(residual);
+  configure(lm, options, options.max_evaluations);
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(kNumPoseParameters);
+  const detail::LmOutcome outcome = detail::minimize_until(lm, x, absolute_norm(options, rows.vertices.size()));
+  FrameFitReport report;
+  report.iterations = static_cast<int>(lm.iterations());
+  report.evaluations = static_cast<int>(lm.nfev());
+  report.status = outcome.name();
+  report.converged = outcome.converged();
+  require(outcome.status != Eigen::LevenbergMarquardtSpace::UserAsked && x.allFinite(),
+          "pose fit: the residual became non-finite (NaN/Inf) after {} evaluations", report.evaluations);
+  parameters += x;
+  logger()->trace("pose fit: {} evaluations, {}", report.evaluations, report.status);
+  return report;
+}
+
+/// Variable projection over β: residual r(β) = r(β, θ*(β)) over the shape frames, with the poses θ*(β)
+/// re-fitted (warm-started) at every evaluation; Jacobian (I − Q_θQ_θᵀ) J_β per frame (Kaufman 1975).
+struct ShapeResidual : Eigen::DenseFunctor<double> {
+  const body::BodyModel* model;
+  const std::vector<const RowMatrixX3d*>* targets;
+  const FitRows* rows;
+  const PoseFitOptions* options;
+  std::vector<PoseParameters>* poses;   // warm starts, updated by every evaluation
+  ShapeResidual(const body::BodyModel& m, const std::vector<const RowMatrixX3d*>& y, const FitRows& fr, const PoseFitOptions& o,
+                std::vector<PoseParameters>& p)
+      : DenseFunctor<double>(body::kNumBetas, static_cast<int>(3 * fr.vertices.size() * y.size())),
+        model(&m), targets(&y), rows(&fr), options(&o), poses(&p) {}
+
+  PosedModel posed_model(const Eigen::VectorXd& beta) const {
+    RowMatrixX3d shaped = body::shaped_template(*model, beta);
+    const body::JointPositions joints = body::regress_joints(*model, shaped);
+    return PosedModel(*model, std::move(shaped), joints, options->world_from_body);
+  }
+
+  /// Re-fits every shape frame's pose at β and returns the stacked residual.
+  int operator()(const Eigen::VectorXd& beta, Eigen::VectorXd& r) const {
+    if (!beta.allFinite()) return -1;
+    const PosedModel m = posed_model(beta);
+    const auto block = 3 * static_cast<Eigen::Index>(rows->vertices.size());
+    r.resize(block * static_cast<Eigen::Index>(targets->size()));
+    for (std::size_t f = 0; f < targets->size(); ++f) {
+      solve_frame(m, *(*targets)[f], *rows, *options, (*poses)[f]);
+      Eigen::VectorXd rf;
+      frame_residual(*(*targets)[f], *rows, m.posed((*poses)[f]), rf);
+      r.segment(block * static_cast<Eigen::Index>(f), block) = rf;
+    }
+    return r.allFinite() ? 0 : -1;
+  }
+
+  int df(const Eigen::VectorXd& beta, Eigen::MatrixXd& jacobian) const {
+    const auto block = 3 * static_cast<Eigen::Index>(rows->vertices.size());
+    jacobian.resize(block * static_cast<Eigen::Index>(targets->size()), body::kNumBetas);
+    const PosedModel m = posed_model(beta);
+    const double h = 1e-6;   // central differences: O(h²) truncation, round-off ε/h ≈ 1e-10 on O(1) entries
+    for (std::size_t f = 0; f < targets->size(); ++f) {
+      const PoseParameters& p = (*poses)[f];
+      Eigen::MatrixXd j_theta;
+      RowMatrixX3d v;
+      m.posed_and_jacobian(p, v, j_theta, &rows->vertices);
+      Eigen::MatrixXd j_beta(block, body::kNumBetas);
+      for (int k = 0; k < body::kNumBetas; ++k) {
+        Eigen::VectorXd plus = beta, minus = beta;
+        plus[k] += h;
+        minus[k] -= h;
+        const RowMatrixX3d dv = (posed_model(plus).posed(p) - posed_model(minus).posed(p)) / (2 * h);
+        for (std::size_t s = 0; s < rows->vertices.size(); ++s) j_beta.block<3, 1>(3 * static_cast<Eigen::Index>(s), k) = dv.row(rows->vertices[s]).transpose();
+      }
+      for (Eigen::Index s = 0; s < rows->scales.size(); ++s) {
+        j_theta.middleRows<3>(3 * s) *= rows->scales[s];
+        j_beta.middleRows<3>(3 * s) *= rows->scales[s];
+      }
+      // Project out the range of the pose Jacobian (only its numerically independent columns).
+      const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(j_theta);
+      Eigen::MatrixXd rotated = qr.householderQ().adjoint() * j_beta;
+      rotated.topRows(qr.rank()).setZero();
+      jacobian.middleRows(block * static_cast<Eigen::Index>(f), block) = qr.householderQ() * rotated;
+    }
+    return jacobian.allFinite() ? 0 : -1;
+  }
+};
+
+}  // namespace
+
+PoseParameters rigid_initial_pose(const RowMatrixX3d& shaped, const Eigen::Vector3d& root, const RowMatrixX3d& target,
+                                  const Eigen::VectorXd& weights, const Eigen::Matrix3d& world_from_body) {
+  // Weighted Kabsch: y ≈ R x + t in the body frame (targets rotated back by world_from_body).
+  const RowMatrixX3d y = target * world_from_body;  // rows R_wbᵀ y_i
+  const double total = weights.sum();
+  const Eigen::RowVector3d cx = (weights.asDiagonal() * shaped).colwise().sum() / total;
+  const Eigen::RowVector3d cy = (weights.asDiagonal() * y).colwise().sum() / total;
+  const Eigen::Matrix3d covariance = (shaped.rowwise() - cx).transpose() * weights.asDiagonal() * (y.rowwise() - cy);
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(covariance, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d d = Eigen::Matrix3d::Identity();
+  d(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1.0 : 1.0;
+  const Eigen::Matrix3d rotation = svd.matrixV() * d * svd.matrixU().transpose();
+  const Eigen::Vector3d t = cy.transpose() - rotation * cx.transpose();
+  // SMPL's root rotates about J_0: v = R (x − J_0) + J_0 + trans, so trans = t + R J_0 − J_0.
+  PoseParameters p = PoseParameters::Zero();
+  const Eigen::AngleAxisd axis_angle(rotation);
+  p.head<3>() = axis_angle.angle() * axis_angle.axis();
+  p.tail<3>() = t + rotation * root - root;
+  return p;
+}
+
+FrameFitReport fit_frame(const body::BodyModel& model, const RowMatrixX3d& shaped, const body::JointPositions& joints,
+                         const RowMatrixX3d& target, const PoseFitOptions& options, PoseParameters& parameters) {
+  const Eigen::Index n = model.num_vertices();
+  require(target.rows() == n, "pose fit: {} target vertices for a body of {}", target.rows(), n);
+  require(options.vertex_stride >= 1, "pose fit: vertex_stride must be at least 1, got {}", options.vertex_stride);
+  const PosedModel posed_model(model, shaped, joints, options.world_from_body);
+  const FitRows rows = fit_rows(n, options);
+  FrameFitReport report = solve_frame(posed_model, target, rows, options, parameters);
+  const RowMatrixX3d v = posed_model.posed(parameters);
+  std::vector<char> soft(static_cast<std::size_t>(n), 0);
+  for (int s : options.soft_vertices) soft[static_cast<std::size_t>(s)] = 1;
+  report.rms = rms_over(v, target, nullptr);
+  report.rms_rigid = rms_over(v, target, &soft);
+  return report;
+}
+
+PoseFitResult fit_motion(const body::BodyModel& model, const std::vector<RowMatrixX3d>& registered, double fps,
+                         const std::optional<body::Betas>& beta, const PoseFitOptions& options) {
+  const auto t0 = std::chrono::steady_clock::now();
+  require(!registered.empty(), "pose fit: no frames");
+  require(options.soft_weight >= 0.0 && options.soft_weight <= 1.0, "pose fit: soft_weight must be in [0, 1], got {}", options.soft_weight);
+  require(options.max_evaluations > 0 && options.shape_frames > 0 && options.shape_evaluations > 0 && options.vertex_stride >= 1,
+          "pose fit: iteration limits and the vertex stride must be positive");
+  const Eigen::Index n = model.num_vertices();
+  for (std::size_t t = 0; t < registered.size(); ++t) {
+    require(registered[t].rows() == n, "pose fit: frame {} has {} vertices, the body has {}", t, registered[t].rows(), n);
+    require(registered[t].allFinite(), "pose fit: frame {} has a non-finite vertex position", t);
+  }
+  const auto T = static_cast<int>(registered.size());
+  const FitRows rows = fit_rows(n, options);
+  Eigen::VectorXd weights = Eigen::VectorXd::Ones(n);   // for the rigid start
+  for (int v : options.soft_vertices) weights[v] = options.soft_weight;
+
+  PoseFitResult result;
+  result.beta = beta.value_or(body::Betas::Zero());
+  result.beta_fitted = !beta.has_value();
+
+  if (result.beta_fitted) {
+    // Warm starts for the shape frames at β = 0: a chain of pose fits over every c-th frame (≤ 40 frames),
+    // each from the previous one (a rest-pose start is fine for frame 0 but slow for a distant pose).
+    const int chain_stride = std::max(1, T / 40);
+    std::vector<int> chain;
+    for (int t = 0; t < T; t += chain_stride) chain.push_back(t);
+    const int k = std::min<int>(options.shape_frames, static_cast<int>(chain.size()));
+    std::vector<int> picks;   // indices into the chain, evenly spaced, first and last included
+    for (int s = 0; s < k; ++s)
+      picks.push_back(k == 1 ? 0 : static_cast<int>(std::lround(static_cast<double>(s) * static_cast<double>(chain.size() - 1) / (k - 1))));
+    picks.erase(std::unique(picks.begin(), picks.end()), picks.end());
+    std::vector<const RowMatrixX3d*> targets;
+    std::vector<PoseParameters> poses;
+    {
+      const RowMatrixX3d shaped = body::shaped_template(model, result.beta);
+      const body::JointPositions joints = body::regress_joints(model, shaped);
+      const PosedModel start_model(model, shaped, joints, options.world_from_body);
+      PoseParameters p = rigid_initial_pose(shaped, joints.row(0).transpose(), registered.front(), weights, options.world_from_body);
+      PoseFitOptions warm = options;   // only warm starts: a few evaluations each
+      warm.max_evaluations = std::min(options.max_evaluations, 20);
+      std::size_t next = 0;
+      for (std::size_t c = 0; c < chain.size() && next < picks.size(); ++c) {
+        const RowMatrixX3d& y = registered[static_cast<std::size_t>(chain[c])];
+        solve_frame(start_model, y, rows, warm, p);
+        if (static_cast<int>(c) == picks[next]) {
+          targets.push_back(&y);
+          poses.push_back(p);
+          ++next;
+        }
+      }
+    }
+    ShapeResidual residual(model, targets, rows, options, poses);
+    Eigen::LevenbergMarquardt<ShapeResidual> lm(residual);
+    configure(lm, options, options.shape_evaluations);
+    Eigen::VectorXd x = result.beta;
+    const detail::LmOutcome outcome = detail::minimize_until(lm, x, absolute_norm(options, rows.vertices.size() * targets.size()));
+    require(outcome.status != Eigen::LevenbergMarquardtSpace::UserAsked && x.allFinite(), "shape fit: the residual became non-finite (NaN/Inf)");
+    result.beta = x;
+    result.shape_iterations = static_cast<int>(lm.iterations());
+    result.shape_converged = outcome.converged();
+    if (!result.shape_converged) logger()->warn("shape fit: β did not converge ({}, {} evaluations)", outcome.name(), lm.nfev());
+    logger()->debug("shape fit: {} iterations, {} evaluations ({})", lm.iterations(), lm.nfev(), outcome.name());
+  }
+
+  const RowMatrixX3d shaped = body::shaped_template(model, result.beta);
+  const body::JointPositions joints = body::regress_joints(model, shaped);
+  const PosedModel posed_model(model, shaped, joints, options.world_from_body);
+  std::vector<char> soft(static_cast<std::size_t>(n), 0);
+  for (int s : options.soft_vertices) soft[static_cast<std::size_t>(s)] = 1;
+  result.motion.name = "fitted";
+  result.motion.source = "pose fit";
+  result.motion.fps = fps;
+  result.motion.world_from_body = options.world_from_body;
+  PoseParameters parameters = rigid_initial_pose(shaped, joints.row(0).transpose(), registered.front(), weights, options.world_from_body);
+  Progress progress("pose fit", static_cast<std::size_t>(T), options.progress);
+  for (int t = 0; t < T; ++t) {
+    const RowMatrixX3d& target = registered[static_cast<std::size_t>(t)];
+    FrameFitReport report = solve_frame(posed_model, target, rows, options, parameters);  // warm start from frame t − 1
+    report.frame = t;
+    const RowMatrixX3d v = posed_model.posed(parameters);
+    report.rms = rms_over(v, target, nullptr);
+    report.rms_rigid = rms_over(v, target, &soft);
+    if (!report.converged) {
+      ++result.unconverged_frames;
+      logger()->warn("pose fit: frame {} did not converge ({}, {} evaluations, RMS {:.2f} mm)", t, report.status, report.evaluations,
+                     1e3 * report.rms);
+    }
+    result.max_rms = std::max(result.max_rms, report.rms);
+    result.mean_rms += report.rms / T;
+    result.frames.push_back(report);
+    result.motion.poses.push_back(pose_of(parameters));
+    result.motion.trans.push_back(trans_of(parameters));
+    progress.advance();
+  }
+  progress.finish();
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return result;
+}
+
+}  // namespace sflsh::validate
