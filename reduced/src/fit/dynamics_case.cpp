@@ -3,6 +3,9 @@
 #include <sflsh/core/error.hpp>
 #include <sflsh/fullspace/reference_integrator.hpp>
 #include <sflsh/fullspace/simulation_output.hpp>
+#include <sflsh/reduced/dynamics_sensitivity.hpp>
+#include <sflsh/reduced/reduced_sensitivity.hpp>
+#include <sflsh/reduced/young_map.hpp>
 
 #include <chrono>
 
@@ -13,6 +16,8 @@ Eigen::VectorXd CaseDynamics::sigma() const {
 }
 
 double CaseDynamics::mean_sigma() const { return sigma_normal.size() ? sigma().mean() : 0.0; }
+
+DynamicsCase::~DynamicsCase() = default;
 
 DynamicsCase::DynamicsCase(const body::BodyModel& model, std::string subject, const body::Betas& beta,
                            const body::Motion& motion, const fullspace::BodyLayerOptions& options)
@@ -53,6 +58,48 @@ CaseDynamics DynamicsCase::simulate(const LayerParameterization& parameterizatio
     out.sigma_normal = 1e3 * amplitude.sigma_normal();
     out.sigma_tangent = 1e3 * amplitude.sigma_tangent();
     require(out.sigma_normal.allFinite() && out.sigma_tangent.allFinite(), "non-finite dynamics amplitude");
+    out.frames = frames_;
+    out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return out;
+  } catch (const Error& e) {
+    throw Error(fmt::format("{} / {}: {}", subject_, motion_, e.what()));
+  }
+}
+
+CaseDynamics DynamicsCase::simulate_with_sensitivity(const LayerParameterization& parameterization,
+                                                    const material::KappaMatrix& kappa, const ReducedModel& model,
+                                                    const Eigen::MatrixXd& young_map, Eigen::MatrixXd& dsigma,
+                                                    const ReducedOptions& options) const {
+  const auto start = std::chrono::steady_clock::now();
+  try {
+    std::call_once(skin_map_once_, [&] { skin_map_ = std::make_unique<SkinDisplacementMap>(*layer_, model.subspace); });
+    const fullspace::Problem problem = parameterization.problem(*layer_, kappa, options_);
+    require(!problem.dirichlet.drives.size(), "fit cases take fixed attachments only");
+    SensitivityIntegrator integrator(problem, model.subspace, model.cubature, young_map, sensitivity_solver_options(options));
+    integrator.initialize(fullspace::initial_state(problem, 0.0));
+    const int columns = 2 * static_cast<int>(young_map.cols());
+    DynamicsAmplitudeSensitivity amplitude(normals_, columns);
+    const meshing::LayerMesh& mesh = *layer_->mesh;
+    Eigen::VectorXd u(problem.num_dofs());
+    auto add_frame = [&] {
+      u.setZero();
+      model.subspace.add_displacement(integrator.q(), u);
+      const Eigen::Map<const meshing::RowMatrixX3d> nodes(u.data(), problem.num_nodes(), 3);
+      amplitude.add(mesh.skin_positions(nodes), skin_map_->derivative(integrator.dq_dyoung()));
+    };
+    add_frame();
+    for (int f = 1; f < frames_; ++f) {
+      integrator.step(1.0 / fps_);
+      add_frame();
+    }
+    CaseDynamics out;
+    out.sigma_normal = 1e3 * amplitude.sigma_normal();
+    out.sigma_tangent = 1e3 * amplitude.sigma_tangent();
+    dsigma.resize(2 * out.sigma_normal.size(), columns);
+    dsigma.topRows(out.sigma_normal.size()) = 1e3 * amplitude.sigma_normal_derivative();
+    dsigma.bottomRows(out.sigma_normal.size()) = 1e3 * amplitude.sigma_tangent_derivative();
+    require(out.sigma_normal.allFinite() && out.sigma_tangent.allFinite() && dsigma.allFinite(),
+            "non-finite dynamics amplitude or derivative");
     out.frames = frames_;
     out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return out;

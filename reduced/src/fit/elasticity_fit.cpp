@@ -5,6 +5,7 @@
 #include <sflsh/core/log.hpp>
 #include <sflsh/material/layer_material.hpp>
 #include <sflsh/material/surface_operators.hpp>
+#include <sflsh/reduced/young_map.hpp>
 
 #include <nlohmann/json.hpp>
 
@@ -41,8 +42,10 @@ struct Stage {
   int fit_rows = 0;
   std::vector<const DynamicsCase*> cases;
   std::vector<std::vector<int>> targets_of_subject;
+  Eigen::MatrixXd young_map;                        ///< W (cubature tets × N), sensitivities only
   long simulations = 0;
   int jacobians = 0;
+  double residual_seconds = 0.0, jacobian_seconds = 0.0;
 
   int num_subjects() const { return static_cast<int>(spec->betas.size()); }
 
@@ -64,6 +67,12 @@ struct Stage {
   }
 
   Eigen::VectorXd residual(const Eigen::VectorXd& p) {
+    const auto start = std::chrono::steady_clock::now();
+    struct Timer {
+      std::chrono::steady_clock::time_point start;
+      double* total;
+      ~Timer() { *total += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); }
+    } timer{start, &residual_seconds};
     std::vector<SimulationJob> jobs;
     std::vector<material::KappaMatrix> kappa(static_cast<std::size_t>(num_subjects()));
     for (int j = 0; j < num_subjects(); ++j) kappa[static_cast<std::size_t>(j)] = material::denormalize(q(j, p), context->bounds);
@@ -83,6 +92,12 @@ struct Stage {
 
   NormalEquations normal_equations(const Eigen::VectorXd& p, const Eigen::VectorXd& r) {
     ++jacobians;
+    const auto start = std::chrono::steady_clock::now();
+    struct Timer {
+      std::chrono::steady_clock::time_point start;
+      double* total;
+      ~Timer() { *total += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); }
+    } timer{start, &jacobian_seconds};
     const auto P = p.size();
     NormalEquations ne;
     ne.JtJ = Eigen::MatrixXd::Zero(P, P);
@@ -98,10 +113,15 @@ struct Stage {
       if (mine.empty()) continue;
       Eigen::VectorXd active;
       const material::KappaMatrix q0 = q(j, p, &active);
-      // One-sided differences in each of the 3N entries of q_j (backwards at an upper bound).
+      // One-sided differences (backwards at an upper bound) in every entry of q_j, or only in the thickness
+      // entries when the Young moduli come from sensitivities.
+      const bool sensitive = spec->jacobian == JacobianMethod::sensitivities;
+      std::vector<int> fd_columns;
+      for (int k = 0; k < 3 * controls; ++k)
+        if (!sensitive || k % kK == material::kThickness) fd_columns.push_back(k);
       std::vector<SimulationJob> jobs;
-      std::vector<double> h(static_cast<std::size_t>(3 * controls));
-      for (int k = 0; k < 3 * controls; ++k) {
+      std::vector<double> h(static_cast<std::size_t>(3 * controls), 0.0);
+      for (int k : fd_columns) {
         material::KappaMatrix qk = q0;
         const int i = k / kK, c = k % kK;
         h[static_cast<std::size_t>(k)] = q0(i, c) + step <= nb[c].max ? step : -step;
@@ -110,6 +130,28 @@ struct Stage {
         for (int t : mine) jobs.push_back({t, kappa});
       }
       const std::vector<Eigen::VectorXd> sigma = simulate(jobs);
+      // Sensitivity runs: one per target, dσ/dY (2R × 2N) [mm/Pa].
+      std::vector<Eigen::MatrixXd> dsigma_dyoung(mine.size());
+      if (sensitive) {
+        const material::KappaMatrix kappa0 = material::denormalize(q0, context->bounds);
+        const std::vector<Eigen::VectorXd> packed = context->pool->run_tasks(
+            static_cast<int>(mine.size()),
+            [&](int m) { return Eigen::Index{2} * (*targets)[static_cast<std::size_t>(mine[static_cast<std::size_t>(m)])].simulation->num_region_vertices() * (1 + 2 * controls); },
+            [&](int m) {
+              const DynamicsCase& c = *(*targets)[static_cast<std::size_t>(mine[static_cast<std::size_t>(m)])].simulation;
+              Eigen::MatrixXd d;
+              const CaseDynamics base = c.simulate_with_sensitivity(*parameterization, kappa0, *context->model, young_map, d, context->reduced);
+              Eigen::VectorXd out(d.rows() * (1 + d.cols()));
+              out.head(d.rows()) << base.sigma_normal, base.sigma_tangent;
+              out.tail(d.size()) = Eigen::Map<const Eigen::VectorXd>(d.data(), d.size());
+              return out;
+            });
+        simulations += static_cast<long>(mine.size());
+        for (std::size_t m = 0; m < mine.size(); ++m) {
+          const Eigen::Index rows = packed[m].size() / (1 + 2 * controls);
+          dsigma_dyoung[m] = Eigen::Map<const Eigen::MatrixXd>(packed[m].data() + rows, rows, 2 * controls);
+        }
+      }
       // G_t = dσ_t/dq_j; accumulate H_q = Σ w² G_tᵀG_t and g_q = Σ w G_tᵀ r_t.
       Eigen::MatrixXd Hq = Eigen::MatrixXd::Zero(3 * controls, 3 * controls);
       Eigen::VectorXd gq = Eigen::VectorXd::Zero(3 * controls);
@@ -118,8 +160,15 @@ struct Stage {
         const Eigen::VectorXd rt = r.segment(offset[static_cast<std::size_t>(t)], offset[static_cast<std::size_t>(t) + 1] - offset[static_cast<std::size_t>(t)]);
         const Eigen::VectorXd sigma_t = rt / weight + (*targets)[static_cast<std::size_t>(t)].sigma;
         Eigen::MatrixXd G(sigma_t.size(), 3 * controls);
-        for (int k = 0; k < 3 * controls; ++k)
-          G.col(k) = (sigma[static_cast<std::size_t>(k) * mine.size() + m] - sigma_t) / h[static_cast<std::size_t>(k)];
+        for (std::size_t f = 0; f < fd_columns.size(); ++f) {
+          const int k = fd_columns[f];
+          G.col(k) = (sigma[f * mine.size() + m] - sigma_t) / h[static_cast<std::size_t>(k)];
+        }
+        if (sensitive)   // dσ/dq̂ = dσ/dY · Y_max (q̂ = Y / Y_max)
+          for (int i = 0; i < controls; ++i) {
+            G.col(kK * i + material::kYoungTangent) = dsigma_dyoung[m].col(i) * context->bounds.young_tangent.max;
+            G.col(kK * i + material::kYoungNormal) = dsigma_dyoung[m].col(controls + i) * context->bounds.young_normal.max;
+          }
         G *= weight;
         Hq.noalias() += G.transpose() * G;
         gq.noalias() += G.transpose() * rt;
@@ -138,6 +187,46 @@ struct Stage {
     return ne;
   }
 };
+
+/// Fills a stage for N control points (the parts that do not change while TAO iterates).
+void setup_stage(Stage& stage, const FitContext& context, const std::vector<FitTarget>& targets, const FitSpec& spec,
+                 const LayerParameterization& parameterization, int N) {
+  stage.context = &context;
+  stage.spec = &spec;
+  stage.targets = &targets;
+  stage.parameterization = &parameterization;
+  stage.controls = N;
+  stage.targets_of_subject.resize(spec.betas.size());
+  for (std::size_t t = 0; t < targets.size(); ++t) {
+    stage.cases.push_back(targets[t].simulation);
+    stage.targets_of_subject[static_cast<std::size_t>(targets[t].subject)].push_back(static_cast<int>(t));
+    stage.fit_rows += static_cast<int>(targets[t].sigma.size());
+  }
+  stage.weight = 1.0 / std::sqrt(static_cast<double>(stage.fit_rows));
+  for (const body::Betas& beta : spec.betas) {
+    if (spec.kind == FitKind::shape) {
+      stage.dq_dp.push_back(kappa_jacobian(beta, N));
+    } else {
+      Eigen::SparseMatrix<double> I(3 * N, 3 * N);
+      I.setIdentity();
+      stage.dq_dp.push_back(I);
+    }
+  }
+  if (spec.kind == FitKind::shape) {
+    std::vector<ShapeMetric> metric;
+    if (spec.regularizer == Regularizer::local) {
+      const meshing::LayerMesh& mesh = parameterization.mesh();
+      const Eigen::VectorXd area =
+          material::lumped_mass(material::region_positions(*context.body, mesh), mesh.region_surface.faces);
+      metric = local_shape_metric(*context.body, mesh.region_surface.vertices, area, parameterization.phi());
+    }
+    stage.L = regularizer_matrix(metric, N);
+  }
+
+  if (spec.jacobian == JacobianMethod::sensitivities)
+    stage.young_map = young_tet_map(parameterization.retargeter(), parameterization.phi(), context.model->cubature.tets,
+                                    targets.front().simulation->layer_options().stiffness_scale);
+}
 
 std::string kind_name(FitKind k) { return k == FitKind::shape ? "shape" : "independent"; }
 
@@ -234,6 +323,30 @@ Eigen::VectorXd from_rows(const Eigen::MatrixXd& rows) {
 
 }  // namespace
 
+const char* jacobian_method_name(JacobianMethod m) {
+  return m == JacobianMethod::sensitivities ? "sensitivities" : "fd";
+}
+
+JacobianMethod parse_jacobian_method(const std::string& name) {
+  if (name == "fd" || name == "finite-differences") return JacobianMethod::finite_differences;
+  if (name == "sensitivities") return JacobianMethod::sensitivities;
+  throw_error("fit: unknown Jacobian method '{}' (expected fd or sensitivities)", name);
+}
+
+NormalEquations fit_normal_equations(const FitContext& context, const std::vector<FitTarget>& targets, const FitSpec& spec,
+                                     const Eigen::VectorXd& p, double* residual_seconds, double* jacobian_seconds) {
+  require(!spec.stages.empty() && !targets.empty(), "fit {}: no stage or no target", spec.name);
+  const int N = spec.stages.front();
+  Stage stage;
+  setup_stage(stage, context, targets, spec, context.parameterization(N), N);
+  require(p.size() == params_per_control(spec.kind) * N, "fit {}: {} parameters for N = {}", spec.name, p.size(), N);
+  const Eigen::VectorXd r = stage.residual(p);
+  const NormalEquations ne = stage.normal_equations(p, r);
+  if (residual_seconds) *residual_seconds = stage.residual_seconds;
+  if (jacobian_seconds) *jacobian_seconds = stage.jacobian_seconds;
+  return ne;
+}
+
 material::KappaMatrix FitResult::kappa_normalized(const body::Betas& beta, const material::ParameterBounds& bounds) const {
   if (kind == FitKind::independent) return clamp_normalized(independent_kappa(p), bounds);
   return clamp_normalized(ShapeElasticity::unpack(p, controls).kappa_normalized(beta), bounds);
@@ -320,37 +433,7 @@ FitResult fit_elasticity(const FitContext& context, const std::vector<FitTarget>
     previous = &parameterization;
 
     Stage stage;
-    stage.context = &context;
-    stage.spec = &spec;
-    stage.targets = &targets;
-    stage.parameterization = &parameterization;
-    stage.controls = N;
-    stage.targets_of_subject.resize(spec.betas.size());
-    for (std::size_t t = 0; t < targets.size(); ++t) {
-      stage.cases.push_back(targets[t].simulation);
-      stage.targets_of_subject[static_cast<std::size_t>(targets[t].subject)].push_back(static_cast<int>(t));
-      stage.fit_rows += static_cast<int>(targets[t].sigma.size());
-    }
-    stage.weight = 1.0 / std::sqrt(static_cast<double>(stage.fit_rows));
-    for (const body::Betas& beta : spec.betas) {
-      if (spec.kind == FitKind::shape) {
-        stage.dq_dp.push_back(kappa_jacobian(beta, N));
-      } else {
-        Eigen::SparseMatrix<double> I(3 * N, 3 * N);
-        I.setIdentity();
-        stage.dq_dp.push_back(I);
-      }
-    }
-    if (spec.kind == FitKind::shape) {
-      std::vector<ShapeMetric> metric;
-      if (spec.regularizer == Regularizer::local) {
-        const meshing::LayerMesh& mesh = parameterization.mesh();
-        const Eigen::VectorXd area =
-            material::lumped_mass(material::region_positions(*context.body, mesh), mesh.region_surface.faces);
-        metric = local_shape_metric(*context.body, mesh.region_surface.vertices, area, parameterization.phi());
-      }
-      stage.L = regularizer_matrix(metric, N);
-    }
+    setup_stage(stage, context, targets, spec, parameterization, N);
 
     LeastSquaresProblem problem;
     problem.residual = [&](const Eigen::VectorXd& x) { return stage.residual(x); };
@@ -369,7 +452,7 @@ FitResult fit_elasticity(const FitContext& context, const std::vector<FitTarget>
     }
     LeastSquaresOptions lso;
     lso.max_iterations = resumed_here ? std::max(0, spec.iterations - checkpoint->iteration) : spec.iterations;
-    lso.gradient_ttol = 1e-3;
+    lso.gradient_ttol = 1e-6;   // the iteration budget, not this, usually ends a stage
     lso.gradient_rtol = 1e-8;
     const auto stage_start = std::chrono::steady_clock::now();
     const int done_before = resumed_here ? checkpoint->iteration : 0;

@@ -27,19 +27,30 @@ std::vector<Eigen::VectorXd> SimulationPool::run(const std::vector<const Dynamic
                                                  const std::vector<SimulationJob>& jobs,
                                                  const LayerParameterization& parameterization, const ReducedModel& model,
                                                  const ReducedOptions& options) {
-  const auto start = std::chrono::steady_clock::now();
-  const auto J = static_cast<int>(jobs.size());
-  std::vector<int> length(jobs.size());
-  for (int j = 0; j < J; ++j) {
-    const int c = jobs[static_cast<std::size_t>(j)].case_index;
+  for (std::size_t j = 0; j < jobs.size(); ++j) {
+    const int c = jobs[j].case_index;
     require(c >= 0 && c < static_cast<int>(cases.size()), "simulation pool: job {} names case {} of {}", j, c, cases.size());
-    length[static_cast<std::size_t>(j)] = 2 * cases[static_cast<std::size_t>(c)]->num_region_vertices();
   }
-  std::vector<int> offset(jobs.size() + 1, 0);
-  for (int j = 0; j < J; ++j) offset[static_cast<std::size_t>(j) + 1] = offset[static_cast<std::size_t>(j)] + length[static_cast<std::size_t>(j)];
+  return run_tasks(
+      static_cast<int>(jobs.size()),
+      [&](int j) { return Eigen::Index{2} * cases[static_cast<std::size_t>(jobs[static_cast<std::size_t>(j)].case_index)]->num_region_vertices(); },
+      [&](int j) {
+        const SimulationJob& job = jobs[static_cast<std::size_t>(j)];
+        const CaseDynamics d = cases[static_cast<std::size_t>(job.case_index)]->simulate(parameterization, job.kappa, model, options);
+        Eigen::VectorXd out(2 * d.sigma_normal.size());
+        out << d.sigma_normal, d.sigma_tangent;
+        return out;
+      });
+}
+
+std::vector<Eigen::VectorXd> SimulationPool::run_tasks(int count, const std::function<Eigen::Index(int)>& length,
+                                                       const std::function<Eigen::VectorXd(int)>& task) {
+  const auto start = std::chrono::steady_clock::now();
+  std::vector<Eigen::Index> offset(static_cast<std::size_t>(count) + 1, 0);
+  for (int j = 0; j < count; ++j) offset[static_cast<std::size_t>(j) + 1] = offset[static_cast<std::size_t>(j)] + length(j);
   Eigen::VectorXd buffer = Eigen::VectorXd::Zero(offset.back());
   std::vector<int> mine;
-  for (int j = rank_; j < J; j += size_) mine.push_back(j);
+  for (int j = rank_; j < count; j += size_) mine.push_back(j);
 
   std::mutex mutex;
   std::string error;
@@ -47,12 +58,11 @@ std::vector<Eigen::VectorXd> SimulationPool::run(const std::vector<const Dynamic
   arena.execute([&] {
     tbb::parallel_for(0, static_cast<int>(mine.size()), [&](int k) {
       const int j = mine[static_cast<std::size_t>(k)];
-      const SimulationJob& job = jobs[static_cast<std::size_t>(j)];
       try {
-        const CaseDynamics d = cases[static_cast<std::size_t>(job.case_index)]->simulate(parameterization, job.kappa, model, options);
-        const auto R = d.sigma_normal.size();
-        buffer.segment(offset[static_cast<std::size_t>(j)], R) = d.sigma_normal;
-        buffer.segment(offset[static_cast<std::size_t>(j)] + R, R) = d.sigma_tangent;
+        const Eigen::VectorXd r = task(j);
+        const Eigen::Index n = offset[static_cast<std::size_t>(j) + 1] - offset[static_cast<std::size_t>(j)];
+        require(r.size() == n, "simulation pool: task {} returned {} values, expected {}", j, r.size(), n);
+        buffer.segment(offset[static_cast<std::size_t>(j)], n) = r;
       } catch (const std::exception& e) {
         std::lock_guard<std::mutex> lock(mutex);
         if (error.empty()) error = e.what();
@@ -75,15 +85,16 @@ std::vector<Eigen::VectorXd> SimulationPool::run(const std::vector<const Dynamic
     throw Error(error);
   }
   if (comm_ != MPI_COMM_NULL && size_ > 1) {
-    constexpr int kChunk = 1 << 24;   // stay far below int counts
+    constexpr Eigen::Index kChunk = 1 << 24;   // stay far below int counts
     for (Eigen::Index at = 0; at < buffer.size(); at += kChunk) {
       const int n = static_cast<int>(std::min<Eigen::Index>(kChunk, buffer.size() - at));
       MPI_Allreduce(MPI_IN_PLACE, buffer.data() + at, n, MPI_DOUBLE, MPI_SUM, comm_);
     }
   }
-  std::vector<Eigen::VectorXd> out(jobs.size());
-  for (int j = 0; j < J; ++j) out[static_cast<std::size_t>(j)] = buffer.segment(offset[static_cast<std::size_t>(j)], length[static_cast<std::size_t>(j)]);
-  simulations_ += J;
+  std::vector<Eigen::VectorXd> out(static_cast<std::size_t>(count));
+  for (int j = 0; j < count; ++j)
+    out[static_cast<std::size_t>(j)] = buffer.segment(offset[static_cast<std::size_t>(j)], offset[static_cast<std::size_t>(j) + 1] - offset[static_cast<std::size_t>(j)]);
+  simulations_ += count;
   seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;
 }

@@ -9,9 +9,12 @@
 #include <sflsh/reduced/reduced_model.hpp>
 
 #include <memory>
+#include <mutex>
 #include <string>
 
 namespace sflsh::reduced {
+
+class SkinDisplacementMap;
 
 /// Per-vertex dynamics of one simulation over the region's skin vertices, in mm.
 struct CaseDynamics {
@@ -28,11 +31,13 @@ class DynamicsCase {
   /// Builds the layer of subject `beta` for `motion` (the first `frames` frames; 0 = all).
   DynamicsCase(const body::BodyModel& model, std::string subject, const body::Betas& beta, const body::Motion& motion,
                const fullspace::BodyLayerOptions& options);
+  ~DynamicsCase();
 
   const std::string& subject() const { return subject_; }
   const std::string& motion() const { return motion_; }
   const body::Betas& beta() const { return layer_->beta; }
   const fullspace::BodyLayer& layer() const { return *layer_; }
+  const fullspace::BodyLayerOptions& layer_options() const { return options_; }
   int num_region_vertices() const { return static_cast<int>(normals_.rows()); }
   /// Unit normals of the shaped template at the region vertices (the σ_n / σ_t split).
   const meshing::RowMatrixX3d& normals() const { return normals_; }
@@ -42,6 +47,14 @@ class DynamicsCase {
   CaseDynamics simulate(const LayerParameterization& parameterization, const material::KappaMatrix& kappa,
                         const ReducedModel& model, const ReducedOptions& options = {}) const;
 
+  /// The same with forward sensitivities (reduced_sensitivity.hpp) of σ_n, σ_t with respect to the Young
+  /// moduli of the N control points: `dsigma` receives (2R × 2N) [mm/Pa], rows [σ_n; σ_t], columns Y_t of
+  /// controls 0..N−1 then Y_n. `young_map` is W of young_map.hpp for the model's cubature tets. Newton runs to
+  /// the sensitivity tolerance (sensitivity_solver_options), so σ agrees with simulate() to that tolerance.
+  CaseDynamics simulate_with_sensitivity(const LayerParameterization& parameterization, const material::KappaMatrix& kappa,
+                                         const ReducedModel& model, const Eigen::MatrixXd& young_map,
+                                         Eigen::MatrixXd& dsigma, const ReducedOptions& options = {}) const;
+
  private:
   std::string subject_, motion_;
   fullspace::BodyLayerOptions options_;
@@ -49,6 +62,8 @@ class DynamicsCase {
   meshing::RowMatrixX3d normals_;
   int frames_ = 0;
   double fps_ = 60.0;
+  mutable std::once_flag skin_map_once_;
+  mutable std::unique_ptr<SkinDisplacementMap> skin_map_;   ///< K B, built on first use
 };
 
 }  // namespace sflsh::reduced

@@ -33,6 +33,13 @@ struct FitTarget {
 
 enum class FitKind { independent, shape };
 
+/// How dσ/dq is computed: one-sided finite differences of every entry (the paper, 1 + 3N simulations per
+/// case), or forward sensitivities for the Young moduli (one differentiated simulation per case,
+/// reduced_sensitivity.hpp) with finite differences for the thickness only (1 + N plain simulations).
+enum class JacobianMethod { finite_differences, sensitivities };
+const char* jacobian_method_name(JacobianMethod m);
+JacobianMethod parse_jacobian_method(const std::string& name);   ///< "fd" or "sensitivities" 
+
 struct FitSpec {
   std::string name;                         ///< for logs, checkpoints and reports
   FitKind kind = FitKind::shape;
@@ -43,6 +50,7 @@ struct FitSpec {
   int iterations = 8;                       ///< trust-region iterations per stage
   double fd_step = 2e-3;                    ///< one-sided step in normalized κ̂
   double a_max = 0.25;                      ///< |A_i(k, c)| bound (normalized κ̂ per unit β)
+  JacobianMethod jacobian = JacobianMethod::sensitivities;  ///< measured ≈ 38× cheaper for the Y columns
   std::filesystem::path checkpoint;         ///< empty: none
 };
 
@@ -83,6 +91,12 @@ struct FitResult {
 };
 
 FitResult fit_elasticity(const FitContext& context, const std::vector<FitTarget>& targets, const FitSpec& spec);
+
+/// The normal-equation terms JᵀJ, Jᵀr of the fit at p for N = spec.stages.front() (what one trust-region
+/// iteration needs), by the spec's Jacobian method — to compare the methods and time them.
+NormalEquations fit_normal_equations(const FitContext& context, const std::vector<FitTarget>& targets, const FitSpec& spec,
+                                     const Eigen::VectorXd& p, double* residual_seconds = nullptr,
+                                     double* jacobian_seconds = nullptr);
 
 /// Parameterizations per control-point count, built on demand from one base layer.
 class ParameterizationCache {

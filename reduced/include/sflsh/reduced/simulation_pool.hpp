@@ -6,6 +6,7 @@
 
 #include <mpi.h>
 
+#include <functional>
 #include <vector>
 
 namespace sflsh::reduced {
@@ -25,6 +26,11 @@ class SimulationPool {
   std::vector<Eigen::VectorXd> run(const std::vector<const DynamicsCase*>& cases, const std::vector<SimulationJob>& jobs,
                                    const LayerParameterization& parameterization, const ReducedModel& model,
                                    const ReducedOptions& options);
+
+  /// The general form: task(k) for k in [0, count), each returning a vector whose length `length(k)` is known
+  /// beforehand on every rank; results reach every rank. `label` names the batch in errors.
+  std::vector<Eigen::VectorXd> run_tasks(int count, const std::function<Eigen::Index(int)>& length,
+                                         const std::function<Eigen::VectorXd(int)>& task);
 
   int threads() const { return threads_; }
   int ranks() const { return size_; }
