@@ -52,6 +52,7 @@ int main(int argc, char** argv) {
   sflsh::app::register_simulate_commands(app, invocation);
   sflsh::app::register_compare_commands(app, invocation);
   sflsh::app::register_validate_commands(app, invocation);
+  sflsh::app::register_groundtruth_commands(app, invocation);
   sflsh::app::register_metrics_commands(app, invocation);
 
   app.parse_complete_callback([&] {

@@ -39,6 +39,79 @@ double default_thickness_max(meshing::SizePreset size) {
 
 std::string case_key(const std::string& subject, const std::string& motion) { return subject + "_" + motion; }
 
+/// The ground truth of every case, computed (round robin over ranks) or loaded from state/groundtruth.
+std::map<std::string, GroundTruthCase> compute_ground_truth(
+    const ValidateConfig& config, const std::map<std::string, std::unique_ptr<reduced::DynamicsCase>>& cases,
+    const std::map<std::string, body::Motion>& motions, reduced::ParameterizationCache& parameterizations,
+    const fullspace::BodyLayerOptions& layer_options, const material::ParameterBounds& bounds,
+    const std::filesystem::path& state, const reduced::SimulationPool& pool) {
+  std::map<std::string, GroundTruthCase> truth;
+  GroundTruthOptions gto;
+  gto.bounds = bounds;
+  std::vector<std::string> keys;
+  for (const auto& [key, c] : cases) keys.push_back(key);
+  Progress progress("ground truth (full space)", keys.size(), config.progress && pool.rank() == 0);
+  for (std::size_t k = 0; k < keys.size(); ++k) {
+    if (static_cast<int>(k) % pool.ranks() != pool.rank()) continue;
+    const std::filesystem::path file = state / "groundtruth" / (keys[k] + ".npz");
+    GroundTruthCase c;
+    if (!load_ground_truth_case(file, c)) {
+      const reduced::DynamicsCase& dc = *cases.at(keys[k]);
+      c = simulate_ground_truth(dc.layer(), motions.at(dc.motion()), dc.subject(), parameterizations.get(1), layer_options, gto);
+      save_ground_truth_case(file, c);
+    }
+    progress.advance();
+  }
+  int initialized = 0;
+  MPI_Initialized(&initialized);
+  if (initialized && pool.ranks() > 1) MPI_Barrier(MPI_COMM_WORLD);
+  for (const std::string& key : keys) {
+    GroundTruthCase c;
+    require(load_ground_truth_case(state / "groundtruth" / (key + ".npz"), c), "validate: ground truth {} is missing", key);
+    truth.emplace(key, std::move(c));
+  }
+  return truth;
+}
+
+std::vector<const GroundTruthCase*> truth_pointers(const std::map<std::string, GroundTruthCase>& truth) {
+  std::vector<const GroundTruthCase*> out;
+  for (const auto& [key, c] : truth) out.push_back(&c);
+  return out;
+}
+
+/// What both commands share: the body, subjects, motions, bounds and one reduced case per (subject, motion).
+struct Setup {
+  body::BodyModel model;
+  std::map<std::string, body::Betas> beta_of;
+  std::vector<std::string> all_subjects, all_motions;
+  fullspace::BodyLayerOptions layer_options;
+  material::ParameterBounds bounds;
+  std::map<std::string, body::Motion> motions;
+  std::map<std::string, std::unique_ptr<reduced::DynamicsCase>> cases;
+};
+
+void prepare(const ValidateConfig& config, Setup& s) {
+  s.model = body::load_body(body::default_body_path());
+  const std::vector<body::Subject> subjects = body::default_subjects();
+  s.all_subjects = config.train_subjects;
+  s.all_subjects.insert(s.all_subjects.end(), config.test_subjects.begin(), config.test_subjects.end());
+  for (const std::string& name : s.all_subjects) s.beta_of[name] = body::find_subject(subjects, name).beta;
+  s.all_motions = config.train_motions;
+  s.all_motions.insert(s.all_motions.end(), config.test_motions.begin(), config.test_motions.end());
+  s.layer_options.size = config.mesh;
+  s.layer_options.cache_dir = config.cache_dir;
+  s.bounds.thickness.max = config.thickness_max > 0.0 ? config.thickness_max : default_thickness_max(config.mesh);
+  material::validate(s.bounds);
+  for (const std::string& m : s.all_motions) s.motions.emplace(m, body::make_procedural_motion(m, 60.0, config.frames));
+  Progress progress("subject layers", s.all_subjects.size() * s.all_motions.size(), config.progress);
+  for (const std::string& name : s.all_subjects)
+    for (const std::string& m : s.all_motions) {
+      s.cases.emplace(case_key(name, m),
+                      std::make_unique<reduced::DynamicsCase>(s.model, name, s.beta_of.at(name), s.motions.at(m), s.layer_options));
+      progress.advance();
+    }
+}
+
 }  // namespace
 
 nlohmann::json run_validation(const ValidateConfig& config, const std::filesystem::path& out_dir, const nlohmann::json& header) {
@@ -55,67 +128,24 @@ nlohmann::json run_validation(const ValidateConfig& config, const std::filesyste
   std::filesystem::create_directories(state / "groundtruth");
   std::filesystem::create_directories(state / "fits");
 
-  const body::BodyModel model = body::load_body(body::default_body_path());
-  const std::vector<body::Subject> subjects = body::default_subjects();
-  std::map<std::string, body::Betas> beta_of;
-  std::vector<std::string> all_subjects = config.train_subjects;
-  all_subjects.insert(all_subjects.end(), config.test_subjects.begin(), config.test_subjects.end());
-  for (const std::string& s : all_subjects) beta_of[s] = body::find_subject(subjects, s).beta;
-  std::vector<std::string> all_motions = config.train_motions;
-  all_motions.insert(all_motions.end(), config.test_motions.begin(), config.test_motions.end());
-
-  fullspace::BodyLayerOptions layer_options;
-  layer_options.size = config.mesh;
-  layer_options.cache_dir = config.cache_dir;
-  material::ParameterBounds bounds;
-  bounds.thickness.max = config.thickness_max > 0.0 ? config.thickness_max : default_thickness_max(config.mesh);
-  material::validate(bounds);
-
-  // Reduced cases: one per (subject, motion).
-  std::map<std::string, body::Motion> motions;
-  for (const std::string& m : all_motions) motions.emplace(m, body::make_procedural_motion(m, 60.0, config.frames));
-  std::map<std::string, std::unique_ptr<reduced::DynamicsCase>> cases;
-  {
-    Progress progress("validate: subject layers", all_subjects.size() * all_motions.size(), config.progress);
-    for (const std::string& s : all_subjects)
-      for (const std::string& m : all_motions) {
-        cases.emplace(case_key(s, m), std::make_unique<reduced::DynamicsCase>(model, s, beta_of.at(s), motions.at(m), layer_options));
-        progress.advance();
-      }
-  }
+  Setup setup;
+  prepare(config, setup);
+  const body::BodyModel& model = setup.model;
+  const std::map<std::string, body::Betas>& beta_of = setup.beta_of;
+  const std::vector<std::string>& all_subjects = setup.all_subjects;
+  const std::vector<std::string>& all_motions = setup.all_motions;
+  const fullspace::BodyLayerOptions& layer_options = setup.layer_options;
+  const material::ParameterBounds& bounds = setup.bounds;
+  const std::map<std::string, body::Motion>& motions = setup.motions;
+  const std::map<std::string, std::unique_ptr<reduced::DynamicsCase>>& cases = setup.cases;
   const reduced::DynamicsCase& first = *cases.at(case_key(all_subjects.front(), all_motions.front()));
   reduced::ParameterizationCache parameterizations(first.layer());
 
   // Ground truth (full space), one cached case per (subject, motion), shared among ranks.
   reduced::SimulationPool pool(config.threads);
-  std::map<std::string, GroundTruthCase> truth;
-  {
-    GroundTruthOptions gto;
-    gto.bounds = bounds;
-    std::vector<std::string> keys;
-    for (const std::string& s : all_subjects)
-      for (const std::string& m : all_motions) keys.push_back(case_key(s, m));
-    Progress progress("validate: ground truth (full space)", keys.size(), config.progress && pool.rank() == 0);
-    for (std::size_t k = 0; k < keys.size(); ++k) {
-      if (static_cast<int>(k) % pool.ranks() != pool.rank()) continue;
-      const std::filesystem::path file = state / "groundtruth" / (keys[k] + ".npz");
-      GroundTruthCase c;
-      if (!load_ground_truth_case(file, c)) {
-        const reduced::DynamicsCase& dc = *cases.at(keys[k]);
-        c = simulate_ground_truth(dc.layer(), motions.at(dc.motion()), dc.subject(), parameterizations.get(1), layer_options, gto);
-        save_ground_truth_case(file, c);
-      }
-      progress.advance();
-    }
-    int initialized = 0;
-    MPI_Initialized(&initialized);
-    if (initialized && pool.ranks() > 1) MPI_Barrier(MPI_COMM_WORLD);
-    for (const std::string& key : keys) {
-      GroundTruthCase c;
-      require(load_ground_truth_case(state / "groundtruth" / (key + ".npz"), c), "validate: ground truth {} is missing", key);
-      truth.emplace(key, std::move(c));
-    }
-  }
+  const std::map<std::string, GroundTruthCase> truth =
+      compute_ground_truth(config, cases, motions, parameterizations, layer_options, bounds, state, pool);
+  if (pool.rank() == 0) write_ground_truth_files(run, model, *first.layer().mesh, truth_pointers(truth), bounds);
 
   // The reduced model (template discretization shared by every subject).
   reduced::ReducedModelOptions ro;
@@ -214,6 +244,34 @@ nlohmann::json run_validation(const ValidateConfig& config, const std::filesyste
   summary["threads"] = pool.threads();
   if (pool.rank() == 0) {
     report.write(run, summary);
+    summary["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    write_json(run.stage("summary.json"), summary);
+    run.commit();
+  }
+  return summary;
+}
+
+nlohmann::json run_ground_truth(const ValidateConfig& config, const std::filesystem::path& out_dir, const nlohmann::json& header) {
+  const auto start = std::chrono::steady_clock::now();
+  require(!config.train_subjects.empty() || !config.test_subjects.empty(), "groundtruth: no subjects");
+  require(!config.train_motions.empty() || !config.test_motions.empty(), "groundtruth: no motions");
+  RunFolder run(out_dir);
+  const std::filesystem::path state = out_dir / "state";
+  std::filesystem::create_directories(state / "groundtruth");
+  Setup setup;
+  prepare(config, setup);
+  const reduced::DynamicsCase& first = *setup.cases.begin()->second;
+  reduced::ParameterizationCache parameterizations(first.layer());
+  const reduced::SimulationPool pool(config.threads);
+  const std::map<std::string, GroundTruthCase> truth = compute_ground_truth(
+      config, setup.cases, setup.motions, parameterizations, setup.layer_options, setup.bounds, state, pool);
+  nlohmann::json summary = header;
+  summary["config"] = config.to_json();
+  for (const auto& [key, c] : truth)
+    summary["cases"].push_back({{"key", key}, {"subject", c.subject}, {"motion", c.motion}, {"frames", c.posed.size()},
+                                {"sigma_mean_mm", c.mean_sigma()}, {"seconds", c.seconds}});
+  if (pool.rank() == 0) {
+    write_ground_truth_files(run, setup.model, *first.layer().mesh, truth_pointers(truth), setup.bounds);
     summary["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     write_json(run.stage("summary.json"), summary);
     run.commit();

@@ -46,4 +46,9 @@ struct ValidateConfig {
 nlohmann::json run_validation(const ValidateConfig& config, const std::filesystem::path& out_dir,
                               const nlohmann::json& header);
 
+/// `sflsh groundtruth`: only the ground truth of every (train and test subject, train and test motion) of
+/// `config`, written by write_ground_truth_files (groundtruth.h5 in the DYNA layout, truth/), plus
+/// summary.json with the mean σ per case. Shares the state/groundtruth cache layout with run_validation.
+nlohmann::json run_ground_truth(const ValidateConfig& config, const std::filesystem::path& out_dir, const nlohmann::json& header);
+
 }  // namespace sflsh::validate

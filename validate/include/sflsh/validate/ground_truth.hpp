@@ -4,6 +4,7 @@
 // posed whole-body surfaces per frame (the DYNA layout) and the per-vertex dynamics σ*_n, σ*_t of the
 // region's skin in the neutral pose (physics.md §4) that the fits try to reproduce.
 #include <sflsh/body/motion.hpp>
+#include <sflsh/core/run_folder.hpp>
 #include <sflsh/fullspace/body_layer.hpp>
 #include <sflsh/reduced/layer_parameterization.hpp>
 
@@ -43,5 +44,17 @@ GroundTruthCase simulate_ground_truth(const fullspace::BodyLayer& layer, const b
 /// unreadable file.
 void save_ground_truth_case(const std::filesystem::path& path, const GroundTruthCase& c);
 bool load_ground_truth_case(const std::filesystem::path& path, GroundTruthCase& c);
+
+}  // namespace sflsh::validate
+
+namespace sflsh::validate {
+
+/// Writes the synthetic ground truth as captured data would come: `<dir>/groundtruth.h5` in the DYNA layout
+/// (faces, one (V, 3, T) dataset per "<subject>_<motion>", attributes fps and beta per dataset, and on the
+/// file "source" = "sflsh synthetic ground truth" and the body name), and the true parameters beside it:
+/// `<dir>/truth/<subject>.npz` (region_vertices, kappa per region vertex [h, Pa, Pa], beta) and
+/// `<dir>/truth/true_material.json`. Files are staged in `run` (atomic). Cases need their posed frames.
+void write_ground_truth_files(RunFolder& run, const body::BodyModel& model, const meshing::LayerMesh& mesh,
+                              const std::vector<const GroundTruthCase*>& cases, const material::ParameterBounds& bounds);
 
 }  // namespace sflsh::validate
