@@ -28,6 +28,8 @@ struct ValidateOptions {
   int threads = 0;
   std::string stages, lambdas, train_subjects, test_subjects, train_motions, test_motions;
   bool no_cross_validation = false;
+  std::vector<std::string> dyna;
+  std::string body;
   bool quiet = false;
 };
 
@@ -67,7 +69,12 @@ void run_validate(const ValidateOptions& o, const Invocation& invocation) {
   config.threads = o.threads;
   if (!o.stages.empty()) config.stages = numbers<int>(o.stages, "--stages");
   if (!o.lambdas.empty()) config.lambdas = numbers<double>(o.lambdas, "--lambdas");
-  if (!o.train_subjects.empty()) config.train_subjects = split_list(o.train_subjects);
+  if (!o.train_subjects.empty()) {
+    config.train_subjects = split_list(o.train_subjects);
+    config.preset_subjects_overridden = true;
+  }
+  for (const std::string& f : o.dyna) config.dyna.emplace_back(f);
+  config.body_path = o.body;
   if (!o.test_subjects.empty()) config.test_subjects = split_list(o.test_subjects);
   if (!o.train_motions.empty()) config.train_motions = split_list(o.train_motions);
   if (!o.test_motions.empty()) config.test_motions = split_list(o.test_motions);
@@ -108,6 +115,10 @@ void register_validate_commands(CLI::App& app, const Invocation& invocation) {
   cmd->add_option("--test-subjects", o->test_subjects, "Comma-separated subject names");
   cmd->add_option("--train-motions", o->train_motions, "Comma-separated motion names");
   cmd->add_option("--test-motions", o->test_motions, "Comma-separated motion names");
+  cmd->add_option("--dyna", o->dyna, "DYNA registration files (HDF5): their subjects become the train subjects and their "
+                                     "sequences the ground truth (poses and β fitted); test subjects come from --test-subjects")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--body", o->body, "Body model .npz (default: the open body; SMPL for DYNA data)")->check(CLI::ExistingFile);
   cmd->add_option("--threads", o->threads, "Threads per process (0 = all)")->check(CLI::NonNegativeNumber);
   cmd->add_flag("--no-cross-validation", o->no_cross_validation, "Skip the leave-one-out fits (λ = the first of --lambdas)");
   cmd->add_flag("--quiet", o->quiet, "No progress lines");

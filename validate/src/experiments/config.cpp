@@ -49,6 +49,10 @@ nlohmann::json ValidateConfig::to_json() const {
   j["cross_validation"] = cross_validation;
   j["threads"] = threads;
   j["thickness_max"] = thickness_max;
+  std::vector<std::string> files;
+  for (const auto& f : dyna) files.push_back(f.string());
+  j["dyna"] = files;
+  j["body"] = body_path.string();
   return j;
 }
 

@@ -9,7 +9,10 @@
 #include <sflsh/core/run_folder.hpp>
 #include <sflsh/meshing/layer_cache.hpp>
 #include <sflsh/reduced/elasticity_fit.hpp>
+#include <sflsh/validate/dyna_file.hpp>
+#include <sflsh/validate/dynamics_metrics.hpp>
 #include <sflsh/validate/ground_truth.hpp>
+#include <sflsh/validate/pose_fit.hpp>
 
 #include "report.hpp"
 
@@ -90,12 +93,84 @@ struct Setup {
   std::map<std::string, std::unique_ptr<reduced::DynamicsCase>> cases;
 };
 
-void prepare(const ValidateConfig& config, Setup& s) {
-  s.model = body::load_body(body::default_body_path());
+/// The DYNA registrations of the train subjects as ground truth: β and poses fitted, σ* on the region.
+struct DynaTruth {
+  std::vector<std::string> subjects;                      ///< train subjects (file subject ids)
+  std::map<std::string, body::Betas> beta;
+  std::map<std::string, body::Motion> motion;             ///< key "<subject>_<motion>": fitted poses
+  std::map<std::string, std::vector<RowMatrixX3d>> frames;
+  std::map<std::string, double> mean_rms;                 ///< pose-fit RMS per sequence [m]
+};
+
+DynaTruth load_dyna_truth(const ValidateConfig& config, const body::BodyModel& model) {
+  DynaTruth t;
+  std::vector<std::string> motions = config.train_motions;
+  motions.insert(motions.end(), config.test_motions.begin(), config.test_motions.end());
+  std::map<std::string, std::pair<const DynaFile*, std::string>> where;   // key → file
+  std::vector<std::unique_ptr<DynaFile>> files;
+  for (const auto& path : config.dyna) {
+    files.push_back(std::make_unique<DynaFile>(path));
+    files.back()->require_vertices(model);
+    for (const std::string& key : files.back()->keys()) where.emplace(key, std::make_pair(files.back().get(), key));
+  }
+  // Subject ids: the key minus "_<motion>" for a motion we use (DYNA ids are digits, but names such as
+  // OPEN_TRAIN_2 contain '_' themselves, so splitting at the first '_' is not enough).
+  std::set<std::string> ids;
+  for (const auto& [key, entry] : where)
+    for (const std::string& m : motions)
+      if (key.size() > m.size() + 1 && key.compare(key.size() - m.size() - 1, std::string::npos, "_" + m) == 0)
+        ids.insert(key.substr(0, key.size() - m.size() - 1));
+  const bool explicit_subjects = config.preset_subjects_overridden;
+  for (const std::string& id : explicit_subjects ? std::set<std::string>(config.train_subjects.begin(), config.train_subjects.end()) : ids) {
+    bool complete = true;
+    for (const std::string& m : motions) complete = complete && where.count(id + "_" + m);
+    if (!complete) {
+      require(!explicit_subjects, "validate: DYNA subject {} lacks one of the motions ({} files given)", id, config.dyna.size());
+      logger()->info("validate: DYNA subject {} skipped (not every train and test motion is recorded)", id);
+      continue;
+    }
+    t.subjects.push_back(id);
+  }
+  require(!t.subjects.empty(), "validate: no DYNA subject has every train and test motion");
+  PoseFitOptions po;
+  for (const std::string& id : t.subjects) {
+    std::optional<body::Betas> beta;
+    for (const std::string& m : motions) {
+      const auto& [file, key] = where.at(id + "_" + m);
+      DynaSequence seq = file->read(key);
+      if (config.frames > 0 && seq.num_frames() > config.frames) seq.frames.resize(static_cast<std::size_t>(config.frames));
+      const PoseFitResult fit = fit_motion(model, seq.frames, seq.fps, beta, po);
+      if (!beta) beta = fit.beta;   // β from the subject's first sequence, then shared
+      logger()->info("validate: DYNA {}: poses fitted (mean RMS {:.2f} mm, {} unconverged frames)", key, 1e3 * fit.mean_rms,
+                     fit.unconverged_frames);
+      t.mean_rms[id + "_" + m] = fit.mean_rms;
+      body::Motion motion = fit.motion;
+      motion.name = m;
+      t.motion.emplace(id + "_" + m, std::move(motion));
+      t.frames.emplace(id + "_" + m, std::move(seq.frames));
+    }
+    t.beta[id] = *beta;
+  }
+  return t;
+}
+
+void prepare(const ValidateConfig& config, Setup& s, DynaTruth* dyna = nullptr) {
+  s.model = body::load_body(config.body_path.empty() ? body::default_body_path() : config.body_path);
   const std::vector<body::Subject> subjects = body::default_subjects();
-  s.all_subjects = config.train_subjects;
-  s.all_subjects.insert(s.all_subjects.end(), config.test_subjects.begin(), config.test_subjects.end());
-  for (const std::string& name : s.all_subjects) s.beta_of[name] = body::find_subject(subjects, name).beta;
+  if (dyna) {
+    *dyna = load_dyna_truth(config, s.model);
+    s.all_subjects = dyna->subjects;
+    for (const std::string& id : dyna->subjects) s.beta_of[id] = dyna->beta.at(id);
+    for (const std::string& name : config.test_subjects) {
+      s.all_subjects.push_back(name);
+      s.beta_of[name] = body::find_subject(subjects, name).beta;
+    }
+  }
+  if (!dyna) {
+    s.all_subjects = config.train_subjects;
+    s.all_subjects.insert(s.all_subjects.end(), config.test_subjects.begin(), config.test_subjects.end());
+    for (const std::string& name : s.all_subjects) s.beta_of[name] = body::find_subject(subjects, name).beta;
+  }
   s.all_motions = config.train_motions;
   s.all_motions.insert(s.all_motions.end(), config.test_motions.begin(), config.test_motions.end());
   s.layer_options.size = config.mesh;
@@ -106,19 +181,20 @@ void prepare(const ValidateConfig& config, Setup& s) {
   Progress progress("subject layers", s.all_subjects.size() * s.all_motions.size(), config.progress);
   for (const std::string& name : s.all_subjects)
     for (const std::string& m : s.all_motions) {
-      s.cases.emplace(case_key(name, m),
-                      std::make_unique<reduced::DynamicsCase>(s.model, name, s.beta_of.at(name), s.motions.at(m), s.layer_options));
+      // DYNA subjects move as their fitted poses; everyone else along the procedural motion.
+      const std::string key = case_key(name, m);
+      const body::Motion& motion = dyna && dyna->motion.count(key) ? dyna->motion.at(key) : s.motions.at(m);
+      s.cases.emplace(key, std::make_unique<reduced::DynamicsCase>(s.model, name, s.beta_of.at(name), motion, s.layer_options));
       progress.advance();
     }
 }
 
 }  // namespace
 
-nlohmann::json run_validation(const ValidateConfig& config, const std::filesystem::path& out_dir, const nlohmann::json& header) {
+nlohmann::json run_validation(const ValidateConfig& requested, const std::filesystem::path& out_dir, const nlohmann::json& header) {
   const auto start = std::chrono::steady_clock::now();
-  require(!config.train_subjects.empty(), "validate: no train subjects");
-  require(config.train_subjects.size() >= 2 || !config.cross_validation,
-          "validate: leave-one-out cross-validation needs at least 2 train subjects");
+  ValidateConfig config = requested;   // with DYNA files, the train subjects become the files' subject ids
+  require(!config.train_subjects.empty() || !config.dyna.empty(), "validate: no train subjects");
   require(!config.train_motions.empty() && !config.test_motions.empty(), "validate: train and test motions are required");
   require(!config.stages.empty(), "validate: no control-point stages");
   for (double l : config.lambdas) require(l > 0.0 && std::isfinite(l), "validate: λ must be positive, got {}", l);
@@ -129,7 +205,12 @@ nlohmann::json run_validation(const ValidateConfig& config, const std::filesyste
   std::filesystem::create_directories(state / "fits");
 
   Setup setup;
-  prepare(config, setup);
+  DynaTruth dyna;
+  const bool from_dyna = !config.dyna.empty();
+  prepare(config, setup, from_dyna ? &dyna : nullptr);
+  if (from_dyna) config.train_subjects = dyna.subjects;
+  require(config.train_subjects.size() >= 2 || !config.cross_validation,
+          "validate: leave-one-out cross-validation needs at least 2 train subjects, have {}", config.train_subjects.size());
   const body::BodyModel& model = setup.model;
   const std::map<std::string, body::Betas>& beta_of = setup.beta_of;
   const std::vector<std::string>& all_subjects = setup.all_subjects;
@@ -143,9 +224,29 @@ nlohmann::json run_validation(const ValidateConfig& config, const std::filesyste
 
   // Ground truth (full space), one cached case per (subject, motion), shared among ranks.
   reduced::SimulationPool pool(config.threads);
-  const std::map<std::string, GroundTruthCase> truth =
-      compute_ground_truth(config, cases, motions, parameterizations, layer_options, bounds, state, pool);
-  if (pool.rank() == 0) write_ground_truth_files(run, model, *first.layer().mesh, truth_pointers(truth), bounds);
+  std::map<std::string, GroundTruthCase> truth;
+  if (from_dyna) {
+    const std::vector<int>& region = first.layer().mesh->region_surface.vertices;
+    for (const auto& [key, frames] : dyna.frames) {
+      const reduced::DynamicsCase& c = *cases.at(key);
+      const DynamicsResult d = dynamics_metrics(model, c.beta(), dyna.motion.at(key), frames, region);
+      GroundTruthCase g;
+      g.subject = c.subject();
+      g.motion = c.motion();
+      g.beta = c.beta();
+      g.fps = dyna.motion.at(key).fps;
+      g.sigma_normal.resize(static_cast<Eigen::Index>(region.size()));
+      g.sigma_tangent.resize(static_cast<Eigen::Index>(region.size()));
+      for (std::size_t r = 0; r < region.size(); ++r) {
+        g.sigma_normal[static_cast<Eigen::Index>(r)] = 1e3 * d.sigma_normal[region[r]];
+        g.sigma_tangent[static_cast<Eigen::Index>(r)] = 1e3 * d.sigma_tangent[region[r]];
+      }
+      truth.emplace(key, std::move(g));
+    }
+  } else {
+    truth = compute_ground_truth(config, cases, motions, parameterizations, layer_options, bounds, state, pool);
+    if (pool.rank() == 0) write_ground_truth_files(run, model, *first.layer().mesh, truth_pointers(truth), bounds);
+  }
 
   // The reduced model (template discretization shared by every subject).
   reduced::ReducedModelOptions ro;
@@ -195,6 +296,8 @@ nlohmann::json run_validation(const ValidateConfig& config, const std::filesyste
   report.model = &model;
   report.parameterization = &parameterizations.get(config.stages.back());
   report.truth = &truth;
+  report.betas = beta_of;
+  report.true_parameters = !from_dyna;
 
   // Independent fits: the optimal targets (SFLSH §3).
   for (const std::string& s : config.train_subjects)
@@ -238,6 +341,13 @@ nlohmann::json run_validation(const ValidateConfig& config, const std::filesyste
   summary["reduced_model"] = {{"point_handles", config.point_handles},
                               {"coordinates", reduced_model.subspace.num_dofs()},
                               {"cubature", reduced_model.cubature.size()}};
+  if (from_dyna) {
+    for (const std::string& id : dyna.subjects) {
+      const body::Betas& b = dyna.beta.at(id);
+      summary["dyna"]["subjects"][id]["beta"] = std::vector<double>(b.data(), b.data() + b.size());
+    }
+    for (const auto& [key, rms] : dyna.mean_rms) summary["dyna"]["pose_fit_mean_rms_mm"][key] = 1e3 * rms;
+  }
   summary["simulations"] = pool.simulations();
   summary["simulation_seconds"] = pool.seconds();
   summary["ranks"] = pool.ranks();

@@ -46,6 +46,11 @@ Eigen::MatrixXd on_body(const body::BodyModel& model, const meshing::LayerMesh& 
 
 }  // namespace
 
+const GroundTruthCase* Report::truth_of(const std::string& subject, const std::string& motion) const {
+  const auto it = truth->find(subject + "_" + motion);
+  return it == truth->end() ? nullptr : &it->second;
+}
+
 std::vector<std::string> Report::evaluated_subjects(const std::string& fit) const {
   if (fit.rfind("independent/", 0) == 0) return {fit.substr(12)};
   if (fit.rfind("cv/", 0) == 0) return {fit.substr(fit.rfind('/') + 1)};
@@ -84,9 +89,13 @@ void Report::evaluate(reduced::SimulationPool& pool, const reduced::ReducedModel
     Evaluation e;
     e.sigma = (sigma[j].head(R).array().square() + sigma[j].tail(R).array().square()).sqrt().matrix();
     e.mean_sigma = e.sigma.mean();
-    const GroundTruthCase& t = truth->at(job_truth[j]);
-    const Eigen::VectorXd ts = (t.sigma_normal.array().square() + t.sigma_tangent.array().square()).sqrt().matrix();
-    e.rms_error = std::sqrt((e.sigma - ts).squaredNorm() / static_cast<double>(R));
+    const auto t = truth->find(job_truth[j]);
+    if (t == truth->end()) {
+      e.rms_error = kNaN;   // no truth for this subject (a test subject of DYNA data)
+    } else {
+      const Eigen::VectorXd ts = (t->second.sigma_normal.array().square() + t->second.sigma_tangent.array().square()).sqrt().matrix();
+      e.rms_error = std::sqrt((e.sigma - ts).squaredNorm() / static_cast<double>(R));
+    }
     evaluations.emplace(job_keys[j], std::move(e));
   }
 }
@@ -111,7 +120,10 @@ double Report::table_error(const std::string& fit, const std::string& subject, c
 
 double Report::truth_entry(const std::string& subject, const std::vector<std::string>& motions) const {
   std::vector<double> v;
-  for (const std::string& m : motions) v.push_back(truth->at(subject + "_" + m).mean_sigma());
+  for (const std::string& m : motions) {
+    const GroundTruthCase* t = truth_of(subject, m);
+    v.push_back(t ? t->mean_sigma() : kNaN);
+  }
   return mean_of(v);
 }
 
@@ -296,32 +308,34 @@ void Report::write(RunFolder& run, nlohmann::json& summary) const {
   {
     std::vector<material::KappaMatrix> truth_k, indep_k, l2_k, ours_k;
     for (const std::string& s : config.train_subjects) {
-      const material::KappaMatrix t = normalized_truth(s);
-      material::KappaMatrix at_controls(N, 3);
-      for (int i = 0; i < N; ++i) at_controls.row(i) = t.row(parameterization->control_region_vertices()[static_cast<std::size_t>(i)]);
-      truth_k.push_back(at_controls);
-      const body::Betas& beta = truth->at(s + "_" + config.train_motions.front()).beta;
+      if (true_parameters) {
+        const material::KappaMatrix t = normalized_truth(s);
+        material::KappaMatrix at_controls(N, 3);
+        for (int i = 0; i < N; ++i) at_controls.row(i) = t.row(parameterization->control_region_vertices()[static_cast<std::size_t>(i)]);
+        truth_k.push_back(at_controls);
+      }
+      const body::Betas& beta = betas.at(s);
       indep_k.push_back(fits.at("independent/" + s).kappa_normalized(beta, bounds));
       l2_k.push_back(fits.at("full/l2").kappa_normalized(beta, bounds));
       ours_k.push_back(fits.at("full/ours").kappa_normalized(beta, bounds));
     }
-    cov_norm["truth"] = covariance_norms(truth_k);
+    cov_norm["truth"] = true_parameters ? covariance_norms(truth_k) : Eigen::VectorXd::Constant(N, kNaN);
     cov_norm["independent"] = covariance_norms(indep_k);
     cov_norm["l2"] = covariance_norms(l2_k);
     cov_norm["ours"] = covariance_norms(ours_k);
     for (int i = 0; i < N; ++i)
       cov_csv << i << "," << parameterization->control_vertices()[static_cast<std::size_t>(i)] << ","
-              << fmt::format("{:.6g},{:.6g},{:.6g},{:.6g}", cov_norm["truth"][i], cov_norm["independent"][i], cov_norm["l2"][i],
-                             cov_norm["ours"][i])
-              << "\n";
+              << (true_parameters ? fmt::format("{:.6g}", cov_norm["truth"][i]) : std::string())
+              << fmt::format(",{:.6g},{:.6g},{:.6g}", cov_norm["independent"][i], cov_norm["l2"][i], cov_norm["ours"][i]) << "\n";
     for (const auto& [tag, norms] : cov_norm)
-      cov_fields.point_data.push_back({"covariance_" + tag, on_body(*model, mesh, parameterization->phi() * norms)});
+      if (tag != "truth" || true_parameters) cov_fields.point_data.push_back({"covariance_" + tag, on_body(*model, mesh, parameterization->phi() * norms)});
     write_text_atomically(run.stage("covariance.csv"), cov_csv.str());
-    summary["covariance_mean"] = {{"truth", cov_norm["truth"].mean()}, {"independent", cov_norm["independent"].mean()},
+    if (!true_parameters) cov_norm.erase("truth");
+    summary["covariance_mean"] = {{"truth", true_parameters ? cov_norm.count("truth") ? cov_norm["truth"].mean() : kNaN : kNaN}, {"independent", cov_norm["independent"].mean()},
                                   {"l2", cov_norm["l2"].mean()}, {"ours", cov_norm["ours"].mean()}};
   }
   // Parameter recovery: the fitted field φ κ̂ against the true κ̂ on the region vertices.
-  {
+  if (true_parameters) {
     std::ostringstream pe;
     pe << "method,subject,split,thickness_rms,young_tangent_rms,young_normal_rms,young_tangent_log_rms,young_normal_log_rms\n";
     nlohmann::json pj = nlohmann::json::array();
@@ -367,12 +381,14 @@ void Report::write(RunFolder& run, nlohmann::json& summary) const {
     std::vector<std::string> all = config.train_subjects;
     all.insert(all.end(), config.test_subjects.begin(), config.test_subjects.end());
     for (const std::string& s : all) {
-      Eigen::VectorXd t = Eigen::VectorXd::Zero(truth->at(s + "_" + config.train_motions.front()).sigma_normal.size());
-      for (const std::string& m : config.train_motions) {
-        const GroundTruthCase& c = truth->at(s + "_" + m);
-        t += (c.sigma_normal.array().square() + c.sigma_tangent.array().square()).sqrt().matrix();
+      if (const GroundTruthCase* first = truth_of(s, config.train_motions.front())) {
+        Eigen::VectorXd t = Eigen::VectorXd::Zero(first->sigma_normal.size());
+        for (const std::string& m : config.train_motions) {
+          const GroundTruthCase& c = *truth_of(s, m);
+          t += (c.sigma_normal.array().square() + c.sigma_tangent.array().square()).sqrt().matrix();
+        }
+        fields.point_data.push_back({"sigma_truth_" + s, on_body(*model, mesh, t / static_cast<double>(config.train_motions.size()))});
       }
-      fields.point_data.push_back({"sigma_truth_" + s, on_body(*model, mesh, t / static_cast<double>(config.train_motions.size()))});
       std::vector<std::pair<std::string, std::string>> fit_list{{"full_l2", "full/l2"}, {"full_ours", "full/ours"}};
       if (fits.count("independent/" + s)) fit_list.emplace_back("independent", "independent/" + s);
       if (config.cross_validation && fits.count("cv/l2/" + l2 + "/" + s)) fit_list.emplace_back("cv_l2", "cv/l2/" + l2 + "/" + s);
@@ -403,12 +419,11 @@ void Report::write(RunFolder& run, nlohmann::json& summary) const {
     all.insert(all.end(), config.test_subjects.begin(), config.test_subjects.end());
     for (const std::string tag : {"l2", "ours"})
       for (const std::string& s : all) {
-        const GroundTruthCase& t = truth->at(s + "_" + config.train_motions.front());
         material::MaterialFile file;
         file.body = model->name;
         file.subject = s;
         file.bounds = bounds;
-        const material::KappaMatrix k = fits.at("full/" + tag).kappa(t.beta, bounds);
+        const material::KappaMatrix k = fits.at("full/" + tag).kappa(betas.at(s), bounds);
         for (int i = 0; i < N; ++i) {
           material::MaterialControlPoint cp;
           cp.vertex = parameterization->control_vertices()[static_cast<std::size_t>(i)];

@@ -26,6 +26,10 @@ struct Report {
   const std::map<std::string, GroundTruthCase>* truth = nullptr;      ///< key "<subject>_<motion>"
   std::map<std::string, reduced::FitResult> fits;   ///< "independent/S", "cv/<reg>/<λ>/S", "full/<reg>"
   std::map<std::string, double> best;               ///< λ chosen per regularizer tag
+  std::map<std::string, body::Betas> betas;         ///< every subject's β
+  bool true_parameters = true;                      ///< the truth carries κ (synthetic); DYNA does not
+
+  const GroundTruthCase* truth_of(const std::string& subject, const std::string& motion) const;
   std::map<std::string, Evaluation> evaluations;    ///< "<fit>|<subject>|<motion>"
 
   /// Simulates every (fit, subject, motion) the report needs and has not evaluated yet.

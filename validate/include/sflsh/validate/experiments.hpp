@@ -30,7 +30,13 @@ struct ValidateConfig {
   bool cross_validation = true;
   int threads = 0;                            ///< 0: all
   double thickness_max = 0.0;                 ///< 0: what the mesh size retargets validly
-  std::vector<std::filesystem::path> dyna;    ///< DYNA files (metrics of their sequences are reported)
+  /// DYNA files: when given, the ground truth comes from their registrations instead of the synthetic
+  /// solver runs. Train subjects are the files' subject ids (all that have every train motion, or
+  /// train_subjects when set); their β and per-frame poses are fitted (pose_fit.hpp) and σ* measured by
+  /// dynamics_metrics on the layer's region. Test subjects (β from data/*subjects.toml) have no truth.
+  std::vector<std::filesystem::path> dyna;
+  std::filesystem::path body_path;            ///< body model (empty: the open body); SMPL for DYNA data
+  bool preset_subjects_overridden = false;    ///< train_subjects were chosen by the user (DYNA: select those ids)
   std::filesystem::path cache_dir;            ///< template mesh cache (empty: default)
   bool progress = true;
 
