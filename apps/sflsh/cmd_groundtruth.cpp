@@ -8,7 +8,6 @@
 #include <sflsh/meshing/layer_mesh.hpp>
 #include <sflsh/validate/experiments.hpp>
 
-#include <sstream>
 
 namespace sflsh::app {
 
@@ -20,17 +19,8 @@ struct GroundTruthOptions {
   std::string mesh;
   int frames = -1;
   int threads = 0;
-  std::string subjects, motions;
+  std::vector<std::string> subjects, motions;
 };
-
-std::vector<std::string> split_commas(const std::string& text) {
-  std::vector<std::string> out;
-  std::stringstream ss(text);
-  std::string item;
-  while (std::getline(ss, item, ','))
-    if (!item.empty()) out.push_back(item);
-  return out;
-}
 
 }  // namespace
 
@@ -47,8 +37,9 @@ void register_groundtruth_commands(CLI::App& app, const Invocation& invocation) 
   cmd->add_option("--out", o->out, "Output folder")->required();
   cmd->add_option("--mesh", o->mesh, "Layer mesh size: coarse | default | fine (default coarse)");
   cmd->add_option("--frames", o->frames, "Frames per motion (0 = the motions' default length)")->check(CLI::NonNegativeNumber);
-  cmd->add_option("--subjects", o->subjects, "Comma-separated subject names (replaces the preset's train and test subjects)");
-  cmd->add_option("--motions", o->motions, "Comma-separated motion names (replaces the preset's motions)");
+  cmd->add_option("--subjects", o->subjects, "Comma-separated subject names (replaces the preset's train and test subjects)")
+      ->delimiter(',');
+  cmd->add_option("--motions", o->motions, "Comma-separated motion names (replaces the preset's motions)")->delimiter(',');
   cmd->add_option("--threads", o->threads, "Threads per process (0 = all)")->check(CLI::NonNegativeNumber);
   cmd->callback([o, invocation] {
     with_petsc(invocation, [&](int, int) {
@@ -57,11 +48,11 @@ void register_groundtruth_commands(CLI::App& app, const Invocation& invocation) 
       if (o->frames >= 0) config.frames = o->frames;
       config.threads = o->threads;
       if (!o->subjects.empty()) {
-        config.train_subjects = split_commas(o->subjects);
+        config.train_subjects = o->subjects;
         config.test_subjects.clear();
       }
       if (!o->motions.empty()) {
-        config.train_motions = split_commas(o->motions);
+        config.train_motions = o->motions;
         config.test_motions.clear();
       }
       const nlohmann::json summary =

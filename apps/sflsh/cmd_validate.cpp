@@ -11,7 +11,6 @@
 
 #include <fmt/format.h>
 
-#include <sstream>
 
 namespace sflsh::app {
 
@@ -26,38 +25,14 @@ struct ValidateOptions {
   int frames = -1;
   int iterations = 0;
   int threads = 0;
-  std::string stages, lambdas, train_subjects, test_subjects, train_motions, test_motions;
+  std::vector<int> stages;
+  std::vector<double> lambdas;
+  std::vector<std::string> train_subjects, test_subjects, train_motions, test_motions;
   bool no_cross_validation = false;
   std::vector<std::string> dyna;
   std::string body;
   bool quiet = false;
 };
-
-std::vector<std::string> split_list(const std::string& text) {
-  std::vector<std::string> out;
-  std::stringstream ss(text);
-  std::string item;
-  while (std::getline(ss, item, ','))
-    if (!item.empty()) out.push_back(item);
-  return out;
-}
-
-template <typename T>
-std::vector<T> numbers(const std::string& text, const char* option) {
-  std::vector<T> out;
-  for (const std::string& item : split_list(text)) {
-    try {
-      std::size_t used = 0;
-      const double v = std::stod(item, &used);
-      require(used == item.size(), "");
-      out.push_back(static_cast<T>(v));
-    } catch (const std::exception&) {
-      throw_error("validate: {} expects comma-separated numbers, got '{}'", option, item);
-    }
-  }
-  require(!out.empty(), "validate: {} is empty", option);
-  return out;
-}
 
 void run_validate(const ValidateOptions& o, const Invocation& invocation) {
   validate::ValidateConfig config = validate::ValidateConfig::from_preset(o.preset);
@@ -67,17 +42,17 @@ void run_validate(const ValidateOptions& o, const Invocation& invocation) {
   if (o.frames >= 0) config.frames = o.frames;
   if (o.iterations > 0) config.iterations = o.iterations;
   config.threads = o.threads;
-  if (!o.stages.empty()) config.stages = numbers<int>(o.stages, "--stages");
-  if (!o.lambdas.empty()) config.lambdas = numbers<double>(o.lambdas, "--lambdas");
+  if (!o.stages.empty()) config.stages = o.stages;
+  if (!o.lambdas.empty()) config.lambdas = o.lambdas;
   if (!o.train_subjects.empty()) {
-    config.train_subjects = split_list(o.train_subjects);
+    config.train_subjects = o.train_subjects;
     config.preset_subjects_overridden = true;
   }
   for (const std::string& f : o.dyna) config.dyna.emplace_back(f);
   config.body_path = o.body;
-  if (!o.test_subjects.empty()) config.test_subjects = split_list(o.test_subjects);
-  if (!o.train_motions.empty()) config.train_motions = split_list(o.train_motions);
-  if (!o.test_motions.empty()) config.test_motions = split_list(o.test_motions);
+  if (!o.test_subjects.empty()) config.test_subjects = o.test_subjects;
+  if (!o.train_motions.empty()) config.train_motions = o.train_motions;
+  if (!o.test_motions.empty()) config.test_motions = o.test_motions;
   if (o.no_cross_validation) config.cross_validation = false;
   config.progress = !o.quiet;
   const nlohmann::json summary =
@@ -108,13 +83,15 @@ void register_validate_commands(CLI::App& app, const Invocation& invocation) {
   cmd->add_option("--handles", o->handles, "Point handles of the reduced model")->check(CLI::PositiveNumber);
   cmd->add_option("--cubature", o->cubature, "Cubature tets (0 = every tet, -1 = auto)")->check(CLI::Range(-1, 1 << 30));
   cmd->add_option("--frames", o->frames, "Frames per clip (0 = the motions' default length)")->check(CLI::NonNegativeNumber);
-  cmd->add_option("--stages", o->stages, "Control-point counts, e.g. 1,12,24,84");
+  cmd->add_option("--stages", o->stages, "Control-point counts, e.g. 1,12,24,84")->delimiter(',')->check(CLI::PositiveNumber);
   cmd->add_option("--iterations", o->iterations, "Trust-region iterations per stage")->check(CLI::PositiveNumber);
-  cmd->add_option("--lambdas", o->lambdas, "λ values of the cross-validation sweep, e.g. 0.01,0.1,1");
-  cmd->add_option("--train-subjects", o->train_subjects, "Comma-separated subject names (data/*subjects.toml)");
-  cmd->add_option("--test-subjects", o->test_subjects, "Comma-separated subject names");
-  cmd->add_option("--train-motions", o->train_motions, "Comma-separated motion names");
-  cmd->add_option("--test-motions", o->test_motions, "Comma-separated motion names");
+  cmd->add_option("--lambdas", o->lambdas, "λ values of the cross-validation sweep, e.g. 0.01,0.1,1")
+      ->delimiter(',')
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--train-subjects", o->train_subjects, "Comma-separated subject names (data/*subjects.toml)")->delimiter(',');
+  cmd->add_option("--test-subjects", o->test_subjects, "Comma-separated subject names")->delimiter(',');
+  cmd->add_option("--train-motions", o->train_motions, "Comma-separated motion names")->delimiter(',');
+  cmd->add_option("--test-motions", o->test_motions, "Comma-separated motion names")->delimiter(',');
   cmd->add_option("--dyna", o->dyna, "DYNA registration files (HDF5): their subjects become the train subjects and their "
                                      "sequences the ground truth (poses and β fitted); test subjects come from --test-subjects")
       ->check(CLI::ExistingFile);

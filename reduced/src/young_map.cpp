@@ -102,6 +102,11 @@ meshing::RowMatrixX3d SkinDisplacementMap::displacement(const Eigen::VectorXd& q
   return layer_.surface_displacement(x);
 }
 
+meshing::RowMatrixX3d SkinDisplacementMap::displacement_of(const Eigen::VectorXd& q) const {
+  const Eigen::MatrixXd u = derivative(q);   // linear: the same map applied to one column
+  return Eigen::Map<const meshing::RowMatrixX3d>(u.data(), skin_basis_.rows(), 3);
+}
+
 Eigen::MatrixXd SkinDisplacementMap::derivative(const Eigen::MatrixXd& dq) const {
   require(dq.rows() == subspace_.num_dofs(), "skin map: dq has {} rows, expected {}", dq.rows(), subspace_.num_dofs());
   const Eigen::Index R = skin_basis_.rows();

@@ -88,7 +88,7 @@ TEST(Experiments, BadArgumentsGiveOneLineErrors) {
   EXPECT_NE(bad_preset.exit_code, 0);
   const auto bad_lambda = sflsh::testing::run_sflsh("validate --lambdas 0.1,x --out " + (dir / "b").string(), dir);
   EXPECT_NE(bad_lambda.exit_code, 0);
-  EXPECT_NE(bad_lambda.err.find("--lambdas expects comma-separated numbers"), std::string::npos) << bad_lambda.err;
+  EXPECT_NE(bad_lambda.err.find("--lambdas"), std::string::npos) << bad_lambda.err;
   const auto bad_subject =
       sflsh::testing::run_sflsh("validate --train-subjects NOBODY,OPEN_TRAIN_1 --out " + (dir / "c").string(), dir);
   EXPECT_NE(bad_subject.exit_code, 0);

@@ -30,6 +30,11 @@ DynamicsCase::DynamicsCase(const body::BodyModel& model, std::string subject, co
   for (std::size_t r = 0; r < region.size(); ++r) normals_.row(static_cast<Eigen::Index>(r)) = all.row(region[r]);
 }
 
+const SkinDisplacementMap& DynamicsCase::skin_map(const ReducedModel& model) const {
+  std::call_once(skin_map_once_, [&] { skin_map_ = std::make_unique<SkinDisplacementMap>(*layer_, model.subspace); });
+  return *skin_map_;
+}
+
 CaseDynamics DynamicsCase::simulate(const LayerParameterization& parameterization, const material::KappaMatrix& kappa,
                                     const ReducedModel& model, const ReducedOptions& options) const {
   const auto start = std::chrono::steady_clock::now();
@@ -38,17 +43,11 @@ CaseDynamics DynamicsCase::simulate(const LayerParameterization& parameterizatio
     ReducedBackwardEuler integrator(problem, model.subspace, model.cubature, options);
     integrator.initialize(fullspace::initial_state(problem, 0.0));
     fullspace::DynamicsAmplitude amplitude(normals_);
-    const meshing::LayerMesh& mesh = *layer_->mesh;
     // The attached nodes carry no elastic displacement (x_D = X), so u = (B ⊗ I₃) q; the skin embedding is
     // affine with weights summing to one, hence linear in u. No pass over the skinned trajectory per frame.
-    require(!problem.dirichlet.drives.size(), "fit cases take fixed attachments only");
-    Eigen::VectorXd u(problem.num_dofs());
-    auto add_frame = [&] {
-      u.setZero();
-      model.subspace.add_displacement(integrator.q(), u);
-      const Eigen::Map<const meshing::RowMatrixX3d> nodes(u.data(), problem.num_nodes(), 3);
-      amplitude.add(mesh.skin_positions(nodes));
-    };
+    require(problem.dirichlet.drives.empty(), "fit cases take fixed attachments only");
+    const SkinDisplacementMap& skin = skin_map(model);
+    auto add_frame = [&] { amplitude.add(skin.displacement_of(integrator.q())); };
     add_frame();
     for (int f = 1; f < frames_; ++f) {
       integrator.step(1.0 / fps_);
@@ -72,21 +71,14 @@ CaseDynamics DynamicsCase::simulate_with_sensitivity(const LayerParameterization
                                                     const ReducedOptions& options) const {
   const auto start = std::chrono::steady_clock::now();
   try {
-    std::call_once(skin_map_once_, [&] { skin_map_ = std::make_unique<SkinDisplacementMap>(*layer_, model.subspace); });
     const fullspace::Problem problem = parameterization.problem(*layer_, kappa, options_);
-    require(!problem.dirichlet.drives.size(), "fit cases take fixed attachments only");
+    require(problem.dirichlet.drives.empty(), "fit cases take fixed attachments only");
     SensitivityIntegrator integrator(problem, model.subspace, model.cubature, young_map, sensitivity_solver_options(options));
     integrator.initialize(fullspace::initial_state(problem, 0.0));
     const int columns = 2 * static_cast<int>(young_map.cols());
     DynamicsAmplitudeSensitivity amplitude(normals_, columns);
-    const meshing::LayerMesh& mesh = *layer_->mesh;
-    Eigen::VectorXd u(problem.num_dofs());
-    auto add_frame = [&] {
-      u.setZero();
-      model.subspace.add_displacement(integrator.q(), u);
-      const Eigen::Map<const meshing::RowMatrixX3d> nodes(u.data(), problem.num_nodes(), 3);
-      amplitude.add(mesh.skin_positions(nodes), skin_map_->derivative(integrator.dq_dyoung()));
-    };
+    const SkinDisplacementMap& skin = skin_map(model);
+    auto add_frame = [&] { amplitude.add(skin.displacement_of(integrator.q()), skin.derivative(integrator.dq_dyoung())); };
     add_frame();
     for (int f = 1; f < frames_; ++f) {
       integrator.step(1.0 / fps_);

@@ -29,6 +29,19 @@ Eigen::VectorXd flatten(const material::KappaMatrix& k) {
   return Eigen::Map<const Eigen::VectorXd>(k.data(), k.size());
 }
 
+/// Adds the wall time of its scope to `total` [s].
+class ScopedSeconds {
+ public:
+  explicit ScopedSeconds(double& total) : total_(total), start_(std::chrono::steady_clock::now()) {}
+  ~ScopedSeconds() { total_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count(); }
+  ScopedSeconds(const ScopedSeconds&) = delete;
+  ScopedSeconds& operator=(const ScopedSeconds&) = delete;
+
+ private:
+  double& total_;
+  std::chrono::steady_clock::time_point start_;
+};
+
 /// Everything one stage needs, fixed while TAO iterates.
 struct Stage {
   const FitContext* context = nullptr;
@@ -67,12 +80,7 @@ struct Stage {
   }
 
   Eigen::VectorXd residual(const Eigen::VectorXd& p) {
-    const auto start = std::chrono::steady_clock::now();
-    struct Timer {
-      std::chrono::steady_clock::time_point start;
-      double* total;
-      ~Timer() { *total += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); }
-    } timer{start, &residual_seconds};
+    const ScopedSeconds timer(residual_seconds);
     std::vector<SimulationJob> jobs;
     std::vector<material::KappaMatrix> kappa(static_cast<std::size_t>(num_subjects()));
     for (int j = 0; j < num_subjects(); ++j) kappa[static_cast<std::size_t>(j)] = material::denormalize(q(j, p), context->bounds);
@@ -92,12 +100,7 @@ struct Stage {
 
   NormalEquations normal_equations(const Eigen::VectorXd& p, const Eigen::VectorXd& r) {
     ++jacobians;
-    const auto start = std::chrono::steady_clock::now();
-    struct Timer {
-      std::chrono::steady_clock::time_point start;
-      double* total;
-      ~Timer() { *total += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); }
-    } timer{start, &jacobian_seconds};
+    const ScopedSeconds timer(jacobian_seconds);
     const auto P = p.size();
     NormalEquations ne;
     ne.JtJ = Eigen::MatrixXd::Zero(P, P);

@@ -100,22 +100,22 @@ void Report::evaluate(reduced::SimulationPool& pool, const reduced::ReducedModel
   }
 }
 
-double Report::table_entry(const std::string& fit, const std::string& subject, const std::vector<std::string>& motions) const {
+double Report::motion_mean(const std::string& fit, const std::string& subject, const std::vector<std::string>& motions,
+                           double Evaluation::*value) const {
   std::vector<double> v;
   for (const std::string& m : motions) {
     const auto it = evaluations.find(key_of(fit, subject, m));
-    v.push_back(it == evaluations.end() ? kNaN : it->second.mean_sigma);
+    v.push_back(it == evaluations.end() ? kNaN : it->second.*value);
   }
   return mean_of(v);
 }
 
+double Report::table_entry(const std::string& fit, const std::string& subject, const std::vector<std::string>& motions) const {
+  return motion_mean(fit, subject, motions, &Evaluation::mean_sigma);
+}
+
 double Report::table_error(const std::string& fit, const std::string& subject, const std::vector<std::string>& motions) const {
-  std::vector<double> v;
-  for (const std::string& m : motions) {
-    const auto it = evaluations.find(key_of(fit, subject, m));
-    v.push_back(it == evaluations.end() ? kNaN : it->second.rms_error);
-  }
-  return mean_of(v);
+  return motion_mean(fit, subject, motions, &Evaluation::rms_error);
 }
 
 double Report::truth_entry(const std::string& subject, const std::vector<std::string>& motions) const {
@@ -319,19 +319,18 @@ void Report::write(RunFolder& run, nlohmann::json& summary) const {
       l2_k.push_back(fits.at("full/l2").kappa_normalized(beta, bounds));
       ours_k.push_back(fits.at("full/ours").kappa_normalized(beta, bounds));
     }
-    cov_norm["truth"] = true_parameters ? covariance_norms(truth_k) : Eigen::VectorXd::Constant(N, kNaN);
+    if (true_parameters) cov_norm["truth"] = covariance_norms(truth_k);
     cov_norm["independent"] = covariance_norms(indep_k);
     cov_norm["l2"] = covariance_norms(l2_k);
     cov_norm["ours"] = covariance_norms(ours_k);
     for (int i = 0; i < N; ++i)
       cov_csv << i << "," << parameterization->control_vertices()[static_cast<std::size_t>(i)] << ","
-              << (true_parameters ? fmt::format("{:.6g}", cov_norm["truth"][i]) : std::string())
+              << (true_parameters ? fmt::format("{:.6g}", cov_norm.at("truth")[i]) : std::string())
               << fmt::format(",{:.6g},{:.6g},{:.6g}", cov_norm["independent"][i], cov_norm["l2"][i], cov_norm["ours"][i]) << "\n";
     for (const auto& [tag, norms] : cov_norm)
-      if (tag != "truth" || true_parameters) cov_fields.point_data.push_back({"covariance_" + tag, on_body(*model, mesh, parameterization->phi() * norms)});
+      cov_fields.point_data.push_back({"covariance_" + tag, on_body(*model, mesh, parameterization->phi() * norms)});
     write_text_atomically(run.stage("covariance.csv"), cov_csv.str());
-    if (!true_parameters) cov_norm.erase("truth");
-    summary["covariance_mean"] = {{"truth", true_parameters ? cov_norm.count("truth") ? cov_norm["truth"].mean() : kNaN : kNaN}, {"independent", cov_norm["independent"].mean()},
+    summary["covariance_mean"] = {{"truth", true_parameters ? cov_norm.at("truth").mean() : kNaN}, {"independent", cov_norm["independent"].mean()},
                                   {"l2", cov_norm["l2"].mean()}, {"ours", cov_norm["ours"].mean()}};
   }
   // Parameter recovery: the fitted field φ κ̂ against the true κ̂ on the region vertices.

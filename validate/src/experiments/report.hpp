@@ -46,6 +46,9 @@ struct Report {
   double table_entry(const std::string& fit, const std::string& subject, const std::vector<std::string>& motions) const;
   double table_error(const std::string& fit, const std::string& subject, const std::vector<std::string>& motions) const;
   double truth_entry(const std::string& subject, const std::vector<std::string>& motions) const;
+  /// Mean over `motions` of one Evaluation member; NaN entries (missing) are skipped.
+  double motion_mean(const std::string& fit, const std::string& subject, const std::vector<std::string>& motions,
+                     double Evaluation::*value) const;
 };
 
 }  // namespace sflsh::validate

@@ -56,6 +56,9 @@ class DynamicsCase {
                                          Eigen::MatrixXd& dsigma, const ReducedOptions& options = {}) const;
 
  private:
+  /// K B of the skin (built on first use; every simulation of this case shares the one subspace).
+  const SkinDisplacementMap& skin_map(const ReducedModel& model) const;
+
   std::string subject_, motion_;
   fullspace::BodyLayerOptions options_;
   std::unique_ptr<fullspace::BodyLayer> layer_;

@@ -57,6 +57,8 @@ class SkinDisplacementMap {
   SkinDisplacementMap(const fullspace::BodyLayer& layer, const Subspace& subspace);
   /// u (R × 3) [m] for coordinates q at time t [s].
   meshing::RowMatrixX3d displacement(const Eigen::VectorXd& q, double t) const;
+  /// (K B ⊗ I₃) q (R × 3) [m]: the skin's displacement when the attached nodes carry none (x_D = X).
+  meshing::RowMatrixX3d displacement_of(const Eigen::VectorXd& q) const;
   /// du/dp (3R × m, row 3r + axis) for dq/dp (3S × m).
   Eigen::MatrixXd derivative(const Eigen::MatrixXd& dq) const;
 
