@@ -5,6 +5,7 @@
 //   p_i(t) = A_i(t) x_i + d_i(t),   d_i = A_i b_i + c_i  (b_i: pose corrective, [A_i | c_i]: blended LBS).
 // The elastic energy E(x) is measured in the unposed frame; inertia and gravity act on p.
 // Equation of motion (Euler–Lagrange of ½ṗᵀMṗ − E(x) + Σ m_i gᵀp_i): A_iᵀ m_i (p̈_i − g) = −∇_i E(x).
+#include <sflsh/fullspace/node_potential.hpp>
 #include <sflsh/material/orthotropic_fung.hpp>
 #include <sflsh/material/psd_projection.hpp>
 #include <sflsh/material/tet_element.hpp>
@@ -79,6 +80,9 @@ struct Problem {
   Dirichlet dirichlet;
   std::shared_ptr<const NodeTrajectory> trajectory;  ///< null: p = x (identity maps, d = 0)
   material::HessianProjection projection = material::HessianProjection::kStressDerivative;
+  /// Extra per-node energies on posed positions (contact, node_potential.hpp); empty unless a scene asks.
+  /// Shared, and mutable through the pointer: integrators call begin_substep/accept_substep on them.
+  std::vector<std::shared_ptr<NodePotential>> potentials;
 
   int num_nodes() const { return static_cast<int>(rest.rows()); }
   int num_tets() const { return static_cast<int>(tets.rows()); }
