@@ -264,6 +264,7 @@ bool BackwardEuler::Impl::solve_substep(State& s, double t0, double dt) {
   Eigen::VectorXd start = s.x;
   problem.apply_dirichlet(t1, start);
   prescribed = start;
+  begin_potentials(p_n, t0, dt);
   if (inertia && options.use_predictor) {
     Eigen::VectorXd predicted = start;
     for (int i = 0; i < problem.num_nodes(); ++i) {
@@ -275,6 +276,36 @@ bool BackwardEuler::Impl::solve_substep(State& s, double t0, double dt) {
     }
     if (predicted.allFinite() && objective(predicted) < objective(start)) start = predicted;
   }
+  int max_refinements = 0;
+  for (const PotentialTerm& term : potential_terms) max_refinements = std::max(max_refinements, term.potential->max_refinements());
+  for (int refinement = 0;; ++refinement) {
+    if (!solve_from(start, dt)) return false;
+    Eigen::VectorXd x_new;
+    gather(X, x_new);
+    if (!x_new.allFinite()) return false;
+    if (accept_potentials(x_new)) break;
+    if (refinement >= max_refinements) {
+      logger()->warn("t = {:.6g}: contact still over its tolerance after {} refinement(s); the substep is kept", t1, refinement);
+      break;
+    }
+    ++stats->potential_refinements;
+  }
+  Eigen::VectorXd x_new;
+  gather(X, x_new);
+  PetscReal fnorm = 0.0;
+  VecNorm(F, NORM_2, &fnorm);
+  stats->final_residual = fnorm;
+  const RowMatrixX3d p_new = posed_positions(frame, x_new);
+  Eigen::VectorXd w_new(problem.num_dofs());
+  for (int i = 0; i < problem.num_nodes(); ++i) w_new.segment<3>(3 * i) = (p_new.row(i) - p_n.row(i)).transpose() / dt;
+  if (!w_new.allFinite()) return false;
+  s.t = t1;
+  s.x = std::move(x_new);
+  s.w = std::move(w_new);
+  return true;
+}
+
+bool BackwardEuler::Impl::solve_from(const Eigen::VectorXd& start, double dt) {
   {
     PetscScalar* a = nullptr;
     SFLSH_PETSC(VecGetArray(X, &a));
@@ -298,19 +329,6 @@ bool BackwardEuler::Impl::solve_substep(State& s, double t0, double dt) {
     logger()->debug("t = {:.6g}: substep of {:.3g} s failed ({})", t1, dt, stats->converged_reason);
     return false;
   }
-  Eigen::VectorXd x_new;
-  gather(X, x_new);
-  PetscReal fnorm = 0.0;
-  VecNorm(F, NORM_2, &fnorm);
-  stats->final_residual = fnorm;
-  if (!x_new.allFinite()) return false;
-  const RowMatrixX3d p_new = posed_positions(frame, x_new);
-  Eigen::VectorXd w_new(problem.num_dofs());
-  for (int i = 0; i < problem.num_nodes(); ++i) w_new.segment<3>(3 * i) = (p_new.row(i) - p_n.row(i)).transpose() / dt;
-  if (!w_new.allFinite()) return false;
-  s.t = t1;
-  s.x = std::move(x_new);
-  s.w = std::move(w_new);
   return true;
 }
 

@@ -164,12 +164,33 @@ struct BackwardEuler::Impl {
     }
     return x_prescribed_buffer;
   }
+  // The problem's node potentials (contact) in the substep being solved: those whose begin_substep found
+  // candidates, with each candidate's mesh node and the candidates this rank owns (it adds their terms).
+  struct PotentialTerm {
+    NodePotential* potential = nullptr;
+    std::vector<int> node;     ///< per candidate: the mesh node
+    std::vector<int> owned;    ///< candidate entries whose node this rank owns
+  };
+  std::vector<PotentialTerm> potential_terms;
+  /// Calls begin_substep on every potential with the posed positions p_n at t0 and the skinned ones at t1
+  /// (frame must hold t1's maps) and keeps the active ones.
+  void begin_potentials(const RowMatrixX3d& p_n, double t0, double dt);
+  /// Σ u over the owned candidates at x (x with prescribed values), and their gradient / diagonal Hessian blocks.
+  double potential_energy(const Eigen::VectorXd& x) const;
+  void add_potential_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& g) const;
+  /// Per owned candidate: its mesh node and the 3×3 block Aᵀ ∇²u A (constrained rows and columns zeroed).
+  std::vector<std::pair<int, Eigen::Matrix3d>> potential_hessian_blocks(const Eigen::VectorXd& x) const;
+  /// accept_substep of every active potential at the new state (the same decision on every rank).
+  bool accept_potentials(const Eigen::VectorXd& x_new);
+
   double objective(const Eigen::VectorXd& x);
   bool residual(const Eigen::VectorXd& x, Vec out);
   bool jacobian(const Eigen::VectorXd& x);
   void build_refill();
   void mark_diagonal_block_symmetric();
   bool solve_substep(State& s, double t0, double dt);
+  /// One SNES solve of the current substep from `start` (full, prescribed values set); true when converged.
+  bool solve_from(const Eigen::VectorXd& start, double dt);
 
   static PetscErrorCode function_cb(SNES, Vec x, Vec f, void* ctx);
   static PetscErrorCode objective_cb(SNES, Vec x, PetscReal* value, void* ctx);

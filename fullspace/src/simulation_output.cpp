@@ -115,7 +115,10 @@ double median(Eigen::VectorXd v) {
 }  // namespace
 
 SimulationWriter::SimulationWriter(const BodyLayer& layer, RunFolder* run, bool write_layer)
-    : layer_(layer), run_(run), write_layer_(write_layer), amplitude_(region_normals(layer)) {
+    : SimulationWriter(layer, run, SimulationWriterOptions{.write_layer = write_layer}) {}
+
+SimulationWriter::SimulationWriter(const BodyLayer& layer, RunFolder* run, const SimulationWriterOptions& options)
+    : layer_(layer), run_(run), options_(options), write_layer_(options.write_layer), amplitude_(region_normals(layer)) {
   const body::BodyModel& model = *layer.model;
   dominant_joint_.resize(model.num_vertices(), 1);
   for (Eigen::Index v = 0; v < model.num_vertices(); ++v) {
@@ -125,12 +128,13 @@ SimulationWriter::SimulationWriter(const BodyLayer& layer, RunFolder* run, bool 
   }
   vertex_kappa_ = scatter(layer, layer.fields.vertex);
   if (run_) {
-    body_series_ = std::make_unique<vtk::PvdSeries>(run_->stage("body.pvd"));
-    if (write_layer_) layer_series_ = std::make_unique<vtk::PvdSeries>(run_->stage("layer.pvd"));
+    body_series_ = std::make_unique<vtk::PvdSeries>(run_->stage(options_.prefix + ".pvd"));
+    if (write_layer_)
+      layer_series_ = std::make_unique<vtk::PvdSeries>(run_->stage(options_.prefix == "body" ? "layer.pvd" : options_.prefix + "_layer.pvd"));
   }
 }
 
-void SimulationWriter::add_frame(double t, const State& state) {
+void SimulationWriter::add_frame(double t, const State& state, const std::vector<vtk::Field>& extra) {
   const Problem& problem = layer_.problem;
   require(state.x.allFinite() && state.w.allFinite(), "simulation output: the state at t = {} is not finite", t);
   const RowMatrixX3d u = layer_.surface_displacement(state.x);
@@ -156,14 +160,22 @@ void SimulationWriter::add_frame(double t, const State& state) {
     fields.point_data.push_back({"strain_energy_density", scatter(layer_, vertex_psi), false});
     add_kappa_fields(fields.point_data, vertex_kappa_);
     fields.field_data.push_back({"TimeValue", Eigen::MatrixXd::Constant(1, 1, t), false});
-    const std::string name = fmt::format("body_{:06d}.vtp", frame_);
-    vtk::write_surface(run_->stage(name), posed, model.faces, fields);
+    const bool placed = !options_.rotation.isIdentity(0.0) || !options_.translation.isZero(0.0);
+    if (placed) {
+      for (vtk::Field& f : fields.point_data)
+        if (f.values.cols() == 3 && !f.integer) f.values = (f.values * options_.rotation.transpose()).eval();
+    }
+    for (const vtk::Field& f : extra) fields.point_data.push_back(f);
+    const std::string name = fmt::format("{}_{:06d}.vtp", options_.prefix, frame_);
+    const RowMatrixX3d written = placed ? RowMatrixX3d((posed * options_.rotation.transpose()).rowwise() + options_.translation.transpose()) : posed;
+    vtk::write_surface(run_->stage(name), written, model.faces, fields);
     body_series_->add(t, name);
 
     if (write_layer_) {
       NodeFrame frame;
       problem.frame(t, frame);
-      const RowMatrixX3d nodes = posed_positions(frame, state.x);
+      RowMatrixX3d nodes = posed_positions(frame, state.x);
+      if (placed) nodes = ((nodes * options_.rotation.transpose()).rowwise() + options_.translation.transpose()).eval();
       const Eigen::Map<const RowMatrixX3d> x(state.x.data(), problem.num_nodes(), 3);
       const Eigen::Map<const RowMatrixX3d> w(state.w.data(), problem.num_nodes(), 3);
       vtk::Fields layer_fields;
@@ -174,7 +186,8 @@ void SimulationWriter::add_frame(double t, const State& state) {
       add_kappa_fields(layer_fields.cell_data, layer_.fields.tet);
       layer_fields.cell_data.push_back({"strain_energy_density", psi, false});
       layer_fields.field_data.push_back({"TimeValue", Eigen::MatrixXd::Constant(1, 1, t), false});
-      const std::string layer_name = fmt::format("layer_{:06d}.vtu", frame_);
+      const std::string layer_name =
+          options_.prefix == "body" ? fmt::format("layer_{:06d}.vtu", frame_) : fmt::format("{}_layer_{:06d}.vtu", options_.prefix, frame_);
       vtk::write_unstructured(run_->stage(layer_name), nodes, problem.tets, layer_fields);
       layer_series_->add(t, layer_name);
     }
@@ -193,7 +206,8 @@ void SimulationWriter::finish() {
   fields.point_data.push_back({"sigma_normal", scatter(layer_, 1e3 * amplitude_.sigma_normal()), false});
   fields.point_data.push_back({"sigma_tangent", scatter(layer_, 1e3 * amplitude_.sigma_tangent()), false});
   add_kappa_fields(fields.point_data, vertex_kappa_);
-  vtk::write_surface(run_->stage("dynamics.vtp"), layer_.shaped, layer_.model->faces, fields);
+  vtk::write_surface(run_->stage(options_.prefix == "body" ? "dynamics.vtp" : options_.prefix + "_dynamics.vtp"), layer_.shaped,
+                     layer_.model->faces, fields);
 }
 
 nlohmann::json SimulationWriter::dynamics_summary() const {

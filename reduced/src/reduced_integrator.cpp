@@ -28,7 +28,8 @@ ReducedBackwardEuler::ReducedBackwardEuler(const fullspace::Problem& problem, co
       cubature_(cubature),
       options_(options),
       elastic_(problem, subspace, cubature),
-      inertia_(problem, subspace) {
+      inertia_(problem, subspace),
+      potentials_(problem, subspace, inertia_.active_nodes()) {
   require(options.max_halvings >= 0 && options.max_newton >= 1, "reduced: max_halvings must be ≥ 0 and max_newton ≥ 1");
   // Attached nodes must be attached as a whole and carry no basis functions.
   std::vector<int> constrained_axes(static_cast<std::size_t>(problem.num_nodes()), 0);
@@ -95,6 +96,12 @@ bool ReducedBackwardEuler::solve_substep(double t0, double dt, material::Hessian
   clock = Clock::now();
   if (has_drives_) elastic_.set_prescribed_state(x_prescribed);
   stats.elastic_seconds += seconds_since(clock);
+  bool contact = false;
+  if (!potentials_.empty()) {
+    clock = Clock::now();
+    contact = potentials_.begin(t0, dt, p_, inertia_);
+    stats.potential_seconds += seconds_since(clock);
+  }
 
   // Φ(q) = cᵀq + ½ qᵀ H_m q + E(q); +∞ where the material refuses the state.
   auto potential = [&](const Eigen::VectorXd& q) {
@@ -106,130 +113,164 @@ bool ReducedBackwardEuler::solve_substep(double t0, double dt, material::Hessian
       value = kInfinity;
     }
     stats.elastic_seconds += seconds_since(t);
+    if (contact) {
+      const auto tc = Clock::now();
+      value += potentials_.energy(q, inertia_);
+      stats.potential_seconds += seconds_since(tc);
+    }
     return std::isfinite(value) ? value : kInfinity;
   };
 
-  Eigen::VectorXd q = q_;
-  double phi = potential(q);
-  if (options_.use_predictor && q_rate_.size() == q_.size()) {
-    const Eigen::VectorXd predicted = q_ + dt * q_rate_;
-    const double phi_predicted = potential(predicted);
-    if (phi_predicted < phi) {
-      q = predicted;
-      phi = phi_predicted;
+  // Solved again from the same start when a node potential refuses the result (penetration over its
+  // tolerance: the potential stiffened itself).
+  Eigen::VectorXd q;
+  for (int refinement = 0;; ++refinement) {
+    q = q_;
+    double phi = potential(q);
+    if (options_.use_predictor && q_rate_.size() == q_.size()) {
+      const Eigen::VectorXd predicted = q_ + dt * q_rate_;
+      const double phi_predicted = potential(predicted);
+      if (phi_predicted < phi) {
+        q = predicted;
+        phi = phi_predicted;
+      }
     }
-  }
-  if (!std::isfinite(phi)) {
-    reason = "the start of the step is outside the material's domain";
-    return false;
-  }
+    if (!std::isfinite(phi)) {
+      reason = "the start of the step is outside the material's domain";
+      return false;
+    }
 
-  Eigen::VectorXd gradient(subspace_.num_dofs());
-  Eigen::MatrixXd hessian;
-  if (!factor_valid_ || factor_h_ != dt || factor_projection_ != projection || !options_.reuse_factorization) factor_valid_ = false;
-  bool fresh = false;          // the factor was computed at this step's current iterate
-  bool refresh = !factor_valid_;
-  double g0 = 0.0, g_previous = kInfinity;
-  bool converged = false;
-  for (int it = 0; it < options_.max_newton && !converged; ++it) {
-    clock = Clock::now();
-    gradient = c + mass_hessian * q;
-    try {
-      elastic_.add_gradient(q, gradient);
-    } catch (const Error& e) {
-      reason = e.what();
-      return false;
-    }
-    stats.elastic_seconds += seconds_since(clock);
-    const double g = gradient.norm();
-    stats.final_gradient = g;
-    if (!std::isfinite(g)) {
-      reason = "non-finite gradient";
-      return false;
-    }
-    if (it == 0) g0 = g;
-    if (g <= options_.gradient_atol || (it > 0 && g <= options_.gradient_rtol * g0)) {
-      converged = true;
-      reason = "gradient";
-      break;
-    }
-    // A stale factor that no longer contracts the gradient fast enough is replaced.
-    if (!fresh && g > options_.refresh_ratio * g_previous) refresh = true;
-    g_previous = g;
-    for (int attempt = 0; attempt < 2; ++attempt) {
-      if (refresh) {
-        clock = Clock::now();
-        hessian = mass_hessian;
-        try {
-          elastic_.add_hessian(q, hessian, projection);
-        } catch (const Error& e) {
-          reason = e.what();
-          return false;
-        }
-        stats.elastic_seconds += seconds_since(clock);
-        clock = Clock::now();
-        factor_.compute(hessian);
-        stats.solve_seconds += seconds_since(clock);
-        ++stats.factorizations;
-        factor_valid_ = factor_.info() == Eigen::Success;
-        factor_h_ = dt;
-        factor_projection_ = projection;
-        if (!factor_valid_) {
-          reason = "indefinite Hessian";
-          return false;
-        }
-        fresh = true;
-        refresh = false;
-      }
+    Eigen::VectorXd gradient(subspace_.num_dofs());
+    Eigen::MatrixXd hessian;
+    // A factor from another step length or projection, or any factor while contact is active (its Hessian
+    // changes with the candidates), is not reused.
+    if (!factor_valid_ || factor_h_ != dt || factor_projection_ != projection || !options_.reuse_factorization || contact)
+      factor_valid_ = false;
+    bool fresh = false;          // the factor was computed at this step's current iterate
+    bool refresh = !factor_valid_;
+    double g0 = 0.0, g_previous = kInfinity;
+    bool converged = false;
+    for (int it = 0; it < options_.max_newton && !converged; ++it) {
       clock = Clock::now();
-      const Eigen::VectorXd delta = -factor_.solve(gradient);
-      stats.solve_seconds += seconds_since(clock);
-      ++stats.newton_iterations;
-      if (!delta.allFinite()) {
-        reason = "non-finite Newton step";
-        factor_valid_ = false;
+      gradient = c + mass_hessian * q;
+      try {
+        elastic_.add_gradient(q, gradient);
+      } catch (const Error& e) {
+        reason = e.what();
         return false;
       }
-      // Backtracking on Φ (Armijo); a decrease below round-off of Φ counts as converged.
-      const double slope = gradient.dot(delta);
-      double alpha = 1.0;
-      bool accepted = false;
-      for (int ls = 0; ls < 40; ++ls, alpha *= 0.5) {
-        const Eigen::VectorXd trial = q + alpha * delta;
-        const double phi_trial = potential(trial);
-        const bool roundoff = std::isfinite(phi_trial) && std::abs(phi_trial - phi) <= 1e-13 * std::max(1.0, std::abs(phi));
-        if (phi_trial <= phi + 1e-4 * alpha * slope ||
-            (alpha == 1.0 && roundoff && std::abs(slope) <= 1e-10 * std::max(1.0, std::abs(phi)))) {
-          q = trial;
-          phi = phi_trial;
-          accepted = true;
-          break;
-        }
+      stats.elastic_seconds += seconds_since(clock);
+      if (contact) {
+        clock = Clock::now();
+        potentials_.add_gradient(q, inertia_, gradient);
+        stats.potential_seconds += seconds_since(clock);
       }
-      if (!accepted) {
-        if (!fresh) {   // a stale factor may point badly: retry the iteration with a fresh Hessian
-          refresh = true;
-          continue;
-        }
-        reason = "line search failed";
+      const double g = gradient.norm();
+      stats.final_gradient = g;
+      if (!std::isfinite(g)) {
+        reason = "non-finite gradient";
         return false;
       }
-      fresh = false;
-      if (alpha == 1.0 && delta.cwiseAbs().maxCoeff() <= options_.step_tolerance) {
+      if (it == 0) g0 = g;
+      if (g <= options_.gradient_atol || (it > 0 && g <= options_.gradient_rtol * g0)) {
         converged = true;
-        reason = "step";
+        reason = "gradient";
+        break;
       }
+      // A stale factor that no longer contracts the gradient fast enough is replaced.
+      if (!fresh && g > options_.refresh_ratio * g_previous) refresh = true;
+      g_previous = g;
+      for (int attempt = 0; attempt < 2; ++attempt) {
+        if (refresh) {
+          clock = Clock::now();
+          hessian = mass_hessian;
+          try {
+            elastic_.add_hessian(q, hessian, projection);
+          } catch (const Error& e) {
+            reason = e.what();
+            return false;
+          }
+          stats.elastic_seconds += seconds_since(clock);
+          if (contact) {
+            clock = Clock::now();
+            potentials_.add_hessian(q, inertia_, hessian);
+            stats.potential_seconds += seconds_since(clock);
+          }
+          clock = Clock::now();
+          factor_.compute(hessian);
+          stats.solve_seconds += seconds_since(clock);
+          ++stats.factorizations;
+          factor_valid_ = factor_.info() == Eigen::Success;
+          factor_h_ = dt;
+          factor_projection_ = projection;
+          if (!factor_valid_) {
+            reason = "indefinite Hessian";
+            return false;
+          }
+          fresh = true;
+          refresh = false;
+        }
+        clock = Clock::now();
+        const Eigen::VectorXd delta = -factor_.solve(gradient);
+        stats.solve_seconds += seconds_since(clock);
+        ++stats.newton_iterations;
+        if (!delta.allFinite()) {
+          reason = "non-finite Newton step";
+          factor_valid_ = false;
+          return false;
+        }
+        // Backtracking on Φ (Armijo); a decrease below round-off of Φ counts as converged.
+        const double slope = gradient.dot(delta);
+        double alpha = 1.0;
+        bool accepted = false;
+        for (int ls = 0; ls < 40; ++ls, alpha *= 0.5) {
+          const Eigen::VectorXd trial = q + alpha * delta;
+          const double phi_trial = potential(trial);
+          const bool roundoff = std::isfinite(phi_trial) && std::abs(phi_trial - phi) <= 1e-13 * std::max(1.0, std::abs(phi));
+          if (phi_trial <= phi + 1e-4 * alpha * slope ||
+              (alpha == 1.0 && roundoff && std::abs(slope) <= 1e-10 * std::max(1.0, std::abs(phi)))) {
+            q = trial;
+            phi = phi_trial;
+            accepted = true;
+            break;
+          }
+        }
+        if (!accepted) {
+          if (!fresh) {   // a stale factor may point badly: retry the iteration with a fresh Hessian
+            refresh = true;
+            continue;
+          }
+          reason = "line search failed";
+          return false;
+        }
+        fresh = false;
+        if (alpha == 1.0 && delta.cwiseAbs().maxCoeff() <= options_.step_tolerance) {
+          converged = true;
+          reason = "step";
+        }
+        break;
+      }
+    }
+    if (!converged) {
+      factor_valid_ = false;
+      reason = fmt::format("no convergence in {} Newton iterations (‖∇Φ‖ = {:.3e})", options_.max_newton, stats.final_gradient);
+      return false;
+    }
+    if (!q.allFinite()) {
+      reason = "non-finite state";
+      return false;
+    }
+    if (!contact) break;
+    clock = Clock::now();
+    const bool accepted = potentials_.accept(q, inertia_);
+    stats.potential_seconds += seconds_since(clock);
+    factor_valid_ = false;   // the factor holds this substep's contact Hessian
+    if (accepted) break;
+    if (refinement >= potentials_.max_refinements()) {
+      logger()->warn("reduced: t = {:.6g}: contact still over its tolerance after {} refinement(s); the substep is kept", t1, refinement);
       break;
     }
-  }
-  if (!converged) {
-    factor_valid_ = false;
-    reason = fmt::format("no convergence in {} Newton iterations (‖∇Φ‖ = {:.3e})", options_.max_newton, stats.final_gradient);
-    return false;
-  }
-  if (!q.allFinite()) {
-    reason = "non-finite state";
-    return false;
+    ++stats.potential_refinements;
   }
   clock = Clock::now();
   meshing::RowMatrixX3d p_new;

@@ -10,6 +10,8 @@
 // Defaults (all overridable with -snes_*, -ksp_*, -pc_* or an options file): newtonls with an energy
 // backtracking line search, KSP CG with ICC (block Jacobi + ICC in parallel) in dynamic steps and GAMG without
 // inertia, a direct solve up to 6000 dofs; rtol 1e-8; the exact Hessian first, then each tet's projected to PSD.
+// Node potentials of the problem (contact, node_potential.hpp) add u(p) to Φ on their candidate nodes; a
+// substep a potential refuses (penetration over its tolerance) is solved again after the potential stiffened.
 #include <sflsh/fullspace/problem.hpp>
 
 #include <mpi.h>
@@ -47,6 +49,9 @@ struct StepStats {
   double seconds = 0.0;
   double function_seconds = 0.0;   ///< residual and objective evaluations
   double jacobian_seconds = 0.0;   ///< Hessian assembly
+  double mass_seconds = 0.0;       ///< the per-node mass terms (inertia and gravity) of Φ, ∇Φ, ∇²Φ
+  double potential_seconds = 0.0;  ///< node potentials (contact): broad phase, evaluations, acceptance
+  int potential_refinements = 0;   ///< substeps solved again because a potential refused the result
   double final_residual = 0.0;     ///< ‖∇Φ‖ at the solution of the last substep [N]
   std::string converged_reason;    ///< PETSc's reason of the last substep
 };

@@ -39,6 +39,16 @@ RowMatrixX3d vertex_normals(const RowMatrixX3d& vertices, const Eigen::Matrix<in
 /// Strain-energy density ψ = E_e / V_e per tet [J/m³] at elastic state x.
 Eigen::VectorXd strain_energy_density(const Problem& problem, const Eigen::VectorXd& x);
 
+/// Where and how a SimulationWriter writes (scenes write several bodies, each placed in the world).
+struct SimulationWriterOptions {
+  std::string prefix = "body";       ///< <prefix>.pvd, <prefix>_NNNNNN.vtp, <prefix>_layer.pvd, <prefix>_dynamics.vtp
+  bool write_layer = false;
+  /// A rigid placement applied to every written point (p_world = rotation p + translation) and the
+  /// rotation to every written vector field; σ is unaffected.
+  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d translation = Eigen::Vector3d::Zero();
+};
+
 /// Writes a body simulation frame by frame into a run folder and accumulates σ.
 /// body.pvd / body_NNNNNN.vtp: the posed body surface (all vertices, model order) with point data
 ///   displacement (posed − shaped template, as `sflsh motion export`), velocity (finite difference of
@@ -53,8 +63,11 @@ class SimulationWriter {
  public:
   /// `run` null: nothing is written (σ is still accumulated). The layer must outlive the writer.
   SimulationWriter(const BodyLayer& layer, RunFolder* run, bool write_layer);
-  /// Records (and writes) the frame at time t.
-  void add_frame(double t, const State& state);
+  /// With a prefix and a placement; prefix "body" gives the file names above.
+  SimulationWriter(const BodyLayer& layer, RunFolder* run, const SimulationWriterOptions& options);
+  /// Records (and writes) the frame at time t; `extra` point fields (one row per body vertex, world frame)
+  /// are written beside the others.
+  void add_frame(double t, const State& state, const std::vector<vtk::Field>& extra = {});
   /// Writes the .pvd collections and dynamics.vtp.
   void finish();
   /// σ statistics over the region's vertices in mm: sigma_mean_mm, sigma_median_mm, sigma_max_mm,
@@ -68,6 +81,7 @@ class SimulationWriter {
  private:
   const BodyLayer& layer_;
   RunFolder* run_;
+  SimulationWriterOptions options_;
   bool write_layer_;
   std::unique_ptr<vtk::PvdSeries> body_series_, layer_series_;
   Eigen::MatrixXd dominant_joint_;      ///< per body vertex: argmax of the skinning weights

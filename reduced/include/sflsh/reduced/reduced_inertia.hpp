@@ -32,6 +32,9 @@ class ReducedInertia {
   void cross_mass(double t_other, Eigen::MatrixXd& M) const;
   /// Posed positions of the active nodes at the current time for coordinates q.
   void posed(const Eigen::VectorXd& q, meshing::RowMatrixX3d& p) const;
+  /// The node maps (A_i, d_i) of the active nodes at the current time, and their posed positions at q = 0.
+  const fullspace::NodeFrame& frame() const { return frame_; }
+  const meshing::RowMatrixX3d& posed_prescribed() const { return z_; }
   /// u_i = Σ_s b_is t_s at the active nodes (active × 3).
   void displacement(const Eigen::VectorXd& q, meshing::RowMatrixX3d& u) const;
 

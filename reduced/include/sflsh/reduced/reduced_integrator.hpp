@@ -8,11 +8,13 @@
 // Hessian first, a failed attempt (indefinite Hessian, failed line search, non-finite or over-cap
 // state) is repeated with PSD-projected dP/dF, then as 2, 4, … 2^max_halvings substeps, then a one-line
 // sflsh::Error naming the time and the reason; the state is never left half-updated.
+// Node potentials of the problem (contact, reduced_potentials.hpp) join Φ on their candidates of each substep.
 // Single-threaded on purpose: crowds parallelize over bodies.
 #include <sflsh/fullspace/problem.hpp>
 #include <sflsh/reduced/cubature.hpp>
 #include <sflsh/reduced/cubature_elastic.hpp>
 #include <sflsh/reduced/reduced_inertia.hpp>
+#include <sflsh/reduced/reduced_potentials.hpp>
 #include <sflsh/reduced/subspace.hpp>
 
 #include <Eigen/Cholesky>
@@ -58,6 +60,8 @@ struct ReducedStepStats {
   double elastic_seconds = 0.0;    ///< cubature energies, forces and Hessians
   double inertia_seconds = 0.0;    ///< node maps, prediction, mass Hessian
   double solve_seconds = 0.0;      ///< dense Cholesky factorizations and solves
+  double potential_seconds = 0.0;  ///< node potentials (contact): broad phase, evaluations, acceptance
+  int potential_refinements = 0;   ///< substeps solved again because a potential refused the result
   double final_gradient = 0.0;     ///< ‖∇Φ‖ at the last Newton iterate [N]
   std::string converged_reason;
 };
@@ -99,6 +103,7 @@ class ReducedBackwardEuler {
   ReducedOptions options_;
   CubatureElastic elastic_;
   ReducedInertia inertia_;
+  ReducedPotentials potentials_;
   bool has_drives_ = false;
   // The reusable factorization and what it was computed for.
   Eigen::LLT<Eigen::MatrixXd> factor_;

@@ -1,0 +1,99 @@
+#pragma once
+// Reading TOML input files with errors as "<file>:<line>: …" (material files, scene files): the checks every
+// reader needs (unknown keys, missing keys, types, finite numbers, fixed-size arrays), on toml++.
+#include <sflsh/core/error.hpp>
+
+#include <toml++/toml.h>
+
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <initializer_list>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace sflsh {
+
+class TomlReader {
+ public:
+  explicit TomlReader(std::filesystem::path path) : path_(std::move(path)) {}
+
+  const std::filesystem::path& path() const { return path_; }
+
+  /// Parses the file; a missing file or a syntax error is one line naming the file (and line).
+  toml::table parse(std::string_view what) const {
+    require(std::filesystem::exists(path_), "{}: {} not found", path_.string(), what);
+    try {
+      return toml::parse_file(path_.string());
+    } catch (const toml::parse_error& e) {
+      throw_error("{}:{}: {}", path_.string(), e.source().begin.line, e.description());
+    }
+  }
+
+  std::string at(const toml::node& node) const { return fmt::format("{}:{}", path_.string(), node.source().begin.line); }
+
+  /// Every key of `table` must be one of `allowed`.
+  void check_keys(const toml::table& table, std::initializer_list<std::string_view> allowed, std::string_view context) const {
+    for (const auto& [key, node] : table) {
+      bool known = false;
+      for (const std::string_view a : allowed) known = known || key.str() == a;
+      if (known) continue;
+      std::string list;
+      for (const std::string_view a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
+      throw_error("{}: unknown key '{}'{} (expected {})", at(node), key.str(), context, list);
+    }
+  }
+
+  const toml::node& required(const toml::table& table, std::string_view key, std::string_view context) const {
+    const toml::node* node = table.get(key);
+    require(node != nullptr, "{}: missing key '{}'{}", at(table), key, context);
+    return *node;
+  }
+
+  const toml::table& table(const toml::node& node, std::string_view key) const {
+    const toml::table* t = node.as_table();
+    require(t != nullptr, "{}: '{}' must be a table", at(node), key);
+    return *t;
+  }
+
+  std::string string_value(const toml::node& node, std::string_view key) const {
+    const auto value = node.value_exact<std::string>();
+    require(value.has_value(), "{}: '{}' must be a string", at(node), key);
+    require(!value->empty(), "{}: '{}' must not be empty", at(node), key);
+    return *value;
+  }
+
+  bool boolean(const toml::node& node, std::string_view key, std::string_view context) const {
+    const auto value = node.value_exact<bool>();
+    require(value.has_value(), "{}: '{}'{} must be true or false", at(node), key, context);
+    return *value;
+  }
+
+  std::int64_t integer(const toml::node& node, std::string_view key, std::string_view context) const {
+    const auto value = node.value_exact<std::int64_t>();
+    require(value.has_value(), "{}: '{}'{} must be an integer", at(node), key, context);
+    return *value;
+  }
+
+  double number(const toml::node& node, std::string_view key, std::string_view context) const {
+    require(node.is_number(), "{}: '{}'{} must be a number", at(node), key, context);
+    const double value = *node.value<double>();
+    require(std::isfinite(value), "{}: '{}'{} is not finite", at(node), key, context);
+    return value;
+  }
+
+  std::vector<double> numbers(const toml::node& node, std::string_view key, std::size_t count, std::string_view context) const {
+    const toml::array* array = node.as_array();
+    require(array != nullptr && array->size() == count, "{}: '{}'{} must be an array of {} numbers", at(node), key, context,
+            count);
+    std::vector<double> out;
+    for (const toml::node& item : *array) out.push_back(number(item, key, context));
+    return out;
+  }
+
+ private:
+  std::filesystem::path path_;
+};
+
+}  // namespace sflsh
