@@ -1,4 +1,5 @@
 // Writing and checking shape-model files, and the material of a subject of shape β (shape_model_file.hpp).
+#include <sflsh/body/body_io.hpp>
 #include <sflsh/core/atomic_file.hpp>
 #include <sflsh/core/error.hpp>
 #include <sflsh/reduced/shape_model_file.hpp>
@@ -139,7 +140,7 @@ void save_shape_model_file(const std::filesystem::path& path, const ShapeModelFi
   if (!model.mesh.empty()) out << "mesh = " << toml_string(model.mesh) << "\n";
   if (model.fit) {
     out << "\n[fit]  # how the model was fitted (metadata)\n";
-    out << "regularizer = \"" << (model.fit->regularizer == Regularizer::l2 ? "l2" : "local") << "\"\n";
+    out << "regularizer = " << toml_string(model.fit->regularizer == Regularizer::l2 ? "l2" : "local") << "\n";
     out << "lambda = " << toml_float(model.fit->lambda) << "\n";
     out << "subjects = " << toml_strings(model.fit->subjects) << "\n";
     out << "motions = " << toml_strings(model.fit->motions) << "\n";
@@ -158,6 +159,8 @@ void save_shape_model_file(const std::filesystem::path& path, const ShapeModelFi
   }
   write_text_atomically(path, out.str());
 }
+
+std::filesystem::path default_shape_model_path() { return body::data_dir() / "shape_models" / "default.toml"; }
 
 material::MaterialFile material_for_beta(const ShapeModelFile& model, const body::BodyModel& body,
                                          const body::Betas& beta, const std::string& subject) {

@@ -102,6 +102,10 @@ void save_shape_model_file(const std::filesystem::path& path, const ShapeModelFi
 /// ≥ 0 and distinct, every number finite, λ ≥ 0. Messages start with `what` (load passes "<file>:<line>").
 void validate(const ShapeModelFile& model, std::string_view what = "shape model");
 
+/// The shipped shape model, data/shape_models/default.toml (body::data_dir(); $SFLSH_DATA overrides): the
+/// local-regularizer full fit of `sflsh validate --preset quick` on the open body (coarse mesh, N = 4).
+std::filesystem::path default_shape_model_path();
+
 /// The material of a subject of shape β (SFLSH §4): κ̂_i(β) = A_iᵀβ + b_i (eq. 1), clamped into the
 /// normalized bounds (clamp_normalized, as the fit does), de-normalized (κ = κ̂ κ_max) — a material file
 /// build_body_layer accepts: the model's body, ν, s and bounds, one control point per model control
