@@ -93,14 +93,17 @@ void register_motion_commands(CLI::App& app, const Invocation& invocation) {
   auto json = std::make_shared<bool>(false);
   list->add_flag("--json", *json, "Print as JSON");
   list->callback([json] {
+    // The five DYNA-like motions (in DYNA order), then the showcase motions (dance).
+    std::vector<std::string> names = body::procedural_motion_names();
+    for (const std::string& name : body::showcase_motion_names()) names.push_back(name);
     if (*json) {
       nlohmann::json out = nlohmann::json::array();
-      for (const std::string& name : body::procedural_motion_names())
+      for (const std::string& name : names)
         out.push_back({{"name", name}, {"description", body::procedural_motion_description(name)}});
       std::cout << out.dump(2) << "\n";
       return;
     }
-    for (const std::string& name : body::procedural_motion_names())
+    for (const std::string& name : names)
       std::cout << fmt::format("{:<18} {}\n", name, body::procedural_motion_description(name));
   });
 

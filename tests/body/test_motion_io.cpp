@@ -87,7 +87,7 @@ TEST(MotionLoad, ByNameOrPath) {
   EXPECT_EQ(load_motion(path.string(), 60.0, 100).num_frames(), 30u);  // shorter file: all of it
   const std::string msg = error_of([] { load_motion("no_such_motion.npz"); });
   EXPECT_NE(msg.find("motion 'no_such_motion.npz': not a procedural motion (one_leg_jump, running_on_spot, "
-                     "shake_hips, jiggle_on_toes, shake_shoulders) and no such file"),
+                     "shake_hips, jiggle_on_toes, shake_shoulders, dance) and no such file"),
             std::string::npos)
       << msg;
 }

@@ -101,7 +101,7 @@ TEST_F(Cli, HelpOnEverySubcommand) {
   }
   const auto list = run_sflsh("motion list", dir_);
   EXPECT_EQ(list.exit_code, 0);
-  for (const char* name : {"one_leg_jump", "running_on_spot", "shake_hips", "jiggle_on_toes", "shake_shoulders"})
+  for (const char* name : {"one_leg_jump", "running_on_spot", "shake_hips", "jiggle_on_toes", "shake_shoulders", "dance"})
     EXPECT_THAT(list.out, HasSubstr(name));
 }
 

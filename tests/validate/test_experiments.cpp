@@ -1,6 +1,9 @@
 // The experiment pipeline of `sflsh validate` end to end on a small configuration, pinned as an accuracy
 // regression test (Table 2 of SFLSH on synthetic ground truth), and the command's input checks.
+#include <sflsh/body/body_io.hpp>
 #include <sflsh/body/subjects.hpp>
+#include <sflsh/material/material_file.hpp>
+#include <sflsh/reduced/shape_model_file.hpp>
 #include <sflsh/core/summary.hpp>
 #include <sflsh/validate/experiments.hpp>
 
@@ -75,6 +78,23 @@ TEST(Experiments, SmallConfigurationReproducesPinnedTable2) {
   EXPECT_GT(row_value(summary, "Independent", "train_motions"), 0.85 * truth);
   EXPECT_GT(row_value(summary, "Full opt. ours", "train_motions"), 0.85 * truth);
   for (const auto& f : summary.at("fits")) EXPECT_TRUE(std::isfinite(f.at("loss_fit").get<double>()));
+
+  // The fitted shape models give back every subject's fitted material (the files validate writes).
+  const body::BodyModel body = body::load_body(body::default_body_path());
+  for (const std::string tag : {"l2", "ours"}) {
+    const reduced::ShapeModelFile model = reduced::load_shape_model_file(dir / "shape_models" / (tag + ".toml"));
+    ASSERT_TRUE(model.fit.has_value());
+    EXPECT_EQ(model.fit->lambda, 1.0);
+    EXPECT_EQ(model.fit->subjects, config.train_subjects);
+    for (const std::string s : {"OPEN_TRAIN_1", "OPEN_TRAIN_2", "OPEN_TEST_1"}) {
+      const material::MaterialFile fitted = material::load_material_file(dir / "materials" / tag / (s + ".toml"));
+      const material::MaterialFile from_model =
+          reduced::material_for_beta(model, body, body::find_subject(body::default_subjects(), s).beta, s);
+      EXPECT_EQ(from_model.vertices(), fitted.vertices());
+      // Both are κ̂(β) clamped and de-normalized; the material file was written the same way.
+      EXPECT_LT((from_model.kappa() - fitted.kappa()).cwiseQuotient(fitted.kappa()).cwiseAbs().maxCoeff(), 1e-12) << tag << " " << s;
+    }
+  }
 
   // A second run resumes from the state folder: no ground truth or fit is recomputed.
   const nlohmann::json again = validate::run_validation(config, dir, nlohmann::json::object());

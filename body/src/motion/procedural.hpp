@@ -20,11 +20,16 @@ struct ProceduralSpec {
   std::string_view description;  ///< one line, for `sflsh motion list`
   double default_seconds;        ///< default length [s]
   PoseSample (*sample)(double t);
+  /// Periodic motions only: the sample with the steady part shifted by `offset` [s] (ease-in kept at t).
+  PoseSample (*sample_offset)(double t, double offset) = nullptr;
+  double period = 0.0;           ///< [s] of the steady part; 0: not periodic by construction
 };
 
 /// The five motions in DYNA order (training: one_leg_jump, running_on_spot, shake_hips; testing:
 /// jiggle_on_toes, shake_shoulders).
 std::span<const ProceduralSpec> procedural_specs();
+/// Showcase motions (not DYNA, not in procedural_motion_names()): dance.
+std::span<const ProceduralSpec> showcase_specs();
 
 /// Ease-in from the rest T-pose shared by all motions [s].
 inline constexpr double kEaseInSeconds = 0.5;
@@ -38,5 +43,7 @@ PoseSample sample_running_on_spot(double t);  // procedural_running.cpp
 PoseSample sample_shake_hips(double t);       // procedural_shake.cpp
 PoseSample sample_shake_shoulders(double t);  // procedural_shake.cpp
 PoseSample sample_jiggle_on_toes(double t);   // procedural_toes.cpp
+PoseSample sample_dance(double t, double offset);  // procedural_dance.cpp
+double dance_period();                             // procedural_dance.cpp
 
 }  // namespace sflsh::body::motion_detail

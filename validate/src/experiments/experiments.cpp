@@ -298,6 +298,9 @@ nlohmann::json run_validation(const ValidateConfig& requested, const std::filesy
   report.truth = &truth;
   report.betas = beta_of;
   report.true_parameters = !from_dyna;
+  report.poisson = first.layer().material.poisson;
+  report.saturation = first.layer().material.saturation;
+  report.region = first.layer().mesh->region;
 
   // Independent fits: the optimal targets (SFLSH §3).
   for (const std::string& s : config.train_subjects)

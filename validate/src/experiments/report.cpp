@@ -6,6 +6,8 @@
 #include <sflsh/core/log.hpp>
 #include <sflsh/core/vtk_io.hpp>
 #include <sflsh/material/material_file.hpp>
+#include <sflsh/meshing/layer_mesh.hpp>
+#include <sflsh/reduced/shape_model_file.hpp>
 
 #include <fmt/format.h>
 
@@ -433,6 +435,24 @@ void Report::write(RunFolder& run, nlohmann::json& summary) const {
                                      fmt::format("Fitted by sflsh validate (full optimization, {} regularizer, λ = {:g})",
                                                  tag == std::string("l2") ? "L2" : "local", best.count(tag) ? best.at(tag) : 0.0));
       }
+    // The full fits themselves: κ̂(β) for any subject (shape_model_file.hpp; the crowd's materials).
+    for (const std::string tag : {"l2", "ours"}) {
+      reduced::ShapeModelFile file =
+          reduced::make_shape_model_file(fits.at("full/" + tag).shape(), *model, parameterization->control_vertices(), bounds,
+                                         poisson, saturation);
+      file.region = region;
+      file.mesh = meshing::size_preset_name(config.mesh);
+      reduced::ShapeModelFit fit;
+      fit.regularizer = tag == std::string("l2") ? reduced::Regularizer::l2 : reduced::Regularizer::local;
+      fit.lambda = best.count(tag) ? best.at(tag) : 0.0;
+      fit.subjects = config.train_subjects;
+      fit.motions = config.train_motions;
+      file.fit = fit;
+      reduced::save_shape_model_file(run.stage("shape_models/" + tag + ".toml"), file,
+                                     fmt::format("Fitted by sflsh validate --preset {} (full optimization, {} regularizer, "
+                                                 "λ = {:g}, N = {})",
+                                                 config.preset, tag == std::string("l2") ? "L2" : "local", fit.lambda, N));
+    }
   }
 }
 

@@ -28,6 +28,8 @@ struct Report {
   std::map<std::string, double> best;               ///< λ chosen per regularizer tag
   std::map<std::string, body::Betas> betas;         ///< every subject's β
   bool true_parameters = true;                      ///< the truth carries κ (synthetic); DYNA does not
+  double poisson = 0.2, saturation = 4.0;           ///< uniform ν and s of the layers (SFLSH §3)
+  std::string region;                               ///< the layer region the control points lie on
 
   const GroundTruthCase* truth_of(const std::string& subject, const std::string& motion) const;
   std::map<std::string, Evaluation> evaluations;    ///< "<fit>|<subject>|<motion>"

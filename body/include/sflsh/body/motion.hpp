@@ -18,6 +18,9 @@ struct Motion {
   /// Rotation applied to posed positions to bring them into the world frame (Y up). Identity for
   /// procedural motions; AMASS data is Z-up, so loading it sets a −90° rotation about X.
   Eigen::Matrix3d world_from_body = Eigen::Matrix3d::Identity();
+  /// Procedural motions: the time offset they were generated with [s] (make_procedural_motion), so that
+  /// offset_motion composes; 0 for data motions.
+  double time_offset = 0.0;
 
   std::size_t num_frames() const { return poses.size(); }
   double duration() const { return num_frames() > 1 ? static_cast<double>(num_frames() - 1) / fps : 0.0; }
@@ -38,12 +41,28 @@ Eigen::Matrix3d amass_world_from_body();
 /// The procedural motion kinds, in DYNA order: one_leg_jump, running_on_spot, shake_hips
 /// (training) and jiggle_on_toes, shake_shoulders (testing).
 const std::vector<std::string>& procedural_motion_names();
-/// One-line description of a procedural motion (for `sflsh motion list`).
+/// Procedural showcase motions outside the DYNA set (not in procedural_motion_names(), accepted by
+/// make_procedural_motion and load_motion): "dance" — a T = 2 s looping groove (hips sway, knees bounce
+/// on the beat with the feet planted, arms swing, torso twists), ease-in from rest, C^∞ afterwards.
+const std::vector<std::string>& showcase_motion_names();
+/// One-line description of a procedural or showcase motion (for `sflsh motion list`).
 std::string procedural_motion_description(const std::string& name);
+/// Period [s] of a procedural motion's steady part when it is periodic by construction (dance: 2 s),
+/// else 0. Throws for an unknown name.
+double procedural_motion_period(const std::string& name);
 
 /// Generates a procedural motion at `fps`. frames ≤ 0 selects the motion's default length.
+/// `time_offset` [s]: periodic motions (procedural_motion_period > 0) still leave the rest pose with
+/// their ease-in at t = 0 but run their steady part shifted by the offset (a crowd in different phases);
+/// the others are the motion from t + offset on (held at the rest pose where t + offset < 0).
 /// Throws sflsh::Error for an unknown name (listing the known ones).
-Motion make_procedural_motion(const std::string& name, double fps = 60.0, int frames = 0);
+Motion make_procedural_motion(const std::string& name, double fps = 60.0, int frames = 0, double time_offset = 0.0);
+
+/// The motion started `seconds` later, same fps and frame count: a procedural motion (source
+/// "procedural", a known name) is regenerated with that time_offset (see make_procedural_motion); data
+/// motions show the input at t_i + seconds clamped to [0, duration] (per-joint slerp between frames,
+/// exact copies for whole-frame offsets).
+Motion offset_motion(const Motion& motion, double seconds);
 
 /// Reads an AMASS .npz (poses T×156 or T×72, trans T×3, mocap_framerate or mocap_frame_rate)
 /// and maps it onto SMPL's 24 joints (SMPL-H body joints 0..21; SMPL hand joints 22, 23 get zero).
@@ -64,6 +83,7 @@ Motion resample(const Motion& motion, double fps);
 
 /// Loads a motion by name (procedural) or by path (a .npz file). frames > 0 sets the length of a
 /// procedural motion and truncates a file's motion (a warning is logged when the file is shorter).
-Motion load_motion(const std::string& name_or_path, double fps = 60.0, int frames = 0);
+/// `time_offset` [s] ≠ 0 starts it later (offset_motion; procedural motions via make_procedural_motion).
+Motion load_motion(const std::string& name_or_path, double fps = 60.0, int frames = 0, double time_offset = 0.0);
 
 }  // namespace sflsh::body

@@ -1,0 +1,204 @@
+// Reading shape-model files (shape_model_file.hpp), errors as "<file>:<line>: …".
+#include <sflsh/core/error.hpp>
+#include <sflsh/reduced/shape_model_file.hpp>
+
+#include <toml++/toml.h>
+
+#include <cmath>
+#include <initializer_list>
+#include <limits>
+#include <map>
+
+namespace sflsh::reduced {
+
+namespace {
+
+class Reader {
+ public:
+  explicit Reader(std::filesystem::path path) : path_(std::move(path)) {}
+
+  std::string at(const toml::node& node) const { return fmt::format("{}:{}", path_.string(), node.source().begin.line); }
+
+  // Every key of `table` must be one of `allowed`.
+  void check_keys(const toml::table& table, std::initializer_list<std::string_view> allowed, std::string_view context) const {
+    for (const auto& [key, node] : table) {
+      bool known = false;
+      for (const std::string_view a : allowed) known = known || key.str() == a;
+      if (known) continue;
+      std::string list;
+      for (const std::string_view a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
+      throw_error("{}: unknown key '{}'{} (expected {})", at(node), key.str(), context, list);
+    }
+  }
+
+  const toml::node& required(const toml::table& table, std::string_view key, std::string_view context) const {
+    const toml::node* node = table.get(key);
+    require(node != nullptr, "{}: missing key '{}'{}", at(table), key, context);
+    return *node;
+  }
+
+  const toml::table& table_of(const toml::node& node, std::string_view key) const {
+    const toml::table* table = node.as_table();
+    require(table != nullptr, "{}: '{}' must be a table", at(node), key);
+    return *table;
+  }
+
+  std::string string_value(const toml::node& node, std::string_view key, std::string_view context = "") const {
+    const auto value = node.value_exact<std::string>();
+    require(value.has_value(), "{}: '{}'{} must be a string", at(node), key, context);
+    require(!value->empty(), "{}: '{}'{} must not be empty", at(node), key, context);
+    return *value;
+  }
+
+  std::vector<std::string> strings(const toml::node& node, std::string_view key, std::string_view context) const {
+    const toml::array* array = node.as_array();
+    require(array != nullptr, "{}: '{}'{} must be an array of strings", at(node), key, context);
+    std::vector<std::string> out;
+    for (const toml::node& item : *array) out.push_back(string_value(item, key, context));
+    return out;
+  }
+
+  double number(const toml::node& node, std::string_view key, std::string_view context) const {
+    require(node.is_number(), "{}: '{}'{} must be a number", at(node), key, context);
+    const double value = *node.value<double>();
+    require(std::isfinite(value), "{}: '{}'{} is not finite", at(node), key, context);
+    return value;
+  }
+
+  std::vector<double> numbers(const toml::node& node, std::string_view key, std::size_t count,
+                              std::string_view context) const {
+    const toml::array* array = node.as_array();
+    require(array != nullptr && array->size() == count, "{}: '{}'{} must be an array of {} numbers", at(node), key,
+            context, count);
+    std::vector<double> out;
+    for (const toml::node& item : *array) out.push_back(number(item, key, context));
+    return out;
+  }
+
+  void read_bounds(const toml::node& node, material::ParameterBounds& bounds) const {
+    const toml::table& table = table_of(node, "bounds");
+    check_keys(table, {"thickness", "young_tangent", "young_normal"}, " in [bounds]");
+    material::ParameterRange* ranges[material::kNumKappa] = {&bounds.thickness, &bounds.young_tangent,
+                                                             &bounds.young_normal};
+    for (int c = 0; c < material::kNumKappa; ++c) {
+      const std::string_view name = material::kKappaNames[static_cast<std::size_t>(c)];
+      const toml::node* entry = table.get(name);
+      if (entry == nullptr) continue;
+      const std::vector<double> range = numbers(*entry, name, 2, " in [bounds]");
+      *ranges[c] = {range[0], range[1]};
+      try {
+        material::validate(bounds);
+      } catch (const Error& e) {
+        throw_error("{}: {}", at(*entry), e.what());
+      }
+    }
+  }
+
+  void read_basis(const toml::node& node, ShapeModelFile& file) const {
+    const toml::table& table = table_of(node, "basis");
+    check_keys(table, {"kind", "region", "mesh"}, " in [basis]");
+    const toml::node& kind = required(table, "kind", " in [basis]");
+    const std::string k = string_value(kind, "kind", " in [basis]");
+    require(k == kShapeModelBasisKind, "{}: 'kind' in [basis] = '{}' (the only basis is '{}')", at(kind), k,
+            kShapeModelBasisKind);
+    if (const toml::node* region = table.get("region")) file.region = string_value(*region, "region", " in [basis]");
+    if (const toml::node* mesh = table.get("mesh")) file.mesh = string_value(*mesh, "mesh", " in [basis]");
+  }
+
+  ShapeModelFit read_fit(const toml::node& node) const {
+    const toml::table& table = table_of(node, "fit");
+    check_keys(table, {"regularizer", "lambda", "subjects", "motions"}, " in [fit]");
+    ShapeModelFit fit;
+    const toml::node& reg = required(table, "regularizer", " in [fit]");
+    const std::string r = string_value(reg, "regularizer", " in [fit]");
+    require(r == "l2" || r == "local", "{}: 'regularizer' in [fit] = '{}' (expected l2 or local)", at(reg), r);
+    fit.regularizer = r == "l2" ? Regularizer::l2 : Regularizer::local;
+    const toml::node& lambda = required(table, "lambda", " in [fit]");
+    fit.lambda = number(lambda, "lambda", " in [fit]");
+    require(fit.lambda >= 0.0, "{}: 'lambda' in [fit] = {} must be >= 0", at(lambda), fit.lambda);
+    if (const toml::node* s = table.get("subjects")) fit.subjects = strings(*s, "subjects", " in [fit]");
+    if (const toml::node* m = table.get("motions")) fit.motions = strings(*m, "motions", " in [fit]");
+    return fit;
+  }
+
+  ShapeModelControlPoint read_point(const toml::node& node, std::size_t index, std::map<int, std::size_t>& seen) const {
+    const toml::table* table = node.as_table();
+    require(table != nullptr, "{}: 'control_point' must be an array of tables ([[control_point]])", at(node));
+    const std::string context = fmt::format(" in control_point #{}", index);
+    check_keys(*table, {"vertex", "position", "b", "A"}, context);
+    ShapeModelControlPoint point;
+    point.line = static_cast<int>(table->source().begin.line);
+    const toml::node& vertex = required(*table, "vertex", context);
+    const auto v = vertex.value_exact<std::int64_t>();
+    require(v.has_value(), "{}: 'vertex'{} must be an integer", at(vertex), context);
+    require(*v >= 0 && *v <= std::numeric_limits<int>::max(), "{}: 'vertex'{} = {} must be a vertex index >= 0",
+            at(vertex), context, *v);
+    point.vertex = static_cast<int>(*v);
+    const auto [first, inserted] = seen.emplace(point.vertex, index);
+    require(inserted, "{}: 'vertex'{} repeats vertex {} of control_point #{}", at(vertex), context, point.vertex,
+            first->second);
+    if (const toml::node* position = table->get("position")) {
+      const std::vector<double> p = numbers(*position, "position", 3, context);
+      point.position = Eigen::Vector3d(p[0], p[1], p[2]);
+    }
+    const std::vector<double> b = numbers(required(*table, "b", context), "b", material::kNumKappa, context);
+    point.b = Eigen::RowVector3d(b[0], b[1], b[2]);
+    const toml::node& a = required(*table, "A", context);
+    const toml::array* rows = a.as_array();
+    require(rows != nullptr && rows->size() == static_cast<std::size_t>(body::kNumBetas),
+            "{}: 'A'{} must be an array of {} rows (one per β) of {} numbers (h, Y_t, Y_n)", at(a), context,
+            body::kNumBetas, material::kNumKappa);
+    for (int k = 0; k < body::kNumBetas; ++k) {
+      const std::vector<double> row =
+          numbers((*rows)[static_cast<std::size_t>(k)], "A", material::kNumKappa, fmt::format("{} (row {})", context, k));
+      for (int c = 0; c < material::kNumKappa; ++c) point.A(k, c) = row[static_cast<std::size_t>(c)];
+    }
+    return point;
+  }
+
+  ShapeModelFile read() const {
+    require(std::filesystem::exists(path_), "{}: shape model file not found", path_.string());
+    toml::table root;
+    try {
+      root = toml::parse_file(path_.string());
+    } catch (const toml::parse_error& e) {
+      throw_error("{}:{}: {}", path_.string(), e.source().begin.line, e.description());
+    }
+    check_keys(root, {"version", "body", "poisson", "saturation", "bounds", "basis", "fit", "control_point"}, "");
+    ShapeModelFile file;
+    const toml::node& version = required(root, "version", "");
+    const auto value = version.value_exact<std::int64_t>();
+    require(value.has_value() && *value == kShapeModelFileVersion,
+            "{}: 'version' must be the integer {} (this reader's format)", at(version), kShapeModelFileVersion);
+    file.body = string_value(required(root, "body", ""), "body");
+    const toml::node& poisson = required(root, "poisson", "");
+    file.poisson = number(poisson, "poisson", "");
+    require(file.poisson > -1.0 && file.poisson < 0.5, "{}: 'poisson' = {} is outside (-1, 0.5)", at(poisson),
+            file.poisson);
+    const toml::node& saturation = required(root, "saturation", "");
+    file.saturation = number(saturation, "saturation", "");
+    require(file.saturation > 0.0, "{}: 'saturation' = {} must be > 0", at(saturation), file.saturation);
+    if (const toml::node* bounds = root.get("bounds")) read_bounds(*bounds, file.bounds);
+    read_basis(required(root, "basis", ""), file);
+    if (const toml::node* fit = root.get("fit")) file.fit = read_fit(*fit);
+
+    const toml::node* list = root.get("control_point");
+    require(list != nullptr, "{}: no [[control_point]] tables", path_.string());
+    const toml::array* points = list->as_array();
+    require(points != nullptr && !points->empty(), "{}: 'control_point' must be a non-empty array of tables",
+            at(*list));
+    std::map<int, std::size_t> seen;  // vertex → its first control point
+    for (std::size_t i = 0; i < points->size(); ++i) file.control_points.push_back(read_point((*points)[i], i, seen));
+    validate(file, path_.string());  // everything again (with each point's table line); nothing should be left
+    return file;
+  }
+
+ private:
+  std::filesystem::path path_;
+};
+
+}  // namespace
+
+ShapeModelFile load_shape_model_file(const std::filesystem::path& path) { return Reader(path).read(); }
+
+}  // namespace sflsh::reduced
