@@ -47,6 +47,19 @@ void ContactParameters::validate() const {
           "contact: broad_phase_safety must be ≥ 0 [m] (got {})", broad_phase_safety);
 }
 
+std::vector<double> lumped_vertex_areas(const RowMatrixX3d& vertices, const RowMatrixX3i& triangles) {
+  require(triangles.size() == 0 || (triangles.minCoeff() >= 0 && triangles.maxCoeff() < vertices.rows()),
+          "lumped_vertex_areas: triangle indices must lie in [0, {})", vertices.rows());
+  std::vector<double> area(static_cast<std::size_t>(vertices.rows()), 0.0);
+  for (Eigen::Index f = 0; f < triangles.rows(); ++f) {
+    const Eigen::Vector3d a = vertices.row(triangles(f, 0)).transpose(), b = vertices.row(triangles(f, 1)).transpose(),
+                          c = vertices.row(triangles(f, 2)).transpose();
+    const double third = (b - a).cross(c - a).norm() / 6.0;
+    for (int k = 0; k < 3; ++k) area[static_cast<std::size_t>(triangles(f, k))] += third;
+  }
+  return area;
+}
+
 ContactPotential::ContactPotential(std::vector<int> nodes, std::vector<double> areas,
                                    std::vector<ContactObstacle> obstacles, const ContactParameters& parameters)
     : nodes_(std::move(nodes)), area_(std::move(areas)), obstacles_(std::move(obstacles)), parameters_(parameters) {

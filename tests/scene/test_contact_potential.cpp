@@ -285,6 +285,14 @@ TEST(ContactPotential, FreeObjectRestsOnNodes) {
   EXPECT_LT(motion->position().z(), radius + 1e-3);   // still in contact
 }
 
+TEST(ContactPotential, LumpedVertexAreasSumToTheSurfaceArea) {
+  const Surface s = Box(Eigen::Vector3d(0.3, 0.2, 0.1)).local_surface(4);
+  const std::vector<double> area = lumped_vertex_areas(s.vertices, s.triangles);
+  double total = 0.0;
+  for (double a : area) total += a;
+  EXPECT_NEAR(total, 8.0 * (0.3 * 0.2 + 0.3 * 0.1 + 0.2 * 0.1), 1e-14);
+}
+
 TEST(ContactPotential, BadInputThrows) {
   auto sphere = std::make_shared<Sphere>(0.1);
   EXPECT_THROW(ContactPotential({2, 1}, {}, {{sphere, nullptr}}), Error);

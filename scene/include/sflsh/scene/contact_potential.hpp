@@ -64,6 +64,10 @@ struct ContactObstacle {
   std::shared_ptr<RigidMotion> motion;
 };
 
+/// Lumped (one third of the incident triangles') area per vertex [m²] of a triangle surface, e.g. the
+/// layer's skin: the per-node weights of ContactPotential.
+std::vector<double> lumped_vertex_areas(const RowMatrixX3d& vertices, const RowMatrixX3i& triangles);
+
 class ContactPotential final : public fullspace::NodePotential {
  public:
   /// nodes: ascending mesh node ids (unconstrained); areas: empty, or one lumped skin area [m²] per node
