@@ -26,6 +26,12 @@ endif()
 find_package(VTK 9 REQUIRED COMPONENTS
   CommonCore CommonDataModel CommonExecutionModel IOXML IOLegacy FiltersGeometry
   RenderingCore RenderingOpenGL2 InteractionStyle RenderingFreeType IOImage)
+# The mesh-file readers of the scene stage (.obj/.stl: IOGeometry, .ply: IOPLY) are linked by sflsh_scene
+# only: found here, at the top level, so that their own dependencies (JsonCpp) are visible to every
+# directory, but kept out of VTK_LIBRARIES so that the other targets' link and compile lines do not change.
+set(SFLSH_VTK_LIBRARIES_CORE ${VTK_LIBRARIES})
+find_package(VTK 9 REQUIRED COMPONENTS IOGeometry IOPLY FiltersCore)
+set(VTK_LIBRARIES ${SFLSH_VTK_LIBRARIES_CORE})
 find_package(HDF5 REQUIRED COMPONENTS C CXX)   # serial flavour: /usr/include/hdf5/serial
 
 find_package(CLI11 2 REQUIRED CONFIG)
