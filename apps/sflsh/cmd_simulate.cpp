@@ -18,6 +18,8 @@
 #include <sflsh/meshing/layer_cache.hpp>
 #include <sflsh/reduced/reduced_integrator.hpp>
 #include <sflsh/reduced/reduced_model.hpp>
+#include <sflsh/scene/scene_file.hpp>
+#include <sflsh/scene/scene_runner.hpp>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -53,12 +55,37 @@ struct SimulateOptions {
   int cubature = -1;
   std::string cubature_weights = "nnls";
   bool affine = false;
+  // Scene files.
+  std::string scene;
+  int threads = 0;
 };
 
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
+// sflsh simulate --scene FILE: bodies, objects and the effects the scene calls for (scene_runner.hpp).
+void run_scene_file(const SimulateOptions& opt, const Invocation& invocation, int rank) {
+  const scene::Scene scene = scene::load_scene(opt.scene);
+  scene::SceneRunOptions options;
+  options.frames = opt.frames;
+  options.out = opt.out;
+  options.cache_dir = opt.cache;
+  options.threads = opt.threads;
+  options.write_frames = !opt.no_output;
+  options.rank = rank;
+  options.header = summary_header("simulate", invocation.argc, invocation.argv);
+  const nlohmann::json summary = scene::run_scene(scene, options);
+  if (rank != 0) return;
+  std::string effects;
+  for (const auto& e : summary["effects"]) effects += fmt::format("{}{} {:.2f} s", effects.empty() ? "" : ", ", e["name"].get<std::string>(),
+                                                                  e["seconds"].get<double>());
+  logger()->info("scene '{}': {} frames in {:.1f} s ({}); wrote {}", scene.name, summary["scene"]["frames"].get<int>(),
+                 summary["timings"]["loop_seconds"].get<double>(), effects, opt.out);
+}
+
 void run_simulate(const SimulateOptions& opt, const Invocation& invocation, int rank, int size) {
+  if (!opt.scene.empty()) return run_scene_file(opt, invocation, rank);
+  require(!opt.motion.empty(), "simulate: --motion is required (or give a scene with --scene FILE)");
   const auto t_start = Clock::now();
   require(opt.solver == "full" || opt.solver == "reduced", "--solver {}: expected full or reduced", opt.solver);
   require(opt.handles >= 1, "--handles must be at least 1, got {}", opt.handles);
@@ -245,7 +272,12 @@ void register_simulate_commands(CLI::App& app, const Invocation& invocation) {
   cmd->add_flag("--affine", opt->affine, "Reduced: affine point handles (12 coordinates each instead of 3)");
   add_body_option(*cmd, opt->subject);
   add_subject_options(*cmd, opt->subject);
-  cmd->add_option("--motion", opt->motion, "Motion: a procedural name (sflsh motion list) or an AMASS .npz path")->required();
+  cmd->add_option("--scene", opt->scene,
+                  "Scene file (TOML, docs/scenes.md, data/scenes/): bodies, objects and effects; then only --frames, "
+                  "--out, --cache, --threads and --no-output apply")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--threads", opt->threads, "Scenes: threads for bodies that do not interact (0: all cores)");
+  cmd->add_option("--motion", opt->motion, "Motion: a procedural name (sflsh motion list) or an AMASS .npz path (required without --scene)");
   cmd->add_option("--frames", opt->frames, "Number of frames (0: the motion's length)");
   cmd->add_option("--fps", opt->fps, "Frame rate of the output (and of the motion sampling)");
   cmd->add_option("--substeps", opt->substeps, "Backward-Euler steps per frame (step = 1 / (fps · substeps))");

@@ -1,0 +1,37 @@
+#pragma once
+// Runs a scene (scene_file.hpp): builds only what its effects ask for and steps every body together.
+//   - no elastic effect (inertia, gravity, contact) → every body is only skinned: no layer, no solve;
+//   - no inertia → quasi-static solves; a quasi-static body without gravity whose contact finds no candidate in
+//     a step is at rest and is not solved;
+//   - no contact effect → no contact potential and no proximity structure is ever built;
+//   - object contact: each soft body gets a penalty potential against the scene's objects (placed in the body's
+//     frame); body contact: against the other bodies' posed surfaces, updated every step (Gauss–Seidel: bodies
+//     solved earlier in the step are seen at the step's end, later ones predicted by carrying their elastic
+//     displacement with the new pose). Skeletons follow their motions: contact moves soft tissue only.
+// Output in the run folder: <body>.pvd / <body>_NNNNNN.vtp per body in world coordinates (with contact_force
+// and penetration fields when contact is on), objects.pvd, summary.json with "effects" (the effects that ran
+// and their time).
+#include <sflsh/scene/scene_file.hpp>
+
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+
+namespace sflsh::scene {
+
+struct SceneRunOptions {
+  int frames = 0;                     ///< > 0 overrides the scene's frame count
+  std::filesystem::path out;          ///< run folder; empty: nothing is written
+  std::filesystem::path cache_dir;    ///< template meshes and reduced models; empty: the default
+  std::filesystem::path data_dir;     ///< the project's data folder (default shape model of crowds)
+  int threads = 0;                    ///< bodies solved in parallel when they do not interact (0: all cores)
+  bool write_frames = true;           ///< false: summary.json only
+  int rank = 0;                       ///< MPI rank: only rank 0 writes
+  nlohmann::json header;              ///< summary header (command line, versions)
+};
+
+/// Runs the scene; returns the summary (also written as summary.json). Throws sflsh::Error naming the body,
+/// object or file on failure; nothing is left in the output folder then.
+nlohmann::json run_scene(const Scene& scene, const SceneRunOptions& options);
+
+}  // namespace sflsh::scene

@@ -1,0 +1,209 @@
+// One body of a scene (scene_internal.hpp).
+#include "scene_internal.hpp"
+
+#include <sflsh/body/subjects.hpp>
+#include <sflsh/core/error.hpp>
+#include <sflsh/core/log.hpp>
+#include <sflsh/fullspace/reference_integrator.hpp>
+#include <sflsh/meshing/layer_cache.hpp>
+
+#include <algorithm>
+#include <chrono>
+
+namespace sflsh::scene::detail {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+}  // namespace
+
+Rigid placement_transform(const Placement& placement) {
+  Rigid r;
+  r.R = Eigen::AngleAxisd(placement.yaw_degrees * EIGEN_PI / 180.0, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  r.t = placement.position;
+  return r;
+}
+
+SceneBody::SceneBody(BodySpec spec, const body::BodyModel& model, const BodySetup& setup)
+    : spec_(std::move(spec)), model_(model), placement_(placement_transform(spec_.placement)) {
+  const auto t0 = Clock::now();
+  const Scene& scene = *setup.scene;
+  if (spec_.betas) {
+    for (std::size_t k = 0; k < spec_.betas->size(); ++k) beta_[static_cast<Eigen::Index>(k)] = (*spec_.betas)[k];
+    subject_label_ = "betas";
+  } else if (!spec_.subject.empty()) {
+    beta_ = body::find_subject(body::default_subjects(), spec_.subject).beta;
+    subject_label_ = spec_.subject;
+  } else {
+    subject_label_ = "mean shape";
+  }
+  motion_ = scene_motion(spec_.motion, spec_.motion_offset, spec_.approach, scene.fps, scene.num_frames());
+  solver_ = scene.effects.elastic() ? spec_.solver : SolverKind::skinned;
+  vertex_node_.assign(static_cast<std::size_t>(model_.num_vertices()), -1);
+  if (!soft()) {
+    poser_ = std::make_unique<body::Poser>(model_, beta_);
+    model_info = "skinned only (no layer built)";
+    setup_seconds = seconds_since(t0);
+    return;
+  }
+  std::optional<material::MaterialFile> material_file;
+  if (!setup.material && !spec_.material.empty()) material_file = material::load_material_file(spec_.material);
+  fullspace::BodyLayerOptions options;
+  options.mesher = meshing::Mesher::layered;
+  options.size = meshing::parse_size_preset(spec_.mesh);
+  if (!setup.cache_dir.empty()) options.cache_dir = setup.cache_dir;
+  options.density = spec_.density;
+  options.gravity = scene.effects.gravity;
+  options.stiffness_scale = spec_.stiffness_scale;
+  const material::MaterialFile* material = setup.material ? setup.material : material_file ? &*material_file : nullptr;
+  layer_ = std::make_unique<fullspace::BodyLayer>(
+      fullspace::build_body_layer(model_, beta_, motion_, material, spec_.control_points, options));
+  const meshing::LayerMesh& mesh = *layer_->mesh;
+  for (std::size_t r = 0; r < mesh.region_surface.vertices.size(); ++r)
+    vertex_node_[static_cast<std::size_t>(mesh.region_surface.vertices[r])] = mesh.skin.node[r];
+  if (solver_ == SolverKind::reduced) {
+    reduced::ReducedModelOptions ro;
+    ro.point_handles = spec_.handles;
+    ro.cubature = spec_.cubature;
+    if (!setup.cache_dir.empty()) ro.cache_dir = setup.cache_dir;
+    reduced_model_ = reduced::build_reduced_model(*layer_, ro);
+  }
+  const fullspace::Problem& problem = layer_->problem;
+  model_info = fmt::format("{} nodes, {} tets", problem.num_nodes(), problem.num_tets());
+  if (reduced_model_)
+    model_info += fmt::format(", {} point handles, {} cubature tets", reduced_model_->handles.point_nodes.size(),
+                              reduced_model_->cubature.size());
+  setup_seconds = seconds_since(t0);
+}
+
+std::vector<int> SceneBody::contact_nodes() const {
+  require(soft(), "scene body '{}': contact nodes of a skinned body", name());
+  const fullspace::Problem& problem = layer_->problem;
+  const std::vector<char> constrained = problem.dirichlet.mask(problem.num_nodes());
+  std::vector<int> nodes;
+  for (int i : layer_->mesh->nodes_of_kind(meshing::NodeKind::outer)) {
+    const auto d = static_cast<std::size_t>(3 * i);
+    if (constrained[d] || constrained[d + 1] || constrained[d + 2]) continue;
+    // The reduced model moves only nodes with basis functions (the others cannot respond).
+    if (reduced_model_ && reduced_model_->subspace.basis.row(i).nonZeros() == 0) continue;
+    nodes.push_back(i);
+  }
+  return nodes;
+}
+
+void SceneBody::start(bool inertia) {
+  quasi_static_ = !inertia;
+  t_ = 0.0;
+  if (!soft()) return;
+  const fullspace::Problem& problem = layer_->problem;
+  if (solver_ == SolverKind::reduced) {
+    reduced::ReducedOptions options;
+    options.quasi_static = quasi_static_;
+    fast_ = std::make_unique<reduced::ReducedBackwardEuler>(problem, reduced_model_->subspace, reduced_model_->cubature, options);
+    fast_->initialize(fullspace::initial_state(problem, 0.0));
+  } else {
+    fullspace::BackwardEulerOptions options;
+    options.quasi_static = quasi_static_;
+    full_ = std::make_unique<fullspace::BackwardEuler>(problem, MPI_COMM_WORLD, options);
+    full_->initialize(fullspace::initial_state(problem, 0.0));
+  }
+}
+
+fullspace::State SceneBody::state() const {
+  require(soft(), "scene body '{}': a skinned body has no elastic state", name());
+  return fast_ ? fast_->full_state() : full_->state();
+}
+
+// Without inertia and gravity the only load is contact: when no potential finds a candidate for the step
+// the equilibrium is the rest state, which needs no solve.
+bool SceneBody::at_rest_this_step(double t0, double h) const {
+  const fullspace::Problem& problem = layer_->problem;
+  if (!quasi_static_ || problem.gravity.squaredNorm() > 0.0) return false;
+  if (problem.potentials.empty()) return true;
+  const fullspace::State s = state();
+  Eigen::VectorXd rest_end = Eigen::Map<const Eigen::VectorXd>(problem.rest.data(), problem.num_dofs());
+  problem.apply_dirichlet(t0 + h, rest_end);
+  for (const auto& potential : problem.potentials) {
+    const std::vector<int>& nodes = potential->nodes();
+    fullspace::NodeFrame start, end;
+    if (problem.trajectory) {
+      problem.trajectory->evaluate_nodes(t0, nodes, start);
+      problem.trajectory->evaluate_nodes(t0 + h, nodes, end);
+    }
+    RowMatrixX3d p_start(static_cast<Eigen::Index>(nodes.size()), 3), p_end(static_cast<Eigen::Index>(nodes.size()), 3);
+    for (std::size_t k = 0; k < nodes.size(); ++k) {
+      const Eigen::Vector3d x = s.x.segment<3>(3 * nodes[k]), X = rest_end.segment<3>(3 * nodes[k]);
+      const auto row = static_cast<Eigen::Index>(k);
+      if (problem.trajectory) {
+        p_start.row(row) = (start.A[k] * x + start.d.row(row).transpose()).transpose();
+        p_end.row(row) = (end.A[k] * X + end.d.row(row).transpose()).transpose();
+      } else {
+        p_start.row(row) = x.transpose();
+        p_end.row(row) = X.transpose();
+      }
+    }
+    if (potential->begin_substep(t0, h, p_start, p_end)) return false;
+  }
+  return true;
+}
+
+void SceneBody::step(double t0, double h, EffectSeconds& seconds) {
+  ++steps;
+  if (!soft()) {
+    t_ = t0 + h;
+    return;
+  }
+  const auto clock = Clock::now();
+  try {
+    if (at_rest_this_step(t0, h)) {
+      ++idle_steps;
+      const fullspace::State rest = fullspace::initial_state(layer_->problem, t0 + h);
+      if (fast_) fast_->initialize(rest);
+      else full_->initialize(rest);
+    } else if (fast_) {
+      const reduced::ReducedStepStats st = fast_->step(h);
+      newton_iterations += st.newton_iterations;
+      refinements += st.potential_refinements;
+      failed_attempts += st.failed_attempts;
+      seconds.inertia += st.inertia_seconds;
+      seconds.elasticity += st.seconds - st.inertia_seconds - st.potential_seconds;
+    } else {
+      const fullspace::StepStats st = full_->step(h);
+      newton_iterations += st.newton_iterations;
+      refinements += st.potential_refinements;
+      failed_attempts += st.failed_attempts;
+      seconds.inertia += st.mass_seconds;
+      seconds.elasticity += st.seconds - st.mass_seconds - st.potential_seconds;
+    }
+  } catch (const Error& e) {
+    throw_error("body '{}': {}", name(), e.what());
+  }
+  t_ = t0 + h;
+  solve_seconds += seconds_since(clock);
+}
+
+// The skinned pose at time t, interpolated between the motion's frames (slerp per joint).
+RowMatrixX3d SceneBody::skinned_world_surface(double t) const {
+  const double f = t * motion_.fps;
+  const auto last = static_cast<double>(motion_.num_frames() - 1);
+  const auto k = static_cast<std::size_t>(std::clamp(std::floor(f + 1e-9), 0.0, last));
+  const std::size_t k1 = std::min(k + 1, motion_.num_frames() - 1);
+  const double u = std::clamp(f - static_cast<double>(k), 0.0, 1.0);
+  const body::Pose theta = u < 1e-9 ? motion_.poses[k] : body::slerp_pose(motion_.poses[k], motion_.poses[k1], u);
+  const Eigen::Vector3d trans = (1.0 - u) * motion_.trans[k] + u * motion_.trans[k1];
+  return placement_.apply(poser_->pose(theta, trans) * motion_.world_from_body.transpose());
+}
+
+RowMatrixX3d SceneBody::world_surface() const {
+  if (!soft()) return skinned_world_surface(t_);
+  return placement_.apply(layer_->posed_surface(state().x, t_));
+}
+
+RowMatrixX3d SceneBody::predicted_world_surface(double t) const {
+  if (!soft()) return skinned_world_surface(t);
+  return placement_.apply(layer_->posed_surface(state().x, t));
+}
+
+}  // namespace sflsh::scene::detail

@@ -1,0 +1,369 @@
+// Reading scene files (scene_file.hpp, docs/scenes.md), errors as "<file>:<line>: …".
+#include <sflsh/scene/scene_file.hpp>
+
+#include <sflsh/core/error.hpp>
+#include <sflsh/core/toml_reader.hpp>
+
+#include <cmath>
+#include <set>
+
+namespace sflsh::scene {
+
+const char* solver_name(SolverKind kind) {
+  switch (kind) {
+    case SolverKind::full: return "full";
+    case SolverKind::reduced: return "reduced";
+    case SolverKind::skinned: return "skinned";
+  }
+  return "?";
+}
+
+const char* shape_name(ShapeKind kind) {
+  switch (kind) {
+    case ShapeKind::plane: return "plane";
+    case ShapeKind::sphere: return "sphere";
+    case ShapeKind::box: return "box";
+    case ShapeKind::capsule: return "capsule";
+    case ShapeKind::mesh: return "mesh";
+  }
+  return "?";
+}
+
+const char* object_motion_name(ObjectMotionKind kind) {
+  switch (kind) {
+    case ObjectMotionKind::fixed: return "fixed";
+    case ObjectMotionKind::prescribed: return "prescribed";
+    case ObjectMotionKind::free: return "free";
+  }
+  return "?";
+}
+
+int Scene::num_frames() const {
+  if (frames > 0) return frames;
+  return static_cast<int>(std::floor(duration * fps + 1e-9)) + 1;
+}
+
+namespace {
+
+class SceneReader : public TomlReader {
+ public:
+  using TomlReader::TomlReader;
+
+  Scene read() const {
+    const toml::table root = parse("scene file");
+    check_keys(root, {"scene", "effects", "body", "object", "contact", "crowd", "output"}, "");
+    Scene scene;
+    scene.file = path();
+    read_header(required(root, "scene", ""), scene);
+    if (const toml::node* node = root.get("effects")) read_effects(*node, scene.effects);
+    if (const toml::node* node = root.get("contact")) read_contact(*node, scene.contact);
+    if (const toml::node* node = root.get("output")) read_output(*node, scene.output);
+    std::set<std::string> names;
+    if (const toml::node* node = root.get("body")) {
+      const toml::array* list = node->as_array();
+      require(list != nullptr, "{}: 'body' must be an array of tables ([[body]])", at(*node));
+      for (std::size_t i = 0; i < list->size(); ++i) {
+        scene.bodies.push_back(read_body((*list)[i], i));
+        require(names.insert(scene.bodies.back().name).second, "{}: the name '{}' is used twice", at((*list)[i]),
+                scene.bodies.back().name);
+      }
+    }
+    if (const toml::node* node = root.get("object")) {
+      const toml::array* list = node->as_array();
+      require(list != nullptr, "{}: 'object' must be an array of tables ([[object]])", at(*node));
+      for (std::size_t i = 0; i < list->size(); ++i) {
+        scene.objects.push_back(read_object((*list)[i], i));
+        require(names.insert(scene.objects.back().name).second, "{}: the name '{}' is used twice", at((*list)[i]),
+                scene.objects.back().name);
+      }
+    }
+    if (const toml::node* node = root.get("crowd")) scene.crowd = read_crowd(*node);
+    check_scene(root, scene);
+    return scene;
+  }
+
+ private:
+  std::string relative(const std::string& file) const {
+    const std::filesystem::path p(file);
+    return p.is_absolute() ? file : (path().parent_path() / p).lexically_normal().string();
+  }
+
+  double positive(const toml::node& node, std::string_view key, std::string_view context) const {
+    const double v = number(node, key, context);
+    require(v > 0.0, "{}: '{}'{} = {} must be positive", at(node), key, context, v);
+    return v;
+  }
+
+  double non_negative(const toml::node& node, std::string_view key, std::string_view context) const {
+    const double v = number(node, key, context);
+    require(v >= 0.0, "{}: '{}'{} = {} must not be negative", at(node), key, context, v);
+    return v;
+  }
+
+  int count(const toml::node& node, std::string_view key, std::string_view context, int minimum) const {
+    const std::int64_t v = integer(node, key, context);
+    require(v >= minimum && v <= 1'000'000, "{}: '{}'{} = {} must be an integer ≥ {}", at(node), key, context, v, minimum);
+    return static_cast<int>(v);
+  }
+
+  Eigen::Vector3d vector3(const toml::node& node, std::string_view key, std::string_view context) const {
+    const std::vector<double> v = numbers(node, key, 3, context);
+    return {v[0], v[1], v[2]};
+  }
+
+  std::string choice(const toml::node& node, std::string_view key, std::initializer_list<std::string_view> allowed,
+                     std::string_view context) const {
+    const std::string value = string_value(node, key);
+    std::string list;
+    for (const std::string_view a : allowed) {
+      if (value == a) return value;
+      list += (list.empty() ? "" : " | ") + std::string(a);
+    }
+    throw_error("{}: '{}'{} = '{}' is not one of {}", at(node), key, context, value, list);
+  }
+
+  SolverKind solver(const toml::node& node, std::string_view context) const {
+    const std::string s = choice(node, "solver", {"full", "reduced", "skinned"}, context);
+    return s == "full" ? SolverKind::full : s == "reduced" ? SolverKind::reduced : SolverKind::skinned;
+  }
+
+  void read_header(const toml::node& node, Scene& scene) const {
+    const toml::table& t = table(node, "scene");
+    check_keys(t, {"name", "fps", "frames", "duration", "substeps"}, " in [scene]");
+    scene.name = t.get("name") ? string_value(*t.get("name"), "name") : path().stem().string();
+    if (const toml::node* n = t.get("fps")) scene.fps = positive(*n, "fps", " in [scene]");
+    if (const toml::node* n = t.get("frames")) scene.frames = count(*n, "frames", " in [scene]", 1);
+    if (const toml::node* n = t.get("duration")) scene.duration = positive(*n, "duration", " in [scene]");
+    if (const toml::node* n = t.get("substeps")) scene.substeps = count(*n, "substeps", " in [scene]", 1);
+    require(scene.fps <= 10000.0, "{}: 'fps' = {} is beyond 10000", at(t), scene.fps);
+  }
+
+  void read_effects(const toml::node& node, Effects& effects) const {
+    const toml::table& t = table(node, "effects");
+    check_keys(t, {"inertia", "gravity", "object_contact", "body_contact", "self_contact"}, " in [effects]");
+    if (const toml::node* n = t.get("inertia")) effects.inertia = boolean(*n, "inertia", " in [effects]");
+    if (const toml::node* n = t.get("gravity")) effects.gravity = boolean(*n, "gravity", " in [effects]");
+    if (const toml::node* n = t.get("object_contact")) effects.object_contact = boolean(*n, "object_contact", " in [effects]");
+    if (const toml::node* n = t.get("body_contact")) effects.body_contact = boolean(*n, "body_contact", " in [effects]");
+    if (const toml::node* n = t.get("self_contact")) {
+      require(!boolean(*n, "self_contact", " in [effects]"),
+              "{}: 'self_contact' = true is not available: a body's layer against its own other parts is not simulated "
+              "(docs/scenes.md); remove it or set it to false",
+              at(*n));
+    }
+  }
+
+  void read_contact(const toml::node& node, ContactSpec& contact) const {
+    const toml::table& t = table(node, "contact");
+    check_keys(t, {"stiffness", "tolerance", "margin", "max_refinements"}, " in [contact]");
+    if (const toml::node* n = t.get("stiffness")) contact.stiffness = non_negative(*n, "stiffness", " in [contact]");
+    if (const toml::node* n = t.get("tolerance")) contact.tolerance = positive(*n, "tolerance", " in [contact]");
+    if (const toml::node* n = t.get("margin")) contact.margin = non_negative(*n, "margin", " in [contact]");
+    if (const toml::node* n = t.get("max_refinements")) contact.max_refinements = count(*n, "max_refinements", " in [contact]", 0);
+  }
+
+  void read_output(const toml::node& node, OutputSpec& output) const {
+    const toml::table& t = table(node, "output");
+    check_keys(t, {"layer", "frames"}, " in [output]");
+    if (const toml::node* n = t.get("layer")) output.layer = boolean(*n, "layer", " in [output]");
+    if (const toml::node* n = t.get("frames")) output.frames = boolean(*n, "frames", " in [output]");
+  }
+
+  std::vector<SceneKeyframe> keyframes(const toml::node& node, std::string_view key, std::string_view context, bool with_rotation) const {
+    const toml::array* list = node.as_array();
+    require(list != nullptr && list->size() >= 2, "{}: '{}'{} must be an array of at least two tables {{ t = …, position = [x, y, z] }}",
+            at(node), key, context);
+    std::vector<SceneKeyframe> out;
+    for (const toml::node& item : *list) {
+      const toml::table* k = item.as_table();
+      require(k != nullptr, "{}: each entry of '{}'{} must be a table {{ t = …, position = […] }}", at(item), key, context);
+      if (with_rotation) check_keys(*k, {"t", "position", "rotation"}, fmt::format(" in '{}'{}", key, context));
+      else check_keys(*k, {"t", "position"}, fmt::format(" in '{}'{}", key, context));
+      SceneKeyframe f;
+      f.t = non_negative(required(*k, "t", context), "t", context);
+      f.position = vector3(required(*k, "position", context), "position", context);
+      if (const toml::node* r = k->get("rotation")) f.rotation = vector3(*r, "rotation", context);
+      require(out.empty() || f.t > out.back().t, "{}: keyframe times in '{}'{} must increase ({} after {})", at(item), key, context,
+              f.t, out.empty() ? 0.0 : out.back().t);
+      out.push_back(f);
+    }
+    return out;
+  }
+
+  Placement placement(const toml::node& node, std::string_view context) const {
+    const toml::table& t = table(node, "placement");
+    check_keys(t, {"position", "yaw"}, fmt::format(" in 'placement'{}", context));
+    Placement p;
+    if (const toml::node* n = t.get("position")) p.position = vector3(*n, "position", context);
+    if (const toml::node* n = t.get("yaw")) p.yaw_degrees = number(*n, "yaw", context);
+    return p;
+  }
+
+  BodySpec read_body(const toml::node& node, std::size_t index) const {
+    const toml::table* t = node.as_table();
+    require(t != nullptr, "{}: 'body' must be an array of tables ([[body]])", at(node));
+    const std::string context = fmt::format(" in body #{}", index);
+    check_keys(*t,
+               {"name", "body", "subject", "betas", "motion", "motion_offset", "approach", "placement", "solver", "mesh",
+                "material", "control_points", "handles", "cubature", "density", "stiffness_scale"},
+               context);
+    BodySpec b;
+    b.line = static_cast<int>(t->source().begin.line);
+    b.name = t->get("name") ? string_value(*t->get("name"), "name") : fmt::format("body{}", index);
+    if (const toml::node* n = t->get("body")) b.body_path = relative(string_value(*n, "body"));
+    if (const toml::node* n = t->get("subject")) b.subject = string_value(*n, "subject");
+    if (const toml::node* n = t->get("betas")) {
+      const toml::array* a = n->as_array();
+      require(a != nullptr && !a->empty() && a->size() <= 10, "{}: 'betas'{} must be an array of 1 to 10 numbers", at(*n), context);
+      std::vector<double> beta;
+      for (const toml::node& v : *a) beta.push_back(number(v, "betas", context));
+      b.betas = beta;
+    }
+    require(b.subject.empty() || !b.betas, "{}: give 'subject' or 'betas'{}, not both", at(node), context);
+    if (const toml::node* n = t->get("motion")) {
+      b.motion = string_value(*n, "motion");
+      if (b.motion.ends_with(".npz")) b.motion = relative(b.motion);
+    }
+    if (const toml::node* n = t->get("motion_offset")) b.motion_offset = non_negative(*n, "motion_offset", context);
+    if (const toml::node* n = t->get("approach")) b.approach = keyframes(*n, "approach", context, false);
+    if (const toml::node* n = t->get("placement")) b.placement = placement(*n, context);
+    if (const toml::node* n = t->get("solver")) b.solver = solver(*n, context);
+    if (const toml::node* n = t->get("mesh")) b.mesh = choice(*n, "mesh", {"coarse", "default", "fine"}, context);
+    if (const toml::node* n = t->get("material")) b.material = relative(string_value(*n, "material"));
+    if (const toml::node* n = t->get("control_points")) b.control_points = count(*n, "control_points", context, 1);
+    if (const toml::node* n = t->get("handles")) b.handles = count(*n, "handles", context, 1);
+    if (const toml::node* n = t->get("cubature")) b.cubature = count(*n, "cubature", context, -1);
+    if (const toml::node* n = t->get("density")) b.density = positive(*n, "density", context);
+    if (const toml::node* n = t->get("stiffness_scale")) b.stiffness_scale = positive(*n, "stiffness_scale", context);
+    for (const std::string* file : {&b.body_path, &b.material}) {
+      require(file->empty() || std::filesystem::exists(*file), "{}: file '{}'{} not found", at(node), *file, context);
+    }
+    require(!b.motion.ends_with(".npz") || std::filesystem::exists(b.motion), "{}: motion file '{}'{} not found", at(node), b.motion,
+            context);
+    return b;
+  }
+
+  ObjectSpec read_object(const toml::node& node, std::size_t index) const {
+    const toml::table* t = node.as_table();
+    require(t != nullptr, "{}: 'object' must be an array of tables ([[object]])", at(node));
+    const std::string context = fmt::format(" in object #{}", index);
+    check_keys(*t,
+               {"name", "shape", "radius", "length", "half_extents", "normal", "file", "scale", "position", "rotation", "motion",
+                "keyframes", "smooth", "mass", "velocity"},
+               context);
+    ObjectSpec o;
+    o.line = static_cast<int>(t->source().begin.line);
+    o.name = t->get("name") ? string_value(*t->get("name"), "name") : fmt::format("object{}", index);
+    const std::string shape = choice(required(*t, "shape", context), "shape", {"plane", "sphere", "box", "capsule", "mesh"}, context);
+    o.shape = shape == "plane" ? ShapeKind::plane
+              : shape == "sphere" ? ShapeKind::sphere
+              : shape == "box" ? ShapeKind::box
+              : shape == "capsule" ? ShapeKind::capsule
+                                   : ShapeKind::mesh;
+    auto only_for = [&](std::string_view key, std::initializer_list<ShapeKind> kinds) {
+      const toml::node* n = t->get(key);
+      if (!n) return n;
+      bool ok = false;
+      for (ShapeKind k : kinds) ok = ok || k == o.shape;
+      require(ok, "{}: '{}'{} does not apply to a {}", at(*n), key, context, shape);
+      return n;
+    };
+    if (const toml::node* n = only_for("radius", {ShapeKind::sphere, ShapeKind::capsule})) o.radius = positive(*n, "radius", context);
+    if (const toml::node* n = only_for("length", {ShapeKind::capsule})) o.length = positive(*n, "length", context);
+    if (const toml::node* n = only_for("half_extents", {ShapeKind::box})) {
+      o.half_extents = vector3(*n, "half_extents", context);
+      require(o.half_extents.minCoeff() > 0.0, "{}: 'half_extents'{} must be positive", at(*n), context);
+    }
+    if (const toml::node* n = only_for("normal", {ShapeKind::plane})) {
+      o.normal = vector3(*n, "normal", context);
+      require(o.normal.norm() > 1e-12, "{}: 'normal'{} must not be zero", at(*n), context);
+      o.normal.normalize();
+    }
+    if (const toml::node* n = only_for("file", {ShapeKind::mesh})) {
+      o.mesh_path = relative(string_value(*n, "file"));
+      require(std::filesystem::exists(o.mesh_path), "{}: mesh file '{}'{} not found", at(*n), o.mesh_path, context);
+    }
+    if (const toml::node* n = only_for("scale", {ShapeKind::mesh})) o.scale = positive(*n, "scale", context);
+    require(o.shape != ShapeKind::mesh || !o.mesh_path.empty(), "{}: a mesh object needs 'file'{}", at(node), context);
+    if (const toml::node* n = t->get("position")) o.position = vector3(*n, "position", context);
+    if (const toml::node* n = t->get("rotation")) o.rotation = vector3(*n, "rotation", context);
+    if (const toml::node* n = t->get("motion")) {
+      const std::string m = choice(*n, "motion", {"fixed", "prescribed", "free"}, context);
+      o.motion = m == "fixed" ? ObjectMotionKind::fixed : m == "prescribed" ? ObjectMotionKind::prescribed : ObjectMotionKind::free;
+    }
+    const toml::node* keys = t->get("keyframes");
+    if (o.motion == ObjectMotionKind::prescribed) {
+      require(keys != nullptr, "{}: a prescribed object needs 'keyframes'{}", at(node), context);
+      o.keyframes = keyframes(*keys, "keyframes", context, true);
+    } else {
+      require(keys == nullptr, "{}: 'keyframes'{} need motion = \"prescribed\"", keys ? at(*keys) : at(node), context);
+    }
+    if (const toml::node* n = t->get("smooth")) o.smooth = boolean(*n, "smooth", context);
+    for (const char* key : {"mass", "velocity"}) {
+      const toml::node* n = t->get(key);
+      require(n == nullptr || o.motion == ObjectMotionKind::free, "{}: '{}'{} needs motion = \"free\"", n ? at(*n) : at(node), key, context);
+    }
+    if (const toml::node* n = t->get("mass")) o.mass = positive(*n, "mass", context);
+    if (const toml::node* n = t->get("velocity")) o.velocity = vector3(*n, "velocity", context);
+    require(o.motion != ObjectMotionKind::free || o.shape != ShapeKind::plane, "{}: a plane cannot be free{}", at(node), context);
+    return o;
+  }
+
+  CrowdSpec read_crowd(const toml::node& node) const {
+    const toml::table& t = table(node, "crowd");
+    const std::string_view context = " in [crowd]";
+    check_keys(t,
+               {"count", "seed", "shape_sigma", "motion", "max_offset", "spacing", "columns", "shape_model", "solver", "mesh", "handles",
+                "cubature"},
+               context);
+    CrowdSpec c;
+    c.line = static_cast<int>(t.source().begin.line);
+    if (const toml::node* n = t.get("count")) c.count = count(*n, "count", context, 1);
+    if (const toml::node* n = t.get("seed")) c.seed = static_cast<std::uint64_t>(count(*n, "seed", context, 0));
+    if (const toml::node* n = t.get("shape_sigma")) c.shape_sigma = non_negative(*n, "shape_sigma", context);
+    if (const toml::node* n = t.get("motion")) {
+      c.motion = string_value(*n, "motion");
+      if (c.motion.ends_with(".npz")) c.motion = relative(c.motion);
+    }
+    if (const toml::node* n = t.get("max_offset")) c.max_offset = non_negative(*n, "max_offset", context);
+    if (const toml::node* n = t.get("spacing")) c.spacing = positive(*n, "spacing", context);
+    if (const toml::node* n = t.get("columns")) c.columns = count(*n, "columns", context, 1);
+    if (const toml::node* n = t.get("shape_model")) {
+      c.shape_model = relative(string_value(*n, "shape_model"));
+      require(std::filesystem::exists(c.shape_model), "{}: shape model '{}'{} not found", at(*n), c.shape_model, context);
+    }
+    if (const toml::node* n = t.get("solver")) c.solver = solver(*n, context);
+    if (const toml::node* n = t.get("mesh")) c.mesh = choice(*n, "mesh", {"coarse", "default", "fine"}, context);
+    if (const toml::node* n = t.get("handles")) c.handles = count(*n, "handles", context, 1);
+    if (const toml::node* n = t.get("cubature")) c.cubature = count(*n, "cubature", context, -1);
+    return c;
+  }
+
+  // Effects that cannot act, and combinations the simulator does not offer.
+  void check_scene(const toml::table& root, const Scene& scene) const {
+    const toml::node& where = root.get("effects") ? *root.get("effects") : static_cast<const toml::node&>(root);
+    require(!scene.bodies.empty() || scene.crowd, "{}: the scene has no [[body]] and no [crowd]", path().string());
+    require(!scene.effects.object_contact || !scene.objects.empty(),
+            "{}: 'object_contact' is on but the scene has no [[object]]", at(where));
+    const std::size_t bodies = scene.bodies.size() + (scene.crowd ? static_cast<std::size_t>(scene.crowd->count) : 0);
+    require(!scene.effects.body_contact || bodies >= 2, "{}: 'body_contact' is on but the scene has fewer than two bodies", at(where));
+    if (scene.crowd) {
+      require(!scene.effects.body_contact && !scene.effects.object_contact,
+              "{}:{}: a [crowd] runs without contact (its avatars stand apart); switch object_contact and body_contact off",
+              path().string(), scene.crowd->line);
+      require(scene.crowd->solver != SolverKind::full, "{}:{}: a [crowd] runs the reduced solver or skinning, not 'full'", path().string(),
+              scene.crowd->line);
+    }
+    for (const ObjectSpec& o : scene.objects) {
+      require(o.motion != ObjectMotionKind::free || scene.effects.object_contact,
+              "{}:{}: object '{}' is free, which needs object_contact (nothing else acts on it but gravity)", path().string(), o.line,
+              o.name);
+    }
+  }
+};
+
+}  // namespace
+
+Scene load_scene(const std::filesystem::path& path) { return SceneReader(path).read(); }
+
+}  // namespace sflsh::scene

@@ -1,0 +1,54 @@
+// The scene's rigid objects (scene_objects.hpp).
+#include "scene_objects.hpp"
+
+#include <sflsh/core/error.hpp>
+
+namespace sflsh::scene::detail {
+
+Pose spec_pose(const Eigen::Vector3d& position, const Eigen::Vector3d& rotation_degrees) {
+  Pose pose;
+  pose.translation = position;
+  const double angle = rotation_degrees.norm() * EIGEN_PI / 180.0;
+  if (angle > 0.0) pose.rotation = Eigen::AngleAxisd(angle, rotation_degrees.normalized()).toRotationMatrix();
+  return pose;
+}
+
+std::shared_ptr<Obstacle> make_shape(const ObjectSpec& spec) {
+  switch (spec.shape) {
+    case ShapeKind::plane: return std::make_shared<HalfSpace>(spec.normal, 0.0, 2.0);
+    case ShapeKind::sphere: return std::make_shared<Sphere>(spec.radius);
+    case ShapeKind::box: return std::make_shared<Box>(spec.half_extents);
+    case ShapeKind::capsule: return std::make_shared<Capsule>(spec.radius, 0.5 * spec.length);
+    case ShapeKind::mesh: {
+      std::unique_ptr<TriangleMesh> mesh = TriangleMesh::load(spec.mesh_path, spec.scale);
+      return std::shared_ptr<Obstacle>(std::move(mesh));
+    }
+  }
+  throw_error("object '{}': unknown shape", spec.name);
+}
+
+SceneObject make_object(const ObjectSpec& spec, const Eigen::Vector3d& gravity) {
+  SceneObject object;
+  object.spec = spec;
+  object.world_shape = make_shape(spec);
+  // A plane's normal is given in the world: its rotation would turn it.
+  const Pose start = spec_pose(spec.position, spec.shape == ShapeKind::plane ? Eigen::Vector3d::Zero() : spec.rotation);
+  switch (spec.motion) {
+    case ObjectMotionKind::fixed: object.motion = std::make_shared<FixedMotion>(start); break;
+    case ObjectMotionKind::prescribed: {
+      std::vector<Keyframe> keys;
+      for (const SceneKeyframe& k : spec.keyframes) {
+        const Pose p = spec_pose(k.position, k.rotation);
+        keys.push_back({k.t, p.translation, Eigen::Quaterniond(p.rotation)});
+      }
+      object.motion = std::make_shared<KeyframeMotion>(
+          std::move(keys), spec.smooth ? KeyframeInterpolation::catmull_rom : KeyframeInterpolation::linear);
+      break;
+    }
+    case ObjectMotionKind::free: object.motion = std::make_shared<FreeMotion>(spec.mass, gravity, start, spec.velocity); break;
+  }
+  object.world_shape->set_pose(object.motion->pose(0.0));
+  return object;
+}
+
+}  // namespace sflsh::scene::detail

@@ -1,0 +1,544 @@
+// Running a scene (scene_runner.hpp): bodies, objects, contact on demand, stepping, output and summary.
+#include <sflsh/scene/scene_runner.hpp>
+
+#include "crowd.hpp"
+#include "scene_internal.hpp"
+#include "scene_objects.hpp"
+
+#include <sflsh/body/body_io.hpp>
+#include <sflsh/core/error.hpp>
+#include <sflsh/core/log.hpp>
+#include <sflsh/core/progress.hpp>
+#include <sflsh/core/run_folder.hpp>
+#include <sflsh/core/summary.hpp>
+#include <sflsh/core/vtk_io.hpp>
+
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+
+#include <chrono>
+#include <map>
+
+namespace sflsh::scene {
+
+namespace {
+
+using detail::Rigid;
+using detail::SceneBody;
+using detail::SceneObject;
+using meshing::RowMatrixX3d;
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+const Eigen::Vector3d kGravity(0.0, -9.81, 0.0);
+
+/// A soft body's contact: its potentials against the objects and against the other bodies.
+struct BodyContact {
+  std::shared_ptr<ContactPotential> objects;          ///< null without object contact
+  std::vector<std::shared_ptr<detail::PlacedMotion>> placed;   ///< per scene object (object potential)
+  std::shared_ptr<ContactPotential> bodies;           ///< null without body contact
+  std::vector<int> other;                             ///< per body obstacle: the other body's index
+  std::vector<std::shared_ptr<TriangleMesh>> surfaces;   ///< per body obstacle, in this body's frame
+  std::vector<int> entry_of_node;                     ///< per layer node: its entry in the potentials, or −1
+  double surface_seconds = 0.0;                       ///< updating the other bodies' surfaces
+  double max_penetration = 0.0;                       ///< measured at the written frames on the skin [m]
+};
+
+/// Lumped skin area per contact node: the region vertex's (lumped_vertex_areas) on the node it sits on;
+/// nodes without a region vertex (embedded skins) get the mean.
+std::vector<double> node_areas(const SceneBody& body, const std::vector<int>& nodes) {
+  const fullspace::BodyLayer& layer = body.layer();
+  const std::vector<double> vertex_area = lumped_vertex_areas(layer.rest_skin, layer.mesh->region_surface.faces);
+  std::map<int, double> area;
+  double sum = 0.0;
+  for (std::size_t r = 0; r < vertex_area.size(); ++r) {
+    sum += vertex_area[r];
+    const int node = layer.mesh->skin.node[r];
+    if (node >= 0) area[node] += vertex_area[r];
+  }
+  const double mean = vertex_area.empty() ? 2.25e-4 : sum / static_cast<double>(vertex_area.size());
+  std::vector<double> out;
+  for (int node : nodes) {
+    const auto it = area.find(node);
+    out.push_back(it == area.end() ? mean : it->second);
+  }
+  return out;
+}
+
+ContactParameters contact_parameters(const ContactSpec& spec) {
+  ContactParameters p;
+  if (spec.stiffness > 0.0) p.stiffness = spec.stiffness;
+  p.tolerance = spec.tolerance;
+  p.margin = spec.margin;
+  p.max_refinements = spec.max_refinements;
+  p.validate();
+  return p;
+}
+
+/// Deepest penetration [m] of the listed world points into the shapes.
+double deepest(const RowMatrixX3d& points, const std::vector<const Obstacle*>& shapes) {
+  double d = 0.0;
+  for (const Obstacle* shape : shapes)
+    for (Eigen::Index i = 0; i < points.rows(); ++i) d = std::max(d, -shape->distance(points.row(i).transpose()));
+  return d;
+}
+
+class SceneRun {
+ public:
+  SceneRun(const Scene& scene, const SceneRunOptions& options) : scene_(scene), options_(options) {}
+
+  nlohmann::json run() {
+    const auto t_start = Clock::now();
+    frames_ = options_.frames > 0 ? options_.frames : scene_.num_frames();
+    Scene scene = scene_;
+    scene.frames = frames_;
+    build_bodies(scene);
+    build_objects();
+    build_contact();
+    const double setup_seconds = seconds_since(t_start);
+    for (auto& body : bodies_) body->start(scene_.effects.inertia);
+
+    std::optional<RunFolder> run;
+    if (!options_.out.empty() && options_.rank == 0) run.emplace(options_.out);
+    RunFolder* folder = run && options_.write_frames && scene_.output.frames ? &*run : nullptr;
+    open_writers(folder);
+    write_frame(0, folder);
+
+    const double h = 1.0 / (scene_.fps * scene_.substeps);
+    const bool coupled = scene_.effects.body_contact || any_free_object();
+    std::optional<tbb::global_control> threads;
+    if (options_.threads > 0) threads.emplace(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(options_.threads));
+    Progress progress("scene frames", frames_ - 1, options_.rank == 0);
+    const auto t_loop = Clock::now();
+    for (int f = 1; f < frames_; ++f) {
+      for (int k = 0; k < scene_.substeps; ++k) {
+        const double t0 = ((f - 1) * scene_.substeps + k) * h;
+        if (coupled) step_coupled(t0, h);
+        else step_independent(t0, h);
+      }
+      const auto t_out = Clock::now();
+      write_frame(f, folder);
+      output_seconds_ += seconds_since(t_out);
+      progress.advance();
+    }
+    progress.finish();
+    const double loop_seconds = seconds_since(t_loop);
+    if (folder) finish_writers(*folder);
+    nlohmann::json summary = make_summary(setup_seconds, loop_seconds, seconds_since(t_start), h);
+    if (run) {
+      write_json(run->stage("summary.json"), summary);
+      run->commit();
+    }
+    return summary;
+  }
+
+ private:
+  // --- setup ---------------------------------------------------------------------------------------------
+  const body::BodyModel& model_for(const std::string& path) {
+    const std::string key = path.empty() ? body::default_body_path().string() : path;
+    auto it = models_.find(key);
+    if (it == models_.end()) {
+      require(std::filesystem::exists(key), "{}: body model not found", key);
+      it = models_.emplace(key, std::make_unique<body::BodyModel>(body::load_body(key))).first;
+    }
+    return *it->second;
+  }
+
+  void build_bodies(const Scene& scene) {
+    std::vector<BodySpec> specs = scene.bodies;
+    if (scene.crowd) {
+      const body::BodyModel& model = model_for("");
+      crowd_ = detail::expand_crowd(*scene.crowd, model, options_.data_dir);
+      for (const BodySpec& b : crowd_.bodies) specs.push_back(b);
+    }
+    for (std::size_t i = 0; i < specs.size(); ++i) {
+      detail::BodySetup setup;
+      setup.scene = &scene;
+      setup.cache_dir = options_.cache_dir;
+      const std::size_t crowd_index = i - scene.bodies.size();
+      if (i >= scene.bodies.size()) setup.material = &crowd_.materials[crowd_index];
+      try {
+        bodies_.push_back(std::make_unique<SceneBody>(specs[i], model_for(specs[i].body_path), setup));
+      } catch (const Error& e) {
+        throw_error("{}:{}: body '{}': {}", scene.file.string(), specs[i].line, specs[i].name, e.what());
+      }
+      logger()->info("scene: body '{}' ({}): {}", specs[i].name, solver_name(bodies_.back()->solver()), bodies_.back()->model_info);
+    }
+  }
+
+  void build_objects() {
+    for (const ObjectSpec& spec : scene_.objects) {
+      try {
+        objects_.push_back(detail::make_object(spec, scene_.effects.gravity ? kGravity : Eigen::Vector3d::Zero()));
+      } catch (const Error& e) {
+        throw_error("{}:{}: object '{}': {}", scene_.file.string(), spec.line, spec.name, e.what());
+      }
+    }
+  }
+
+  bool any_free_object() const {
+    for (const SceneObject& o : objects_)
+      if (o.motion->reacts()) return true;
+    return false;
+  }
+
+  // Contact potentials exist only for the contact effects the scene asks for, and only on soft bodies.
+  void build_contact() {
+    contact_.resize(bodies_.size());
+    if (!scene_.effects.object_contact && !scene_.effects.body_contact) return;
+    const ContactParameters parameters = contact_parameters(scene_.contact);
+    for (std::size_t b = 0; b < bodies_.size(); ++b) {
+      SceneBody& body = *bodies_[b];
+      if (!body.soft()) continue;
+      BodyContact& c = contact_[b];
+      const std::vector<int> nodes = body.contact_nodes();
+      const std::vector<double> areas = node_areas(body, nodes);
+      c.entry_of_node.assign(static_cast<std::size_t>(body.layer().problem.num_nodes()), -1);
+      for (std::size_t k = 0; k < nodes.size(); ++k) c.entry_of_node[static_cast<std::size_t>(nodes[k])] = static_cast<int>(k);
+      const Rigid body_from_world = body.placement().inverse();
+      if (scene_.effects.object_contact) {
+        std::vector<ContactObstacle> obstacles;
+        for (const SceneObject& o : objects_) {
+          auto placed = std::make_shared<detail::PlacedMotion>(o.motion, body_from_world);
+          c.placed.push_back(placed);
+          obstacles.push_back({detail::make_shape(o.spec), placed});
+        }
+        c.objects = std::make_shared<ContactPotential>(nodes, areas, std::move(obstacles), parameters);
+        body.layer().problem.potentials.push_back(c.objects);
+      }
+      if (scene_.effects.body_contact) {
+        std::vector<ContactObstacle> obstacles;
+        for (std::size_t o = 0; o < bodies_.size(); ++o) {
+          if (o == b) continue;
+          const body::BodyModel& model = bodies_[o]->model();
+          auto mesh = std::make_shared<TriangleMesh>(body_from_world.apply(bodies_[o]->predicted_world_surface(0.0)),
+                                                     model.faces);
+          c.other.push_back(static_cast<int>(o));
+          c.surfaces.push_back(mesh);
+          obstacles.push_back({mesh, nullptr});
+        }
+        c.bodies = std::make_shared<ContactPotential>(nodes, areas, std::move(obstacles), parameters);
+        body.layer().problem.potentials.push_back(c.bodies);
+      }
+    }
+  }
+
+  // --- stepping ------------------------------------------------------------------------------------------
+  // No coupling between bodies: every body steps on its own, reduced and skinned ones in parallel (each
+  // integrator is single-threaded), full-space ones one after another (PETSc runs them on all ranks).
+  void step_independent(double t0, double h) {
+    std::vector<std::size_t> parallel, serial;
+    for (std::size_t b = 0; b < bodies_.size(); ++b) (bodies_[b]->solver() == SolverKind::full ? serial : parallel).push_back(b);
+    std::vector<detail::EffectSeconds> seconds(bodies_.size());
+    std::vector<std::string> errors(bodies_.size());
+    tbb::parallel_for(std::size_t{0}, parallel.size(), [&](std::size_t k) {
+      const std::size_t b = parallel[k];
+      try {
+        bodies_[b]->step(t0, h, seconds[b]);
+      } catch (const std::exception& e) {
+        errors[b] = e.what();
+      }
+    });
+    for (const std::string& e : errors)
+      if (!e.empty()) throw_error("{}", e);
+    for (std::size_t b : serial) bodies_[b]->step(t0, h, seconds[b]);
+    for (const auto& s : seconds) add(s);
+    commit_objects(t0 + h);
+  }
+
+  // Gauss–Seidel over the bodies: each sees the bodies before it at the step's end and the ones after it
+  // predicted (their current elastic displacement carried by the new pose).
+  void step_coupled(double t0, double h) {
+    const double t1 = t0 + h;
+    for (std::size_t b = 0; b < bodies_.size(); ++b) {
+      BodyContact& c = contact_[b];
+      if (c.bodies) {
+        const auto clock = Clock::now();
+        const Rigid body_from_world = bodies_[b]->placement().inverse();
+        for (std::size_t k = 0; k < c.other.size(); ++k) {
+          const SceneBody& other = *bodies_[static_cast<std::size_t>(c.other[k])];
+          const RowMatrixX3d world = other.time() >= t1 - 1e-12 ? other.world_surface() : other.predicted_world_surface(t1);
+          c.surfaces[k]->set_vertices(body_from_world.apply(world));
+        }
+        c.surface_seconds += seconds_since(clock);
+      }
+      detail::EffectSeconds s;
+      bodies_[b]->step(t0, h, s);
+      add(s);
+    }
+    commit_objects(t1);
+  }
+
+  // Free objects: the reaction of every body, summed, moves the object once per step.
+  void commit_objects(double t1) {
+    for (std::size_t j = 0; j < objects_.size(); ++j) {
+      SceneObject& o = objects_[j];
+      if (o.motion->reacts()) {
+        Eigen::Vector3d force = Eigen::Vector3d::Zero();
+        for (BodyContact& c : contact_)
+          if (c.objects) force += c.placed[j]->take_force();
+        o.motion->commit(t1, force);
+      }
+      o.world_shape->set_pose(o.motion->pose(t1));
+    }
+  }
+
+  void add(const detail::EffectSeconds& s) {
+    seconds_.elasticity += s.elasticity;
+    seconds_.inertia += s.inertia;
+  }
+
+  // --- output --------------------------------------------------------------------------------------------
+  void open_writers(RunFolder* folder) {
+    for (auto& body : bodies_) {
+      if (!body->soft()) {
+        writers_.emplace_back();
+        continue;
+      }
+      fullspace::SimulationWriterOptions o;
+      o.prefix = body->name();
+      o.write_layer = scene_.output.layer;
+      o.rotation = body->placement().R;
+      o.translation = body->placement().t;
+      writers_.push_back(std::make_unique<fullspace::SimulationWriter>(body->layer(), folder, o));
+    }
+    if (folder) {
+      for (auto& body : bodies_)
+        if (!body->soft()) skinned_series_.emplace(body->name(), std::make_unique<vtk::PvdSeries>(folder->stage(body->name() + ".pvd")));
+      if (!objects_.empty()) objects_series_ = std::make_unique<vtk::PvdSeries>(folder->stage("objects.pvd"));
+    }
+  }
+
+  /// contact_force [N] and penetration [m] per body vertex from the body's potentials (world frame).
+  std::vector<vtk::Field> contact_fields(std::size_t b) const {
+    const BodyContact& c = contact_[b];
+    if (!c.objects && !c.bodies) return {};
+    const SceneBody& body = *bodies_[b];
+    const auto n = static_cast<Eigen::Index>(body.model().num_vertices());
+    Eigen::MatrixXd force = Eigen::MatrixXd::Zero(n, 3), depth = Eigen::MatrixXd::Zero(n, 1);
+    for (Eigen::Index v = 0; v < n; ++v) {
+      const int node = body.vertex_node()[static_cast<std::size_t>(v)];
+      if (node < 0) continue;
+      const int k = c.entry_of_node[static_cast<std::size_t>(node)];
+      if (k < 0) continue;
+      for (const ContactPotential* p : {c.objects.get(), c.bodies.get()}) {
+        if (!p) continue;
+        force.row(v) += p->contact_force().row(k) * body.placement().R.transpose();
+        depth(v, 0) = std::max(depth(v, 0), p->penetration()[k]);
+      }
+    }
+    return {{"contact_force", force, false}, {"penetration", depth, false}};
+  }
+
+  // Independent check of the contact: the soft skin's deepest point inside any object or other body.
+  void measure_penetration(double t) {
+    std::vector<RowMatrixX3d> world(bodies_.size());
+    std::vector<std::unique_ptr<TriangleMesh>> meshes(bodies_.size());
+    for (std::size_t b = 0; b < bodies_.size(); ++b) world[b] = bodies_[b]->world_surface();
+    for (std::size_t b = 0; b < bodies_.size(); ++b) {
+      BodyContact& c = contact_[b];
+      if (!c.objects && !c.bodies) continue;
+      const std::vector<int>& region = bodies_[b]->layer().mesh->region_surface.vertices;
+      RowMatrixX3d skin(static_cast<Eigen::Index>(region.size()), 3);
+      for (std::size_t r = 0; r < region.size(); ++r) skin.row(static_cast<Eigen::Index>(r)) = world[b].row(region[r]);
+      std::vector<const Obstacle*> shapes;
+      if (c.objects)
+        for (const SceneObject& o : objects_) shapes.push_back(o.world_shape.get());
+      if (c.bodies) {
+        for (int o : c.other) {
+          auto& mesh = meshes[static_cast<std::size_t>(o)];
+          if (!mesh) mesh = std::make_unique<TriangleMesh>(world[static_cast<std::size_t>(o)], bodies_[static_cast<std::size_t>(o)]->model().faces);
+          shapes.push_back(mesh.get());
+        }
+      }
+      const double d = deepest(skin, shapes);
+      if (d > c.max_penetration) {
+        c.max_penetration = d;
+        deepest_time_ = t;
+      }
+    }
+  }
+
+  void write_frame(int f, RunFolder* folder) {
+    const double t = f / scene_.fps;
+    const auto clock = Clock::now();
+    if (scene_.effects.object_contact || scene_.effects.body_contact) measure_penetration(t);
+    check_seconds_ += seconds_since(clock);
+    for (std::size_t b = 0; b < bodies_.size(); ++b) {
+      SceneBody& body = *bodies_[b];
+      if (body.soft()) {
+        writers_[b]->add_frame(t, body.state(), folder ? contact_fields(b) : std::vector<vtk::Field>{});
+        continue;
+      }
+      if (!folder) continue;
+      const auto t_skin = Clock::now();
+      const RowMatrixX3d posed = body.world_surface();
+      seconds_.skinning += seconds_since(t_skin);
+      vtk::Fields fields;
+      fields.field_data.push_back({"TimeValue", Eigen::MatrixXd::Constant(1, 1, t), false});
+      const std::string name = fmt::format("{}_{:06d}.vtp", body.name(), f);
+      vtk::write_surface(folder->stage(name), posed, body.model().faces, fields);
+      skinned_series_.at(body.name())->add(t, name);
+    }
+    if (folder && objects_series_) {
+      std::vector<Surface> surfaces;
+      Eigen::Index vertices = 0, triangles = 0;
+      for (const SceneObject& o : objects_) {
+        surfaces.push_back(o.world_shape->surface(32));
+        vertices += surfaces.back().vertices.rows();
+        triangles += surfaces.back().triangles.rows();
+      }
+      vtk::Points points(vertices, 3);
+      vtk::Cells cells(triangles, 3);
+      Eigen::MatrixXd id(triangles, 1);
+      Eigen::Index v0 = 0, f0 = 0;
+      for (std::size_t j = 0; j < surfaces.size(); ++j) {
+        points.middleRows(v0, surfaces[j].vertices.rows()) = surfaces[j].vertices;
+        cells.middleRows(f0, surfaces[j].triangles.rows()) = surfaces[j].triangles.array() + static_cast<int>(v0);
+        id.middleRows(f0, surfaces[j].triangles.rows()).setConstant(static_cast<double>(j));
+        v0 += surfaces[j].vertices.rows();
+        f0 += surfaces[j].triangles.rows();
+      }
+      vtk::Fields fields;
+      fields.cell_data.push_back({"object_id", id, true});
+      fields.field_data.push_back({"TimeValue", Eigen::MatrixXd::Constant(1, 1, t), false});
+      const std::string name = fmt::format("objects_{:06d}.vtp", f);
+      vtk::write_surface(folder->stage(name), points, cells, fields);
+      objects_series_->add(t, name);
+    }
+  }
+
+  void finish_writers(RunFolder& folder) {
+    for (auto& w : writers_)
+      if (w) w->finish();
+    for (auto& [name, series] : skinned_series_) series->write();
+    if (objects_series_) objects_series_->write();
+    (void)folder;
+  }
+
+  // --- summary -------------------------------------------------------------------------------------------
+  nlohmann::json make_summary(double setup_seconds, double loop_seconds, double total_seconds, double h) const {
+    nlohmann::json s = options_.header.is_object() ? options_.header : nlohmann::json::object();
+    s["scene"] = {{"file", scene_.file.string()}, {"name", scene_.name}, {"fps", scene_.fps}, {"frames", frames_},
+                  {"substeps", scene_.substeps}, {"step", h}};
+    const Effects& e = scene_.effects;
+    s["effects_requested"] = {{"inertia", e.inertia}, {"gravity", e.gravity}, {"object_contact", e.object_contact},
+                              {"body_contact", e.body_contact}, {"self_contact", false}};
+    double object_seconds = 0.0, body_seconds = 0.0;
+    long soft = 0, solved_steps = 0, potentials = 0;
+    ContactStats total;
+    nlohmann::json bodies = nlohmann::json::array();
+    for (std::size_t b = 0; b < bodies_.size(); ++b) {
+      const SceneBody& body = *bodies_[b];
+      const BodyContact& c = contact_[b];
+      nlohmann::json j = {{"name", body.name()},
+                          {"solver_requested", solver_name(body.spec().solver)},
+                          {"solver", solver_name(body.solver())},
+                          {"subject", body.subject_label()},
+                          {"beta", std::vector<double>(body.beta().data(), body.beta().data() + body.beta().size())},
+                          {"motion", body.motion().name},
+                          {"motion_offset", body.spec().motion_offset},
+                          {"placement", {{"position", {body.spec().placement.position.x(), body.spec().placement.position.y(),
+                                                       body.spec().placement.position.z()}},
+                                         {"yaw_degrees", body.spec().placement.yaw_degrees}}},
+                          {"model", body.model_info},
+                          {"setup_seconds", body.setup_seconds}};
+      if (body.soft()) {
+        ++soft;
+        solved_steps += body.steps - body.idle_steps;
+        j["steps"] = body.steps;
+        j["idle_steps"] = body.idle_steps;
+        j["newton_iterations"] = body.newton_iterations;
+        j["failed_attempts"] = body.failed_attempts;
+        j["contact_refinements"] = body.refinements;
+        j["solve_seconds"] = body.solve_seconds;
+        j["dynamics"] = writers_[b]->dynamics_summary();
+      }
+      nlohmann::json contact = nlohmann::json::object();
+      for (const auto& [label, p] : {std::pair{"objects", c.objects.get()}, std::pair{"bodies", c.bodies.get()}}) {
+        if (!p) continue;
+        ++potentials;
+        const ContactStats st = p->stats();
+        contact[label] = {{"broad_phase_passes", st.broad_phase_passes}, {"candidates", st.candidates},
+                          {"narrow_phase_evaluations", st.narrow_phase_evaluations}, {"refinements", st.refinements},
+                          {"unresolved", st.unresolved}, {"max_penetration_mm", 1e3 * st.max_penetration},
+                          {"seconds", st.seconds}};
+        (std::string(label) == "objects" ? object_seconds : body_seconds) += st.seconds;
+        total.broad_phase_passes += st.broad_phase_passes;
+        total.narrow_phase_evaluations += st.narrow_phase_evaluations;
+        total.max_penetration = std::max(total.max_penetration, st.max_penetration);
+      }
+      body_seconds += c.surface_seconds;
+      if (!contact.empty()) {
+        contact["measured_max_penetration_mm"] = 1e3 * c.max_penetration;
+        j["contact"] = contact;
+      }
+      bodies.push_back(j);
+    }
+    s["bodies"] = bodies;
+    nlohmann::json objects = nlohmann::json::array();
+    for (const SceneObject& o : objects_) {
+      const Eigen::Vector3d p = o.world_shape->pose().translation;
+      objects.push_back({{"name", o.spec.name}, {"shape", shape_name(o.spec.shape)}, {"motion", object_motion_name(o.spec.motion)},
+                         {"final_position", {p.x(), p.y(), p.z()}}});
+    }
+    s["objects"] = objects;
+
+    // The effects that ran, with their time and share of the stepping loop.
+    nlohmann::json ran = nlohmann::json::array();
+    auto entry = [&](const char* name, double seconds, const char* note) {
+      nlohmann::json j = {{"name", name}, {"seconds", seconds}, {"share", loop_seconds > 0 ? seconds / loop_seconds : 0.0}};
+      if (note && *note) j["note"] = note;
+      ran.push_back(j);
+    };
+    entry("skinning", seconds_.skinning, "posing the skinned bodies (soft bodies' skinning is inside their solves)");
+    if (soft > 0 && solved_steps > 0) {
+      entry("elasticity", seconds_.elasticity, "the soft layers' solves without their mass and contact terms");
+      if (e.inertia) entry("inertia", seconds_.inertia, e.gravity ? "the mass terms, gravity included" : "the mass terms");
+      else if (e.gravity) entry("gravity", seconds_.inertia, "the mass terms of gravity");
+      if (e.inertia && e.gravity) entry("gravity", 0.0, "inside the inertia terms");
+    }
+    if (e.object_contact && potentials > 0) entry("object_contact", object_seconds, "broad phase, penalty terms, acceptance");
+    if (e.body_contact && potentials > 0) entry("body_contact", body_seconds, "other bodies' surfaces (trees), penalty terms");
+    s["effects"] = ran;
+    s["built"] = {{"soft_layers", soft},
+                  {"skinned_bodies", static_cast<long>(bodies_.size()) - soft},
+                  {"contact_potentials", potentials},
+                  {"broad_phase_passes", total.broad_phase_passes},
+                  {"narrow_phase_evaluations", total.narrow_phase_evaluations}};
+    double measured = 0.0;
+    for (const BodyContact& c : contact_) measured = std::max(measured, c.max_penetration);
+    if (potentials > 0)
+      s["contact"] = {{"tolerance_mm", 1e3 * scene_.contact.tolerance}, {"max_penetration_mm", 1e3 * total.max_penetration},
+                      {"measured_max_penetration_mm", 1e3 * measured}, {"measured_at", deepest_time_},
+                      {"skeleton_response", false}};
+    s["timings"] = {{"setup_seconds", setup_seconds},
+                    {"loop_seconds", loop_seconds},
+                    {"output_seconds", output_seconds_},
+                    {"penetration_check_seconds", check_seconds_},
+                    {"frames_per_second", loop_seconds > 0 ? (frames_ - 1) / loop_seconds : 0.0},
+                    {"total_seconds", total_seconds}};
+    if (!crowd_.bodies.empty()) s["crowd"] = {{"avatars", crowd_.bodies.size()}, {"shape_model", crowd_.shape_model}};
+    return s;
+  }
+
+  const Scene& scene_;
+  const SceneRunOptions& options_;
+  int frames_ = 0;
+  std::map<std::string, std::unique_ptr<body::BodyModel>> models_;
+  detail::Crowd crowd_;
+  std::vector<std::unique_ptr<SceneBody>> bodies_;
+  std::vector<SceneObject> objects_;
+  std::vector<BodyContact> contact_;
+  std::vector<std::unique_ptr<fullspace::SimulationWriter>> writers_;
+  std::map<std::string, std::unique_ptr<vtk::PvdSeries>> skinned_series_;
+  std::unique_ptr<vtk::PvdSeries> objects_series_;
+  detail::EffectSeconds seconds_;
+  double output_seconds_ = 0.0, check_seconds_ = 0.0, deepest_time_ = 0.0;
+};
+
+}  // namespace
+
+nlohmann::json run_scene(const Scene& scene, const SceneRunOptions& options) { return SceneRun(scene, options).run(); }
+
+}  // namespace sflsh::scene
