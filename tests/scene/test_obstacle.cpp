@@ -11,6 +11,7 @@
 #include <random>
 #include <sflsh/core/error.hpp>
 #include <sflsh/scene/obstacle.hpp>
+#include <thread>
 
 #include "scene_test_support.hpp"
 #include "scratch_dir.hpp"
@@ -230,6 +231,26 @@ TEST(ObstacleMesh, RebuildCostOfASkinSizedMesh) {
   RecordProperty("rebuild_ms", std::to_string(1e3 * rebuild));
   RecordProperty("query_us", std::to_string(1e6 * query));
   EXPECT_LT(rebuild, 0.5);  // generous: a refit must stay far below a frame's budget even on a busy CI
+}
+
+// Integrators evaluate the potential from several threads: concurrent queries give the serial answers.
+TEST(ObstacleMesh, ConcurrentQueriesAgreeWithSerialOnes) {
+  const Surface s = Sphere(0.1).local_surface(48);
+  const TriangleMesh mesh(s.vertices, s.triangles);
+  std::vector<Eigen::Vector3d> points;
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> unit(-0.12, 0.12);
+  for (int i = 0; i < 2000; ++i) points.emplace_back(unit(rng), unit(rng), unit(rng));
+  std::vector<double> serial(points.size()), parallel(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) serial[i] = mesh.distance(points[i]);
+  std::vector<std::thread> threads;
+  for (int t = 0; t < 4; ++t)
+    threads.emplace_back([&, t] {
+      for (std::size_t i = static_cast<std::size_t>(t); i < points.size(); i += 4)
+        parallel[i] = mesh.distance(points[i]);
+    });
+  for (auto& th : threads) th.join();
+  EXPECT_EQ(serial, parallel);
 }
 
 TEST(ObstacleMesh, LoadsObjStlAndPlyFiles) {
