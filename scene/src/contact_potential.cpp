@@ -183,10 +183,12 @@ double ContactPotential::evaluate_masked(int k, std::uint64_t mask, const Eigen:
   return u;
 }
 
-double ContactPotential::evaluate(int k, const Eigen::Vector3d& p, Eigen::Vector3d* gradient,
+double ContactPotential::evaluate(int c, const Eigen::Vector3d& p, Eigen::Vector3d* gradient,
                                   Eigen::Matrix3d* hessian) const {
-  assert(k >= 0 && k < static_cast<int>(nodes_.size()));
+  // c indexes candidates() (as p_end of accept_substep does), the convention both integrators use.
+  assert(c >= 0 && c < static_cast<int>(candidates_.size()));
   const auto start = Clock::now();
+  const int k = candidates_[static_cast<std::size_t>(c)];
   const double u = evaluate_masked(k, mask_[static_cast<std::size_t>(k)], p, gradient, hessian);
   evaluate_nanoseconds_.fetch_add(std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - start).count(),
                                   std::memory_order_relaxed);

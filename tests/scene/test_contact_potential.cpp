@@ -129,7 +129,8 @@ TEST(ContactPotential, BroadPhaseDropsFarNodes) {
   EXPECT_EQ(s.candidates, 10);
   EXPECT_EQ(s.broad_phase_queries, 2 * 10);  // only the nodes inside the sphere's box (+ reach)
   EXPECT_EQ(s.narrow_phase_evaluations, 0);
-  for (int c : potential.candidates()) potential.evaluate(c, p.row(c).transpose(), nullptr, nullptr);
+  for (std::size_t c = 0; c < potential.candidates().size(); ++c)
+    potential.evaluate(static_cast<int>(c), p.row(potential.candidates()[c]).transpose(), nullptr, nullptr);
   EXPECT_EQ(potential.stats().narrow_phase_evaluations, 10);  // one obstacle each: not the far box
 
   // Everything far: idle, and only box tests ran.
@@ -145,6 +146,8 @@ TEST(ContactPotential, BroadPhaseDropsFarNodes) {
   end.row(20) << 0.0, 0.0, 0.12;
   EXPECT_TRUE(potential.begin_substep(0.02, 0.01, q, end));
   EXPECT_EQ(potential.candidates(), std::vector<int>{20});
+  // evaluate() takes the index into candidates(): candidate 0 is entry 20.
+  EXPECT_GT(potential.evaluate(0, {0.0, 0.0, 0.0995}, nullptr, nullptr), 0.0);
 }
 
 // A node 5 mm deep is rejected (tolerance 1 mm) and gets ×4 stiffness; after max_refinements the

@@ -78,7 +78,8 @@ class ContactPotential final : public fullspace::NodePotential {
   bool begin_substep(double t0, double dt, const meshing::RowMatrixX3d& p_start,
                      const meshing::RowMatrixX3d& p_skinned_end) override;
   const std::vector<int>& candidates() const override { return candidates_; }
-  double evaluate(int k, const Eigen::Vector3d& p, Eigen::Vector3d* gradient, Eigen::Matrix3d* hessian) const override;
+  /// u of candidate c (index into candidates(); the node is nodes()[candidates()[c]]) at posed p.
+  double evaluate(int c, const Eigen::Vector3d& p, Eigen::Vector3d* gradient, Eigen::Matrix3d* hessian) const override;
   bool accept_substep(const meshing::RowMatrixX3d& p_end) override;
   int max_refinements() const override { return parameters_.max_refinements; }
 
