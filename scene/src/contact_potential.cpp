@@ -12,15 +12,13 @@
 // matrix in the Frobenius norm) therefore keeps the exact Hessian wherever it is already PSD (concave
 // features, flat faces), and reduces to Gauss–Newton k g gᵀ at convex ones: the tangential softening of
 // a convex obstacle is what would make Newton's model non-convex.
-#include <sflsh/core/error.hpp>
-#include <sflsh/scene/contact_potential.hpp>
-
 #include <Eigen/Eigenvalues>
-
 #include <cassert>
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <sflsh/core/error.hpp>
+#include <sflsh/scene/contact_potential.hpp>
 
 namespace sflsh::scene {
 
@@ -28,9 +26,7 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
+double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
 }  // namespace
 
@@ -65,11 +61,13 @@ ContactPotential::ContactPotential(std::vector<int> nodes, std::vector<double> a
     : nodes_(std::move(nodes)), area_(std::move(areas)), obstacles_(std::move(obstacles)), parameters_(parameters) {
   parameters_.validate();
   for (std::size_t k = 0; k < nodes_.size(); ++k)
-    require(nodes_[k] >= 0 && (k == 0 || nodes_[k] > nodes_[k - 1]), "contact: node ids must be ascending and ≥ 0 (entry {})", k);
+    require(nodes_[k] >= 0 && (k == 0 || nodes_[k] > nodes_[k - 1]),
+            "contact: node ids must be ascending and ≥ 0 (entry {})", k);
   if (area_.empty()) area_.assign(nodes_.size(), parameters_.default_node_area);
   require(area_.size() == nodes_.size(), "contact: {} areas for {} nodes", area_.size(), nodes_.size());
   for (std::size_t k = 0; k < area_.size(); ++k)
-    require(std::isfinite(area_[k]) && area_[k] >= 0.0, "contact: area of entry {} must be ≥ 0 [m²] (got {})", k, area_[k]);
+    require(std::isfinite(area_[k]) && area_[k] >= 0.0, "contact: area of entry {} must be ≥ 0 [m²] (got {})", k,
+            area_[k]);
   require(obstacles_.size() <= 64, "contact: at most 64 obstacles (got {})", obstacles_.size());
   for (std::size_t j = 0; j < obstacles_.size(); ++j)
     require(obstacles_[j].shape != nullptr, "contact: obstacle {} has no shape", j);
@@ -131,7 +129,7 @@ bool ContactPotential::begin_substep(double t0, double dt, const meshing::RowMat
   for (std::size_t j = 0; j < obstacles_.size(); ++j) {
     const Obstacle& shape = *obstacles_[j].shape;
     const Aabb box = shape.bounds();
-    if (n == 0 || box.distance(cloud) > reach_max) continue;   // far away: costs one box test
+    if (n == 0 || box.distance(cloud) > reach_max) continue;  // far away: costs one box test
     const std::uint64_t bit = std::uint64_t{1} << j;
     for (Eigen::Index k = 0; k < n; ++k) {
       const Eigen::Vector3d ps = p_start.row(k).transpose(), pe = p_skinned_end.row(k).transpose();
@@ -146,7 +144,7 @@ bool ContactPotential::begin_substep(double t0, double dt, const meshing::RowMat
     if (mask_[k] != 0)
       candidates_.push_back(static_cast<int>(k));
     else
-      factor_[k] = 1.0;   // a node that left the contact zone starts again from the base stiffness
+      factor_[k] = 1.0;  // a node that left the contact zone starts again from the base stiffness
   }
   stats_.candidates += static_cast<std::int64_t>(candidates_.size());
   stats_.seconds += seconds_since(start);
@@ -157,7 +155,7 @@ double ContactPotential::evaluate_masked(int k, std::uint64_t mask, const Eigen:
                                          Eigen::Matrix3d* hessian) const {
   if (gradient) gradient->setZero();
   if (hessian) hessian->setZero();
-  if (!p.allFinite()) return std::numeric_limits<double>::quiet_NaN();   // let the solver see it
+  if (!p.allFinite()) return std::numeric_limits<double>::quiet_NaN();  // let the solver see it
   const double delta = parameters_.margin;
   const double stiffness = node_stiffness(k);
   double u = 0.0;
@@ -167,7 +165,7 @@ double ContactPotential::evaluate_masked(int k, std::uint64_t mask, const Eigen:
     ++evaluations;
     Eigen::Vector3d g;
     Eigen::Matrix3d H;
-    const double phi = obstacles_[j].shape->distance(p, gradient ? &g : nullptr, hessian ? &H : nullptr);
+    const double phi = obstacles_[j].shape->distance(p, (gradient || hessian) ? &g : nullptr, hessian ? &H : nullptr);
     const double s = delta - phi;
     if (!(s > 0.0)) continue;
     u += 0.5 * stiffness * s * s;
@@ -185,10 +183,12 @@ double ContactPotential::evaluate_masked(int k, std::uint64_t mask, const Eigen:
   return u;
 }
 
-double ContactPotential::evaluate(int k, const Eigen::Vector3d& p, Eigen::Vector3d* gradient,
+double ContactPotential::evaluate(int c, const Eigen::Vector3d& p, Eigen::Vector3d* gradient,
                                   Eigen::Matrix3d* hessian) const {
-  assert(k >= 0 && k < static_cast<int>(nodes_.size()));
+  // c indexes candidates() (as p_end of accept_substep does), the convention both integrators use.
+  assert(c >= 0 && c < static_cast<int>(candidates_.size()));
   const auto start = Clock::now();
+  const int k = candidates_[static_cast<std::size_t>(c)];
   const double u = evaluate_masked(k, mask_[static_cast<std::size_t>(k)], p, gradient, hessian);
   evaluate_nanoseconds_.fetch_add(std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - start).count(),
                                   std::memory_order_relaxed);
@@ -207,7 +207,8 @@ bool ContactPotential::accept_substep(const meshing::RowMatrixX3d& p_end) {
     const Eigen::Vector3d p = p_end.row(static_cast<Eigen::Index>(c)).transpose();
     for (std::size_t j = 0; j < obstacles_.size(); ++j)
       if (mask_[k] & (std::uint64_t{1} << j))
-        depth(static_cast<Eigen::Index>(c)) = std::max(depth(static_cast<Eigen::Index>(c)), -obstacles_[j].shape->distance(p));
+        depth(static_cast<Eigen::Index>(c)) =
+            std::max(depth(static_cast<Eigen::Index>(c)), -obstacles_[j].shape->distance(p));
     if (!(depth(static_cast<Eigen::Index>(c)) <= parameters_.tolerance)) too_deep.push_back(candidates_[c]);
   }
   if (!too_deep.empty() && substep_refinements_ < parameters_.max_refinements) {
@@ -215,7 +216,7 @@ bool ContactPotential::accept_substep(const meshing::RowMatrixX3d& p_end) {
     ++substep_refinements_;
     ++stats_.refinements;
     stats_.seconds += seconds_since(start);
-    return false;   // last_accepted_ stays false: the next begin_substep of this interval is a retry
+    return false;  // last_accepted_ stays false: the next begin_substep of this interval is a retry
   }
   if (!too_deep.empty()) ++stats_.unresolved;
 
@@ -233,8 +234,8 @@ bool ContactPotential::accept_substep(const meshing::RowMatrixX3d& p_end) {
       if (!(mask_[static_cast<std::size_t>(k)] & bit)) continue;
       Eigen::Vector3d gradient;
       evaluate_masked(k, bit, p, &gradient, nullptr);
-      force_.row(k) -= gradient.transpose();             // on the node: −∇u
-      obstacle_force_[j] += gradient;                    // on the obstacle: the reaction +∇u
+      force_.row(k) -= gradient.transpose();  // on the node: −∇u
+      obstacle_force_[j] += gradient;         // on the obstacle: the reaction +∇u
       obstacle_torque_[j] += (p - obstacles_[j].shape->pose().translation).cross(gradient);
     }
   }

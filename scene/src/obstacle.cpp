@@ -3,20 +3,18 @@
 // for φ = |q − c(q)| with c(q) the closest point of a convex feature, ∇φ = n = (q − c)/|q − c| and
 // ∇²φ = (∂c-free directions − n nᵀ)/|q − c|, i.e. (P − n nᵀ)/|q − c| with P the projector on the
 // directions in which c(q) does not move (all three at a point, the normal plane of a segment, …).
-#include <sflsh/core/error.hpp>
-#include <sflsh/scene/obstacle.hpp>
-
 #include <Eigen/Geometry>
-
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <sflsh/core/error.hpp>
+#include <sflsh/scene/obstacle.hpp>
 
 namespace sflsh::scene {
 
 namespace {
 
-constexpr double kTiny = 1e-12;   // [m] below this a distance counts as zero (the direction is undefined)
+constexpr double kTiny = 1e-12;  // [m] below this a distance counts as zero (the direction is undefined)
 
 }  // namespace
 
@@ -71,7 +69,7 @@ Surface Obstacle::surface(int n_segments) const {
 
 Surface revolve_profile(const std::vector<Eigen::Vector2d>& profile, int n_segments) {
   require(profile.size() >= 3 && n_segments >= 3, "revolve_profile: needs ≥ 3 profile points and ≥ 3 segments");
-  const int rings = static_cast<int>(profile.size()) - 2;   // without the two poles
+  const int rings = static_cast<int>(profile.size()) - 2;  // without the two poles
   const int n = n_segments;
   Surface s;
   s.vertices.resize(2 + rings * n, 3);
@@ -88,7 +86,7 @@ Surface revolve_profile(const std::vector<Eigen::Vector2d>& profile, int n_segme
   s.triangles.resize(2 * n + 2 * n * (rings - 1), 3);
   int f = 0;
   auto ring = [n](int j, int k) { return 1 + j * n + (k % n); };
-  for (int k = 0; k < n; ++k) s.triangles.row(f++) << 0, ring(0, k + 1), ring(0, k);   // bottom cap, facing −z
+  for (int k = 0; k < n; ++k) s.triangles.row(f++) << 0, ring(0, k + 1), ring(0, k);  // bottom cap, facing −z
   for (int j = 0; j + 1 < rings; ++j)
     for (int k = 0; k < n; ++k) {
       s.triangles.row(f++) << ring(j, k), ring(j, k + 1), ring(j + 1, k + 1);
@@ -133,7 +131,7 @@ Surface HalfSpace::local_surface(int /*n_segments*/) const {
   s.vertices.row(2) = (centre + h * u + h * v).transpose();
   s.vertices.row(3) = (centre - h * u + h * v).transpose();
   s.triangles.resize(2, 3);
-  s.triangles << 0, 1, 2, 0, 2, 3;   // (u × v) = n: counter-clockwise seen from outside
+  s.triangles << 0, 1, 2, 0, 2, 3;  // (u × v) = n: counter-clockwise seen from outside
   return s;
 }
 
@@ -145,7 +143,7 @@ Sphere::Sphere(double radius) : radius_(radius) {
 
 double Sphere::local_distance(const Eigen::Vector3d& q, Eigen::Vector3d* gradient, Eigen::Matrix3d* hessian) const {
   const double rho = q.norm();
-  if (rho < kTiny) {   // the centre: any direction; ∇²φ is unbounded, report 0
+  if (rho < kTiny) {  // the centre: any direction; ∇²φ is unbounded, report 0
     if (gradient) *gradient = Eigen::Vector3d::UnitZ();
     if (hessian) hessian->setZero();
     return -radius_;
@@ -183,7 +181,7 @@ Box::Box(const Eigen::Vector3d& half_extent) : half_extent_(half_extent) {
 
 double Box::local_distance(const Eigen::Vector3d& q, Eigen::Vector3d* gradient, Eigen::Matrix3d* hessian) const {
   const Eigen::Vector3d sign = q.unaryExpr([](double x) { return x >= 0.0 ? 1.0 : -1.0; });
-  const Eigen::Vector3d r = q.cwiseAbs() - half_extent_;   // per-axis distance outside the slab
+  const Eigen::Vector3d r = q.cwiseAbs() - half_extent_;  // per-axis distance outside the slab
   if (r.maxCoeff() > 0.0) {
     // Outside: the closest point clamps the outside axes; φ = |max(r, 0)|.
     const Eigen::Vector3d d = r.cwiseMax(0.0);
@@ -219,12 +217,12 @@ Surface Box::local_surface(int /*n_segments*/) const {
         ((c & 4) ? 1 : -1) * half_extent_.z();
   // Corner c has bits (x, y, z); each face as two counter-clockwise triangles seen from outside.
   s.triangles.resize(12, 3);
-  s.triangles << 0, 2, 3, 0, 3, 1,   // −z
-      4, 5, 7, 4, 7, 6,              // +z
-      0, 1, 5, 0, 5, 4,              // −y
-      2, 6, 7, 2, 7, 3,              // +y
-      0, 4, 6, 0, 6, 2,              // −x
-      1, 3, 7, 1, 7, 5;              // +x
+  s.triangles << 0, 2, 3, 0, 3, 1,  // −z
+      4, 5, 7, 4, 7, 6,             // +z
+      0, 1, 5, 0, 5, 4,             // −y
+      2, 6, 7, 2, 7, 3,             // +y
+      0, 4, 6, 0, 6, 2,             // −x
+      1, 3, 7, 1, 7, 5;             // +x
   return s;
 }
 
@@ -239,7 +237,7 @@ double Capsule::local_distance(const Eigen::Vector3d& q, Eigen::Vector3d* gradie
   const double zc = std::clamp(q.z(), -half_length_, half_length_);
   const Eigen::Vector3d v = q - Eigen::Vector3d(0.0, 0.0, zc);
   const double rho = v.norm();
-  if (rho < kTiny) {   // on the segment
+  if (rho < kTiny) {  // on the segment
     if (gradient) *gradient = Eigen::Vector3d::UnitX();
     if (hessian) hessian->setZero();
     return -radius_;
@@ -248,7 +246,7 @@ double Capsule::local_distance(const Eigen::Vector3d& q, Eigen::Vector3d* gradie
   if (gradient) *gradient = n;
   if (hessian) {
     Eigen::Matrix3d P = Eigen::Matrix3d::Identity();
-    if (std::abs(q.z()) < half_length_) P(2, 2) = 0.0;   // beside the segment c(q) slides along z
+    if (std::abs(q.z()) < half_length_) P(2, 2) = 0.0;  // beside the segment c(q) slides along z
     *hessian = (P - n * n.transpose()) / rho;
   }
   return rho - radius_;
@@ -262,7 +260,7 @@ Aabb Capsule::local_bounds() const {
 }
 
 Surface Capsule::local_surface(int n_segments) const {
-  const int m = std::max(1, n_segments / 4);   // latitude steps per hemisphere
+  const int m = std::max(1, n_segments / 4);  // latitude steps per hemisphere
   std::vector<Eigen::Vector2d> profile;
   for (int j = 0; j <= m; ++j) {
     const double theta = 0.5 * std::numbers::pi * j / m;

@@ -1,8 +1,7 @@
-#include <sflsh/core/error.hpp>
-#include <sflsh/scene/rigid_motion.hpp>
-
 #include <algorithm>
 #include <cmath>
+#include <sflsh/core/error.hpp>
+#include <sflsh/scene/rigid_motion.hpp>
 #include <utility>
 
 namespace sflsh::scene {
@@ -31,7 +30,8 @@ std::pair<int, double> locate(const std::vector<Keyframe>& keys, double t) {
   if (t >= keys.back().t) return {n - 1, 0.0};
   const auto it = std::upper_bound(keys.begin(), keys.end(), t, [](double v, const Keyframe& k) { return v < k.t; });
   const int i = static_cast<int>(it - keys.begin()) - 1;
-  return {i, (t - keys[static_cast<std::size_t>(i)].t) / (keys[static_cast<std::size_t>(i) + 1].t - keys[static_cast<std::size_t>(i)].t)};
+  return {i, (t - keys[static_cast<std::size_t>(i)].t) /
+                 (keys[static_cast<std::size_t>(i) + 1].t - keys[static_cast<std::size_t>(i)].t)};
 }
 
 }  // namespace
@@ -97,9 +97,7 @@ FreeMotion::FreeMotion(double mass, const Eigen::Vector3d& gravity, const Pose& 
           "free motion: gravity, velocity, position and t0 must be finite");
 }
 
-Eigen::Vector3d FreeMotion::predicted_velocity(double dt) const {
-  return velocity_ + dt * (gravity_ + force_ / mass_);
-}
+Eigen::Vector3d FreeMotion::predicted_velocity(double dt) const { return velocity_ + dt * (gravity_ + force_ / mass_); }
 
 Pose FreeMotion::pose(double t) const {
   // Idempotent: a substep solved again (refinement) asks for the same pose.
@@ -113,11 +111,11 @@ void FreeMotion::commit(double t, const Eigen::Vector3d& force) {
   require(force.allFinite(), "free motion: non-finite contact force at t = {}", t);
   const double dt = t - t_;
   if (dt > 0.0) {
-    velocity_ = predicted_velocity(dt);        // v_{n+1} = v_n + dt (g + F_n/m)
-    pose_.translation += dt * velocity_;       // x_{n+1} = x_n + dt v_{n+1}
+    velocity_ = predicted_velocity(dt);   // v_{n+1} = v_n + dt (g + F_n/m)
+    pose_.translation += dt * velocity_;  // x_{n+1} = x_n + dt v_{n+1}
     t_ = t;
   }
-  force_ = force;                              // F_{n+1}, used by the next step
+  force_ = force;  // F_{n+1}, used by the next step
 }
 
 }  // namespace sflsh::scene

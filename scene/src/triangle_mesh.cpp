@@ -4,14 +4,10 @@
 // mesh, sign((q − c)·N) is the inside/outside sign when N is the face normal (face region), the sum of
 // the two face normals (edge region) or Σ_f α_f n_f with α_f the angle of face f at the vertex (vertex).
 // Files are read with VTK's readers (IOGeometry: .obj/.stl, IOPLY: .ply).
-#include <sflsh/core/error.hpp>
-#include <sflsh/scene/obstacle.hpp>
-
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
 #include <CGAL/AABB_triangle_primitive.h>
 #include <CGAL/Simple_cartesian.h>
-
 #include <vtkCellArray.h>
 #include <vtkCleanPolyData.h>
 #include <vtkIdList.h>
@@ -25,10 +21,11 @@
 #include <vtkTriangleFilter.h>
 
 #include <Eigen/Geometry>
-
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <sflsh/core/error.hpp>
+#include <sflsh/scene/obstacle.hpp>
 #include <unordered_map>
 
 namespace sflsh::scene {
@@ -134,7 +131,8 @@ void TriangleMesh::rebuild() {
   bounds_ = Aabb{};
   for (Eigen::Index v = 0; v < vertices_.rows(); ++v) bounds_.extend(vertices_.row(v).transpose());
   for (Eigen::Index f = 0; f < triangles_.rows(); ++f) {
-    const Eigen::Vector3d x[3] = {vertices_.row(triangles_(f, 0)).transpose(), vertices_.row(triangles_(f, 1)).transpose(),
+    const Eigen::Vector3d x[3] = {vertices_.row(triangles_(f, 0)).transpose(),
+                                  vertices_.row(triangles_(f, 1)).transpose(),
                                   vertices_.row(triangles_(f, 2)).transpose()};
     const Eigen::Vector3d cross = (x[1] - x[0]).cross(x[2] - x[0]);
     const double twice_area = cross.norm();
@@ -143,7 +141,7 @@ void TriangleMesh::rebuild() {
     for (int k = 0; k < 3; ++k) {
       edge_normal_[static_cast<std::size_t>(triangle_edges_(f, k))] += n;
       const Eigen::Vector3d e1 = x[(k + 1) % 3] - x[k], e2 = x[(k + 2) % 3] - x[k];
-      const double angle = std::atan2(e1.cross(e2).norm(), e1.dot(e2));   // interior angle at corner k
+      const double angle = std::atan2(e1.cross(e2).norm(), e1.dot(e2));  // interior angle at corner k
       vertex_normal_[static_cast<std::size_t>(triangles_(f, k))] += angle * n;
     }
     tree_->triangles[static_cast<std::size_t>(f)] = CgalTriangle(to_cgal(x[0]), to_cgal(x[1]), to_cgal(x[2]));
@@ -155,7 +153,8 @@ void TriangleMesh::rebuild() {
   tree_->tree.accelerate_distance_queries();
 }
 
-double TriangleMesh::local_distance(const Eigen::Vector3d& q, Eigen::Vector3d* gradient, Eigen::Matrix3d* hessian) const {
+double TriangleMesh::local_distance(const Eigen::Vector3d& q, Eigen::Vector3d* gradient,
+                                    Eigen::Matrix3d* hessian) const {
   const auto hit = tree_->tree.closest_point_and_primitive(to_cgal(q));
   const auto f = static_cast<Eigen::Index>(hit.second - tree_->triangles.cbegin());
   const Eigen::Vector3d a = vertices_.row(triangles_(f, 0)).transpose();
@@ -165,7 +164,9 @@ double TriangleMesh::local_distance(const Eigen::Vector3d& q, Eigen::Vector3d* g
   Eigen::Vector3d pseudonormal;
   Eigen::Vector3d edge_direction = Eigen::Vector3d::Zero();
   switch (feature.kind) {
-    case TriangleFeature::face: pseudonormal = face_normal_[static_cast<std::size_t>(f)]; break;
+    case TriangleFeature::face:
+      pseudonormal = face_normal_[static_cast<std::size_t>(f)];
+      break;
     case TriangleFeature::edge: {
       pseudonormal = edge_normal_[static_cast<std::size_t>(triangle_edges_(f, feature.index))];
       const int i = triangles_(f, feature.index), j = triangles_(f, (feature.index + 1) % 3);
@@ -178,7 +179,7 @@ double TriangleMesh::local_distance(const Eigen::Vector3d& q, Eigen::Vector3d* g
   }
   const Eigen::Vector3d v = q - feature.point;
   const double d = v.norm();
-  if (d < 1e-12) {   // on the surface: ∇φ is the pseudonormal direction, the curvature is not defined
+  if (d < 1e-12) {  // on the surface: ∇φ is the pseudonormal direction, the curvature is not defined
     if (gradient) *gradient = pseudonormal.normalized();
     if (hessian) hessian->setZero();
     return 0.0;
@@ -192,12 +193,16 @@ double TriangleMesh::local_distance(const Eigen::Vector3d& q, Eigen::Vector3d* g
     // the shared edge of two coplanar triangles) takes the face's one-sided value 0.
     const bool on_face_region = std::abs(n.dot(face_normal_[static_cast<std::size_t>(f)])) > 1.0 - 1e-12;
     switch (on_face_region ? TriangleFeature::face : feature.kind) {
-      case TriangleFeature::face: hessian->setZero(); break;
-      case TriangleFeature::edge:
-        *hessian = sign / d *
-                   (Eigen::Matrix3d::Identity() - n * n.transpose() - edge_direction * edge_direction.transpose());
+      case TriangleFeature::face:
+        hessian->setZero();
         break;
-      case TriangleFeature::vertex: *hessian = sign / d * (Eigen::Matrix3d::Identity() - n * n.transpose()); break;
+      case TriangleFeature::edge:
+        *hessian =
+            sign / d * (Eigen::Matrix3d::Identity() - n * n.transpose() - edge_direction * edge_direction.transpose());
+        break;
+      case TriangleFeature::vertex:
+        *hessian = sign / d * (Eigen::Matrix3d::Identity() - n * n.transpose());
+        break;
     }
   }
   return sign * d;
@@ -209,7 +214,8 @@ std::unique_ptr<TriangleMesh> TriangleMesh::load(const std::filesystem::path& pa
   require(std::isfinite(scale) && scale > 0.0, "{}: mesh scale must be positive (got {})", path.string(), scale);
   require(std::filesystem::is_regular_file(path), "{}: mesh file not found", path.string());
   std::string ext = path.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char ch) { return static_cast<char>(std::tolower(ch)); });
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char ch) { return static_cast<char>(std::tolower(ch)); });
   vtkSmartPointer<vtkPolyDataAlgorithm> reader;
   if (ext == ".obj") {
     auto r = vtkSmartPointer<vtkOBJReader>::New();
@@ -226,11 +232,11 @@ std::unique_ptr<TriangleMesh> TriangleMesh::load(const std::filesystem::path& pa
   } else {
     throw_error("{}: unsupported mesh format '{}' (expected .obj, .stl or .ply)", path.string(), ext);
   }
-  vtkNew<vtkTriangleFilter> triangulate;   // polygons → triangles
+  vtkNew<vtkTriangleFilter> triangulate;  // polygons → triangles
   triangulate->SetInputConnection(reader->GetOutputPort());
   triangulate->PassLinesOff();
   triangulate->PassVertsOff();
-  vtkNew<vtkCleanPolyData> clean;          // merge coincident points (STL stores each triangle's own)
+  vtkNew<vtkCleanPolyData> clean;  // merge coincident points (STL stores each triangle's own)
   clean->SetInputConnection(triangulate->GetOutputPort());
   clean->PointMergingOn();
   clean->SetTolerance(0.0);
@@ -251,7 +257,8 @@ std::unique_ptr<TriangleMesh> TriangleMesh::load(const std::filesystem::path& pa
   Eigen::Index f = 0;
   while (polys->GetNextCell(ids)) {
     if (ids->GetNumberOfIds() != 3) continue;
-    triangles.row(f++) << static_cast<int>(ids->GetId(0)), static_cast<int>(ids->GetId(1)), static_cast<int>(ids->GetId(2));
+    triangles.row(f++) << static_cast<int>(ids->GetId(0)), static_cast<int>(ids->GetId(1)),
+        static_cast<int>(ids->GetId(2));
   }
   triangles.conservativeResize(f, 3);
   require(f > 0, "{}: no triangles could be read", path.string());
@@ -259,8 +266,7 @@ std::unique_ptr<TriangleMesh> TriangleMesh::load(const std::filesystem::path& pa
 
   // A closed mesh stored inward (negative enclosed volume) is flipped so that φ < 0 inside.
   double volume = 0.0;
-  for (Eigen::Index t = 0; t < f; ++t)
-    {
+  for (Eigen::Index t = 0; t < f; ++t) {
     const Eigen::Vector3d a = vertices.row(triangles(t, 0)).transpose(), b = vertices.row(triangles(t, 1)).transpose(),
                           c = vertices.row(triangles(t, 2)).transpose();
     volume += a.dot(b.cross(c)) / 6.0;

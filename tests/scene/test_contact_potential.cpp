@@ -1,16 +1,14 @@
 // The contact penalty: derivatives, PSD Hessian, broad phase, refinement, a 1-dof Newton toy and a
 // free object resting on nodes.
-#include "scene_test_support.hpp"
-
-#include <sflsh/core/error.hpp>
-#include <sflsh/scene/contact_potential.hpp>
-
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
-
 #include <memory>
+#include <sflsh/core/error.hpp>
+#include <sflsh/scene/contact_potential.hpp>
+
+#include "scene_test_support.hpp"
 
 namespace sflsh::scene {
 namespace {
@@ -50,7 +48,8 @@ void expect_potential_derivatives(const std::shared_ptr<Obstacle>& shape, const 
     const double u = potential.evaluate(0, p, &g, &H);
     ASSERT_GT(u, 0.0) << p.transpose();
     const double h = 1e-7;
-    const Eigen::Vector3d g_fd = central_gradient([&](const Eigen::Vector3d& x) { return potential.evaluate(0, x, nullptr, nullptr); }, p, h);
+    const Eigen::Vector3d g_fd =
+        central_gradient([&](const Eigen::Vector3d& x) { return potential.evaluate(0, x, nullptr, nullptr); }, p, h);
     const Eigen::Matrix3d H_fd = central_jacobian(
         [&](const Eigen::Vector3d& x) {
           Eigen::Vector3d gx;
@@ -73,12 +72,12 @@ TEST(ContactPotential, GradientAndHessianMatchFiniteDifferences) {
                                         sphere->pose().to_world(Eigen::Vector3d(1, 1, 1).normalized() * 0.095)});
   auto box = std::make_shared<Box>(Eigen::Vector3d(0.1, 0.05, 0.08));
   box->set_pose(tilted_pose());
-  expect_potential_derivatives(box, {box->pose().to_world({0.1006, 0.0, 0.0804}),      // edge region, outside
-                                     box->pose().to_world({0.02, 0.047, 0.0})});        // inside
+  expect_potential_derivatives(box, {box->pose().to_world({0.1006, 0.0, 0.0804}),  // edge region, outside
+                                     box->pose().to_world({0.02, 0.047, 0.0})});   // inside
   auto capsule = std::make_shared<Capsule>(0.05, 0.1);
   capsule->set_pose(tilted_pose());
-  expect_potential_derivatives(capsule, {capsule->pose().to_world({0.0498, 0.0, 0.02}),
-                                         capsule->pose().to_world({0.0, 0.0, 0.1499})});
+  expect_potential_derivatives(
+      capsule, {capsule->pose().to_world({0.0498, 0.0, 0.02}), capsule->pose().to_world({0.0, 0.0, 0.1499})});
 }
 
 // With projection on the Hessian is PSD; at a convex obstacle it is the Gauss–Newton k ∇φ∇φᵀ, at a
@@ -101,7 +100,7 @@ TEST(ContactPotential, ProjectedHessianIsPsdAndGaussNewtonOnConvexShapes) {
     const double phi = p.row(k).norm() - 0.1;
     EXPECT_LT((-g - stiffness * (1e-3 - phi) * n).norm(), 1e-12 * stiffness);
   }
-  EXPECT_EQ(potential.evaluate(0, {0.0, 0.0, 0.2}, nullptr, nullptr), 0.0);   // beyond δ: nothing
+  EXPECT_EQ(potential.evaluate(0, {0.0, 0.0, 0.2}, nullptr, nullptr), 0.0);  // beyond δ: nothing
 }
 
 // Far nodes are dropped by the broad phase and cost no narrow-phase work; an obstacle far from every
@@ -128,10 +127,11 @@ TEST(ContactPotential, BroadPhaseDropsFarNodes) {
   ContactStats s = potential.stats();
   EXPECT_EQ(s.broad_phase_passes, 1);
   EXPECT_EQ(s.candidates, 10);
-  EXPECT_EQ(s.broad_phase_queries, 2 * 10);   // only the nodes inside the sphere's box (+ reach)
+  EXPECT_EQ(s.broad_phase_queries, 2 * 10);  // only the nodes inside the sphere's box (+ reach)
   EXPECT_EQ(s.narrow_phase_evaluations, 0);
-  for (int c : potential.candidates()) potential.evaluate(c, p.row(c).transpose(), nullptr, nullptr);
-  EXPECT_EQ(potential.stats().narrow_phase_evaluations, 10);   // one obstacle each: not the far box
+  for (std::size_t c = 0; c < potential.candidates().size(); ++c)
+    potential.evaluate(static_cast<int>(c), p.row(potential.candidates()[c]).transpose(), nullptr, nullptr);
+  EXPECT_EQ(potential.stats().narrow_phase_evaluations, 10);  // one obstacle each: not the far box
 
   // Everything far: idle, and only box tests ran.
   RowMatrixX3d q = p.array() + 10.0;
@@ -146,6 +146,8 @@ TEST(ContactPotential, BroadPhaseDropsFarNodes) {
   end.row(20) << 0.0, 0.0, 0.12;
   EXPECT_TRUE(potential.begin_substep(0.02, 0.01, q, end));
   EXPECT_EQ(potential.candidates(), std::vector<int>{20});
+  // evaluate() takes the index into candidates(): candidate 0 is entry 20.
+  EXPECT_GT(potential.evaluate(0, {0.0, 0.0, 0.0995}, nullptr, nullptr), 0.0);
 }
 
 // A node 5 mm deep is rejected (tolerance 1 mm) and gets ×4 stiffness; after max_refinements the
@@ -161,12 +163,12 @@ TEST(ContactPotential, AcceptRejectsTooDeepNodesAndRaisesStiffness) {
   ASSERT_EQ(potential.candidates().size(), 2u);
   EXPECT_FALSE(potential.accept_substep(p));
   EXPECT_DOUBLE_EQ(potential.node_stiffness(0), 4.0 * k0);
-  EXPECT_DOUBLE_EQ(potential.node_stiffness(1), k0);   // within tolerance: unchanged
+  EXPECT_DOUBLE_EQ(potential.node_stiffness(1), k0);  // within tolerance: unchanged
   EXPECT_EQ(potential.stats().refinements, 1);
-  ASSERT_TRUE(potential.begin_substep(0.0, 0.01, p, p));   // the retry keeps the raised stiffness
+  ASSERT_TRUE(potential.begin_substep(0.0, 0.01, p, p));  // the retry keeps the raised stiffness
   EXPECT_DOUBLE_EQ(potential.node_stiffness(0), 4.0 * k0);
   EXPECT_FALSE(potential.accept_substep(p));
-  EXPECT_TRUE(potential.accept_substep(p));   // max_refinements reached: accepted, unresolved
+  EXPECT_TRUE(potential.accept_substep(p));  // max_refinements reached: accepted, unresolved
   const ContactStats s = potential.stats();
   EXPECT_EQ(s.refinements, 2);
   EXPECT_EQ(s.unresolved, 1);
@@ -219,7 +221,7 @@ TEST(ContactPotential, SpringPressedByAPlaneConvergesBelowTolerance) {
         const double e = energy(z, &g, &H);
         const Eigen::Vector3d dz = -H.ldlt().solve(g);
         if (dz.norm() < 1e-13) break;
-        double alpha = 1.0;   // backtracking on Φ (u is only C¹)
+        double alpha = 1.0;  // backtracking on Φ (u is only C¹)
         while (alpha > 1e-8 && energy(z + alpha * dz, nullptr, nullptr) > e + 1e-4 * alpha * g.dot(dz)) alpha *= 0.5;
         z += alpha * dz;
       }
@@ -236,12 +238,12 @@ TEST(ContactPotential, SpringPressedByAPlaneConvergesBelowTolerance) {
   EXPECT_EQ(s.unresolved, 0);
   EXPECT_LE(potential.penetration()(0), potential.parameters().tolerance);
   const double s_end = -0.01, delta = potential.parameters().margin;
-  EXPECT_LE(x.z() - s_end, potential.parameters().tolerance);   // penetration, measured directly
+  EXPECT_LE(x.z() - s_end, potential.parameters().tolerance);  // penetration, measured directly
   const double k = potential.node_stiffness(0);
   // After 5 held steps the backward-Euler transient (factor (m/dt²)/(m/dt² + k + k_s) ≲ 1e-3 per step)
   // is gone: the analytic equilibrium to 1e-9 m.
   EXPECT_NEAR(x.z(), k * (s_end - delta) / (k + k_spring), 1e-9);
-  EXPECT_NEAR(potential.contact_force()(0, 2), k_spring * x.z(), 1e-6);   // it balances the spring −k_s z
+  EXPECT_NEAR(potential.contact_force()(0, 2), k_spring * x.z(), 1e-6);  // it balances the spring −k_s z
 }
 
 // A free 1 kg sphere released touching nine fixed nodes (a loose tolerance: no refinement, so the
@@ -253,7 +255,7 @@ TEST(ContactPotential, FreeObjectRestsOnNodes) {
   const double mass = 1.0, radius = 0.05, dt = 1e-3;
   auto sphere = std::make_shared<Sphere>(radius);
   Pose start;
-  start.translation = {0.0, 0.0, radius + 1e-3};   // the centre node at φ = δ
+  start.translation = {0.0, 0.0, radius + 1e-3};  // the centre node at φ = δ
   auto motion = std::make_shared<FreeMotion>(mass, gravity, start, Eigen::Vector3d::Zero());
   RowMatrixX3d p(9, 3);
   for (int i = 0; i < 9; ++i) p.row(i) << 0.01 * (i % 3 - 1), 0.01 * (i / 3 - 1), 0.0;
@@ -266,7 +268,8 @@ TEST(ContactPotential, FreeObjectRestsOnNodes) {
   for (int n = 0; n < 1500; ++n) {
     if (potential.begin_substep(n * dt, dt, p, p)) {
       RowMatrixX3d pc(static_cast<Eigen::Index>(potential.candidates().size()), 3);
-      for (std::size_t c = 0; c < potential.candidates().size(); ++c) pc.row(static_cast<Eigen::Index>(c)) = p.row(potential.candidates()[c]);
+      for (std::size_t c = 0; c < potential.candidates().size(); ++c)
+        pc.row(static_cast<Eigen::Index>(c)) = p.row(potential.candidates()[c]);
       while (!potential.accept_substep(pc)) {
       }
     }
@@ -282,7 +285,33 @@ TEST(ContactPotential, FreeObjectRestsOnNodes) {
   EXPECT_NEAR(mean_force.z(), mass * 9.81, 0.1 * mass * 9.81);
   EXPECT_GT(lowest, radius - 0.004);
   EXPECT_EQ(potential.stats().refinements, 0);
-  EXPECT_LT(motion->position().z(), radius + 1e-3);   // still in contact
+  EXPECT_LT(motion->position().z(), radius + 1e-3);  // still in contact
+}
+
+// At a concave feature the curvature term is PSD already: the projection must leave the exact Hessian.
+// (Hessians are asked for without gradients here, as an integrator may.)
+// A box mesh turned inside out (the obstacle is everything outside the box) has concave edges; a node
+// 0.5 mm beyond one of them is 0.5 mm deep.
+TEST(ContactPotential, ProjectionKeepsTheExactHessianAtConcaveFeatures) {
+  Surface s = Box(Eigen::Vector3d(0.1, 0.1, 0.1)).local_surface(4);
+  s.triangles.col(1).swap(s.triangles.col(2));
+  auto room = std::make_shared<TriangleMesh>(s.vertices, s.triangles);
+  const Eigen::Vector3d p(0.1 + 0.0003, 0.02, 0.1 + 0.0004);  // edge region of the +x/+z edge
+  ASSERT_NEAR(room->distance(p), -0.0005, 1e-15);
+  ContactParameters exact;
+  exact.project_hessian = false;
+  ContactPotential projected({0}, {}, {{room, nullptr}}), unprojected({0}, {}, {{room, nullptr}}, exact);
+  ASSERT_TRUE(projected.begin_substep(0.0, 0.01, rows({p}), rows({p})));
+  ASSERT_TRUE(unprojected.begin_substep(0.0, 0.01, rows({p}), rows({p})));
+  Eigen::Matrix3d H, H_exact;
+  projected.evaluate(0, p, nullptr, &H);
+  unprojected.evaluate(0, p, nullptr, &H_exact);
+  EXPECT_LT((H - H_exact).norm(), 1e-9 * H_exact.norm()) << H << "\nexact\n" << H_exact;
+  // … and the curvature part is really there: more than Gauss–Newton in the bending direction.
+  const Eigen::Vector3d n = Eigen::Vector3d(0.0003, 0.0, 0.0004).normalized();
+  const Eigen::Vector3d bend = Eigen::Vector3d(0.0004, 0.0, -0.0003).normalized();
+  EXPECT_NEAR(n.dot(H * n), projected.node_stiffness(0), 1e-9 * H.norm());
+  EXPECT_GT(bend.dot(H * bend), 0.1 * projected.node_stiffness(0));
 }
 
 TEST(ContactPotential, LumpedVertexAreasSumToTheSurfaceArea) {

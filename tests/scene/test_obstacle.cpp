@@ -1,21 +1,20 @@
 // Signed distances of the obstacle shapes: derivatives by finite differences in each geometric regime,
 // signs, surfaces, the mesh obstacle against the analytic shapes, vertex updates and mesh files.
-#include "scene_test_support.hpp"
-#include "scratch_dir.hpp"
-
-#include <sflsh/core/error.hpp>
-#include <sflsh/scene/obstacle.hpp>
-
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
-
 #include <chrono>
 #include <fstream>
 #include <iostream>
 #include <memory>
 #include <numbers>
 #include <random>
+#include <sflsh/core/error.hpp>
+#include <sflsh/scene/obstacle.hpp>
+#include <thread>
+
+#include "scene_test_support.hpp"
+#include "scratch_dir.hpp"
 
 namespace sflsh::scene {
 namespace {
@@ -50,8 +49,8 @@ void expect_derivatives(const Obstacle& shape, const std::vector<Eigen::Vector3d
         p);
     EXPECT_LT(relative_error(g, g_fd), 1e-6) << "gradient at local " << q.transpose();
     EXPECT_LT(relative_error(H, H_fd), 1e-6) << "Hessian at local " << q.transpose() << "\n" << H << "\nfd\n" << H_fd;
-    EXPECT_NEAR(g.norm(), 1.0, 1e-12);                    // a distance has |∇φ| = 1
-    EXPECT_LT((H * g).norm(), 1e-9 * (1.0 + H.norm()));   // and ∇²φ ∇φ = 0
+    EXPECT_NEAR(g.norm(), 1.0, 1e-12);                   // a distance has |∇φ| = 1
+    EXPECT_LT((H * g).norm(), 1e-9 * (1.0 + H.norm()));  // and ∇²φ ∇φ = 0
     EXPECT_LT((H - H.transpose()).norm(), 1e-12);
   }
 }
@@ -75,11 +74,11 @@ TEST(ObstacleDerivatives, BoxInEveryRegion) {
   Box box(Eigen::Vector3d(0.3, 0.2, 0.1));
   box.set_pose(tilted_pose());
   expect_derivatives(box, {
-                              {0.1, 0.05, 0.4},     // face region (+z)
-                              {0.5, 0.05, -0.3},    // edge region (x, z outside)
-                              {-0.45, 0.35, 0.3},   // corner region
-                              {0.1, 0.02, 0.03},    // inside, nearest face +z
-                              {-0.25, 0.0, 0.0},    // inside, nearest face −x
+                              {0.1, 0.05, 0.4},    // face region (+z)
+                              {0.5, 0.05, -0.3},   // edge region (x, z outside)
+                              {-0.45, 0.35, 0.3},  // corner region
+                              {0.1, 0.02, 0.03},   // inside, nearest face +z
+                              {-0.25, 0.0, 0.0},   // inside, nearest face −x
                           });
   EXPECT_NEAR(box.distance(box.pose().to_world({0.0, 0.0, 0.0})), -0.1, 1e-14);
   EXPECT_NEAR(box.distance(box.pose().to_world({0.6, 0.6, 0.1})), 0.5, 1e-14);
@@ -89,10 +88,10 @@ TEST(ObstacleDerivatives, CapsuleSideCapsAndInside) {
   Capsule capsule(0.1, 0.25);
   capsule.set_pose(tilted_pose());
   expect_derivatives(capsule, {
-                                  {0.2, 0.1, 0.1},     // beside the segment
-                                  {0.1, -0.1, 0.45},   // beyond +z end
-                                  {0.0, 0.05, -0.4},   // beyond −z end
-                                  {0.06, 0.0, 0.0},    // inside, beside the segment
+                                  {0.2, 0.1, 0.1},    // beside the segment
+                                  {0.1, -0.1, 0.45},  // beyond +z end
+                                  {0.0, 0.05, -0.4},  // beyond −z end
+                                  {0.06, 0.0, 0.0},   // inside, beside the segment
                               });
   EXPECT_NEAR(capsule.distance(capsule.pose().to_world({0.0, 0.3, 0.1})), 0.2, 1e-14);
   EXPECT_NEAR(capsule.distance(capsule.pose().to_world({0.0, 0.0, 0.55})), 0.2, 1e-14);
@@ -105,8 +104,8 @@ TEST(ObstacleDerivatives, TriangleMeshMatchesBoxInEveryRegion) {
   const Surface s = box.local_surface(4);
   TriangleMesh mesh(s.vertices, s.triangles);
   EXPECT_TRUE(mesh.closed());
-  const std::vector<Eigen::Vector3d> points = {
-      {0.1, 0.05, 0.4}, {0.5, 0.05, -0.3}, {-0.45, 0.35, 0.3}, {0.1, 0.02, 0.03}, {-0.25, 0.0, 0.0}, {0.25, -0.15, 0.06}};
+  const std::vector<Eigen::Vector3d> points = {{0.1, 0.05, 0.4},  {0.5, 0.05, -0.3}, {-0.45, 0.35, 0.3},
+                                               {0.1, 0.02, 0.03}, {-0.25, 0.0, 0.0}, {0.25, -0.15, 0.06}};
   for (const auto& q : points) EXPECT_NEAR(mesh.distance(q), box.distance(q), 1e-12) << q.transpose();
   mesh.set_pose(tilted_pose());
   expect_derivatives(mesh, points);
@@ -130,7 +129,7 @@ TEST(ObstacleSurface, ShapesGiveClosedOutwardSurfacesOnTheirZeroSet) {
                             c = s.vertices.row(s.triangles(f, 2));
       volume += a.dot(b.cross(c)) / 6.0;
     }
-    EXPECT_GT(volume, 0.0);   // outward orientation
+    EXPECT_GT(volume, 0.0);  // outward orientation
     for (Eigen::Index v = 0; v < s.vertices.rows(); ++v) EXPECT_NEAR(shape->distance(s.vertices.row(v)), 0.0, 1e-12);
     // The world box holds the surface.
     const Aabb box = shape->bounds();
@@ -182,26 +181,26 @@ TEST(ObstacleMesh, TriangulatedSphereAgreesWithTheAnalyticSphere) {
     }
   }
   EXPECT_LE(worst, sagitta * (1.0 + 1e-9));
-  EXPECT_GT(worst, 0.1 * sagitta);   // the test sees the discretisation at all
+  EXPECT_GT(worst, 0.1 * sagitta);  // the test sees the discretisation at all
 }
 
 TEST(ObstacleMesh, UpdatingVerticesMovesTheDistance) {
   const Surface s = Sphere(0.1).local_surface(32);
   TriangleMesh mesh(s.vertices, s.triangles);
-  const Eigen::Vector3d q(0.0, 0.0, 0.3);   // above the north pole (a vertex): exact distance 0.2
+  const Eigen::Vector3d q(0.0, 0.0, 0.3);  // above the north pole (a vertex): exact distance 0.2
   EXPECT_NEAR(mesh.distance(q), 0.2, 1e-12);
   RowMatrixX3d moved = s.vertices;
-  moved.col(2).array() += 0.05;             // lift the whole surface by 5 cm
+  moved.col(2).array() += 0.05;  // lift the whole surface by 5 cm
   mesh.set_vertices(moved);
   EXPECT_NEAR(mesh.distance(q), 0.15, 1e-12);
   EXPECT_NEAR(mesh.local_bounds().upper.z(), 0.15, 1e-12);
-  EXPECT_LT(mesh.distance({0.0, 0.0, 0.12}), 0.0);   // inside only after the move
+  EXPECT_LT(mesh.distance({0.0, 0.0, 0.12}), 0.0);  // inside only after the move
   EXPECT_THROW(mesh.set_vertices(moved.topRows(10)), Error);
 }
 
 // The cost of following another body's posed skin: a ~14k-triangle surface refitted per step.
 TEST(ObstacleMesh, RebuildCostOfASkinSizedMesh) {
-  const Surface s = Sphere(0.3).local_surface(120);   // 14160 triangles, 7082 vertices
+  const Surface s = Sphere(0.3).local_surface(120);  // 14160 triangles, 7082 vertices
   ASSERT_EQ(s.triangles.rows(), 14160);
   TriangleMesh mesh(s.vertices, s.triangles);
   RowMatrixX3d moved = s.vertices;
@@ -231,14 +230,35 @@ TEST(ObstacleMesh, RebuildCostOfASkinSizedMesh) {
             << 1e6 * query << " us (checksum " << sum << ")\n";
   RecordProperty("rebuild_ms", std::to_string(1e3 * rebuild));
   RecordProperty("query_us", std::to_string(1e6 * query));
-  EXPECT_LT(rebuild, 0.5);   // generous: a refit must stay far below a frame's budget even on a busy CI
+  EXPECT_LT(rebuild, 0.5);  // generous: a refit must stay far below a frame's budget even on a busy CI
+}
+
+// Integrators evaluate the potential from several threads: concurrent queries give the serial answers.
+TEST(ObstacleMesh, ConcurrentQueriesAgreeWithSerialOnes) {
+  const Surface s = Sphere(0.1).local_surface(48);
+  const TriangleMesh mesh(s.vertices, s.triangles);
+  std::vector<Eigen::Vector3d> points;
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> unit(-0.12, 0.12);
+  for (int i = 0; i < 2000; ++i) points.emplace_back(unit(rng), unit(rng), unit(rng));
+  std::vector<double> serial(points.size()), parallel(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) serial[i] = mesh.distance(points[i]);
+  std::vector<std::thread> threads;
+  for (int t = 0; t < 4; ++t)
+    threads.emplace_back([&, t] {
+      for (std::size_t i = static_cast<std::size_t>(t); i < points.size(); i += 4)
+        parallel[i] = mesh.distance(points[i]);
+    });
+  for (auto& th : threads) th.join();
+  EXPECT_EQ(serial, parallel);
 }
 
 TEST(ObstacleMesh, LoadsObjStlAndPlyFiles) {
   const auto dir = testing::scratch_dir();
   {  // a 2 × 1 × 1 box with quads (1-based indices), in mm
     std::ofstream obj(dir / "box.obj");
-    obj << "# box\nv 0 0 0\nv 2000 0 0\nv 2000 1000 0\nv 0 1000 0\nv 0 0 1000\nv 2000 0 1000\nv 2000 1000 1000\nv 0 1000 1000\n"
+    obj << "# box\nv 0 0 0\nv 2000 0 0\nv 2000 1000 0\nv 0 1000 0\nv 0 0 1000\nv 2000 0 1000\nv 2000 1000 1000\nv 0 "
+           "1000 1000\n"
            "f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 4 8 7 3\nf 1 5 8 4\nf 2 3 7 6\n";
   }
   const auto box = TriangleMesh::load(dir / "box.obj", 0.001);
@@ -249,7 +269,7 @@ TEST(ObstacleMesh, LoadsObjStlAndPlyFiles) {
   EXPECT_NEAR(box->distance({1.0, 0.5, 1.5}), 0.5, 1e-12);
   {  // a tetrahedron in ASCII STL, every facet with its own copies of the corners, stored inward
     const Eigen::Vector3d x[4] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
-    const int faces[4][3] = {{0, 1, 2}, {0, 3, 1}, {0, 2, 3}, {1, 3, 2}};   // inward (negative volume)
+    const int faces[4][3] = {{0, 1, 2}, {0, 3, 1}, {0, 2, 3}, {1, 3, 2}};  // inward (negative volume)
     std::ofstream stl(dir / "tet.stl");
     stl << "solid tet\n";
     for (const auto& f : faces) {
@@ -260,9 +280,9 @@ TEST(ObstacleMesh, LoadsObjStlAndPlyFiles) {
     stl << "endsolid tet\n";
   }
   const auto tet = TriangleMesh::load(dir / "tet.stl");
-  EXPECT_EQ(tet->vertices().rows(), 4);   // merged
+  EXPECT_EQ(tet->vertices().rows(), 4);  // merged
   EXPECT_TRUE(tet->closed());
-  EXPECT_LT(tet->distance({0.1, 0.1, 0.1}), 0.0);   // flipped outward on load
+  EXPECT_LT(tet->distance({0.1, 0.1, 0.1}), 0.0);  // flipped outward on load
   EXPECT_GT(tet->distance({1.0, 1.0, 1.0}), 0.0);
   {
     std::ofstream ply(dir / "tet.ply");
@@ -272,7 +292,7 @@ TEST(ObstacleMesh, LoadsObjStlAndPlyFiles) {
   }
   const auto ply = TriangleMesh::load(dir / "tet.ply");
   EXPECT_TRUE(ply->closed());
-  EXPECT_NEAR(ply->distance({0.1, 0.1, -0.2}), 0.2, 1e-7);   // below the z = 0 face (float file)
+  EXPECT_NEAR(ply->distance({0.1, 0.1, -0.2}), 0.2, 1e-7);  // below the z = 0 face (float file)
   EXPECT_THROW(TriangleMesh::load(dir / "missing.obj"), Error);
   EXPECT_THROW(TriangleMesh::load(dir / "box.off"), Error);
 }

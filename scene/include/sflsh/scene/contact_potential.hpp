@@ -4,16 +4,14 @@
 // obstacle j with signed distance φ_j (obstacle.hpp):
 //   u_ij(p) = ½ k_i (δ − φ_j(p))²  if φ_j(p) < δ,  0 otherwise,   k_i = stiffness · area_i · factor_i
 // C¹ in p (value and gradient vanish at φ = δ). Model, units and defaults: docs/contact.md.
-#include <sflsh/fullspace/node_potential.hpp>
-#include <sflsh/scene/obstacle.hpp>
-#include <sflsh/scene/rigid_motion.hpp>
-
 #include <Eigen/Core>
-
 #include <atomic>
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <sflsh/fullspace/node_potential.hpp>
+#include <sflsh/scene/obstacle.hpp>
+#include <sflsh/scene/rigid_motion.hpp>
 #include <vector>
 
 namespace sflsh::scene {
@@ -80,7 +78,8 @@ class ContactPotential final : public fullspace::NodePotential {
   bool begin_substep(double t0, double dt, const meshing::RowMatrixX3d& p_start,
                      const meshing::RowMatrixX3d& p_skinned_end) override;
   const std::vector<int>& candidates() const override { return candidates_; }
-  double evaluate(int k, const Eigen::Vector3d& p, Eigen::Vector3d* gradient, Eigen::Matrix3d* hessian) const override;
+  /// u of candidate c (index into candidates(); the node is nodes()[candidates()[c]]) at posed p.
+  double evaluate(int c, const Eigen::Vector3d& p, Eigen::Vector3d* gradient, Eigen::Matrix3d* hessian) const override;
   bool accept_substep(const meshing::RowMatrixX3d& p_end) override;
   int max_refinements() const override { return parameters_.max_refinements; }
 
@@ -112,13 +111,13 @@ class ContactPotential final : public fullspace::NodePotential {
   std::vector<ContactObstacle> obstacles_;
   ContactParameters parameters_;
 
-  std::vector<double> factor_;             ///< per entry: refinement factor on k (1 until raised)
-  std::vector<int> candidates_;            ///< entries of nodes() near an obstacle in this substep
-  std::vector<std::uint64_t> mask_;        ///< per entry: the obstacles it is near (bit j)
-  double t_end_ = 0.0;                     ///< end time of the current substep
+  std::vector<double> factor_;       ///< per entry: refinement factor on k (1 until raised)
+  std::vector<int> candidates_;      ///< entries of nodes() near an obstacle in this substep
+  std::vector<std::uint64_t> mask_;  ///< per entry: the obstacles it is near (bit j)
+  double t_end_ = 0.0;               ///< end time of the current substep
   double substep_t0_ = -std::numeric_limits<double>::infinity();
   double substep_dt_ = -1.0;
-  int substep_refinements_ = 0;            ///< rejections of the current substep so far
+  int substep_refinements_ = 0;  ///< rejections of the current substep so far
   bool last_accepted_ = true;
 
   meshing::RowMatrixX3d force_;

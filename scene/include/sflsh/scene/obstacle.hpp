@@ -5,13 +5,11 @@
 // φ is a true (1-Lipschitz) distance for every shape, so |∇φ| = 1 and ∇²φ ∇φ = 0 wherever φ is smooth.
 // Where it is not smooth (medial axes inside, the surface of a mesh at a vertex/edge, the axis of a
 // capsule, the centre of a sphere) each shape returns one of the one-sided values and says which below.
-#include <sflsh/meshing/types.hpp>
-
 #include <Eigen/Core>
-
 #include <filesystem>
 #include <limits>
 #include <memory>
+#include <sflsh/meshing/types.hpp>
 #include <vector>
 
 namespace sflsh::scene {
@@ -21,8 +19,8 @@ using meshing::RowMatrixX3i;
 
 /// A rigid placement local → world: p = rotation · q + translation.
 struct Pose {
-  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();   ///< orthonormal, det = +1
-  Eigen::Vector3d translation = Eigen::Vector3d::Zero();    ///< [m]
+  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();  ///< orthonormal, det = +1
+  Eigen::Vector3d translation = Eigen::Vector3d::Zero();   ///< [m]
 
   Eigen::Vector3d to_world(const Eigen::Vector3d& q) const { return rotation * q + translation; }
   Eigen::Vector3d to_local(const Eigen::Vector3d& p) const { return rotation.transpose() * (p - translation); }
@@ -184,13 +182,13 @@ class TriangleMesh final : public Obstacle {
  private:
   void rebuild();
 
-  struct Tree;   // the CGAL AABB tree (kept out of this header)
+  struct Tree;  // the CGAL AABB tree (kept out of this header)
   RowMatrixX3d vertices_;
   RowMatrixX3i triangles_;
   RowMatrixX3i triangle_edges_;                 ///< per triangle, the edge ids of (v0v1, v1v2, v2v0)
-  std::vector<Eigen::Vector3d> face_normal_;     ///< unit
-  std::vector<Eigen::Vector3d> edge_normal_;     ///< pseudonormal per edge (sum of the adjacent face normals)
-  std::vector<Eigen::Vector3d> vertex_normal_;   ///< angle-weighted pseudonormal per vertex
+  std::vector<Eigen::Vector3d> face_normal_;    ///< unit
+  std::vector<Eigen::Vector3d> edge_normal_;    ///< pseudonormal per edge (sum of the adjacent face normals)
+  std::vector<Eigen::Vector3d> vertex_normal_;  ///< angle-weighted pseudonormal per vertex
   Aabb bounds_;
   bool closed_ = false;
   std::unique_ptr<Tree> tree_;

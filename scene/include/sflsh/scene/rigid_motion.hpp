@@ -2,11 +2,9 @@
 // How a rigid obstacle moves: fixed, prescribed by keyframes, or free (translation under gravity and the
 // contact reaction). ContactPotential asks a motion for the pose at the end of each substep and, after an
 // accepted substep, commits it with the contact force the body exerted on the object in that substep.
-#include <sflsh/scene/obstacle.hpp>
-
 #include <Eigen/Core>
 #include <Eigen/Geometry>
-
+#include <sflsh/scene/obstacle.hpp>
 #include <vector>
 
 namespace sflsh::scene {
@@ -41,8 +39,8 @@ struct Keyframe {
 };
 
 enum class KeyframeInterpolation {
-  linear,        ///< piecewise linear positions (C⁰)
-  catmull_rom,   ///< C¹ cubic Hermite with Catmull–Rom tangents, zero tangents at the first and last key
+  linear,       ///< piecewise linear positions (C⁰)
+  catmull_rom,  ///< C¹ cubic Hermite with Catmull–Rom tangents, zero tangents at the first and last key
 };
 
 /// A prescribed motion through keyframes (ascending times). Before the first key and after the last one
@@ -92,7 +90,7 @@ class FreeMotion final : public RigidMotion {
   Eigen::Vector3d gravity_;
   Pose pose_;
   Eigen::Vector3d velocity_;
-  Eigen::Vector3d force_ = Eigen::Vector3d::Zero();   ///< F_n: contact force of the last committed substep
+  Eigen::Vector3d force_ = Eigen::Vector3d::Zero();  ///< F_n: contact force of the last committed substep
   double t_;
 };
 
