@@ -113,6 +113,7 @@ void SceneBody::start(bool inertia) {
 
 fullspace::State SceneBody::state() const {
   require(soft(), "scene body '{}': a skinned body has no elastic state", name());
+  if (!fast_ && !full_) return fullspace::initial_state(layer_->problem, t_);   // before start()
   return fast_ ? fast_->full_state() : full_->state();
 }
 

@@ -30,8 +30,8 @@ class NodePotential {
   /// Entries of nodes() that evaluate() may be non-zero on during this substep.
   virtual const std::vector<int>& candidates() const = 0;
 
-  /// u of entry k at posed position p [J]; its gradient [N] and a positive semi-definite Hessian [N/m]
-  /// when not null.
+  /// u of candidate k (an index into candidates()) at posed position p [J]; its gradient [N] and a positive
+  /// semi-definite Hessian [N/m] when not null.
   virtual double evaluate(int k, const Eigen::Vector3d& p, Eigen::Vector3d* gradient, Eigen::Matrix3d* hessian) const = 0;
 
   /// After a converged substep, with the posed positions of the candidates at its end (one row per entry of
