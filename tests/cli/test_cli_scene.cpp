@@ -1,0 +1,42 @@
+// sflsh simulate --scene: the contract (summary.json with "effects") and bad input (one line, nothing written).
+#include <gtest/gtest.h>
+
+#include "run_command.hpp"
+#include "scratch_dir.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <fstream>
+
+namespace sflsh {
+namespace {
+
+TEST(CliScene, SkinningOnlySceneWritesSeriesAndEffects) {
+  const auto dir = testing::scratch_dir();
+  const std::string scene = std::string(SFLSH_DATA_DIR) + "/scenes/skinning_only.toml";
+  const auto r = testing::run_sflsh("simulate --scene " + scene + " --frames 3 --out " + (dir / "out").string(), dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::ifstream in(dir / "out" / "summary.json");
+  const nlohmann::json s = nlohmann::json::parse(in);
+  ASSERT_TRUE(s.contains("effects"));
+  ASSERT_EQ(s["effects"].size(), 1u);
+  EXPECT_EQ(s["effects"][0]["name"], "skinning");
+  EXPECT_TRUE(s["effects"][0].contains("seconds"));
+  EXPECT_EQ(s["scene"]["frames"], 3);
+  for (const char* f : {"dancer.pvd", "runner.pvd", "dancer_000002.vtp", "runner_000002.vtp"}) EXPECT_TRUE(std::filesystem::exists(dir / "out" / f)) << f;
+}
+
+TEST(CliScene, BadSceneIsOneLineAndWritesNothing) {
+  const auto dir = testing::scratch_dir();
+  std::ofstream(dir / "bad.toml") << "[scene]\nfps = 30\n[[body]]\nmotion = \"rest\"\nhandels = 30\n";
+  const auto r = testing::run_sflsh("simulate --scene " + (dir / "bad.toml").string() + " --out " + (dir / "out").string(), dir);
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("bad.toml:5: unknown key 'handels' in body #0"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "out"));
+  const auto m = testing::run_sflsh("simulate --out " + (dir / "out").string(), dir);
+  EXPECT_NE(m.exit_code, 0);
+  EXPECT_NE(m.err.find("--motion is required (or give a scene with --scene FILE)"), std::string::npos) << m.err;
+}
+
+}  // namespace
+}  // namespace sflsh

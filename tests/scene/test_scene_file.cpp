@@ -1,0 +1,97 @@
+// Scene files: the shipped examples parse, bad input is one error naming the file and line.
+#include <sflsh/core/error.hpp>
+#include <sflsh/scene/scene_file.hpp>
+
+#include <gtest/gtest.h>
+
+#include "scratch_dir.hpp"
+
+#include <fstream>
+
+namespace sflsh::scene {
+namespace {
+
+std::filesystem::path write_scene(const std::filesystem::path& dir, const std::string& text) {
+  const auto path = dir / "scene.toml";
+  std::ofstream(path) << text;
+  return path;
+}
+
+/// The message of load_scene's error ("" when it loads).
+std::string error_of(const std::filesystem::path& path) {
+  try {
+    load_scene(path);
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+constexpr const char* kBody = "[[body]]\nname = \"a\"\nmotion = \"rest\"\n";
+
+TEST(SceneFile, ShippedScenesParse) {
+  for (const char* name : {"belly_press", "two_bodies_push", "crowd", "skinning_only"}) {
+    SCOPED_TRACE(name);
+    const Scene scene = load_scene(std::filesystem::path(SFLSH_DATA_DIR) / "scenes" / (std::string(name) + ".toml"));
+    EXPECT_EQ(scene.name, name);
+    EXPECT_GT(scene.num_frames(), 1);
+  }
+  const Scene belly = load_scene(std::filesystem::path(SFLSH_DATA_DIR) / "scenes" / "belly_press.toml");
+  EXPECT_TRUE(belly.effects.inertia && belly.effects.object_contact && !belly.effects.gravity && !belly.effects.body_contact);
+  ASSERT_EQ(belly.objects.size(), 1u);
+  EXPECT_EQ(belly.objects[0].shape, ShapeKind::sphere);
+  EXPECT_EQ(belly.objects[0].motion, ObjectMotionKind::prescribed);
+  EXPECT_EQ(belly.objects[0].keyframes.size(), 4u);
+  EXPECT_EQ(belly.num_frames(), 61);
+  const Scene skin = load_scene(std::filesystem::path(SFLSH_DATA_DIR) / "scenes" / "skinning_only.toml");
+  EXPECT_FALSE(skin.effects.elastic());
+  EXPECT_DOUBLE_EQ(skin.bodies[1].placement.yaw_degrees, -30.0);
+  const Scene crowd = load_scene(std::filesystem::path(SFLSH_DATA_DIR) / "scenes" / "crowd.toml");
+  ASSERT_TRUE(crowd.crowd.has_value());
+  EXPECT_EQ(crowd.crowd->count, 25);
+}
+
+TEST(SceneFile, BadInputNamesFileAndLine) {
+  const auto dir = testing::scratch_dir();
+  struct Case {
+    std::string text;
+    std::string expected;   // a part of the message
+  };
+  const std::vector<Case> cases = {
+      {"[scene]\nfps = 60\n[effects]\ninertia = true\nwobble = true\n" + std::string(kBody), "scene.toml:5: unknown key 'wobble'"},
+      {"[scene]\nfps = -1\n" + std::string(kBody), "scene.toml:2: 'fps' in [scene] = -1 must be positive"},
+      {"[scene]\n[effects]\nobject_contact = true\n" + std::string(kBody), "'object_contact' is on but the scene has no [[object]]"},
+      {"[scene]\n[effects]\nbody_contact = true\n" + std::string(kBody), "fewer than two bodies"},
+      {"[scene]\n[effects]\nself_contact = true\n" + std::string(kBody), "scene.toml:3: 'self_contact' = true is not available"},
+      {"[scene]\n" + std::string(kBody) + "solver = \"fast\"\n", "scene.toml:5: 'solver' in body #0 = 'fast' is not one of full | reduced | skinned"},
+      {"[scene]\n" + std::string(kBody) + "material = \"nope.toml\"\n", "file '"},
+      {"[scene]\n" + std::string(kBody) + "[[object]]\nshape = \"sphere\"\nradius = -0.1\n", "scene.toml:7: 'radius' in object #0 = -0.1 must be positive"},
+      {"[scene]\n" + std::string(kBody) + "[[object]]\nshape = \"box\"\nradius = 0.1\n", "'radius' in object #0 does not apply to a box"},
+      {"[scene]\n" + std::string(kBody) +
+           "[[object]]\nshape = \"sphere\"\nmotion = \"prescribed\"\nkeyframes = [{ t = 0.5, position = [0, 0, 0] }, { t = 0.2, position = [0, 0, 1] }]\n",
+       "keyframe times in 'keyframes' in object #0 must increase"},
+      {"[scene]\n" + std::string(kBody) + "[[object]]\nshape = \"sphere\"\nmotion = \"prescribed\"\n", "a prescribed object needs 'keyframes'"},
+      {"[scene]\n[effects]\nobject_contact = true\n[crowd]\ncount = 4\n[[object]]\nshape = \"sphere\"\n", "a [crowd] runs without contact"},
+      {"[scene]\n" + std::string(kBody) + "[[body]]\nname = \"a\"\n", "the name 'a' is used twice"},
+      {"[scene]\nfps = \n", "scene.toml:2:"},
+      {"[effects]\n" + std::string(kBody), "missing key 'scene'"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.text);
+    const std::string message = error_of(write_scene(dir, c.text));
+    EXPECT_NE(message.find(c.expected), std::string::npos) << message;
+    EXPECT_EQ(message.find('\n'), std::string::npos) << "one line: " << message;
+  }
+  EXPECT_NE(error_of(dir / "missing.toml").find("missing.toml: scene file not found"), std::string::npos);
+}
+
+TEST(SceneFile, RelativePathsAreTakenFromTheSceneFolder) {
+  const auto dir = testing::scratch_dir();
+  std::filesystem::create_directories(dir / "meshes");
+  std::ofstream(dir / "meshes" / "ball.obj") << "v 0 0 0\n";
+  const Scene scene = load_scene(write_scene(dir, "[scene]\n" + std::string(kBody) + "[[object]]\nshape = \"mesh\"\nfile = \"meshes/ball.obj\"\n"));
+  EXPECT_EQ(std::filesystem::path(scene.objects[0].mesh_path), (dir / "meshes" / "ball.obj").lexically_normal());
+}
+
+}  // namespace
+}  // namespace sflsh::scene
