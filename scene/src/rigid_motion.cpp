@@ -97,7 +97,15 @@ FreeMotion::FreeMotion(double mass, const Eigen::Vector3d& gravity, const Pose& 
           "free motion: gravity, velocity, position and t0 must be finite");
 }
 
-Eigen::Vector3d FreeMotion::predicted_velocity(double dt) const { return velocity_ + dt * (gravity_ + force_ / mass_); }
+// (m + dt² k) v_{n+1} = m v_n + dt (m g + F_n): the reaction linearized as F_n − k dt v_{n+1} (k = 0: explicit).
+Eigen::Vector3d FreeMotion::predicted_velocity(double dt) const {
+  return (mass_ * velocity_ + dt * (mass_ * gravity_ + force_)) / (mass_ + dt * dt * contact_stiffness_);
+}
+
+void FreeMotion::set_contact_stiffness(double k) {
+  require(std::isfinite(k) && k >= 0.0, "free motion: contact stiffness must be ≥ 0 (got {})", k);
+  contact_stiffness_ = k;
+}
 
 Pose FreeMotion::pose(double t) const {
   // Idempotent: a substep solved again (refinement) asks for the same pose.
@@ -111,7 +119,7 @@ void FreeMotion::commit(double t, const Eigen::Vector3d& force) {
   require(force.allFinite(), "free motion: non-finite contact force at t = {}", t);
   const double dt = t - t_;
   if (dt > 0.0) {
-    velocity_ = predicted_velocity(dt);   // v_{n+1} = v_n + dt (g + F_n/m)
+    velocity_ = predicted_velocity(dt);
     pose_.translation += dt * velocity_;  // x_{n+1} = x_n + dt v_{n+1}
     t_ = t;
   }

@@ -275,8 +275,14 @@ class SceneRun {
       SceneObject& o = objects_[j];
       if (o.motion->reacts()) {
         Eigen::Vector3d force = Eigen::Vector3d::Zero();
-        for (BodyContact& c : contact_)
-          if (c.objects) force += c.placed[j]->take_force();
+        double stiffness = 0.0;   // of the nodes touching it (makes the object's update implicit)
+        for (BodyContact& c : contact_) {
+          if (!c.objects) continue;
+          force += c.placed[j]->take_force();
+          for (Eigen::Index k = 0; k < c.objects->contact_force().rows(); ++k)
+            if (c.objects->contact_force().row(k).squaredNorm() > 0.0) stiffness += c.objects->node_stiffness(static_cast<int>(k));
+        }
+        if (auto* free = dynamic_cast<FreeMotion*>(o.motion.get())) free->set_contact_stiffness(stiffness);
         o.motion->commit(t1, force);
       }
       o.world_shape->set_pose(o.motion->pose(t1));

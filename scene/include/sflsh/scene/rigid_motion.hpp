@@ -63,7 +63,8 @@ class KeyframeMotion final : public RigidMotion {
 };
 
 /// A free object, translation only (its rotation stays the initial one): mass m, gravity g and the
-/// contact reaction F. Symplectic (semi-implicit) Euler with the contact force lagged by one substep:
+/// contact reaction F. Semi-implicit Euler with the contact force lagged by one substep (and linearized by
+/// set_contact_stiffness, below):
 ///   v_{n+1} = v_n + dt (g + F_n / m),   x_{n+1} = x_n + dt v_{n+1},
 /// where F_n is the force committed at the end of the previous substep (the penalty on the body is
 /// implicit in the body's solve, the reaction on the object is explicit). Stable while dt·√(k_c/m) ≲ 2
@@ -77,6 +78,11 @@ class FreeMotion final : public RigidMotion {
   void commit(double t, const Eigen::Vector3d& force) override;
   bool reacts() const override { return true; }
 
+  /// k [N/m] ≥ 0: the summed stiffness of the touching nodes. With k > 0 the lagged reaction is linearized,
+  ///   (m + dt² k) v_{n+1} = m v_n + dt (m g + F_n),
+  /// which is unconditionally stable (backward Euler on the object; isotropic k also damps the tangential
+  /// motion while touching). 0 (the default): the explicit update above.
+  void set_contact_stiffness(double k);
   double time() const { return t_; }
   const Eigen::Vector3d& position() const { return pose_.translation; }
   const Eigen::Vector3d& velocity() const { return velocity_; }
@@ -91,6 +97,7 @@ class FreeMotion final : public RigidMotion {
   Pose pose_;
   Eigen::Vector3d velocity_;
   Eigen::Vector3d force_ = Eigen::Vector3d::Zero();  ///< F_n: contact force of the last committed substep
+  double contact_stiffness_ = 0.0;                    ///< k of set_contact_stiffness [N/m]
   double t_;
 };
 
