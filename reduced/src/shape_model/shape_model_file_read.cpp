@@ -1,5 +1,6 @@
 // Reading shape-model files (shape_model_file.hpp), errors as "<file>:<line>: …".
 #include <sflsh/core/error.hpp>
+#include <sflsh/core/toml_reader.hpp>
 #include <sflsh/reduced/shape_model_file.hpp>
 
 #include <toml++/toml.h>
@@ -13,70 +14,12 @@ namespace sflsh::reduced {
 
 namespace {
 
-class Reader {
+class Reader : public TomlReader {
  public:
-  explicit Reader(std::filesystem::path path) : path_(std::move(path)) {}
-
-  std::string at(const toml::node& node) const { return fmt::format("{}:{}", path_.string(), node.source().begin.line); }
-
-  // Every key of `table` must be one of `allowed`.
-  void check_keys(const toml::table& table, std::initializer_list<std::string_view> allowed, std::string_view context) const {
-    for (const auto& [key, node] : table) {
-      bool known = false;
-      for (const std::string_view a : allowed) known = known || key.str() == a;
-      if (known) continue;
-      std::string list;
-      for (const std::string_view a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
-      throw_error("{}: unknown key '{}'{} (expected {})", at(node), key.str(), context, list);
-    }
-  }
-
-  const toml::node& required(const toml::table& table, std::string_view key, std::string_view context) const {
-    const toml::node* node = table.get(key);
-    require(node != nullptr, "{}: missing key '{}'{}", at(table), key, context);
-    return *node;
-  }
-
-  const toml::table& table_of(const toml::node& node, std::string_view key) const {
-    const toml::table* table = node.as_table();
-    require(table != nullptr, "{}: '{}' must be a table", at(node), key);
-    return *table;
-  }
-
-  std::string string_value(const toml::node& node, std::string_view key, std::string_view context = "") const {
-    const auto value = node.value_exact<std::string>();
-    require(value.has_value(), "{}: '{}'{} must be a string", at(node), key, context);
-    require(!value->empty(), "{}: '{}'{} must not be empty", at(node), key, context);
-    return *value;
-  }
-
-  std::vector<std::string> strings(const toml::node& node, std::string_view key, std::string_view context) const {
-    const toml::array* array = node.as_array();
-    require(array != nullptr, "{}: '{}'{} must be an array of strings", at(node), key, context);
-    std::vector<std::string> out;
-    for (const toml::node& item : *array) out.push_back(string_value(item, key, context));
-    return out;
-  }
-
-  double number(const toml::node& node, std::string_view key, std::string_view context) const {
-    require(node.is_number(), "{}: '{}'{} must be a number", at(node), key, context);
-    const double value = *node.value<double>();
-    require(std::isfinite(value), "{}: '{}'{} is not finite", at(node), key, context);
-    return value;
-  }
-
-  std::vector<double> numbers(const toml::node& node, std::string_view key, std::size_t count,
-                              std::string_view context) const {
-    const toml::array* array = node.as_array();
-    require(array != nullptr && array->size() == count, "{}: '{}'{} must be an array of {} numbers", at(node), key,
-            context, count);
-    std::vector<double> out;
-    for (const toml::node& item : *array) out.push_back(number(item, key, context));
-    return out;
-  }
+  using TomlReader::TomlReader;
 
   void read_bounds(const toml::node& node, material::ParameterBounds& bounds) const {
-    const toml::table& table = table_of(node, "bounds");
+    const toml::table& table = table(node, "bounds");
     check_keys(table, {"thickness", "young_tangent", "young_normal"}, " in [bounds]");
     material::ParameterRange* ranges[material::kNumKappa] = {&bounds.thickness, &bounds.young_tangent,
                                                              &bounds.young_normal};
@@ -95,7 +38,7 @@ class Reader {
   }
 
   void read_basis(const toml::node& node, ShapeModelFile& file) const {
-    const toml::table& table = table_of(node, "basis");
+    const toml::table& table = table(node, "basis");
     check_keys(table, {"kind", "region", "mesh"}, " in [basis]");
     const toml::node& kind = required(table, "kind", " in [basis]");
     const std::string k = string_value(kind, "kind", " in [basis]");
@@ -106,7 +49,7 @@ class Reader {
   }
 
   ShapeModelFit read_fit(const toml::node& node) const {
-    const toml::table& table = table_of(node, "fit");
+    const toml::table& table = table(node, "fit");
     check_keys(table, {"regularizer", "lambda", "subjects", "motions"}, " in [fit]");
     ShapeModelFit fit;
     const toml::node& reg = required(table, "regularizer", " in [fit]");
@@ -157,13 +100,7 @@ class Reader {
   }
 
   ShapeModelFile read() const {
-    require(std::filesystem::exists(path_), "{}: shape model file not found", path_.string());
-    toml::table root;
-    try {
-      root = toml::parse_file(path_.string());
-    } catch (const toml::parse_error& e) {
-      throw_error("{}:{}: {}", path_.string(), e.source().begin.line, e.description());
-    }
+    const toml::table root = parse("shape model file");
     check_keys(root, {"version", "body", "poisson", "saturation", "bounds", "basis", "fit", "control_point"}, "");
     ShapeModelFile file;
     const toml::node& version = required(root, "version", "");
@@ -183,18 +120,16 @@ class Reader {
     if (const toml::node* fit = root.get("fit")) file.fit = read_fit(*fit);
 
     const toml::node* list = root.get("control_point");
-    require(list != nullptr, "{}: no [[control_point]] tables", path_.string());
+    require(list != nullptr, "{}: no [[control_point]] tables", path().string());
     const toml::array* points = list->as_array();
     require(points != nullptr && !points->empty(), "{}: 'control_point' must be a non-empty array of tables",
             at(*list));
     std::map<int, std::size_t> seen;  // vertex → its first control point
     for (std::size_t i = 0; i < points->size(); ++i) file.control_points.push_back(read_point((*points)[i], i, seen));
-    validate(file, path_.string());  // everything again (with each point's table line); nothing should be left
+    validate(file, path().string());  // everything again (with each point's table line); nothing should be left
     return file;
   }
 
- private:
-  std::filesystem::path path_;
 };
 
 }  // namespace

@@ -57,11 +57,19 @@ class TomlReader {
     return *t;
   }
 
-  std::string string_value(const toml::node& node, std::string_view key) const {
+  std::string string_value(const toml::node& node, std::string_view key, std::string_view context = "") const {
     const auto value = node.value_exact<std::string>();
-    require(value.has_value(), "{}: '{}' must be a string", at(node), key);
-    require(!value->empty(), "{}: '{}' must not be empty", at(node), key);
+    require(value.has_value(), "{}: '{}'{} must be a string", at(node), key, context);
+    require(!value->empty(), "{}: '{}'{} must not be empty", at(node), key, context);
     return *value;
+  }
+
+  std::vector<std::string> strings(const toml::node& node, std::string_view key, std::string_view context) const {
+    const toml::array* array = node.as_array();
+    require(array != nullptr, "{}: '{}'{} must be an array of strings", at(node), key, context);
+    std::vector<std::string> out;
+    for (const toml::node& item : *array) out.push_back(string_value(item, key, context));
+    return out;
   }
 
   bool boolean(const toml::node& node, std::string_view key, std::string_view context) const {
