@@ -4,6 +4,7 @@
 // and the error–time trade-off (tradeoff.csv / .md / .png, compare.vtp, summary.json).
 #include "commands.hpp"
 #include "compare_report.hpp"
+#include "layer_setup.hpp"
 
 #include <sflsh/body/motion.hpp>
 #include <sflsh/core/error.hpp>
@@ -41,23 +42,13 @@ struct CompareOptions {
   double fps = 60.0;
   int substeps = 1;
   std::string mesh = "default";
-  std::string mesher = "layered";
-  std::string material;
-  int control_points = 12;
-  std::string cache;
-  double density = 1000.0;
-  bool gravity = false;
-  double stiffness_scale = 1.0;
+  LayerSettings layer;
   std::string handles = "30,86,200";
   std::string cubature = "100,200,400";
   bool exact_cubature = false;
-  std::string cubature_weights = "nnls";
-  bool affine = false;
+  ReducedSettings reduced;
   std::string out;
 };
-
-using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 /// "30,86,200" → {30, 86, 200}: distinct, in the given order, each at least `minimum`.
 std::vector<int> parse_sweep(const std::string& text, const char* option, int minimum) {
@@ -104,8 +95,7 @@ void run_compare(const CompareOptions& opt, const Invocation& invocation, int ra
   require(opt.fps > 0.0, "--fps must be positive, got {}", opt.fps);
   require(opt.substeps >= 1, "--substeps must be at least 1, got {}", opt.substeps);
   require(opt.frames >= 0, "--frames must be non-negative, got {}", opt.frames);
-  require(opt.density > 0.0, "--density must be positive, got {}", opt.density);
-  require(opt.stiffness_scale > 0.0, "--stiffness-scale must be positive, got {}", opt.stiffness_scale);
+  check_layer_settings(opt.layer);
   const std::vector<int> handle_sweep = parse_sweep(opt.handles, "--handles", 1);
   std::vector<int> cubature_sweep = parse_sweep(opt.cubature, "--cubature", 0);
   if (opt.exact_cubature && std::find(cubature_sweep.begin(), cubature_sweep.end(), 0) == cubature_sweep.end())
@@ -117,19 +107,10 @@ void run_compare(const CompareOptions& opt, const Invocation& invocation, int ra
   const body::Motion motion = body::load_motion(opt.motion, opt.fps, opt.frames);
   motion.validate();
   require(motion.num_frames() >= 2, "compare: the motion has {} frame(s); at least 2 are needed", motion.num_frames());
-  std::optional<material::MaterialFile> material_file;
-  if (!opt.material.empty()) material_file = material::load_material_file(opt.material);
-
-  fullspace::BodyLayerOptions layer_options;
-  layer_options.mesher = meshing::parse_mesher(opt.mesher);
-  layer_options.size = meshing::parse_size_preset(opt.mesh);
-  if (!opt.cache.empty()) layer_options.cache_dir = opt.cache;
-  layer_options.density = opt.density;
-  layer_options.gravity = opt.gravity;
-  layer_options.stiffness_scale = opt.stiffness_scale;
+  const std::optional<material::MaterialFile> material_file = load_layer_material(opt.layer);
   const auto t_build = Clock::now();
   const fullspace::BodyLayer layer = fullspace::build_body_layer(model, beta, motion, material_file ? &*material_file : nullptr,
-                                                                 opt.control_points, layer_options);
+                                                                 opt.layer.control_points, body_layer_options(opt.layer, opt.mesh));
   const double build_seconds = seconds_since(t_build);
   const fullspace::Problem& problem = layer.problem;
   const std::vector<int>& region = layer.mesh->region_surface.vertices;
@@ -141,22 +122,14 @@ void run_compare(const CompareOptions& opt, const Invocation& invocation, int ra
   // fails here, before the expensive reference run.
   std::vector<std::unique_ptr<Configuration>> configs;
   const auto t_models = Clock::now();
-  for (int handles : handle_sweep)   // all counts checked before any model is built (one message, no output)
-    require(handles <= reduced::max_point_handles(layer), "reduced: {} point handles requested; the layer allows 1 to {}", handles,
-            reduced::max_point_handles(layer));
+  check_handle_counts(layer, handle_sweep);   // all counts checked before any model is built (one message, no output)
   if (rank == 0) {
     for (int handles : handle_sweep) {
       for (int k : cubature_sweep) {
         auto c = std::make_unique<Configuration>();
         c->handles = handles;
         c->cubature_request = k;
-        reduced::ReducedModelOptions ro;
-        ro.point_handles = handles;
-        ro.cubature = k;
-        ro.weighting = opt.cubature_weights == "voronoi" ? reduced::CubatureWeighting::voronoi : reduced::CubatureWeighting::nnls;
-        ro.basis.affine = opt.affine;
-        if (!opt.cache.empty()) ro.cache_dir = opt.cache;
-        c->model = reduced::build_reduced_model(layer, ro);
+        c->model = reduced::build_reduced_model(layer, reduced_model_options(opt.reduced, handles, k, opt.layer.cache));
         configs.push_back(std::move(c));
       }
     }
@@ -170,9 +143,7 @@ void run_compare(const CompareOptions& opt, const Invocation& invocation, int ra
   // The full-space reference: its skin displacement per frame is kept for the error maps.
   std::vector<fullspace::RowMatrixX3d> u_full;
   u_full.reserve(motion.num_frames());
-  fullspace::RowMatrixX3d normals_all = fullspace::vertex_normals(layer.shaped, model.faces);
-  fullspace::RowMatrixX3d normals(R, 3);
-  for (Eigen::Index r = 0; r < R; ++r) normals.row(r) = normals_all.row(region[static_cast<std::size_t>(r)]);
+  const fullspace::RowMatrixX3d normals = region_normals(layer);
   fullspace::DynamicsAmplitude full_amplitude(normals);
   double full_seconds = 0.0;
   long full_newton = 0, full_linear = 0, full_retries = 0;
@@ -346,16 +317,14 @@ void run_compare(const CompareOptions& opt, const Invocation& invocation, int ra
   summary["subject"] = subject_label;
   summary["beta"] = std::vector<double>(beta.data(), beta.data() + beta.size());
   summary["motion"] = {{"name", motion.name}, {"source", motion.source}, {"fps", motion.fps}, {"frames", motion.num_frames()}};
-  summary["mesh"] = {{"mesher", opt.mesher}, {"size", opt.mesh}, {"nodes", problem.num_nodes()}, {"tets", problem.num_tets()},
+  summary["mesh"] = {{"mesher", opt.layer.mesher}, {"size", opt.mesh}, {"nodes", problem.num_nodes()}, {"tets", problem.num_tets()},
                      {"constrained_dofs", problem.dirichlet.dof.size()}, {"region_vertices", R},
                      {"body_vertices", model.num_vertices()}};
-  summary["material"] = {{"file", opt.material}, {"control_points", material_file ? material_file->control_points.size()
-                                                                                    : static_cast<std::size_t>(opt.control_points)},
-                         {"density", opt.density}, {"gravity", opt.gravity}, {"stiffness_scale", opt.stiffness_scale}};
+  summary["material"] = material_summary(opt.layer, material_file);
   summary["step"] = h;
   summary["substeps"] = opt.substeps;
-  summary["sweep"] = {{"handles", handle_sweep}, {"cubature", cubature_sweep}, {"cubature_weights", opt.cubature_weights},
-                      {"affine", opt.affine}};
+  summary["sweep"] = {{"handles", handle_sweep}, {"cubature", cubature_sweep}, {"cubature_weights", opt.reduced.cubature_weights},
+                      {"affine", opt.reduced.affine}};
   summary["full"] = {{"processes", size},
                      {"free_dofs", problem.num_dofs() - static_cast<int>(problem.dirichlet.dof.size())},
                      {"seconds_per_frame", full_row.seconds_per_frame},
@@ -393,19 +362,11 @@ void register_compare_commands(CLI::App& app, const Invocation& invocation) {
   cmd->add_option("--mesh", opt->mesh, "Layer resolution: coarse | default | fine")
       ->capture_default_str()
       ->check(CLI::IsMember({"coarse", "default", "fine"}));
-  cmd->add_option("--mesher", opt->mesher, "Layer mesher: layered | cgal | gmsh")->check(CLI::IsMember({"layered", "cgal", "gmsh"}));
   cmd->add_option("--handles", opt->handles, "Sweep of point-handle counts, comma-separated (plus the bone handles)")->capture_default_str();
   cmd->add_option("--cubature", opt->cubature, "Sweep of cubature tet counts K, comma-separated (0 = every tet)")->capture_default_str();
   cmd->add_flag("--exact-cubature", opt->exact_cubature, "Also run every handle count with exact cubature (every tet)");
-  cmd->add_option("--cubature-weights", opt->cubature_weights, "nnls (training-free force matching) | voronoi")
-      ->check(CLI::IsMember({"nnls", "voronoi"}));
-  cmd->add_flag("--affine", opt->affine, "Affine point handles (12 coordinates each instead of 3)");
-  cmd->add_option("--material", opt->material, "Material file (TOML); default: the project defaults at --control-points");
-  cmd->add_option("--control-points", opt->control_points, "Control points N when no --material is given");
-  cmd->add_option("--cache", opt->cache, "Cache folder for template meshes and reduced models (default $SFLSH_CACHE or ~/.cache/sflsh)");
-  cmd->add_option("--density", opt->density, "Tissue density [kg/m³]");
-  cmd->add_flag("--gravity", opt->gravity, "Apply gravity");
-  cmd->add_option("--stiffness-scale", opt->stiffness_scale, "Multiply Y_t and Y_n by this factor");
+  add_reduced_options(*cmd, opt->reduced);
+  add_layer_options(*cmd, opt->layer);
   cmd->add_option("--out", opt->out, "Output folder")->required();
   cmd->callback([opt, invocation] {
     with_petsc(invocation, [&](int rank, int size) { run_compare(*opt, invocation, rank, size); });

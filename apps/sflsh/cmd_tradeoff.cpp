@@ -1,0 +1,433 @@
+// sflsh tradeoff: what accuracy costs in time. One case (subject, motion, material) is run by a hierarchy of
+// models — an error-controlled reference, full-space backward Euler on several meshes and steps, reduced
+// models with several handle and cubature counts — and each is scored against the reference on the same
+// posed body-surface points at the same frame times (docs/tradeoff.md says exactly what is measured):
+// RMS error [mm], relative error, σ ratio, solve seconds per frame, setup seconds. Writes tradeoff.csv/.md/.png
+// and summary.json with the Pareto front and the cheapest configuration within an error budget.
+#include "commands.hpp"
+#include "layer_setup.hpp"
+#include "tradeoff_table.hpp"
+
+#include <sflsh/body/motion.hpp>
+#include <sflsh/core/error.hpp>
+#include <sflsh/core/log.hpp>
+#include <sflsh/core/run_folder.hpp>
+#include <sflsh/core/summary.hpp>
+#include <sflsh/fullspace/backward_euler.hpp>
+#include <sflsh/fullspace/reference_integrator.hpp>
+#include <sflsh/fullspace/simulation_output.hpp>
+#include <sflsh/reduced/reduced_integrator.hpp>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <map>
+#include <memory>
+
+namespace sflsh::app {
+
+namespace {
+
+using fullspace::RowMatrixX3d;
+
+struct TradeoffOptions {
+  std::string preset = "quick";
+  SubjectOptions subject;
+  std::string motion = "shake_hips";
+  int frames = 8;
+  double fps = 30.0;
+  /// quick: backward Euler at 1/960 s on the coarse mesh (SUNDIALS at rtol 1e-6 costs ~93 s per 1/30 s frame
+  /// there, measured); full: SUNDIALS on the fine mesh.
+  std::string reference = "backward_euler";      ///< sundials | backward_euler
+  std::string reference_mesh = "coarse";
+  int reference_substeps = 32;                   ///< backward-Euler reference only
+  double rtol = 1e-6, atol = 1e-9;               ///< SUNDIALS reference
+  std::vector<std::string> meshes = {"coarse", "default"};
+  std::vector<int> substeps = {1, 2, 4, 8};
+  std::vector<std::string> reduced_meshes = {"coarse"};
+  std::vector<int> handles = {30, 86};
+  std::vector<int> cubature = {200, 400};
+  std::vector<int> reduced_substeps = {1, 4};
+  double budget_mm = 0.0, budget_relative = 0.0;  ///< 0: not given
+  LayerSettings layer;
+  ReducedSettings reduced;
+  std::string out;
+};
+
+/// The `full` preset; `quick` is the defaults of TradeoffOptions. Options given on the command line win.
+void apply_preset(TradeoffOptions& o, const CLI::App& cmd) {
+  require(o.preset == "quick" || o.preset == "full", "--preset {}: expected quick or full", o.preset);
+  if (o.preset != "full") return;
+  auto unset = [&](const char* name) { return cmd.count(name) == 0; };
+  if (unset("--frames")) o.frames = 60;
+  if (unset("--reference")) o.reference = "sundials";
+  if (unset("--reference-mesh")) o.reference_mesh = "fine";
+  if (unset("--rtol")) o.rtol = 1e-6;
+  if (unset("--reduced-meshes")) o.reduced_meshes = {"coarse", "default"};
+  if (unset("--handles")) o.handles = {30, 86, 200};
+  if (unset("--cubature")) o.cubature = {200, 400, 800};
+  if (unset("--reduced-substeps")) o.reduced_substeps = {1, 2, 4, 8};
+}
+
+void check_options(const TradeoffOptions& o) {
+  require(o.fps > 0.0, "--fps must be positive, got {}", o.fps);
+  require(o.frames >= 2, "--frames must be at least 2, got {}", o.frames);
+  require(o.reference == "sundials" || o.reference == "backward_euler", "--reference {}: expected sundials or backward_euler", o.reference);
+  require(o.rtol > 0.0 && o.atol > 0.0, "--rtol and --atol must be positive, got {} and {}", o.rtol, o.atol);
+  require(o.budget_mm >= 0.0 && o.budget_relative >= 0.0, "--budget-mm and --budget-relative must be positive, got {} and {}",
+          o.budget_mm, o.budget_relative);
+  for (const auto* list : {&o.substeps, &o.reduced_substeps})
+    for (int s : *list) require(s >= 1, "--substeps and --reduced-substeps: {} is below 1", s);
+  for (int h : o.handles) require(h >= 1, "--handles: {} is below 1", h);
+  for (int k : o.cubature) require(k >= 0, "--cubature: {} is negative (0 = every tet)", k);
+  if (o.reference == "backward_euler") {
+    int finest = 0;
+    for (int s : o.substeps) finest = std::max(finest, s);
+    for (int s : o.reduced_substeps) finest = std::max(finest, s);
+    require(o.reference_substeps > finest,
+            "--reference-substeps {}: the backward-Euler reference must take a smaller step than every tested model (more than {} substeps)",
+            o.reference_substeps, finest);
+  }
+  check_layer_settings(o.layer);
+}
+
+/// The region's rows of a body-surface array.
+RowMatrixX3d region_rows(const RowMatrixX3d& all, const std::vector<int>& region) {
+  RowMatrixX3d out(static_cast<Eigen::Index>(region.size()), 3);
+  for (std::size_t r = 0; r < region.size(); ++r) out.row(static_cast<Eigen::Index>(r)) = all.row(region[r]);
+  return out;
+}
+
+/// The reference's posed region surface per frame and the size of its soft-tissue motion.
+struct ReferenceTrack {
+  std::vector<RowMatrixX3d> posed;   ///< frames 0..F, R×3 [m]
+  double soft_rms = 0.0;             ///< RMS over region vertices and frames 1..F of posed − skinned [m]
+  double sigma_mean = 0.0;           ///< mean σ over the region [m]
+};
+
+/// What one run measured.
+struct Measured {
+  double solve_seconds = 0.0;
+  double error_sq = 0.0;             ///< Σ over frames 1..F and region vertices of |p − p_ref|² [m²]
+  double sigma_mean = 0.0;           ///< [m]
+  std::string invalid;               ///< why a reduced state left the material's range, or why the run failed
+};
+
+/// Runs one solver frame by frame. `advance(f, seconds)` integrates to frame f, adds its solve time to
+/// `seconds` and returns the state there. With `keep` the posed region surface is stored (the reference),
+/// with `ref` the error against it is summed. σ is that of simulate's summary: of the unposed skin
+/// displacement u (fullspace::SimulationWriter), over frames 0..F.
+Measured track(const fullspace::BodyLayer& layer, const body::Motion& motion, const fullspace::State& initial,
+               const std::function<fullspace::State(std::size_t, double&)>& advance, bool check_range, ReferenceTrack* keep,
+               const ReferenceTrack* ref) {
+  const std::vector<int>& region = layer.mesh->region_surface.vertices;
+  fullspace::DynamicsAmplitude amplitude(region_normals(layer));
+  Measured m;
+  double soft_sq = 0.0;
+  for (std::size_t f = 0; f < motion.num_frames(); ++f) {
+    const double t = motion.time(f);
+    const fullspace::State state = f == 0 ? initial : advance(f, m.solve_seconds);
+    require(state.x.allFinite(), "tradeoff: the state at t = {} is not finite", t);
+    const RowMatrixX3d u = layer.surface_displacement(state.x);
+    amplitude.add(u);
+    const RowMatrixX3d posed = region_rows(layer.posed_surface_from_displacement(u, t), region);
+    if (ref && f > 0) m.error_sq += (posed - ref->posed[f]).squaredNorm();
+    if (keep) {
+      const RowMatrixX3d skinned = region_rows(layer.posed_surface_from_displacement(RowMatrixX3d::Zero(u.rows(), 3), t), region);
+      if (f > 0) soft_sq += (posed - skinned).squaredNorm();
+      keep->posed.push_back(posed);
+    }
+    if (check_range && m.invalid.empty()) {
+      try {
+        (void)fullspace::energies(layer.problem, state);
+      } catch (const Error& e) {
+        m.invalid = fmt::format("at t = {:.4f} s: {}", t, e.what());
+      }
+    }
+  }
+  m.sigma_mean = amplitude.sigma().mean();
+  if (keep) {
+    keep->soft_rms = std::sqrt(soft_sq / (static_cast<double>(region.size()) * static_cast<double>(motion.num_frames() - 1)));
+    keep->sigma_mean = m.sigma_mean;
+  }
+  return m;
+}
+
+struct BuiltLayer {
+  fullspace::BodyLayer layer;
+  double seconds = 0.0;
+};
+
+void run_tradeoff(const TradeoffOptions& opt, const Invocation& invocation, int rank, int size) {
+  const auto t_start = Clock::now();
+  require(size == 1, "tradeoff runs on one process (got {}): its timings compare solvers on the same cores", size);
+  (void)rank;
+  check_options(opt);
+  const body::BodyModel model = load_selected_body(opt.subject);
+  std::string subject_label;
+  const body::Betas beta = selected_betas(opt.subject, subject_label);
+  const body::Motion motion = body::load_motion(opt.motion, opt.fps, opt.frames);
+  motion.validate();
+  require(motion.num_frames() >= 2, "tradeoff: the motion has {} frame(s); at least 2 are needed", motion.num_frames());
+  const std::optional<material::MaterialFile> material_file = load_layer_material(opt.layer);
+  const int steps = static_cast<int>(motion.num_frames()) - 1;
+  const tradeoff::Budget budget{opt.budget_mm > 0 ? std::optional<double>(opt.budget_mm) : std::nullopt,
+                                opt.budget_relative > 0 ? std::optional<double>(opt.budget_relative) : std::nullopt};
+
+  // Every layer first, and every handle count checked on it, before any solve (one message, no output).
+  std::map<std::string, BuiltLayer> layers;
+  auto layer_of = [&](const std::string& mesh) -> BuiltLayer& {
+    auto it = layers.find(mesh);
+    if (it != layers.end()) return it->second;
+    const auto t0 = Clock::now();
+    fullspace::BodyLayer l = fullspace::build_body_layer(model, beta, motion, material_file ? &*material_file : nullptr,
+                                                         opt.layer.control_points, body_layer_options(opt.layer, mesh));
+    return layers.emplace(mesh, BuiltLayer{std::move(l), seconds_since(t0)}).first->second;
+  };
+  const BuiltLayer& ref_layer = layer_of(opt.reference_mesh);
+  for (const std::string& mesh : opt.meshes) (void)layer_of(mesh);
+  for (const std::string& mesh : opt.reduced_meshes) check_handle_counts(layer_of(mesh).layer, opt.handles);
+  const std::vector<int>& region = ref_layer.layer.mesh->region_surface.vertices;
+  for (const auto& [mesh, built] : layers)
+    require(built.layer.mesh->region_surface.vertices == region, "tradeoff: the {} mesh has a different skin region than the {} mesh",
+            mesh, opt.reference_mesh);
+  logger()->info("tradeoff: {} frames at {:g} fps, {} region vertices; reference {} on the {} mesh", motion.num_frames(), motion.fps,
+                 region.size(), opt.reference, opt.reference_mesh);
+
+  // The reference.
+  std::vector<tradeoff::Row> rows;
+  ReferenceTrack ref;
+  nlohmann::json reference_json;
+  {
+    const fullspace::BodyLayer& layer = ref_layer.layer;
+    const fullspace::State initial = fullspace::initial_state(layer.problem, 0.0);
+    tradeoff::Row row{"reference", opt.reference, opt.reference_mesh};
+    const auto t0 = Clock::now();
+    Measured m;
+    if (opt.reference == "sundials") {
+      fullspace::ReferenceOptions ro;
+      ro.rtol = opt.rtol;
+      ro.atol = opt.atol;
+      fullspace::ReferenceIntegrator integrator(layer.problem, ro);
+      integrator.initialize(initial);
+      row.setup_seconds = ref_layer.seconds + seconds_since(t0);
+      m = track(layer, motion, initial, [&](std::size_t f, double& seconds) {
+            const double before = integrator.stats().seconds;
+            fullspace::State s = integrator.advance_to(motion.time(f));
+            seconds += integrator.stats().seconds - before;
+            return s;
+          }, false, &ref, nullptr);
+      const fullspace::ReferenceStats& st = integrator.stats();
+      reference_json = {{"integrator", "sundials"}, {"method", "ARKODE ARKStep, adaptive implicit SDIRK, KLU"}, {"rtol", opt.rtol},
+                        {"atol", opt.atol}, {"order", ro.order}, {"internal_steps", st.steps}, {"error_test_fails", st.error_test_fails},
+                        {"newton_iterations", st.nonlin_iters}, {"mean_step", motion.duration() / std::max(1L, st.steps)}};
+    } else {
+      row.substeps = opt.reference_substeps;
+      row.step = 1.0 / (motion.fps * opt.reference_substeps);
+      fullspace::BackwardEuler integrator(layer.problem, MPI_COMM_WORLD);
+      integrator.initialize(initial);
+      row.setup_seconds = ref_layer.seconds + seconds_since(t0);
+      m = track(layer, motion, initial, [&](std::size_t, double& seconds) {
+            for (int k = 0; k < row.substeps; ++k) seconds += integrator.step(row.step).seconds;
+            return integrator.state();
+          }, false, &ref, nullptr);
+      reference_json = {{"integrator", "backward_euler"}, {"substeps", row.substeps}, {"step", row.step}};
+    }
+    row.seconds_per_frame = m.solve_seconds / steps;
+    row.sigma_ratio = 1.0;
+    rows.push_back(row);
+    reference_json["mesh"] = opt.reference_mesh;
+    reference_json["nodes"] = layer.problem.num_nodes();
+    reference_json["tets"] = layer.problem.num_tets();
+    reference_json["preset"] = opt.preset;
+    reference_json["seconds_per_frame"] = row.seconds_per_frame;
+    reference_json["soft_tissue_rms_mm"] = 1e3 * ref.soft_rms;
+    reference_json["sigma_mean_mm"] = 1e3 * ref.sigma_mean;
+    logger()->info("reference: {:.3f} s per frame, soft-tissue RMS {:.3f} mm, mean σ {:.3f} mm", row.seconds_per_frame, 1e3 * ref.soft_rms,
+                   1e3 * ref.sigma_mean);
+  }
+  require(ref.soft_rms > 0.0, "tradeoff: the reference does not move the soft tissue (motion {}, {} frames)", motion.name, motion.num_frames());
+  const double samples = static_cast<double>(region.size()) * steps;
+
+  // Scores one run against the reference into its row.
+  auto score = [&](tradeoff::Row& row, const Measured& m) {
+    row.seconds_per_frame = m.solve_seconds / steps;
+    row.rms_error_mm = 1e3 * std::sqrt(m.error_sq / samples);
+    row.relative_error = std::sqrt(m.error_sq / samples) / ref.soft_rms;
+    row.sigma_ratio = ref.sigma_mean > 0 ? m.sigma_mean / ref.sigma_mean : std::nan("");
+    row.valid = m.invalid.empty();
+    if (!row.valid) logger()->warn("{}: {}", row.label(), m.invalid);
+    logger()->info("{}: {:.4f} s per frame, RMS error {:.4f} mm (relative {:.3f}), σ ratio {:.3f}", row.label(), row.seconds_per_frame,
+                   row.rms_error_mm, row.relative_error, row.sigma_ratio);
+  };
+  // A solver that gives up is a row that failed, not a failed command.
+  auto guarded = [&](tradeoff::Row& row, const std::function<Measured()>& run) {
+    try {
+      score(row, run());
+    } catch (const Error& e) {
+      row.valid = false;
+      row.rms_error_mm = row.relative_error = row.sigma_ratio = std::nan("");
+      logger()->warn("{} failed: {}", row.label(), e.what());
+    }
+    rows.push_back(row);
+  };
+
+  for (const std::string& mesh : opt.meshes) {
+    const BuiltLayer& built = layers.at(mesh);
+    for (int substeps : opt.substeps) {
+      tradeoff::Row row{"full", "backward_euler", mesh};
+      row.substeps = substeps;
+      row.step = 1.0 / (motion.fps * substeps);
+      guarded(row, [&] {
+        const auto t0 = Clock::now();
+        const fullspace::State initial = fullspace::initial_state(built.layer.problem, 0.0);
+        fullspace::BackwardEuler integrator(built.layer.problem, MPI_COMM_WORLD);
+        integrator.initialize(initial);
+        row.setup_seconds = built.seconds + seconds_since(t0);
+        return track(built.layer, motion, initial, [&](std::size_t, double& seconds) {
+                 for (int k = 0; k < substeps; ++k) seconds += integrator.step(row.step).seconds;
+                 return integrator.state();
+               }, false, nullptr, &ref);
+      });
+    }
+  }
+  for (const std::string& mesh : opt.reduced_meshes) {
+    const BuiltLayer& built = layers.at(mesh);
+    for (int handles : opt.handles)
+      for (int k : opt.cubature) {
+        const auto t0 = Clock::now();
+        const reduced::ReducedModel reduced_model =
+            reduced::build_reduced_model(built.layer, reduced_model_options(opt.reduced, handles, k, opt.layer.cache));
+        const double model_seconds = seconds_since(t0);
+        for (int substeps : opt.reduced_substeps) {
+          tradeoff::Row row{"reduced", "backward_euler", mesh, handles, static_cast<int>(reduced_model.cubature.size()), substeps,
+                            1.0 / (motion.fps * substeps)};
+          guarded(row, [&] {
+            const auto t1 = Clock::now();
+            const fullspace::State initial = fullspace::initial_state(built.layer.problem, 0.0);
+            reduced::ReducedBackwardEuler integrator(built.layer.problem, reduced_model.subspace, reduced_model.cubature);
+            integrator.initialize(initial);
+            row.setup_seconds = built.seconds + model_seconds + seconds_since(t1);
+            return track(built.layer, motion, initial, [&](std::size_t, double& seconds) {
+                     for (int s = 0; s < substeps; ++s) seconds += integrator.step(row.step).seconds;
+                     return integrator.full_state();
+                   }, true, nullptr, &ref);
+          });
+        }
+      }
+  }
+  tradeoff::mark_pareto_front(rows);
+  const std::optional<std::size_t> pick = tradeoff::recommend(rows, budget);
+  const std::string recommendation = tradeoff::recommendation_text(rows, budget, pick);
+  logger()->info("{}", recommendation);
+
+  // Everything is computed: the run folder appears at once.
+  RunFolder run(opt.out);
+  tradeoff::write_csv(run.stage("tradeoff.csv"), rows);
+  const std::string title = fmt::format("{} · {} · {} frames at {:g} fps", subject_label, motion.name, motion.num_frames(), motion.fps);
+  const std::string reference_text =
+      opt.reference == "sundials"
+          ? fmt::format("SUNDIALS ARKODE (adaptive, rtol {:g}, atol {:g}) on the {} mesh", opt.rtol, opt.atol, opt.reference_mesh)
+          : fmt::format("backward Euler at {} substeps per frame on the {} mesh", opt.reference_substeps, opt.reference_mesh);
+  tradeoff::write_markdown(
+      run.stage("tradeoff.md"), "What accuracy costs in time: " + title,
+      {fmt::format("preset {}; reference: {}", opt.preset, reference_text),
+       fmt::format("error: RMS over the {} region vertices of the body surface and frames 1..{} of |p − p_ref|, p the posed body "
+                   "surface every model writes (fullspace::BodyLayer::posed_surface); relative: divided by the RMS of the reference's "
+                   "soft-tissue displacement p_ref − p_skinned ({:.3f} mm)",
+                   region.size(), steps, 1e3 * ref.soft_rms),
+       fmt::format("σ ratio: mean σ / mean σ_ref over the region (fullspace::DynamicsAmplitude of the unposed skin displacement, as "
+                   "`sflsh simulate` reports it; σ_ref = {:.3f} mm)",
+                   1e3 * ref.sigma_mean),
+       "s/frame: solve time per output frame (steps only); setup: layer build + solver (+ reduced model) setup",
+       "Pareto: no other valid row is both faster and more accurate"},
+      rows, recommendation);
+  std::string png = "tradeoff.png";
+  try {
+    tradeoff::write_png(run.stage("tradeoff.png"), "Error against time: " + title, rows);
+  } catch (const Error& e) {   // the picture is a convenience: the tables never depend on a display
+    logger()->warn("skipped tradeoff.png: {}", e.what());
+    png.clear();
+  }
+  nlohmann::json row_json = nlohmann::json::array();
+  for (const tradeoff::Row& r : rows)
+    row_json.push_back({{"label", r.label()}, {"model", r.model}, {"integrator", r.integrator}, {"mesh", r.mesh}, {"handles", r.handles},
+                        {"cubature", r.cubature}, {"substeps", r.substeps}, {"step", r.step}, {"setup_seconds", r.setup_seconds},
+                        {"seconds_per_frame", r.seconds_per_frame},
+                        {"rms_error_mm", std::isfinite(r.rms_error_mm) ? nlohmann::json(r.rms_error_mm) : nlohmann::json(nullptr)},
+                        {"relative_error", std::isfinite(r.relative_error) ? nlohmann::json(r.relative_error) : nlohmann::json(nullptr)},
+                        {"sigma_ratio", std::isfinite(r.sigma_ratio) ? nlohmann::json(r.sigma_ratio) : nlohmann::json(nullptr)},
+                        {"valid", r.valid}, {"pareto", r.pareto}});
+  nlohmann::json summary = summary_header("tradeoff", invocation.argc, invocation.argv);
+  summary["preset"] = opt.preset;
+  summary["body"] = opt.subject.body_path.empty() ? "open_body" : opt.subject.body_path;
+  summary["subject"] = subject_label;
+  summary["beta"] = std::vector<double>(beta.data(), beta.data() + beta.size());
+  summary["motion"] = {{"name", motion.name}, {"source", motion.source}, {"fps", motion.fps}, {"frames", motion.num_frames()}};
+  summary["material"] = material_summary(opt.layer, material_file);
+  summary["region_vertices"] = region.size();
+  summary["reference"] = reference_json;
+  summary["reference"]["description"] = reference_text;
+  summary["rows"] = row_json;
+  summary["budget"] = {{"rms_error_mm", budget.mm ? nlohmann::json(*budget.mm) : nlohmann::json(nullptr)},
+                       {"relative_error", budget.relative ? nlohmann::json(*budget.relative) : nlohmann::json(nullptr)}};
+  summary["recommendation"] = {{"row", pick ? nlohmann::json(*pick) : nlohmann::json(nullptr)},
+                               {"configuration", pick ? row_json[*pick] : nlohmann::json(nullptr)},
+                               {"message", recommendation}};
+  summary["output"] = {{"table", "tradeoff.csv"}, {"markdown", "tradeoff.md"}, {"plot", png.empty() ? nlohmann::json(nullptr) : nlohmann::json(png)}};
+  summary["units"] = {{"rms_error", "mm"}, {"seconds_per_frame", "s"}, {"setup_seconds", "s"}, {"step", "s"}};
+  summary["timings"] = {{"total_seconds", seconds_since(t_start)}};
+  write_json(run.stage("summary.json"), summary);
+  run.commit();
+  logger()->info("tradeoff: wrote {} ({} rows, {:.1f} s)", run.dir().string(), rows.size(), seconds_since(t_start));
+}
+
+}  // namespace
+
+void register_tradeoff_commands(CLI::App& app, const Invocation& invocation) {
+  auto opt = std::make_shared<TradeoffOptions>();
+  auto* cmd = app.add_subcommand(
+      "tradeoff",
+      "What accuracy costs in time: one case run by a reference, full-space backward Euler on several meshes and steps and reduced "
+      "models (handles × cubature × steps), scored against the reference; writes tradeoff.csv/.md/.png and summary.json with the "
+      "Pareto front and the cheapest configuration within --budget-mm / --budget-relative.");
+  cmd->add_option("--preset", opt->preset, "quick (minutes on 2 cores; reference: backward Euler at 1/960 s on the coarse mesh) | full (reference: SUNDIALS on the fine mesh)")
+      ->check(CLI::IsMember({"quick", "full"}));
+  add_body_option(*cmd, opt->subject);
+  add_subject_options(*cmd, opt->subject);
+  cmd->add_option("--motion", opt->motion, "Motion: a procedural name (sflsh motion list) or an AMASS .npz path")->capture_default_str();
+  cmd->add_option("--frames", opt->frames, "Output frames (quick 8, full 60)");
+  cmd->add_option("--fps", opt->fps, "Output frame rate (and motion sampling); every step is 1 / (fps · substeps)")->capture_default_str();
+  cmd->add_option("--reference", opt->reference, "sundials (adaptive, error-controlled; full preset) | backward_euler (at --reference-substeps; quick preset)")
+      ->check(CLI::IsMember({"sundials", "backward_euler"}));
+  cmd->add_option("--reference-mesh", opt->reference_mesh, "Mesh of the reference (quick coarse, full fine)")
+      ->check(CLI::IsMember({"coarse", "default", "fine"}));
+  cmd->add_option("--reference-substeps", opt->reference_substeps, "Substeps per frame of a backward-Euler reference")->capture_default_str();
+  cmd->add_option("--rtol", opt->rtol, "SUNDIALS reference: relative tolerance")->capture_default_str();
+  cmd->add_option("--atol", opt->atol, "SUNDIALS reference: absolute tolerance [m, m/s]")->capture_default_str();
+  cmd->add_option("--meshes", opt->meshes, "Meshes of the full-space backward-Euler rows, comma-separated")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"coarse", "default", "fine"}));
+  cmd->add_option("--substeps", opt->substeps, "Substeps per frame of the full-space rows, comma-separated (1,2,4,8 at 30 fps: 1/30 to 1/240 s)")
+      ->delimiter(',');
+  cmd->add_option("--reduced-meshes", opt->reduced_meshes, "Meshes of the reduced rows, comma-separated (empty: none)")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"coarse", "default", "fine"}));
+  cmd->add_option("--handles", opt->handles, "Point-handle counts of the reduced rows, comma-separated")->delimiter(',');
+  cmd->add_option("--cubature", opt->cubature, "Cubature tet counts K of the reduced rows, comma-separated (0 = every tet)")->delimiter(',');
+  cmd->add_option("--reduced-substeps", opt->reduced_substeps, "Substeps per frame of the reduced rows, comma-separated")->delimiter(',');
+  cmd->add_option("--budget-mm", opt->budget_mm, "Error budget: largest RMS error [mm] (the recommendation is the cheapest row within it)");
+  cmd->add_option("--budget-relative", opt->budget_relative, "Error budget: largest relative error");
+  add_reduced_options(*cmd, opt->reduced);
+  add_layer_options(*cmd, opt->layer);
+  cmd->add_option("--out", opt->out, "Output folder")->required();
+  cmd->callback([opt, invocation, cmd] {
+    apply_preset(*opt, *cmd);
+    with_petsc(invocation, [&](int rank, int size) { run_tradeoff(*opt, invocation, rank, size); });
+  });
+}
+
+}  // namespace sflsh::app
