@@ -26,7 +26,8 @@ std::string step_text(const Row& r) {
 }  // namespace
 
 std::string Row::label() const {
-  if (model == "reference") return fmt::format("reference {} {}{}", integrator, mesh, substeps ? " " + step_text(*this) : "");
+  if (model == "reference")
+    return substeps ? fmt::format("reference {} {} {}", integrator, mesh, step_text(*this)) : fmt::format("reference {} {}", integrator, mesh);
   if (model == "reduced") return fmt::format("reduced {} h{} k{} {}", mesh, handles, cubature, step_text(*this));
   return fmt::format("full {} {}", mesh, step_text(*this));
 }

@@ -19,7 +19,7 @@ class Reader : public TomlReader {
   using TomlReader::TomlReader;
 
   void read_bounds(const toml::node& node, material::ParameterBounds& bounds) const {
-    const toml::table& table = table(node, "bounds");
+    const toml::table& table = TomlReader::table(node, "bounds");
     check_keys(table, {"thickness", "young_tangent", "young_normal"}, " in [bounds]");
     material::ParameterRange* ranges[material::kNumKappa] = {&bounds.thickness, &bounds.young_tangent,
                                                              &bounds.young_normal};
@@ -38,7 +38,7 @@ class Reader : public TomlReader {
   }
 
   void read_basis(const toml::node& node, ShapeModelFile& file) const {
-    const toml::table& table = table(node, "basis");
+    const toml::table& table = TomlReader::table(node, "basis");
     check_keys(table, {"kind", "region", "mesh"}, " in [basis]");
     const toml::node& kind = required(table, "kind", " in [basis]");
     const std::string k = string_value(kind, "kind", " in [basis]");
@@ -49,7 +49,7 @@ class Reader : public TomlReader {
   }
 
   ShapeModelFit read_fit(const toml::node& node) const {
-    const toml::table& table = table(node, "fit");
+    const toml::table& table = TomlReader::table(node, "fit");
     check_keys(table, {"regularizer", "lambda", "subjects", "motions"}, " in [fit]");
     ShapeModelFit fit;
     const toml::node& reg = required(table, "regularizer", " in [fit]");
