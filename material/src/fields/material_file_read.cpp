@@ -45,19 +45,7 @@ class Reader : public TomlReader {
     check_keys(*table, {"vertex", "position", "thickness", "young_tangent", "young_normal"}, context);
     MaterialControlPoint point;
     point.line = static_cast<int>(table->source().begin.line);
-    const toml::node& vertex = required(*table, "vertex", context);
-    const auto v = vertex.value_exact<std::int64_t>();
-    require(v.has_value(), "{}: 'vertex'{} must be an integer", at(vertex), context);
-    require(*v >= 0 && *v <= std::numeric_limits<int>::max(), "{}: 'vertex'{} = {} must be a vertex index >= 0",
-            at(vertex), context, *v);
-    point.vertex = static_cast<int>(*v);
-    const auto [first, inserted] = seen.emplace(point.vertex, index);
-    require(inserted, "{}: 'vertex'{} repeats vertex {} of control_point #{}", at(vertex), context, point.vertex,
-            first->second);
-    if (const toml::node* position = table->get("position")) {
-      const std::vector<double> p = numbers(*position, "position", 3, context);
-      point.position = Eigen::Vector3d(p[0], p[1], p[2]);
-    }
+    point.vertex = control_vertex(*table, index, context, seen, point.position);
     double* values[kNumKappa] = {&point.kappa.thickness, &point.kappa.young_tangent, &point.kappa.young_normal};
     for (int c = 0; c < kNumKappa; ++c) {
       const std::string_view name = kKappaNames[static_cast<std::size_t>(c)];

@@ -1,6 +1,7 @@
 // Writing and checking material files (material_file.hpp, docs/material_file.md).
 #include <sflsh/core/atomic_file.hpp>
 #include <sflsh/core/error.hpp>
+#include <sflsh/core/toml_reader.hpp>
 #include <sflsh/material/material_file.hpp>
 
 #include <toml++/toml.h>
@@ -19,18 +20,6 @@ std::string where(std::string_view what, const MaterialControlPoint& point) {
   return point.line > 0 ? fmt::format("{}:{}", what, point.line) : std::string(what);
 }
 
-// Shortest round-trip decimal, always with a '.' or exponent so TOML reads it back as a float.
-std::string toml_float(double value) {
-  std::string s = fmt::format("{}", value);
-  if (s.find_first_of(".eEn") == std::string::npos) s += ".0";
-  return s;
-}
-
-std::string toml_string(const std::string& value) {
-  std::ostringstream out;
-  out << toml::value<std::string>(value);
-  return out.str();
-}
 
 }  // namespace
 

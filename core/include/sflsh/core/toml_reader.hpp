@@ -1,14 +1,21 @@
 #pragma once
-// Reading TOML input files with errors as "<file>:<line>: …" (material files, scene files): the checks every
-// reader needs (unknown keys, missing keys, types, finite numbers, fixed-size arrays), on toml++.
+// Reading TOML input files with errors as "<file>:<line>: …" (material, shape-model and scene files): the checks
+// every reader needs (unknown keys, missing keys, types, finite numbers, fixed-size arrays, control-point
+// vertices), on toml++; and the two value formatters their writers share.
 #include <sflsh/core/error.hpp>
 
 #include <toml++/toml.h>
+
+#include <Eigen/Core>
 
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <initializer_list>
+#include <limits>
+#include <map>
+#include <optional>
+#include <sstream>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -100,8 +107,40 @@ class TomlReader {
     return out;
   }
 
+  /// The 'vertex' of a [[control_point]] table (a body vertex index ≥ 0 that no earlier entry used: `seen`
+  /// maps vertex → entry index) and its optional 'position' [m].
+  int control_vertex(const toml::table& table, std::size_t index, std::string_view context, std::map<int, std::size_t>& seen,
+                     std::optional<Eigen::Vector3d>& position) const {
+    const toml::node& vertex = required(table, "vertex", context);
+    const auto v = vertex.value_exact<std::int64_t>();
+    require(v.has_value(), "{}: 'vertex'{} must be an integer", at(vertex), context);
+    require(*v >= 0 && *v <= std::numeric_limits<int>::max(), "{}: 'vertex'{} = {} must be a vertex index >= 0", at(vertex), context, *v);
+    const int id = static_cast<int>(*v);
+    const auto [first, inserted] = seen.emplace(id, index);
+    require(inserted, "{}: 'vertex'{} repeats vertex {} of control_point #{}", at(vertex), context, id, first->second);
+    if (const toml::node* p = table.get("position")) {
+      const std::vector<double> xyz = numbers(*p, "position", 3, context);
+      position = Eigen::Vector3d(xyz[0], xyz[1], xyz[2]);
+    }
+    return id;
+  }
+
  private:
   std::filesystem::path path_;
 };
+
+/// Shortest round-trip decimal, always with a '.' or exponent so TOML reads it back as a float.
+inline std::string toml_float(double value) {
+  std::string s = fmt::format("{}", value);
+  if (s.find_first_of(".eEn") == std::string::npos) s += ".0";
+  return s;
+}
+
+/// A TOML basic string (quoted and escaped by toml++).
+inline std::string toml_string(const std::string& value) {
+  std::ostringstream out;
+  out << toml::value<std::string>(value);
+  return out.str();
+}
 
 }  // namespace sflsh
