@@ -12,11 +12,11 @@
 #include <sflsh/body/subjects.hpp>
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/summary.hpp>
-#include <sflsh/fullspace/backward_euler.hpp>
-#include <sflsh/fullspace/body_layer.hpp>
+#include <sflsh/fullspace/fullspace_solver.hpp>
+#include <sflsh/model/body_layer.hpp>
 #include <sflsh/fullspace/petsc_session.hpp>
 #include <sflsh/fullspace/reference_integrator.hpp>
-#include <sflsh/fullspace/simulation_output.hpp>
+#include <sflsh/model/simulation_output.hpp>
 
 #include <fmt/format.h>
 
@@ -126,7 +126,7 @@ int main(int argc, char** argv) {
     nlohmann::json rows = nlohmann::json::array();
     for (int r : rates) {
       const int stride = finest / r;
-      BackwardEuler be(problem, MPI_COMM_WORLD);
+      FullSpaceSolver be(problem, MPI_COMM_WORLD);
       be.initialize(initial_state(problem, 0.0));
       Samples samples{layer.surface_displacement(be.state().x)}, ref_at;
       ref_at.push_back(ref_samples[0]);

@@ -50,7 +50,7 @@ int main(int argc, char** argv) {
     const std::vector<body::Subject> all = body::default_subjects();
     std::vector<body::Betas> betas;
     for (int s = 1; s <= subjects; ++s) betas.push_back(body::find_subject(all, fmt::format("OPEN_TRAIN_{}", (s - 1) % 5 + 1)).beta);
-    fullspace::BodyLayerOptions lo;
+    model::BodyLayerOptions lo;
     lo.size = meshing::SizePreset::coarse;
     std::vector<std::unique_ptr<reduced::DynamicsCase>> cases;
     for (int s = 0; s < subjects; ++s)

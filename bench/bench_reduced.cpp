@@ -9,9 +9,9 @@
 #include <sflsh/body/motion.hpp>
 #include <sflsh/core/log.hpp>
 #include <sflsh/core/summary.hpp>
-#include <sflsh/fullspace/body_layer.hpp>
+#include <sflsh/model/body_layer.hpp>
 #include <sflsh/fullspace/reference_integrator.hpp>
-#include <sflsh/reduced/reduced_integrator.hpp>
+#include <sflsh/reduced/reduced_solver.hpp>
 #include <sflsh/reduced/reduced_model.hpp>
 
 #include <fmt/format.h>
@@ -31,16 +31,16 @@ using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 struct Body {
-  fullspace::BodyLayer layer;
+  model::BodyLayer layer;
   reduced::ReducedModel model;
-  std::unique_ptr<reduced::ReducedBackwardEuler> integrator;
+  std::unique_ptr<reduced::ReducedSolver> integrator;
   double t0 = 0.0;
 };
 
 struct Breakdown {
   double step = 0, elastic = 0, inertia = 0, solve = 0, output = 0;
   long newton = 0;
-  void add(const reduced::ReducedStepStats& s) {
+  void add(const model::StepStats& s) {
     step += s.seconds;
     elastic += s.elastic_seconds;
     inertia += s.inertia_seconds;
@@ -50,12 +50,12 @@ struct Breakdown {
 };
 
 std::unique_ptr<Body> make_body(const body::BodyModel& model, const body::Betas& beta, const body::Motion& motion, double t0,
-                                const fullspace::BodyLayerOptions& layer_options, const reduced::ReducedModelOptions& options) {
+                                const model::BodyLayerOptions& layer_options, const reduced::ReducedModelOptions& options) {
   auto b = std::make_unique<Body>();
-  b->layer = fullspace::build_body_layer(model, beta, motion, nullptr, 12, layer_options);
+  b->layer = model::build_body_layer(model, beta, motion, nullptr, 12, layer_options);
   b->model = reduced::build_reduced_model(b->layer, options);
-  b->integrator = std::make_unique<reduced::ReducedBackwardEuler>(b->layer.problem, b->model.subspace, b->model.cubature);
-  b->integrator->initialize(fullspace::initial_state(b->layer.problem, t0));
+  b->integrator = std::make_unique<reduced::ReducedSolver>(b->layer.problem, b->model.subspace, b->model.cubature);
+  b->integrator->initialize(model::initial_state(b->layer.problem, t0));
   b->t0 = t0;
   return b;
 }
@@ -93,7 +93,7 @@ int main(int argc, char** argv) {
   try {
     logger()->set_level(spdlog::level::warn);
     const body::BodyModel model = body::load_body(std::filesystem::path(SFLSH_DATA_DIR) / "open_body.npz");
-    fullspace::BodyLayerOptions layer_options;
+    model::BodyLayerOptions layer_options;
     layer_options.size = meshing::parse_size_preset(mesh);
     reduced::ReducedModelOptions options;
     options.point_handles = handles;

@@ -8,7 +8,7 @@
 #include <sflsh/body/motion.hpp>
 #include <sflsh/core/log.hpp>
 #include <sflsh/core/summary.hpp>
-#include <sflsh/fullspace/body_layer.hpp>
+#include <sflsh/model/body_layer.hpp>
 #include <sflsh/fullspace/reference_integrator.hpp>
 #include <sflsh/reduced/reduced_model.hpp>
 #include <sflsh/reduced/reduced_sensitivity.hpp>
@@ -31,10 +31,10 @@ struct PlainRun {
   long newton = 0;
 };
 
-PlainRun plain_run(const fullspace::Problem& problem, const reduced::ReducedModel& model, const reduced::ReducedOptions& options,
+PlainRun plain_run(const model::Problem& problem, const reduced::ReducedModel& model, const reduced::ReducedOptions& options,
                    int frames, double h) {
-  reduced::ReducedBackwardEuler integrator(problem, model.subspace, model.cubature, options);
-  integrator.initialize(fullspace::initial_state(problem, 0.0));
+  reduced::ReducedSolver integrator(problem, model.subspace, model.cubature, options);
+  integrator.initialize(model::initial_state(problem, 0.0));
   PlainRun run;
   const auto t = Clock::now();
   for (int f = 0; f < frames; ++f) run.newton += integrator.step(h).newton_iterations;
@@ -63,11 +63,11 @@ int main(int argc, char** argv) {
   try {
     logger()->set_level(spdlog::level::warn);
     const body::BodyModel model = body::load_body(std::filesystem::path(SFLSH_DATA_DIR) / "open_body.npz");
-    fullspace::BodyLayerOptions layer_options;
+    model::BodyLayerOptions layer_options;
     layer_options.size = meshing::parse_size_preset(mesh);
     const double h = 1.0 / 60.0;
     const body::Motion motion = body::make_procedural_motion(motion_name, 60.0, frames + 2);
-    const fullspace::BodyLayer layer = fullspace::build_body_layer(model, body::Betas::Zero(), motion, nullptr, controls, layer_options);
+    const model::BodyLayer layer = model::build_body_layer(model, body::Betas::Zero(), motion, nullptr, controls, layer_options);
     reduced::ReducedModelOptions options;
     options.point_handles = handles;
     options.cubature = cubature;
@@ -87,7 +87,7 @@ int main(int argc, char** argv) {
 
     // With sensitivities.
     reduced::SensitivityIntegrator sensitivity(layer.problem, reduced_model.subspace, reduced_model.cubature, W);
-    sensitivity.initialize(fullspace::initial_state(layer.problem, 0.0));
+    sensitivity.initialize(model::initial_state(layer.problem, 0.0));
     double sens_solve = 0.0, sens_young = 0.0, sens_history = 0.0, sens_hessian = 0.0, sens_factor = 0.0;
     long sens_newton = 0;
     t = Clock::now();
@@ -104,7 +104,7 @@ int main(int argc, char** argv) {
     const double largest = sensitivity.dq_dyoung().cwiseAbs().maxCoeff();
 
     // Finite differences: 2N extra simulations, each after a rebuild of the tet materials.
-    fullspace::Problem perturbed = layer.problem;
+    model::Problem perturbed = layer.problem;
     Eigen::MatrixX2d young = map.control_young();
     young(0, 0) *= 1.0 + 1e-4;
     const int rebuilds = 3;

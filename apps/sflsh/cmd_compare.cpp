@@ -13,13 +13,13 @@
 #include <sflsh/core/run_folder.hpp>
 #include <sflsh/core/summary.hpp>
 #include <sflsh/core/vtk_io.hpp>
-#include <sflsh/fullspace/backward_euler.hpp>
-#include <sflsh/fullspace/body_layer.hpp>
+#include <sflsh/fullspace/fullspace_solver.hpp>
+#include <sflsh/model/body_layer.hpp>
 #include <sflsh/fullspace/reference_integrator.hpp>
-#include <sflsh/fullspace/simulation_output.hpp>
+#include <sflsh/model/simulation_output.hpp>
 #include <sflsh/material/material_file.hpp>
 #include <sflsh/meshing/layer_cache.hpp>
-#include <sflsh/reduced/reduced_integrator.hpp>
+#include <sflsh/reduced/reduced_solver.hpp>
 #include <sflsh/reduced/reduced_model.hpp>
 
 #include <fmt/format.h>
@@ -109,10 +109,10 @@ void run_compare(const CompareOptions& opt, const Invocation& invocation, int ra
   require(motion.num_frames() >= 2, "compare: the motion has {} frame(s); at least 2 are needed", motion.num_frames());
   const std::optional<material::MaterialFile> material_file = load_layer_material(opt.layer);
   const auto t_build = Clock::now();
-  const fullspace::BodyLayer layer = fullspace::build_body_layer(model, beta, motion, material_file ? &*material_file : nullptr,
+  const model::BodyLayer layer = model::build_body_layer(model, beta, motion, material_file ? &*material_file : nullptr,
                                                                  opt.layer.control_points, body_layer_options(opt.layer, opt.mesh));
   const double build_seconds = seconds_since(t_build);
-  const fullspace::Problem& problem = layer.problem;
+  const model::Problem& problem = layer.problem;
   const std::vector<int>& region = layer.mesh->region_surface.vertices;
   const auto R = static_cast<Eigen::Index>(region.size());
   const int steps = static_cast<int>(motion.num_frames()) - 1;
@@ -141,26 +141,26 @@ void run_compare(const CompareOptions& opt, const Invocation& invocation, int ra
                  handle_sweep.size() * cubature_sweep.size());
 
   // The full-space reference: its skin displacement per frame is kept for the error maps.
-  std::vector<fullspace::RowMatrixX3d> u_full;
+  std::vector<model::RowMatrixX3d> u_full;
   u_full.reserve(motion.num_frames());
-  const fullspace::RowMatrixX3d normals = region_normals(layer);
-  fullspace::DynamicsAmplitude full_amplitude(normals);
+  const model::RowMatrixX3d normals = region_normals(layer);
+  model::DynamicsAmplitude full_amplitude(normals);
   double full_seconds = 0.0;
   long full_newton = 0, full_linear = 0, full_retries = 0;
   {
-    fullspace::BackwardEuler full(problem, MPI_COMM_WORLD);
-    full.initialize(fullspace::initial_state(problem, 0.0));
+    fullspace::FullSpaceSolver full(problem, MPI_COMM_WORLD);
+    full.initialize(model::initial_state(problem, 0.0));
     u_full.push_back(layer.surface_displacement(full.state().x));
     Progress progress("full-space frames", static_cast<std::size_t>(steps), rank == 0);
     for (int f = 1; f <= steps; ++f) {
       for (int k = 0; k < opt.substeps; ++k) {
-        const fullspace::StepStats st = full.step(h);
+        const model::StepStats st = full.step(h);
         full_seconds += st.seconds;
         full_newton += st.newton_iterations;
         full_linear += st.linear_iterations;
         full_retries += st.failed_attempts;
       }
-      const fullspace::State& state = full.state();
+      const model::State& state = full.state();
       require(state.x.allFinite(), "compare: the full-space state at t = {} is not finite", motion.time(static_cast<std::size_t>(f)));
       u_full.push_back(layer.surface_displacement(state.x));
       progress.advance();
@@ -181,20 +181,20 @@ void run_compare(const CompareOptions& opt, const Invocation& invocation, int ra
   Progress progress("reduced frames", configs.size() * static_cast<std::size_t>(steps));
   for (auto& cp : configs) {
     Configuration& c = *cp;
-    reduced::ReducedBackwardEuler fast(problem, c.model.subspace, c.model.cubature);
-    fast.initialize(fullspace::initial_state(problem, 0.0));
-    fullspace::DynamicsAmplitude amplitude(normals);
+    reduced::ReducedSolver fast(problem, c.model.subspace, c.model.cubature);
+    fast.initialize(model::initial_state(problem, 0.0));
+    model::DynamicsAmplitude amplitude(normals);
     c.error_sq = Eigen::VectorXd::Zero(R);
     const std::string name = compare::config_suffix(c.handles, c.model.cubature.size());
     auto record = [&](std::size_t f) {
-      const fullspace::State state = fast.full_state();
-      const fullspace::RowMatrixX3d u = layer.surface_displacement(state.x);
+      const model::State state = fast.full_state();
+      const model::RowMatrixX3d u = layer.surface_displacement(state.x);
       require(u.allFinite(), "compare: reduced {} state at t = {} is not finite", name, motion.time(f));
       amplitude.add(u);
       c.error_sq += (u - u_full[f]).rowwise().squaredNorm();
       if (c.invalid.empty()) {
         try {
-          (void)fullspace::energies(problem, state);
+          (void)model::energies(problem, state);
         } catch (const Error& e) {
           c.invalid = fmt::format("at t = {:.4f} s: {}", motion.time(f), e.what());
           logger()->warn("reduced {}: the full-space state leaves the material's range {}", name, c.invalid);
@@ -204,7 +204,7 @@ void run_compare(const CompareOptions& opt, const Invocation& invocation, int ra
     record(0);
     for (int f = 1; f <= steps; ++f) {
       for (int k = 0; k < opt.substeps; ++k) {
-        const reduced::ReducedStepStats st = fast.step(h);
+        const model::StepStats st = fast.step(h);
         c.seconds += st.seconds;
         c.elastic_seconds += st.elastic_seconds;
         c.inertia_seconds += st.inertia_seconds;

@@ -10,13 +10,13 @@
 #include <sflsh/core/run_folder.hpp>
 #include <sflsh/core/summary.hpp>
 #include <sflsh/core/vtk_io.hpp>
-#include <sflsh/fullspace/backward_euler.hpp>
-#include <sflsh/fullspace/body_layer.hpp>
+#include <sflsh/fullspace/fullspace_solver.hpp>
+#include <sflsh/model/body_layer.hpp>
 #include <sflsh/fullspace/reference_integrator.hpp>
-#include <sflsh/fullspace/simulation_output.hpp>
+#include <sflsh/model/simulation_output.hpp>
 #include <sflsh/material/material_file.hpp>
 #include <sflsh/meshing/layer_cache.hpp>
-#include <sflsh/reduced/reduced_integrator.hpp>
+#include <sflsh/reduced/reduced_solver.hpp>
 #include <sflsh/reduced/reduced_model.hpp>
 #include <sflsh/scene/scene_file.hpp>
 #include <sflsh/scene/scene_runner.hpp>
@@ -105,7 +105,7 @@ void run_simulate(const SimulateOptions& opt, const Invocation& invocation, int 
   std::optional<material::MaterialFile> material_file;
   if (!opt.material.empty()) material_file = material::load_material_file(opt.material);
 
-  fullspace::BodyLayerOptions layer_options;
+  model::BodyLayerOptions layer_options;
   layer_options.mesher = meshing::parse_mesher(opt.mesher);
   layer_options.size = meshing::parse_size_preset(opt.mesh);
   if (!opt.cache.empty()) layer_options.cache_dir = opt.cache;
@@ -113,10 +113,10 @@ void run_simulate(const SimulateOptions& opt, const Invocation& invocation, int 
   layer_options.gravity = opt.gravity;
   layer_options.stiffness_scale = opt.stiffness_scale;
   const auto t_build = Clock::now();
-  fullspace::BodyLayer layer = fullspace::build_body_layer(model, beta, motion, material_file ? &*material_file : nullptr,
+  model::BodyLayer layer = model::build_body_layer(model, beta, motion, material_file ? &*material_file : nullptr,
                                                            opt.control_points, layer_options);
   const double build_seconds = seconds_since(t_build);
-  const fullspace::Problem& problem = layer.problem;
+  const model::Problem& problem = layer.problem;
   logger()->info("simulate: {} nodes ({} free), {} tets, {} frames at {} fps, {} substep(s), {} process(es)",
                  problem.num_nodes(), problem.num_nodes() - static_cast<int>(problem.dirichlet.dof.size() / 3),
                  problem.num_tets(), motion.num_frames(), motion.fps, opt.substeps, size);
@@ -124,8 +124,8 @@ void run_simulate(const SimulateOptions& opt, const Invocation& invocation, int 
   const bool use_reduced = opt.solver == "reduced";
   require(!use_reduced || size == 1, "--solver reduced runs on one process (got {}); parallelize over bodies instead", size);
   std::optional<reduced::ReducedModel> reduced_model;
-  std::unique_ptr<fullspace::BackwardEuler> full;
-  std::unique_ptr<reduced::ReducedBackwardEuler> fast;
+  std::unique_ptr<fullspace::FullSpaceSolver> full;
+  std::unique_ptr<reduced::ReducedSolver> fast;
   const auto t_model = Clock::now();
   if (use_reduced) {
     reduced::ReducedModelOptions ro;
@@ -135,11 +135,11 @@ void run_simulate(const SimulateOptions& opt, const Invocation& invocation, int 
     ro.basis.affine = opt.affine;
     if (!opt.cache.empty()) ro.cache_dir = opt.cache;
     reduced_model = reduced::build_reduced_model(layer, ro);
-    fast = std::make_unique<reduced::ReducedBackwardEuler>(problem, reduced_model->subspace, reduced_model->cubature);
-    fast->initialize(fullspace::initial_state(problem, 0.0));
+    fast = std::make_unique<reduced::ReducedSolver>(problem, reduced_model->subspace, reduced_model->cubature);
+    fast->initialize(model::initial_state(problem, 0.0));
   } else {
-    full = std::make_unique<fullspace::BackwardEuler>(problem, MPI_COMM_WORLD);
-    full->initialize(fullspace::initial_state(problem, 0.0));
+    full = std::make_unique<fullspace::FullSpaceSolver>(problem, MPI_COMM_WORLD);
+    full->initialize(model::initial_state(problem, 0.0));
   }
   const double model_seconds = seconds_since(t_model);
   auto current_state = [&]() { return use_reduced ? fast->full_state() : full->state(); };
@@ -147,7 +147,7 @@ void run_simulate(const SimulateOptions& opt, const Invocation& invocation, int 
   const bool write = rank == 0 && !opt.no_output;
   std::optional<RunFolder> run;
   if (rank == 0) run.emplace(opt.out);
-  fullspace::SimulationWriter writer(layer, write ? &*run : nullptr, opt.write_layer);
+  model::SimulationWriter writer(layer, write ? &*run : nullptr, opt.write_layer);
   writer.add_frame(0.0, current_state());
 
   nlohmann::json frames = nlohmann::json::array();
@@ -162,7 +162,7 @@ void run_simulate(const SimulateOptions& opt, const Invocation& invocation, int 
     double seconds = 0.0;
     for (int k = 0; k < opt.substeps; ++k) {
       if (use_reduced) {
-        const reduced::ReducedStepStats st = fast->step(h);
+        const model::StepStats st = fast->step(h);
         newton += st.newton_iterations;
         retries += st.failed_attempts;
         seconds += st.seconds;
@@ -171,7 +171,7 @@ void run_simulate(const SimulateOptions& opt, const Invocation& invocation, int 
         dense_seconds += st.solve_seconds;
         factorizations_total += st.factorizations;
       } else {
-        const fullspace::StepStats st = full->step(h);
+        const model::StepStats st = full->step(h);
         newton += st.newton_iterations;
         linear += st.linear_iterations;
         retries += st.failed_attempts;
@@ -185,8 +185,8 @@ void run_simulate(const SimulateOptions& opt, const Invocation& invocation, int 
     retries_total += retries;
     solve_seconds += seconds;
     const auto t_output = Clock::now();
-    const fullspace::State state = current_state();
-    const fullspace::Energies e = fullspace::energies(problem, state);
+    const model::State state = current_state();
+    const model::Energies e = model::energies(problem, state);
     writer.add_frame(motion.time(f), state);
     output_seconds += seconds_since(t_output);
     frames.push_back({{"frame", f},

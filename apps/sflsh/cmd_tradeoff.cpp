@@ -13,10 +13,10 @@
 #include <sflsh/core/log.hpp>
 #include <sflsh/core/run_folder.hpp>
 #include <sflsh/core/summary.hpp>
-#include <sflsh/fullspace/backward_euler.hpp>
+#include <sflsh/fullspace/fullspace_solver.hpp>
 #include <sflsh/fullspace/reference_integrator.hpp>
-#include <sflsh/fullspace/simulation_output.hpp>
-#include <sflsh/reduced/reduced_integrator.hpp>
+#include <sflsh/model/simulation_output.hpp>
+#include <sflsh/reduced/reduced_solver.hpp>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -31,7 +31,7 @@ namespace sflsh::app {
 
 namespace {
 
-using fullspace::RowMatrixX3d;
+using model::RowMatrixX3d;
 
 struct TradeoffOptions {
   std::string preset = "quick";
@@ -119,17 +119,17 @@ struct Measured {
 /// Runs one solver frame by frame. `advance(f, seconds)` integrates to frame f, adds its solve time to
 /// `seconds` and returns the state there. With `keep` the posed region surface is stored (the reference),
 /// with `ref` the error against it is summed. σ is that of simulate's summary: of the unposed skin
-/// displacement u (fullspace::SimulationWriter), over frames 0..F.
-Measured track(const fullspace::BodyLayer& layer, const body::Motion& motion, const fullspace::State& initial,
-               const std::function<fullspace::State(std::size_t, double&)>& advance, bool check_range, ReferenceTrack* keep,
+/// displacement u (model::SimulationWriter), over frames 0..F.
+Measured track(const model::BodyLayer& layer, const body::Motion& motion, const model::State& initial,
+               const std::function<model::State(std::size_t, double&)>& advance, bool check_range, ReferenceTrack* keep,
                const ReferenceTrack* ref) {
   const std::vector<int>& region = layer.mesh->region_surface.vertices;
-  fullspace::DynamicsAmplitude amplitude(region_normals(layer));
+  model::DynamicsAmplitude amplitude(region_normals(layer));
   Measured m;
   double soft_sq = 0.0;
   for (std::size_t f = 0; f < motion.num_frames(); ++f) {
     const double t = motion.time(f);
-    const fullspace::State state = f == 0 ? initial : advance(f, m.solve_seconds);
+    const model::State state = f == 0 ? initial : advance(f, m.solve_seconds);
     require(state.x.allFinite(), "tradeoff: the state at t = {} is not finite", t);
     const RowMatrixX3d u = layer.surface_displacement(state.x);
     amplitude.add(u);
@@ -142,7 +142,7 @@ Measured track(const fullspace::BodyLayer& layer, const body::Motion& motion, co
     }
     if (check_range && m.invalid.empty()) {
       try {
-        (void)fullspace::energies(layer.problem, state);
+        (void)model::energies(layer.problem, state);
       } catch (const Error& e) {
         m.invalid = fmt::format("at t = {:.4f} s: {}", t, e.what());
       }
@@ -157,7 +157,7 @@ Measured track(const fullspace::BodyLayer& layer, const body::Motion& motion, co
 }
 
 struct BuiltLayer {
-  fullspace::BodyLayer layer;
+  model::BodyLayer layer;
   double seconds = 0.0;
 };
 
@@ -183,7 +183,7 @@ void run_tradeoff(const TradeoffOptions& opt, const Invocation& invocation, int 
     auto it = layers.find(mesh);
     if (it != layers.end()) return it->second;
     const auto t0 = Clock::now();
-    fullspace::BodyLayer l = fullspace::build_body_layer(model, beta, motion, material_file ? &*material_file : nullptr,
+    model::BodyLayer l = model::build_body_layer(model, beta, motion, material_file ? &*material_file : nullptr,
                                                          opt.layer.control_points, body_layer_options(opt.layer, mesh));
     return layers.emplace(mesh, BuiltLayer{std::move(l), seconds_since(t0)}).first->second;
   };
@@ -202,8 +202,8 @@ void run_tradeoff(const TradeoffOptions& opt, const Invocation& invocation, int 
   ReferenceTrack ref;
   nlohmann::json reference_json;
   {
-    const fullspace::BodyLayer& layer = ref_layer.layer;
-    const fullspace::State initial = fullspace::initial_state(layer.problem, 0.0);
+    const model::BodyLayer& layer = ref_layer.layer;
+    const model::State initial = model::initial_state(layer.problem, 0.0);
     tradeoff::Row row{"reference", opt.reference, opt.reference_mesh};
     const auto t0 = Clock::now();
     Measured m;
@@ -216,7 +216,7 @@ void run_tradeoff(const TradeoffOptions& opt, const Invocation& invocation, int 
       row.setup_seconds = ref_layer.seconds + seconds_since(t0);
       m = track(layer, motion, initial, [&](std::size_t f, double& seconds) {
             const double before = integrator.stats().seconds;
-            fullspace::State s = integrator.advance_to(motion.time(f));
+            model::State s = integrator.advance_to(motion.time(f));
             seconds += integrator.stats().seconds - before;
             return s;
           }, false, &ref, nullptr);
@@ -227,7 +227,7 @@ void run_tradeoff(const TradeoffOptions& opt, const Invocation& invocation, int 
     } else {
       row.substeps = opt.reference_substeps;
       row.step = 1.0 / (motion.fps * opt.reference_substeps);
-      fullspace::BackwardEuler integrator(layer.problem, MPI_COMM_WORLD);
+      fullspace::FullSpaceSolver integrator(layer.problem, MPI_COMM_WORLD);
       integrator.initialize(initial);
       row.setup_seconds = ref_layer.seconds + seconds_since(t0);
       m = track(layer, motion, initial, [&](std::size_t, double& seconds) {
@@ -283,8 +283,8 @@ void run_tradeoff(const TradeoffOptions& opt, const Invocation& invocation, int 
       row.step = 1.0 / (motion.fps * substeps);
       guarded(row, [&] {
         const auto t0 = Clock::now();
-        const fullspace::State initial = fullspace::initial_state(built.layer.problem, 0.0);
-        fullspace::BackwardEuler integrator(built.layer.problem, MPI_COMM_WORLD);
+        const model::State initial = model::initial_state(built.layer.problem, 0.0);
+        fullspace::FullSpaceSolver integrator(built.layer.problem, MPI_COMM_WORLD);
         integrator.initialize(initial);
         row.setup_seconds = built.seconds + seconds_since(t0);
         return track(built.layer, motion, initial, [&](std::size_t, double& seconds) {
@@ -307,8 +307,8 @@ void run_tradeoff(const TradeoffOptions& opt, const Invocation& invocation, int 
                             1.0 / (motion.fps * substeps)};
           guarded(row, [&] {
             const auto t1 = Clock::now();
-            const fullspace::State initial = fullspace::initial_state(built.layer.problem, 0.0);
-            reduced::ReducedBackwardEuler integrator(built.layer.problem, reduced_model.subspace, reduced_model.cubature);
+            const model::State initial = model::initial_state(built.layer.problem, 0.0);
+            reduced::ReducedSolver integrator(built.layer.problem, reduced_model.subspace, reduced_model.cubature);
             integrator.initialize(initial);
             row.setup_seconds = built.seconds + model_seconds + seconds_since(t1);
             return track(built.layer, motion, initial, [&](std::size_t, double& seconds) {
@@ -336,10 +336,10 @@ void run_tradeoff(const TradeoffOptions& opt, const Invocation& invocation, int 
       run.stage("tradeoff.md"), "What accuracy costs in time: " + title,
       {fmt::format("preset {}; reference: {}", opt.preset, reference_text),
        fmt::format("error: RMS over the {} region vertices of the body surface and frames 1..{} of |p − p_ref|, p the posed body "
-                   "surface every model writes (fullspace::BodyLayer::posed_surface); relative: divided by the RMS of the reference's "
+                   "surface every model writes (model::BodyLayer::posed_surface); relative: divided by the RMS of the reference's "
                    "soft-tissue displacement p_ref − p_skinned ({:.3f} mm)",
                    region.size(), steps, 1e3 * ref.soft_rms),
-       fmt::format("σ ratio: mean σ / mean σ_ref over the region (fullspace::DynamicsAmplitude of the unposed skin displacement, as "
+       fmt::format("σ ratio: mean σ / mean σ_ref over the region (model::DynamicsAmplitude of the unposed skin displacement, as "
                    "`sflsh simulate` reports it; σ_ref = {:.3f} mm)",
                    1e3 * ref.sigma_mean),
        "s/frame: solve time per output frame (steps only); setup: layer build + solver (+ reduced model) setup",

@@ -9,7 +9,7 @@
 #include <sflsh/core/run_folder.hpp>
 #include <sflsh/core/summary.hpp>
 #include <sflsh/core/vtk_io.hpp>
-#include <sflsh/fullspace/backward_euler.hpp>
+#include <sflsh/fullspace/fullspace_solver.hpp>
 #include <sflsh/fullspace/reference_integrator.hpp>
 #include <sflsh/fullspace/verify_problem.hpp>
 
@@ -36,7 +36,7 @@ struct Record {
   Eigen::VectorXd x;
 };
 
-void write_history(const std::filesystem::path& path, const fullspace::Problem& problem, const std::vector<int>& nodes,
+void write_history(const std::filesystem::path& path, const model::Problem& problem, const std::vector<int>& nodes,
                    const std::vector<Record>& records) {
   std::ostringstream csv;
   csv << "t,node,ux,uy,uz\n";
@@ -52,7 +52,7 @@ void write_history(const std::filesystem::path& path, const fullspace::Problem& 
 void run_verify(const VerifyOptions& opt, const Invocation& invocation, int rank, int size) {
   const auto t_start = std::chrono::steady_clock::now();
   const fullspace::VerifyProblem spec = fullspace::load_verify_problem(opt.problem);
-  fullspace::Problem problem = fullspace::make_problem(spec);
+  model::Problem problem = fullspace::make_problem(spec);
   problem.validate();
   const std::vector<int> record_nodes = fullspace::record_nodes(spec);
   const bool reference = spec.integrator == fullspace::VerifyProblem::Integrator::reference;
@@ -71,7 +71,7 @@ void run_verify(const VerifyOptions& opt, const Invocation& invocation, int rank
 
   std::vector<Record> records;
   nlohmann::json steps_json = nlohmann::json::array();
-  fullspace::State state = fullspace::initial_state(problem, 0.0);
+  model::State state = model::initial_state(problem, 0.0);
   nlohmann::json solver_json;
   Progress progress("time steps", static_cast<std::size_t>(steps), rank == 0);
 
@@ -83,7 +83,7 @@ void run_verify(const VerifyOptions& opt, const Invocation& invocation, int rank
     integrator.initialize(state);
     records.push_back({0.0, state.x});
     for (long k = spec.record_every; k <= steps; k += spec.record_every) {
-      const fullspace::State s = integrator.advance_to(static_cast<double>(k) * step);
+      const model::State s = integrator.advance_to(static_cast<double>(k) * step);
       records.push_back({s.t, s.x});
       progress.advance(static_cast<std::size_t>(spec.record_every));
     }
@@ -98,9 +98,9 @@ void run_verify(const VerifyOptions& opt, const Invocation& invocation, int rank
                    {"error_test_failures", st.error_test_fails},
                    {"seconds", st.seconds}};
   } else {
-    fullspace::BackwardEulerOptions be;
+    fullspace::FullSpaceOptions be;
     be.quasi_static = !dynamic;
-    fullspace::BackwardEuler integrator(problem, MPI_COMM_WORLD, be);
+    fullspace::FullSpaceSolver integrator(problem, MPI_COMM_WORLD, be);
     if (!dynamic) {
       // A static problem starts at equilibrium with the drives at t = 0.
       state.w.setZero();
@@ -109,7 +109,7 @@ void run_verify(const VerifyOptions& opt, const Invocation& invocation, int rank
     records.push_back({0.0, state.x});
     long newton = 0, linear = 0;
     for (long k = 1; k <= steps; ++k) {
-      const fullspace::StepStats st = integrator.step(step);
+      const model::StepStats st = integrator.step(step);
       newton += st.newton_iterations;
       linear += st.linear_iterations;
       steps_json.push_back({{"t", integrator.state().t},

@@ -1,7 +1,7 @@
 #include "layer_setup.hpp"
 
 #include <sflsh/core/error.hpp>
-#include <sflsh/fullspace/simulation_output.hpp>
+#include <sflsh/model/simulation_output.hpp>
 #include <sflsh/meshing/layer_cache.hpp>
 
 namespace sflsh::app {
@@ -26,8 +26,8 @@ std::optional<material::MaterialFile> load_layer_material(const LayerSettings& s
   return material::load_material_file(s.material);
 }
 
-fullspace::BodyLayerOptions body_layer_options(const LayerSettings& s, const std::string& mesh) {
-  fullspace::BodyLayerOptions o;
+model::BodyLayerOptions body_layer_options(const LayerSettings& s, const std::string& mesh) {
+  model::BodyLayerOptions o;
   o.mesher = meshing::parse_mesher(s.mesher);
   o.size = meshing::parse_size_preset(mesh);
   if (!s.cache.empty()) o.cache_dir = s.cache;
@@ -61,15 +61,15 @@ reduced::ReducedModelOptions reduced_model_options(const ReducedSettings& s, int
   return o;
 }
 
-void check_handle_counts(const fullspace::BodyLayer& layer, const std::vector<int>& handles) {
+void check_handle_counts(const model::BodyLayer& layer, const std::vector<int>& handles) {
   const int most = reduced::max_point_handles(layer);
   for (int h : handles) require(h <= most, "reduced: {} point handles requested; the layer allows 1 to {}", h, most);
 }
 
-fullspace::RowMatrixX3d region_normals(const fullspace::BodyLayer& layer) {
-  const fullspace::RowMatrixX3d all = fullspace::vertex_normals(layer.shaped, layer.model->faces);
+model::RowMatrixX3d region_normals(const model::BodyLayer& layer) {
+  const model::RowMatrixX3d all = model::vertex_normals(layer.shaped, layer.model->faces);
   const std::vector<int>& region = layer.mesh->region_surface.vertices;
-  fullspace::RowMatrixX3d normals(static_cast<Eigen::Index>(region.size()), 3);
+  model::RowMatrixX3d normals(static_cast<Eigen::Index>(region.size()), 3);
   for (std::size_t r = 0; r < region.size(); ++r) normals.row(static_cast<Eigen::Index>(r)) = all.row(region[r]);
   return normals;
 }

@@ -2,7 +2,7 @@
 // What the commands that build a subject's soft-tissue layer and reduced models on it share (compare,
 // tradeoff): the layer options on the command line, the reduced-model options, the region normals for σ and
 // a wall clock.
-#include <sflsh/fullspace/body_layer.hpp>
+#include <sflsh/model/body_layer.hpp>
 #include <sflsh/material/material_file.hpp>
 #include <sflsh/reduced/reduced_model.hpp>
 
@@ -35,7 +35,7 @@ void check_layer_settings(const LayerSettings& settings);
 /// The material file of --material, or nothing (the defaults).
 std::optional<material::MaterialFile> load_layer_material(const LayerSettings& settings);
 /// Layer options at resolution `mesh` ("coarse" | "default" | "fine").
-fullspace::BodyLayerOptions body_layer_options(const LayerSettings& settings, const std::string& mesh);
+model::BodyLayerOptions body_layer_options(const LayerSettings& settings, const std::string& mesh);
 /// summary.json's "material" block.
 nlohmann::json material_summary(const LayerSettings& settings, const std::optional<material::MaterialFile>& material);
 
@@ -49,9 +49,9 @@ void add_reduced_options(CLI::App& cmd, ReducedSettings& settings);
 /// Options of one reduced model: `handles` point handles, `cubature` tets (0 = every tet).
 reduced::ReducedModelOptions reduced_model_options(const ReducedSettings& settings, int handles, int cubature, const std::string& cache);
 /// Throws a one-line error naming the largest count when a handle count exceeds what the layer allows.
-void check_handle_counts(const fullspace::BodyLayer& layer, const std::vector<int>& handles);
+void check_handle_counts(const model::BodyLayer& layer, const std::vector<int>& handles);
 
-/// Unit normals (R×3) of the shaped body at the region's vertices, for fullspace::DynamicsAmplitude.
-fullspace::RowMatrixX3d region_normals(const fullspace::BodyLayer& layer);
+/// Unit normals (R×3) of the shaped body at the region's vertices, for model::DynamicsAmplitude.
+model::RowMatrixX3d region_normals(const model::BodyLayer& layer);
 
 }  // namespace sflsh::app

@@ -513,23 +513,5 @@ Eigen::SparseMatrix<double, Eigen::RowMajor> ReferenceIntegrator::jacobian(doubl
 
 const ReferenceStats& ReferenceIntegrator::stats() const { return impl_->stats; }
 
-State initial_state(const Problem& problem, double t0) {
-  const int n = problem.num_nodes();
-  State s;
-  s.t = t0;
-  s.x = Eigen::Map<const Eigen::VectorXd>(problem.rest.data(), 3 * static_cast<Eigen::Index>(n));
-  problem.apply_dirichlet(t0, s.x);
-  Eigen::VectorXd xdot = Eigen::VectorXd::Zero(s.x.size());
-  const Eigen::VectorXd du = problem.dirichlet.rates(t0);
-  for (std::size_t k = 0; k < problem.dirichlet.dof.size(); ++k) xdot[problem.dirichlet.dof[k]] = du[static_cast<Eigen::Index>(k)];
-  NodeFrame frame, rate;
-  problem.frame(t0, frame, &rate);
-  s.w.resize(s.x.size());
-  for (int i = 0; i < n; ++i) {
-    const auto si = static_cast<std::size_t>(i);
-    s.w.segment<3>(3 * i) = rate.A[si] * s.x.segment<3>(3 * i) + rate.d.row(i).transpose() + frame.A[si] * xdot.segment<3>(3 * i);
-  }
-  return s;
-}
 
 }  // namespace sflsh::fullspace

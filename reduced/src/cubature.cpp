@@ -13,7 +13,7 @@ namespace sflsh::reduced {
 
 namespace {
 
-meshing::RowMatrixX3d tet_centroids(const fullspace::Problem& problem) {
+meshing::RowMatrixX3d tet_centroids(const model::Problem& problem) {
   meshing::RowMatrixX3d c(problem.num_tets(), 3);
   for (int e = 0; e < problem.num_tets(); ++e) {
     Eigen::RowVector3d sum = Eigen::RowVector3d::Zero();
@@ -34,7 +34,7 @@ Cubature exact_cubature(int num_tets) {
   return c;
 }
 
-std::vector<int> farthest_point_tets(const fullspace::Problem& problem, int count, const std::vector<double>& density) {
+std::vector<int> farthest_point_tets(const model::Problem& problem, int count, const std::vector<double>& density) {
   const int m = problem.num_tets();
   require(count >= 1 && count <= m, "cubature: {} points requested for a mesh of {} tets", count, m);
   require(density.empty() || static_cast<int>(density.size()) == m, "cubature: {} density values for {} tets", density.size(), m);
@@ -63,7 +63,7 @@ std::vector<int> farthest_point_tets(const fullspace::Problem& problem, int coun
   return chosen;
 }
 
-std::vector<double> voronoi_weights(const fullspace::Problem& problem, const std::vector<int>& tets) {
+std::vector<double> voronoi_weights(const model::Problem& problem, const std::vector<int>& tets) {
   const meshing::RowMatrixX3d c = tet_centroids(problem);
   meshing::RowMatrixX3d points(static_cast<Eigen::Index>(tets.size()), 3);
   for (std::size_t k = 0; k < tets.size(); ++k) points.row(static_cast<Eigen::Index>(k)) = c.row(tets[k]);
@@ -78,7 +78,7 @@ std::vector<double> voronoi_weights(const fullspace::Problem& problem, const std
   return w;
 }
 
-Cubature select_cubature(const fullspace::Problem& problem, const Subspace& subspace, const CubatureOptions& options) {
+Cubature select_cubature(const model::Problem& problem, const Subspace& subspace, const CubatureOptions& options) {
   Cubature out;
   out.tets = farthest_point_tets(problem, options.count, options.density);
   out.weights = voronoi_weights(problem, out.tets);

@@ -7,7 +7,7 @@
 
 namespace sflsh::reduced {
 
-CubatureElastic::CubatureElastic(const fullspace::Problem& problem, const Subspace& subspace, const Cubature& cubature)
+CubatureElastic::CubatureElastic(const model::Problem& problem, const Subspace& subspace, const Cubature& cubature)
     : problem_(problem) {
   require(subspace.num_nodes() == problem.num_nodes(), "cubature: subspace has {} nodes, problem {}", subspace.num_nodes(),
           problem.num_nodes());

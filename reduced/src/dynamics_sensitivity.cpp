@@ -37,7 +37,7 @@ void DynamicsAmplitudeSensitivity::add(const meshing::RowMatrixX3d& u, const Eig
   ++frames_;
 }
 
-// Variances as in fullspace::DynamicsAmplitude (mean of squares minus square of the mean, clamped at 0).
+// Variances as in model::DynamicsAmplitude (mean of squares minus square of the mean, clamped at 0).
 Eigen::VectorXd DynamicsAmplitudeSensitivity::sigma_normal() const {
   if (frames_ == 0) return Eigen::VectorXd::Zero(normals_.rows());
   const double inv = 1.0 / frames_;

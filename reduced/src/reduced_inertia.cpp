@@ -6,15 +6,15 @@
 
 namespace sflsh::reduced {
 
-ReducedInertia::ReducedInertia(const fullspace::Problem& problem, const Subspace& subspace)
+ReducedInertia::ReducedInertia(const model::Problem& problem, const Subspace& subspace)
     : problem_(problem), subspace_(subspace), active_(subspace.active_nodes()) {
   for (int i : active_) mass_.push_back(problem.mass.size() ? problem.mass[i] : 0.0);
-  skinned_ = dynamic_cast<const fullspace::SkinnedTrajectory*>(problem.trajectory.get());
+  skinned_ = dynamic_cast<const model::SkinnedTrajectory*>(problem.trajectory.get());
   if (skinned_) build_pairs(*skinned_);
   z_.resize(static_cast<Eigen::Index>(active_.size()), 3);
 }
 
-void ReducedInertia::build_pairs(const fullspace::SkinnedTrajectory& skinned) {
+void ReducedInertia::build_pairs(const model::SkinnedTrajectory& skinned) {
   // T_kl(s, r) for k ≤ l, accumulated densely per joint pair (S × S, upper triangle), then compressed.
   const int S = subspace_.num_functions();
   std::map<std::pair<int, int>, Eigen::MatrixXd> accumulate;
@@ -109,7 +109,7 @@ void ReducedInertia::cross_mass(double t_other, Eigen::MatrixXd& M) const {
   if (skinned_) {
     // A_i(t)ᵀA_i(t') = Σ_{k,l} w_ik w_il R_k(t)ᵀ R_l(t'); T_kl is symmetric in (k, l) and in (s, r), and the
     // (s, r) and (r, s) blocks are equal (not transposed: b_is b_ir is symmetric, the 3×3 factor is not).
-    fullspace::JointTransforms other;
+    model::JointTransforms other;
     skinned_->curve().transforms(t_other, other);
     for (const PairTerm& pair : pairs_) {
       const Eigen::Matrix3d Rk = joints_[static_cast<std::size_t>(pair.k)].leftCols<3>();
@@ -126,7 +126,7 @@ void ReducedInertia::cross_mass(double t_other, Eigen::MatrixXd& M) const {
     }
     return;
   }
-  fullspace::NodeFrame other;
+  model::NodeFrame other;
   if (problem_.trajectory) {
     problem_.trajectory->evaluate_nodes(t_other, active_, other);
   } else {

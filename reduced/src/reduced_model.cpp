@@ -134,7 +134,7 @@ std::vector<int> BodyHandles::bone_joints() const {
   return out;
 }
 
-BodyHandles place_body_handles(const fullspace::BodyLayer& layer, int point_handles) {
+BodyHandles place_body_handles(const model::BodyLayer& layer, int point_handles) {
   const meshing::LayerMesh& mesh = *layer.mesh;
   const int n = mesh.num_nodes();
   BodyHandles h;
@@ -175,8 +175,8 @@ BodyHandles place_body_handles(const fullspace::BodyLayer& layer, int point_hand
   return h;
 }
 
-fullspace::Problem template_problem(const fullspace::BodyLayer& layer) {
-  fullspace::Problem p;
+model::Problem template_problem(const model::BodyLayer& layer) {
+  model::Problem p;
   p.rest = layer.mesh->nodes;
   p.tets = layer.mesh->tets;
   material::SkinMaterial m;
@@ -187,12 +187,12 @@ fullspace::Problem template_problem(const fullspace::BodyLayer& layer) {
   m.saturation = layer.material.saturation;
   p.tet_material.assign(static_cast<std::size_t>(p.num_tets()), material::make_orthotropic_fung(m, Eigen::Vector3d::UnitZ()));
   p.dirichlet = layer.problem.dirichlet;
-  p.mass = fullspace::lumped_masses(p.rest, p.tets, layer.problem.density > 0 ? layer.problem.density : 1000.0);
+  p.mass = model::lumped_masses(p.rest, p.tets, layer.problem.density > 0 ? layer.problem.density : 1000.0);
   p.validate();
   return p;
 }
 
-int max_point_handles(const fullspace::BodyLayer& layer) { return layer.mesh->region_surface.num_vertices() / 4; }
+int max_point_handles(const model::BodyLayer& layer) { return layer.mesh->region_surface.num_vertices() / 4; }
 
 int resolved_cubature_count(const ReducedModelOptions& options) {
   if (options.cubature >= 0) return options.cubature;
@@ -200,7 +200,7 @@ int resolved_cubature_count(const ReducedModelOptions& options) {
   return std::max(200, static_cast<int>(std::ceil(0.8 * coordinates)));
 }
 
-ReducedModel build_reduced_model(const fullspace::BodyLayer& layer, const ReducedModelOptions& requested) {
+ReducedModel build_reduced_model(const model::BodyLayer& layer, const ReducedModelOptions& requested) {
   const auto start = std::chrono::steady_clock::now();
   const meshing::LayerMesh& mesh = *layer.mesh;
   require(requested.point_handles > 0 && requested.point_handles <= max_point_handles(layer),

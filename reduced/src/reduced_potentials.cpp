@@ -6,7 +6,7 @@
 
 namespace sflsh::reduced {
 
-ReducedPotentials::ReducedPotentials(const fullspace::Problem& problem, const Subspace& subspace, const std::vector<int>& active_nodes)
+ReducedPotentials::ReducedPotentials(const model::Problem& problem, const Subspace& subspace, const std::vector<int>& active_nodes)
     : subspace_(subspace), active_nodes_(active_nodes) {
   for (const auto& potential : problem.potentials) {
     std::vector<int> active_of;

@@ -45,7 +45,7 @@ Eigen::MatrixXd solve_step_sensitivity(const Eigen::MatrixXd& hessian, const Eig
   return solution;
 }
 
-SensitivityIntegrator::SensitivityIntegrator(const fullspace::Problem& problem, const Subspace& subspace, const Cubature& cubature,
+SensitivityIntegrator::SensitivityIntegrator(const model::Problem& problem, const Subspace& subspace, const Cubature& cubature,
                                              Eigen::MatrixXd young_map, const ReducedOptions& options)
     : problem_(problem),
       integrator_(problem, subspace, cubature,
@@ -65,7 +65,7 @@ SensitivityIntegrator::SensitivityIntegrator(const fullspace::Problem& problem, 
   sensitivity_ = Eigen::MatrixXd::Zero(subspace.num_dofs(), 2 * young_map_.cols());
 }
 
-void SensitivityIntegrator::initialize(const fullspace::State& state) {
+void SensitivityIntegrator::initialize(const model::State& state) {
   integrator_.initialize(state);
   sensitivity_.setZero();   // the initial state does not depend on Y
   previous_.resize(0, 0);
@@ -147,8 +147,8 @@ SensitivityStepStats SensitivityIntegrator::step(double h) {
   return stats;
 }
 
-SensitivityResult simulate_with_sensitivities(const fullspace::Problem& problem, const Subspace& subspace, const Cubature& cubature,
-                                              const Eigen::MatrixXd& young_map, const fullspace::State& start, double h, int frames,
+SensitivityResult simulate_with_sensitivities(const model::Problem& problem, const Subspace& subspace, const Cubature& cubature,
+                                              const Eigen::MatrixXd& young_map, const model::State& start, double h, int frames,
                                               const ReducedOptions& options) {
   require(frames >= 0, "sensitivity: frame count must be ≥ 0, got {}", frames);
   const auto t0 = Clock::now();

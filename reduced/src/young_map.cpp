@@ -31,7 +31,7 @@ Eigen::MatrixXd young_tet_map(const meshing::Retargeter& retargeter, const Eigen
   return W;
 }
 
-LayerYoungMap::LayerYoungMap(const fullspace::BodyLayer& layer, double stiffness_scale)
+LayerYoungMap::LayerYoungMap(const model::BodyLayer& layer, double stiffness_scale)
     : layer_(layer),
       stiffness_scale_(stiffness_scale),
       phi_(material::layer_basis(*layer.model, *layer.mesh, layer.material.vertices()).phi),
@@ -53,7 +53,7 @@ Eigen::MatrixX2d LayerYoungMap::control_young() const {
   return young;
 }
 
-void LayerYoungMap::set_control_young(const Eigen::MatrixX2d& young, fullspace::Problem& problem) const {
+void LayerYoungMap::set_control_young(const Eigen::MatrixX2d& young, model::Problem& problem) const {
   require(young.rows() == num_controls(), "young map: {} control moduli, expected {}", young.rows(), num_controls());
   require(young.allFinite() && young.minCoeff() > 0.0, "young map: control moduli must be finite and positive");
   require(problem.num_tets() == layer_.mesh->num_tets() && problem.tet_material.size() == static_cast<std::size_t>(problem.num_tets()),
@@ -73,7 +73,7 @@ void LayerYoungMap::set_control_young(const Eigen::MatrixX2d& young, fullspace::
   }
 }
 
-SkinDisplacementMap::SkinDisplacementMap(const fullspace::BodyLayer& layer, const Subspace& subspace)
+SkinDisplacementMap::SkinDisplacementMap(const model::BodyLayer& layer, const Subspace& subspace)
     : layer_(layer), subspace_(subspace) {
   require(subspace.num_nodes() == layer.problem.num_nodes(), "skin map: subspace has {} nodes, the layer {}", subspace.num_nodes(),
           layer.problem.num_nodes());
@@ -95,7 +95,7 @@ SkinDisplacementMap::SkinDisplacementMap(const fullspace::BodyLayer& layer, cons
 }
 
 meshing::RowMatrixX3d SkinDisplacementMap::displacement(const Eigen::VectorXd& q, double t) const {
-  const fullspace::Problem& p = layer_.problem;
+  const model::Problem& p = layer_.problem;
   Eigen::VectorXd x = Eigen::Map<const Eigen::VectorXd>(p.rest.data(), p.num_dofs());
   p.apply_dirichlet(t, x);
   subspace_.add_displacement(q, x);

@@ -50,7 +50,7 @@ SceneBody::SceneBody(BodySpec spec, const body::BodyModel& model, const BodySetu
   }
   std::optional<material::MaterialFile> material_file;
   if (!setup.material && !spec_.material.empty()) material_file = material::load_material_file(spec_.material);
-  fullspace::BodyLayerOptions options;
+  model::BodyLayerOptions options;
   options.mesher = meshing::Mesher::layered;
   options.size = meshing::parse_size_preset(spec_.mesh);
   if (!setup.cache_dir.empty()) options.cache_dir = setup.cache_dir;
@@ -58,8 +58,8 @@ SceneBody::SceneBody(BodySpec spec, const body::BodyModel& model, const BodySetu
   options.gravity = scene.effects.gravity;
   options.stiffness_scale = spec_.stiffness_scale;
   const material::MaterialFile* material = setup.material ? setup.material : material_file ? &*material_file : nullptr;
-  layer_ = std::make_unique<fullspace::BodyLayer>(
-      fullspace::build_body_layer(model_, beta_, motion_, material, spec_.control_points, options));
+  layer_ = std::make_unique<model::BodyLayer>(
+      model::build_body_layer(model_, beta_, motion_, material, spec_.control_points, options));
   const meshing::LayerMesh& mesh = *layer_->mesh;
   for (std::size_t r = 0; r < mesh.region_surface.vertices.size(); ++r)
     vertex_node_[static_cast<std::size_t>(mesh.region_surface.vertices[r])] = mesh.skin.node[r];
@@ -70,7 +70,7 @@ SceneBody::SceneBody(BodySpec spec, const body::BodyModel& model, const BodySetu
     if (!setup.cache_dir.empty()) ro.cache_dir = setup.cache_dir;
     reduced_model_ = reduced::build_reduced_model(*layer_, ro);
   }
-  const fullspace::Problem& problem = layer_->problem;
+  const model::Problem& problem = layer_->problem;
   model_info = fmt::format("{} nodes, {} tets", problem.num_nodes(), problem.num_tets());
   if (reduced_model_)
     model_info += fmt::format(", {} point handles, {} cubature tets", reduced_model_->handles.point_nodes.size(),
@@ -80,7 +80,7 @@ SceneBody::SceneBody(BodySpec spec, const body::BodyModel& model, const BodySetu
 
 std::vector<int> SceneBody::contact_nodes() const {
   require(soft(), "scene body '{}': contact nodes of a skinned body", name());
-  const fullspace::Problem& problem = layer_->problem;
+  const model::Problem& problem = layer_->problem;
   const std::vector<char> constrained = problem.dirichlet.mask(problem.num_nodes());
   std::vector<int> nodes;
   for (int i : layer_->mesh->nodes_of_kind(meshing::NodeKind::outer)) {
@@ -97,38 +97,38 @@ void SceneBody::start(bool inertia) {
   quasi_static_ = !inertia;
   t_ = 0.0;
   if (!soft()) return;
-  const fullspace::Problem& problem = layer_->problem;
+  const model::Problem& problem = layer_->problem;
   if (solver_ == SolverKind::reduced) {
     reduced::ReducedOptions options;
     options.quasi_static = quasi_static_;
-    fast_ = std::make_unique<reduced::ReducedBackwardEuler>(problem, reduced_model_->subspace, reduced_model_->cubature, options);
-    fast_->initialize(fullspace::initial_state(problem, 0.0));
+    fast_ = std::make_unique<reduced::ReducedSolver>(problem, reduced_model_->subspace, reduced_model_->cubature, options);
+    fast_->initialize(model::initial_state(problem, 0.0));
   } else {
-    fullspace::BackwardEulerOptions options;
+    fullspace::FullSpaceOptions options;
     options.quasi_static = quasi_static_;
-    full_ = std::make_unique<fullspace::BackwardEuler>(problem, MPI_COMM_WORLD, options);
-    full_->initialize(fullspace::initial_state(problem, 0.0));
+    full_ = std::make_unique<fullspace::FullSpaceSolver>(problem, MPI_COMM_WORLD, options);
+    full_->initialize(model::initial_state(problem, 0.0));
   }
 }
 
-fullspace::State SceneBody::state() const {
+model::State SceneBody::state() const {
   require(soft(), "scene body '{}': a skinned body has no elastic state", name());
-  if (!fast_ && !full_) return fullspace::initial_state(layer_->problem, t_);   // before start()
+  if (!fast_ && !full_) return model::initial_state(layer_->problem, t_);   // before start()
   return fast_ ? fast_->full_state() : full_->state();
 }
 
 // Without inertia and gravity the only load is contact: when no potential finds a candidate for the step
 // the equilibrium is the rest state, which needs no solve.
 bool SceneBody::at_rest_this_step(double t0, double h) const {
-  const fullspace::Problem& problem = layer_->problem;
+  const model::Problem& problem = layer_->problem;
   if (!quasi_static_ || problem.gravity.squaredNorm() > 0.0) return false;
   if (problem.potentials.empty()) return true;
-  const fullspace::State s = state();
+  const model::State s = state();
   Eigen::VectorXd rest_end = Eigen::Map<const Eigen::VectorXd>(problem.rest.data(), problem.num_dofs());
   problem.apply_dirichlet(t0 + h, rest_end);
   for (const auto& potential : problem.potentials) {
     const std::vector<int>& nodes = potential->nodes();
-    fullspace::NodeFrame start, end;
+    model::NodeFrame start, end;
     if (problem.trajectory) {
       problem.trajectory->evaluate_nodes(t0, nodes, start);
       problem.trajectory->evaluate_nodes(t0 + h, nodes, end);
@@ -160,23 +160,23 @@ void SceneBody::step(double t0, double h, EffectSeconds& seconds) {
   try {
     if (at_rest_this_step(t0, h)) {
       ++idle_steps;
-      const fullspace::State rest = fullspace::initial_state(layer_->problem, t0 + h);
+      const model::State rest = model::initial_state(layer_->problem, t0 + h);
       if (fast_) fast_->initialize(rest);
       else full_->initialize(rest);
     } else if (fast_) {
-      const reduced::ReducedStepStats st = fast_->step(h);
+      const model::StepStats st = fast_->step(h);
       newton_iterations += st.newton_iterations;
       refinements += st.potential_refinements;
       failed_attempts += st.failed_attempts;
       seconds.inertia += st.inertia_seconds;
       seconds.elasticity += st.seconds - st.inertia_seconds - st.potential_seconds;
     } else {
-      const fullspace::StepStats st = full_->step(h);
+      const model::StepStats st = full_->step(h);
       newton_iterations += st.newton_iterations;
       refinements += st.potential_refinements;
       failed_attempts += st.failed_attempts;
-      seconds.inertia += st.mass_seconds;
-      seconds.elasticity += st.seconds - st.mass_seconds - st.potential_seconds;
+      seconds.inertia += st.inertia_seconds;
+      seconds.elasticity += st.seconds - st.inertia_seconds - st.potential_seconds;
     }
   } catch (const Error& e) {
     throw_error("body '{}': {}", name(), e.what());

@@ -4,11 +4,11 @@
 #include <sflsh/body/body_model.hpp>
 #include <sflsh/body/motion.hpp>
 #include <sflsh/body/skinning.hpp>
-#include <sflsh/fullspace/backward_euler.hpp>
-#include <sflsh/fullspace/body_layer.hpp>
-#include <sflsh/fullspace/simulation_output.hpp>
+#include <sflsh/fullspace/fullspace_solver.hpp>
+#include <sflsh/model/body_layer.hpp>
+#include <sflsh/model/simulation_output.hpp>
 #include <sflsh/material/material_file.hpp>
-#include <sflsh/reduced/reduced_integrator.hpp>
+#include <sflsh/reduced/reduced_solver.hpp>
 #include <sflsh/reduced/reduced_model.hpp>
 #include <sflsh/scene/scene_file.hpp>
 
@@ -68,8 +68,8 @@ class SceneBody {
   const body::Betas& beta() const { return beta_; }
   const std::string& subject_label() const { return subject_label_; }
   const body::Motion& motion() const { return motion_; }
-  fullspace::BodyLayer& layer() { return *layer_; }
-  const fullspace::BodyLayer& layer() const { return *layer_; }
+  model::BodyLayer& layer() { return *layer_; }
+  const model::BodyLayer& layer() const { return *layer_; }
   /// The layer's skin nodes a contact may act on (outer nodes without prescribed components and, reduced, with
   /// basis functions), ascending.
   std::vector<int> contact_nodes() const;
@@ -88,7 +88,7 @@ class SceneBody {
   /// The surface at time t with the current elastic displacement carried by the pose at t (a prediction of
   /// the body at the end of a step, for the other bodies' contact).
   RowMatrixX3d predicted_world_surface(double t) const;
-  fullspace::State state() const;
+  model::State state() const;
 
   // Counters for summary.json.
   long steps = 0, idle_steps = 0, newton_iterations = 0, refinements = 0, failed_attempts = 0;
@@ -107,10 +107,10 @@ class SceneBody {
   std::string subject_label_;
   body::Motion motion_;
   std::unique_ptr<body::Poser> poser_;              ///< skinned bodies
-  std::unique_ptr<fullspace::BodyLayer> layer_;     ///< soft bodies
+  std::unique_ptr<model::BodyLayer> layer_;     ///< soft bodies
   std::optional<reduced::ReducedModel> reduced_model_;
-  std::unique_ptr<fullspace::BackwardEuler> full_;
-  std::unique_ptr<reduced::ReducedBackwardEuler> fast_;
+  std::unique_ptr<fullspace::FullSpaceSolver> full_;
+  std::unique_ptr<reduced::ReducedSolver> fast_;
   std::vector<int> vertex_node_;
   bool quasi_static_ = false;
   double t_ = 0.0;

@@ -47,7 +47,7 @@ struct BodyContact {
 /// Lumped skin area per contact node: the region vertex's (lumped_vertex_areas) on the node it sits on;
 /// nodes without a region vertex (embedded skins) get the mean.
 std::vector<double> node_areas(const SceneBody& body, const std::vector<int>& nodes) {
-  const fullspace::BodyLayer& layer = body.layer();
+  const model::BodyLayer& layer = body.layer();
   const std::vector<double> vertex_area = lumped_vertex_areas(layer.rest_skin, layer.mesh->region_surface.faces);
   std::map<int, double> area;
   double sum = 0.0;
@@ -301,12 +301,12 @@ class SceneRun {
         writers_.emplace_back();
         continue;
       }
-      fullspace::SimulationWriterOptions o;
+      model::SimulationWriterOptions o;
       o.prefix = body->name();
       o.write_layer = scene_.output.layer;
       o.rotation = body->placement().R;
       o.translation = body->placement().t;
-      writers_.push_back(std::make_unique<fullspace::SimulationWriter>(body->layer(), folder, o));
+      writers_.push_back(std::make_unique<model::SimulationWriter>(body->layer(), folder, o));
     }
     if (folder) {
       for (auto& body : bodies_)
@@ -536,7 +536,7 @@ class SceneRun {
   std::vector<std::unique_ptr<SceneBody>> bodies_;
   std::vector<SceneObject> objects_;
   std::vector<BodyContact> contact_;
-  std::vector<std::unique_ptr<fullspace::SimulationWriter>> writers_;
+  std::vector<std::unique_ptr<model::SimulationWriter>> writers_;
   std::map<std::string, std::unique_ptr<vtk::PvdSeries>> skinned_series_;
   std::unique_ptr<vtk::PvdSeries> objects_series_;
   detail::EffectSeconds seconds_;

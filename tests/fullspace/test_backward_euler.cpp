@@ -1,7 +1,7 @@
 // The PETSc backward-Euler integrator on canonical problems: patch test, static sag under refinement,
 // step rejection, rigid motion through the node maps, and PETSc's own Jacobian check.
 #include <sflsh/core/error.hpp>
-#include <sflsh/fullspace/backward_euler.hpp>
+#include <sflsh/fullspace/fullspace_solver.hpp>
 #include <sflsh/fullspace/msh_reader.hpp>
 #include <sflsh/fullspace/reference_integrator.hpp>
 #include <sflsh/material/skin_material.hpp>
@@ -41,7 +41,7 @@ std::vector<int> group(const Eigen::Vector3d& size, std::array<int, 3> cells, co
   return box_tet_mesh(size, cells).node_groups.at(name);
 }
 
-TEST(BackwardEuler, PatchTestAffineBoundaryGivesAffineSolution) {
+TEST(FullSpaceSolver, PatchTestAffineBoundaryGivesAffineSolution) {
   // Every boundary node prescribed on x ↦ (I + G)x: the exact solution of any homogeneous hyperelastic
   // material is the affine map (uniform F, divergence-free stress), whatever the nonlinearity.
   const Eigen::Vector3d size(0.1, 0.08, 0.06);
@@ -68,9 +68,9 @@ TEST(BackwardEuler, PatchTestAffineBoundaryGivesAffineSolution) {
   }
   ASSERT_GT(interior, 0);
   p.validate();
-  BackwardEulerOptions options;
+  FullSpaceOptions options;
   options.quasi_static = true;
-  BackwardEuler solver(p, PETSC_COMM_WORLD, options);
+  FullSpaceSolver solver(p, PETSC_COMM_WORLD, options);
   State s;
   s.x = Eigen::Map<const Eigen::VectorXd>(p.rest.data(), p.num_dofs());
   s.w = Eigen::VectorXd::Zero(p.num_dofs());
@@ -95,9 +95,9 @@ double cantilever_tip_sag(int refinement) {
   for (int v : group(size, cells, "xmin")) p.dirichlet.add(v, 7u);
   p.gravity = Eigen::Vector3d(0.0, -9.81, 0.0);
   p.validate();
-  BackwardEulerOptions options;
+  FullSpaceOptions options;
   options.quasi_static = true;
-  BackwardEuler solver(p, PETSC_COMM_WORLD, options);
+  FullSpaceSolver solver(p, PETSC_COMM_WORLD, options);
   State s;
   s.x = Eigen::Map<const Eigen::VectorXd>(p.rest.data(), p.num_dofs());
   s.w = Eigen::VectorXd::Zero(p.num_dofs());
@@ -109,7 +109,7 @@ double cantilever_tip_sag(int refinement) {
   return sag / static_cast<double>(tip.size());
 }
 
-TEST(BackwardEuler, StaticSagConvergesUnderRefinement) {
+TEST(FullSpaceSolver, StaticSagConvergesUnderRefinement) {
   const double s1 = cantilever_tip_sag(1);
   const double s2 = cantilever_tip_sag(2);
   const double s4 = cantilever_tip_sag(4);
@@ -147,7 +147,7 @@ class RigidTrajectory : public NodeTrajectory {
   double spin_;
 };
 
-TEST(BackwardEuler, UniformAccelerationOfTheFrameWithMatchingGravityStaysUndeformed) {
+TEST(FullSpaceSolver, UniformAccelerationOfTheFrameWithMatchingGravityStaysUndeformed) {
   // Equivalence principle: a frame accelerating with g carries a free body without deforming it.
   const Eigen::Vector3d size(0.05, 0.05, 0.05);
   Problem p = box_problem(size, {2, 2, 2}, 1000.0);
@@ -155,7 +155,7 @@ TEST(BackwardEuler, UniformAccelerationOfTheFrameWithMatchingGravityStaysUndefor
   p.gravity = g;
   p.trajectory = std::make_shared<RigidTrajectory>(p.num_nodes(), g, 0.0);
   p.validate();
-  BackwardEuler solver(p, PETSC_COMM_WORLD);
+  FullSpaceSolver solver(p, PETSC_COMM_WORLD);
   solver.initialize(initial_state(p, 0.0));
   const double h = 1.0 / 60.0;
   const int steps = 10;
@@ -171,7 +171,7 @@ TEST(BackwardEuler, UniformAccelerationOfTheFrameWithMatchingGravityStaysUndefor
   EXPECT_LT(energies(p, solver.state()).elastic, 1e-12);
 }
 
-TEST(BackwardEuler, SpinningFrameStretchesTheBodyOutwards) {
+TEST(FullSpaceSolver, SpinningFrameStretchesTheBodyOutwards) {
   // A body carried around a vertical axis through its corner feels the centrifugal load: nodes move
   // outwards in the rotating frame and stay finite.
   const Eigen::Vector3d size(0.1, 0.02, 0.02);
@@ -180,7 +180,7 @@ TEST(BackwardEuler, SpinningFrameStretchesTheBodyOutwards) {
   for (int v : group(size, cells, "xmin")) p.dirichlet.add(v, 7u);
   p.trajectory = std::make_shared<RigidTrajectory>(p.num_nodes(), Eigen::Vector3d::Zero(), 6.0);
   p.validate();
-  BackwardEuler solver(p, PETSC_COMM_WORLD);
+  FullSpaceSolver solver(p, PETSC_COMM_WORLD);
   solver.initialize(initial_state(p, 0.0));
   for (int k = 0; k < 60; ++k) solver.step(1.0 / 60.0);
   double stretch = 0.0;
@@ -189,7 +189,7 @@ TEST(BackwardEuler, SpinningFrameStretchesTheBodyOutwards) {
   EXPECT_TRUE(solver.state().x.allFinite());
 }
 
-TEST(BackwardEuler, HugeStepIsRecoveredBySubstepsOrFailsLoudly) {
+TEST(FullSpaceSolver, HugeStepIsRecoveredBySubstepsOrFailsLoudly) {
   // A soft bar hit by a violent prescribed jerk in one large step: the integrator must either recover
   // (substeps) or throw sflsh::Error, never return non-finite values.
   const Eigen::Vector3d size(0.1, 0.02, 0.02);
@@ -199,7 +199,7 @@ TEST(BackwardEuler, HugeStepIsRecoveredBySubstepsOrFailsLoudly) {
   for (int v : group(size, cells, "xmin")) p.dirichlet.add(v, 1u, 0);
   for (int v : group(size, cells, "xmin")) p.dirichlet.add(v, 6u);
   p.validate();
-  BackwardEuler solver(p, PETSC_COMM_WORLD);
+  FullSpaceSolver solver(p, PETSC_COMM_WORLD);
   solver.initialize(initial_state(p, 0.0));
   try {
     const StepStats stats = solver.step(0.5);
@@ -210,7 +210,7 @@ TEST(BackwardEuler, HugeStepIsRecoveredBySubstepsOrFailsLoudly) {
   }
 }
 
-TEST(BackwardEuler, InvertedInitialElementRecovers) {
+TEST(FullSpaceSolver, InvertedInitialElementRecovers) {
   // One node of the start state pushed through its opposite face: StVK has no barrier, the projected
   // Newton with energy line search pulls it back to a valid equilibrium.
   const Eigen::Vector3d size(0.05, 0.05, 0.05);
@@ -218,7 +218,7 @@ TEST(BackwardEuler, InvertedInitialElementRecovers) {
   Problem p = box_problem(size, cells, 1000.0);
   for (int v : group(size, cells, "zmin")) p.dirichlet.add(v, 7u);
   p.validate();
-  BackwardEuler solver(p, PETSC_COMM_WORLD);
+  FullSpaceSolver solver(p, PETSC_COMM_WORLD);
   State s = initial_state(p, 0.0);
   // The centre node (interior) pushed 1.5 cell widths along z, through the top nodes' plane.
   int centre = -1;

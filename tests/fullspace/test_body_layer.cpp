@@ -3,10 +3,10 @@
 #include <sflsh/body/body_io.hpp>
 #include <sflsh/body/motion.hpp>
 #include <sflsh/body/skinning.hpp>
-#include <sflsh/fullspace/backward_euler.hpp>
-#include <sflsh/fullspace/body_layer.hpp>
+#include <sflsh/fullspace/fullspace_solver.hpp>
+#include <sflsh/model/body_layer.hpp>
 #include <sflsh/fullspace/reference_integrator.hpp>
-#include <sflsh/fullspace/simulation_output.hpp>
+#include <sflsh/model/simulation_output.hpp>
 
 #include <gtest/gtest.h>
 #include <mpi.h>
@@ -107,7 +107,7 @@ TEST(SkinnedTrajectory, RatesAreTimeDerivativesAndFramesAreExact) {
 TEST(BodyLayer, ShortRunStaysFiniteAndProducesSoftTissueMotion) {
   const body::Motion motion = body::make_procedural_motion("running_on_spot", 60.0, 10);
   const BodyLayer layer = build_body_layer(open_body(), body::Betas::Zero(), motion, nullptr, 6, coarse());
-  BackwardEuler integrator(layer.problem, MPI_COMM_WORLD);
+  FullSpaceSolver integrator(layer.problem, MPI_COMM_WORLD);
   integrator.initialize(initial_state(layer.problem, 0.0));
   SimulationWriter writer(layer, nullptr, false);
   writer.add_frame(0.0, integrator.state());

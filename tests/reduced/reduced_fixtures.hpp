@@ -2,7 +2,7 @@
 // Small problems for the reduced-model tests: a structured box with a homogeneous material, its bottom face
 // attached (every component), and a handful of interior point handles.
 #include <sflsh/fullspace/msh_reader.hpp>
-#include <sflsh/fullspace/problem.hpp>
+#include <sflsh/model/problem.hpp>
 #include <sflsh/material/skin_material.hpp>
 #include <sflsh/reduced/subspace.hpp>
 #include <sflsh/reduced/weights.hpp>
@@ -21,7 +21,7 @@ inline material::SkinMaterial skin(double young_tangent = 5000.0, double young_n
 
 struct BoxCase {
   fullspace::MshMesh mesh;
-  fullspace::Problem problem;
+  model::Problem problem;
   std::vector<int> attached;       ///< the zmin face
   std::vector<int> point_handles;  ///< interior nodes
 };
@@ -29,15 +29,15 @@ struct BoxCase {
 /// A box of size (0.12, 0.1, 0.06) m with `cells`, density ρ, zmin attached (zero displacement, or driven
 /// in z by `drive` when given), point handles at the interior nodes nearest to a few fixed sites.
 inline BoxCase box_case(std::array<int, 3> cells = {4, 4, 3}, double density = 1000.0,
-                        const fullspace::ScalarDrive* drive = nullptr) {
+                        const model::ScalarDrive* drive = nullptr) {
   BoxCase c;
   const Eigen::Vector3d size(0.12, 0.1, 0.06);
   c.mesh = fullspace::box_tet_mesh(size, cells);
-  fullspace::Problem& p = c.problem;
+  model::Problem& p = c.problem;
   p.rest = c.mesh.nodes;
   p.tets = c.mesh.tets;
   p.tet_material.assign(static_cast<std::size_t>(p.num_tets()), material::make_orthotropic_fung(skin(), Eigen::Vector3d::UnitZ()));
-  p.mass = fullspace::lumped_masses(p.rest, p.tets, density);
+  p.mass = model::lumped_masses(p.rest, p.tets, density);
   p.density = density;
   c.attached = c.mesh.node_groups.at("zmin");
   int drive_index = -1;
@@ -95,7 +95,7 @@ inline Subspace box_subspace(const BoxCase& c, bool affine = false) {
 }
 
 /// B = identity on every free node: the subspace is the whole free space.
-inline Subspace full_basis(const fullspace::Problem& p) {
+inline Subspace full_basis(const model::Problem& p) {
   const std::vector<char> fixed = p.dirichlet.mask(p.num_nodes());
   std::vector<Eigen::Triplet<double>> entries;
   int s = 0;

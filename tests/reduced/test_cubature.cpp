@@ -24,7 +24,7 @@ TEST(Cubature, EveryTetEqualsExactIntegration) {
   const Eigen::VectorXd q = random_q(s.num_dofs(), 0.004, 3);
   Eigen::VectorXd x = Eigen::Map<const Eigen::VectorXd>(c.problem.rest.data(), c.problem.num_dofs());
   s.add_displacement(q, x);
-  const fullspace::ElasticEvaluation full = fullspace::evaluate_elastic(c.problem, x);
+  const model::ElasticEvaluation full = model::evaluate_elastic(c.problem, x);
   Eigen::VectorXd g = Eigen::VectorXd::Zero(s.num_dofs());
   const double e = elastic.add_gradient(q, g);
   // Same sums in a different order: round-off.

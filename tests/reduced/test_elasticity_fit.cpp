@@ -51,7 +51,7 @@ namespace {
 
 struct FitFixture {
   body::BodyModel model = body::load_body(std::filesystem::path(SFLSH_DATA_DIR) / "open_body.npz");
-  fullspace::BodyLayerOptions layer_options;
+  model::BodyLayerOptions layer_options;
   std::vector<std::unique_ptr<DynamicsCase>> cases;
   std::unique_ptr<ParameterizationCache> parameterizations;
   ReducedModel reduced;

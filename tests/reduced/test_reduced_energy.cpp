@@ -6,7 +6,7 @@
 #include <sflsh/body/body_io.hpp>
 #include <sflsh/core/error.hpp>
 #include <sflsh/body/motion.hpp>
-#include <sflsh/fullspace/body_layer.hpp>
+#include <sflsh/model/body_layer.hpp>
 #include <sflsh/reduced/cubature_elastic.hpp>
 #include <sflsh/reduced/reduced_inertia.hpp>
 #include <sflsh/reduced/reduced_model.hpp>
@@ -69,26 +69,26 @@ const body::BodyModel& open_body() {
 }
 
 TEST(ReducedInertia, ClosedFormMatchesTheNodeByNodePotential) {
-  fullspace::BodyLayerOptions options;
+  model::BodyLayerOptions options;
   options.size = meshing::SizePreset::coarse;
   options.cache_dir = SFLSH_TEST_CACHE;
   const body::Motion motion = body::make_procedural_motion("shake_hips", 60.0, 30);
   body::Betas beta = body::Betas::Zero();
   beta[1] = 1.0;
-  const fullspace::BodyLayer layer = fullspace::build_body_layer(open_body(), beta, motion, nullptr, 6, options);
+  const model::BodyLayer layer = model::build_body_layer(open_body(), beta, motion, nullptr, 6, options);
   ReducedModelOptions ro;
   ro.point_handles = 30;
   ro.cubature = 50;
   ro.cache_dir = SFLSH_TEST_CACHE;
   const ReducedModel model = build_reduced_model(layer, ro);
-  const fullspace::Problem& p = layer.problem;
+  const model::Problem& p = layer.problem;
   ReducedInertia inertia(p, model.subspace);
   const double t = 0.37, h = 1.0 / 60.0;   // between frames: the interpolated node maps, hips rotated
   const Eigen::VectorXd x_d = Eigen::Map<const Eigen::VectorXd>(p.rest.data(), p.num_dofs());
   inertia.set_time(t, x_d);
   const std::vector<int>& active = inertia.active_nodes();
   meshing::RowMatrixX3d p_tilde(static_cast<Eigen::Index>(active.size()), 3);
-  fullspace::NodeFrame frame;
+  model::NodeFrame frame;
   p.frame(t, frame);
   std::mt19937 rng(5);
   std::normal_distribution<double> normal(0.0, 0.01);
@@ -129,11 +129,11 @@ TEST(ReducedInertia, ClosedFormMatchesTheNodeByNodePotential) {
 }
 
 TEST(BodyHandles, PlacedInsideTheLayerNestedAndDistinct) {
-  fullspace::BodyLayerOptions options;
+  model::BodyLayerOptions options;
   options.size = meshing::SizePreset::coarse;
   options.cache_dir = SFLSH_TEST_CACHE;
   const body::Motion motion = body::make_procedural_motion("jiggle_on_toes", 60.0, 4);
-  const fullspace::BodyLayer layer = fullspace::build_body_layer(open_body(), body::Betas::Zero(), motion, nullptr, 6, options);
+  const model::BodyLayer layer = model::build_body_layer(open_body(), body::Betas::Zero(), motion, nullptr, 6, options);
   const BodyHandles h86 = place_body_handles(layer, 86), h30 = place_body_handles(layer, 30);
   ASSERT_EQ(h86.point_nodes.size(), 86u);
   EXPECT_TRUE(std::equal(h30.point_nodes.begin(), h30.point_nodes.end(), h86.point_nodes.begin()));

@@ -6,10 +6,10 @@
 #include <sflsh/body/body_io.hpp>
 #include <sflsh/body/motion.hpp>
 #include <sflsh/core/error.hpp>
-#include <sflsh/fullspace/backward_euler.hpp>
-#include <sflsh/fullspace/body_layer.hpp>
+#include <sflsh/fullspace/fullspace_solver.hpp>
+#include <sflsh/model/body_layer.hpp>
 #include <sflsh/fullspace/reference_integrator.hpp>
-#include <sflsh/reduced/reduced_integrator.hpp>
+#include <sflsh/reduced/reduced_solver.hpp>
 #include <sflsh/reduced/reduced_model.hpp>
 
 #include <gtest/gtest.h>
@@ -21,13 +21,13 @@
 namespace sflsh::reduced {
 namespace {
 
-fullspace::ScalarDrive shake(double amplitude, double frequency) {
+model::ScalarDrive shake(double amplitude, double frequency) {
   const double w = 2.0 * M_PI * frequency;
   return {[=](double t) { return amplitude * std::sin(w * t); }, [=](double t) { return amplitude * w * std::cos(w * t); }};
 }
 
 TEST(ReducedIntegrator, FullBasisAndExactCubatureReproduceTheFullSpaceSolver) {
-  const fullspace::ScalarDrive drive = shake(0.006, 4.0);
+  const model::ScalarDrive drive = shake(0.006, 4.0);
   const auto c = testing::box_case({3, 3, 2}, 1000.0, &drive);
   const Subspace s = testing::full_basis(c.problem);
   const Cubature all = exact_cubature(c.problem.num_tets());
@@ -36,14 +36,14 @@ TEST(ReducedIntegrator, FullBasisAndExactCubatureReproduceTheFullSpaceSolver) {
   ro.gradient_atol = 1e-14;
   ro.step_tolerance = 1e-14;
   ro.use_predictor = false;
-  ReducedBackwardEuler reduced(c.problem, s, all, ro);
-  fullspace::BackwardEulerOptions fo;
+  ReducedSolver reduced(c.problem, s, all, ro);
+  fullspace::FullSpaceOptions fo;
   fo.default_snes_rtol = 1e-13;
   fo.default_snes_atol = 1e-14;
   fo.default_ksp_rtol = 1e-13;
   fo.use_predictor = false;
-  fullspace::BackwardEuler full(c.problem, PETSC_COMM_WORLD, fo);
-  const fullspace::State start = fullspace::initial_state(c.problem, 0.0);
+  fullspace::FullSpaceSolver full(c.problem, PETSC_COMM_WORLD, fo);
+  const model::State start = model::initial_state(c.problem, 0.0);
   reduced.initialize(start);
   full.initialize(start);
   double worst = 0.0, largest = 0.0;
@@ -51,7 +51,7 @@ TEST(ReducedIntegrator, FullBasisAndExactCubatureReproduceTheFullSpaceSolver) {
   for (int k = 0; k < 40; ++k) {
     reduced.step(1.0 / 120.0);
     full.step(1.0 / 120.0);
-    const fullspace::State a = reduced.full_state();
+    const model::State a = reduced.full_state();
     worst = std::max(worst, (a.x - full.state().x).cwiseAbs().maxCoeff());
     largest = std::max(largest, (full.state().x - rest).cwiseAbs().maxCoeff());
   }
@@ -65,22 +65,22 @@ TEST(ReducedIntegrator, FreeOscillationInTheHandleSubspaceDecays) {
   const auto c = testing::box_case({4, 4, 3});
   const Subspace s = testing::box_subspace(c);
   const Cubature all = exact_cubature(c.problem.num_tets());
-  ReducedBackwardEuler reduced(c.problem, s, all);
-  fullspace::State start = fullspace::initial_state(c.problem, 0.0);
+  ReducedSolver reduced(c.problem, s, all);
+  model::State start = model::initial_state(c.problem, 0.0);
   Eigen::VectorXd q0 = Eigen::VectorXd::Zero(s.num_dofs());
   for (int j = 0; j < s.num_functions(); ++j) q0[3 * j] = 0.004;   // every handle pulled 4 mm along x
   s.add_displacement(q0, start.x);
   reduced.initialize(start);
   EXPECT_LT((reduced.q() - q0).cwiseAbs().maxCoeff(), 1e-12);   // the initial state lies in the subspace
   const auto total = [&]() {
-    const fullspace::State st = reduced.full_state();
-    return fullspace::energies(c.problem, st).kinetic + fullspace::energies(c.problem, st).elastic;
+    const model::State st = reduced.full_state();
+    return model::energies(c.problem, st).kinetic + model::energies(c.problem, st).elastic;
   };
   const double e0 = total();
   ASSERT_GT(e0, 0.0);
   double previous = e0, last = e0;
   for (int k = 0; k < 120; ++k) {
-    const ReducedStepStats st = reduced.step(1.0 / 60.0);
+    const model::StepStats st = reduced.step(1.0 / 60.0);
     EXPECT_EQ(st.failed_attempts, 0);
     last = total();
     // Backward Euler dissipates: the energy never grows (1e-9 relative slack for Newton's tolerance).
@@ -94,9 +94,9 @@ TEST(ReducedIntegrator, AnImpossibleStepFailsLoudlyAndLeavesTheStateUnchanged) {
   // The bottom face is pulled 30 cm down within one step while the top face is held: the 6 cm box would have
   // to stretch sixfold, the Fung exponent exceeds its cap in every state of the last substep, and no step
   // can be taken.
-  const fullspace::ScalarDrive drive{[](double t) { return -0.3 * t / 0.01; }, [](double) { return -30.0; }};
+  const model::ScalarDrive drive{[](double t) { return -0.3 * t / 0.01; }, [](double) { return -30.0; }};
   auto c = testing::box_case({3, 3, 2}, 1000.0, &drive);
-  fullspace::Problem& p = c.problem;
+  model::Problem& p = c.problem;
   for (int v : c.mesh.node_groups.at("zmax")) p.dirichlet.add(v, 0b111u);
   p.validate();
   std::vector<char> attached = testing::attached_flags(c);
@@ -107,8 +107,8 @@ TEST(ReducedIntegrator, AnImpossibleStepFailsLoudlyAndLeavesTheStateUnchanged) {
   const Cubature all = exact_cubature(p.num_tets());
   ReducedOptions ro;
   ro.max_halvings = 2;
-  ReducedBackwardEuler reduced(p, s, all, ro);
-  reduced.initialize(fullspace::initial_state(p, 0.0));
+  ReducedSolver reduced(p, s, all, ro);
+  reduced.initialize(model::initial_state(p, 0.0));
   const Eigen::VectorXd q_before = reduced.q();
   try {
     reduced.step(0.01);
@@ -125,14 +125,14 @@ TEST(ReducedIntegrator, AnImpossibleStepFailsLoudlyAndLeavesTheStateUnchanged) {
 
 TEST(ReducedIntegrator, PartiallyAttachedNodesAreRefused) {
   auto c = testing::box_case({2, 2, 2});
-  fullspace::Problem p = c.problem;
+  model::Problem p = c.problem;
   p.dirichlet = {};
   p.dirichlet.add(c.attached[0], 0b001u);
   for (std::size_t k = 1; k < c.attached.size(); ++k) p.dirichlet.add(c.attached[k], 0b111u);
   p.validate();
   const Subspace s = testing::full_basis(p);
   const Cubature all = exact_cubature(p.num_tets());
-  EXPECT_THROW(ReducedBackwardEuler(p, s, all), Error);
+  EXPECT_THROW(ReducedSolver(p, s, all), Error);
 }
 
 const body::BodyModel& open_body() {
@@ -141,11 +141,11 @@ const body::BodyModel& open_body() {
 }
 
 TEST(ReducedModel, CachedModelEqualsTheBuiltOneAndACorruptEntryIsRebuilt) {
-  fullspace::BodyLayerOptions options;
+  model::BodyLayerOptions options;
   options.size = meshing::SizePreset::coarse;
   options.cache_dir = SFLSH_TEST_CACHE;
   const body::Motion motion = body::make_procedural_motion("jiggle_on_toes", 60.0, 4);
-  const fullspace::BodyLayer layer = fullspace::build_body_layer(open_body(), body::Betas::Zero(), motion, nullptr, 6, options);
+  const model::BodyLayer layer = model::build_body_layer(open_body(), body::Betas::Zero(), motion, nullptr, 6, options);
   const std::filesystem::path dir = std::filesystem::path(SFLSH_TEST_CACHE) / "reduced-cache-test";
   std::filesystem::remove_all(dir);
   ReducedModelOptions ro;
@@ -169,26 +169,26 @@ TEST(ReducedModel, CachedModelEqualsTheBuiltOneAndACorruptEntryIsRebuilt) {
 }
 
 TEST(ReducedModel, BodyRunStaysFiniteAndMovesTheSkin) {
-  fullspace::BodyLayerOptions options;
+  model::BodyLayerOptions options;
   options.size = meshing::SizePreset::coarse;
   options.cache_dir = SFLSH_TEST_CACHE;
   const body::Motion motion = body::make_procedural_motion("jiggle_on_toes", 60.0, 40);
-  const fullspace::BodyLayer layer = fullspace::build_body_layer(open_body(), body::Betas::Zero(), motion, nullptr, 6, options);
+  const model::BodyLayer layer = model::build_body_layer(open_body(), body::Betas::Zero(), motion, nullptr, 6, options);
   ReducedModelOptions ro;
   ro.cache_dir = SFLSH_TEST_CACHE;
   const ReducedModel model = build_reduced_model(layer, ro);
   EXPECT_EQ(model.subspace.num_dofs(), 3 * 86);
-  ReducedBackwardEuler integrator(layer.problem, model.subspace, model.cubature);
-  integrator.initialize(fullspace::initial_state(layer.problem, 0.0));
+  ReducedSolver integrator(layer.problem, model.subspace, model.cubature);
+  integrator.initialize(model::initial_state(layer.problem, 0.0));
   double largest = 0.0;
   long newton = 0, factorizations = 0;
   for (std::size_t f = 1; f < motion.num_frames(); ++f) {
-    const ReducedStepStats st = integrator.step(1.0 / 60.0);
+    const model::StepStats st = integrator.step(1.0 / 60.0);
     EXPECT_LE(st.newton_iterations, 20);
     EXPECT_EQ(st.failed_attempts, 0);
     newton += st.newton_iterations;
     factorizations += st.factorizations;
-    const fullspace::State s = integrator.full_state();
+    const model::State s = integrator.full_state();
     ASSERT_TRUE(s.x.allFinite() && s.w.allFinite());
     largest = std::max(largest, layer.surface_displacement(s.x).cwiseAbs().maxCoeff());
   }

@@ -7,9 +7,9 @@
 
 #include <sflsh/body/body_io.hpp>
 #include <sflsh/body/motion.hpp>
-#include <sflsh/fullspace/body_layer.hpp>
+#include <sflsh/model/body_layer.hpp>
 #include <sflsh/fullspace/reference_integrator.hpp>
-#include <sflsh/fullspace/simulation_output.hpp>
+#include <sflsh/model/simulation_output.hpp>
 #include <sflsh/material/layer_material.hpp>
 #include <sflsh/reduced/dynamics_sensitivity.hpp>
 #include <sflsh/reduced/reduced_model.hpp>
@@ -91,7 +91,7 @@ INSTANTIATE_TEST_SUITE_P(Regimes, YoungStressFd,
 // ---------------------------------------------------------------------------------------------------------
 // A box with a two-control material: Y of tet e = (1 − ξ_e) Y_0 + ξ_e Y_1, ξ_e its centroid's x / length.
 
-Eigen::MatrixXd box_young_map(const fullspace::Problem& p, const std::vector<int>& tets) {
+Eigen::MatrixXd box_young_map(const model::Problem& p, const std::vector<int>& tets) {
   Eigen::MatrixXd W(static_cast<Eigen::Index>(tets.size()), 2);
   for (std::size_t k = 0; k < tets.size(); ++k) {
     double x = 0.0;
@@ -103,14 +103,14 @@ Eigen::MatrixXd box_young_map(const fullspace::Problem& p, const std::vector<int
   return W;
 }
 
-std::vector<int> all_tets(const fullspace::Problem& p) {
+std::vector<int> all_tets(const model::Problem& p) {
   std::vector<int> tets(static_cast<std::size_t>(p.num_tets()));
   for (int e = 0; e < p.num_tets(); ++e) tets[static_cast<std::size_t>(e)] = e;
   return tets;
 }
 
 /// young: controls × (Y_t, Y_n) [Pa].
-void set_box_young(fullspace::Problem& p, const Eigen::MatrixX2d& young) {
+void set_box_young(model::Problem& p, const Eigen::MatrixX2d& young) {
   const Eigen::MatrixXd W = box_young_map(p, all_tets(p));
   const Eigen::MatrixX2d tet = W * young;
   for (int e = 0; e < p.num_tets(); ++e)
@@ -124,7 +124,7 @@ Eigen::MatrixX2d box_control_young() {
   return young;
 }
 
-fullspace::ScalarDrive shake(double amplitude, double frequency) {
+model::ScalarDrive shake(double amplitude, double frequency) {
   const double w = 2.0 * M_PI * frequency;
   return {[=](double t) { return amplitude * std::sin(w * t); }, [=](double t) { return amplitude * w * std::cos(w * t); }};
 }
@@ -171,8 +171,8 @@ const body::BodyModel& open_body() {
   return model;
 }
 
-fullspace::BodyLayerOptions coarse_layer_options() {
-  fullspace::BodyLayerOptions options;
+model::BodyLayerOptions coarse_layer_options() {
+  model::BodyLayerOptions options;
   options.size = meshing::SizePreset::coarse;
   options.cache_dir = SFLSH_TEST_CACHE;
   return options;
@@ -180,7 +180,7 @@ fullspace::BodyLayerOptions coarse_layer_options() {
 
 TEST(YoungSensitivity, CrossMassMatchesTheNodeByNodeSum) {
   const body::Motion motion = body::make_procedural_motion("shake_hips", 60.0, 30);
-  const fullspace::BodyLayer layer = fullspace::build_body_layer(open_body(), body::Betas::Zero(), motion, nullptr, 6, coarse_layer_options());
+  const model::BodyLayer layer = model::build_body_layer(open_body(), body::Betas::Zero(), motion, nullptr, 6, coarse_layer_options());
   ReducedModelOptions ro;
   ro.point_handles = 12;
   ro.cache_dir = SFLSH_TEST_CACHE;
@@ -195,7 +195,7 @@ TEST(YoungSensitivity, CrossMassMatchesTheNodeByNodeSum) {
   inertia.mass_hessian(h, hessian);
   // Node by node: Σ_i m_i b_is b_ir A_i(t1)ᵀ A_i(t0).
   const std::vector<int> active = model.subspace.active_nodes();
-  fullspace::NodeFrame f1, f0;
+  model::NodeFrame f1, f0;
   layer.problem.trajectory->evaluate_nodes(t1, active, f1);
   layer.problem.trajectory->evaluate_nodes(t0, active, f0);
   Eigen::MatrixXd direct = Eigen::MatrixXd::Zero(model.subspace.num_dofs(), model.subspace.num_dofs());
@@ -218,7 +218,7 @@ TEST(YoungSensitivity, CrossMassMatchesTheNodeByNodeSum) {
 
 TEST(YoungMap, MatchesTheLayerMaterialFieldsOnRandomKappa) {
   const body::Motion motion = body::make_procedural_motion("shake_hips", 60.0, 4);
-  const fullspace::BodyLayer layer = fullspace::build_body_layer(open_body(), body::Betas::Zero(), motion, nullptr, 6, coarse_layer_options());
+  const model::BodyLayer layer = model::build_body_layer(open_body(), body::Betas::Zero(), motion, nullptr, 6, coarse_layer_options());
   const LayerYoungMap map(layer);
   ASSERT_EQ(map.num_controls(), 6);
   const std::vector<int> tets = all_tets(layer.problem);
@@ -267,9 +267,9 @@ double trajectory_error(const std::vector<Eigen::MatrixXd>& analytic, int column
   return scale > 0.0 ? error / scale : std::numeric_limits<double>::infinity();
 }
 
-std::vector<Eigen::VectorXd> plain_run(const fullspace::Problem& p, const Subspace& s, const Cubature& cub, const fullspace::State& start,
+std::vector<Eigen::VectorXd> plain_run(const model::Problem& p, const Subspace& s, const Cubature& cub, const model::State& start,
                                        double h, int frames) {
-  ReducedBackwardEuler integrator(p, s, cub, sensitivity_solver_options());
+  ReducedSolver integrator(p, s, cub, sensitivity_solver_options());
   integrator.initialize(start);
   std::vector<Eigen::VectorXd> q{integrator.q()};
   for (int f = 0; f < frames; ++f) {
@@ -297,13 +297,13 @@ std::vector<Eigen::VectorXd> central_difference(const std::vector<Eigen::VectorX
 constexpr double kTrajectoryTolerance = 1e-5;
 
 TEST(YoungSensitivity, BoxTrajectoryMatchesFiniteDifferencesOfCompleteSimulations) {
-  const fullspace::ScalarDrive drive = shake(0.006, 4.0);
+  const model::ScalarDrive drive = shake(0.006, 4.0);
   auto c = testing::box_case({4, 4, 3}, 1000.0, &drive);
   const Eigen::MatrixX2d base = box_control_young();
   set_box_young(c.problem, base);
   const Subspace s = testing::box_subspace(c);
   const Cubature cub = exact_cubature(c.problem.num_tets());
-  const fullspace::State start = fullspace::initial_state(c.problem, 0.0);
+  const model::State start = model::initial_state(c.problem, 0.0);
   const double h = 1.0 / 60.0;
   const int frames = 20;
   const SensitivityResult result = simulate_with_sensitivities(c.problem, s, cub, box_young_map(c.problem, cub.tets), start, h, frames);
@@ -329,13 +329,13 @@ TEST(YoungSensitivity, BoxTrajectoryMatchesFiniteDifferencesOfCompleteSimulation
 // Steps of changing size (as substeps make them): the prediction's velocity w_n = (p_n − p_{n−1})/h_prev then
 // enters with r = h/h_prev ≠ 1.
 TEST(YoungSensitivity, VariableStepTrajectoryMatchesFiniteDifferences) {
-  const fullspace::ScalarDrive drive = shake(0.006, 4.0);
+  const model::ScalarDrive drive = shake(0.006, 4.0);
   auto c = testing::box_case({4, 4, 3}, 1000.0, &drive);
   const Eigen::MatrixX2d base = box_control_young();
   set_box_young(c.problem, base);
   const Subspace s = testing::box_subspace(c);
   const Cubature cub = exact_cubature(c.problem.num_tets());
-  const fullspace::State start = fullspace::initial_state(c.problem, 0.0);
+  const model::State start = model::initial_state(c.problem, 0.0);
   const std::vector<double> steps{1.0 / 60, 1.0 / 120, 1.0 / 120, 1.0 / 40, 1.0 / 90, 1.0 / 60, 1.0 / 30, 1.0 / 240, 1.0 / 60, 1.0 / 60};
   SensitivityIntegrator integrator(c.problem, s, cub, box_young_map(c.problem, cub.tets));
   integrator.initialize(start);
@@ -346,7 +346,7 @@ TEST(YoungSensitivity, VariableStepTrajectoryMatchesFiniteDifferences) {
   }
   const auto run = [&](const Eigen::MatrixX2d& young) {
     set_box_young(c.problem, young);
-    ReducedBackwardEuler plain(c.problem, s, cub, sensitivity_solver_options());
+    ReducedSolver plain(c.problem, s, cub, sensitivity_solver_options());
     plain.initialize(start);
     std::vector<Eigen::VectorXd> q{plain.q()};
     for (double h : steps) {
@@ -370,35 +370,35 @@ TEST(YoungSensitivity, VariableStepTrajectoryMatchesFiniteDifferences) {
 TEST(YoungSensitivity, BodyLayerTrajectoryMatchesFiniteDifferencesOfCompleteSimulations) {
   const int frames = 20;
   const body::Motion motion = body::make_procedural_motion("jiggle_on_toes", 60.0, frames + 2);
-  const fullspace::BodyLayer layer = fullspace::build_body_layer(open_body(), body::Betas::Zero(), motion, nullptr, 6, coarse_layer_options());
+  const model::BodyLayer layer = model::build_body_layer(open_body(), body::Betas::Zero(), motion, nullptr, 6, coarse_layer_options());
   ReducedModelOptions ro;
   ro.cache_dir = SFLSH_TEST_CACHE;
   const ReducedModel model = build_reduced_model(layer, ro);
   const LayerYoungMap map(layer);
-  const fullspace::State start = fullspace::initial_state(layer.problem, 0.0);
+  const model::State start = model::initial_state(layer.problem, 0.0);
   const double h = 1.0 / 60.0;
   const SensitivityResult result =
       simulate_with_sensitivities(layer.problem, model.subspace, model.cubature, map.tet_map(model.cubature.tets), start, h, frames);
   const int N = map.num_controls();
   const Eigen::MatrixX2d base = map.control_young();
-  fullspace::Problem perturbed = layer.problem;
+  model::Problem perturbed = layer.problem;
   // σ_n, σ_t of the region skin (the fit's measurement) and their derivatives through the skin map.
   const SkinDisplacementMap skin(layer, model.subspace);
-  const meshing::RowMatrixX3d all_normals = fullspace::vertex_normals(layer.shaped, open_body().faces);
+  const meshing::RowMatrixX3d all_normals = model::vertex_normals(layer.shaped, open_body().faces);
   meshing::RowMatrixX3d normals(layer.mesh->region_surface.num_vertices(), 3);
   for (Eigen::Index r = 0; r < normals.rows(); ++r) normals.row(r) = all_normals.row(layer.mesh->region_surface.vertices[static_cast<std::size_t>(r)]);
   DynamicsAmplitudeSensitivity dynamics(normals, 2 * N);
   for (std::size_t f = 0; f < result.q.size(); ++f)
     dynamics.add(skin.displacement(result.q[f], result.t[f]), skin.derivative(result.dq_dyoung[f]));
   const auto sigma_of = [&](const std::vector<Eigen::VectorXd>& q) {
-    fullspace::DynamicsAmplitude amplitude(normals);
+    model::DynamicsAmplitude amplitude(normals);
     for (std::size_t f = 0; f < q.size(); ++f) amplitude.add(skin.displacement(q[f], result.t[f]));
     Eigen::VectorXd sigma(2 * normals.rows());
     sigma << amplitude.sigma_normal(), amplitude.sigma_tangent();
     return sigma;
   };
   {
-    fullspace::DynamicsAmplitude amplitude(normals);
+    model::DynamicsAmplitude amplitude(normals);
     for (std::size_t f = 0; f < result.q.size(); ++f) amplitude.add(skin.displacement(result.q[f], result.t[f]));
     EXPECT_LE((amplitude.sigma_normal() - dynamics.sigma_normal()).cwiseAbs().maxCoeff(), 1e-12);   // same sums [m]
     EXPECT_LE((amplitude.sigma_tangent() - dynamics.sigma_tangent()).cwiseAbs().maxCoeff(), 1e-12);
@@ -454,7 +454,7 @@ TEST(YoungSensitivity, AnIndefiniteOrNonFiniteSystemIsReportedNotSolved) {
 }
 
 TEST(YoungSensitivity, ABadMapOrAMissingInitializationIsRefused) {
-  const fullspace::ScalarDrive drive = shake(0.006, 4.0);
+  const model::ScalarDrive drive = shake(0.006, 4.0);
   auto c = testing::box_case({3, 3, 2}, 1000.0, &drive);
   const Subspace s = testing::box_subspace(c);
   const Cubature cub = exact_cubature(c.problem.num_tets());
@@ -465,7 +465,7 @@ TEST(YoungSensitivity, ABadMapOrAMissingInitializationIsRefused) {
   EXPECT_NE(sflsh::testing::error_of([&] { SensitivityIntegrator(c.problem, s, cub, nan_map); }).find("finite"), std::string::npos);
   SensitivityIntegrator integrator(c.problem, s, cub, W);
   EXPECT_NE(sflsh::testing::error_of([&] { integrator.step(1.0 / 60.0); }).find("initialize"), std::string::npos);
-  integrator.initialize(fullspace::initial_state(c.problem, 0.0));
+  integrator.initialize(model::initial_state(c.problem, 0.0));
   EXPECT_EQ(integrator.dq_dyoung().cwiseAbs().maxCoeff(), 0.0);
   integrator.step(1.0 / 60.0);
   EXPECT_TRUE(integrator.dq_dyoung().allFinite());
@@ -474,15 +474,15 @@ TEST(YoungSensitivity, ABadMapOrAMissingInitializationIsRefused) {
 
 // The plain integrator with substep recording is the plain integrator (same trajectory to the bit).
 TEST(YoungSensitivity, RecordingSubstepsDoesNotChangeTheTrajectory) {
-  const fullspace::ScalarDrive drive = shake(0.006, 4.0);
+  const model::ScalarDrive drive = shake(0.006, 4.0);
   auto c = testing::box_case({3, 3, 2}, 1000.0, &drive);
   const Subspace s = testing::box_subspace(c);
   const Cubature cub = exact_cubature(c.problem.num_tets());
   ReducedOptions with = sensitivity_solver_options(), without = with;
   without.record_substeps = false;
-  ReducedBackwardEuler a(c.problem, s, cub, with), b(c.problem, s, cub, without);
-  a.initialize(fullspace::initial_state(c.problem, 0.0));
-  b.initialize(fullspace::initial_state(c.problem, 0.0));
+  ReducedSolver a(c.problem, s, cub, with), b(c.problem, s, cub, without);
+  a.initialize(model::initial_state(c.problem, 0.0));
+  b.initialize(model::initial_state(c.problem, 0.0));
   for (int k = 0; k < 10; ++k) {
     a.step(1.0 / 60.0);
     b.step(1.0 / 60.0);

@@ -2,7 +2,7 @@
 // metric Q_i and the regularizer matrix L.
 #include <sflsh/body/body_io.hpp>
 #include <sflsh/core/error.hpp>
-#include <sflsh/fullspace/body_layer.hpp>
+#include <sflsh/model/body_layer.hpp>
 #include <sflsh/material/layer_material.hpp>
 #include <sflsh/material/surface_operators.hpp>
 #include <sflsh/reduced/layer_parameterization.hpp>
@@ -34,12 +34,12 @@ const body::BodyModel& open_body() {
   return model;
 }
 
-const fullspace::BodyLayer& coarse_layer() {
-  static const fullspace::BodyLayer layer = [] {
-    fullspace::BodyLayerOptions options;
+const model::BodyLayer& coarse_layer() {
+  static const model::BodyLayer layer = [] {
+    model::BodyLayerOptions options;
     options.size = meshing::SizePreset::coarse;
     options.cache_dir = SFLSH_TEST_CACHE;
-    return fullspace::build_body_layer(open_body(), body::Betas::Zero(), body::make_procedural_motion("shake_hips", 60.0, 3),
+    return model::build_body_layer(open_body(), body::Betas::Zero(), body::make_procedural_motion("shake_hips", 60.0, 3),
                                        nullptr, 1, options);
   }();
   return layer;
@@ -81,7 +81,7 @@ TEST(ShapeElasticity, L2RegularizerIsTheFrobeniusNorm) {
 }
 
 TEST(ShapeElasticity, LocalMetricIsSymmetricPositiveDefiniteAndGivesTheTrace) {
-  const fullspace::BodyLayer& layer = coarse_layer();
+  const model::BodyLayer& layer = coarse_layer();
   const LayerParameterization param(layer, 12);
   const meshing::LayerMesh& mesh = *layer.mesh;
   const Eigen::VectorXd area = material::lumped_mass(material::region_positions(open_body(), mesh), mesh.region_surface.faces);
@@ -109,7 +109,7 @@ TEST(ShapeElasticity, LocalMetricIsSymmetricPositiveDefiniteAndGivesTheTrace) {
 }
 
 TEST(ShapeElasticity, ControlValuesTransferBetweenNestedSets) {
-  const fullspace::BodyLayer& layer = coarse_layer();
+  const model::BodyLayer& layer = coarse_layer();
   const LayerParameterization small(layer, 4), large(layer, 12);
   // Nested: the first 4 of the 12 are the 4, and a field given on the 4 is kept at those points.
   for (int i = 0; i < 4; ++i) EXPECT_EQ(small.control_vertices()[static_cast<std::size_t>(i)], large.control_vertices()[static_cast<std::size_t>(i)]);

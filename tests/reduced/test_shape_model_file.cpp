@@ -2,7 +2,7 @@
 // (material_for_beta): constant models, clamping, the checks of material files, and build_body_layer.
 #include <sflsh/body/body_io.hpp>
 #include <sflsh/body/motion.hpp>
-#include <sflsh/fullspace/body_layer.hpp>
+#include <sflsh/model/body_layer.hpp>
 #include <sflsh/reduced/shape_model_file.hpp>
 
 #include <gtest/gtest.h>
@@ -163,11 +163,11 @@ TEST(MaterialForBeta, ClampsIntoTheBoundsAndPassesTheMaterialChecks) {
 
 TEST(MaterialForBeta, BuildBodyLayerAcceptsTheMaterial) {
   const body::BodyModel body = body::load_body(body::default_body_path());
-  fullspace::BodyLayerOptions options;
+  model::BodyLayerOptions options;
   options.size = meshing::SizePreset::coarse;
   options.cache_dir = SFLSH_TEST_CACHE;
   const body::Motion motion = body::make_procedural_motion("dance", 30.0, 2);
-  const fullspace::BodyLayer base = fullspace::build_body_layer(body, body::Betas::Zero(), motion, nullptr, 4, options);
+  const model::BodyLayer base = model::build_body_layer(body, body::Betas::Zero(), motion, nullptr, 4, options);
   material::ParameterBounds bounds;
   bounds.thickness.max = 0.6;   // what the coarse mesh retargets validly (validate's default)
   ShapeElasticity s = ShapeElasticity::constant(material::normalize(base.material.kappa(), bounds));
@@ -176,7 +176,7 @@ TEST(MaterialForBeta, BuildBodyLayerAcceptsTheMaterial) {
   body::Betas beta = body::Betas::Zero();
   beta[0] = 1.5;
   const material::MaterialFile m = material_for_beta(model, body, beta, "crowd_0");
-  const fullspace::BodyLayer layer = fullspace::build_body_layer(body, beta, motion, &m, 0, options);
+  const model::BodyLayer layer = model::build_body_layer(body, beta, motion, &m, 0, options);
   EXPECT_EQ(layer.material.kappa(), m.kappa());
   EXPECT_NEAR(m.kappa()(0, material::kThickness), base.material.kappa()(0, material::kThickness) + 0.02 * 1.5 * 0.6, 1e-12);
 }

@@ -3,7 +3,7 @@
 // material with per-control-point κ, the skinned layer's kinetic energy (the energy scale the skeleton feeds
 // into the tissue) and the bounded-energy check.
 #include <sflsh/body/body_io.hpp>
-#include <sflsh/fullspace/body_layer.hpp>
+#include <sflsh/model/body_layer.hpp>
 #include <sflsh/material/layer_material.hpp>
 #include <sflsh/meshing/layer_cache.hpp>
 
@@ -18,8 +18,8 @@ inline const body::BodyModel& open_body() {
   return model;
 }
 
-inline fullspace::BodyLayerOptions coarse() {
-  fullspace::BodyLayerOptions options;
+inline model::BodyLayerOptions coarse() {
+  model::BodyLayerOptions options;
   options.size = meshing::SizePreset::coarse;
   options.cache_dir = SFLSH_TEST_CACHE;
   return options;
@@ -47,9 +47,9 @@ struct Outcome {
 };
 
 /// ½ Σ m_i |d/dt (A_i x̄_i + d_i)|² at time t: the kinetic energy of the layer moving rigidly with the skin.
-inline double skinned_kinetic_energy(const fullspace::Problem& p, double t) {
+inline double skinned_kinetic_energy(const model::Problem& p, double t) {
   const Eigen::Map<const Eigen::VectorXd> rest(p.rest.data(), p.num_dofs());
-  fullspace::NodeFrame frame, rate;
+  model::NodeFrame frame, rate;
   p.frame(t, frame, &rate);
   double kinetic = 0.0;
   for (int i = 0; i < p.num_nodes(); ++i) {
@@ -60,9 +60,9 @@ inline double skinned_kinetic_energy(const fullspace::Problem& p, double t) {
 }
 
 /// Records one frame's state: finite, and its energies folded into `out`.
-inline void record_frame(const fullspace::Problem& p, const fullspace::State& s, double t, std::size_t f, Outcome& out) {
+inline void record_frame(const model::Problem& p, const model::State& s, double t, std::size_t f, Outcome& out) {
   EXPECT_TRUE(s.x.allFinite() && s.w.allFinite()) << "frame " << f;
-  const fullspace::Energies e = fullspace::energies(p, s);
+  const model::Energies e = model::energies(p, s);
   EXPECT_TRUE(std::isfinite(e.kinetic) && std::isfinite(e.elastic)) << "frame " << f;
   out.max_kinetic = std::max(out.max_kinetic, e.kinetic);
   out.max_elastic = std::max(out.max_elastic, e.elastic);

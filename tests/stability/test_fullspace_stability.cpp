@@ -5,8 +5,8 @@
 #include <sflsh/body/body_io.hpp>
 #include <sflsh/body/motion.hpp>
 #include <sflsh/core/error.hpp>
-#include <sflsh/fullspace/backward_euler.hpp>
-#include <sflsh/fullspace/body_layer.hpp>
+#include <sflsh/fullspace/fullspace_solver.hpp>
+#include <sflsh/model/body_layer.hpp>
 #include <sflsh/fullspace/reference_integrator.hpp>
 #include <sflsh/material/layer_material.hpp>
 #include <sflsh/meshing/layer_cache.hpp>
@@ -34,7 +34,7 @@ Outcome run_case(const body::Betas& beta, const body::Motion& motion, const mate
   const Problem& p = layer.problem;
   State state = initial_state(p, 0.0);
   if (perturb) perturb(p, state);
-  BackwardEuler integrator(p, MPI_COMM_WORLD);
+  FullSpaceSolver integrator(p, MPI_COMM_WORLD);
   integrator.initialize(state);
   if (std::getenv("SFLSH_PROBE")) std::cerr << fmt::format("{} nodes {} tets {} constrained\n", p.num_nodes(), p.num_tets(), p.dirichlet.dof.size());
   Outcome out;

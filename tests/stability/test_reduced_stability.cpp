@@ -5,11 +5,11 @@
 #include <sflsh/body/body_io.hpp>
 #include <sflsh/body/motion.hpp>
 #include <sflsh/core/error.hpp>
-#include <sflsh/fullspace/body_layer.hpp>
+#include <sflsh/model/body_layer.hpp>
 #include <sflsh/fullspace/reference_integrator.hpp>
 #include <sflsh/material/layer_material.hpp>
 #include <sflsh/meshing/layer_cache.hpp>
-#include <sflsh/reduced/reduced_integrator.hpp>
+#include <sflsh/reduced/reduced_solver.hpp>
 #include <sflsh/reduced/reduced_model.hpp>
 
 #include "stability_support.hpp"
@@ -28,18 +28,18 @@ using namespace sflsh::stability;
 
 /// Runs the reduced model (86 handles, 200 cubature tets) along the motion; `perturb` may change q₀.
 Outcome run_case(const body::Betas& beta, const body::Motion& motion, const material::MaterialFile* material,
-                 const std::function<void(const fullspace::Problem&, const Subspace&, fullspace::State&)>& perturb = {}) {
-  const fullspace::BodyLayer layer = fullspace::build_body_layer(open_body(), beta, motion, material, 12, coarse());
-  const fullspace::Problem& p = layer.problem;
+                 const std::function<void(const model::Problem&, const Subspace&, model::State&)>& perturb = {}) {
+  const model::BodyLayer layer = model::build_body_layer(open_body(), beta, motion, material, 12, coarse());
+  const model::Problem& p = layer.problem;
   ReducedModelOptions ro;
   ro.cache_dir = SFLSH_TEST_CACHE;
   const ReducedModel model = build_reduced_model(layer, ro);
-  ReducedBackwardEuler integrator(p, model.subspace, model.cubature);
-  fullspace::State state = fullspace::initial_state(p, 0.0);
+  ReducedSolver integrator(p, model.subspace, model.cubature);
+  model::State state = model::initial_state(p, 0.0);
   if (perturb) perturb(p, model.subspace, state);
   integrator.initialize(state);
   Outcome out;
-  out.initial_elastic = fullspace::energies(p, integrator.full_state()).elastic;
+  out.initial_elastic = model::energies(p, integrator.full_state()).elastic;
   for (std::size_t f = 0; f < motion.num_frames(); ++f) {
     if (f > 0) out.failed_attempts += integrator.step(1.0 / motion.fps).failed_attempts;
     record_frame(p, integrator.full_state(), motion.time(f), f, out);
@@ -102,7 +102,7 @@ TEST(ReducedStability, ElementInvertedByTheInitialState) {
   // tets between it and the inner surface turn inside out.
   const body::Motion motion = body::make_procedural_motion("running_on_spot", 60.0, 20);
   int inverted = 0;
-  const auto push = [&](const fullspace::Problem& p, const Subspace& s, fullspace::State& state) {
+  const auto push = [&](const model::Problem& p, const Subspace& s, model::State& state) {
     int handle = -1;
     for (int i = 0; i < p.num_nodes() && handle < 0; ++i)
       if (s.basis.coeff(i, 0) == 1.0) handle = i;

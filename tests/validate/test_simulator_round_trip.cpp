@@ -1,10 +1,10 @@
 // physics.md §4, last paragraph: for a simulation driven by the same poses, inverse skinning returns the
 // elastic displacement exactly, so the metric pipeline run on the simulator's posed surfaces (written to and
 // read back from a DYNA file) must reproduce the simulator's own σ on the region's vertices.
-#include <sflsh/fullspace/backward_euler.hpp>
-#include <sflsh/fullspace/body_layer.hpp>
+#include <sflsh/fullspace/fullspace_solver.hpp>
+#include <sflsh/model/body_layer.hpp>
 #include <sflsh/fullspace/reference_integrator.hpp>
-#include <sflsh/fullspace/simulation_output.hpp>
+#include <sflsh/model/simulation_output.hpp>
 #include <sflsh/validate/dyna_file.hpp>
 #include <sflsh/validate/dynamics_metrics.hpp>
 
@@ -22,18 +22,18 @@ using testing::some_beta;
 
 TEST(SimulatorRoundTrip, MetricOfSimulatedSurfacesEqualsTheSimulatorsSigma) {
   const body::Motion motion = body::make_procedural_motion("running_on_spot", 60.0, 14);
-  fullspace::BodyLayerOptions options;
+  model::BodyLayerOptions options;
   options.size = meshing::SizePreset::coarse;
   options.cache_dir = SFLSH_TEST_CACHE;
-  const fullspace::BodyLayer layer = fullspace::build_body_layer(open_body(), some_beta(), motion, nullptr, 6, options);
-  fullspace::BackwardEuler integrator(layer.problem, MPI_COMM_WORLD);
-  integrator.initialize(fullspace::initial_state(layer.problem, 0.0));
-  fullspace::SimulationWriter writer(layer, nullptr, false);
+  const model::BodyLayer layer = model::build_body_layer(open_body(), some_beta(), motion, nullptr, 6, options);
+  fullspace::FullSpaceSolver integrator(layer.problem, MPI_COMM_WORLD);
+  integrator.initialize(model::initial_state(layer.problem, 0.0));
+  model::SimulationWriter writer(layer, nullptr, false);
   DynaSequence simulated;
   simulated.key = "sim_running_on_spot";
   for (std::size_t f = 0; f < motion.num_frames(); ++f) {
     if (f > 0) integrator.step(1.0 / motion.fps);
-    const fullspace::State state = integrator.state();
+    const model::State state = integrator.state();
     writer.add_frame(motion.time(f), state);
     simulated.frames.push_back(layer.posed_surface(state.x, motion.time(f)));
   }

@@ -8,7 +8,7 @@
 #include <sflsh/body/body_io.hpp>
 #include <sflsh/body/motion.hpp>
 #include <sflsh/body/skinning.hpp>
-#include <sflsh/fullspace/simulation_output.hpp>
+#include <sflsh/model/simulation_output.hpp>
 
 #include <cmath>
 #include <numbers>
@@ -48,7 +48,7 @@ inline SyntheticSequence synthetic_sequence(const body::BodyModel& model, const 
   const Eigen::Index n = model.num_vertices();
   const body::RowMatrixX3d shaped = body::shaped_template(model, beta);
   const body::JointPositions joints = body::regress_joints(model, shaped);
-  const body::RowMatrixX3d normals = fullspace::vertex_normals(shaped, model.faces);
+  const body::RowMatrixX3d normals = model::vertex_normals(shaped, model.faces);
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> uniform(0.0, 1.0);
   std::normal_distribution<double> normal(0.0, 1.0);

@@ -3,7 +3,7 @@
 #include <sflsh/validate/dynamics_metrics.hpp>
 
 #include <sflsh/core/error.hpp>
-#include <sflsh/fullspace/simulation_output.hpp>
+#include <sflsh/model/simulation_output.hpp>
 #include <sflsh/meshing/region.hpp>
 
 #include <Eigen/LU>
@@ -21,7 +21,7 @@ NeutralPullback::NeutralPullback(const body::BodyModel& model, const body::Betas
     : model_(model),
       shaped_(body::shaped_template(model, beta)),
       joints_(body::regress_joints(model, shaped_)),
-      normals_(fullspace::vertex_normals(shaped_, model.faces)) {}
+      normals_(model::vertex_normals(shaped_, model.faces)) {}
 
 RowMatrixX3d NeutralPullback::unposed(const body::Pose& theta, const Eigen::Vector3d& trans, const Eigen::Matrix3d& world_from_body,
                                       const RowMatrixX3d& posed) const {
@@ -79,7 +79,7 @@ DynamicsResult dynamics_metrics(const body::BodyModel& model, const body::Betas&
   const Eigen::Index n = model.num_vertices();
   for (int v : soft_vertices) require(v >= 0 && v < n, "dynamics metrics: soft-region vertex {} outside the body's {} vertices", v, n);
   const NeutralPullback pullback(model, beta);
-  fullspace::DynamicsAmplitude amplitude(pullback.normals());  // steps 4–6
+  model::DynamicsAmplitude amplitude(pullback.normals());  // steps 4–6
   for (std::size_t t = 0; t < posed.size(); ++t) {
     require(posed[t].rows() == n, "dynamics metrics: frame {} has {} vertices, the body has {}", t, posed[t].rows(), n);
     require(posed[t].allFinite(), "dynamics metrics: frame {} has a non-finite vertex position", t);

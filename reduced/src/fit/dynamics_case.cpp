@@ -1,8 +1,7 @@
 #include <sflsh/reduced/dynamics_case.hpp>
 
 #include <sflsh/core/error.hpp>
-#include <sflsh/fullspace/reference_integrator.hpp>
-#include <sflsh/fullspace/simulation_output.hpp>
+#include <sflsh/model/simulation_output.hpp>
 #include <sflsh/reduced/dynamics_sensitivity.hpp>
 #include <sflsh/reduced/reduced_sensitivity.hpp>
 #include <sflsh/reduced/young_map.hpp>
@@ -20,11 +19,11 @@ double CaseDynamics::mean_sigma() const { return sigma_normal.size() ? sigma().m
 DynamicsCase::~DynamicsCase() = default;
 
 DynamicsCase::DynamicsCase(const body::BodyModel& model, std::string subject, const body::Betas& beta,
-                           const body::Motion& motion, const fullspace::BodyLayerOptions& options)
+                           const body::Motion& motion, const model::BodyLayerOptions& options)
     : subject_(std::move(subject)), motion_(motion.name), options_(options), fps_(motion.fps) {
-  layer_ = std::make_unique<fullspace::BodyLayer>(fullspace::build_body_layer(model, beta, motion, nullptr, 1, options));
+  layer_ = std::make_unique<model::BodyLayer>(model::build_body_layer(model, beta, motion, nullptr, 1, options));
   frames_ = static_cast<int>(motion.num_frames());
-  const meshing::RowMatrixX3d all = fullspace::vertex_normals(layer_->shaped, model.faces);
+  const meshing::RowMatrixX3d all = model::vertex_normals(layer_->shaped, model.faces);
   const std::vector<int>& region = layer_->mesh->region_surface.vertices;
   normals_.resize(static_cast<Eigen::Index>(region.size()), 3);
   for (std::size_t r = 0; r < region.size(); ++r) normals_.row(static_cast<Eigen::Index>(r)) = all.row(region[r]);
@@ -39,10 +38,10 @@ CaseDynamics DynamicsCase::simulate(const LayerParameterization& parameterizatio
                                     const ReducedModel& model, const ReducedOptions& options) const {
   const auto start = std::chrono::steady_clock::now();
   try {
-    const fullspace::Problem problem = parameterization.problem(*layer_, kappa, options_);
-    ReducedBackwardEuler integrator(problem, model.subspace, model.cubature, options);
-    integrator.initialize(fullspace::initial_state(problem, 0.0));
-    fullspace::DynamicsAmplitude amplitude(normals_);
+    const model::Problem problem = parameterization.problem(*layer_, kappa, options_);
+    ReducedSolver integrator(problem, model.subspace, model.cubature, options);
+    integrator.initialize(model::initial_state(problem, 0.0));
+    model::DynamicsAmplitude amplitude(normals_);
     // The attached nodes carry no elastic displacement (x_D = X), so u = (B ⊗ I₃) q; the skin embedding is
     // affine with weights summing to one, hence linear in u. No pass over the skinned trajectory per frame.
     require(problem.dirichlet.drives.empty(), "fit cases take fixed attachments only");
@@ -71,10 +70,10 @@ CaseDynamics DynamicsCase::simulate_with_sensitivity(const LayerParameterization
                                                     const ReducedOptions& options) const {
   const auto start = std::chrono::steady_clock::now();
   try {
-    const fullspace::Problem problem = parameterization.problem(*layer_, kappa, options_);
+    const model::Problem problem = parameterization.problem(*layer_, kappa, options_);
     require(problem.dirichlet.drives.empty(), "fit cases take fixed attachments only");
     SensitivityIntegrator integrator(problem, model.subspace, model.cubature, young_map, sensitivity_solver_options(options));
-    integrator.initialize(fullspace::initial_state(problem, 0.0));
+    integrator.initialize(model::initial_state(problem, 0.0));
     const int columns = 2 * static_cast<int>(young_map.cols());
     DynamicsAmplitudeSensitivity amplitude(normals_, columns);
     const SkinDisplacementMap& skin = skin_map(model);

@@ -7,7 +7,7 @@
 
 namespace sflsh::reduced {
 
-LayerParameterization::LayerParameterization(const fullspace::BodyLayer& base, int control_points)
+LayerParameterization::LayerParameterization(const model::BodyLayer& base, int control_points)
     : model_(base.model),
       mesh_(std::make_shared<meshing::LayerMesh>(*base.mesh)),
       poisson_(base.material.poisson),
@@ -26,8 +26,8 @@ material::KappaMatrix LayerParameterization::field(const material::KappaMatrix& 
   return material::evaluate_field(phi_, kappa);
 }
 
-fullspace::Problem LayerParameterization::problem(const fullspace::BodyLayer& layer, const material::KappaMatrix& kappa,
-                                                  const fullspace::BodyLayerOptions& options,
+model::Problem LayerParameterization::problem(const model::BodyLayer& layer, const material::KappaMatrix& kappa,
+                                                  const model::BodyLayerOptions& options,
                                                   meshing::RowMatrixX3d* rest_skin) const {
   require(layer.mesh && layer.mesh->num_nodes() == mesh_->num_nodes() && layer.mesh->num_tets() == mesh_->num_tets(),
           "layer parameterization: the layer is not on the template mesh the parameterization was built for");
@@ -37,9 +37,9 @@ fullspace::Problem LayerParameterization::problem(const fullspace::BodyLayer& la
   return problem_from_field(layer, field(kappa), options, rest_skin);
 }
 
-fullspace::Problem LayerParameterization::problem_from_field(const fullspace::BodyLayer& layer,
+model::Problem LayerParameterization::problem_from_field(const model::BodyLayer& layer,
                                                              const material::KappaMatrix& kappa_vertex,
-                                                             const fullspace::BodyLayerOptions& options,
+                                                             const model::BodyLayerOptions& options,
                                                              meshing::RowMatrixX3d* rest_skin) const {
   require(layer.mesh && layer.mesh->num_nodes() == mesh_->num_nodes() && layer.mesh->num_tets() == mesh_->num_tets(),
           "layer parameterization: the layer is not on the template mesh the parameterization was built for");
@@ -47,7 +47,7 @@ fullspace::Problem LayerParameterization::problem_from_field(const fullspace::Bo
   const meshing::RetargetedLayer retargeted = retargeter_->retarget(layer.beta, thickness);
   const material::LayerMaterialFields fields = material::layer_material_fields(*retargeter_, kappa_vertex, retargeted.nodes);
 
-  fullspace::Problem p = layer.problem;   // tets, Dirichlet set and trajectory do not depend on κ
+  model::Problem p = layer.problem;   // tets, Dirichlet set and trajectory do not depend on κ
   p.rest = retargeted.nodes;
   p.tet_rest.clear();
   for (int e = 0; e < mesh_->num_tets(); ++e) {
@@ -59,7 +59,7 @@ fullspace::Problem LayerParameterization::problem_from_field(const fullspace::Bo
     m.overflow = options.overflow;
     p.tet_material[static_cast<std::size_t>(e)] = material::make_orthotropic_fung(m, fields.normal.row(e).transpose());
   }
-  p.mass = fullspace::lumped_masses(p.rest, p.tets, p.density > 0.0 ? p.density : options.density);
+  p.mass = model::lumped_masses(p.rest, p.tets, p.density > 0.0 ? p.density : options.density);
   p.validate();
   if (rest_skin) *rest_skin = mesh_->skin_positions(p.rest);
   return p;

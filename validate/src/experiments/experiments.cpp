@@ -46,7 +46,7 @@ std::string case_key(const std::string& subject, const std::string& motion) { re
 std::map<std::string, GroundTruthCase> compute_ground_truth(
     const ValidateConfig& config, const std::map<std::string, std::unique_ptr<reduced::DynamicsCase>>& cases,
     const std::map<std::string, body::Motion>& motions, reduced::ParameterizationCache& parameterizations,
-    const fullspace::BodyLayerOptions& layer_options, const material::ParameterBounds& bounds,
+    const model::BodyLayerOptions& layer_options, const material::ParameterBounds& bounds,
     const std::filesystem::path& state, const reduced::SimulationPool& pool) {
   std::map<std::string, GroundTruthCase> truth;
   GroundTruthOptions gto;
@@ -87,7 +87,7 @@ struct Setup {
   body::BodyModel model;
   std::map<std::string, body::Betas> beta_of;
   std::vector<std::string> all_subjects, all_motions;
-  fullspace::BodyLayerOptions layer_options;
+  model::BodyLayerOptions layer_options;
   material::ParameterBounds bounds;
   std::map<std::string, body::Motion> motions;
   std::map<std::string, std::unique_ptr<reduced::DynamicsCase>> cases;
@@ -215,7 +215,7 @@ nlohmann::json run_validation(const ValidateConfig& requested, const std::filesy
   const std::map<std::string, body::Betas>& beta_of = setup.beta_of;
   const std::vector<std::string>& all_subjects = setup.all_subjects;
   const std::vector<std::string>& all_motions = setup.all_motions;
-  const fullspace::BodyLayerOptions& layer_options = setup.layer_options;
+  const model::BodyLayerOptions& layer_options = setup.layer_options;
   const material::ParameterBounds& bounds = setup.bounds;
   const std::map<std::string, body::Motion>& motions = setup.motions;
   const std::map<std::string, std::unique_ptr<reduced::DynamicsCase>>& cases = setup.cases;

@@ -3,9 +3,9 @@
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
 #include <sflsh/core/npz.hpp>
-#include <sflsh/fullspace/backward_euler.hpp>
+#include <sflsh/fullspace/fullspace_solver.hpp>
 #include <sflsh/fullspace/reference_integrator.hpp>
-#include <sflsh/fullspace/simulation_output.hpp>
+#include <sflsh/model/simulation_output.hpp>
 #include <sflsh/validate/true_material.hpp>
 
 #include <chrono>
@@ -22,9 +22,9 @@ double GroundTruthCase::mean_sigma() const {
   return sigma_normal.size() ? (sigma_normal.array().square() + sigma_tangent.array().square()).sqrt().mean() : 0.0;
 }
 
-GroundTruthCase simulate_ground_truth(const fullspace::BodyLayer& layer, const body::Motion& motion, const std::string& subject,
+GroundTruthCase simulate_ground_truth(const model::BodyLayer& layer, const body::Motion& motion, const std::string& subject,
                                       const reduced::LayerParameterization& parameterization,
-                                      const fullspace::BodyLayerOptions& layer_options, const GroundTruthOptions& options) {
+                                      const model::BodyLayerOptions& layer_options, const GroundTruthOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   GroundTruthCase out;
   out.subject = subject;
@@ -33,14 +33,14 @@ GroundTruthCase simulate_ground_truth(const fullspace::BodyLayer& layer, const b
   out.fps = motion.fps;
   out.kappa = true_kappa_field(*layer.model, *layer.mesh, layer.beta, options.bounds);
   meshing::RowMatrixX3d rest_skin;
-  const fullspace::Problem problem = parameterization.problem_from_field(layer, out.kappa, layer_options, &rest_skin);
-  fullspace::BackwardEuler solver(problem, MPI_COMM_SELF);
-  solver.initialize(fullspace::initial_state(problem, 0.0));
+  const model::Problem problem = parameterization.problem_from_field(layer, out.kappa, layer_options, &rest_skin);
+  fullspace::FullSpaceSolver solver(problem, MPI_COMM_SELF);
+  solver.initialize(model::initial_state(problem, 0.0));
   const std::vector<int>& region = layer.mesh->region_surface.vertices;
-  const meshing::RowMatrixX3d all_normals = fullspace::vertex_normals(layer.shaped, layer.model->faces);
+  const meshing::RowMatrixX3d all_normals = model::vertex_normals(layer.shaped, layer.model->faces);
   meshing::RowMatrixX3d normals(static_cast<Eigen::Index>(region.size()), 3);
   for (std::size_t r = 0; r < region.size(); ++r) normals.row(static_cast<Eigen::Index>(r)) = all_normals.row(region[r]);
-  fullspace::DynamicsAmplitude amplitude(normals);
+  model::DynamicsAmplitude amplitude(normals);
   auto record = [&](double t) {
     const Eigen::Map<const meshing::RowMatrixX3d> nodes(solver.state().x.data(), problem.num_nodes(), 3);
     const meshing::RowMatrixX3d u = layer.mesh->skin_positions(nodes) - rest_skin;
@@ -51,7 +51,7 @@ GroundTruthCase simulate_ground_truth(const fullspace::BodyLayer& layer, const b
   const auto frames = static_cast<int>(motion.num_frames());
   for (int f = 1; f < frames; ++f) {
     try {
-      const fullspace::StepStats st = solver.step(1.0 / motion.fps);
+      const model::StepStats st = solver.step(1.0 / motion.fps);
       out.newton_iterations += st.newton_iterations;
     } catch (const Error& e) {
       throw_error("ground truth {} / {}: frame {}: {}", subject, motion.name, f, e.what());

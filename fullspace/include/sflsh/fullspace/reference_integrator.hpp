@@ -20,7 +20,7 @@
 //
 // Serial: one process, SUNDIALS serial vectors. Run it on rank 0 only / with one MPI process.
 // All SUNDIALS-specific code sits in reference_integrator.cpp (SUNDIALS 7 renames parts of the API).
-#include <sflsh/fullspace/problem.hpp>
+#include <sflsh/fullspace/model_names.hpp>
 #include <sflsh/material/psd_projection.hpp>
 
 #include <Eigen/Core>
@@ -95,10 +95,5 @@ class ReferenceIntegrator {
   std::unique_ptr<Impl> impl_;
 };
 
-/// The usual initial state at t0: x = X with the Dirichlet values applied at t0, and w the posed velocity
-/// of that configuration carried by the trajectory, ṗ = Ȧx + ḋ + Aẋ with ẋ = du/dt on prescribed
-/// components and 0 elsewhere (the body moves rigidly with its skinning, no elastic velocity).
-/// Shared by the backward-Euler and the reference integrators.
-State initial_state(const Problem& problem, double t0);
 
 }  // namespace sflsh::fullspace

@@ -15,7 +15,7 @@
 //   [record]     group = "top"  every = 16
 //   [solver]     hessian = "projected" | "exact"             # optional
 #include <sflsh/fullspace/msh_reader.hpp>
-#include <sflsh/fullspace/problem.hpp>
+#include <sflsh/fullspace/model_names.hpp>
 #include <sflsh/material/psd_projection.hpp>
 #include <sflsh/material/skin_material.hpp>
 

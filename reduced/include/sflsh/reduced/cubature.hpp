@@ -8,7 +8,7 @@
 // integrals that need no training data — the total volume and the exact reduced forces at random handle
 // displacements of a few millimetres to centimetres (generated, never simulated). Exact integration
 // (every tet, ω = 1) stays available.
-#include <sflsh/fullspace/problem.hpp>
+#include <sflsh/model/problem.hpp>
 #include <sflsh/reduced/subspace.hpp>
 
 #include <string>
@@ -41,13 +41,13 @@ struct CubatureOptions {
 
 /// Farthest-point sample of `count` tets by centroid, started at the tet nearest the volume-weighted
 /// centroid; deterministic. Distances are scaled by the per-tet density (empty: 1).
-std::vector<int> farthest_point_tets(const fullspace::Problem& problem, int count, const std::vector<double>& density);
+std::vector<int> farthest_point_tets(const model::Problem& problem, int count, const std::vector<double>& density);
 
 /// Voronoi weights: every tet is given to its nearest cubature tet (by centroid); ω_c = (Σ V_e)/V_c.
-std::vector<double> voronoi_weights(const fullspace::Problem& problem, const std::vector<int>& tets);
+std::vector<double> voronoi_weights(const model::Problem& problem, const std::vector<int>& tets);
 
 /// Data-oblivious cubature for `problem` in `subspace`. Falls back to Voronoi weights (logged) when the
 /// NNLS fit leaves the volume off by more than 5%.
-Cubature select_cubature(const fullspace::Problem& problem, const Subspace& subspace, const CubatureOptions& options);
+Cubature select_cubature(const model::Problem& problem, const Subspace& subspace, const CubatureOptions& options);
 
 }  // namespace sflsh::reduced

@@ -6,7 +6,7 @@
 // prescribed state x_D. Hence
 //   ∂E/∂t_s = ω V P c_s,     ∂²E/∂t_s∂t_r (i, k) = ω V Σ_{j,l} (∂P/∂F)_{(i j),(k l)} c_s(j) c_r(l),
 // with (i j) the column-major vec index i + 3j (orthotropic_fung.hpp). No allocation per point.
-#include <sflsh/fullspace/problem.hpp>
+#include <sflsh/model/problem.hpp>
 #include <sflsh/reduced/cubature.hpp>
 #include <sflsh/reduced/subspace.hpp>
 
@@ -16,7 +16,7 @@ namespace sflsh::reduced {
 
 class CubatureElastic {
  public:
-  CubatureElastic(const fullspace::Problem& problem, const Subspace& subspace, const Cubature& cubature);
+  CubatureElastic(const model::Problem& problem, const Subspace& subspace, const Cubature& cubature);
 
   /// F_D per point from the prescribed state x_D (3N). Call before the first evaluation and whenever x_D changes.
   void set_prescribed_state(const Eigen::VectorXd& x_prescribed);
@@ -44,7 +44,7 @@ class CubatureElastic {
  private:
   Eigen::Matrix3d deformation_gradient(int point, const Eigen::VectorXd& q) const;
 
-  const fullspace::Problem& problem_;
+  const model::Problem& problem_;
   std::vector<int> point_tet_;
   std::vector<double> point_weight_;   ///< ω_c V_c (· energy scale)
   std::vector<int> offset_;            ///< point p's functions are function_[offset_[p] .. offset_[p+1])

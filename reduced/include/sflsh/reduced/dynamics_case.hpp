@@ -3,9 +3,9 @@
 // reduced simulation of it for any control-point material κ, measured as the paper's per-vertex dynamics
 // of the region skin in the neutral pose (physics.md §4; for a simulation driven by the motion's own poses
 // inverse skinning returns the elastic displacement exactly, so d̃ = u − mean_t u).
-#include <sflsh/fullspace/body_layer.hpp>
+#include <sflsh/model/body_layer.hpp>
 #include <sflsh/reduced/layer_parameterization.hpp>
-#include <sflsh/reduced/reduced_integrator.hpp>
+#include <sflsh/reduced/reduced_solver.hpp>
 #include <sflsh/reduced/reduced_model.hpp>
 
 #include <memory>
@@ -30,14 +30,14 @@ class DynamicsCase {
  public:
   /// Builds the layer of subject `beta` for `motion` (the first `frames` frames; 0 = all).
   DynamicsCase(const body::BodyModel& model, std::string subject, const body::Betas& beta, const body::Motion& motion,
-               const fullspace::BodyLayerOptions& options);
+               const model::BodyLayerOptions& options);
   ~DynamicsCase();
 
   const std::string& subject() const { return subject_; }
   const std::string& motion() const { return motion_; }
   const body::Betas& beta() const { return layer_->beta; }
-  const fullspace::BodyLayer& layer() const { return *layer_; }
-  const fullspace::BodyLayerOptions& layer_options() const { return options_; }
+  const model::BodyLayer& layer() const { return *layer_; }
+  const model::BodyLayerOptions& layer_options() const { return options_; }
   int num_region_vertices() const { return static_cast<int>(normals_.rows()); }
   /// Unit normals of the shaped template at the region vertices (the σ_n / σ_t split).
   const meshing::RowMatrixX3d& normals() const { return normals_; }
@@ -60,8 +60,8 @@ class DynamicsCase {
   const SkinDisplacementMap& skin_map(const ReducedModel& model) const;
 
   std::string subject_, motion_;
-  fullspace::BodyLayerOptions options_;
-  std::unique_ptr<fullspace::BodyLayer> layer_;
+  model::BodyLayerOptions options_;
+  std::unique_ptr<model::BodyLayer> layer_;
   meshing::RowMatrixX3d normals_;
   int frames_ = 0;
   double fps_ = 60.0;

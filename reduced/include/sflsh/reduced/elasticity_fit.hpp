@@ -101,11 +101,11 @@ NormalEquations fit_normal_equations(const FitContext& context, const std::vecto
 /// Parameterizations per control-point count, built on demand from one base layer.
 class ParameterizationCache {
  public:
-  explicit ParameterizationCache(const fullspace::BodyLayer& base) : base_(base) {}
+  explicit ParameterizationCache(const model::BodyLayer& base) : base_(base) {}
   const LayerParameterization& get(int controls);
 
  private:
-  const fullspace::BodyLayer& base_;
+  const model::BodyLayer& base_;
   std::map<int, std::unique_ptr<LayerParameterization>> cache_;
 };
 

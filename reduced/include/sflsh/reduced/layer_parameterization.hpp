@@ -4,7 +4,7 @@
 // κ (N × 3, physical) into a subject's problem — thickness field → retargeted nodes → κ per tet → tet
 // materials and lumped masses — without rebuilding anything that does not depend on κ (the template mesh,
 // the skinning trajectory, the reduced model). A fit evaluates it hundreds of times per iteration.
-#include <sflsh/fullspace/body_layer.hpp>
+#include <sflsh/model/body_layer.hpp>
 #include <sflsh/material/parameters.hpp>
 #include <sflsh/meshing/retarget.hpp>
 
@@ -19,7 +19,7 @@ class LayerParameterization {
  public:
   /// `base` fixes the body model and template mesh (any subject of that template works afterwards).
   /// `control_points` ≥ 1: the first N of the nested control-point sequence (material/control_points.hpp).
-  LayerParameterization(const fullspace::BodyLayer& base, int control_points);
+  LayerParameterization(const model::BodyLayer& base, int control_points);
 
   int num_controls() const { return static_cast<int>(control_vertices_.size()); }
   const std::vector<int>& control_vertices() const { return control_vertices_; }   ///< body vertex indices
@@ -32,12 +32,12 @@ class LayerParameterization {
   /// `layer`'s problem with the material κ (N × 3, physical, validated against `bounds`): a copy of the
   /// layer's problem with new rest nodes, tet materials and masses; `rest_skin` receives the region skin
   /// at rest (R × 3). Thread-safe (const). Throws when κ is out of range or the retarget inverts a tet.
-  fullspace::Problem problem(const fullspace::BodyLayer& layer, const material::KappaMatrix& kappa,
-                             const fullspace::BodyLayerOptions& options, meshing::RowMatrixX3d* rest_skin = nullptr) const;
+  model::Problem problem(const model::BodyLayer& layer, const material::KappaMatrix& kappa,
+                             const model::BodyLayerOptions& options, meshing::RowMatrixX3d* rest_skin = nullptr) const;
 
   /// The same for κ given at every region vertex (R × 3, physical): any field, not only the span of φ.
-  fullspace::Problem problem_from_field(const fullspace::BodyLayer& layer, const material::KappaMatrix& kappa_vertex,
-                                        const fullspace::BodyLayerOptions& options,
+  model::Problem problem_from_field(const model::BodyLayer& layer, const material::KappaMatrix& kappa_vertex,
+                                        const model::BodyLayerOptions& options,
                                         meshing::RowMatrixX3d* rest_skin = nullptr) const;
 
   /// κ per region vertex (R × 3) for control values κ (N × 3): φ κ.

@@ -7,8 +7,8 @@
 // The potential is exactly quadratic in q within a step. With skinned node maps A_i = Σ_k w_ik R_k(t),
 // H = Σ_{k≤l} T_kl(s, r) (R_kᵀR_l + R_lᵀR_k)/(1 + δ_kl) / h² with T_kl(s, r) = Σ_i m_i w_ik w_il b_is b_ir
 // precomputed once: a step costs one 3×3 product per joint pair and entry of T, not a pass over the nodes.
-#include <sflsh/fullspace/problem.hpp>
-#include <sflsh/fullspace/skinned_trajectory.hpp>
+#include <sflsh/model/problem.hpp>
+#include <sflsh/model/skinned_trajectory.hpp>
 #include <sflsh/reduced/subspace.hpp>
 
 #include <vector>
@@ -17,7 +17,7 @@ namespace sflsh::reduced {
 
 class ReducedInertia {
  public:
-  ReducedInertia(const fullspace::Problem& problem, const Subspace& subspace);
+  ReducedInertia(const model::Problem& problem, const Subspace& subspace);
 
   const std::vector<int>& active_nodes() const { return active_; }
   /// Node maps of the active nodes at t and z_i from the prescribed state x_D (3N).
@@ -33,7 +33,7 @@ class ReducedInertia {
   /// Posed positions of the active nodes at the current time for coordinates q.
   void posed(const Eigen::VectorXd& q, meshing::RowMatrixX3d& p) const;
   /// The node maps (A_i, d_i) of the active nodes at the current time, and their posed positions at q = 0.
-  const fullspace::NodeFrame& frame() const { return frame_; }
+  const model::NodeFrame& frame() const { return frame_; }
   const meshing::RowMatrixX3d& posed_prescribed() const { return z_; }
   /// u_i = Σ_s b_is t_s at the active nodes (active × 3).
   void displacement(const Eigen::VectorXd& q, meshing::RowMatrixX3d& u) const;
@@ -44,17 +44,17 @@ class ReducedInertia {
     std::vector<int> s, r;
     std::vector<double> value;
   };
-  void build_pairs(const fullspace::SkinnedTrajectory& skinned);
+  void build_pairs(const model::SkinnedTrajectory& skinned);
 
-  const fullspace::Problem& problem_;
+  const model::Problem& problem_;
   const Subspace& subspace_;
   std::vector<int> active_;
   std::vector<double> mass_;           ///< per active node
-  fullspace::NodeFrame frame_;         ///< per active node
+  model::NodeFrame frame_;         ///< per active node
   meshing::RowMatrixX3d z_;            ///< per active node
-  const fullspace::SkinnedTrajectory* skinned_ = nullptr;
+  const model::SkinnedTrajectory* skinned_ = nullptr;
   std::vector<PairTerm> pairs_;
-  fullspace::JointTransforms joints_;
+  model::JointTransforms joints_;
 };
 
 }  // namespace sflsh::reduced

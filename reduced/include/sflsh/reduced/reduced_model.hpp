@@ -6,7 +6,7 @@
 // the data-oblivious cubature. Handles, weights and cubature are one common discretization built on the
 // template layer (β = 0) and cached beside the template mesh; handle positions follow retargeting because
 // handles are mesh nodes.
-#include <sflsh/fullspace/body_layer.hpp>
+#include <sflsh/model/body_layer.hpp>
 #include <sflsh/reduced/cubature.hpp>
 #include <sflsh/reduced/subspace.hpp>
 #include <sflsh/reduced/weights.hpp>
@@ -38,7 +38,7 @@ struct BodyHandles {
 };
 
 /// Places the handles on a body layer (template mesh, its depth field and node skinning weights).
-BodyHandles place_body_handles(const fullspace::BodyLayer& layer, int point_handles);
+BodyHandles place_body_handles(const model::BodyLayer& layer, int point_handles);
 
 struct ReducedModel {
   BodyHandles handles;
@@ -51,15 +51,15 @@ struct ReducedModel {
 
 /// The reduced model of `layer`. Throws naming the cause (too many handles for the mesh, a failed solve, an
 /// unreadable cache entry — which is then rebuilt, with a warning).
-ReducedModel build_reduced_model(const fullspace::BodyLayer& layer, const ReducedModelOptions& options);
+ReducedModel build_reduced_model(const model::BodyLayer& layer, const ReducedModelOptions& options);
 
 /// The largest point-handle count a layer takes (a quarter of its skin vertices).
-int max_point_handles(const fullspace::BodyLayer& layer);
+int max_point_handles(const model::BodyLayer& layer);
 
 /// The cubature count that `options` asks for (resolves −1 = auto).
 int resolved_cubature_count(const ReducedModelOptions& options);
 
 /// The template problem the cubature is fitted on: template nodes and tets, isotropic default tissue.
-fullspace::Problem template_problem(const fullspace::BodyLayer& layer);
+model::Problem template_problem(const model::BodyLayer& layer);
 
 }  // namespace sflsh::reduced

@@ -1,9 +1,9 @@
 #pragma once
-// The problem's node potentials (contact, fullspace/node_potential.hpp) in the reduced incremental potential:
+// The problem's node potentials (contact, model/node_potential.hpp) in the reduced incremental potential:
 // with p_i(q) = z_i + A_i Σ_s b_is t_s (z_i: posed at q = 0),
 //   U(q) = Σ_k u_k(p_{n_k}(q)),   ∂U/∂t_s = Σ_k b_{n_k s} A_kᵀ ∇u_k,   ∂²U/∂t_s∂t_r = Σ_k b_ks b_kr A_kᵀ ∇²u_k A_k,
 // summed over each potential's candidates of the substep only, so an idle or absent potential costs nothing.
-#include <sflsh/fullspace/problem.hpp>
+#include <sflsh/model/problem.hpp>
 #include <sflsh/reduced/reduced_inertia.hpp>
 #include <sflsh/reduced/subspace.hpp>
 
@@ -16,7 +16,7 @@ namespace sflsh::reduced {
 class ReducedPotentials {
  public:
   /// Throws when a potential acts on a node without basis functions (it could not respond).
-  ReducedPotentials(const fullspace::Problem& problem, const Subspace& subspace, const std::vector<int>& active_nodes);
+  ReducedPotentials(const model::Problem& problem, const Subspace& subspace, const std::vector<int>& active_nodes);
 
   bool empty() const { return potentials_.empty(); }
   /// begin_substep of every potential; `inertia` must be set to the end time, p_start are the active nodes'
@@ -32,14 +32,14 @@ class ReducedPotentials {
 
  private:
   struct Term {
-    fullspace::NodePotential* potential = nullptr;
+    model::NodePotential* potential = nullptr;
     std::vector<int> active;   ///< per candidate: index into the active nodes
   };
   Eigen::Vector3d posed(const Eigen::VectorXd& q, const ReducedInertia& inertia, int a) const;
 
   const Subspace& subspace_;
   const std::vector<int>& active_nodes_;
-  std::vector<fullspace::NodePotential*> potentials_;
+  std::vector<model::NodePotential*> potentials_;
   std::vector<std::vector<int>> active_of_;   ///< per potential, per entry of nodes(): its active index
   std::vector<Term> terms_;
 };

@@ -13,7 +13,7 @@
 // young_map.hpp). The initial state does not depend on Y: S_0 = 0, w_0 given. Substeps are steps of their own
 // size. Where H is not positive definite at a converged state the trajectory is not differentiable there
 // and the step throws instead of returning numbers.
-#include <sflsh/reduced/reduced_integrator.hpp>
+#include <sflsh/reduced/reduced_solver.hpp>
 
 #include <Eigen/Core>
 
@@ -32,7 +32,7 @@ ReducedOptions sensitivity_solver_options(ReducedOptions base = {});
 Eigen::MatrixXd solve_step_sensitivity(const Eigen::MatrixXd& hessian, const Eigen::MatrixXd& rhs, double t);
 
 struct SensitivityStepStats {
-  ReducedStepStats step;         ///< the integrator's own step
+  model::StepStats step;         ///< the integrator's own step
   double seconds = 0.0;          ///< the sensitivity work (all of the below)
   double young_seconds = 0.0;    ///< ∂∇Φ/∂Y at the cubature points
   double history_seconds = 0.0;  ///< cross-time masses and their products with S_n, S_{n−1}
@@ -48,12 +48,12 @@ class SensitivityIntegrator {
   /// The problem, subspace and cubature must outlive the integrator. `options` are used as given (pass
   /// sensitivity_solver_options() for derivatives that a finite-difference check can reproduce);
   /// record_substeps is switched on.
-  SensitivityIntegrator(const fullspace::Problem& problem, const Subspace& subspace, const Cubature& cubature,
+  SensitivityIntegrator(const model::Problem& problem, const Subspace& subspace, const Cubature& cubature,
                         Eigen::MatrixXd young_map, const ReducedOptions& options = sensitivity_solver_options());
 
-  /// The state (as ReducedBackwardEuler::initialize) and S = 0.
-  void initialize(const fullspace::State& state);
-  /// One step of ReducedBackwardEuler followed by the sensitivity solves of its substeps. Throws sflsh::Error
+  /// The state (as ReducedSolver::initialize) and S = 0.
+  void initialize(const model::State& state);
+  /// One step of ReducedSolver followed by the sensitivity solves of its substeps. Throws sflsh::Error
   /// (naming the time) when the step fails, when H is not positive definite at a converged state, or when a
   /// sensitivity is not finite; the sensitivities are then invalid until initialize().
   SensitivityStepStats step(double h);
@@ -64,7 +64,7 @@ class SensitivityIntegrator {
   /// stiffness scale — the scale sits in W).
   const Eigen::MatrixXd& dq_dyoung() const { return sensitivity_; }
   int num_controls() const { return static_cast<int>(young_map_.cols()); }
-  const ReducedBackwardEuler& integrator() const { return integrator_; }
+  const ReducedSolver& integrator() const { return integrator_; }
 
   /// ∂G/∂Y (3S × 2N) of the elastic gradient at coordinates q (public for tests).
   Eigen::MatrixXd elastic_gradient_dyoung(const Eigen::VectorXd& q) const;
@@ -72,8 +72,8 @@ class SensitivityIntegrator {
  private:
   void substep_sensitivity(const ReducedSubstep& substep, SensitivityStepStats& stats);
 
-  const fullspace::Problem& problem_;
-  ReducedBackwardEuler integrator_;
+  const model::Problem& problem_;
+  ReducedSolver integrator_;
   CubatureElastic elastic_;
   ReducedInertia inertia_;
   Eigen::MatrixXd young_map_;
@@ -97,8 +97,8 @@ struct SensitivityResult {
 };
 
 /// Runs `frames` steps of h [s] from `start` with sensitivities (a one-off SensitivityIntegrator).
-SensitivityResult simulate_with_sensitivities(const fullspace::Problem& problem, const Subspace& subspace, const Cubature& cubature,
-                                              const Eigen::MatrixXd& young_map, const fullspace::State& start, double h, int frames,
+SensitivityResult simulate_with_sensitivities(const model::Problem& problem, const Subspace& subspace, const Cubature& cubature,
+                                              const Eigen::MatrixXd& young_map, const model::State& start, double h, int frames,
                                               const ReducedOptions& options = sensitivity_solver_options());
 
 }  // namespace sflsh::reduced

@@ -5,7 +5,7 @@
 // with φ the region's biharmonic basis (R × N), X the retargeter's harmonic extension of a skin field to the
 // nodes (linear for fixed geometry) and T the mean over a tet's four nodes; the same W serves Y_t and Y_n. The
 // thickness h moves the rest geometry (retargeting) and is not part of this map.
-#include <sflsh/fullspace/body_layer.hpp>
+#include <sflsh/model/body_layer.hpp>
 #include <sflsh/meshing/retarget.hpp>
 #include <sflsh/reduced/subspace.hpp>
 
@@ -27,7 +27,7 @@ Eigen::MatrixXd young_tet_map(const meshing::Retargeter& retargeter, const Eigen
 class LayerYoungMap {
  public:
   /// @param[in] stiffness_scale  the BodyLayerOptions::stiffness_scale the layer was built with
-  LayerYoungMap(const fullspace::BodyLayer& layer, double stiffness_scale = 1.0);
+  LayerYoungMap(const model::BodyLayer& layer, double stiffness_scale = 1.0);
 
   int num_controls() const { return static_cast<int>(phi_.cols()); }
   /// W for the listed tets (young_tet_map).
@@ -37,12 +37,12 @@ class LayerYoungMap {
   /// Rebuilds problem.tet_material (every tet) for control moduli `young` (N × 2) [Pa] through
   /// layer_material_fields, with thickness, normals, ν, s and the overflow policy as built. The problem
   /// must be the layer's (or a copy of it).
-  void set_control_young(const Eigen::MatrixX2d& young, fullspace::Problem& problem) const;
+  void set_control_young(const Eigen::MatrixX2d& young, model::Problem& problem) const;
   const Eigen::MatrixXd& basis() const { return phi_; }
   const meshing::Retargeter& retargeter() const { return retargeter_; }
 
  private:
-  const fullspace::BodyLayer& layer_;
+  const model::BodyLayer& layer_;
   double stiffness_scale_;
   Eigen::MatrixXd phi_;
   meshing::Retargeter retargeter_;
@@ -54,7 +54,7 @@ class LayerYoungMap {
 class SkinDisplacementMap {
  public:
   /// The layer and subspace must outlive the map.
-  SkinDisplacementMap(const fullspace::BodyLayer& layer, const Subspace& subspace);
+  SkinDisplacementMap(const model::BodyLayer& layer, const Subspace& subspace);
   /// u (R × 3) [m] for coordinates q at time t [s].
   meshing::RowMatrixX3d displacement(const Eigen::VectorXd& q, double t) const;
   /// (K B ⊗ I₃) q (R × 3) [m]: the skin's displacement when the attached nodes carry none (x_D = X).
@@ -63,7 +63,7 @@ class SkinDisplacementMap {
   Eigen::MatrixXd derivative(const Eigen::MatrixXd& dq) const;
 
  private:
-  const fullspace::BodyLayer& layer_;
+  const model::BodyLayer& layer_;
   const Subspace& subspace_;
   SparseRowMatrix skin_basis_;   ///< K B (R × S), a few non-zeros per row
 };

@@ -9,7 +9,7 @@
 #include <cstdint>
 #include <limits>
 #include <memory>
-#include <sflsh/fullspace/node_potential.hpp>
+#include <sflsh/model/node_potential.hpp>
 #include <sflsh/scene/obstacle.hpp>
 #include <sflsh/scene/rigid_motion.hpp>
 #include <vector>
@@ -66,14 +66,14 @@ struct ContactObstacle {
 /// layer's skin: the per-node weights of ContactPotential.
 std::vector<double> lumped_vertex_areas(const RowMatrixX3d& vertices, const RowMatrixX3i& triangles);
 
-class ContactPotential final : public fullspace::NodePotential {
+class ContactPotential final : public model::NodePotential {
  public:
   /// nodes: ascending mesh node ids (unconstrained); areas: empty, or one lumped skin area [m²] per node
   /// (the weight of its stiffness); at most 64 obstacles. Throws sflsh::Error on bad input.
   ContactPotential(std::vector<int> nodes, std::vector<double> areas, std::vector<ContactObstacle> obstacles,
                    const ContactParameters& parameters = {});
 
-  // fullspace::NodePotential
+  // model::NodePotential
   const std::vector<int>& nodes() const override { return nodes_; }
   bool begin_substep(double t0, double dt, const meshing::RowMatrixX3d& p_start,
                      const meshing::RowMatrixX3d& p_skinned_end) override;

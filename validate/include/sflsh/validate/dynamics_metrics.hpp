@@ -9,7 +9,7 @@
 //   5. σ_i = sqrt(mean_t ‖d̃_i‖²)
 //   6. σ_i^n = sqrt(mean_t (n_i·d̃_i)²), σ_i^t = sqrt(mean_t ‖(I − n_in_iᵀ)d̃_i‖²), σ² = σn² + σt²,
 //      n_i the area-weighted unit normal of the shaped template T̄ + B_S(β).
-// Steps 4–6 use fullspace::DynamicsAmplitude, the accumulator the simulator reports its own σ with, so
+// Steps 4–6 use model::DynamicsAmplitude, the accumulator the simulator reports its own σ with, so
 // data and simulation share one definition.
 #include <sflsh/body/motion.hpp>
 #include <sflsh/body/skinning.hpp>

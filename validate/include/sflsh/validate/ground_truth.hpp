@@ -5,7 +5,7 @@
 // region's skin in the neutral pose (physics.md §4) that the fits try to reproduce.
 #include <sflsh/body/motion.hpp>
 #include <sflsh/core/run_folder.hpp>
-#include <sflsh/fullspace/body_layer.hpp>
+#include <sflsh/model/body_layer.hpp>
 #include <sflsh/reduced/layer_parameterization.hpp>
 
 #include <filesystem>
@@ -35,9 +35,9 @@ struct GroundTruthOptions {
 
 /// Runs the full-space solver (one process, PETSc on MPI_COMM_SELF) over the layer's motion with the true
 /// material of `layer.beta`. `parameterization` supplies the retargeter of the layer's template.
-GroundTruthCase simulate_ground_truth(const fullspace::BodyLayer& layer, const body::Motion& motion, const std::string& subject,
+GroundTruthCase simulate_ground_truth(const model::BodyLayer& layer, const body::Motion& motion, const std::string& subject,
                                       const reduced::LayerParameterization& parameterization,
-                                      const fullspace::BodyLayerOptions& layer_options, const GroundTruthOptions& options);
+                                      const model::BodyLayerOptions& layer_options, const GroundTruthOptions& options);
 
 /// Per-case cache (npz: sigma_normal, sigma_tangent, kappa, beta, posed frames when kept), so that runs
 /// can resume and several commands can share one ground truth. load returns false for a missing or

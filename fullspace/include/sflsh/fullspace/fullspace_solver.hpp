@@ -12,7 +12,9 @@
 // inertia, a direct solve up to 6000 dofs; rtol 1e-8; the exact Hessian first, then each tet's projected to PSD.
 // Node potentials of the problem (contact, node_potential.hpp) add u(p) to Φ on their candidate nodes; a
 // substep a potential refuses (penetration over its tolerance) is solved again after the potential stiffened.
-#include <sflsh/fullspace/problem.hpp>
+#include <sflsh/fullspace/model_names.hpp>
+#include <sflsh/model/step_stats.hpp>
+#include <sflsh/model/time_integrator.hpp>
 
 #include <mpi.h>
 
@@ -22,7 +24,8 @@
 
 namespace sflsh::fullspace {
 
-struct BackwardEulerOptions {
+struct FullSpaceOptions {
+  model::Integrator integrator = model::Integrator::backward_euler;   ///< time_integrator.hpp
   bool quasi_static = false;       ///< drop inertia (equilibrium at each time; gravity still acts through mass)
   int max_halvings = 6;            ///< a failed step is retried as 2, 4, … 2^max_halvings substeps
   std::string options_prefix;      ///< PETSc options prefix of the SNES (e.g. "full_")
@@ -38,31 +41,14 @@ struct BackwardEulerOptions {
   bool exact_hessian_first = true;
 };
 
-/// What one call of step() did.
-struct StepStats {
-  int newton_iterations = 0;   ///< summed over substeps
-  int linear_iterations = 0;
-  int substeps = 1;            ///< 1 unless the step had to be split
-  int failed_attempts = 0;     ///< attempts rejected (divergence, NaN/Inf, failed line search)
-  int projected_retries = 0;   ///< exact-Hessian attempts that failed and were repeated with the projection
-  int fallback_preconditioner = 0;  ///< attempts repeated with CG + Jacobi after a linear-solver failure
-  double seconds = 0.0;
-  double function_seconds = 0.0;   ///< residual and objective evaluations
-  double jacobian_seconds = 0.0;   ///< Hessian assembly
-  double mass_seconds = 0.0;       ///< the per-node mass terms (inertia and gravity) of Φ, ∇Φ, ∇²Φ
-  double potential_seconds = 0.0;  ///< node potentials (contact): broad phase, evaluations, acceptance
-  int potential_refinements = 0;   ///< substeps solved again because a potential refused the result
-  double final_residual = 0.0;     ///< ‖∇Φ‖ at the solution of the last substep [N]
-  std::string converged_reason;    ///< PETSc's reason of the last substep
-};
 
-class BackwardEuler {
+class FullSpaceSolver {
  public:
   /// `problem` must outlive the integrator and be validated. Collective on `comm`.
-  BackwardEuler(const Problem& problem, MPI_Comm comm, const BackwardEulerOptions& options = {});
-  ~BackwardEuler();
-  BackwardEuler(const BackwardEuler&) = delete;
-  BackwardEuler& operator=(const BackwardEuler&) = delete;
+  FullSpaceSolver(const Problem& problem, MPI_Comm comm, const FullSpaceOptions& options = {});
+  ~FullSpaceSolver();
+  FullSpaceSolver(const FullSpaceSolver&) = delete;
+  FullSpaceSolver& operator=(const FullSpaceSolver&) = delete;
 
   /// Sets the state (full vectors, identical on every rank).
   void initialize(const State& state);

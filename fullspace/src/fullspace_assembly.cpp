@@ -1,6 +1,6 @@
 // Backward Euler on PETSc: the incremental potential, its gradient (residual) and Hessian assembled over
 // this rank's tets, and the direct refill of the assembled AIJ arrays (backward_euler_impl.hpp).
-#include "backward_euler_impl.hpp"
+#include "fullspace_solver_impl.hpp"
 
 namespace sflsh::fullspace {
 
@@ -17,7 +17,7 @@ material::TetNodes tet_nodes(const Problem& problem, const Eigen::VectorXd& x, i
 // The potential sees constrained components at their prescribed values (so the free rows do not depend on
 // them) plus the penalty ½ D (x_d − x̄_d)², which is zero at every Newton iterate; its gradient and Hessian are
 // then exactly what residual() and jacobian() assemble.
-double BackwardEuler::Impl::objective(const Eigen::VectorXd& x_in) {
+double FullSpaceSolver::Impl::objective(const Eigen::VectorXd& x_in) {
   const auto t0 = Clock::now();
   const Eigen::VectorXd& x = with_prescribed(x_in);
   double penalty = 0.0;
@@ -53,7 +53,7 @@ double BackwardEuler::Impl::objective(const Eigen::VectorXd& x_in) {
     if (inertia) local += m / (2.0 * h * h) * (p - p_tilde.row(i).transpose()).squaredNorm();
     local -= m * problem.gravity.dot(p);
   }
-  if (stats) stats->mass_seconds += seconds_since(t_mass);
+  if (stats) stats->inertia_seconds += seconds_since(t_mass);
   local += potential_energy(x);
   if (!std::isfinite(local)) local = kInfinity;
   double global = 0.0;
@@ -62,7 +62,7 @@ double BackwardEuler::Impl::objective(const Eigen::VectorXd& x_in) {
   return global;
 }
 
-bool BackwardEuler::Impl::residual(const Eigen::VectorXd& x_in, Vec out) {
+bool FullSpaceSolver::Impl::residual(const Eigen::VectorXd& x_in, Vec out) {
   const auto t0 = Clock::now();
   const Eigen::VectorXd& x = with_prescribed(x_in);
   const int n = problem.num_nodes();
@@ -99,7 +99,7 @@ bool BackwardEuler::Impl::residual(const Eigen::VectorXd& x_in, Vec out) {
     if (inertia) force += m / (h * h) * (p - p_tilde.row(i).transpose());
     g.segment<3>(3 * i) += frame.A[si].transpose() * force;
   }
-  if (stats) stats->mass_seconds += seconds_since(t_mass);
+  if (stats) stats->inertia_seconds += seconds_since(t_mass);
   add_potential_gradient(x, g);
   // Constrained rows: D (x_d − x̄_d), zero at every iterate (x starts on the prescribed values and the Jacobian row
   // D e_d keeps it there), so that the residual's derivative is the assembled row (PETSc's Jacobian test).
@@ -126,7 +126,7 @@ bool BackwardEuler::Impl::residual(const Eigen::VectorXd& x_in, Vec out) {
   return any_failed == 0;
 }
 
-bool BackwardEuler::Impl::jacobian(const Eigen::VectorXd& x) {
+bool FullSpaceSolver::Impl::jacobian(const Eigen::VectorXd& x) {
   const auto t0 = Clock::now();
   PetscScalar* diag_values = nullptr;
   PetscScalar* offdiag_values = nullptr;
@@ -218,7 +218,7 @@ bool BackwardEuler::Impl::jacobian(const Eigen::VectorXd& x) {
     const PetscInt block = row;
     SFLSH_PETSC(MatSetValuesBlocked(J, 1, &block, 1, &block, B.data(), ADD_VALUES));
   }
-  if (stats) stats->mass_seconds += seconds_since(t_mass);
+  if (stats) stats->inertia_seconds += seconds_since(t_mass);
   // Node potentials: one 3×3 block on the diagonal of each owned candidate (always in the pattern).
   for (const auto& [node, block] : potential_hessian_blocks(x)) {
     if (!block.allFinite()) ++local_failed;
@@ -256,7 +256,7 @@ bool BackwardEuler::Impl::jacobian(const Eigen::VectorXd& x) {
 // which is what block Jacobi hands to each block's preconditioner: marked too, its blocks default to ICC
 // (PETSc's choice for a matrix known to be symmetric) instead of ILU, at half the factorization cost.
 // An explicit -sub_pc_type still wins.
-void BackwardEuler::Impl::mark_diagonal_block_symmetric() {
+void FullSpaceSolver::Impl::mark_diagonal_block_symmetric() {
   PetscBool has_block = PETSC_FALSE;
   SFLSH_PETSC(MatHasOperation(J, MATOP_GET_DIAGONAL_BLOCK, &has_block));
   if (!has_block) return;
@@ -268,7 +268,7 @@ void BackwardEuler::Impl::mark_diagonal_block_symmetric() {
 
 // Offsets of every block of the assembled pattern (see Refill). Only for PETSc's own AIJ storage; any other
 // -mat_type keeps the MatSetValuesBlocked path.
-void BackwardEuler::Impl::build_refill() {
+void FullSpaceSolver::Impl::build_refill() {
   MatType type = nullptr;
   SFLSH_PETSC(MatGetType(J, &type));
   const PetscInt* colmap = nullptr;

@@ -1,10 +1,10 @@
 // Backward Euler on PETSc: setup of the distributed problem, the SNES callbacks, and the step with its retry
 // ladder (backward_euler_impl.hpp; assembly in backward_euler_assembly.cpp).
-#include "backward_euler_impl.hpp"
+#include "fullspace_solver_impl.hpp"
 
 namespace sflsh::fullspace {
 
-void BackwardEuler::Impl::setup() {
+void FullSpaceSolver::Impl::setup() {
   MPI_Comm_rank(comm, &rank);
   MPI_Comm_size(comm, &size);
   const int n = problem.num_nodes();
@@ -139,7 +139,7 @@ void BackwardEuler::Impl::setup() {
   SFLSH_PETSC(SNESSetFromOptions(snes));
 }
 
-void BackwardEuler::Impl::destroy() {
+void FullSpaceSolver::Impl::destroy() {
   if (snes) SNESDestroy(&snes);
   if (J) MatDestroy(&J);
   if (to_all) VecScatterDestroy(&to_all);
@@ -148,7 +148,7 @@ void BackwardEuler::Impl::destroy() {
   if (X) VecDestroy(&X);
 }
 
-void BackwardEuler::Impl::gather(Vec v, Eigen::VectorXd& out) {
+void FullSpaceSolver::Impl::gather(Vec v, Eigen::VectorXd& out) {
   SFLSH_PETSC(VecScatterBegin(to_all, v, x_all, INSERT_VALUES, SCATTER_FORWARD));
   SFLSH_PETSC(VecScatterEnd(to_all, v, x_all, INSERT_VALUES, SCATTER_FORWARD));
   const PetscScalar* a = nullptr;
@@ -158,7 +158,7 @@ void BackwardEuler::Impl::gather(Vec v, Eigen::VectorXd& out) {
   SFLSH_PETSC(VecRestoreArrayRead(x_all, &a));
 }
 
-PetscErrorCode BackwardEuler::Impl::function_cb(SNES s, Vec x, Vec f, void* ctx) {
+PetscErrorCode FullSpaceSolver::Impl::function_cb(SNES s, Vec x, Vec f, void* ctx) {
   auto* self = static_cast<Impl*>(ctx);
   try {
     self->gather(x, self->x_full);
@@ -170,7 +170,7 @@ PetscErrorCode BackwardEuler::Impl::function_cb(SNES s, Vec x, Vec f, void* ctx)
   return 0;
 }
 
-PetscErrorCode BackwardEuler::Impl::objective_cb(SNES, Vec x, PetscReal* value, void* ctx) {
+PetscErrorCode FullSpaceSolver::Impl::objective_cb(SNES, Vec x, PetscReal* value, void* ctx) {
   auto* self = static_cast<Impl*>(ctx);
   try {
     self->gather(x, self->x_full);
@@ -181,7 +181,7 @@ PetscErrorCode BackwardEuler::Impl::objective_cb(SNES, Vec x, PetscReal* value, 
   return 0;
 }
 
-PetscErrorCode BackwardEuler::Impl::jacobian_cb(SNES s, Vec x, Mat, Mat, void* ctx) {
+PetscErrorCode FullSpaceSolver::Impl::jacobian_cb(SNES s, Vec x, Mat, Mat, void* ctx) {
   auto* self = static_cast<Impl*>(ctx);
   try {
     self->gather(x, self->x_full);
@@ -197,7 +197,7 @@ PetscErrorCode BackwardEuler::Impl::jacobian_cb(SNES s, Vec x, Mat, Mat, void* c
 // minimization must decrease the energy. Trial points where Φ is not finite (Fung overflow) are halved
 // away. Near the minimum Φ stops resolving decrease (round-off ~1e-16 |Φ|); there a step is accepted
 // when it reduces ‖∇Φ‖ instead.
-PetscErrorCode BackwardEuler::Impl::linesearch_cb(SNESLineSearch ls, void* ctx) {
+PetscErrorCode FullSpaceSolver::Impl::linesearch_cb(SNESLineSearch ls, void* ctx) {
   auto* self = static_cast<Impl*>(ctx);
   Vec Xv = nullptr, Fv = nullptr, Yv = nullptr, Wv = nullptr, Gv = nullptr;
   SNES s = nullptr;
@@ -249,7 +249,7 @@ PetscErrorCode BackwardEuler::Impl::linesearch_cb(SNESLineSearch ls, void* ctx) 
   return 0;
 }
 
-bool BackwardEuler::Impl::solve_substep(State& s, double t0, double dt) {
+bool FullSpaceSolver::Impl::solve_substep(State& s, double t0, double dt) {
   t1 = t0 + dt;
   h = dt;
   inertia = !options.quasi_static && problem.dynamic();
@@ -294,7 +294,7 @@ bool BackwardEuler::Impl::solve_substep(State& s, double t0, double dt) {
   gather(X, x_new);
   PetscReal fnorm = 0.0;
   VecNorm(F, NORM_2, &fnorm);
-  stats->final_residual = fnorm;
+  stats->final_gradient = fnorm;
   const RowMatrixX3d p_new = posed_positions(frame, x_new);
   Eigen::VectorXd w_new(problem.num_dofs());
   for (int i = 0; i < problem.num_nodes(); ++i) w_new.segment<3>(3 * i) = (p_new.row(i) - p_n.row(i)).transpose() / dt;
@@ -305,7 +305,7 @@ bool BackwardEuler::Impl::solve_substep(State& s, double t0, double dt) {
   return true;
 }
 
-bool BackwardEuler::Impl::solve_from(const Eigen::VectorXd& start, double dt) {
+bool FullSpaceSolver::Impl::solve_from(const Eigen::VectorXd& start, double dt) {
   {
     PetscScalar* a = nullptr;
     SFLSH_PETSC(VecGetArray(X, &a));
@@ -332,9 +332,9 @@ bool BackwardEuler::Impl::solve_from(const Eigen::VectorXd& start, double dt) {
   return true;
 }
 
-BackwardEuler::BackwardEuler(const Problem& problem, MPI_Comm comm, const BackwardEulerOptions& options)
+FullSpaceSolver::FullSpaceSolver(const Problem& problem, MPI_Comm comm, const FullSpaceOptions& options)
     : impl_(std::make_unique<Impl>(problem, comm, options)) {
-  require(static_cast<int>(problem.tet_rest.size()) == problem.num_tets(), "BackwardEuler: the problem is not validated");
+  require(static_cast<int>(problem.tet_rest.size()) == problem.num_tets(), "FullSpaceSolver: the problem is not validated");
   try {
     impl_->setup();
   } catch (...) {
@@ -343,27 +343,27 @@ BackwardEuler::BackwardEuler(const Problem& problem, MPI_Comm comm, const Backwa
   }
 }
 
-BackwardEuler::~BackwardEuler() { impl_->destroy(); }
+FullSpaceSolver::~FullSpaceSolver() { impl_->destroy(); }
 
-void BackwardEuler::initialize(const State& s) {
+void FullSpaceSolver::initialize(const State& s) {
   require(s.x.size() == impl_->problem.num_dofs() && s.w.size() == impl_->problem.num_dofs(),
-          "BackwardEuler: initial state has {} / {} entries, expected {}", s.x.size(), s.w.size(),
+          "FullSpaceSolver: initial state has {} / {} entries, expected {}", s.x.size(), s.w.size(),
           impl_->problem.num_dofs());
-  require(s.x.allFinite() && s.w.allFinite(), "BackwardEuler: initial state is not finite");
+  require(s.x.allFinite() && s.w.allFinite(), "FullSpaceSolver: initial state is not finite");
   impl_->state = s;
 }
 
-const State& BackwardEuler::state() const { return impl_->state; }
+const State& FullSpaceSolver::state() const { return impl_->state; }
 
-std::vector<int> BackwardEuler::owned_nodes() const {
+std::vector<int> FullSpaceSolver::owned_nodes() const {
   std::vector<int> nodes;
   for (int k = impl_->begin; k < impl_->end; ++k) nodes.push_back(impl_->node_of(k));
   std::sort(nodes.begin(), nodes.end());
   return nodes;
 }
 
-StepStats BackwardEuler::step(double h) {
-  require(std::isfinite(h) && h > 0.0, "BackwardEuler: step must be positive, got {}", h);
+StepStats FullSpaceSolver::step(double h) {
+  require(std::isfinite(h) && h > 0.0, "FullSpaceSolver: step must be positive, got {}", h);
   const auto t0 = Clock::now();
   StepStats stats;
   impl_->stats = &stats;

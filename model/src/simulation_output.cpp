@@ -1,4 +1,4 @@
-#include <sflsh/fullspace/simulation_output.hpp>
+#include <sflsh/model/simulation_output.hpp>
 
 #include <sflsh/core/error.hpp>
 
@@ -7,7 +7,7 @@
 #include <algorithm>
 #include <cmath>
 
-namespace sflsh::fullspace {
+namespace sflsh::model {
 
 DynamicsAmplitude::DynamicsAmplitude(RowMatrixX3d normals)
     : normals_(std::move(normals)),
@@ -77,9 +77,9 @@ Eigen::VectorXd strain_energy_density(const Problem& problem, const Eigen::Vecto
   return psi;
 }
 
-}  // namespace sflsh::fullspace
+}  // namespace sflsh::model
 
-namespace sflsh::fullspace {
+namespace sflsh::model {
 
 namespace {
 
@@ -225,4 +225,4 @@ nlohmann::json SimulationWriter::dynamics_summary() const {
 
 Eigen::VectorXd SimulationWriter::sigma_per_vertex() const { return scatter(layer_, amplitude_.sigma()); }
 
-}  // namespace sflsh::fullspace
+}  // namespace sflsh::model

@@ -11,7 +11,7 @@
 
 #include <vector>
 
-namespace sflsh::fullspace {
+namespace sflsh::model {
 
 class NodePotential {
  public:
@@ -42,4 +42,4 @@ class NodePotential {
   virtual int max_refinements() const { return 4; }
 };
 
-}  // namespace sflsh::fullspace
+}  // namespace sflsh::model

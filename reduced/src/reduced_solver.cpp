@@ -1,8 +1,7 @@
-#include <sflsh/reduced/reduced_integrator.hpp>
+#include <sflsh/reduced/reduced_solver.hpp>
 
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
-#include <sflsh/fullspace/reference_integrator.hpp>
 
 #include <Eigen/Cholesky>
 #include <Eigen/SparseCholesky>
@@ -21,7 +20,7 @@ constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
 }  // namespace
 
-ReducedBackwardEuler::ReducedBackwardEuler(const fullspace::Problem& problem, const Subspace& subspace, const Cubature& cubature,
+ReducedSolver::ReducedSolver(const model::Problem& problem, const Subspace& subspace, const Cubature& cubature,
                                            const ReducedOptions& options)
     : problem_(problem),
       subspace_(subspace),
@@ -44,13 +43,13 @@ ReducedBackwardEuler::ReducedBackwardEuler(const fullspace::Problem& problem, co
   q_rate_ = q_;
 }
 
-Eigen::VectorXd ReducedBackwardEuler::prescribed_state(double t) const {
+Eigen::VectorXd ReducedSolver::prescribed_state(double t) const {
   Eigen::VectorXd x = Eigen::Map<const Eigen::VectorXd>(problem_.rest.data(), problem_.num_dofs());
   problem_.apply_dirichlet(t, x);
   return x;
 }
 
-void ReducedBackwardEuler::initialize(const fullspace::State& state) {
+void ReducedSolver::initialize(const model::State& state) {
   require(state.x.size() == problem_.num_dofs() && state.w.size() == problem_.num_dofs(),
           "reduced: initial state has {} / {} entries, expected {}", state.x.size(), state.w.size(), problem_.num_dofs());
   require(state.x.allFinite() && state.w.allFinite(), "reduced: initial state is not finite");
@@ -80,7 +79,7 @@ void ReducedBackwardEuler::initialize(const fullspace::State& state) {
   for (std::size_t a = 0; a < active.size(); ++a) w_.row(static_cast<Eigen::Index>(a)) = state.w.segment<3>(3 * active[a]).transpose();
 }
 
-bool ReducedBackwardEuler::solve_substep(double t0, double dt, material::HessianProjection projection, ReducedStepStats& stats,
+bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProjection projection, model::StepStats& stats,
                                          std::string& reason) {
   const double t1 = t0 + dt;
   const bool inertia_on = !options_.quasi_static && problem_.dynamic();
@@ -285,10 +284,10 @@ bool ReducedBackwardEuler::solve_substep(double t0, double dt, material::Hessian
   return true;
 }
 
-ReducedStepStats ReducedBackwardEuler::step(double h) {
+model::StepStats ReducedSolver::step(double h) {
   require(h > 0.0 && std::isfinite(h), "reduced: step must be positive, got {}", h);
   const auto start = Clock::now();
-  ReducedStepStats stats;
+  model::StepStats stats;
   const double t_save = t_;
   const Eigen::VectorXd q_save = q_, rate_save = q_rate_;
   const meshing::RowMatrixX3d p_save = p_, w_save = w_;
@@ -331,14 +330,14 @@ ReducedStepStats ReducedBackwardEuler::step(double h) {
               reason);
 }
 
-fullspace::State ReducedBackwardEuler::full_state() const {
-  fullspace::State s = fullspace::initial_state(problem_, t_);
+model::State ReducedSolver::full_state() const {
+  model::State s = model::initial_state(problem_, t_);
   subspace_.add_displacement(q_, s.x);
   const std::vector<int>& active = inertia_.active_nodes();
   for (std::size_t a = 0; a < active.size(); ++a) s.w.segment<3>(3 * active[a]) = w_.row(static_cast<Eigen::Index>(a)).transpose();
   return s;
 }
 
-double ReducedBackwardEuler::elastic_energy() const { return elastic_.energy(q_); }
+double ReducedSolver::elastic_energy() const { return elastic_.energy(q_); }
 
 }  // namespace sflsh::reduced

@@ -1,10 +1,10 @@
-#include <sflsh/fullspace/skinned_trajectory.hpp>
+#include <sflsh/model/skinned_trajectory.hpp>
 
 #include <sflsh/core/error.hpp>
 
 #include <cmath>
 
-namespace sflsh::fullspace {
+namespace sflsh::model {
 
 namespace {
 
@@ -221,4 +221,4 @@ std::vector<std::vector<std::pair<int, double>>> sparse_blend_weights(const Eige
   return out;
 }
 
-}  // namespace sflsh::fullspace
+}  // namespace sflsh::model

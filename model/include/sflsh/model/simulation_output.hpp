@@ -5,13 +5,13 @@
 // inverse skinning returns for a simulation driven by the same poses).
 #include <sflsh/core/run_folder.hpp>
 #include <sflsh/core/vtk_io.hpp>
-#include <sflsh/fullspace/body_layer.hpp>
+#include <sflsh/model/body_layer.hpp>
 
 #include <nlohmann/json.hpp>
 
 #include <memory>
 
-namespace sflsh::fullspace {
+namespace sflsh::model {
 
 /// Per-vertex σ, σ_n, σ_t (physics.md §4 steps 4–6) from a stream of displacement fields.
 class DynamicsAmplitude {
@@ -92,4 +92,4 @@ class SimulationWriter {
   int frame_ = 0;
 };
 
-}  // namespace sflsh::fullspace
+}  // namespace sflsh::model

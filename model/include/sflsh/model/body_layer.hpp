@@ -4,8 +4,8 @@
 // inner and side nodes attached to the skinned body (Dirichlet: zero elastic displacement), and the
 // skinning trajectory that carries the unposed elastic state to posed positions along a motion.
 #include <sflsh/body/motion.hpp>
-#include <sflsh/fullspace/problem.hpp>
-#include <sflsh/fullspace/skinned_trajectory.hpp>
+#include <sflsh/model/problem.hpp>
+#include <sflsh/model/skinned_trajectory.hpp>
 #include <sflsh/material/layer_material.hpp>
 #include <sflsh/material/skin_material.hpp>
 #include <sflsh/meshing/layer_mesh.hpp>
@@ -14,13 +14,14 @@
 #include <filesystem>
 #include <memory>
 
-namespace sflsh::fullspace {
+namespace sflsh::model {
 
 struct BodyLayerOptions {
   meshing::Mesher mesher = meshing::Mesher::layered;
   meshing::SizePreset size = meshing::SizePreset::medium;
   std::filesystem::path cache_dir;    ///< template mesh cache; empty: meshing::default_cache_dir()
   double density = 1000.0;            ///< ρ [kg/m³]
+  MassKind mass = MassKind::lumped;    ///< lumped or consistent inertia (mass.hpp)
   bool gravity = false;               ///< g = (0, −9.81, 0) in the world frame (Y up); off by default (physics.md §5)
   double stiffness_scale = 1.0;       ///< multiplies Y_t and Y_n
   material::ExponentOverflow overflow = material::ExponentOverflow::kThrow;
@@ -56,4 +57,4 @@ struct BodyLayer {
 BodyLayer build_body_layer(const body::BodyModel& model, const body::Betas& beta, const body::Motion& motion,
                            const material::MaterialFile* material, int control_points, const BodyLayerOptions& options);
 
-}  // namespace sflsh::fullspace
+}  // namespace sflsh::model

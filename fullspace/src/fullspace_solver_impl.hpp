@@ -1,8 +1,8 @@
 #pragma once
-// Internal to the backward-Euler integrator: its state (BackwardEuler::Impl) and the helpers shared by
+// Internal to the backward-Euler integrator: its state (FullSpaceSolver::Impl) and the helpers shared by
 // backward_euler.cpp (setup, PETSc callbacks, the step) and backward_euler_assembly.cpp (potential,
 // residual and Hessian assembly, the direct refill of the AIJ arrays).
-#include <sflsh/fullspace/backward_euler.hpp>
+#include <sflsh/fullspace/fullspace_solver.hpp>
 #include <sflsh/fullspace/node_partition.hpp>
 
 #include <sflsh/core/error.hpp>
@@ -60,10 +60,10 @@ inline PCType default_pc_type(int dofs, int size, bool dynamic) {
 
 }  // namespace
 
-struct BackwardEuler::Impl {
+struct FullSpaceSolver::Impl {
   const Problem& problem;
   MPI_Comm comm;
-  BackwardEulerOptions options;
+  FullSpaceOptions options;
   int rank = 0;
   int size = 1;
   /// PETSc's numbering of the nodes (see node_partition.hpp): rows, vector entries and ownership ranges are
@@ -141,7 +141,7 @@ struct BackwardEuler::Impl {
     std::vector<PetscInt> node_offset;         ///< per owned node, 3 rows: offsets of its diagonal block
   } refill;
 
-  Impl(const Problem& p, MPI_Comm c, const BackwardEulerOptions& o) : problem(p), comm(c), options(o) {}
+  Impl(const Problem& p, MPI_Comm c, const FullSpaceOptions& o) : problem(p), comm(c), options(o) {}
 
   int index_of(int node) const { return partition.index_of[static_cast<std::size_t>(node)]; }
   int node_of(int index) const { return partition.node_of[static_cast<std::size_t>(index)]; }

@@ -1,23 +1,27 @@
 #pragma once
-// What both full-space integrators (backward Euler on PETSc, the SUNDIALS reference) solve: a tet mesh
-// with a per-tet orthotropic StVK–Fung material, lumped masses, prescribed (Dirichlet) components, and
+// What every integrator solves (the full-space solver on PETSc, the SUNDIALS reference, the reduced model in
+// its subspace): a tet mesh with a per-tet orthotropic StVK–Fung material, lumped or consistent masses
+// (mass.hpp), prescribed (Dirichlet) components, and
 // a per-node affine map from the unposed elastic state x to posed positions p (physics.md §5):
 //   p_i(t) = A_i(t) x_i + d_i(t),   d_i = A_i b_i + c_i  (b_i: pose corrective, [A_i | c_i]: blended LBS).
 // The elastic energy E(x) is measured in the unposed frame; inertia and gravity act on p.
-// Equation of motion (Euler–Lagrange of ½ṗᵀMṗ − E(x) + Σ m_i gᵀp_i): A_iᵀ m_i (p̈_i − g) = −∇_i E(x).
-#include <sflsh/fullspace/node_potential.hpp>
+// Equation of motion (Euler–Lagrange of ½ṗᵀMṗ − E(x) + gᵀMp): A_iᵀ [M (p̈ − g)]_i = −∇_i E(x), with M the
+// lumped diagonal m_i or the consistent matrix M_ij (per axis).
+#include <sflsh/model/mass.hpp>
+#include <sflsh/model/node_potential.hpp>
 #include <sflsh/material/orthotropic_fung.hpp>
 #include <sflsh/material/psd_projection.hpp>
 #include <sflsh/material/tet_element.hpp>
 #include <sflsh/meshing/types.hpp>
 
 #include <Eigen/Core>
+#include <Eigen/SparseCore>
 #include <functional>
 #include <memory>
 #include <string>
 #include <vector>
 
-namespace sflsh::fullspace {
+namespace sflsh::model {
 
 using meshing::RowMatrixX3d;
 using meshing::RowMatrixX4i;
@@ -75,7 +79,10 @@ struct Problem {
   std::vector<material::OrthotropicFung> tet_material;  ///< per tet
   std::vector<double> tet_energy_scale;            ///< optional per-tet factor on the energy (empty = 1)
   Eigen::VectorXd mass;                            ///< lumped mass per node [kg]; all zero = quasi-static
-  double density = 0.0;                            ///< ρ [kg/m³] that `mass` came from (reporting only)
+  double density = 0.0;                            ///< ρ [kg/m³] that `mass` came from
+  /// Lumped (diagonal `mass`) or consistent (ρV_e/20 (1 + δ_ab) per tet node pair, mass.hpp) inertia.
+  MassKind mass_kind = MassKind::lumped;
+  Eigen::VectorXd tet_mass;                        ///< ρV per tet [kg]; filled by validate() from `density`
   Eigen::Vector3d gravity = Eigen::Vector3d::Zero();  ///< g in the posed (world) frame [m/s²]
   Dirichlet dirichlet;
   std::shared_ptr<const NodeTrajectory> trajectory;  ///< null: p = x (identity maps, d = 0)
@@ -92,13 +99,15 @@ struct Problem {
   /// Fills tet_rest from `rest` when empty and checks every size, index, mass and the Dirichlet set.
   /// Throws sflsh::Error naming the first inconsistency.
   void validate();
+  /// The node-level mass matrix (N×N) [kg]: consistent_mass_matrix of tet_mass, or diag(mass) when lumped.
+  Eigen::SparseMatrix<double, Eigen::RowMajor> mass_matrix() const;
   /// The maps at time t (identity when there is no trajectory).
   void frame(double t, NodeFrame& frame, NodeFrame* rate = nullptr) const;
   /// x with its constrained components set to their prescribed values at time t.
   void apply_dirichlet(double t, Eigen::Ref<Eigen::VectorXd> x) const;
 };
 
-/// Lumped masses ρV/4 per node (physics.md §5).
+/// Lumped masses ρV/4 per node (physics.md §5): the row sums of the consistent matrix.
 Eigen::VectorXd lumped_masses(const RowMatrixX3d& rest, const RowMatrixX4i& tets, double density);
 
 /// Elastic energy, gradient and (optionally) the element Hessians of the whole mesh at x (3N, node-major).
@@ -112,19 +121,30 @@ ElasticEvaluation evaluate_elastic(const Problem& problem, const Eigen::VectorXd
 /// Posed positions p = A x + d (N×3 from 3N x).
 RowMatrixX3d posed_positions(const NodeFrame& frame, const Eigen::VectorXd& x);
 
-/// One trajectory sample: the state an integrator reports at recorded times.
+/// One trajectory sample: the state an integrator reports at recorded times, with the history the
+/// multistep integrators carry (time_integrator.hpp).
 struct State {
   double t = 0.0;
-  Eigen::VectorXd x;   ///< unposed elastic positions (3N)
-  Eigen::VectorXd w;   ///< posed velocities ṗ (3N)
+  Eigen::VectorXd x;   ///< unposed elastic positions (3N) [m]
+  Eigen::VectorXd w;   ///< posed velocities ṗ (3N) [m/s]
+  Eigen::VectorXd a;   ///< posed accelerations p̈ (3N) [m/s²] (Newmark); empty until an integrator sets it
+  Eigen::VectorXd p_previous;   ///< posed positions one step back (3N) [m] (BDF2); empty at the start
+  Eigen::VectorXd w_previous;   ///< posed velocities one step back (3N) [m/s] (BDF2)
+  double h_previous = 0.0;      ///< length of that step [s]
 };
 
 /// Energy bookkeeping of a state (for bounded-energy checks and summaries) [J].
 struct Energies {
-  double kinetic = 0.0;    ///< ½ Σ m_i |w_i|²
+  double kinetic = 0.0;    ///< ½ wᵀ M w (lumped or consistent, as the problem says)
   double elastic = 0.0;    ///< E(x)
   double gravity = 0.0;    ///< −Σ m_i gᵀ p_i
 };
 Energies energies(const Problem& problem, const State& state);
 
-}  // namespace sflsh::fullspace
+/// The usual initial state at t0: x = X with the Dirichlet values applied at t0, and w the posed velocity
+/// of that configuration carried by the trajectory, ṗ = Ȧx + ḋ + Aẋ with ẋ = du/dt on prescribed
+/// components and 0 elsewhere (the body moves rigidly with its skinning, no elastic velocity).
+/// Shared by every integrator.
+State initial_state(const Problem& problem, double t0);
+
+}  // namespace sflsh::model

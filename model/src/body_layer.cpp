@@ -1,11 +1,11 @@
-#include <sflsh/fullspace/body_layer.hpp>
+#include <sflsh/model/body_layer.hpp>
 
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
 #include <sflsh/material/orthotropic_fung.hpp>
 #include <sflsh/meshing/layer_cache.hpp>
 
-namespace sflsh::fullspace {
+namespace sflsh::model {
 
 namespace {
 
@@ -90,6 +90,7 @@ BodyLayer build_body_layer(const body::BodyModel& model, const body::Betas& beta
   }
   p.density = options.density;
   p.mass = lumped_masses(p.rest, p.tets, options.density);
+  p.mass_kind = options.mass;
   if (options.gravity) p.gravity = Eigen::Vector3d(0.0, -9.81, 0.0);
   // Inner nodes ride on the bones and the side wall follows the skinned body: zero elastic displacement.
   for (meshing::NodeKind kind : {meshing::NodeKind::inner, meshing::NodeKind::side})
@@ -145,4 +146,4 @@ RowMatrixX3d BodyLayer::posed_surface_from_displacement(const RowMatrixX3d& u, d
   return posed;
 }
 
-}  // namespace sflsh::fullspace
+}  // namespace sflsh::model

@@ -1,4 +1,4 @@
-#include <sflsh/fullspace/problem.hpp>
+#include <sflsh/model/problem.hpp>
 
 #include <sflsh/core/error.hpp>
 
@@ -11,7 +11,7 @@
 #include <cmath>
 #include <numeric>
 
-namespace sflsh::fullspace {
+namespace sflsh::model {
 
 void Dirichlet::add(int node, unsigned axis_mask, int drive_index) {
   require(node >= 0, "Dirichlet: negative node index {}", node);
@@ -119,6 +119,16 @@ void Problem::validate() {
   if (mass.size() == 0) mass = Eigen::VectorXd::Zero(n);
   require(mass.size() == n, "problem: {} masses for {} nodes", mass.size(), n);
   require(mass.allFinite() && mass.minCoeff() >= 0.0, "problem: masses must be finite and non-negative");
+  if (tet_mass.size() == 0 && density > 0.0) tet_mass = tet_masses(rest, tets, density);
+  if (mass_kind == MassKind::consistent && dynamic()) {
+    require(tet_mass.size() == m, "problem: consistent mass needs ρV per tet (a density), have {} for {} tets", tet_mass.size(), m);
+    // The lumped masses must be the consistent matrix's row sums (gravity and the reports use them).
+    Eigen::VectorXd row_sum = Eigen::VectorXd::Zero(n);
+    for (int e = 0; e < m; ++e)
+      for (int a = 0; a < 4; ++a) row_sum[tets(e, a)] += 0.25 * tet_mass[e];
+    require((row_sum - mass).cwiseAbs().maxCoeff() <= 1e-9 * std::max(1e-300, mass.cwiseAbs().maxCoeff()),
+            "problem: the lumped masses are not the row sums of the consistent mass (different density?)");
+  }
   require(gravity.allFinite(), "problem: gravity is not finite");
   dirichlet.finalize();
   for (int d : dirichlet.dof) require(d < num_dofs(), "problem: constrained dof {} out of range", d);
@@ -126,6 +136,15 @@ void Problem::validate() {
   if (!dynamic()) {
     require(!dirichlet.dof.empty(), "problem: a static problem (no mass) needs prescribed components");
   }
+}
+
+Eigen::SparseMatrix<double, Eigen::RowMajor> Problem::mass_matrix() const {
+  if (mass_kind == MassKind::consistent && tet_mass.size() == num_tets()) return consistent_mass_matrix(tets, tet_mass, num_nodes());
+  Eigen::SparseMatrix<double, Eigen::RowMajor> M(num_nodes(), num_nodes());
+  std::vector<Eigen::Triplet<double>> entries;
+  for (int i = 0; i < num_nodes(); ++i) entries.emplace_back(i, i, mass.size() ? mass[i] : 0.0);
+  M.setFromTriplets(entries.begin(), entries.end());
+  return M;
 }
 
 void Problem::frame(double t, NodeFrame& out, NodeFrame* rate) const {
@@ -232,11 +251,38 @@ Energies energies(const Problem& problem, const State& state) {
   const RowMatrixX3d p = posed_positions(frame, state.x);
   for (int i = 0; i < problem.num_nodes(); ++i) {
     const double m = problem.mass[i];
-    out.kinetic += 0.5 * m * state.w.segment<3>(3 * i).squaredNorm();
+    if (problem.mass_kind == MassKind::lumped) out.kinetic += 0.5 * m * state.w.segment<3>(3 * i).squaredNorm();
     out.gravity -= m * problem.gravity.dot(p.row(i).transpose());
+  }
+  if (problem.mass_kind == MassKind::consistent) {
+    for (int e = 0; e < problem.num_tets(); ++e) {
+      for (int a = 0; a < 4; ++a)
+        for (int b = 0; b < 4; ++b)
+          out.kinetic += 0.5 * problem.tet_mass[e] * consistent_mass_factor(a, b) *
+                         state.w.segment<3>(3 * problem.tets(e, a)).dot(state.w.segment<3>(3 * problem.tets(e, b)));
+    }
   }
   out.elastic = evaluate_elastic(problem, state.x, false).energy;
   return out;
 }
 
-}  // namespace sflsh::fullspace
+State initial_state(const Problem& problem, double t0) {
+  const int n = problem.num_nodes();
+  State s;
+  s.t = t0;
+  s.x = Eigen::Map<const Eigen::VectorXd>(problem.rest.data(), 3 * static_cast<Eigen::Index>(n));
+  problem.apply_dirichlet(t0, s.x);
+  Eigen::VectorXd xdot = Eigen::VectorXd::Zero(s.x.size());
+  const Eigen::VectorXd du = problem.dirichlet.rates(t0);
+  for (std::size_t k = 0; k < problem.dirichlet.dof.size(); ++k) xdot[problem.dirichlet.dof[k]] = du[static_cast<Eigen::Index>(k)];
+  NodeFrame frame, rate;
+  problem.frame(t0, frame, &rate);
+  s.w.resize(s.x.size());
+  for (int i = 0; i < n; ++i) {
+    const auto si = static_cast<std::size_t>(i);
+    s.w.segment<3>(3 * i) = rate.A[si] * s.x.segment<3>(3 * i) + rate.d.row(i).transpose() + frame.A[si] * xdot.segment<3>(3 * i);
+  }
+  return s;
+}
+
+}  // namespace sflsh::model

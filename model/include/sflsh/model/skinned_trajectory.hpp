@@ -6,12 +6,12 @@
 // reference integrator sees a smooth forcing and every frame time reproduces the frame exactly.
 #include <sflsh/body/motion.hpp>
 #include <sflsh/body/skinning.hpp>
-#include <sflsh/fullspace/problem.hpp>
+#include <sflsh/model/problem.hpp>
 
 #include <array>
 #include <vector>
 
-namespace sflsh::fullspace {
+namespace sflsh::model {
 
 using Matrix34d = Eigen::Matrix<double, 3, 4>;
 using JointTransforms = std::array<Matrix34d, body::kNumJoints>;
@@ -62,4 +62,4 @@ class SkinnedTrajectory final : public NodeTrajectory {
 /// removed, rows renormalized. Throws when a row has no positive weight.
 std::vector<std::vector<std::pair<int, double>>> sparse_blend_weights(const Eigen::MatrixXd& dense, double drop = 1e-4);
 
-}  // namespace sflsh::fullspace
+}  // namespace sflsh::model

@@ -10,12 +10,14 @@
 // sflsh::Error naming the time and the reason; the state is never left half-updated.
 // Node potentials of the problem (contact, reduced_potentials.hpp) join Φ on their candidates of each substep.
 // Single-threaded on purpose: crowds parallelize over bodies.
-#include <sflsh/fullspace/problem.hpp>
+#include <sflsh/model/problem.hpp>
 #include <sflsh/reduced/cubature.hpp>
 #include <sflsh/reduced/cubature_elastic.hpp>
 #include <sflsh/reduced/reduced_inertia.hpp>
 #include <sflsh/reduced/reduced_potentials.hpp>
 #include <sflsh/reduced/subspace.hpp>
+#include <sflsh/model/step_stats.hpp>
+#include <sflsh/model/time_integrator.hpp>
 
 #include <Eigen/Cholesky>
 
@@ -25,6 +27,7 @@
 namespace sflsh::reduced {
 
 struct ReducedOptions {
+  model::Integrator integrator = model::Integrator::backward_euler;   ///< time_integrator.hpp
   bool quasi_static = false;   ///< drop inertia (gravity still acts through mass)
   int max_halvings = 6;
   int max_newton = 30;
@@ -50,40 +53,25 @@ struct ReducedSubstep {
   Eigen::VectorXd q;
 };
 
-struct ReducedStepStats {
-  int newton_iterations = 0;
-  int substeps = 1;
-  int failed_attempts = 0;
-  int projected_retries = 0;
-  int factorizations = 0;          ///< Hessians assembled and factorized (≤ newton_iterations when reused)
-  double seconds = 0.0;
-  double elastic_seconds = 0.0;    ///< cubature energies, forces and Hessians
-  double inertia_seconds = 0.0;    ///< node maps, prediction, mass Hessian
-  double solve_seconds = 0.0;      ///< dense Cholesky factorizations and solves
-  double potential_seconds = 0.0;  ///< node potentials (contact): broad phase, evaluations, acceptance
-  int potential_refinements = 0;   ///< substeps solved again because a potential refused the result
-  double final_gradient = 0.0;     ///< ‖∇Φ‖ at the last Newton iterate [N]
-  std::string converged_reason;
-};
 
-class ReducedBackwardEuler {
+class ReducedSolver {
  public:
   /// The problem, subspace and cubature must outlive the integrator; the problem must be validated and its
   /// constrained nodes fully constrained (all three components) with zero basis rows.
-  ReducedBackwardEuler(const fullspace::Problem& problem, const Subspace& subspace, const Cubature& cubature,
+  ReducedSolver(const model::Problem& problem, const Subspace& subspace, const Cubature& cubature,
                        const ReducedOptions& options = {});
 
   /// Sets the state from a full one (x projected onto the subspace by least squares on the active nodes,
   /// w taken at the active nodes).
-  void initialize(const fullspace::State& state);
+  void initialize(const model::State& state);
   /// Advances by h [s]; throws sflsh::Error (state unchanged) when even 2^max_halvings substeps fail.
-  ReducedStepStats step(double h);
+  model::StepStats step(double h);
 
   double time() const { return t_; }
   const Eigen::VectorXd& q() const { return q_; }
   /// The full-space state: x = x_D + (B ⊗ I₃) q on every node; w from the steps at the active nodes and the
   /// skinned velocity ẋ of the prescribed motion elsewhere.
-  fullspace::State full_state() const;
+  model::State full_state() const;
   /// Φ's elastic part at the current state (cubature) [J].
   double elastic_energy() const;
   const Subspace& subspace() const { return subspace_; }
@@ -95,9 +83,9 @@ class ReducedBackwardEuler {
  private:
   struct Attempt;
   Eigen::VectorXd prescribed_state(double t) const;
-  bool solve_substep(double t0, double dt, material::HessianProjection projection, ReducedStepStats& stats, std::string& reason);
+  bool solve_substep(double t0, double dt, material::HessianProjection projection, model::StepStats& stats, std::string& reason);
 
-  const fullspace::Problem& problem_;
+  const model::Problem& problem_;
   const Subspace& subspace_;
   const Cubature& cubature_;
   ReducedOptions options_;

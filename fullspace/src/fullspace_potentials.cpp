@@ -1,7 +1,7 @@
 // Backward Euler on PETSc: the problem's node potentials (contact, node_potential.hpp) in Φ. Each rank adds
 // the terms of the candidates it owns; begin/accept run identically on every rank (every rank keeps the full
 // state), so all ranks take the same decisions without communication.
-#include "backward_euler_impl.hpp"
+#include "fullspace_solver_impl.hpp"
 
 namespace sflsh::fullspace {
 
@@ -13,7 +13,7 @@ Eigen::Vector3d posed(const NodeFrame& frame, const Eigen::VectorXd& x, int node
 
 }  // namespace
 
-void BackwardEuler::Impl::begin_potentials(const RowMatrixX3d& p_n, double t0, double dt) {
+void FullSpaceSolver::Impl::begin_potentials(const RowMatrixX3d& p_n, double t0, double dt) {
   potential_terms.clear();
   if (problem.potentials.empty()) return;
   const auto clock = Clock::now();
@@ -37,7 +37,7 @@ void BackwardEuler::Impl::begin_potentials(const RowMatrixX3d& p_n, double t0, d
   if (stats) stats->potential_seconds += seconds_since(clock);
 }
 
-double BackwardEuler::Impl::potential_energy(const Eigen::VectorXd& x) const {
+double FullSpaceSolver::Impl::potential_energy(const Eigen::VectorXd& x) const {
   if (potential_terms.empty()) return 0.0;
   const auto clock = Clock::now();
   double sum = 0.0;
@@ -48,7 +48,7 @@ double BackwardEuler::Impl::potential_energy(const Eigen::VectorXd& x) const {
   return sum;
 }
 
-void BackwardEuler::Impl::add_potential_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& g) const {
+void FullSpaceSolver::Impl::add_potential_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& g) const {
   if (potential_terms.empty()) return;
   const auto clock = Clock::now();
   for (const PotentialTerm& term : potential_terms) {
@@ -62,7 +62,7 @@ void BackwardEuler::Impl::add_potential_gradient(const Eigen::VectorXd& x, Eigen
   if (stats) stats->potential_seconds += seconds_since(clock);
 }
 
-std::vector<std::pair<int, Eigen::Matrix3d>> BackwardEuler::Impl::potential_hessian_blocks(const Eigen::VectorXd& x) const {
+std::vector<std::pair<int, Eigen::Matrix3d>> FullSpaceSolver::Impl::potential_hessian_blocks(const Eigen::VectorXd& x) const {
   std::vector<std::pair<int, Eigen::Matrix3d>> blocks;
   if (potential_terms.empty()) return blocks;
   const auto clock = Clock::now();
@@ -86,7 +86,7 @@ std::vector<std::pair<int, Eigen::Matrix3d>> BackwardEuler::Impl::potential_hess
   return blocks;
 }
 
-bool BackwardEuler::Impl::accept_potentials(const Eigen::VectorXd& x_new) {
+bool FullSpaceSolver::Impl::accept_potentials(const Eigen::VectorXd& x_new) {
   if (potential_terms.empty()) return true;
   const auto clock = Clock::now();
   bool accepted = true;

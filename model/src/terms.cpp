@@ -1,0 +1,325 @@
+#include <sflsh/model/terms.hpp>
+
+#include <sflsh/core/error.hpp>
+
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+namespace sflsh::model {
+
+namespace {
+
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
+
+material::TetNodes tet_nodes(const Problem& problem, const Eigen::VectorXd& x, int e) {
+  material::TetNodes nodes;
+  for (int a = 0; a < 4; ++a) nodes.col(a) = x.segment<3>(3 * problem.tets(e, a));
+  return nodes;
+}
+
+double energy_scale(const Problem& problem, int e) {
+  return problem.tet_energy_scale.empty() ? 1.0 : problem.tet_energy_scale[static_cast<std::size_t>(e)];
+}
+
+Eigen::Vector3d posed_node(const NodeFrame& frame, const Eigen::VectorXd& x, int node) {
+  return frame.A[static_cast<std::size_t>(node)] * x.segment<3>(3 * node) + frame.d.row(node).transpose();
+}
+
+}  // namespace
+
+std::shared_ptr<const TermSubset> TermSubset::whole(const Problem& problem) {
+  auto subset = std::make_shared<TermSubset>();
+  subset->value_tets.resize(static_cast<std::size_t>(problem.num_tets()));
+  std::iota(subset->value_tets.begin(), subset->value_tets.end(), 0);
+  subset->row_tets = subset->value_tets;
+  subset->nodes.resize(static_cast<std::size_t>(problem.num_nodes()));
+  std::iota(subset->nodes.begin(), subset->nodes.end(), 0);
+  return subset;
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Elasticity
+
+ElasticTerm::ElasticTerm(const Problem& problem, std::shared_ptr<const TermSubset> subset)
+    : problem_(problem), subset_(std::move(subset)) {
+  require(subset_ != nullptr, "elastic term: no subset");
+}
+
+double ElasticTerm::value(const Eigen::VectorXd& x) const {
+  const std::vector<int>& tets = subset_->value_tets;
+  tbb::enumerable_thread_specific<double> partial(0.0);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tets.size(), 256), [&](const auto& range) {
+    double& acc = partial.local();
+    for (std::size_t k = range.begin(); k < range.end(); ++k) {
+      const int e = tets[k];
+      try {
+        acc += energy_scale(problem_, e) * material::tet_elastic_energy(problem_.tet_rest[static_cast<std::size_t>(e)],
+                                                                        tet_nodes(problem_, x, e),
+                                                                        problem_.tet_material[static_cast<std::size_t>(e)]);
+      } catch (const Error&) {
+        acc = kInfinity;   // the Fung exponent overflowed: this state is out of reach
+      }
+    }
+  });
+  const double total = partial.combine(std::plus<double>());
+  return std::isfinite(total) ? total : kInfinity;
+}
+
+bool ElasticTerm::add_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& g) const {
+  const std::vector<int>& tets = subset_->row_tets;
+  const Eigen::Index dofs = x.size();
+  tbb::enumerable_thread_specific<Eigen::VectorXd> partial([dofs] { return Eigen::VectorXd::Zero(dofs); });
+  tbb::enumerable_thread_specific<int> failed(0);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tets.size(), 256), [&](const auto& range) {
+    Eigen::VectorXd& local = partial.local();
+    for (std::size_t k = range.begin(); k < range.end(); ++k) {
+      const int e = tets[k];
+      const auto se = static_cast<std::size_t>(e);
+      try {
+        const material::Vector12d ge =
+            energy_scale(problem_, e) * material::tet_elastic_dq(problem_.tet_rest[se], tet_nodes(problem_, x, e), problem_.tet_material[se]);
+        for (int a = 0; a < 4; ++a) local.segment<3>(3 * problem_.tets(e, a)) += ge.segment<3>(3 * a);
+      } catch (const Error&) {
+        ++failed.local();
+      }
+    }
+  });
+  for (const Eigen::VectorXd& part : partial) g += part;
+  return failed.combine(std::plus<int>()) == 0 && g.allFinite();
+}
+
+bool ElasticTerm::add_hessian(const Eigen::VectorXd& x, HessianSink& sink) const {
+  const std::vector<int>& tets = subset_->row_tets;
+  constexpr std::size_t kBatch = 8192;   // blocks computed in parallel, then handed over in order
+  std::vector<material::Matrix12d> blocks(std::min(kBatch, tets.size()));
+  int failed_total = 0;
+  for (std::size_t first = 0; first < tets.size(); first += kBatch) {
+    const std::size_t count = std::min(kBatch, tets.size() - first);
+    tbb::enumerable_thread_specific<int> failed(0);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 64), [&](const auto& range) {
+      for (std::size_t k = range.begin(); k < range.end(); ++k) {
+        const int e = tets[first + k];
+        const auto se = static_cast<std::size_t>(e);
+        material::Matrix12d& K = blocks[k];
+        try {
+          K = energy_scale(problem_, e) *
+              material::tet_elastic_dq2(problem_.tet_rest[se], tet_nodes(problem_, x, e), problem_.tet_material[se], projection_);
+        } catch (const Error&) {
+          K.setZero();
+          ++failed.local();
+        }
+        if (!K.allFinite()) {
+          K.setZero();
+          ++failed.local();
+        }
+      }
+    });
+    failed_total += failed.combine(std::plus<int>());
+    for (std::size_t k = 0; k < count; ++k) sink.add_tet(first + k, tets[first + k], blocks[k]);
+  }
+  return failed_total == 0;
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Inertia
+
+InertiaTerm::InertiaTerm(const Problem& problem, std::shared_ptr<const TermSubset> subset)
+    : problem_(problem), subset_(std::move(subset)) {
+  require(subset_ != nullptr, "inertia term: no subset");
+  require(problem.mass_kind == MassKind::lumped || problem.tet_mass.size() == problem.num_tets(),
+          "inertia term: consistent mass without ρV per tet");
+}
+
+void InertiaTerm::set_step(const NodeFrame& frame, const InertiaTarget& target) {
+  require(static_cast<int>(frame.A.size()) == problem_.num_nodes() && target.p_tilde.size() == problem_.num_dofs(),
+          "inertia term: maps for {} nodes and p̃ of {} entries, expected {} nodes", frame.A.size(), target.p_tilde.size(),
+          problem_.num_nodes());
+  require(target.h_eff > 0.0, "inertia term: ĥ must be positive");
+  frame_ = &frame;
+  target_ = &target;
+}
+
+Eigen::Vector3d InertiaTerm::residual(const Eigen::VectorXd& x, int node) const {
+  return posed_node(*frame_, x, node) - target_->p_tilde.segment<3>(3 * node);
+}
+
+double InertiaTerm::value(const Eigen::VectorXd& x) const {
+  require(frame_ != nullptr, "inertia term: set_step was not called");
+  const double scale = 1.0 / (2.0 * target_->h_eff * target_->h_eff);
+  double total = 0.0;
+  if (problem_.mass_kind == MassKind::lumped) {
+    for (int i : subset_->nodes) total += problem_.mass[i] * residual(x, i).squaredNorm();
+  } else {
+    for (int e : subset_->value_tets) {
+      Eigen::Matrix<double, 3, 4> r;
+      for (int a = 0; a < 4; ++a) r.col(a) = residual(x, problem_.tets(e, a));
+      const Eigen::Vector3d sum = r.rowwise().sum();
+      // Σ_ab ρV/20 (1 + δ_ab) r_a·r_b = ρV/20 (|Σ_a r_a|² + Σ_a |r_a|²)   (consistent mass, mass.hpp)
+      total += problem_.tet_mass[e] * 0.05 * (sum.squaredNorm() + r.colwise().squaredNorm().sum());
+    }
+  }
+  return scale * total;
+}
+
+bool InertiaTerm::add_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& g) const {
+  require(frame_ != nullptr, "inertia term: set_step was not called");
+  const double scale = 1.0 / (target_->h_eff * target_->h_eff);
+  if (problem_.mass_kind == MassKind::lumped) {
+    for (int i : subset_->nodes)
+      g.segment<3>(3 * i) += scale * problem_.mass[i] * (frame_->A[static_cast<std::size_t>(i)].transpose() * residual(x, i));
+    return true;
+  }
+  // Only the rows of the subset's nodes are complete; the others are partial sums, as for elasticity.
+  for (int e : subset_->row_tets) {
+    Eigen::Matrix<double, 3, 4> r;
+    for (int a = 0; a < 4; ++a) r.col(a) = residual(x, problem_.tets(e, a));
+    const Eigen::Vector3d sum = r.rowwise().sum();
+    for (int a = 0; a < 4; ++a) {
+      const int i = problem_.tets(e, a);
+      const Eigen::Vector3d force = problem_.tet_mass[e] * 0.05 * (sum + r.col(a));   // Σ_b M_e(a, b) r_b
+      g.segment<3>(3 * i) += scale * (frame_->A[static_cast<std::size_t>(i)].transpose() * force);
+    }
+  }
+  return true;
+}
+
+bool InertiaTerm::add_hessian(const Eigen::VectorXd&, HessianSink& sink) const {
+  require(frame_ != nullptr, "inertia term: set_step was not called");
+  const double scale = 1.0 / (target_->h_eff * target_->h_eff);
+  if (problem_.mass_kind == MassKind::lumped) {
+    for (int i : subset_->nodes) {
+      const Eigen::Matrix3d& A = frame_->A[static_cast<std::size_t>(i)];
+      sink.add_node(i, scale * problem_.mass[i] * (A.transpose() * A));
+    }
+    return true;
+  }
+  const std::vector<int>& tets = subset_->row_tets;
+  for (std::size_t k = 0; k < tets.size(); ++k) {
+    const int e = tets[k];
+    material::Matrix12d block;
+    for (int a = 0; a < 4; ++a) {
+      const Eigen::Matrix3d& Aa = frame_->A[static_cast<std::size_t>(problem_.tets(e, a))];
+      for (int b = 0; b < 4; ++b) {
+        const Eigen::Matrix3d& Ab = frame_->A[static_cast<std::size_t>(problem_.tets(e, b))];
+        block.block<3, 3>(3 * a, 3 * b) = (scale * problem_.tet_mass[e] * consistent_mass_factor(a, b)) * (Aa.transpose() * Ab);
+      }
+    }
+    sink.add_tet(k, e, block);
+  }
+  return true;
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Gravity
+
+GravityTerm::GravityTerm(const Problem& problem, std::shared_ptr<const TermSubset> subset)
+    : problem_(problem), subset_(std::move(subset)) {
+  require(subset_ != nullptr, "gravity term: no subset");
+}
+
+double GravityTerm::value(const Eigen::VectorXd& x) const {
+  require(frame_ != nullptr, "gravity term: set_frame was not called");
+  double total = 0.0;
+  for (int i : subset_->nodes) total -= problem_.mass[i] * problem_.gravity.dot(posed_node(*frame_, x, i));
+  return total;
+}
+
+bool GravityTerm::add_gradient(const Eigen::VectorXd&, Eigen::VectorXd& g) const {
+  require(frame_ != nullptr, "gravity term: set_frame was not called");
+  for (int i : subset_->nodes)
+    g.segment<3>(3 * i) -= problem_.mass[i] * (frame_->A[static_cast<std::size_t>(i)].transpose() * problem_.gravity);
+  return true;
+}
+
+bool GravityTerm::add_hessian(const Eigen::VectorXd&, HessianSink&) const { return true; }
+
+// ---------------------------------------------------------------------------------------------------------
+// Node potentials
+
+PotentialTerm::PotentialTerm(const Problem& problem) : problem_(problem) {}
+
+Eigen::Vector3d PotentialTerm::posed(const Eigen::VectorXd& x, int node) const { return posed_node(*frame_, x, node); }
+
+bool PotentialTerm::begin(const RowMatrixX3d& p_n, double t0, double dt, const NodeFrame& frame, const Eigen::VectorXd& x_prescribed,
+                          const std::function<bool(int)>& owns) {
+  frame_ = &frame;
+  active_.clear();
+  for (const auto& potential : problem_.potentials) {
+    const std::vector<int>& nodes = potential->nodes();
+    RowMatrixX3d start(static_cast<Eigen::Index>(nodes.size()), 3), skinned(static_cast<Eigen::Index>(nodes.size()), 3);
+    for (std::size_t k = 0; k < nodes.size(); ++k) {
+      start.row(static_cast<Eigen::Index>(k)) = p_n.row(nodes[k]);
+      skinned.row(static_cast<Eigen::Index>(k)) = posed(x_prescribed, nodes[k]).transpose();
+    }
+    if (!potential->begin_substep(t0, dt, start, skinned)) continue;
+    Active term;
+    term.potential = potential.get();
+    for (int c : potential->candidates()) term.node.push_back(nodes[static_cast<std::size_t>(c)]);
+    for (std::size_t c = 0; c < term.node.size(); ++c)
+      if (!owns || owns(term.node[c])) term.owned.push_back(static_cast<int>(c));
+    active_.push_back(std::move(term));
+  }
+  return !active_.empty();
+}
+
+bool PotentialTerm::accept(const Eigen::VectorXd& x_new) const {
+  bool accepted = true;
+  for (const Active& term : active_) {
+    RowMatrixX3d p_end(static_cast<Eigen::Index>(term.node.size()), 3);
+    for (std::size_t c = 0; c < term.node.size(); ++c) p_end.row(static_cast<Eigen::Index>(c)) = posed(x_new, term.node[c]).transpose();
+    accepted = term.potential->accept_substep(p_end) && accepted;   // every potential sees the result
+  }
+  return accepted;
+}
+
+int PotentialTerm::max_refinements() const {
+  int most = 0;
+  for (const Active& term : active_) most = std::max(most, term.potential->max_refinements());
+  return most;
+}
+
+double PotentialTerm::value(const Eigen::VectorXd& x) const {
+  double sum = 0.0;
+  for (const Active& term : active_)
+    for (int c : term.owned) sum += term.potential->evaluate(c, posed(x, term.node[static_cast<std::size_t>(c)]), nullptr, nullptr);
+  return std::isfinite(sum) ? sum : kInfinity;
+}
+
+bool PotentialTerm::add_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& g) const {
+  bool finite = true;
+  for (const Active& term : active_) {
+    for (int c : term.owned) {
+      const int i = term.node[static_cast<std::size_t>(c)];
+      Eigen::Vector3d gradient;
+      term.potential->evaluate(c, posed(x, i), &gradient, nullptr);
+      finite = finite && gradient.allFinite();
+      g.segment<3>(3 * i) += frame_->A[static_cast<std::size_t>(i)].transpose() * gradient;   // A_iᵀ ∇u
+    }
+  }
+  return finite;
+}
+
+bool PotentialTerm::add_hessian(const Eigen::VectorXd& x, HessianSink& sink) const {
+  bool finite = true;
+  for (const Active& term : active_) {
+    for (int c : term.owned) {
+      const int i = term.node[static_cast<std::size_t>(c)];
+      const Eigen::Matrix3d& A = frame_->A[static_cast<std::size_t>(i)];
+      Eigen::Vector3d gradient;
+      Eigen::Matrix3d hessian;
+      term.potential->evaluate(c, posed(x, i), &gradient, &hessian);
+      const Eigen::Matrix3d block = A.transpose() * hessian * A;   // A_iᵀ ∇²u A_i
+      finite = finite && block.allFinite();
+      sink.add_node(i, block);
+    }
+  }
+  return finite;
+}
+
+}  // namespace sflsh::model
