@@ -35,6 +35,8 @@ Crowd expand_crowd(const CrowdSpec& spec, const body::BodyModel& model, const st
     b.mesh = spec.mesh;
     b.handles = spec.handles;
     b.cubature = spec.cubature;
+    b.integrator = spec.integrator;
+    b.mass = spec.mass;
     crowd.materials.push_back(reduced::material_for_beta(shape_model, model, beta, b.name));
     crowd.bodies.push_back(std::move(b));
   }

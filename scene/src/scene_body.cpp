@@ -55,6 +55,7 @@ SceneBody::SceneBody(BodySpec spec, const body::BodyModel& model, const BodySetu
   options.size = meshing::parse_size_preset(spec_.mesh);
   if (!setup.cache_dir.empty()) options.cache_dir = setup.cache_dir;
   options.density = spec_.density;
+  options.mass = spec_.mass;
   options.gravity = scene.effects.gravity;
   options.stiffness_scale = spec_.stiffness_scale;
   const material::MaterialFile* material = setup.material ? setup.material : material_file ? &*material_file : nullptr;
@@ -101,11 +102,13 @@ void SceneBody::start(bool inertia) {
   if (solver_ == SolverKind::reduced) {
     reduced::ReducedOptions options;
     options.quasi_static = quasi_static_;
+    options.integrator = spec_.integrator;
     fast_ = std::make_unique<reduced::ReducedSolver>(problem, reduced_model_->subspace, reduced_model_->cubature, options);
     fast_->initialize(model::initial_state(problem, 0.0));
   } else {
     fullspace::FullSpaceOptions options;
     options.quasi_static = quasi_static_;
+    options.integrator = spec_.integrator;
     full_ = std::make_unique<fullspace::FullSpaceSolver>(problem, MPI_COMM_WORLD, options);
     full_->initialize(model::initial_state(problem, 0.0));
   }

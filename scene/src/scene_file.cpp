@@ -122,6 +122,13 @@ class SceneReader : public TomlReader {
     throw_error("{}: '{}'{} = '{}' is not one of {}", at(node), key, context, value, list);
   }
 
+  model::Integrator integrator(const toml::node& node, std::string_view context) const {
+    return model::parse_integrator(choice(node, "integrator", {"backward_euler", "bdf2", "newmark"}, context), "integrator");
+  }
+  model::MassKind mass(const toml::node& node, std::string_view context) const {
+    return model::parse_mass_kind(choice(node, "mass", {"lumped", "consistent"}, context), "mass");
+  }
+
   SolverKind solver(const toml::node& node, std::string_view context) const {
     const std::string s = choice(node, "solver", {"full", "reduced", "skinned"}, context);
     return s == "full" ? SolverKind::full : s == "reduced" ? SolverKind::reduced : SolverKind::skinned;
@@ -205,7 +212,7 @@ class SceneReader : public TomlReader {
     const std::string context = fmt::format(" in body #{}", index);
     check_keys(*t,
                {"name", "body", "subject", "betas", "motion", "motion_offset", "approach", "placement", "solver", "mesh",
-                "material", "control_points", "handles", "cubature", "density", "stiffness_scale"},
+                "material", "control_points", "handles", "cubature", "density", "stiffness_scale", "integrator", "mass"},
                context);
     BodySpec b;
     b.line = static_cast<int>(t->source().begin.line);
@@ -235,6 +242,8 @@ class SceneReader : public TomlReader {
     if (const toml::node* n = t->get("cubature")) b.cubature = count(*n, "cubature", context, -1);
     if (const toml::node* n = t->get("density")) b.density = positive(*n, "density", context);
     if (const toml::node* n = t->get("stiffness_scale")) b.stiffness_scale = positive(*n, "stiffness_scale", context);
+    if (const toml::node* n = t->get("integrator")) b.integrator = integrator(*n, context);
+    if (const toml::node* n = t->get("mass")) b.mass = mass(*n, context);
     for (const std::string* file : {&b.body_path, &b.material}) {
       require(file->empty() || std::filesystem::exists(*file), "{}: file '{}'{} not found", at(node), *file, context);
     }
@@ -314,7 +323,7 @@ class SceneReader : public TomlReader {
     const std::string_view context = " in [crowd]";
     check_keys(t,
                {"count", "seed", "shape_sigma", "motion", "max_offset", "spacing", "columns", "shape_model", "solver", "mesh", "handles",
-                "cubature"},
+                "cubature", "integrator", "mass"},
                context);
     CrowdSpec c;
     c.line = static_cast<int>(t.source().begin.line);
@@ -336,6 +345,8 @@ class SceneReader : public TomlReader {
     if (const toml::node* n = t.get("mesh")) c.mesh = choice(*n, "mesh", {"coarse", "default", "fine"}, context);
     if (const toml::node* n = t.get("handles")) c.handles = count(*n, "handles", context, 1);
     if (const toml::node* n = t.get("cubature")) c.cubature = count(*n, "cubature", context, -1);
+    if (const toml::node* n = t.get("integrator")) c.integrator = integrator(*n, context);
+    if (const toml::node* n = t.get("mass")) c.mass = mass(*n, context);
     return c;
   }
 

@@ -452,6 +452,8 @@ class SceneRun {
       if (body.soft()) {
         ++soft;
         solved_steps += body.steps - body.idle_steps;
+        j["integrator"] = std::string(model::to_string(body.spec().integrator));
+        j["mass"] = std::string(model::to_string(body.spec().mass));
         j["steps"] = body.steps;
         j["idle_steps"] = body.idle_steps;
         j["newton_iterations"] = body.newton_iterations;

@@ -65,6 +65,9 @@ TEST(SceneFile, BadInputNamesFileAndLine) {
       {"[scene]\n[effects]\nself_contact = true\n" + std::string(kBody), "scene.toml:3: 'self_contact' = true is not available"},
       {"[scene]\n" + std::string(kBody) + "solver = \"fast\"\n", "scene.toml:5: 'solver' in body #0 = 'fast' is not one of full | reduced | skinned"},
       {"[scene]\n" + std::string(kBody) + "material = \"nope.toml\"\n", "file '"},
+      {"[scene]\n" + std::string(kBody) + "integrator = \"rk4\"\n",
+       "scene.toml:5: 'integrator' in body #0 = 'rk4' is not one of backward_euler | bdf2 | newmark"},
+      {"[scene]\n" + std::string(kBody) + "mass = \"diagonal\"\n", "scene.toml:5: 'mass' in body #0 = 'diagonal' is not one of lumped | consistent"},
       {"[scene]\n" + std::string(kBody) + "[[object]]\nshape = \"sphere\"\nradius = -0.1\n", "scene.toml:7: 'radius' in object #0 = -0.1 must be positive"},
       {"[scene]\n" + std::string(kBody) + "[[object]]\nshape = \"box\"\nradius = 0.1\n", "'radius' in object #0 does not apply to a box"},
       {"[scene]\n" + std::string(kBody) +
@@ -83,6 +86,21 @@ TEST(SceneFile, BadInputNamesFileAndLine) {
     EXPECT_EQ(message.find('\n'), std::string::npos) << "one line: " << message;
   }
   EXPECT_NE(error_of(dir / "missing.toml").find("missing.toml: scene file not found"), std::string::npos);
+}
+
+TEST(SceneFile, IntegratorAndMassPerBodyAndCrowd) {
+  const auto dir = testing::scratch_dir();
+  const Scene scene = load_scene(write_scene(
+      dir, "[scene]\n" + std::string(kBody) + "integrator = \"newmark\"\nmass = \"consistent\"\n[[body]]\nname = \"b\"\nmotion = \"rest\"\n"));
+  ASSERT_EQ(scene.bodies.size(), 2u);
+  EXPECT_EQ(scene.bodies[0].integrator, model::Integrator::newmark);
+  EXPECT_EQ(scene.bodies[0].mass, model::MassKind::consistent);
+  EXPECT_EQ(scene.bodies[1].integrator, model::Integrator::backward_euler);   // the defaults
+  EXPECT_EQ(scene.bodies[1].mass, model::MassKind::lumped);
+  const Scene crowd = load_scene(write_scene(dir, "[scene]\n[crowd]\ncount = 2\nintegrator = \"bdf2\"\nmass = \"consistent\"\n"));
+  ASSERT_TRUE(crowd.crowd.has_value());
+  EXPECT_EQ(crowd.crowd->integrator, model::Integrator::bdf2);
+  EXPECT_EQ(crowd.crowd->mass, model::MassKind::consistent);
 }
 
 TEST(SceneFile, RelativePathsAreTakenFromTheSceneFolder) {

@@ -2,6 +2,7 @@
 // Scene files (TOML, docs/scenes.md, examples in data/scenes/): bodies, rigid objects, the effects the scene
 // calls for, time stepping and output. The simulator builds only what the effects ask for (scene_runner.hpp).
 // Every error names the file and line: unknown keys, missing keys, wrong types, impossible values.
+#include <sflsh/model/time_integrator.hpp>
 #include <Eigen/Core>
 
 #include <cstdint>
@@ -58,6 +59,8 @@ struct BodySpec {
   int cubature = -1;                  ///< reduced: −1 auto, 0 every tet
   double density = 1000.0;            ///< [kg/m³]
   double stiffness_scale = 1.0;
+  model::Integrator integrator = model::Integrator::backward_euler;   ///< `integrator` (docs/integrators.md)
+  model::MassKind mass = model::MassKind::lumped;                      ///< `mass`
 };
 
 enum class ShapeKind { plane, sphere, box, capsule, mesh };
@@ -106,6 +109,8 @@ struct CrowdSpec {
   SolverKind solver = SolverKind::reduced;
   std::string mesh = "coarse";
   int handles = 30;
+  model::Integrator integrator = model::Integrator::backward_euler;   ///< `integrator`
+  model::MassKind mass = model::MassKind::lumped;                      ///< `mass`
   int cubature = -1;
 };
 

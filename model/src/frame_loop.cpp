@@ -1,0 +1,46 @@
+#include <sflsh/model/frame_loop.hpp>
+
+#include <sflsh/core/error.hpp>
+
+#include <cmath>
+
+namespace sflsh::model {
+
+void accumulate(StepStats& total, const StepStats& step) {
+  total.newton_iterations += step.newton_iterations;
+  total.linear_iterations += step.linear_iterations;
+  total.factorizations += step.factorizations;
+  total.substeps = step.substeps;
+  total.failed_attempts += step.failed_attempts;
+  total.projected_retries += step.projected_retries;
+  total.fallback_preconditioner += step.fallback_preconditioner;
+  total.potential_refinements += step.potential_refinements;
+  total.startup_steps += step.startup_steps;
+  total.seconds += step.seconds;
+  total.function_seconds += step.function_seconds;
+  total.jacobian_seconds += step.jacobian_seconds;
+  total.elastic_seconds += step.elastic_seconds;
+  total.inertia_seconds += step.inertia_seconds;
+  total.solve_seconds += step.solve_seconds;
+  total.potential_seconds += step.potential_seconds;
+  total.final_gradient = step.final_gradient;
+  total.converged_reason = step.converged_reason;
+}
+
+StepStats run_frames(BodySolver& solver, const FrameLoopOptions& options,
+                     const std::function<void(int frame, double t, const StepStats& stats)>& on_frame) {
+  require(options.fps > 0.0 && std::isfinite(options.fps), "frame loop: fps must be positive, got {}", options.fps);
+  require(options.substeps >= 1, "frame loop: substeps must be ≥ 1, got {}", options.substeps);
+  require(options.first_frame >= 1, "frame loop: the first frame solved is ≥ 1, got {}", options.first_frame);
+  const double h = 1.0 / (options.fps * options.substeps);
+  StepStats total;
+  for (int f = options.first_frame; f < options.frames; ++f) {
+    StepStats frame;
+    for (int k = 0; k < options.substeps; ++k) accumulate(frame, solver.step(h));
+    accumulate(total, frame);
+    if (on_frame) on_frame(f, f / options.fps, frame);
+  }
+  return total;
+}
+
+}  // namespace sflsh::model
