@@ -2,6 +2,8 @@
 
 #include <sflsh/core/error.hpp>
 
+#include <Eigen/Geometry>
+
 #include <cmath>
 #include <vector>
 
