@@ -1,6 +1,7 @@
 // sflsh tradeoff: what accuracy costs in time. One case (subject, motion, material) is run by a hierarchy of
-// models — an error-controlled reference, full-space backward Euler on several meshes and steps, reduced
-// models with several handle and cubature counts — and each is scored against the reference on the same
+// models — a reference, the full-space solver on several meshes, integrators, masses and steps, reduced models
+// with several handle and cubature counts, integrators, masses and steps — and each is scored against the
+// reference on the same
 // posed body-surface points at the same frame times (docs/tradeoff.md says exactly what is measured):
 // RMS error [mm], relative error, σ ratio, solve seconds per frame, setup seconds. Writes tradeoff.csv/.md/.png
 // and summary.json with the Pareto front and the cheapest configuration within an error budget.
@@ -39,14 +40,22 @@ struct TradeoffOptions {
   std::string motion = "shake_hips";
   int frames = 8;
   double fps = 30.0;
-  /// quick: backward Euler at 1/960 s on the coarse mesh (SUNDIALS at rtol 1e-6 costs ~93 s per 1/30 s frame
-  /// there, measured); full: SUNDIALS on the fine mesh.
-  std::string reference = "backward_euler";      ///< sundials | backward_euler
+  /// quick: Newmark with consistent masses at 1/960 s on the coarse mesh (second order and undamped: at that step
+  /// its own time error is far below every row's; SUNDIALS at rtol 1e-6 costs ~93 s per 1/30 s frame there);
+  /// full: the same on the default mesh at 1/480 s, checked against a finer step and a finer mesh.
+  std::string reference = "newmark";             ///< sundials | backward_euler | bdf2 | newmark
+  std::string reference_mass = "consistent";     ///< lumped | consistent
   std::string reference_mesh = "coarse";
-  int reference_substeps = 32;                   ///< backward-Euler reference only
+  int reference_substeps = 32;                   ///< stepping references only
   double rtol = 1e-6, atol = 1e-9;               ///< SUNDIALS reference
-  std::vector<std::string> meshes = {"coarse", "default"};
+  /// How converged the reference is: "time" reruns it at twice the substeps, "space" on the next finer mesh, over
+  /// the first reference_check_frames frames; the RMS difference is reported (summary.json "reference_checks").
+  std::vector<std::string> reference_checks;
+  int reference_check_frames = 8;
+  std::vector<std::string> meshes = {"coarse"};
   std::vector<int> substeps = {1, 2, 4, 8};
+  std::vector<std::string> integrators = {"backward_euler", "bdf2", "newmark"};
+  std::vector<std::string> masses = {"lumped", "consistent"};
   std::vector<std::string> reduced_meshes = {"coarse"};
   std::vector<int> handles = {30, 86};
   std::vector<int> cubature = {200, 400};
@@ -62,20 +71,28 @@ void apply_preset(TradeoffOptions& o, const CLI::App& cmd) {
   require(o.preset == "quick" || o.preset == "full", "--preset {}: expected quick or full", o.preset);
   if (o.preset != "full") return;
   auto unset = [&](const char* name) { return cmd.count(name) == 0; };
-  if (unset("--frames")) o.frames = 60;
-  if (unset("--reference")) o.reference = "sundials";
-  if (unset("--reference-mesh")) o.reference_mesh = "fine";
-  if (unset("--rtol")) o.rtol = 1e-6;
+  if (unset("--frames")) o.frames = 30;
+  if (unset("--reference-mesh")) o.reference_mesh = "default";
+  if (unset("--reference-substeps")) o.reference_substeps = 16;
+  if (unset("--reference-check")) o.reference_checks = {"time", "space"};
+  if (unset("--meshes")) o.meshes = {"coarse", "default"};
+  if (unset("--substeps")) o.substeps = {1, 2, 4};
+  if (unset("--integrators")) o.integrators = {"backward_euler", "newmark"};
   if (unset("--reduced-meshes")) o.reduced_meshes = {"coarse", "default"};
   if (unset("--handles")) o.handles = {30, 86, 200};
   if (unset("--cubature")) o.cubature = {200, 400, 800};
-  if (unset("--reduced-substeps")) o.reduced_substeps = {1, 2, 4, 8};
+  if (unset("--reduced-substeps")) o.reduced_substeps = {1, 2, 4};
 }
 
 void check_options(const TradeoffOptions& o) {
   require(o.fps > 0.0, "--fps must be positive, got {}", o.fps);
   require(o.frames >= 2, "--frames must be at least 2, got {}", o.frames);
-  require(o.reference == "sundials" || o.reference == "backward_euler", "--reference {}: expected sundials or backward_euler", o.reference);
+  require(o.reference == "sundials" || o.reference == "backward_euler" || o.reference == "bdf2" || o.reference == "newmark",
+          "--reference {}: expected sundials, backward_euler, bdf2 or newmark", o.reference);
+  for (const std::string& c : o.reference_checks)
+    require(c == "time" || c == "space", "--reference-check {}: expected time and/or space", c);
+  require(o.reference_check_frames >= 2, "--reference-check-frames must be at least 2, got {}", o.reference_check_frames);
+  require(!o.integrators.empty() && !o.masses.empty(), "--integrators and --masses need at least one entry each");
   require(o.rtol > 0.0 && o.atol > 0.0, "--rtol and --atol must be positive, got {} and {}", o.rtol, o.atol);
   require(o.budget_mm >= 0.0 && o.budget_relative >= 0.0, "--budget-mm and --budget-relative must be positive, got {} and {}",
           o.budget_mm, o.budget_relative);
@@ -83,12 +100,12 @@ void check_options(const TradeoffOptions& o) {
     for (int s : *list) require(s >= 1, "--substeps and --reduced-substeps: {} is below 1", s);
   for (int h : o.handles) require(h >= 1, "--handles: {} is below 1", h);
   for (int k : o.cubature) require(k >= 0, "--cubature: {} is negative (0 = every tet)", k);
-  if (o.reference == "backward_euler") {
+  if (o.reference != "sundials") {
     int finest = 0;
     for (int s : o.substeps) finest = std::max(finest, s);
     for (int s : o.reduced_substeps) finest = std::max(finest, s);
     require(o.reference_substeps > finest,
-            "--reference-substeps {}: the backward-Euler reference must take a smaller step than every tested model (more than {} substeps)",
+            "--reference-substeps {}: the stepping reference must take a smaller step than every tested model (more than {} substeps)",
             o.reference_substeps, finest);
   }
   check_layer_settings(o.layer);
@@ -120,14 +137,14 @@ struct Measured {
 /// `seconds` and returns the state there. With `keep` the posed region surface is stored (the reference),
 /// with `ref` the error against it is summed. σ is that of simulate's summary: of the unposed skin
 /// displacement u (model::SimulationWriter), over frames 0..F.
-Measured track(const model::BodyLayer& layer, const body::Motion& motion, const model::State& initial,
+Measured track(const model::BodyLayer& layer, const body::Motion& motion, std::size_t frames, const model::State& initial,
                const std::function<model::State(std::size_t, double&)>& advance, bool check_range, ReferenceTrack* keep,
                const ReferenceTrack* ref) {
   const std::vector<int>& region = layer.mesh->region_surface.vertices;
   model::DynamicsAmplitude amplitude(region_normals(layer));
   Measured m;
   double soft_sq = 0.0;
-  for (std::size_t f = 0; f < motion.num_frames(); ++f) {
+  for (std::size_t f = 0; f < frames; ++f) {
     const double t = motion.time(f);
     const model::State state = f == 0 ? initial : advance(f, m.solve_seconds);
     require(state.x.allFinite(), "tradeoff: the state at t = {} is not finite", t);
@@ -150,7 +167,7 @@ Measured track(const model::BodyLayer& layer, const body::Motion& motion, const 
   }
   m.sigma_mean = amplitude.sigma().mean();
   if (keep) {
-    keep->soft_rms = std::sqrt(soft_sq / (static_cast<double>(region.size()) * static_cast<double>(motion.num_frames() - 1)));
+    keep->soft_rms = std::sqrt(soft_sq / (static_cast<double>(region.size()) * static_cast<double>(frames - 1)));
     keep->sigma_mean = m.sigma_mean;
   }
   return m;
@@ -179,7 +196,7 @@ void run_tradeoff(const TradeoffOptions& opt, const Invocation& invocation, int 
 
   // Every layer first, and every handle count checked on it, before any solve (one message, no output).
   std::map<std::string, BuiltLayer> layers;
-  auto layer_of = [&](const std::string& mesh) -> BuiltLayer& {
+  auto layer_of = [&](const std::string& mesh) -> BuiltLayer& {   // std::map: references stay valid
     auto it = layers.find(mesh);
     if (it != layers.end()) return it->second;
     const auto t0 = Clock::now();
@@ -188,6 +205,8 @@ void run_tradeoff(const TradeoffOptions& opt, const Invocation& invocation, int 
     return layers.emplace(mesh, BuiltLayer{std::move(l), seconds_since(t0)}).first->second;
   };
   const BuiltLayer& ref_layer = layer_of(opt.reference_mesh);
+  for (const std::string& c : opt.reference_checks)
+    if (c == "space" && opt.reference_mesh != "fine") (void)layer_of(opt.reference_mesh == "coarse" ? "default" : "fine");
   for (const std::string& mesh : opt.meshes) (void)layer_of(mesh);
   for (const std::string& mesh : opt.reduced_meshes) check_handle_counts(layer_of(mesh).layer, opt.handles);
   const std::vector<int>& region = ref_layer.layer.mesh->region_surface.vertices;
@@ -197,24 +216,45 @@ void run_tradeoff(const TradeoffOptions& opt, const Invocation& invocation, int 
   logger()->info("tradeoff: {} frames at {:g} fps, {} region vertices; reference {} on the {} mesh", motion.num_frames(), motion.fps,
                  region.size(), opt.reference, opt.reference_mesh);
 
+  // One stepping run of the full-space solver (an integrator, a mass, substeps per frame) over the first `frames`
+  // frames; the problem's mass is set for the run (the solver is built afterwards).
+  auto run_full = [&](model::BodyLayer& layer, const std::string& integrator, const std::string& mass, int substeps, std::size_t frames,
+                      ReferenceTrack* keep, const ReferenceTrack* against, double& setup_seconds) {
+    layer.problem.mass_kind = model::parse_mass_kind(mass, "--masses");
+    fullspace::FullSpaceOptions options;
+    options.integrator = model::parse_integrator(integrator, "--integrators");
+    const auto t0 = Clock::now();
+    const model::State initial = model::initial_state(layer.problem, 0.0);
+    fullspace::FullSpaceSolver solver(layer.problem, MPI_COMM_WORLD, options);
+    solver.initialize(initial);
+    setup_seconds = seconds_since(t0);
+    const double step = 1.0 / (motion.fps * substeps);
+    return track(layer, motion, frames, initial, [&](std::size_t, double& seconds) {
+             for (int k = 0; k < substeps; ++k) seconds += solver.step(step).seconds;
+             return solver.state();
+           }, false, keep, against);
+  };
+
   // The reference.
   std::vector<tradeoff::Row> rows;
   ReferenceTrack ref;
   nlohmann::json reference_json;
   {
-    const model::BodyLayer& layer = ref_layer.layer;
-    const model::State initial = model::initial_state(layer.problem, 0.0);
+    model::BodyLayer& layer = layer_of(opt.reference_mesh).layer;
     tradeoff::Row row{"reference", opt.reference, opt.reference_mesh};
-    const auto t0 = Clock::now();
+    row.mass = opt.reference_mass;
     Measured m;
     if (opt.reference == "sundials") {
+      layer.problem.mass_kind = model::parse_mass_kind(opt.reference_mass, "--reference-mass");
+      const auto t0 = Clock::now();
+      const model::State initial = model::initial_state(layer.problem, 0.0);
       fullspace::ReferenceOptions ro;
       ro.rtol = opt.rtol;
       ro.atol = opt.atol;
       fullspace::ReferenceIntegrator integrator(layer.problem, ro);
       integrator.initialize(initial);
       row.setup_seconds = ref_layer.seconds + seconds_since(t0);
-      m = track(layer, motion, initial, [&](std::size_t f, double& seconds) {
+      m = track(layer, motion, motion.num_frames(), initial, [&](std::size_t f, double& seconds) {
             const double before = integrator.stats().seconds;
             model::State s = integrator.advance_to(motion.time(f));
             seconds += integrator.stats().seconds - before;
@@ -227,18 +267,15 @@ void run_tradeoff(const TradeoffOptions& opt, const Invocation& invocation, int 
     } else {
       row.substeps = opt.reference_substeps;
       row.step = 1.0 / (motion.fps * opt.reference_substeps);
-      fullspace::FullSpaceSolver integrator(layer.problem, MPI_COMM_WORLD);
-      integrator.initialize(initial);
-      row.setup_seconds = ref_layer.seconds + seconds_since(t0);
-      m = track(layer, motion, initial, [&](std::size_t, double& seconds) {
-            for (int k = 0; k < row.substeps; ++k) seconds += integrator.step(row.step).seconds;
-            return integrator.state();
-          }, false, &ref, nullptr);
-      reference_json = {{"integrator", "backward_euler"}, {"substeps", row.substeps}, {"step", row.step}};
+      double setup = 0.0;
+      m = run_full(layer, opt.reference, opt.reference_mass, row.substeps, motion.num_frames(), &ref, nullptr, setup);
+      row.setup_seconds = ref_layer.seconds + setup;
+      reference_json = {{"integrator", opt.reference}, {"substeps", row.substeps}, {"step", row.step}};
     }
     row.seconds_per_frame = m.solve_seconds / steps;
     row.sigma_ratio = 1.0;
     rows.push_back(row);
+    reference_json["mass"] = opt.reference_mass;
     reference_json["mesh"] = opt.reference_mesh;
     reference_json["nodes"] = layer.problem.num_nodes();
     reference_json["tets"] = layer.problem.num_tets();
@@ -251,6 +288,27 @@ void run_tradeoff(const TradeoffOptions& opt, const Invocation& invocation, int 
   }
   require(ref.soft_rms > 0.0, "tradeoff: the reference does not move the soft tissue (motion {}, {} frames)", motion.name, motion.num_frames());
   const double samples = static_cast<double>(region.size()) * steps;
+
+  // How converged the reference is: the same configuration at twice the substeps ("time") or on the next finer
+  // mesh ("space"), over the first frames, against the reference itself.
+  nlohmann::json checks = nlohmann::json::array();
+  for (const std::string& check : opt.reference_checks) {
+    require(opt.reference != "sundials", "--reference-check applies to a stepping reference, not sundials (its error is controlled)");
+    const std::size_t frames = std::min<std::size_t>(motion.num_frames(), static_cast<std::size_t>(opt.reference_check_frames));
+    const std::string mesh = check == "space" ? (opt.reference_mesh == "coarse" ? "default" : "fine") : opt.reference_mesh;
+    require(check == "time" || opt.reference_mesh != "fine", "--reference-check space: there is no mesh finer than fine");
+    BuiltLayer& built = layer_of(mesh);
+    require(built.layer.mesh->region_surface.vertices == region, "tradeoff: the {} mesh has a different skin region", mesh);
+    const int substeps = check == "time" ? 2 * opt.reference_substeps : opt.reference_substeps;
+    double setup = 0.0;
+    const Measured m = run_full(built.layer, opt.reference, opt.reference_mass, substeps, frames, nullptr, &ref, setup);
+    const double rms = std::sqrt(m.error_sq / (static_cast<double>(region.size()) * static_cast<double>(frames - 1)));
+    checks.push_back({{"check", check}, {"mesh", mesh}, {"substeps", substeps}, {"frames", frames}, {"rms_difference_mm", 1e3 * rms},
+                      {"relative_difference", rms / ref.soft_rms}, {"seconds", m.solve_seconds}});
+    logger()->info("reference check ({}): {} mesh, {} substeps, {} frames: RMS difference {:.4f} mm ({:.2f} % of the soft-tissue motion)",
+                   check, mesh, substeps, frames, 1e3 * rms, 100.0 * rms / ref.soft_rms);
+  }
+  reference_json["checks"] = checks;
 
   // Scores one run against the reference into its row.
   auto score = [&](tradeoff::Row& row, const Measured& m) {
@@ -276,47 +334,51 @@ void run_tradeoff(const TradeoffOptions& opt, const Invocation& invocation, int 
   };
 
   for (const std::string& mesh : opt.meshes) {
-    const BuiltLayer& built = layers.at(mesh);
-    for (int substeps : opt.substeps) {
-      tradeoff::Row row{"full", "backward_euler", mesh};
-      row.substeps = substeps;
-      row.step = 1.0 / (motion.fps * substeps);
-      guarded(row, [&] {
-        const auto t0 = Clock::now();
-        const model::State initial = model::initial_state(built.layer.problem, 0.0);
-        fullspace::FullSpaceSolver integrator(built.layer.problem, MPI_COMM_WORLD);
-        integrator.initialize(initial);
-        row.setup_seconds = built.seconds + seconds_since(t0);
-        return track(built.layer, motion, initial, [&](std::size_t, double& seconds) {
-                 for (int k = 0; k < substeps; ++k) seconds += integrator.step(row.step).seconds;
-                 return integrator.state();
-               }, false, nullptr, &ref);
-      });
-    }
+    BuiltLayer& built = layers.at(mesh);
+    for (const std::string& integrator : opt.integrators)
+      for (const std::string& mass : opt.masses)
+        for (int substeps : opt.substeps) {
+          tradeoff::Row row{"full", integrator, mesh};
+          row.mass = mass;
+          row.substeps = substeps;
+          row.step = 1.0 / (motion.fps * substeps);
+          guarded(row, [&] {
+            double setup = 0.0;
+            const Measured m = run_full(built.layer, integrator, mass, substeps, motion.num_frames(), nullptr, &ref, setup);
+            row.setup_seconds = built.seconds + setup;
+            return m;
+          });
+        }
   }
   for (const std::string& mesh : opt.reduced_meshes) {
-    const BuiltLayer& built = layers.at(mesh);
+    BuiltLayer& built = layers.at(mesh);
     for (int handles : opt.handles)
       for (int k : opt.cubature) {
         const auto t0 = Clock::now();
         const reduced::ReducedModel reduced_model =
             reduced::build_reduced_model(built.layer, reduced_model_options(opt.reduced, handles, k, opt.layer.cache));
         const double model_seconds = seconds_since(t0);
-        for (int substeps : opt.reduced_substeps) {
-          tradeoff::Row row{"reduced", "backward_euler", mesh, handles, static_cast<int>(reduced_model.cubature.size()), substeps,
-                            1.0 / (motion.fps * substeps)};
-          guarded(row, [&] {
-            const auto t1 = Clock::now();
-            const model::State initial = model::initial_state(built.layer.problem, 0.0);
-            reduced::ReducedSolver integrator(built.layer.problem, reduced_model.subspace, reduced_model.cubature);
-            integrator.initialize(initial);
-            row.setup_seconds = built.seconds + model_seconds + seconds_since(t1);
-            return track(built.layer, motion, initial, [&](std::size_t, double& seconds) {
-                     for (int s = 0; s < substeps; ++s) seconds += integrator.step(row.step).seconds;
-                     return integrator.full_state();
-                   }, true, nullptr, &ref);
-          });
-        }
+        for (const std::string& integrator : opt.integrators)
+          for (const std::string& mass : opt.masses)
+            for (int substeps : opt.reduced_substeps) {
+              tradeoff::Row row{"reduced", integrator, mesh, handles, static_cast<int>(reduced_model.cubature.size()), substeps,
+                                1.0 / (motion.fps * substeps)};
+              row.mass = mass;
+              guarded(row, [&] {
+                built.layer.problem.mass_kind = model::parse_mass_kind(mass, "--masses");
+                reduced::ReducedOptions options;
+                options.integrator = model::parse_integrator(integrator, "--integrators");
+                const auto t1 = Clock::now();
+                const model::State initial = model::initial_state(built.layer.problem, 0.0);
+                reduced::ReducedSolver solver(built.layer.problem, reduced_model.subspace, reduced_model.cubature, options);
+                solver.initialize(initial);
+                row.setup_seconds = built.seconds + model_seconds + seconds_since(t1);
+                return track(built.layer, motion, motion.num_frames(), initial, [&](std::size_t, double& seconds) {
+                         for (int s = 0; s < substeps; ++s) seconds += solver.step(row.step).seconds;
+                         return solver.full_state();
+                       }, true, nullptr, &ref);
+              });
+            }
       }
   }
   tradeoff::mark_pareto_front(rows);
@@ -331,7 +393,8 @@ void run_tradeoff(const TradeoffOptions& opt, const Invocation& invocation, int 
   const std::string reference_text =
       opt.reference == "sundials"
           ? fmt::format("SUNDIALS ARKODE (adaptive, rtol {:g}, atol {:g}) on the {} mesh", opt.rtol, opt.atol, opt.reference_mesh)
-          : fmt::format("backward Euler at {} substeps per frame on the {} mesh", opt.reference_substeps, opt.reference_mesh);
+          : fmt::format("{} with {} masses at {} substeps per frame on the {} mesh", opt.reference, opt.reference_mass, opt.reference_substeps,
+                        opt.reference_mesh);
   tradeoff::write_markdown(
       run.stage("tradeoff.md"), "What accuracy costs in time: " + title,
       {fmt::format("preset {}; reference: {}", opt.preset, reference_text),
@@ -354,7 +417,7 @@ void run_tradeoff(const TradeoffOptions& opt, const Invocation& invocation, int 
   }
   nlohmann::json row_json = nlohmann::json::array();
   for (const tradeoff::Row& r : rows)
-    row_json.push_back({{"label", r.label()}, {"model", r.model}, {"integrator", r.integrator}, {"mesh", r.mesh}, {"handles", r.handles},
+    row_json.push_back({{"label", r.label()}, {"model", r.model}, {"integrator", r.integrator}, {"mass", r.mass}, {"mesh", r.mesh}, {"handles", r.handles},
                         {"cubature", r.cubature}, {"substeps", r.substeps}, {"step", r.step}, {"setup_seconds", r.setup_seconds},
                         {"seconds_per_frame", r.seconds_per_frame},
                         {"rms_error_mm", std::isfinite(r.rms_error_mm) ? nlohmann::json(r.rms_error_mm) : nlohmann::json(nullptr)},
@@ -394,21 +457,38 @@ void register_tradeoff_commands(CLI::App& app, const Invocation& invocation) {
       "What accuracy costs in time: one case run by a reference, full-space backward Euler on several meshes and steps and reduced "
       "models (handles × cubature × steps), scored against the reference; writes tradeoff.csv/.md/.png and summary.json with the "
       "Pareto front and the cheapest configuration within --budget-mm / --budget-relative.");
-  cmd->add_option("--preset", opt->preset, "quick (minutes on 2 cores; reference: backward Euler at 1/960 s on the coarse mesh) | full (reference: SUNDIALS on the fine mesh)")
+  cmd->add_option("--preset", opt->preset,
+                  "quick (minutes on 2 cores; reference: Newmark + consistent masses at 1/960 s on the coarse mesh) | full (reference: the same "
+                  "at 1/480 s on the default mesh, checked against a finer step and the fine mesh)")
       ->check(CLI::IsMember({"quick", "full"}));
   add_body_option(*cmd, opt->subject);
   add_subject_options(*cmd, opt->subject);
   cmd->add_option("--motion", opt->motion, "Motion: a procedural name (sflsh motion list) or an AMASS .npz path")->capture_default_str();
   cmd->add_option("--frames", opt->frames, "Output frames (quick 8, full 60)");
   cmd->add_option("--fps", opt->fps, "Output frame rate (and motion sampling); every step is 1 / (fps · substeps)")->capture_default_str();
-  cmd->add_option("--reference", opt->reference, "sundials (adaptive, error-controlled; full preset) | backward_euler (at --reference-substeps; quick preset)")
-      ->check(CLI::IsMember({"sundials", "backward_euler"}));
+  cmd->add_option("--reference", opt->reference,
+                  "newmark | bdf2 | backward_euler (the full-space solver at --reference-substeps) | sundials (adaptive, error-controlled)")
+      ->check(CLI::IsMember({"sundials", "backward_euler", "bdf2", "newmark"}));
+  cmd->add_option("--reference-mass", opt->reference_mass, "Mass of the reference: lumped | consistent")
+      ->check(CLI::IsMember({"lumped", "consistent"}))
+      ->capture_default_str();
+  cmd->add_option("--reference-check", opt->reference_checks,
+                  "How converged the reference is: time (twice the substeps) and/or space (the next finer mesh), comma-separated")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"time", "space"}));
+  cmd->add_option("--reference-check-frames", opt->reference_check_frames, "Frames the reference checks run")->capture_default_str();
+  cmd->add_option("--integrators", opt->integrators, "Integrators of the full-space and reduced rows, comma-separated")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"backward_euler", "bdf2", "newmark"}));
+  cmd->add_option("--masses", opt->masses, "Masses of the full-space and reduced rows, comma-separated")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"lumped", "consistent"}));
   cmd->add_option("--reference-mesh", opt->reference_mesh, "Mesh of the reference (quick coarse, full fine)")
       ->check(CLI::IsMember({"coarse", "default", "fine"}));
-  cmd->add_option("--reference-substeps", opt->reference_substeps, "Substeps per frame of a backward-Euler reference")->capture_default_str();
+  cmd->add_option("--reference-substeps", opt->reference_substeps, "Substeps per frame of a stepping reference (quick 32, full 16)");
   cmd->add_option("--rtol", opt->rtol, "SUNDIALS reference: relative tolerance")->capture_default_str();
   cmd->add_option("--atol", opt->atol, "SUNDIALS reference: absolute tolerance [m, m/s]")->capture_default_str();
-  cmd->add_option("--meshes", opt->meshes, "Meshes of the full-space backward-Euler rows, comma-separated")
+  cmd->add_option("--meshes", opt->meshes, "Meshes of the full-space rows, comma-separated")
       ->delimiter(',')
       ->check(CLI::IsMember({"coarse", "default", "fine"}));
   cmd->add_option("--substeps", opt->substeps, "Substeps per frame of the full-space rows, comma-separated (1,2,4,8 at 30 fps: 1/30 to 1/240 s)")

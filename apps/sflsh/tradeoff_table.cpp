@@ -26,10 +26,12 @@ std::string step_text(const Row& r) {
 }  // namespace
 
 std::string Row::label() const {
+  const std::string scheme = integrator == "backward_euler" && mass == "lumped" ? std::string() : fmt::format("{} {} ", integrator, mass);
   if (model == "reference")
-    return substeps ? fmt::format("reference {} {} {}", integrator, mesh, step_text(*this)) : fmt::format("reference {} {}", integrator, mesh);
-  if (model == "reduced") return fmt::format("reduced {} h{} k{} {}", mesh, handles, cubature, step_text(*this));
-  return fmt::format("full {} {}", mesh, step_text(*this));
+    return substeps ? fmt::format("reference {} {} {}{}", integrator, mesh, mass == "lumped" ? "" : mass + " ", step_text(*this))
+                    : fmt::format("reference {} {}{}", integrator, mesh, mass == "lumped" ? "" : " " + mass);
+  if (model == "reduced") return fmt::format("reduced {} h{} k{} {}{}", mesh, handles, cubature, scheme, step_text(*this));
+  return fmt::format("full {} {}{}", mesh, scheme, step_text(*this));
 }
 
 void mark_pareto_front(std::vector<Row>& rows) {
@@ -93,9 +95,9 @@ void write_csv(const std::filesystem::path& path, const std::vector<Row>& rows) 
   for (const Row& r : rows) {
     const std::string sizes = r.model == "reduced" ? fmt::format("{},{}", r.handles, r.cubature) : ",";
     const std::string step = r.substeps ? fmt::format("{},{:.6g}", r.substeps, r.step) : ",";
-    text += fmt::format("{},{},{},{},{},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{},{}\n", r.model, r.integrator, r.mesh, sizes, step,
+    text += fmt::format("{},{},{},{},{},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{},{},{}\n", r.model, r.integrator, r.mesh, sizes, step,
                         r.setup_seconds, r.seconds_per_frame, r.rms_error_mm, r.relative_error, r.sigma_ratio, r.valid ? "yes" : "no",
-                        r.pareto ? "yes" : "no");
+                        r.pareto ? "yes" : "no", r.mass);
   }
   write_text_atomically(path, text);
 }
@@ -104,11 +106,11 @@ void write_markdown(const std::filesystem::path& path, const std::string& title,
                     const std::vector<Row>& rows, const std::string& recommendation) {
   std::string text = fmt::format("# {}\n\n", title);
   for (const std::string& line : context) text += fmt::format("- {}\n", line);
-  text += "\n| model | integrator | mesh | handles | cubature | step | setup [s] | s/frame | RMS error [mm] | relative error | "
-          "σ ratio | Pareto |\n|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---|\n";
+  text += "\n| model | integrator | mass | mesh | handles | cubature | step | setup [s] | s/frame | RMS error [mm] | relative error | "
+          "σ ratio | Pareto |\n|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---|\n";
   for (const Row& r : rows) {
     const std::string sizes = r.model == "reduced" ? fmt::format("{} | {}", r.handles, r.cubature) : std::string("– | –");
-    text += fmt::format("| {} | {} | {} | {} | {} | {:.3g} | {:.4g} | {:.4f} | {:.4f} | {:.3f} | {}{} |\n", r.model, r.integrator, r.mesh,
+    text += fmt::format("| {} | {} | {} | {} | {} | {} | {:.3g} | {:.4g} | {:.4f} | {:.4f} | {:.3f} | {}{} |\n", r.model, r.integrator, r.mass, r.mesh,
                         sizes, step_text(r), r.setup_seconds, r.seconds_per_frame, r.rms_error_mm, r.relative_error, r.sigma_ratio,
                         r.pareto ? "yes" : "no", r.valid ? "" : " (out of range)");
   }

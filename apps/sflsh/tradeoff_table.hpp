@@ -12,7 +12,7 @@ namespace sflsh::app::tradeoff {
 /// One configuration and what its run measured against the reference.
 struct Row {
   std::string model;              ///< reference | full | reduced
-  std::string integrator;         ///< sundials (adaptive, error-controlled) | backward_euler
+  std::string integrator;         ///< sundials (adaptive, error-controlled) | backward_euler | bdf2 | newmark
   std::string mesh;               ///< coarse | default | fine
   int handles = 0;                ///< point handles (reduced; 0 otherwise)
   int cubature = 0;               ///< cubature tets used (reduced; 0 otherwise)
@@ -25,15 +25,17 @@ struct Row {
   double sigma_ratio = 0.0;       ///< mean σ / mean σ_ref over the region's vertices
   bool valid = true;              ///< every full-space tet stayed within the material's range (reduced)
   bool pareto = false;            ///< on the Pareto front of (seconds_per_frame, rms_error_mm)
+  std::string mass = "lumped";    ///< lumped | consistent (docs/integrators.md)
 
-  /// e.g. "reduced coarse h30 k200 1/60 s", "full default 1/120 s", "reference sundials coarse".
+  /// e.g. "reduced coarse h30 k200 1/60 s", "full default 1/120 s", "reference sundials coarse"; rows that are not
+  /// backward Euler with lumped masses name their integrator and mass ("full coarse newmark consistent 1/60 s").
   std::string label() const;
 };
 
 /// The exact CSV header of tradeoff.csv.
 inline constexpr const char* kHeader =
     "model,integrator,mesh,handles,cubature,substeps,step_s,setup_seconds,seconds_per_frame,rms_error_mm,relative_error,"
-    "sigma_ratio,valid,pareto";
+    "sigma_ratio,valid,pareto,mass";
 
 /// Sets Row::pareto: a valid row is on the front when no other valid row is at least as fast and at least as
 /// accurate and strictly better in one of the two. The reference (zero error) is on it by construction.

@@ -10,6 +10,7 @@
 #include <gmock/gmock.h>
 
 #include <cmath>
+#include <map>
 #include <fstream>
 #include <sstream>
 
@@ -24,14 +25,14 @@ namespace fs = std::filesystem;
 
 constexpr const char* kHeader =
     "model,integrator,mesh,handles,cubature,substeps,step_s,setup_seconds,seconds_per_frame,rms_error_mm,relative_error,"
-    "sigma_ratio,valid,pareto";
+    "sigma_ratio,valid,pareto,mass";
 
 /// A 3-frame clip on the coarse layer, scored against backward Euler at 1/120 s (4 substeps at 30 fps); one
 /// reduced model (30 handles, 200 cubature tets, 1/30 s).
 std::string tiny_case(int frames = 3, int reference_substeps = 4) {
   return fmt::format("--subject OPEN_TRAIN_1 --motion jiggle_on_toes --frames {} --fps 30 --reference backward_euler "
                      "--reference-mesh coarse --reference-substeps {} --meshes coarse --reduced-meshes coarse --handles 30 --cubature 200 "
-                     "--reduced-substeps 1 --cache {}",
+                     "--reduced-substeps 1 --reference-mass lumped --integrators backward_euler --masses lumped --cache {}",
                      frames, reference_substeps, SFLSH_TEST_CACHE);
 }
 
@@ -113,6 +114,43 @@ TEST(CliTradeoff, ScoresEveryModelAgainstTheReferenceAndRecommendsTheCheapestWit
   std::stringstream text;
   text << md.rdbuf();
   EXPECT_THAT(text.str(), HasSubstr("Recommended for RMS error ≤ 0.05 mm"));
+}
+
+TEST(CliTradeoff, SweepsIntegratorsAndMassesAndChecksTheReference) {
+  // Reference: Newmark with consistent masses at 1/240 s; rows: backward Euler and Newmark × lumped and consistent at
+  // 1/30 s, full space and one reduced model. Newmark keeps the dynamics backward Euler damps away, so at the same
+  // step its σ ratio is closer to 1; the time check (1/480 s against 1/240 s) shows the reference's own error is
+  // far below the rows' errors.
+  const fs::path dir = sflsh::testing::scratch_dir();
+  const fs::path out = dir / "tr";
+  const auto result = run_sflsh(
+      fmt::format("-q tradeoff --subject OPEN_TRAIN_1 --motion jiggle_on_toes --frames 4 --fps 30 --reference newmark --reference-mass "
+                  "consistent --reference-mesh coarse --reference-substeps 8 --reference-check time --reference-check-frames 3 "
+                  "--meshes coarse --substeps 1 --integrators backward_euler,newmark --masses lumped,consistent --reduced-meshes coarse "
+                  "--handles 30 --cubature 200 --reduced-substeps 1 --cache {} --out {}",
+                  SFLSH_TEST_CACHE, out.string()),
+      dir);
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const nlohmann::json summary = read_json(out / "summary.json");
+  ASSERT_EQ(summary["rows"].size(), 9u);   // the reference, 4 full-space rows, 4 reduced rows
+  EXPECT_EQ(summary["reference"]["integrator"], "newmark");
+  EXPECT_EQ(summary["reference"]["mass"], "consistent");
+  std::map<std::string, double> sigma_ratio, error;
+  for (const auto& row : summary["rows"]) {
+    if (row["model"] != "full") continue;
+    const std::string key = row["integrator"].get<std::string>() + "/" + row["mass"].get<std::string>();
+    sigma_ratio[key] = row["sigma_ratio"].get<double>();
+    error[key] = row["rms_error_mm"].get<double>();
+  }
+  ASSERT_EQ(sigma_ratio.size(), 4u);
+  EXPECT_GT(sigma_ratio["newmark/consistent"], sigma_ratio["backward_euler/consistent"]);
+  EXPECT_GT(sigma_ratio["newmark/lumped"], sigma_ratio["backward_euler/lumped"]);
+  ASSERT_EQ(summary["reference"]["checks"].size(), 1u);
+  const double check_mm = summary["reference"]["checks"][0]["rms_difference_mm"].get<double>();
+  EXPECT_LT(check_mm, 0.25 * error["newmark/consistent"]) << "the reference is not converged in time against the rows it scores";
+  const Table t = read_table(out / "tradeoff.csv");
+  EXPECT_EQ(t.header, kHeader);
+  for (std::size_t i = 0; i < t.rows.size(); ++i) EXPECT_THAT(t.rows[i].back(), ::testing::AnyOf("lumped", "consistent")) << i;
 }
 
 TEST(CliTradeoff, SaysSoWhenNoConfigurationMeetsTheBudget) {
