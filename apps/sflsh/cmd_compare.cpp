@@ -152,19 +152,20 @@ void run_compare(const CompareOptions& opt, const Invocation& invocation, int ra
     full.initialize(model::initial_state(problem, 0.0));
     u_full.push_back(layer.surface_displacement(full.state().x));
     Progress progress("full-space frames", static_cast<std::size_t>(steps), rank == 0);
-    for (int f = 1; f <= steps; ++f) {
-      for (int k = 0; k < opt.substeps; ++k) {
-        const model::StepStats st = full.step(h);
-        full_seconds += st.seconds;
-        full_newton += st.newton_iterations;
-        full_linear += st.linear_iterations;
-        full_retries += st.failed_attempts;
-      }
+    model::FrameLoopOptions loop;
+    loop.frames = steps + 1;
+    loop.fps = motion.fps;
+    loop.substeps = opt.substeps;
+    const model::StepStats total = model::run_frames(full, loop, [&](int f, double, const model::StepStats&) {
       const model::State& state = full.state();
       require(state.x.allFinite(), "compare: the full-space state at t = {} is not finite", motion.time(static_cast<std::size_t>(f)));
       u_full.push_back(layer.surface_displacement(state.x));
       progress.advance();
-    }
+    });
+    full_seconds = total.seconds;
+    full_newton = total.newton_iterations;
+    full_linear = total.linear_iterations;
+    full_retries = total.failed_attempts;
   }
   for (const auto& u : u_full) full_amplitude.add(u);
   const Eigen::VectorXd sigma_full = full_amplitude.sigma();
@@ -202,19 +203,20 @@ void run_compare(const CompareOptions& opt, const Invocation& invocation, int ra
       }
     };
     record(0);
-    for (int f = 1; f <= steps; ++f) {
-      for (int k = 0; k < opt.substeps; ++k) {
-        const model::StepStats st = fast.step(h);
-        c.seconds += st.seconds;
-        c.elastic_seconds += st.elastic_seconds;
-        c.inertia_seconds += st.inertia_seconds;
-        c.solve_seconds += st.solve_seconds;
-        c.newton += st.newton_iterations;
-        c.retries += st.failed_attempts;
-      }
+    model::FrameLoopOptions loop;
+    loop.frames = steps + 1;
+    loop.fps = motion.fps;
+    loop.substeps = opt.substeps;
+    const model::StepStats total = model::run_frames(fast, loop, [&](int f, double, const model::StepStats&) {
       record(static_cast<std::size_t>(f));
       progress.advance();
-    }
+    });
+    c.seconds = total.seconds;
+    c.elastic_seconds = total.elastic_seconds;
+    c.inertia_seconds = total.inertia_seconds;
+    c.solve_seconds = total.solve_seconds;
+    c.newton = total.newton_iterations;
+    c.retries = total.failed_attempts;
     c.frames = steps;
     c.sigma = amplitude.sigma();
   }

@@ -48,10 +48,10 @@ CaseDynamics DynamicsCase::simulate(const LayerParameterization& parameterizatio
     const SkinDisplacementMap& skin = skin_map(model);
     auto add_frame = [&] { amplitude.add(skin.displacement_of(integrator.q())); };
     add_frame();
-    for (int f = 1; f < frames_; ++f) {
-      integrator.step(1.0 / fps_);
-      add_frame();
-    }
+    model::FrameLoopOptions loop;
+    loop.frames = frames_;
+    loop.fps = fps_;
+    model::run_frames(integrator, loop, [&](int, double, const model::StepStats&) { add_frame(); });
     CaseDynamics out;
     out.sigma_normal = 1e3 * amplitude.sigma_normal();
     out.sigma_tangent = 1e3 * amplitude.sigma_tangent();

@@ -48,15 +48,15 @@ GroundTruthCase simulate_ground_truth(const model::BodyLayer& layer, const body:
     if (options.keep_frames) out.posed.push_back(layer.posed_surface_from_displacement(u, t));
   };
   record(0.0);
-  const auto frames = static_cast<int>(motion.num_frames());
-  for (int f = 1; f < frames; ++f) {
-    try {
-      const model::StepStats st = solver.step(1.0 / motion.fps);
-      out.newton_iterations += st.newton_iterations;
-    } catch (const Error& e) {
-      throw_error("ground truth {} / {}: frame {}: {}", subject, motion.name, f, e.what());
-    }
-    record(motion.time(static_cast<std::size_t>(f)));
+  model::FrameLoopOptions loop;
+  loop.frames = static_cast<int>(motion.num_frames());
+  loop.fps = motion.fps;
+  try {
+    const model::StepStats total =
+        model::run_frames(solver, loop, [&](int f, double, const model::StepStats&) { record(motion.time(static_cast<std::size_t>(f))); });
+    out.newton_iterations += total.newton_iterations;
+  } catch (const Error& e) {
+    throw_error("ground truth {} / {}: {}", subject, motion.name, e.what());
   }
   out.sigma_normal = 1e3 * amplitude.sigma_normal();
   out.sigma_tangent = 1e3 * amplitude.sigma_tangent();

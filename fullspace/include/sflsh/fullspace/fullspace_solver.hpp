@@ -13,6 +13,7 @@
 // Node potentials of the problem (contact, node_potential.hpp) add u(p) to Φ on their candidate nodes; a
 // substep a potential refuses (penetration over its tolerance) is solved again after the potential stiffened.
 #include <sflsh/fullspace/model_names.hpp>
+#include <sflsh/model/frame_loop.hpp>
 #include <sflsh/model/step_stats.hpp>
 #include <sflsh/model/time_integrator.hpp>
 
@@ -42,7 +43,7 @@ struct FullSpaceOptions {
 };
 
 
-class FullSpaceSolver {
+class FullSpaceSolver final : public model::BodySolver {
  public:
   /// `problem` must outlive the integrator and be validated. Collective on `comm`.
   FullSpaceSolver(const Problem& problem, MPI_Comm comm, const FullSpaceOptions& options = {});
@@ -53,9 +54,10 @@ class FullSpaceSolver {
   /// Sets the state (full vectors, identical on every rank).
   void initialize(const State& state);
   const State& state() const;
+  State current_state() const override { return state(); }
   /// Advances by h [s]. Retries failed solves with smaller substeps; throws sflsh::Error (on every rank)
   /// naming the time and the reason when even 2^max_halvings substeps fail. The state is unchanged then.
-  StepStats step(double h);
+  StepStats step(double h) override;
   /// Local ownership (for reporting): the mesh nodes this rank owns, ascending.
   std::vector<int> owned_nodes() const;
 

@@ -16,6 +16,7 @@
 #include <sflsh/reduced/reduced_inertia.hpp>
 #include <sflsh/reduced/reduced_potentials.hpp>
 #include <sflsh/reduced/subspace.hpp>
+#include <sflsh/model/frame_loop.hpp>
 #include <sflsh/model/step_stats.hpp>
 #include <sflsh/model/time_integrator.hpp>
 
@@ -54,7 +55,7 @@ struct ReducedSubstep {
 };
 
 
-class ReducedSolver {
+class ReducedSolver final : public model::BodySolver {
  public:
   /// The problem, subspace and cubature must outlive the integrator; the problem must be validated and its
   /// constrained nodes fully constrained (all three components) with zero basis rows.
@@ -65,13 +66,14 @@ class ReducedSolver {
   /// w taken at the active nodes).
   void initialize(const model::State& state);
   /// Advances by h [s]; throws sflsh::Error (state unchanged) when even 2^max_halvings substeps fail.
-  model::StepStats step(double h);
+  model::StepStats step(double h) override;
 
   double time() const { return t_; }
   const Eigen::VectorXd& q() const { return q_; }
   /// The full-space state: x = x_D + (B ⊗ I₃) q on every node; w from the steps at the active nodes and the
   /// skinned velocity ẋ of the prescribed motion elsewhere.
   model::State full_state() const;
+  model::State current_state() const override { return full_state(); }
   /// Φ's elastic part at the current state (cubature) [J].
   double elastic_energy() const;
   const Subspace& subspace() const { return subspace_; }
