@@ -30,6 +30,7 @@ namespace {
 
 using namespace sflsh;
 using namespace sflsh::fullspace;
+using namespace sflsh::model;
 using Clock = std::chrono::steady_clock;
 
 std::vector<int> split_ints(const std::string& csv) {

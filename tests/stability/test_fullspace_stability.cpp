@@ -30,7 +30,7 @@ using namespace sflsh::stability;
 /// Runs backward Euler along the motion, checking every frame's state and energies for finiteness.
 Outcome run_case(const body::Betas& beta, const body::Motion& motion, const material::MaterialFile* material,
                  int substeps = 1, const std::function<void(const Problem&, State&)>& perturb = {}) {
-  const BodyLayer layer = build_body_layer(open_body(), beta, motion, material, 12, coarse());
+  const model::BodyLayer layer = model::build_body_layer(open_body(), beta, motion, material, 12, coarse());
   const Problem& p = layer.problem;
   State state = initial_state(p, 0.0);
   if (perturb) perturb(p, state);
