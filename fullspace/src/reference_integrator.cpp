@@ -7,7 +7,13 @@
 // pattern and KLU can refactor with the symbolic analysis of the first setup):
 //   row x_{i,α}: columns x_{i,0..2}, w_{i,0..2}                          (6 entries)
 //   row w_{i,α}: columns x_{j,0..2} for the mesh neighbours j of i (with i itself), then w_{i,α}
+//                (consistent mass: w_{j,α} for every neighbour j, the pattern of M_w, reference_mass.hpp)
+// Consistent mass: ARKODE solves M_y ẏ = f with a second KLU solver on M_y (time-independent, factorized once
+// per initialize). The Newton matrix M_y − γJ is formed here on the fixed pattern (ARKStepSetLinSysFn):
+// SUNMatScaleAdd on two sparse matrices scans a dense work array per row, O(rows²) per setup.
 #include <sflsh/fullspace/reference_integrator.hpp>
+
+#include "reference_mass.hpp"
 
 #include <sflsh/core/error.hpp>
 
@@ -23,6 +29,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -57,6 +64,15 @@ struct ReferenceIntegrator::Impl {
   std::vector<char> constrained;       // per x dof
   std::vector<int> constraint_count;   // per node: how many of its components are prescribed
   std::vector<double> inv_mass;        // per node; 0 for fully prescribed massless nodes
+  bool consistent = false;             // M_y ẏ = f with the consistent mass (reference_mass.hpp)
+  detail::ComponentMass component_mass;  // M_w and M_FC (consistent only)
+  std::vector<sunindextype> mass_row_ptr, mass_col_idx;  // M_y = diag(I, M_w) in CSR (consistent only)
+  std::vector<double> mass_values;
+  std::vector<double> mass_on_pattern;   // M_y on the pattern of J (consistent only)
+  std::vector<double> saved_values;      // J of the last Jacobian evaluation (consistent: ARKODE's jok reuse)
+  double t_start = 0.0;                  // of the run: the prescribed accelerations are not differenced before it
+  double acceleration_time = std::numeric_limits<double>::quiet_NaN();
+  Eigen::VectorXd coupling_force;        // M_FC a_C(acceleration_time) [N]
 
   // Jacobian pattern (CSR) and per-tet positions of the node-pair blocks in the w rows.
   std::vector<sunindextype> row_ptr, col_idx;
@@ -74,6 +90,8 @@ struct ReferenceIntegrator::Impl {
   N_Vector y = nullptr;
   SUNMatrix jac = nullptr;
   SUNLinearSolver solver = nullptr;
+  SUNMatrix mass = nullptr;               // consistent only
+  SUNLinearSolver mass_solver = nullptr;  // consistent only
   void* arkode = nullptr;
 
   double t = 0.0;
@@ -85,6 +103,8 @@ struct ReferenceIntegrator::Impl {
   Impl(const Problem& p, const ReferenceOptions& o) : problem(p), options(o) {}
   ~Impl() {
     if (arkode != nullptr) ARKStepFree(&arkode);
+    if (mass_solver != nullptr) SUNLinSolFree(mass_solver);
+    if (mass != nullptr) SUNMatDestroy(mass);
     if (solver != nullptr) SUNLinSolFree(solver);
     if (jac != nullptr) SUNMatDestroy(jac);
     if (y != nullptr) N_VDestroy(y);
@@ -101,6 +121,11 @@ struct ReferenceIntegrator::Impl {
   }
 
   void build_pattern();
+  /// M_w, M_FC, M_y in CSR and M_y on the pattern of J (consistent mass; after build_pattern).
+  void build_mass();
+  /// coupling_force = M_FC a_C(t_eval), reused while t_eval repeats (Newton iterations of one stage).
+  /// Returns 0 or −1 (the forcing is not finite) with the reason in last_rhs_problem.
+  int update_coupling(double t_eval);
   /// The frame, its rate, x with the prescribed values and du/dt at time t into the scratch members.
   /// Returns 0 or −1 (unrecoverable: non-finite forcing, bad input) with the reason in last_rhs_problem.
   int prepare(double t_eval, const double* x);
@@ -126,6 +151,39 @@ struct ReferenceIntegrator::Impl {
     std::copy(impl->row_ptr.begin(), impl->row_ptr.end(), SM_INDEXPTRS_S(J));
     std::copy(impl->col_idx.begin(), impl->col_idx.end(), SM_INDEXVALS_S(J));
     std::copy(impl->values.begin(), impl->values.end(), SM_DATA_S(J));
+    return 0;
+  }
+  static int mass_callback(sunrealtype /*t_eval*/, SUNMatrix M, void* user_data, N_Vector /*tmp1*/, N_Vector /*tmp2*/,
+                           N_Vector /*tmp3*/) {
+    auto* impl = static_cast<Impl*>(user_data);
+    if (SM_NNZ_S(M) < static_cast<sunindextype>(impl->mass_col_idx.size()) || SM_ROWS_S(M) != 2 * impl->nx) return -1;
+    std::copy(impl->mass_row_ptr.begin(), impl->mass_row_ptr.end(), SM_INDEXPTRS_S(M));
+    std::copy(impl->mass_col_idx.begin(), impl->mass_col_idx.end(), SM_INDEXVALS_S(M));
+    std::copy(impl->mass_values.begin(), impl->mass_values.end(), SM_DATA_S(M));
+    return 0;
+  }
+  /// The Newton matrix M_y − γJ on J's pattern; J is re-evaluated unless ARKODE allows reuse (jok).
+  static int linear_system_callback(sunrealtype t_eval, N_Vector yv, N_Vector /*fy*/, SUNMatrix A, SUNMatrix /*M*/,
+                                    sunbooleantype jok, sunbooleantype* jcur, sunrealtype gamma, void* user_data,
+                                    N_Vector /*tmp1*/, N_Vector /*tmp2*/, N_Vector /*tmp3*/) {
+    auto* impl = static_cast<Impl*>(user_data);
+    if (SM_NNZ_S(A) < static_cast<sunindextype>(impl->col_idx.size()) || SM_ROWS_S(A) != 2 * impl->nx) {
+      impl->last_rhs_problem = "the Newton matrix lost its storage";
+      return -1;
+    }
+    if (jok == SUNFALSE || impl->saved_values.size() != impl->values.size()) {
+      if (const int status = impl->jacobian(t_eval, NV_DATA_S(yv)); status != 0) return status;
+      impl->saved_values = impl->values;
+      *jcur = SUNTRUE;
+    } else {
+      *jcur = SUNFALSE;
+    }
+    std::copy(impl->row_ptr.begin(), impl->row_ptr.end(), SM_INDEXPTRS_S(A));
+    std::copy(impl->col_idx.begin(), impl->col_idx.end(), SM_INDEXVALS_S(A));
+    sunrealtype* data = SM_DATA_S(A);
+    for (std::size_t q = 0; q < impl->saved_values.size(); ++q) {
+      data[q] = impl->mass_on_pattern[q] - gamma * impl->saved_values[q];  // M_y − γJ
+    }
     return 0;
   }
   static void error_callback(int error_code, const char* module, const char* function, char* message, void* user_data) {
@@ -163,7 +221,11 @@ void ReferenceIntegrator::Impl::build_pattern() {
       for (int j : neighbours[static_cast<std::size_t>(i)]) {
         for (int b = 0; b < 3; ++b) col_idx.push_back(3 * j + b);
       }
-      col_idx.push_back(nx + 3 * i + alpha);
+      if (consistent) {
+        for (int j : neighbours[static_cast<std::size_t>(i)]) col_idx.push_back(nx + 3 * j + alpha);
+      } else {
+        col_idx.push_back(nx + 3 * i + alpha);
+      }
       row_ptr[static_cast<std::size_t>(nx + 3 * i + alpha + 1)] = static_cast<sunindextype>(col_idx.size());
     }
   }
@@ -178,6 +240,65 @@ void ReferenceIntegrator::Impl::build_pattern() {
     }
   }
   values.assign(col_idx.size(), 0.0);
+}
+
+void ReferenceIntegrator::Impl::build_mass() {
+  component_mass = detail::component_mass(problem, constrained);
+  const Eigen::SparseMatrix<double, Eigen::RowMajor>& Mw = component_mass.free;
+  // M_y = diag(I, M_w) in CSR.
+  mass_row_ptr.assign(static_cast<std::size_t>(2 * nx + 1), 0);
+  mass_col_idx.clear();
+  mass_values.clear();
+  for (sunindextype r = 0; r < nx; ++r) {
+    mass_col_idx.push_back(r);
+    mass_values.push_back(1.0);
+    mass_row_ptr[static_cast<std::size_t>(r + 1)] = static_cast<sunindextype>(mass_col_idx.size());
+  }
+  for (Eigen::Index r = 0; r < nx; ++r) {
+    for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator it(Mw, r); it; ++it) {
+      mass_col_idx.push_back(nx + static_cast<sunindextype>(it.col()));
+      mass_values.push_back(it.value());
+    }
+    mass_row_ptr[static_cast<std::size_t>(nx + r + 1)] = static_cast<sunindextype>(mass_col_idx.size());
+  }
+  // M_y on J's pattern (which holds every entry of M_y: the x diagonals and the w_{j,α} of the neighbours).
+  mass_on_pattern.assign(col_idx.size(), 0.0);
+  std::size_t placed = 0;
+  for (sunindextype r = 0; r < 2 * nx; ++r) {
+    auto q = static_cast<std::size_t>(row_ptr[static_cast<std::size_t>(r)]);
+    const auto q_end = static_cast<std::size_t>(row_ptr[static_cast<std::size_t>(r + 1)]);
+    for (auto k = static_cast<std::size_t>(mass_row_ptr[static_cast<std::size_t>(r)]);
+         k < static_cast<std::size_t>(mass_row_ptr[static_cast<std::size_t>(r + 1)]); ++k) {
+      while (q < q_end && col_idx[q] < mass_col_idx[k]) ++q;  // both rows sorted
+      if (q < q_end && col_idx[q] == mass_col_idx[k]) {
+        mass_on_pattern[q] = mass_values[k];
+        ++placed;
+      }
+    }
+  }
+  require(placed == mass_values.size(), "reference integrator: {} of {} mass entries lie outside the Jacobian pattern",
+          mass_values.size() - placed, mass_values.size());
+}
+
+int ReferenceIntegrator::Impl::update_coupling(double t_eval) {
+  if (component_mass.coupling.nonZeros() == 0) {
+    coupling_force.setZero(nx);
+    return 0;
+  }
+  if (t_eval == acceleration_time) return 0;
+  try {
+    const Eigen::VectorXd acceleration = detail::prescribed_acceleration(problem, t_eval, t_start);
+    if (!acceleration.allFinite()) {
+      last_rhs_problem = fmt::format("the prescribed accelerations are not finite at t = {}", t_eval);
+      return -1;
+    }
+    coupling_force = component_mass.coupling * acceleration;  // M_FC a_C
+  } catch (const std::exception& error) {
+    last_rhs_problem = error.what();
+    return -1;
+  }
+  acceleration_time = t_eval;
+  return 0;
 }
 
 int ReferenceIntegrator::Impl::prepare(double t_eval, const double* x) {
@@ -217,6 +338,9 @@ int ReferenceIntegrator::Impl::rhs(double t_eval, const double* yv, double* ydot
       last_rhs_problem = fmt::format("the elastic forces are not finite at t = {}", t_eval);
       return 1;
     }
+    if (consistent) {
+      if (const int status = update_coupling(t_eval); status != 0) return status;
+    }
     const Eigen::Map<const Eigen::VectorXd> w(yv + nx, nx);
     Eigen::Map<Eigen::VectorXd> xdot(ydot, nx), wdot(ydot + nx, nx);
     for (int i = 0; i < n; ++i) {
@@ -224,7 +348,13 @@ int ReferenceIntegrator::Impl::rhs(double t_eval, const double* yv, double* ydot
       const Eigen::Matrix3d map_inv = frame.A[si].inverse();
       const Eigen::Vector3d x_i = x_eff.segment<3>(3 * i);
       xdot.segment<3>(3 * i) = map_inv * (w.segment<3>(3 * i) - rate.A[si] * x_i - rate.d.row(i).transpose());
-      wdot.segment<3>(3 * i) = inv_mass[si] * (map_inv.transpose() * -elastic.gradient.segment<3>(3 * i)) + problem.gravity;
+      const Eigen::Vector3d force = map_inv.transpose() * -elastic.gradient.segment<3>(3 * i);  // −A_i⁻ᵀ∇_i E
+      if (consistent) {
+        // f_w,i = −A_i⁻ᵀ∇_i E + m_i g − [M_FC a_C]_i   (the left side M_w ẇ is ARKODE's)
+        wdot.segment<3>(3 * i) = force + problem.mass[i] * problem.gravity - coupling_force.segment<3>(3 * i);
+      } else {
+        wdot.segment<3>(3 * i) = inv_mass[si] * force + problem.gravity;  // ẇ_i = A_i⁻ᵀ(−∇_i E)/m_i + g
+      }
     }
     for (std::size_t k = 0; k < problem.dirichlet.dof.size(); ++k) {
       const int dof = problem.dirichlet.dof[k];
@@ -276,7 +406,8 @@ int ReferenceIntegrator::Impl::jacobian(double t_eval, const double* yv) {
       for (int a = 0; a < 4; ++a) {
         const int i = problem.tets(e, a);
         const auto si = static_cast<std::size_t>(i);
-        const Eigen::Matrix3d row_map = -scale * inv_mass[si] * A_inv[si].transpose();
+        // ∂ẇ_i/∂x_j = −(1/m_i) A_i⁻ᵀ K_ij (lumped); ∂f_w,i/∂x_j = −A_i⁻ᵀ K_ij (consistent: M_w stays on the left)
+        const Eigen::Matrix3d row_map = -scale * (consistent ? 1.0 : inv_mass[si]) * A_inv[si].transpose();
         for (int b = 0; b < 4; ++b) {
           const Eigen::Matrix3d block = row_map * el.hessian.block<3, 3>(3 * a, 3 * b);
           const int k = tet_block[se][static_cast<std::size_t>(4 * a + b)];
@@ -349,6 +480,8 @@ void ReferenceIntegrator::Impl::collect_stats() {
   check(ARKStepGetNumLinSolvSetups(arkode, &stats.lin_setups), "ARKStepGetNumLinSolvSetups");
   check(ARKStepGetNumErrTestFails(arkode, &stats.error_test_fails), "ARKStepGetNumErrTestFails");
   check(ARKStepGetNumNonlinSolvConvFails(arkode, &stats.conv_fails), "ARKStepGetNumNonlinSolvConvFails");
+  stats.mass_solves = 0;
+  if (consistent) check(ARKStepGetNumMassSolves(arkode, &stats.mass_solves), "ARKStepGetNumMassSolves");
   sunrealtype last = 0.0;
   check(ARKStepGetLastStep(arkode, &last), "ARKStepGetLastStep");
   stats.last_step = last;
@@ -388,7 +521,23 @@ ReferenceIntegrator::ReferenceIntegrator(const Problem& problem, const Reference
             "reference integrator: node {} is not fully prescribed but has mass {} (every moving node needs mass > 0)", i, m);
     s.inv_mass[static_cast<std::size_t>(i)] = m > 0.0 ? 1.0 / m : 0.0;
   }
+  s.consistent = problem.mass_kind == model::MassKind::consistent;
+  if (s.consistent) {
+    const int m = problem.num_tets();
+    require(problem.tet_mass.size() == m, "reference integrator: consistent mass needs ρV per tet (Problem::tet_mass from a "
+            "density, filled by Problem::validate()), have {} for {} tets", problem.tet_mass.size(), m);
+    require(problem.tet_mass.allFinite() && problem.tet_mass.minCoeff() >= 0.0,
+            "reference integrator: the tet masses ρV must be finite and non-negative");
+    // The lumped masses (gravity m_i g) must be the row sums of the consistent matrix, as validate() checks.
+    Eigen::VectorXd row_sum = Eigen::VectorXd::Zero(s.n);
+    for (int e = 0; e < m; ++e)
+      for (int a = 0; a < 4; ++a) row_sum[problem.tets(e, a)] += 0.25 * problem.tet_mass[e];
+    require((row_sum - problem.mass).cwiseAbs().maxCoeff() <= 1e-9 * problem.mass.cwiseAbs().maxCoeff(),
+            "reference integrator: the lumped masses are not the row sums of the consistent mass (tet_mass and mass "
+            "from different densities?)");
+  }
   s.build_pattern();
+  if (s.consistent) s.build_mass();
 
   require(SUNContext_Create(nullptr, &s.ctx) == 0 && s.ctx != nullptr, "reference integrator: SUNContext_Create failed");
   s.y = N_VNew_Serial(2 * s.nx, s.ctx);
@@ -405,6 +554,17 @@ ReferenceIntegrator::ReferenceIntegrator(const Problem& problem, const Reference
   // AMD on the structurally symmetric Newton matrix I − γJ of a tet mesh: KLU's default COLAMD is meant for
   // circuit-like matrices and filled in several times more on 3D meshes.
   require(SUNLinSol_KLUSetOrdering(s.solver, 0) == SUNLS_SUCCESS, "reference integrator: KLU ordering rejected");
+  if (s.consistent) {
+    const auto mass_nnz = static_cast<sunindextype>(s.mass_col_idx.size());
+    s.mass = SUNSparseMatrix(2 * s.nx, 2 * s.nx, mass_nnz, CSR_MAT, s.ctx);
+    require(s.mass != nullptr, "reference integrator: SUNSparseMatrix({0}×{0}, {1} nonzeros) failed", 2 * s.nx, mass_nnz);
+    std::copy(s.mass_row_ptr.begin(), s.mass_row_ptr.end(), SM_INDEXPTRS_S(s.mass));
+    std::copy(s.mass_col_idx.begin(), s.mass_col_idx.end(), SM_INDEXVALS_S(s.mass));
+    std::copy(s.mass_values.begin(), s.mass_values.end(), SM_DATA_S(s.mass));
+    s.mass_solver = SUNLinSol_KLU(s.y, s.mass, s.ctx);
+    require(s.mass_solver != nullptr, "reference integrator: SUNLinSol_KLU (mass) failed");
+    require(SUNLinSol_KLUSetOrdering(s.mass_solver, 0) == SUNLS_SUCCESS, "reference integrator: KLU ordering rejected");
+  }
 }
 
 ReferenceIntegrator::~ReferenceIntegrator() = default;
@@ -435,12 +595,22 @@ void ReferenceIntegrator::initialize(const State& initial) {
     if (s.options.max_step > 0.0) s.check(ARKStepSetMaxStep(s.arkode, s.options.max_step), "ARKStepSetMaxStep");
     if (s.options.min_step > 0.0) s.check(ARKStepSetMinStep(s.arkode, s.options.min_step), "ARKStepSetMinStep");
     s.check(ARKStepSetLinearSolver(s.arkode, s.solver, s.jac), "ARKStepSetLinearSolver");
-    s.check(ARKStepSetJacFn(s.arkode, &Impl::jacobian_callback), "ARKStepSetJacFn");
+    if (s.consistent) {
+      // M_y ẏ = f: M_y constant in time (SUNFALSE), factorized once per initialize by its own KLU solver.
+      s.check(ARKStepSetMassLinearSolver(s.arkode, s.mass_solver, s.mass, SUNFALSE), "ARKStepSetMassLinearSolver");
+      s.check(ARKStepSetMassFn(s.arkode, &Impl::mass_callback), "ARKStepSetMassFn");
+      s.check(ARKStepSetLinSysFn(s.arkode, &Impl::linear_system_callback), "ARKStepSetLinSysFn");
+    } else {
+      s.check(ARKStepSetJacFn(s.arkode, &Impl::jacobian_callback), "ARKStepSetJacFn");
+    }
   } else {
     // Keeps every option, the linear solver and the Jacobian function; resets ARKODE's counters.
     s.check(ARKStepReInit(s.arkode, nullptr, &Impl::rhs_callback, initial.t, s.y), "ARKStepReInit");
   }
   s.t = initial.t;
+  s.t_start = initial.t;
+  s.acceleration_time = std::numeric_limits<double>::quiet_NaN();
+  s.saved_values.clear();
   s.stats = ReferenceStats{};
   s.ready = true;
 }
@@ -509,6 +679,25 @@ Eigen::SparseMatrix<double, Eigen::RowMajor> ReferenceIntegrator::jacobian(doubl
   Eigen::SparseMatrix<double, Eigen::RowMajor> J(2 * s.nx, 2 * s.nx);
   J.setFromTriplets(triplets.begin(), triplets.end());
   return J;
+}
+
+Eigen::SparseMatrix<double, Eigen::RowMajor> ReferenceIntegrator::mass_matrix() const {
+  const Impl& s = *impl_;
+  Eigen::SparseMatrix<double, Eigen::RowMajor> M(2 * s.nx, 2 * s.nx);
+  if (!s.consistent) {
+    M.setIdentity();
+    return M;
+  }
+  std::vector<Eigen::Triplet<double>> triplets;
+  triplets.reserve(s.mass_values.size());
+  for (sunindextype r = 0; r < 2 * s.nx; ++r) {
+    for (auto q = s.mass_row_ptr[static_cast<std::size_t>(r)]; q < s.mass_row_ptr[static_cast<std::size_t>(r + 1)]; ++q) {
+      const auto sq = static_cast<std::size_t>(q);
+      triplets.emplace_back(static_cast<int>(r), static_cast<int>(s.mass_col_idx[sq]), s.mass_values[sq]);
+    }
+  }
+  M.setFromTriplets(triplets.begin(), triplets.end());
+  return M;
 }
 
 const ReferenceStats& ReferenceIntegrator::stats() const { return impl_->stats; }
