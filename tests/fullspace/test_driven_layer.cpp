@@ -1,6 +1,6 @@
 // A driven layer block, the canonical soft-tissue case for the consistent mass: a 10 × 10 × 3 cm slab of our
 // skin material (Y_t = 5 kPa, Y_n = 2 kPa, normal z, ρ = 1000 kg/m³) whose bottom face is carried like a bone by
-// a smooth sideways bump (5 mm along x over 0.1 s, C¹), then held, so the slab rings freely. Read through
+// a smooth sideways bump (2 mm along x over 0.1 s, C¹), then held, so the slab rings freely. Read through
 // `sflsh verify`'s problem file (mass = "consistent"), run by
 //   - the SUNDIALS reference with the consistent mass (error-controlled: the "exact" dynamics of the mesh),
 //   - the same with lumped masses (lumping lowers the frequencies: a phase drift — why consistent mass exists),
@@ -23,6 +23,7 @@
 #include <cstdio>
 #include <fstream>
 #include <functional>
+#include <algorithm>
 
 namespace sflsh::fullspace {
 namespace {
@@ -50,7 +51,7 @@ components = "yz"
 [[drive]]
 group = "zmin"
 component = "x"
-expression = "0.005*(t<0.1)*sin(pi*t/0.1)^2"
+expression = "0.002*(t<0.1)*sin(pi*t/0.1)^2"
 [time]
 duration = 0.4
 step = 0.0005
@@ -85,16 +86,21 @@ Trajectory sample(const Problem& problem, const std::vector<int>& top, const Adv
   return out;
 }
 
-/// max_k max_n |u_a − u_b| / max_k max_n |u_reference| over the top face's nodes.
-double relative_difference(const Trajectory& a, const Trajectory& b, const Trajectory& reference) {
-  double difference = 0.0, motion = 0.0;
-  for (std::size_t k = 0; k < reference.u.size(); ++k) {
-    for (Eigen::Index n = 0; n < reference.u[k].size() / 3; ++n) {
-      difference = std::max(difference, (a.u[k].segment<3>(3 * n) - b.u[k].segment<3>(3 * n)).norm());
-      motion = std::max(motion, reference.u[k].segment<3>(3 * n).norm());
-    }
+/// max_n |u_n| over the top face's nodes and the samples k in [first, last) [m].
+double largest(const Trajectory& a, const Trajectory& b, std::size_t first, std::size_t last) {
+  double out = 0.0;
+  for (std::size_t k = first; k < std::min({last, a.u.size(), b.u.size()}); ++k) {
+    for (Eigen::Index n = 0; n < a.u[k].size() / 3; ++n)
+      out = std::max(out, (a.u[k].segment<3>(3 * n) - b.u[k].segment<3>(3 * n)).norm());
   }
-  return difference / motion;
+  return out;
+}
+
+/// max_k max_n |u_a − u_b| over samples [first, last) / max_k max_n |u_reference| over the whole run.
+double relative_difference(const Trajectory& a, const Trajectory& b, const Trajectory& reference, std::size_t first = 0,
+                           std::size_t last = kSamples + 1) {
+  const Trajectory rest{std::vector<Eigen::VectorXd>(reference.u.size(), Eigen::VectorXd::Zero(reference.u[0].size())), 0.0};
+  return largest(a, b, first, last) / largest(reference, rest, 0, reference.u.size());
 }
 
 struct Block {
@@ -147,19 +153,18 @@ TEST(DrivenLayer, LumpedMassesDriftInPhaseFromTheConsistentReference) {
   ASSERT_EQ(consistent_block().problem.mass_kind, model::MassKind::consistent);
   const Trajectory& consistent = consistent_reference();
   const Trajectory lumped = run_reference(lumped_block);
-  const double during_drive = [&] {
-    Trajectory early_c = consistent, early_l = lumped;
-    early_c.u.resize(11);   // t ≤ 0.05 s: the slab is still being carried
-    early_l.u.resize(11);
-    return relative_difference(early_c, early_l, consistent);
-  }();
+  const double during_drive = relative_difference(consistent, lumped, consistent, 0, 21);   // t ≤ 0.1 s
+  const double last_period = relative_difference(consistent, lumped, consistent, 60);        // t ≥ 0.3 s
   const double overall = relative_difference(consistent, lumped, consistent);
-  std::printf("[ measured ] reference consistent %.2f s, lumped %.2f s; lumped vs consistent: %.3e (t ≤ 0.05 s), "
-              "%.3e (whole run) of the largest motion\n", consistent.seconds, lumped.seconds, during_drive, overall);
+  std::printf("[ measured ] reference consistent %.2f s, lumped %.2f s; lumped vs consistent: %.3e (t ≤ 0.1 s), "
+              "%.3e (t ≥ 0.3 s), %.3e (whole run) of the largest motion\n", consistent.seconds, lumped.seconds,
+              during_drive, last_period, overall);
   // Two tets through the thickness: lumping lowers the shear mode's frequency by several per cent, and after
-  // ~2 periods of free ringing the phase drift is a sizeable part of the amplitude.
+  // ~2 periods of free ringing the phase drift is a sizeable part of the amplitude, larger than while driven.
+  // Measured: 15 % of the largest motion while driven (t ≤ 0.1 s; there the consistent mass also pushes the
+  // free nodes next to the driven face back, −M_FC a_C), 127 % for t ≥ 0.3 s: the two ring out of phase.
   EXPECT_GT(overall, 0.05);
-  EXPECT_GT(overall, 3.0 * during_drive);   // the gap grows with time: a phase drift, not an offset
+  EXPECT_GT(last_period, 1.5 * during_drive);   // the gap grows with time: a phase drift, not an offset
 }
 
 TEST(DrivenLayer, NewmarkWithConsistentMassMatchesTheReference) {
@@ -173,12 +178,13 @@ TEST(DrivenLayer, NewmarkWithConsistentMassMatchesTheReference) {
     return stepper.state().x;
   });
   const double difference = relative_difference(newmark, reference, reference);
-  std::printf("[ measured ] Newmark (model terms, h = %.1f ms) %.2f s; vs the consistent reference: %.3e of the "
+  std::printf("[ measured ] Newmark (model terms, h = %.2f ms) %.2f s; vs the consistent reference: %.3e of the "
               "largest motion\n", 1e3 * h, newmark.seconds, difference);
-  // Newmark's period error is (ωh)²/12: ω ≈ 2π·10 s⁻¹ and h = 0.5 ms give 8e-6, a phase error of ~1e-4 rad
-  // after the ~2.5 free periods here; the drive's higher modes (ω up to ~10× that) add ~10⁻³. The reference
-  // is far tighter (rtol 1e-9). A mismatch in how the two treat the mass (M_FC a_C of the driven face, the
-  // row sums) would show at the 10⁻² level of the lumped–consistent gap above.
+  // Measured: 3.3e-3 at h = 0.5 ms and 8.2e-4 at h = 0.25 ms: Newmark's second-order time error (period error
+  // (ωh)²/12 on the slab's ~10 Hz shear mode and the higher modes the drive excites) converging onto the
+  // reference (rtol 1e-9, far tighter), so the two integrate the same equations — M_FC a_C of the driven face
+  // included, which alone moves the top face by ~15 % of its motion (the lumped–consistent gap while driven).
+  // The bound leaves 1.5× over the measured error at 0.5 ms.
   EXPECT_LT(difference, 5e-3);
 }
 
@@ -217,9 +223,9 @@ TEST(DrivenLayer, FullSpaceNewmarkWithConsistentMassMatchesTheReference) {
   });
   const Trajectory& reference = consistent_reference();
   const double difference = relative_difference(full, reference, reference);
-  std::printf("[ measured ] full-space Newmark (h = %.1f ms) %.2f s; vs the consistent reference: %.3e of the "
+  std::printf("[ measured ] full-space Newmark (h = %.2f ms) %.2f s; vs the consistent reference: %.3e of the "
               "largest motion\n", 1e3 * h, full.seconds, difference);
-  EXPECT_LT(difference, 5e-3);   // as for the model-terms Newmark above: the same step definition
+  EXPECT_LT(difference, 5e-3);   // as for the model-terms Newmark above: the same step definition and h
 }
 
 }  // namespace
