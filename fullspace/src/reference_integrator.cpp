@@ -1,5 +1,6 @@
 // The SUNDIALS reference integrator (reference_integrator.hpp). Everything SUNDIALS-specific lives in this
-// file: SUNDIALS 6.4 as Debian 12 ships it (SUNContext_Create(nullptr, …), ARKStep*, realtype), which
+// file and its siblings reference_integrator_impl.hpp (the shared state) and reference_integrator_mass.cpp (the
+// consistent mass): SUNDIALS 6.4 as Debian 12 ships it (SUNContext_Create(nullptr, …), ARKStep*, realtype), which
 // SUNDIALS 7 renames in part (SUN_COMM_NULL, ARKode* generic calls, SUNLogger instead of error handlers).
 //
 // Layout of y (6N): y[0, 3N) = x (node-major, 3i + axis), y[3N, 6N) = w.
@@ -8,30 +9,19 @@
 //   row x_{i,α}: columns x_{i,0..2}, w_{i,0..2}                          (6 entries)
 //   row w_{i,α}: columns x_{j,0..2} for the mesh neighbours j of i (with i itself), then w_{i,α}
 //                (consistent mass: w_{j,α} for every neighbour j, the pattern of M_w, reference_mass.hpp)
-// Consistent mass: ARKODE solves M_y ẏ = f with a second KLU solver on M_y (time-independent, factorized once
-// per initialize). The Newton matrix M_y − γJ is formed here on the fixed pattern (ARKStepSetLinSysFn):
-// SUNMatScaleAdd on two sparse matrices scans a dense work array per row, O(rows²) per setup.
-#include <sflsh/fullspace/reference_integrator.hpp>
-
-#include "reference_mass.hpp"
+// Consistent mass: ARKODE solves M_y ẏ = f with a second KLU solver on M_y and the Newton matrix M_y − γJ
+// formed by us on the fixed pattern (reference_integrator_mass.cpp).
+#include "reference_integrator_impl.hpp"
 
 #include <sflsh/core/error.hpp>
 
 #include <Eigen/LU>
-#include <arkode/arkode_arkstep.h>
-#include <nvector/nvector_serial.h>
-#include <sundials/sundials_context.h>
-#include <sunlinsol/sunlinsol_klu.h>
-#include <sunmatrix/sunmatrix_sparse.h>
 
 #include <algorithm>
-#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <limits>
-#include <string>
-#include <vector>
 
 namespace sflsh::fullspace {
 namespace {
@@ -56,143 +46,12 @@ constexpr double kIdentityTolerance = 1e-10;
 
 }  // namespace
 
-struct ReferenceIntegrator::Impl {
-  const Problem& problem;
-  ReferenceOptions options;
-  int n = 0;         // nodes
-  sunindextype nx = 0;  // 3N
-  std::vector<char> constrained;       // per x dof
-  std::vector<int> constraint_count;   // per node: how many of its components are prescribed
-  std::vector<double> inv_mass;        // per node; 0 for fully prescribed massless nodes
-  bool consistent = false;             // M_y ẏ = f with the consistent mass (reference_mass.hpp)
-  detail::ComponentMass component_mass;  // M_w and M_FC (consistent only)
-  std::vector<sunindextype> mass_row_ptr, mass_col_idx;  // M_y = diag(I, M_w) in CSR (consistent only)
-  std::vector<double> mass_values;
-  std::vector<double> mass_on_pattern;   // M_y on the pattern of J (consistent only)
-  std::vector<double> saved_values;      // J of the last Jacobian evaluation (consistent: ARKODE's jok reuse)
-  double t_start = 0.0;                  // of the run: the prescribed accelerations are not differenced before it
-  double acceleration_time = std::numeric_limits<double>::quiet_NaN();
-  Eigen::VectorXd coupling_force;        // M_FC a_C(acceleration_time) [N]
-
-  // Jacobian pattern (CSR) and per-tet positions of the node-pair blocks in the w rows.
-  std::vector<sunindextype> row_ptr, col_idx;
-  std::vector<std::vector<int>> neighbours;  // sorted, including the node itself
-  std::vector<std::array<int, 16>> tet_block;  // (a, b) ↦ index of node b in neighbours[node a]
-
-  // Scratch reused by the callbacks.
-  NodeFrame frame, rate;
-  Eigen::VectorXd x_eff, du;
-  std::vector<Eigen::Matrix3d> A_inv;  // per node
-  std::vector<double> values;
-
-  // SUNDIALS objects.
-  SUNContext ctx = nullptr;
-  N_Vector y = nullptr;
-  SUNMatrix jac = nullptr;
-  SUNLinearSolver solver = nullptr;
-  SUNMatrix mass = nullptr;               // consistent only
-  SUNLinearSolver mass_solver = nullptr;  // consistent only
-  void* arkode = nullptr;
-
-  double t = 0.0;
-  bool ready = false;   // initialized and not failed
-  ReferenceStats stats;
-  std::string last_arkode_error;  // from the error handler
-  std::string last_rhs_problem;   // why the RHS or the Jacobian last refused
-
-  Impl(const Problem& p, const ReferenceOptions& o) : problem(p), options(o) {}
-  ~Impl() {
-    if (arkode != nullptr) ARKStepFree(&arkode);
-    if (mass_solver != nullptr) SUNLinSolFree(mass_solver);
-    if (mass != nullptr) SUNMatDestroy(mass);
-    if (solver != nullptr) SUNLinSolFree(solver);
-    if (jac != nullptr) SUNMatDestroy(jac);
-    if (y != nullptr) N_VDestroy(y);
-    if (ctx != nullptr) SUNContext_Free(&ctx);
+void ReferenceIntegrator::Impl::check(int flag, const char* call) const {
+  if (flag < 0) {
+    throw_error("reference integrator: {} failed with {}{}{}", call, flag_name(flag), last_arkode_error.empty() ? "" : ": ",
+                last_arkode_error);
   }
-  Impl(const Impl&) = delete;
-  Impl& operator=(const Impl&) = delete;
-
-  void check(int flag, const char* call) const {
-    if (flag < 0) {
-      throw_error("reference integrator: {} failed with {}{}{}", call, flag_name(flag),
-                  last_arkode_error.empty() ? "" : ": ", last_arkode_error);
-    }
-  }
-
-  void build_pattern();
-  /// M_w, M_FC, M_y in CSR and M_y on the pattern of J (consistent mass; after build_pattern).
-  void build_mass();
-  /// coupling_force = M_FC a_C(t_eval), reused while t_eval repeats (Newton iterations of one stage).
-  /// Returns 0 or −1 (the forcing is not finite) with the reason in last_rhs_problem.
-  int update_coupling(double t_eval);
-  /// The frame, its rate, x with the prescribed values and du/dt at time t into the scratch members.
-  /// Returns 0 or −1 (unrecoverable: non-finite forcing, bad input) with the reason in last_rhs_problem.
-  int prepare(double t_eval, const double* x);
-  int rhs(double t_eval, const double* yv, double* ydot);
-  /// J = ∂f/∂y into `values` (on the fixed pattern).
-  int jacobian(double t_eval, const double* yv);
-  State output_state(double t_out) const;
-  void collect_stats();
-
-  // The C callbacks; user_data is the Impl.
-  static int rhs_callback(sunrealtype t_eval, N_Vector yv, N_Vector ydot, void* user_data) {
-    return static_cast<Impl*>(user_data)->rhs(t_eval, NV_DATA_S(yv), NV_DATA_S(ydot));
-  }
-  static int jacobian_callback(sunrealtype t_eval, N_Vector yv, N_Vector /*fy*/, SUNMatrix J, void* user_data,
-                               N_Vector /*tmp1*/, N_Vector /*tmp2*/, N_Vector /*tmp3*/) {
-    auto* impl = static_cast<Impl*>(user_data);
-    if (SM_NNZ_S(J) < static_cast<sunindextype>(impl->col_idx.size()) || SM_ROWS_S(J) != 2 * impl->nx) {
-      impl->last_rhs_problem = "the Jacobian matrix lost its storage";
-      return -1;
-    }
-    if (const int status = impl->jacobian(t_eval, NV_DATA_S(yv)); status != 0) return status;
-    // ARKODE zeroes the matrix (pattern included) before calling us: write pattern and values.
-    std::copy(impl->row_ptr.begin(), impl->row_ptr.end(), SM_INDEXPTRS_S(J));
-    std::copy(impl->col_idx.begin(), impl->col_idx.end(), SM_INDEXVALS_S(J));
-    std::copy(impl->values.begin(), impl->values.end(), SM_DATA_S(J));
-    return 0;
-  }
-  static int mass_callback(sunrealtype /*t_eval*/, SUNMatrix M, void* user_data, N_Vector /*tmp1*/, N_Vector /*tmp2*/,
-                           N_Vector /*tmp3*/) {
-    auto* impl = static_cast<Impl*>(user_data);
-    if (SM_NNZ_S(M) < static_cast<sunindextype>(impl->mass_col_idx.size()) || SM_ROWS_S(M) != 2 * impl->nx) return -1;
-    std::copy(impl->mass_row_ptr.begin(), impl->mass_row_ptr.end(), SM_INDEXPTRS_S(M));
-    std::copy(impl->mass_col_idx.begin(), impl->mass_col_idx.end(), SM_INDEXVALS_S(M));
-    std::copy(impl->mass_values.begin(), impl->mass_values.end(), SM_DATA_S(M));
-    return 0;
-  }
-  /// The Newton matrix M_y − γJ on J's pattern; J is re-evaluated unless ARKODE allows reuse (jok).
-  static int linear_system_callback(sunrealtype t_eval, N_Vector yv, N_Vector /*fy*/, SUNMatrix A, SUNMatrix /*M*/,
-                                    sunbooleantype jok, sunbooleantype* jcur, sunrealtype gamma, void* user_data,
-                                    N_Vector /*tmp1*/, N_Vector /*tmp2*/, N_Vector /*tmp3*/) {
-    auto* impl = static_cast<Impl*>(user_data);
-    if (SM_NNZ_S(A) < static_cast<sunindextype>(impl->col_idx.size()) || SM_ROWS_S(A) != 2 * impl->nx) {
-      impl->last_rhs_problem = "the Newton matrix lost its storage";
-      return -1;
-    }
-    if (jok == SUNFALSE || impl->saved_values.size() != impl->values.size()) {
-      if (const int status = impl->jacobian(t_eval, NV_DATA_S(yv)); status != 0) return status;
-      impl->saved_values = impl->values;
-      *jcur = SUNTRUE;
-    } else {
-      *jcur = SUNFALSE;
-    }
-    std::copy(impl->row_ptr.begin(), impl->row_ptr.end(), SM_INDEXPTRS_S(A));
-    std::copy(impl->col_idx.begin(), impl->col_idx.end(), SM_INDEXVALS_S(A));
-    sunrealtype* data = SM_DATA_S(A);
-    for (std::size_t q = 0; q < impl->saved_values.size(); ++q) {
-      data[q] = impl->mass_on_pattern[q] - gamma * impl->saved_values[q];  // M_y − γJ
-    }
-    return 0;
-  }
-  static void error_callback(int error_code, const char* module, const char* function, char* message, void* user_data) {
-    if (error_code == ARK_WARNING) return;  // e.g. "t + h = t": no exception for that, and stderr stays quiet
-    static_cast<Impl*>(user_data)->last_arkode_error =
-        fmt::format("[{}::{}] {}", module != nullptr ? module : "?", function != nullptr ? function : "?",
-                    message != nullptr ? message : "");
-  }
-};
+}
 
 void ReferenceIntegrator::Impl::build_pattern() {
   neighbours.assign(static_cast<std::size_t>(n), {});
@@ -240,65 +99,6 @@ void ReferenceIntegrator::Impl::build_pattern() {
     }
   }
   values.assign(col_idx.size(), 0.0);
-}
-
-void ReferenceIntegrator::Impl::build_mass() {
-  component_mass = detail::component_mass(problem, constrained);
-  const Eigen::SparseMatrix<double, Eigen::RowMajor>& Mw = component_mass.free;
-  // M_y = diag(I, M_w) in CSR.
-  mass_row_ptr.assign(static_cast<std::size_t>(2 * nx + 1), 0);
-  mass_col_idx.clear();
-  mass_values.clear();
-  for (sunindextype r = 0; r < nx; ++r) {
-    mass_col_idx.push_back(r);
-    mass_values.push_back(1.0);
-    mass_row_ptr[static_cast<std::size_t>(r + 1)] = static_cast<sunindextype>(mass_col_idx.size());
-  }
-  for (Eigen::Index r = 0; r < nx; ++r) {
-    for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator it(Mw, r); it; ++it) {
-      mass_col_idx.push_back(nx + static_cast<sunindextype>(it.col()));
-      mass_values.push_back(it.value());
-    }
-    mass_row_ptr[static_cast<std::size_t>(nx + r + 1)] = static_cast<sunindextype>(mass_col_idx.size());
-  }
-  // M_y on J's pattern (which holds every entry of M_y: the x diagonals and the w_{j,α} of the neighbours).
-  mass_on_pattern.assign(col_idx.size(), 0.0);
-  std::size_t placed = 0;
-  for (sunindextype r = 0; r < 2 * nx; ++r) {
-    auto q = static_cast<std::size_t>(row_ptr[static_cast<std::size_t>(r)]);
-    const auto q_end = static_cast<std::size_t>(row_ptr[static_cast<std::size_t>(r + 1)]);
-    for (auto k = static_cast<std::size_t>(mass_row_ptr[static_cast<std::size_t>(r)]);
-         k < static_cast<std::size_t>(mass_row_ptr[static_cast<std::size_t>(r + 1)]); ++k) {
-      while (q < q_end && col_idx[q] < mass_col_idx[k]) ++q;  // both rows sorted
-      if (q < q_end && col_idx[q] == mass_col_idx[k]) {
-        mass_on_pattern[q] = mass_values[k];
-        ++placed;
-      }
-    }
-  }
-  require(placed == mass_values.size(), "reference integrator: {} of {} mass entries lie outside the Jacobian pattern",
-          mass_values.size() - placed, mass_values.size());
-}
-
-int ReferenceIntegrator::Impl::update_coupling(double t_eval) {
-  if (component_mass.coupling.nonZeros() == 0) {
-    coupling_force.setZero(nx);
-    return 0;
-  }
-  if (t_eval == acceleration_time) return 0;
-  try {
-    const Eigen::VectorXd acceleration = detail::prescribed_acceleration(problem, t_eval, t_start);
-    if (!acceleration.allFinite()) {
-      last_rhs_problem = fmt::format("the prescribed accelerations are not finite at t = {}", t_eval);
-      return -1;
-    }
-    coupling_force = component_mass.coupling * acceleration;  // M_FC a_C
-  } catch (const std::exception& error) {
-    last_rhs_problem = error.what();
-    return -1;
-  }
-  acceleration_time = t_eval;
-  return 0;
 }
 
 int ReferenceIntegrator::Impl::prepare(double t_eval, const double* x) {
@@ -522,20 +322,7 @@ ReferenceIntegrator::ReferenceIntegrator(const Problem& problem, const Reference
     s.inv_mass[static_cast<std::size_t>(i)] = m > 0.0 ? 1.0 / m : 0.0;
   }
   s.consistent = problem.mass_kind == model::MassKind::consistent;
-  if (s.consistent) {
-    const int m = problem.num_tets();
-    require(problem.tet_mass.size() == m, "reference integrator: consistent mass needs ρV per tet (Problem::tet_mass from a "
-            "density, filled by Problem::validate()), have {} for {} tets", problem.tet_mass.size(), m);
-    require(problem.tet_mass.allFinite() && problem.tet_mass.minCoeff() >= 0.0,
-            "reference integrator: the tet masses ρV must be finite and non-negative");
-    // The lumped masses (gravity m_i g) must be the row sums of the consistent matrix, as validate() checks.
-    Eigen::VectorXd row_sum = Eigen::VectorXd::Zero(s.n);
-    for (int e = 0; e < m; ++e)
-      for (int a = 0; a < 4; ++a) row_sum[problem.tets(e, a)] += 0.25 * problem.tet_mass[e];
-    require((row_sum - problem.mass).cwiseAbs().maxCoeff() <= 1e-9 * problem.mass.cwiseAbs().maxCoeff(),
-            "reference integrator: the lumped masses are not the row sums of the consistent mass (tet_mass and mass "
-            "from different densities?)");
-  }
+  if (s.consistent) s.check_consistent_mass();
   s.build_pattern();
   if (s.consistent) s.build_mass();
 
@@ -554,17 +341,7 @@ ReferenceIntegrator::ReferenceIntegrator(const Problem& problem, const Reference
   // AMD on the structurally symmetric Newton matrix I − γJ of a tet mesh: KLU's default COLAMD is meant for
   // circuit-like matrices and filled in several times more on 3D meshes.
   require(SUNLinSol_KLUSetOrdering(s.solver, 0) == SUNLS_SUCCESS, "reference integrator: KLU ordering rejected");
-  if (s.consistent) {
-    const auto mass_nnz = static_cast<sunindextype>(s.mass_col_idx.size());
-    s.mass = SUNSparseMatrix(2 * s.nx, 2 * s.nx, mass_nnz, CSR_MAT, s.ctx);
-    require(s.mass != nullptr, "reference integrator: SUNSparseMatrix({0}×{0}, {1} nonzeros) failed", 2 * s.nx, mass_nnz);
-    std::copy(s.mass_row_ptr.begin(), s.mass_row_ptr.end(), SM_INDEXPTRS_S(s.mass));
-    std::copy(s.mass_col_idx.begin(), s.mass_col_idx.end(), SM_INDEXVALS_S(s.mass));
-    std::copy(s.mass_values.begin(), s.mass_values.end(), SM_DATA_S(s.mass));
-    s.mass_solver = SUNLinSol_KLU(s.y, s.mass, s.ctx);
-    require(s.mass_solver != nullptr, "reference integrator: SUNLinSol_KLU (mass) failed");
-    require(SUNLinSol_KLUSetOrdering(s.mass_solver, 0) == SUNLS_SUCCESS, "reference integrator: KLU ordering rejected");
-  }
+  if (s.consistent) s.create_mass_solver();
 }
 
 ReferenceIntegrator::~ReferenceIntegrator() = default;
@@ -681,26 +458,6 @@ Eigen::SparseMatrix<double, Eigen::RowMajor> ReferenceIntegrator::jacobian(doubl
   return J;
 }
 
-Eigen::SparseMatrix<double, Eigen::RowMajor> ReferenceIntegrator::mass_matrix() const {
-  const Impl& s = *impl_;
-  Eigen::SparseMatrix<double, Eigen::RowMajor> M(2 * s.nx, 2 * s.nx);
-  if (!s.consistent) {
-    M.setIdentity();
-    return M;
-  }
-  std::vector<Eigen::Triplet<double>> triplets;
-  triplets.reserve(s.mass_values.size());
-  for (sunindextype r = 0; r < 2 * s.nx; ++r) {
-    for (auto q = s.mass_row_ptr[static_cast<std::size_t>(r)]; q < s.mass_row_ptr[static_cast<std::size_t>(r + 1)]; ++q) {
-      const auto sq = static_cast<std::size_t>(q);
-      triplets.emplace_back(static_cast<int>(r), static_cast<int>(s.mass_col_idx[sq]), s.mass_values[sq]);
-    }
-  }
-  M.setFromTriplets(triplets.begin(), triplets.end());
-  return M;
-}
-
 const ReferenceStats& ReferenceIntegrator::stats() const { return impl_->stats; }
-
 
 }  // namespace sflsh::fullspace
