@@ -64,9 +64,12 @@ void run_verify(const VerifyOptions& opt, const Invocation& invocation, int rank
   const auto steps = static_cast<long>(std::llround(spec.duration / step));
   require(std::abs(static_cast<double>(steps) * step - spec.duration) <= 1e-9 * std::max(1.0, spec.duration),
           "{}: time.duration = {} is not a whole number of steps of {}", opt.problem, spec.duration, step);
-  logger()->info("verify {}: {} nodes, {} tets, {} {} steps of {:.6g} s, recording {} nodes of '{}' every {} steps",
+  // What ran: the integrator of the problem file, or "static" without density (mass then means nothing).
+  const std::string integrator_name = dynamic ? std::string(fullspace::to_string(spec.integrator)) : "static";
+  const std::string mass_name = dynamic ? std::string(model::to_string(problem.mass_kind)) : "none";
+  logger()->info("verify {}: {} nodes, {} tets, {} {} steps of {:.6g} s ({} mass), recording {} nodes of '{}' every {} steps",
                  spec.file.filename().string(), problem.num_nodes(), problem.num_tets(), steps,
-                 reference ? "reference (SUNDIALS)" : (dynamic ? "backward Euler" : "static"), step, record_nodes.size(),
+                 reference ? "reference (SUNDIALS)" : integrator_name, step, mass_name, record_nodes.size(),
                  spec.record_group, spec.record_every);
 
   std::vector<Record> records;
@@ -96,14 +99,22 @@ void run_verify(const VerifyOptions& opt, const Invocation& invocation, int rank
                    {"jacobian_evals", st.jac_evals},
                    {"nonlinear_iterations", st.nonlin_iters},
                    {"error_test_failures", st.error_test_fails},
+                   {"mass_solves", st.mass_solves},
                    {"seconds", st.seconds}};
   } else {
-    fullspace::FullSpaceOptions be;
-    be.quasi_static = !dynamic;
-    fullspace::FullSpaceSolver integrator(problem, MPI_COMM_WORLD, be);
+    fullspace::FullSpaceOptions options;
+    options.quasi_static = !dynamic;
+    switch (spec.integrator) {
+      case fullspace::VerifyProblem::Integrator::bdf2: options.integrator = model::Integrator::bdf2; break;
+      case fullspace::VerifyProblem::Integrator::newmark: options.integrator = model::Integrator::newmark; break;
+      default: options.integrator = model::Integrator::backward_euler; break;
+    }
+    fullspace::FullSpaceSolver integrator(problem, MPI_COMM_WORLD, options);
     if (!dynamic) {
       // A static problem starts at equilibrium with the drives at t = 0.
       state.w.setZero();
+    } else if (options.integrator == model::Integrator::newmark) {
+      state.a = model::initial_acceleration(problem, state);  // p̈(0) from the equations of motion
     }
     integrator.initialize(state);
     records.push_back({0.0, state.x});
@@ -120,7 +131,7 @@ void run_verify(const VerifyOptions& opt, const Invocation& invocation, int rank
       if (k % spec.record_every == 0) records.push_back({integrator.state().t, integrator.state().x});
       progress.advance();
     }
-    solver_json = {{"integrator", dynamic ? "backward_euler" : "static"},
+    solver_json = {{"integrator", integrator_name},
                    {"processes", size},
                    {"newton_iterations", newton},
                    {"linear_iterations", linear}};
@@ -151,6 +162,8 @@ void run_verify(const VerifyOptions& opt, const Invocation& invocation, int rank
                      {"flipped_tets", spec.mesh.flipped_tets}};
   summary["record"] = {{"group", spec.record_group}, {"nodes", record_nodes.size()}, {"every", spec.record_every},
                        {"samples", records.size()}};
+  summary["integrator"] = integrator_name;
+  summary["mass"] = mass_name;
   summary["solver"] = solver_json;
   summary["steps"] = steps_json;
   summary["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();

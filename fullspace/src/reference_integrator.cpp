@@ -1,5 +1,6 @@
 // The SUNDIALS reference integrator (reference_integrator.hpp). Everything SUNDIALS-specific lives in this
-// file: SUNDIALS 6.4 as Debian 12 ships it (SUNContext_Create(nullptr, …), ARKStep*, realtype), which
+// file and its siblings reference_integrator_impl.hpp (the shared state) and reference_integrator_mass.cpp (the
+// consistent mass): SUNDIALS 6.4 as Debian 12 ships it (SUNContext_Create(nullptr, …), ARKStep*, realtype), which
 // SUNDIALS 7 renames in part (SUN_COMM_NULL, ARKode* generic calls, SUNLogger instead of error handlers).
 //
 // Layout of y (6N): y[0, 3N) = x (node-major, 3i + axis), y[3N, 6N) = w.
@@ -7,24 +8,20 @@
 // pattern and KLU can refactor with the symbolic analysis of the first setup):
 //   row x_{i,α}: columns x_{i,0..2}, w_{i,0..2}                          (6 entries)
 //   row w_{i,α}: columns x_{j,0..2} for the mesh neighbours j of i (with i itself), then w_{i,α}
-#include <sflsh/fullspace/reference_integrator.hpp>
+//                (consistent mass: w_{j,α} for every neighbour j, the pattern of M_w, reference_mass.hpp)
+// Consistent mass: ARKODE solves M_y ẏ = f with a second KLU solver on M_y and the Newton matrix M_y − γJ
+// formed by us on the fixed pattern (reference_integrator_mass.cpp).
+#include "reference_integrator_impl.hpp"
 
 #include <sflsh/core/error.hpp>
 
 #include <Eigen/LU>
-#include <arkode/arkode_arkstep.h>
-#include <nvector/nvector_serial.h>
-#include <sundials/sundials_context.h>
-#include <sunlinsol/sunlinsol_klu.h>
-#include <sunmatrix/sunmatrix_sparse.h>
 
 #include <algorithm>
-#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
-#include <string>
-#include <vector>
+#include <limits>
 
 namespace sflsh::fullspace {
 namespace {
@@ -49,92 +46,12 @@ constexpr double kIdentityTolerance = 1e-10;
 
 }  // namespace
 
-struct ReferenceIntegrator::Impl {
-  const Problem& problem;
-  ReferenceOptions options;
-  int n = 0;         // nodes
-  sunindextype nx = 0;  // 3N
-  std::vector<char> constrained;       // per x dof
-  std::vector<int> constraint_count;   // per node: how many of its components are prescribed
-  std::vector<double> inv_mass;        // per node; 0 for fully prescribed massless nodes
-
-  // Jacobian pattern (CSR) and per-tet positions of the node-pair blocks in the w rows.
-  std::vector<sunindextype> row_ptr, col_idx;
-  std::vector<std::vector<int>> neighbours;  // sorted, including the node itself
-  std::vector<std::array<int, 16>> tet_block;  // (a, b) ↦ index of node b in neighbours[node a]
-
-  // Scratch reused by the callbacks.
-  NodeFrame frame, rate;
-  Eigen::VectorXd x_eff, du;
-  std::vector<Eigen::Matrix3d> A_inv;  // per node
-  std::vector<double> values;
-
-  // SUNDIALS objects.
-  SUNContext ctx = nullptr;
-  N_Vector y = nullptr;
-  SUNMatrix jac = nullptr;
-  SUNLinearSolver solver = nullptr;
-  void* arkode = nullptr;
-
-  double t = 0.0;
-  bool ready = false;   // initialized and not failed
-  ReferenceStats stats;
-  std::string last_arkode_error;  // from the error handler
-  std::string last_rhs_problem;   // why the RHS or the Jacobian last refused
-
-  Impl(const Problem& p, const ReferenceOptions& o) : problem(p), options(o) {}
-  ~Impl() {
-    if (arkode != nullptr) ARKStepFree(&arkode);
-    if (solver != nullptr) SUNLinSolFree(solver);
-    if (jac != nullptr) SUNMatDestroy(jac);
-    if (y != nullptr) N_VDestroy(y);
-    if (ctx != nullptr) SUNContext_Free(&ctx);
+void ReferenceIntegrator::Impl::check(int flag, const char* call) const {
+  if (flag < 0) {
+    throw_error("reference integrator: {} failed with {}{}{}", call, flag_name(flag), last_arkode_error.empty() ? "" : ": ",
+                last_arkode_error);
   }
-  Impl(const Impl&) = delete;
-  Impl& operator=(const Impl&) = delete;
-
-  void check(int flag, const char* call) const {
-    if (flag < 0) {
-      throw_error("reference integrator: {} failed with {}{}{}", call, flag_name(flag),
-                  last_arkode_error.empty() ? "" : ": ", last_arkode_error);
-    }
-  }
-
-  void build_pattern();
-  /// The frame, its rate, x with the prescribed values and du/dt at time t into the scratch members.
-  /// Returns 0 or −1 (unrecoverable: non-finite forcing, bad input) with the reason in last_rhs_problem.
-  int prepare(double t_eval, const double* x);
-  int rhs(double t_eval, const double* yv, double* ydot);
-  /// J = ∂f/∂y into `values` (on the fixed pattern).
-  int jacobian(double t_eval, const double* yv);
-  State output_state(double t_out) const;
-  void collect_stats();
-
-  // The C callbacks; user_data is the Impl.
-  static int rhs_callback(sunrealtype t_eval, N_Vector yv, N_Vector ydot, void* user_data) {
-    return static_cast<Impl*>(user_data)->rhs(t_eval, NV_DATA_S(yv), NV_DATA_S(ydot));
-  }
-  static int jacobian_callback(sunrealtype t_eval, N_Vector yv, N_Vector /*fy*/, SUNMatrix J, void* user_data,
-                               N_Vector /*tmp1*/, N_Vector /*tmp2*/, N_Vector /*tmp3*/) {
-    auto* impl = static_cast<Impl*>(user_data);
-    if (SM_NNZ_S(J) < static_cast<sunindextype>(impl->col_idx.size()) || SM_ROWS_S(J) != 2 * impl->nx) {
-      impl->last_rhs_problem = "the Jacobian matrix lost its storage";
-      return -1;
-    }
-    if (const int status = impl->jacobian(t_eval, NV_DATA_S(yv)); status != 0) return status;
-    // ARKODE zeroes the matrix (pattern included) before calling us: write pattern and values.
-    std::copy(impl->row_ptr.begin(), impl->row_ptr.end(), SM_INDEXPTRS_S(J));
-    std::copy(impl->col_idx.begin(), impl->col_idx.end(), SM_INDEXVALS_S(J));
-    std::copy(impl->values.begin(), impl->values.end(), SM_DATA_S(J));
-    return 0;
-  }
-  static void error_callback(int error_code, const char* module, const char* function, char* message, void* user_data) {
-    if (error_code == ARK_WARNING) return;  // e.g. "t + h = t": no exception for that, and stderr stays quiet
-    static_cast<Impl*>(user_data)->last_arkode_error =
-        fmt::format("[{}::{}] {}", module != nullptr ? module : "?", function != nullptr ? function : "?",
-                    message != nullptr ? message : "");
-  }
-};
+}
 
 void ReferenceIntegrator::Impl::build_pattern() {
   neighbours.assign(static_cast<std::size_t>(n), {});
@@ -163,7 +80,11 @@ void ReferenceIntegrator::Impl::build_pattern() {
       for (int j : neighbours[static_cast<std::size_t>(i)]) {
         for (int b = 0; b < 3; ++b) col_idx.push_back(3 * j + b);
       }
-      col_idx.push_back(nx + 3 * i + alpha);
+      if (consistent) {
+        for (int j : neighbours[static_cast<std::size_t>(i)]) col_idx.push_back(nx + 3 * j + alpha);
+      } else {
+        col_idx.push_back(nx + 3 * i + alpha);
+      }
       row_ptr[static_cast<std::size_t>(nx + 3 * i + alpha + 1)] = static_cast<sunindextype>(col_idx.size());
     }
   }
@@ -217,6 +138,9 @@ int ReferenceIntegrator::Impl::rhs(double t_eval, const double* yv, double* ydot
       last_rhs_problem = fmt::format("the elastic forces are not finite at t = {}", t_eval);
       return 1;
     }
+    if (consistent) {
+      if (const int status = update_coupling(t_eval); status != 0) return status;
+    }
     const Eigen::Map<const Eigen::VectorXd> w(yv + nx, nx);
     Eigen::Map<Eigen::VectorXd> xdot(ydot, nx), wdot(ydot + nx, nx);
     for (int i = 0; i < n; ++i) {
@@ -224,7 +148,13 @@ int ReferenceIntegrator::Impl::rhs(double t_eval, const double* yv, double* ydot
       const Eigen::Matrix3d map_inv = frame.A[si].inverse();
       const Eigen::Vector3d x_i = x_eff.segment<3>(3 * i);
       xdot.segment<3>(3 * i) = map_inv * (w.segment<3>(3 * i) - rate.A[si] * x_i - rate.d.row(i).transpose());
-      wdot.segment<3>(3 * i) = inv_mass[si] * (map_inv.transpose() * -elastic.gradient.segment<3>(3 * i)) + problem.gravity;
+      const Eigen::Vector3d force = map_inv.transpose() * -elastic.gradient.segment<3>(3 * i);  // −A_i⁻ᵀ∇_i E
+      if (consistent) {
+        // f_w,i = −A_i⁻ᵀ∇_i E + m_i g − [M_FC a_C]_i   (the left side M_w ẇ is ARKODE's)
+        wdot.segment<3>(3 * i) = force + problem.mass[i] * problem.gravity - coupling_force.segment<3>(3 * i);
+      } else {
+        wdot.segment<3>(3 * i) = inv_mass[si] * force + problem.gravity;  // ẇ_i = A_i⁻ᵀ(−∇_i E)/m_i + g
+      }
     }
     for (std::size_t k = 0; k < problem.dirichlet.dof.size(); ++k) {
       const int dof = problem.dirichlet.dof[k];
@@ -276,7 +206,8 @@ int ReferenceIntegrator::Impl::jacobian(double t_eval, const double* yv) {
       for (int a = 0; a < 4; ++a) {
         const int i = problem.tets(e, a);
         const auto si = static_cast<std::size_t>(i);
-        const Eigen::Matrix3d row_map = -scale * inv_mass[si] * A_inv[si].transpose();
+        // ∂ẇ_i/∂x_j = −(1/m_i) A_i⁻ᵀ K_ij (lumped); ∂f_w,i/∂x_j = −A_i⁻ᵀ K_ij (consistent: M_w stays on the left)
+        const Eigen::Matrix3d row_map = -scale * (consistent ? 1.0 : inv_mass[si]) * A_inv[si].transpose();
         for (int b = 0; b < 4; ++b) {
           const Eigen::Matrix3d block = row_map * el.hessian.block<3, 3>(3 * a, 3 * b);
           const int k = tet_block[se][static_cast<std::size_t>(4 * a + b)];
@@ -349,6 +280,8 @@ void ReferenceIntegrator::Impl::collect_stats() {
   check(ARKStepGetNumLinSolvSetups(arkode, &stats.lin_setups), "ARKStepGetNumLinSolvSetups");
   check(ARKStepGetNumErrTestFails(arkode, &stats.error_test_fails), "ARKStepGetNumErrTestFails");
   check(ARKStepGetNumNonlinSolvConvFails(arkode, &stats.conv_fails), "ARKStepGetNumNonlinSolvConvFails");
+  stats.mass_solves = 0;
+  if (consistent) check(ARKStepGetNumMassSolves(arkode, &stats.mass_solves), "ARKStepGetNumMassSolves");
   sunrealtype last = 0.0;
   check(ARKStepGetLastStep(arkode, &last), "ARKStepGetLastStep");
   stats.last_step = last;
@@ -388,7 +321,10 @@ ReferenceIntegrator::ReferenceIntegrator(const Problem& problem, const Reference
             "reference integrator: node {} is not fully prescribed but has mass {} (every moving node needs mass > 0)", i, m);
     s.inv_mass[static_cast<std::size_t>(i)] = m > 0.0 ? 1.0 / m : 0.0;
   }
+  s.consistent = problem.mass_kind == model::MassKind::consistent;
+  if (s.consistent) s.check_consistent_mass();
   s.build_pattern();
+  if (s.consistent) s.build_mass();
 
   require(SUNContext_Create(nullptr, &s.ctx) == 0 && s.ctx != nullptr, "reference integrator: SUNContext_Create failed");
   s.y = N_VNew_Serial(2 * s.nx, s.ctx);
@@ -405,6 +341,7 @@ ReferenceIntegrator::ReferenceIntegrator(const Problem& problem, const Reference
   // AMD on the structurally symmetric Newton matrix I − γJ of a tet mesh: KLU's default COLAMD is meant for
   // circuit-like matrices and filled in several times more on 3D meshes.
   require(SUNLinSol_KLUSetOrdering(s.solver, 0) == SUNLS_SUCCESS, "reference integrator: KLU ordering rejected");
+  if (s.consistent) s.create_mass_solver();
 }
 
 ReferenceIntegrator::~ReferenceIntegrator() = default;
@@ -435,12 +372,22 @@ void ReferenceIntegrator::initialize(const State& initial) {
     if (s.options.max_step > 0.0) s.check(ARKStepSetMaxStep(s.arkode, s.options.max_step), "ARKStepSetMaxStep");
     if (s.options.min_step > 0.0) s.check(ARKStepSetMinStep(s.arkode, s.options.min_step), "ARKStepSetMinStep");
     s.check(ARKStepSetLinearSolver(s.arkode, s.solver, s.jac), "ARKStepSetLinearSolver");
-    s.check(ARKStepSetJacFn(s.arkode, &Impl::jacobian_callback), "ARKStepSetJacFn");
+    if (s.consistent) {
+      // M_y ẏ = f: M_y constant in time (SUNFALSE), factorized once per initialize by its own KLU solver.
+      s.check(ARKStepSetMassLinearSolver(s.arkode, s.mass_solver, s.mass, SUNFALSE), "ARKStepSetMassLinearSolver");
+      s.check(ARKStepSetMassFn(s.arkode, &Impl::mass_callback), "ARKStepSetMassFn");
+      s.check(ARKStepSetLinSysFn(s.arkode, &Impl::linear_system_callback), "ARKStepSetLinSysFn");
+    } else {
+      s.check(ARKStepSetJacFn(s.arkode, &Impl::jacobian_callback), "ARKStepSetJacFn");
+    }
   } else {
     // Keeps every option, the linear solver and the Jacobian function; resets ARKODE's counters.
     s.check(ARKStepReInit(s.arkode, nullptr, &Impl::rhs_callback, initial.t, s.y), "ARKStepReInit");
   }
   s.t = initial.t;
+  s.t_start = initial.t;
+  s.acceleration_time = std::numeric_limits<double>::quiet_NaN();
+  s.saved_values.clear();
   s.stats = ReferenceStats{};
   s.ready = true;
 }
@@ -512,6 +459,5 @@ Eigen::SparseMatrix<double, Eigen::RowMajor> ReferenceIntegrator::jacobian(doubl
 }
 
 const ReferenceStats& ReferenceIntegrator::stats() const { return impl_->stats; }
-
 
 }  // namespace sflsh::fullspace

@@ -8,6 +8,7 @@
 #include <toml++/toml.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <initializer_list>
@@ -56,6 +57,10 @@ struct ExpressionDrive {
 };
 
 constexpr std::string_view kAxes = "xyz";
+
+constexpr std::array<VerifyProblem::Integrator, 4> kIntegrators = {
+    VerifyProblem::Integrator::backward_euler, VerifyProblem::Integrator::bdf2, VerifyProblem::Integrator::newmark,
+    VerifyProblem::Integrator::reference};
 
 class Reader {
  public:
@@ -209,12 +214,15 @@ class Reader {
       fail(*t.get("step"), "time.step", "must not exceed time.duration = {}", p.duration);
     if (const toml::node* n = t.get("integrator")) {
       const std::string s = string(*n, "time.integrator");
-      if (s == "backward_euler") {
-        p.integrator = VerifyProblem::Integrator::backward_euler;
-      } else if (s == "reference") {
-        p.integrator = VerifyProblem::Integrator::reference;
-      } else {
-        fail(*n, "time.integrator", "expected \"backward_euler\" or \"reference\", got \"{}\"", s);
+      const auto known = std::find_if(kIntegrators.begin(), kIntegrators.end(),
+                                      [&](VerifyProblem::Integrator i) { return to_string(i) == s; });
+      if (known == kIntegrators.end()) {
+        fail(*n, "time.integrator", "expected one of \"backward_euler\", \"bdf2\", \"newmark\", \"reference\", got \"{}\"", s);
+      }
+      p.integrator = *known;
+      if (p.density == 0.0 && p.integrator != VerifyProblem::Integrator::backward_euler) {
+        fail(*n, "time.integrator", "\"{}\" needs a dynamic problem (density > 0); a static problem takes "
+             "\"backward_euler\" (or no integrator)", s);
       }
     }
     if (const toml::node* n = t.get("rtol")) p.rtol = positive(*n, "time.rtol");
@@ -324,7 +332,7 @@ class Reader {
     } catch (const toml::parse_error& e) {
       throw_error("{}:{}: {}", path_.string(), e.source().begin.line, e.description());
     }
-    check_keys(root, {"mesh", "density", "gravity", "material", "fix", "drive", "time", "record", "solver"}, "");
+    check_keys(root, {"mesh", "density", "gravity", "mass", "material", "fix", "drive", "time", "record", "solver"}, "");
     VerifyProblem p;
     p.file = path_;
     const toml::node& mesh = required(root, "mesh", "");
@@ -341,6 +349,19 @@ class Reader {
       if (p.density < 0.0) fail(*n, "density", "must be >= 0 (0 = static), got {}", p.density);
     }
     if (const toml::node* n = root.get("gravity")) p.gravity = vector3(*n, "gravity");
+    if (const toml::node* n = root.get("mass")) {
+      const std::string s = string(*n, "mass");
+      if (s == "lumped") {
+        p.mass = model::MassKind::lumped;
+      } else if (s == "consistent") {
+        p.mass = model::MassKind::consistent;
+      } else {
+        fail(*n, "mass", "expected one of \"lumped\", \"consistent\", got \"{}\"", s);
+      }
+      if (p.mass == model::MassKind::consistent && p.density == 0.0) {
+        fail(*n, "mass", "\"consistent\" needs density > 0 (a static problem has no inertia)");
+      }
+    }
     read_material(root, p);
     read_time(root, p);
     read_boundary(root, p);
@@ -384,6 +405,7 @@ Problem make_problem(const VerifyProblem& spec) {
   }
   p.mass = lumped_masses(p.rest, p.tets, spec.density);
   p.density = spec.density;
+  p.mass_kind = spec.mass;
   p.gravity = spec.gravity;
   p.projection = spec.projection;
   auto nodes_of = [&](const std::string& group) -> const std::vector<int>& {
@@ -407,6 +429,16 @@ Problem make_problem(const VerifyProblem& spec) {
     throw_error("{}: {}", file, what);
   }
   return p;
+}
+
+std::string_view to_string(VerifyProblem::Integrator integrator) {
+  switch (integrator) {
+    case VerifyProblem::Integrator::backward_euler: return "backward_euler";
+    case VerifyProblem::Integrator::bdf2: return "bdf2";
+    case VerifyProblem::Integrator::newmark: return "newmark";
+    case VerifyProblem::Integrator::reference: return "reference";
+  }
+  return "backward_euler";
 }
 
 std::vector<int> record_nodes(const VerifyProblem& spec) {

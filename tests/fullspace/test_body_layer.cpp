@@ -7,6 +7,7 @@
 #include <sflsh/model/body_layer.hpp>
 #include <sflsh/fullspace/reference_integrator.hpp>
 #include <sflsh/model/simulation_output.hpp>
+#include <sflsh/model/skinned_trajectory.hpp>
 
 #include <gtest/gtest.h>
 #include <mpi.h>
@@ -14,12 +15,7 @@
 namespace sflsh::fullspace {
 namespace {
 
-using model::BodyLayer;
-using model::BodyLayerOptions;
-using model::JointTransforms;
-using model::Matrix34d;
-using model::MotionCurve;
-using model::SimulationWriter;
+using namespace sflsh::model;  // the body layer, its trajectory and writer moved to the model library
 
 const body::BodyModel& open_body() {
   static const body::BodyModel model = body::load_body(std::filesystem::path(SFLSH_DATA_DIR) / "open_body.npz");

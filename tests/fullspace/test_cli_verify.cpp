@@ -1,5 +1,6 @@
 // `sflsh verify` end to end: the history.csv contract, serial vs 2 MPI processes, PETSc's Jacobian
 // check, backward Euler vs the SUNDIALS reference on a free oscillation, and bad input.
+#include <sflsh/core/summary.hpp>
 #include <sflsh/fullspace/msh_reader.hpp>
 
 #include "run_command.hpp"
@@ -212,6 +213,33 @@ TEST(CliVerify, FreeOscillationDecaysUnderBackwardEulerAndIsKeptByTheReference) 
   EXPECT_GT(ref_ratio, 4.0 * be_ratio);
 }
 
+TEST(CliVerify, SummaryRecordsTheIntegratorAndTheMass) {
+  // The reference with the consistent mass end to end, and a full-space run with the defaults.
+  const fs::path dir = scratch_dir();
+  write_bar(dir);
+  std::string consistent = bar_problem("", "mass = \"consistent\"\n");
+  consistent = std::regex_replace(consistent, std::regex("integrator = \"backward_euler\""), "integrator = \"reference\"");
+  write_text(dir / "consistent.toml", consistent);
+  const auto r = run_sflsh("verify " + (dir / "consistent.toml").string() + " --out " + (dir / "ref").string() +
+                               " --no-vtk -q", dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json ref = read_json(dir / "ref" / "summary.json");
+  EXPECT_EQ(ref["integrator"], "reference");
+  EXPECT_EQ(ref["mass"], "consistent");
+  EXPECT_GT(ref["solver"]["mass_solves"].get<long>(), 0);
+  const History h = read_history(dir / "ref" / "history.csv");
+  for (std::size_t k = 0; k < h.t.size(); ++k) EXPECT_NEAR(h.u[k].y(), 0.01 * std::sin(2 * M_PI * 2 * h.t[k]), 1e-12);
+
+  std::string defaults = std::regex_replace(bar_problem(), std::regex("integrator = \"backward_euler\"\n"), "");
+  write_text(dir / "defaults.toml", defaults);
+  const auto d = run_sflsh("verify " + (dir / "defaults.toml").string() + " --out " + (dir / "be").string() +
+                               " --no-vtk -q", dir);
+  ASSERT_EQ(d.exit_code, 0) << d.err;
+  const nlohmann::json be = read_json(dir / "be" / "summary.json");
+  EXPECT_EQ(be["integrator"], "backward_euler");
+  EXPECT_EQ(be["mass"], "lumped");
+}
+
 TEST(CliVerify, BadFilesGiveOneLineErrorsAndNoOutput) {
   const fs::path dir = scratch_dir();
   write_bar(dir);
@@ -223,6 +251,11 @@ TEST(CliVerify, BadFilesGiveOneLineErrorsAndNoOutput) {
   const auto missing = run_sflsh("verify " + (dir / "nope.toml").string() + " --out " + (dir / "out").string(), dir);
   EXPECT_NE(missing.exit_code, 0);
   EXPECT_NE(missing.err.find("nope.toml"), std::string::npos) << missing.err;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+  write_text(dir / "mass.toml", bar_problem("", "mass = \"diagonal\"\n"));
+  const auto mass = run_sflsh("verify " + (dir / "mass.toml").string() + " --out " + (dir / "out").string(), dir);
+  EXPECT_NE(mass.exit_code, 0);
+  EXPECT_NE(mass.err.find("mass.toml:3: mass: expected one of \"lumped\", \"consistent\""), std::string::npos) << mass.err;
   EXPECT_FALSE(fs::exists(dir / "out"));
 }
 

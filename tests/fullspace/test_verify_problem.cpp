@@ -110,6 +110,7 @@ TEST(VerifyProblem, FullExampleParses) {
   EXPECT_EQ(p.duration, 1.0);
   EXPECT_EQ(p.step, 0.0010416666666666667);
   EXPECT_EQ(p.integrator, VerifyProblem::Integrator::reference);
+  EXPECT_EQ(p.mass, model::MassKind::lumped);
   EXPECT_EQ(p.rtol, 1e-7);
   EXPECT_EQ(p.atol, 1e-10);
   EXPECT_EQ(p.record_group, "xmax");
@@ -158,6 +159,7 @@ group = "xmax"
   EXPECT_EQ(p.material.saturation, 4.0);
   EXPECT_EQ(p.fixes[0].mask, 7u);
   EXPECT_EQ(p.integrator, VerifyProblem::Integrator::backward_euler);
+  EXPECT_EQ(p.mass, model::MassKind::lumped);
   EXPECT_EQ(p.record_every, 1);
   EXPECT_EQ(p.projection, material::HessianProjection::kStressDerivative);
   Problem problem = make_problem(p);
@@ -199,6 +201,52 @@ TEST(VerifyProblem, BadValuesAreOneLineErrors) {
             std::string::npos);
   EXPECT_NE(load_error(edited("mesh/bar.msh", "mesh/none.msh")).find("none.msh"), std::string::npos);
   EXPECT_NE(load_error(edited("density = 1000.0", "density = \"1000")).find("problem.toml:2:"), std::string::npos);
+}
+
+TEST(VerifyProblem, MassAndIntegratorSpellings) {
+  const fs::path dir = scratch_dir();
+  write_bar(dir);
+  for (const std::string integrator : {"backward_euler", "bdf2", "newmark", "reference"}) {
+    for (const std::string mass : {"lumped", "consistent"}) {
+      const std::string text =
+          edited("density = 1000.0\n", "density = 1000.0\nmass = \"" + mass + "\"\n");
+      const std::size_t at = text.find("integrator = \"reference\"");
+      ASSERT_NE(at, std::string::npos);
+      const VerifyProblem p = load_verify_problem(
+          write_problem(dir, std::string(text).replace(at, 24, "integrator = \"" + integrator + "\"")));
+      EXPECT_EQ(to_string(p.integrator), integrator);
+      EXPECT_EQ(model::to_string(p.mass), mass);
+      Problem problem = make_problem(p);
+      problem.validate();
+      EXPECT_EQ(problem.mass_kind, p.mass);
+      if (p.mass == model::MassKind::consistent) {
+        // ρV per tet, whose consistent matrix has the lumped masses as row sums.
+        ASSERT_EQ(problem.tet_mass.size(), problem.num_tets());
+        const Eigen::VectorXd row_sums = problem.mass_matrix() * Eigen::VectorXd::Ones(problem.num_nodes());
+        EXPECT_LT((row_sums - problem.mass).cwiseAbs().maxCoeff(), 1e-15);
+      }
+    }
+  }
+}
+
+TEST(VerifyProblem, BadMassOrIntegratorIsAOneLineErrorListingTheChoices) {
+  const std::string mass = load_error(edited("density = 1000.0\n", "density = 1000.0\nmass = \"diagonal\"\n"));
+  EXPECT_NE(mass.find("problem.toml:3: mass: expected one of \"lumped\", \"consistent\", got \"diagonal\""),
+            std::string::npos) << mass;
+  const std::string integrator = load_error(edited("integrator = \"reference\"", "integrator = \"rk4\""));
+  EXPECT_NE(integrator.find("problem.toml:20: time.integrator: expected one of \"backward_euler\", \"bdf2\", "
+                            "\"newmark\", \"reference\", got \"rk4\""),
+            std::string::npos) << integrator;
+  const std::string number = load_error(edited("density = 1000.0\n", "density = 1000.0\nmass = 1\n"));
+  EXPECT_NE(number.find(":3: mass: must be a string"), std::string::npos) << number;
+  // A static problem (no density) has no inertia: consistent mass and the dynamic integrators are refused.
+  const std::string static_mass = load_error(edited("density = 1000.0\n", "mass = \"consistent\"\n"));
+  EXPECT_NE(static_mass.find(":2: mass: \"consistent\" needs density > 0"), std::string::npos) << static_mass;
+  std::string text = edited("density = 1000.0\n", "");
+  text.replace(text.find("integrator = \"reference\""), 24, "integrator = \"newmark\"");
+  const std::string static_newmark = load_error(text);
+  EXPECT_NE(static_newmark.find("time.integrator: \"newmark\" needs a dynamic problem"), std::string::npos)
+      << static_newmark;
 }
 
 TEST(VerifyProblem, MeshErrorsNameBothFiles) {

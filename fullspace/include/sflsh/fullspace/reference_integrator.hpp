@@ -8,6 +8,12 @@
 // p_i = A_i(t) x_i + d_i(t) and the equation of motion A_iᵀ m_i (p̈_i − g) = −∇_i E(x) (problem.hpp):
 //   \f[ \dot x_i = A_i^{-1}\,(w_i - \dot A_i x_i - \dot d_i), \qquad
 //       \dot w_i = \frac{1}{m_i} A_i^{-T} (-\nabla_i E(x)) + g. \f]
+// Consistent mass (problem.mass_kind, mass.hpp): ARKODE's mass-matrix form M_y ẏ = f with M_y = diag(I, M_w),
+//   \f[ \sum_j M_{ij} \dot w_j = -A_i^{-T}\nabla_i E(x) + m_i g - \sum_{c\ \mathrm{prescribed}} M_{ic}\, a_c(t) \f]
+// per axis on the free components, M_w = M ⊗ I₃ restricted to them (identity rows on prescribed components,
+// ẇ = 0 there as above), a_c the prescribed posed acceleration (a difference of the prescribed velocity,
+// fullspace/src/reference_mass.hpp). M_y is time-independent and factorized once per initialize by a second KLU solver; the
+// lumped path is the explicit form above (M_y = I). Both obey the same constraint rules.
 // Prescribed (Dirichlet) components of x take their prescribed value X + u(t) wherever x enters the forces
 // (the state's entry is ignored), get ẋ = du/dt and ẇ = 0. Component-wise constraints need A_i = I (the
 // verification problems); a node with some but not all components prescribed under A_i ≉ I is an error.
@@ -16,6 +22,7 @@
 //
 // Jacobian J = ∂f/∂y (sparse CSR, pattern from the tet connectivity, built once):
 //   ∂ẋ_i/∂x_i = −A_i⁻¹Ȧ_i,  ∂ẋ_i/∂w_i = A_i⁻¹,  ∂ẇ_i/∂x_j = −(1/m_i) A_i⁻ᵀ K_ij,  ∂ẇ/∂w = 0,
+// (consistent mass: ∂f_w,i/∂x_j = −A_i⁻ᵀ K_ij; the Newton matrix is M_y − γJ)
 // with K the elastic Hessian (exact by default) and the rows and columns of prescribed x components zero.
 //
 // Serial: one process, SUNDIALS serial vectors. Run it on rank 0 only / with one MPI process.
@@ -56,6 +63,7 @@ struct ReferenceStats {
   long lin_setups = 0;        ///< linear-solver setups (KLU factorizations)
   long error_test_fails = 0;  ///< steps rejected by the error test
   long conv_fails = 0;        ///< Newton convergence failures
+  long mass_solves = 0;       ///< solves with the consistent mass matrix (0 with lumped masses)
   double last_step = 0.0;     ///< size of the last internal step [s]
   double seconds = 0.0;       ///< wall time in advance_to [s]
 };
@@ -64,8 +72,9 @@ struct ReferenceStats {
 /// Keeps a reference to `problem`, which must outlive the integrator and be validated (Problem::validate).
 class ReferenceIntegrator {
  public:
-  /// Checks the problem (dynamic, every node that is not fully prescribed has mass > 0) and the options,
-  /// and builds the Jacobian pattern. Throws sflsh::Error on bad input.
+  /// Checks the problem (dynamic, every node that is not fully prescribed has mass > 0; consistent mass: ρV per
+  /// tet whose row sums are the lumped masses) and the options, and builds the Jacobian pattern (and M_y).
+  /// Throws sflsh::Error on bad input.
   ReferenceIntegrator(const Problem& problem, const ReferenceOptions& options = {});
   ~ReferenceIntegrator();
   ReferenceIntegrator(const ReferenceIntegrator&) = delete;
@@ -84,8 +93,11 @@ class ReferenceIntegrator {
   State advance_to(double t_out);
   /// The current time [s].
   double time() const;
-  /// f(t, y) with y = [x; w] (6N), as ARKODE sees it (for tests and diagnostics). Throws when it fails.
+  /// f(t, y) with y = [x; w] (6N), as ARKODE sees it (for tests and diagnostics): the right side of
+  /// M_y ẏ = f (lumped: ẏ itself). Throws when it fails.
   Eigen::VectorXd rhs(double t, const Eigen::VectorXd& y);
+  /// M_y (6N×6N): the identity with lumped masses, diag(I, M_w) with consistent ones (see the file comment).
+  Eigen::SparseMatrix<double, Eigen::RowMajor> mass_matrix() const;
   /// J = ∂f/∂y at (t, y) (6N×6N, the stored pattern including explicit zeros; for tests and diagnostics).
   Eigen::SparseMatrix<double, Eigen::RowMajor> jacobian(double t, const Eigen::VectorXd& y);
   const ReferenceStats& stats() const;

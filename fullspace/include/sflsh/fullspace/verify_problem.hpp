@@ -5,13 +5,15 @@
 //
 //   mesh = "layer.msh"               # .msh 2.2 or 4.1, relative to the TOML file's folder
 //   density = 1000.0                 # kg/m³; 0 or absent = static
+//   mass = "lumped"                  # "lumped" (ρV/4 per node, default) | "consistent" (needs density > 0)
 //   gravity = [0.0, 0.0, -9.81]      # optional, m/s², default zero
 //   [material]                       # young_tangent, young_normal [Pa] required; poisson (0.2), saturation (4),
 //   normal = [0.0, 0.0, 1.0]         #   normal (z), fung_scale ("tangent_over_saturation" | "tangent_times_saturation"
 //                                    #   | "none"), overflow ("throw" | "continue_linearly") optional
 //   [[fix]]      group = "bone"  components = "xy"           # non-empty subset of "xyz"
 //   [[drive]]    group = "bone"  component = "z"  expression = "0.01*sin(2*pi*2*t)"   # u(t) [m]
-//   [time]       duration = 1.0  step = 0.001  integrator = "backward_euler" | "reference"  rtol  atol
+//   [time]       duration = 1.0  step = 0.001  rtol  atol
+//                integrator = "backward_euler" | "bdf2" | "newmark" | "reference"   # bdf2/newmark/reference: dynamic only
 //   [record]     group = "top"  every = 16
 //   [solver]     hessian = "projected" | "exact"             # optional
 #include <sflsh/fullspace/msh_reader.hpp>
@@ -23,18 +25,21 @@
 
 #include <filesystem>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace sflsh::fullspace {
 
 /// A verification problem as read from its TOML file (checked: groups exist, no dof both fixed and driven).
 struct VerifyProblem {
-  enum class Integrator { backward_euler, reference };
+  /// The full-space solver's integrators (model::Integrator) or the SUNDIALS reference.
+  enum class Integrator { backward_euler, bdf2, newmark, reference };
 
   std::filesystem::path file;       ///< the TOML file
   std::filesystem::path mesh_path;  ///< the .msh file (resolved against the TOML file's folder)
   MshMesh mesh;
   double density = 0.0;                               ///< ρ [kg/m³]; 0 = static
+  model::MassKind mass = model::MassKind::lumped;     ///< lumped or consistent inertia (mass.hpp)
   Eigen::Vector3d gravity = Eigen::Vector3d::Zero();  ///< g [m/s²]
   material::SkinMaterial material;
   Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  ///< through-thickness direction (unit)
@@ -66,8 +71,9 @@ struct VerifyProblem {
 
 /// Reads and checks a verification problem and its mesh. Throws sflsh::Error "<file>:<line>: key: what
 /// was expected" for syntax errors, unknown keys, wrong types, missing or out-of-range values, unknown
-/// groups (listing the mesh's groups), expressions muparser cannot evaluate at t = 0, and a component
-/// that is both fixed and driven (or driven twice).
+/// groups (listing the mesh's groups), expressions muparser cannot evaluate at t = 0, a component
+/// that is both fixed and driven (or driven twice), and consistent mass or an integrator other than
+/// backward_euler on a static problem (density 0).
 VerifyProblem load_verify_problem(const std::filesystem::path& path);
 
 /// u(t) = expression (muparser, variable t, constants pi and e) and du/dt by central differences
@@ -78,9 +84,12 @@ VerifyProblem load_verify_problem(const std::filesystem::path& path);
 ScalarDrive expression_drive(const std::string& expression);
 
 /// The full-space problem: rest = mesh nodes, homogeneous make_orthotropic_fung(material, normal), lumped
-/// masses ρV/4, gravity, projection, and the Dirichlet set of the fixes and drives (one ScalarDrive per
+/// masses ρV/4 (and mass_kind = spec.mass; validate() fills ρV per tet), gravity, projection, and the Dirichlet set of the fixes and drives (one ScalarDrive per
 /// drive entry). No trajectory (p = x). Call Problem::validate() before integrating.
 Problem make_problem(const VerifyProblem& spec);
+
+/// "backward_euler" | "bdf2" | "newmark" | "reference" (the spelling of the problem file).
+std::string_view to_string(VerifyProblem::Integrator integrator);
 
 /// The nodes of the record group, ascending.
 std::vector<int> record_nodes(const VerifyProblem& spec);
