@@ -72,7 +72,7 @@ TEST(CliTradeoff, ScoresEveryModelAgainstTheReferenceAndRecommendsTheCheapestWit
   const Table t = read_table(out / "tradeoff.csv");
   EXPECT_EQ(t.header, kHeader);
   ASSERT_EQ(t.rows.size(), 4u);   // reference, full 1/30, full 1/60, reduced
-  for (const auto& r : t.rows) ASSERT_EQ(r.size(), 14u);
+  for (const auto& r : t.rows) ASSERT_EQ(r.size(), 15u);
   // The reference scores itself: exactly zero error, σ ratio 1, and it is on the front.
   EXPECT_EQ(t.rows[0][0], "reference");
   EXPECT_EQ(std::stod(t.rows[0][9]), 0.0);
