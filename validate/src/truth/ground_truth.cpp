@@ -63,7 +63,7 @@ GroundTruthCase simulate_ground_truth(const model::BodyLayer& layer, const body:
   require(out.sigma_normal.allFinite() && out.sigma_tangent.allFinite(), "ground truth {} / {}: non-finite dynamics", subject,
           motion.name);
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  logger()->info("ground truth {} / {}: {} frames, mean σ {:.3f} mm, {:.1f} s", subject, motion.name, frames, out.mean_sigma(),
+  logger()->info("ground truth {} / {}: {} frames, mean σ {:.3f} mm, {:.1f} s", subject, motion.name, loop.frames, out.mean_sigma(),
                  out.seconds);
   return out;
 }
