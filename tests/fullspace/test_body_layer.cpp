@@ -14,6 +14,14 @@
 namespace sflsh::fullspace {
 namespace {
 
+using model::BodyLayer;
+using model::BodyLayerOptions;
+using model::JointTransforms;
+using model::Matrix34d;
+using model::MotionCurve;
+using model::SimulationWriter;
+using model::build_body_layer;
+
 const body::BodyModel& open_body() {
   static const body::BodyModel model = body::load_body(std::filesystem::path(SFLSH_DATA_DIR) / "open_body.npz");
   return model;
