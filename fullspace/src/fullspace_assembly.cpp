@@ -237,7 +237,11 @@ bool FullSpaceSolver::Impl::jacobian(const Eigen::VectorXd& x) {
   const auto t_inertia = Clock::now();
   if (stats) stats->elastic_seconds += std::chrono::duration<double>(t_inertia - t0).count();
   // Lumped: M/ĥ² A_iᵀA_i on node i's diagonal block; consistent: tet blocks ρV/20 (1 + δ_ab) A_aᵀA_b/ĥ².
-  if (inertia) ok = inertia_term->add_hessian(x, sink) && ok;
+  if (inertia && problem.mass_kind == model::MassKind::consistent && refill.ready) {
+    ok = add_cached_inertia_hessian(x, diag_values, offdiag_values) && ok;
+  } else if (inertia) {
+    ok = inertia_term->add_hessian(x, sink) && ok;
+  }
   sink.add_dirichlet_rows();
   if (stats) stats->inertia_seconds += seconds_since(t_inertia);
   if (potential_term->active()) {   // one 3×3 block on the diagonal of each owned candidate (always in the pattern)
@@ -266,6 +270,22 @@ bool FullSpaceSolver::Impl::jacobian(const Eigen::VectorXd& x) {
   MPI_Allreduce(&local_failed, &any_failed, 1, MPI_INT, MPI_SUM, comm);
   if (stats) stats->jacobian_seconds += seconds_since(t0);
   return any_failed == 0;
+}
+
+bool FullSpaceSolver::Impl::add_cached_inertia_hessian(const Eigen::VectorXd& x, PetscScalar* diag_values,
+                                                      PetscScalar* offdiag_values) {
+  InertiaHessianCache& cache = inertia_cache;
+  bool ok = true;
+  if (cache.substep != substep_serial) {
+    cache.diag.assign(static_cast<std::size_t>(refill.diag_nnz), 0.0);
+    cache.offdiag.assign(static_cast<std::size_t>(refill.offdiag_nnz), 0.0);
+    PetscSink cache_sink(*this, cache.diag.data(), cache.offdiag.empty() ? nullptr : cache.offdiag.data());
+    ok = inertia_term->add_hessian(x, cache_sink);
+    cache.substep = ok ? substep_serial : -1;
+  }
+  for (std::size_t k = 0; k < cache.diag.size(); ++k) diag_values[k] += cache.diag[k];
+  for (std::size_t k = 0; k < cache.offdiag.size(); ++k) offdiag_values[k] += cache.offdiag[k];
+  return ok;
 }
 
 // J is marked symmetric, but the symmetry flag of the whole matrix does not reach its local diagonal block,

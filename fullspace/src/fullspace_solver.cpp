@@ -274,6 +274,7 @@ PetscErrorCode FullSpaceSolver::Impl::linesearch_cb(SNESLineSearch ls, void* ctx
 // Φ minimized by SNES, then the history advanced from the posed minimizer (every node, constrained ones too).
 bool FullSpaceSolver::Impl::solve_substep(State& s, double t0, double dt) {
   const auto t_setup = Clock::now();
+  ++substep_serial;   // a new ĥ and new maps: the cached inertia Hessian is stale
   t1 = t0 + dt;
   inertia = !options.quasi_static && problem.dynamic();
   NodeFrame previous;

@@ -155,6 +155,14 @@ struct FullSpaceSolver::Impl {
     std::vector<PetscInt> node_offset;         ///< per owned node, 3 rows: offsets of its diagonal block
   } refill;
 
+  /// The consistent inertia's Hessian blocks depend only on the maps at t1 and ĥ: assembled once per substep
+  /// into copies of the AIJ value arrays and added to each Jacobian of that substep.
+  struct InertiaHessianCache {
+    long substep = -1;                          ///< the substep they belong to (−1: none)
+    std::vector<PetscScalar> diag, offdiag;     ///< same layout as refill.diag / refill.offdiag
+  } inertia_cache;
+  long substep_serial = 0;                      ///< counts solve_substep calls
+
   Impl(const Problem& p, MPI_Comm c, const FullSpaceOptions& o) : problem(p), comm(c), options(o) {}
 
   int index_of(int node) const { return partition.index_of[static_cast<std::size_t>(node)]; }
@@ -187,6 +195,8 @@ struct FullSpaceSolver::Impl {
   bool jacobian(const Eigen::VectorXd& x);
   /// Receives the terms' Hessian blocks (fullspace_assembly.cpp).
   class PetscSink;
+  /// Adds the consistent inertia's Hessian (refill storage only), assembling it when the substep is new.
+  bool add_cached_inertia_hessian(const Eigen::VectorXd& x, PetscScalar* diag_values, PetscScalar* offdiag_values);
   void build_refill();
   void mark_diagonal_block_symmetric();
   bool solve_substep(State& s, double t0, double dt);
