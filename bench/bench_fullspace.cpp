@@ -1,8 +1,10 @@
 // Benchmark: seconds per 1/60 s step of the full-space solver on the coarse, default and fine layers with
-// 1 and 2 MPI processes, Newton and KSP iterations per step, peak memory, and the scaling exponent of the
-// time per step in the tet count. Each configuration is one `sflsh simulate --solver full --no-output`
-// run (under mpiexec for P > 1); its summary.json gives the timings, wait4 the peak RSS.
+// 1 and 2 MPI processes, per time integrator and mass kind; Newton and KSP iterations per step, peak memory,
+// and the scaling exponent of the time per step in the tet count. Each configuration is one
+// `sflsh simulate --solver full --no-output` run (under mpiexec for P > 1); its summary.json gives the timings
+// (mean and median over the frames), wait4 the peak RSS.
 // Usage: bench_fullspace [--sflsh PATH] [--sizes coarse,default,fine] [--procs 1,2] [--frames 20]
+//                        [--integrators backward_euler,bdf2,newmark] [--masses lumped,consistent]
 //                        [--subject NAME] [--motion NAME] [--mesher layered] [--out bench_fullspace.json]
 #include <sflsh/core/summary.hpp>
 
@@ -12,6 +14,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -61,11 +64,24 @@ double loglog_slope(const std::vector<double>& x, const std::vector<double>& y) 
   return den > 0 ? (n * sxy - sx * sy) / den : 0.0;
 }
 
+/// The median of the per-frame solve times divided by the steps per frame [s per step].
+double median_seconds_per_step(const nlohmann::json& summary) {
+  std::vector<double> per_step;
+  const double substeps = summary["solver"]["substeps"].get<double>();
+  for (const auto& frame : summary["frames"])
+    if (frame["frame"].get<int>() > 0) per_step.push_back(frame["seconds"].get<double>() / substeps);
+  if (per_step.empty()) return 0.0;
+  std::sort(per_step.begin(), per_step.end());
+  const std::size_t n = per_step.size();
+  return n % 2 == 1 ? per_step[n / 2] : 0.5 * (per_step[n / 2 - 1] + per_step[n / 2]);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   std::string sflsh_path = SFLSH_CLI, out = "bench_fullspace.json", sizes = "coarse,default,fine", procs = "1,2";
   std::string subject = "OPEN_TRAIN_1", motion = "running_on_spot", mesher = "layered";
+  std::string integrators = "backward_euler", masses = "lumped";
   int frames = 20;
   for (int i = 1; i + 1 < argc; i += 2) {
     if (std::strcmp(argv[i], "--sflsh") == 0) sflsh_path = argv[i + 1];
@@ -76,6 +92,8 @@ int main(int argc, char** argv) {
     else if (std::strcmp(argv[i], "--subject") == 0) subject = argv[i + 1];
     else if (std::strcmp(argv[i], "--motion") == 0) motion = argv[i + 1];
     else if (std::strcmp(argv[i], "--mesher") == 0) mesher = argv[i + 1];
+    else if (std::strcmp(argv[i], "--integrators") == 0) integrators = argv[i + 1];
+    else if (std::strcmp(argv[i], "--masses") == 0) masses = argv[i + 1];
     else {
       std::cerr << "bench_fullspace: unknown option " << argv[i] << "\n";
       return 2;
@@ -83,71 +101,90 @@ int main(int argc, char** argv) {
   }
   try {
     nlohmann::json results = nlohmann::json::array();
-    std::cout << fmt::format("{:<8} {:>5} {:>8} {:>8} {:>10} {:>9} {:>9} {:>9} {:>9} {:>9}\n", "size", "procs", "tets",
-                             "nodes", "s/step", "newton", "ksp/step", "assem %", "build s", "peak MB");
-    std::map<int, std::pair<std::vector<double>, std::vector<double>>> scaling;   // procs → (tets, s/step)
+    std::cout << fmt::format("{:<8} {:>5} {:<14} {:<10} {:>8} {:>8} {:>8} {:>8} {:>7} {:>8} {:>7} {:>7} {:>7}\n", "size",
+                             "procs", "integrator", "mass", "tets", "nodes", "s/step", "median", "newton", "ksp/step",
+                             "assem %", "build s", "peak MB");
+    // (procs, integrator, mass) → (tets, s/step)
+    std::map<std::string, std::pair<std::vector<double>, std::vector<double>>> scaling;
     const auto scratch = std::filesystem::temp_directory_path() / fmt::format("bench_fullspace_{}", ::getpid());
-    for (const std::string& size : split(sizes)) {
-      for (const std::string& p : split(procs)) {
-        const int np = std::stoi(p);
-        const auto dir = scratch / fmt::format("{}_{}", size, np);
-        std::string command = fmt::format(
-            "{} simulate --solver full --mesh {} --mesher {} --subject {} --motion {} --frames {} --no-output -q --out {}",
-            sflsh_path, size, mesher, subject, motion, frames + 1, dir.string());
-        if (np > 1) {
-          command = fmt::format(
-              "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 mpiexec -n {} {}",
-              np, command);
-        }
-        // Warm the layer cache outside the measurement (meshing is benchmarked by bench_meshing).
-        const auto [code, peak_mb] = run_measured(command);
-        if (code != 0) {
-          std::cerr << "bench_fullspace: " << size << " with " << np << " processes failed (exit " << code << ")\n";
-          results.push_back({{"size", size}, {"procs", np}, {"error", fmt::format("exit code {}", code)}});
-          continue;
-        }
-        const nlohmann::json summary = read_json(dir / "summary.json");
-        const double steps = static_cast<double>(summary["motion"]["frames"].get<long>() - 1) *
-                             summary["solver"]["substeps"].get<double>();
-        const double solve_s = summary["timings"]["solve_seconds"].get<double>();
-        const double per_step = solve_s / steps;
-        const double newton = summary["solver"]["newton_iterations"].get<double>() / steps;
-        const double ksp = summary["solver"]["linear_iterations"].get<double>() / steps;
-        const double assembly = summary["timings"]["jacobian_seconds"].get<double>() + summary["timings"]["function_seconds"].get<double>();
-        const long tets = summary["mesh"]["tets"].get<long>();
-        nlohmann::json r = {{"size", size},
-                            {"procs", np},
-                            {"mesher", mesher},
-                            {"tets", tets},
-                            {"nodes", summary["mesh"]["nodes"]},
-                            {"steps", steps},
-                            {"seconds_per_step", per_step},
-                            {"newton_per_step", newton},
-                            {"ksp_per_step", ksp},
-                            {"assembly_fraction", solve_s > 0 ? assembly / solve_s : 0.0},
-                            {"build_seconds", summary["timings"]["build_seconds"]},
-                            {"peak_rss_mb", peak_mb}};
-        std::cout << fmt::format("{:<8} {:>5} {:>8} {:>8} {:>10.3f} {:>9.2f} {:>9.1f} {:>9.0f} {:>9.1f} {:>9.0f}\n", size, np,
-                                 tets, summary["mesh"]["nodes"].get<long>(), per_step, newton, ksp,
-                                 100.0 * r["assembly_fraction"].get<double>(), r["build_seconds"].get<double>(), peak_mb);
-        scaling[np].first.push_back(static_cast<double>(tets));
-        scaling[np].second.push_back(per_step);
-        results.push_back(r);
+    struct Run {
+      std::string size, integrator, mass;
+      int np = 1;
+    };
+    std::vector<Run> runs;
+    for (const std::string& size : split(sizes))
+      for (const std::string& p : split(procs))
+        for (const std::string& integrator : split(integrators))
+          for (const std::string& mass : split(masses)) runs.push_back({size, integrator, mass, std::stoi(p)});
+    for (const auto& [size, integrator, mass, np] : runs) {
+      const auto dir = scratch / fmt::format("{}_{}_{}_{}", size, np, integrator, mass);
+      std::string command = fmt::format(
+          "{} simulate --solver full --mesh {} --mesher {} --subject {} --motion {} --frames {} --integrator {} --mass {} "
+          "--no-output -q --out {}",
+          sflsh_path, size, mesher, subject, motion, frames + 1, integrator, mass, dir.string());
+      if (np > 1) {
+        command = fmt::format(
+            "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 mpiexec -n {} {}",
+            np, command);
       }
+      // Warm the layer cache outside the measurement (meshing is benchmarked by bench_meshing).
+      const auto [code, peak_mb] = run_measured(command);
+      if (code != 0) {
+        std::cerr << "bench_fullspace: " << size << " with " << np << " processes, " << integrator << ", " << mass
+                  << " mass failed (exit " << code << ")\n";
+        results.push_back({{"size", size}, {"procs", np}, {"integrator", integrator}, {"mass", mass},
+                           {"error", fmt::format("exit code {}", code)}});
+        continue;
+      }
+      const nlohmann::json summary = read_json(dir / "summary.json");
+      const double steps = static_cast<double>(summary["motion"]["frames"].get<long>() - 1) *
+                           summary["solver"]["substeps"].get<double>();
+      const double solve_s = summary["timings"]["solve_seconds"].get<double>();
+      const double per_step = solve_s / steps;
+      const double median = median_seconds_per_step(summary);
+      const double newton = summary["solver"]["newton_iterations"].get<double>() / steps;
+      const double ksp = summary["solver"]["linear_iterations"].get<double>() / steps;
+      const double assembly = summary["timings"]["jacobian_seconds"].get<double>() + summary["timings"]["function_seconds"].get<double>();
+      const long tets = summary["mesh"]["tets"].get<long>();
+      nlohmann::json r = {{"size", size},
+                          {"procs", np},
+                          {"integrator", integrator},
+                          {"mass", mass},
+                          {"mesher", mesher},
+                          {"tets", tets},
+                          {"nodes", summary["mesh"]["nodes"]},
+                          {"steps", steps},
+                          {"seconds_per_step", per_step},
+                          {"median_seconds_per_step", median},
+                          {"newton_per_step", newton},
+                          {"ksp_per_step", ksp},
+                          {"assembly_fraction", solve_s > 0 ? assembly / solve_s : 0.0},
+                          {"build_seconds", summary["timings"]["build_seconds"]},
+                          {"peak_rss_mb", peak_mb}};
+      std::cout << fmt::format("{:<8} {:>5} {:<14} {:<10} {:>8} {:>8} {:>8.3f} {:>8.3f} {:>7.2f} {:>8.1f} {:>7.0f} {:>7.1f} {:>7.0f}\n",
+                               size, np, integrator, mass, tets, summary["mesh"]["nodes"].get<long>(), per_step, median,
+                               newton, ksp, 100.0 * r["assembly_fraction"].get<double>(), r["build_seconds"].get<double>(),
+                               peak_mb);
+      const std::string key = fmt::format("{} process(es), {}, {} mass", np, integrator, mass);
+      scaling[key].first.push_back(static_cast<double>(tets));
+      scaling[key].second.push_back(per_step);
+      results.push_back(r);
     }
     std::filesystem::remove_all(scratch);
     nlohmann::json exponents = nlohmann::json::object();
-    for (const auto& [np, data] : scaling) {
+    for (const auto& [key, data] : scaling) {
       if (data.first.size() < 2) continue;
       const double slope = loglog_slope(data.first, data.second);
-      exponents[std::to_string(np)] = slope;
-      std::cout << fmt::format("scaling exponent (s/step ∝ tets^k) with {} process(es): k = {:.2f}\n", np, slope);
+      exponents[key] = slope;
+      std::cout << fmt::format("scaling exponent (s/step ∝ tets^k) with {}: k = {:.2f}\n", key, slope);
     }
     write_json(out, {{"benchmark", "fullspace"},
                      {"subject", subject},
                      {"motion", motion},
                      {"frames", frames},
                      {"mesher", mesher},
+                     {"integrators", split(integrators)},
+                     {"masses", split(masses)},
                      {"results", results},
                      {"scaling_exponent", exponents}});
     std::cout << "wrote " << out << "\n";

@@ -2,6 +2,7 @@
 // soft-tissue layer driven by a motion. Both write the posed body surface per frame exactly as `sflsh motion export` does (same points,
 // same order, same .pvd layout), so that subtracting the two gives the soft-tissue motion.
 #include "commands.hpp"
+#include "layer_setup.hpp"
 
 #include <sflsh/body/motion.hpp>
 #include <sflsh/core/error.hpp>
@@ -11,9 +12,11 @@
 #include <sflsh/core/summary.hpp>
 #include <sflsh/core/vtk_io.hpp>
 #include <sflsh/fullspace/fullspace_solver.hpp>
-#include <sflsh/model/body_layer.hpp>
 #include <sflsh/fullspace/reference_integrator.hpp>
+#include <sflsh/model/body_layer.hpp>
+#include <sflsh/model/frame_loop.hpp>
 #include <sflsh/model/simulation_output.hpp>
+#include <sflsh/model/time_integrator.hpp>
 #include <sflsh/material/material_file.hpp>
 #include <sflsh/meshing/layer_cache.hpp>
 #include <sflsh/reduced/reduced_solver.hpp>
@@ -40,13 +43,8 @@ struct SimulateOptions {
   double fps = 60.0;
   int substeps = 1;
   std::string mesh = "default";
-  std::string mesher = "layered";
-  std::string material;
-  int control_points = 12;
-  std::string cache;
-  double density = 1000.0;
-  bool gravity = false;
-  double stiffness_scale = 1.0;
+  LayerSettings layer;                       ///< mesher, material, cache, density, gravity, stiffness, mass
+  std::string integrator = "backward_euler";   ///< backward_euler | bdf2 | newmark (time_integrator.hpp)
   bool write_layer = false;
   bool no_output = false;
   std::string out;
@@ -60,16 +58,13 @@ struct SimulateOptions {
   int threads = 0;
 };
 
-using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
-
 // sflsh simulate --scene FILE: bodies, objects and the effects the scene calls for (scene_runner.hpp).
 void run_scene_file(const SimulateOptions& opt, const Invocation& invocation, int rank) {
   const scene::Scene scene = scene::load_scene(opt.scene);
   scene::SceneRunOptions options;
   options.frames = opt.frames;
   options.out = opt.out;
-  options.cache_dir = opt.cache;
+  options.cache_dir = opt.layer.cache;
   options.threads = opt.threads;
   options.write_frames = !opt.no_output;
   options.rank = rank;
@@ -93,8 +88,8 @@ void run_simulate(const SimulateOptions& opt, const Invocation& invocation, int 
   require(opt.fps > 0.0, "--fps must be positive, got {}", opt.fps);
   require(opt.substeps >= 1, "--substeps must be at least 1, got {}", opt.substeps);
   require(opt.frames >= 0, "--frames must be non-negative, got {}", opt.frames);
-  require(opt.density > 0.0, "--density must be positive, got {}", opt.density);
-  require(opt.stiffness_scale > 0.0, "--stiffness-scale must be positive, got {}", opt.stiffness_scale);
+  check_layer_settings(opt.layer);
+  const model::Integrator integrator = model::parse_integrator(opt.integrator, "--integrator");
 
   const body::BodyModel model = load_selected_body(opt.subject);
   std::string subject_label;
@@ -102,24 +97,17 @@ void run_simulate(const SimulateOptions& opt, const Invocation& invocation, int 
   const body::Motion motion = body::load_motion(opt.motion, opt.fps, opt.frames);
   motion.validate();
 
-  std::optional<material::MaterialFile> material_file;
-  if (!opt.material.empty()) material_file = material::load_material_file(opt.material);
-
-  model::BodyLayerOptions layer_options;
-  layer_options.mesher = meshing::parse_mesher(opt.mesher);
-  layer_options.size = meshing::parse_size_preset(opt.mesh);
-  if (!opt.cache.empty()) layer_options.cache_dir = opt.cache;
-  layer_options.density = opt.density;
-  layer_options.gravity = opt.gravity;
-  layer_options.stiffness_scale = opt.stiffness_scale;
+  const std::optional<material::MaterialFile> material_file = load_layer_material(opt.layer);
+  const model::BodyLayerOptions layer_options = body_layer_options(opt.layer, opt.mesh);
   const auto t_build = Clock::now();
   model::BodyLayer layer = model::build_body_layer(model, beta, motion, material_file ? &*material_file : nullptr,
-                                                           opt.control_points, layer_options);
+                                                   opt.layer.control_points, layer_options);
   const double build_seconds = seconds_since(t_build);
   const model::Problem& problem = layer.problem;
-  logger()->info("simulate: {} nodes ({} free), {} tets, {} frames at {} fps, {} substep(s), {} process(es)",
+  logger()->info("simulate: {} nodes ({} free), {} tets, {} frames at {} fps, {} substep(s), {} + {} mass, {} process(es)",
                  problem.num_nodes(), problem.num_nodes() - static_cast<int>(problem.dirichlet.dof.size() / 3),
-                 problem.num_tets(), motion.num_frames(), motion.fps, opt.substeps, size);
+                 problem.num_tets(), motion.num_frames(), motion.fps, opt.substeps, model::to_string(integrator),
+                 model::to_string(problem.mass_kind), size);
 
   const bool use_reduced = opt.solver == "reduced";
   require(!use_reduced || size == 1, "--solver reduced runs on one process (got {}); parallelize over bodies instead", size);
@@ -133,93 +121,76 @@ void run_simulate(const SimulateOptions& opt, const Invocation& invocation, int 
     ro.cubature = opt.cubature;
     ro.weighting = opt.cubature_weights == "voronoi" ? reduced::CubatureWeighting::voronoi : reduced::CubatureWeighting::nnls;
     ro.basis.affine = opt.affine;
-    if (!opt.cache.empty()) ro.cache_dir = opt.cache;
+    if (!opt.layer.cache.empty()) ro.cache_dir = opt.layer.cache;
     reduced_model = reduced::build_reduced_model(layer, ro);
-    fast = std::make_unique<reduced::ReducedSolver>(problem, reduced_model->subspace, reduced_model->cubature);
+    reduced::ReducedOptions solver_options;
+    solver_options.integrator = integrator;
+    fast = std::make_unique<reduced::ReducedSolver>(problem, reduced_model->subspace, reduced_model->cubature, solver_options);
     fast->initialize(model::initial_state(problem, 0.0));
   } else {
-    full = std::make_unique<fullspace::FullSpaceSolver>(problem, MPI_COMM_WORLD);
+    fullspace::FullSpaceOptions solver_options;
+    solver_options.integrator = integrator;
+    full = std::make_unique<fullspace::FullSpaceSolver>(problem, MPI_COMM_WORLD, solver_options);
     full->initialize(model::initial_state(problem, 0.0));
   }
   const double model_seconds = seconds_since(t_model);
-  auto current_state = [&]() { return use_reduced ? fast->full_state() : full->state(); };
+  model::BodySolver& solver = use_reduced ? static_cast<model::BodySolver&>(*fast) : *full;
 
   const bool write = rank == 0 && !opt.no_output;
   std::optional<RunFolder> run;
   if (rank == 0) run.emplace(opt.out);
   model::SimulationWriter writer(layer, write ? &*run : nullptr, opt.write_layer);
-  writer.add_frame(0.0, current_state());
+  writer.add_frame(0.0, solver.current_state());
 
   nlohmann::json frames = nlohmann::json::array();
   frames.push_back({{"frame", 0}, {"t", 0.0}, {"newton_iterations", 0}, {"linear_iterations", 0}, {"seconds", 0.0}});
   const double h = 1.0 / (motion.fps * opt.substeps);
   Progress progress("frames", motion.num_frames() > 0 ? motion.num_frames() - 1 : 0, rank == 0);
-  long newton_total = 0, linear_total = 0, retries_total = 0, factorizations_total = 0;
-  double solve_seconds = 0.0, function_seconds = 0.0, jacobian_seconds = 0.0;
-  double elastic_seconds = 0.0, inertia_seconds = 0.0, dense_seconds = 0.0, output_seconds = 0.0;
-  for (std::size_t f = 1; f < motion.num_frames(); ++f) {
-    int newton = 0, linear = 0, retries = 0;
-    double seconds = 0.0;
-    for (int k = 0; k < opt.substeps; ++k) {
-      if (use_reduced) {
-        const model::StepStats st = fast->step(h);
-        newton += st.newton_iterations;
-        retries += st.failed_attempts;
-        seconds += st.seconds;
-        elastic_seconds += st.elastic_seconds;
-        inertia_seconds += st.inertia_seconds;
-        dense_seconds += st.solve_seconds;
-        factorizations_total += st.factorizations;
-      } else {
-        const model::StepStats st = full->step(h);
-        newton += st.newton_iterations;
-        linear += st.linear_iterations;
-        retries += st.failed_attempts;
-        seconds += st.seconds;
-        function_seconds += st.function_seconds;
-        jacobian_seconds += st.jacobian_seconds;
-      }
-    }
-    newton_total += newton;
-    linear_total += linear;
-    retries_total += retries;
-    solve_seconds += seconds;
+  double output_seconds = 0.0;
+  model::FrameLoopOptions loop;
+  loop.frames = static_cast<int>(motion.num_frames());
+  loop.fps = motion.fps;
+  loop.substeps = opt.substeps;
+  const model::StepStats total = model::run_frames(solver, loop, [&](int frame, double, const model::StepStats& st) {
+    const auto f = static_cast<std::size_t>(frame);
     const auto t_output = Clock::now();
-    const model::State state = current_state();
+    const model::State state = solver.current_state();
     const model::Energies e = model::energies(problem, state);
     writer.add_frame(motion.time(f), state);
     output_seconds += seconds_since(t_output);
     frames.push_back({{"frame", f},
                       {"t", motion.time(f)},
-                      {"newton_iterations", newton},
-                      {"linear_iterations", linear},
-                      {"failed_attempts", retries},
-                      {"seconds", seconds},
+                      {"newton_iterations", st.newton_iterations},
+                      {"linear_iterations", st.linear_iterations},
+                      {"failed_attempts", st.failed_attempts},
+                      {"seconds", st.seconds},
                       {"energy", {{"kinetic", e.kinetic}, {"elastic", e.elastic}, {"gravity", e.gravity}}}});
     progress.advance();
-  }
+  });
   progress.finish();
+  const double solve_seconds = total.seconds;
   if (rank != 0) return;
 
   writer.finish();
   nlohmann::json summary = summary_header("simulate", invocation.argc, invocation.argv);
+  summary["integrator"] = model::to_string(integrator);
+  summary["mass"] = model::to_string(problem.mass_kind);
   summary["solver"] = {{"name", opt.solver},
-                       {"integrator", "backward_euler"},
+                       {"integrator", model::to_string(integrator)},
+                       {"startup_steps", total.startup_steps},
                        {"processes", size},
                        {"step", h},
                        {"substeps", opt.substeps},
-                       {"newton_iterations", newton_total},
-                       {"linear_iterations", linear_total},
-                       {"failed_attempts", retries_total}};
+                       {"newton_iterations", total.newton_iterations},
+                       {"linear_iterations", total.linear_iterations},
+                       {"failed_attempts", total.failed_attempts}};
   summary["body"] = opt.subject.body_path.empty() ? "open_body" : opt.subject.body_path;
   summary["subject"] = subject_label;
   summary["beta"] = std::vector<double>(beta.data(), beta.data() + beta.size());
   summary["motion"] = {{"name", motion.name}, {"source", motion.source}, {"fps", motion.fps}, {"frames", motion.num_frames()}};
-  summary["mesh"] = {{"mesher", opt.mesher}, {"size", opt.mesh}, {"nodes", problem.num_nodes()},
+  summary["mesh"] = {{"mesher", opt.layer.mesher}, {"size", opt.mesh}, {"nodes", problem.num_nodes()},
                      {"tets", problem.num_tets()}, {"constrained_dofs", problem.dirichlet.dof.size()}};
-  summary["material"] = {{"file", opt.material}, {"control_points", material_file ? material_file->control_points.size()
-                                                                                    : static_cast<std::size_t>(opt.control_points)},
-                         {"density", opt.density}, {"gravity", opt.gravity}, {"stiffness_scale", opt.stiffness_scale}};
+  summary["material"] = material_summary(opt.layer, material_file);
   if (reduced_model) {
     summary["reduced"] = {{"point_handles", reduced_model->handles.point_nodes.size()},
                           {"bone_handles", reduced_model->handles.bone_joints().size()},
@@ -229,19 +200,20 @@ void run_simulate(const SimulateOptions& opt, const Invocation& invocation, int 
                           {"cubature", reduced_model->cubature.size()},
                           {"cubature_method", reduced_model->cubature.method},
                           {"cache", reduced_model->cache_outcome},
-                          {"factorizations", factorizations_total},
+                          {"factorizations", total.factorizations},
                           {"model_seconds", reduced_model->build_seconds}};
   }
   summary["dynamics"] = writer.dynamics_summary();
   summary["frames"] = frames;
   summary["timings"] = {{"build_seconds", build_seconds},
                         {"solve_seconds", solve_seconds},
-                        {"function_seconds", function_seconds},
-                        {"jacobian_seconds", jacobian_seconds},
+                        {"function_seconds", total.function_seconds},
+                        {"jacobian_seconds", total.jacobian_seconds},
                         {"model_seconds", model_seconds},
-                        {"elastic_seconds", elastic_seconds},
-                        {"inertia_seconds", inertia_seconds},
-                        {"dense_solve_seconds", dense_seconds},
+                        {"elastic_seconds", total.elastic_seconds},
+                        {"inertia_seconds", total.inertia_seconds},
+                        {"potential_seconds", total.potential_seconds},
+                        {"dense_solve_seconds", total.solve_seconds},
                         {"output_seconds", output_seconds},
                         {"frames_per_second", solve_seconds > 0 ? static_cast<double>(motion.num_frames() - 1) / solve_seconds : 0.0},
                         {"seconds_per_frame", motion.num_frames() > 1 ? solve_seconds / static_cast<double>(motion.num_frames() - 1) : 0.0},
@@ -280,17 +252,14 @@ void register_simulate_commands(CLI::App& app, const Invocation& invocation) {
   cmd->add_option("--motion", opt->motion, "Motion: a procedural name (sflsh motion list) or an AMASS .npz path (required without --scene)");
   cmd->add_option("--frames", opt->frames, "Number of frames (0: the motion's length)");
   cmd->add_option("--fps", opt->fps, "Frame rate of the output (and of the motion sampling)");
-  cmd->add_option("--substeps", opt->substeps, "Backward-Euler steps per frame (step = 1 / (fps · substeps))");
+  cmd->add_option("--substeps", opt->substeps, "Integrator steps per frame (step = 1 / (fps · substeps))");
+  cmd->add_option("--integrator", opt->integrator,
+                  "Time integrator: backward_euler (default; first order, damps) | bdf2 (second order, mild damping) | "
+                  "newmark (trapezoidal, no numerical damping); docs/fullspace.md");
   cmd->add_option("--mesh", opt->mesh, "Layer resolution: coarse | default | fine")
       ->check(CLI::IsMember({"coarse", "default", "fine"}));
-  cmd->add_option("--mesher", opt->mesher, "Layer mesher: layered (default: fast, robust retargeting) | cgal | gmsh")
-      ->check(CLI::IsMember({"layered", "cgal", "gmsh"}));
-  cmd->add_option("--material", opt->material, "Material file (TOML); default: the project defaults at --control-points");
-  cmd->add_option("--control-points", opt->control_points, "Control points N when no --material is given");
-  cmd->add_option("--cache", opt->cache, "Cache folder for template meshes (default $SFLSH_CACHE or ~/.cache/sflsh)");
-  cmd->add_option("--density", opt->density, "Tissue density [kg/m³]");
-  cmd->add_flag("--gravity", opt->gravity, "Apply gravity (off by default: the body's rest shape already includes sag)");
-  cmd->add_option("--stiffness-scale", opt->stiffness_scale, "Multiply Y_t and Y_n by this factor");
+  add_layer_options(*cmd, opt->layer);
+  add_mass_option(*cmd, opt->layer);
   cmd->add_flag("--write-layer", opt->write_layer, "Also write the tet layer per frame (layer.pvd)");
   cmd->add_flag("--no-output", opt->no_output, "Write only summary.json");
   cmd->add_option("--out", opt->out, "Output folder")->required();

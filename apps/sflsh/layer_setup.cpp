@@ -16,9 +16,14 @@ void add_layer_options(CLI::App& cmd, LayerSettings& s) {
   cmd.add_option("--stiffness-scale", s.stiffness_scale, "Multiply Y_t and Y_n by this factor");
 }
 
+void add_mass_option(CLI::App& cmd, LayerSettings& s) {
+  cmd.add_option("--mass", s.mass, "Inertia: lumped (ρV/4 per node) | consistent (ρV/20 (1 + δ_ab) per tet node pair)");
+}
+
 void check_layer_settings(const LayerSettings& s) {
   require(s.density > 0.0, "--density must be positive, got {}", s.density);
   require(s.stiffness_scale > 0.0, "--stiffness-scale must be positive, got {}", s.stiffness_scale);
+  model::parse_mass_kind(s.mass, "--mass");
 }
 
 std::optional<material::MaterialFile> load_layer_material(const LayerSettings& s) {
@@ -34,6 +39,7 @@ model::BodyLayerOptions body_layer_options(const LayerSettings& s, const std::st
   o.density = s.density;
   o.gravity = s.gravity;
   o.stiffness_scale = s.stiffness_scale;
+  o.mass = model::parse_mass_kind(s.mass, "--mass");
   return o;
 }
 

@@ -1,7 +1,7 @@
 #pragma once
-// What the commands that build a subject's soft-tissue layer and reduced models on it share (compare,
-// tradeoff): the layer options on the command line, the reduced-model options, the region normals for σ and
-// a wall clock.
+// What the commands that build a subject's soft-tissue layer and reduced models on it share (simulate,
+// compare, tradeoff): the layer options on the command line, the reduced-model options, the region normals for
+// σ and a wall clock.
 #include <sflsh/model/body_layer.hpp>
 #include <sflsh/material/material_file.hpp>
 #include <sflsh/reduced/reduced_model.hpp>
@@ -27,10 +27,13 @@ struct LayerSettings {
   double density = 1000.0;              ///< [kg/m³]
   bool gravity = false;
   double stiffness_scale = 1.0;         ///< multiplies Y_t and Y_n
+  std::string mass = "lumped";          ///< lumped | consistent (model/mass.hpp)
 };
 /// --mesher, --material, --control-points, --cache, --density, --gravity, --stiffness-scale.
 void add_layer_options(CLI::App& cmd, LayerSettings& settings);
-/// Throws a one-line sflsh::Error for a non-positive density or stiffness scale.
+/// --mass lumped|consistent (the commands that choose the inertia; the others keep lumped).
+void add_mass_option(CLI::App& cmd, LayerSettings& settings);
+/// Throws a one-line sflsh::Error for a non-positive density or stiffness scale or an unknown mass kind.
 void check_layer_settings(const LayerSettings& settings);
 /// The material file of --material, or nothing (the defaults).
 std::optional<material::MaterialFile> load_layer_material(const LayerSettings& settings);

@@ -1,60 +1,172 @@
-// Backward Euler on PETSc: the incremental potential, its gradient (residual) and Hessian assembled over
-// this rank's tets, and the direct refill of the assembled AIJ arrays (backward_euler_impl.hpp).
+// The full-space solver's Φ, residual and Hessian as sums of the model's terms (model/terms.hpp) over this
+// rank's share (fullspace_solver_impl.hpp), the Dirichlet penalty on constrained components, and the PETSc
+// Hessian sink: the first assembly goes through MatSetValuesBlocked, later ones add every 3×3 block directly
+// into the AIJ value arrays at offsets computed once (build_refill).
 #include "fullspace_solver_impl.hpp"
 
 namespace sflsh::fullspace {
 
-namespace {
+// ---------------------------------------------------------------------------------------------------------
+// The Hessian sink
 
-material::TetNodes tet_nodes(const Problem& problem, const Eigen::VectorXd& x, int e) {
-  material::TetNodes nodes;
-  for (int a = 0; a < 4; ++a) nodes.col(a) = x.segment<3>(3 * problem.tets(e, a));
-  return nodes;
+/// Adds the terms' blocks to J, rows of this rank only, with constrained rows and columns dropped (the
+/// constrained rows get D e_d afterwards, add_dirichlet_rows).
+class FullSpaceSolver::Impl::PetscSink final : public model::HessianSink {
+ public:
+  /// `diag` / `offdiag`: the value arrays of J's local blocks when the refill is ready (else null).
+  PetscSink(Impl& solver, PetscScalar* diag, PetscScalar* offdiag) : solver_(solver), diag_(diag), offdiag_(offdiag) {}
+
+  void add_tet(std::size_t k, int e, const material::Matrix12d& block) override {
+    const unsigned mask = solver_.tet_constrained[k];
+    if (!solver_.refill.ready) return set_tet(e, block, mask);
+    const PetscInt* offsets = solver_.refill.tet_offset.data() + 48 * k;
+    for (int a = 0; a < 4; ++a) {
+      for (int b = 0; b < 4; ++b, offsets += 3) {
+        if (offsets[0] == -1) continue;   // row of another rank
+        if (mask == 0) {
+          add_rows(offsets, block.block<3, 3>(3 * a, 3 * b));
+        } else {
+          add_rows_masked(offsets, block.block<3, 3>(3 * a, 3 * b), mask >> (3 * a), mask >> (3 * b));
+        }
+      }
+    }
+  }
+
+  void add_node(int node, const Eigen::Matrix3d& block) override {
+    require(solver_.owns(node), "full-space Hessian: a node block for node {}, which this process does not own", node);
+    const unsigned mask = node_mask(node);
+    const int row = solver_.index_of(node);
+    if (solver_.refill.ready) {
+      add_rows_masked(solver_.refill.node_offset.data() + 3 * (row - solver_.begin), block, mask, mask);
+      return;
+    }
+    Eigen::Matrix3d masked = block;
+    for (int r = 0; r < 3; ++r) {
+      if (!(mask >> r & 1u)) continue;
+      masked.row(r).setZero();
+      masked.col(r).setZero();
+    }
+    const PetscInt index = row;
+    SFLSH_PETSC(MatSetValuesBlocked(solver_.J, 1, &index, 1, &index, masked.data(), ADD_VALUES));
+  }
+
+  /// D on the diagonal of the constrained components of every owned node. The first assembly also sets every
+  /// owned node's diagonal block (zero where free), so the pattern always holds it.
+  void add_dirichlet_rows() {
+    for (int row = solver_.begin; row < solver_.end; ++row) {
+      const unsigned mask = node_mask(solver_.node_of(row));
+      if (mask == 0 && solver_.refill.ready) continue;
+      Eigen::Matrix3d B = Eigen::Matrix3d::Zero();
+      for (int r = 0; r < 3; ++r)
+        if (mask >> r & 1u) B(r, r) = solver_.dirichlet_diagonal;
+      if (solver_.refill.ready) {
+        add_rows(solver_.refill.node_offset.data() + 3 * (row - solver_.begin), B);
+        continue;
+      }
+      const PetscInt index = row;
+      SFLSH_PETSC(MatSetValuesBlocked(solver_.J, 1, &index, 1, &index, B.data(), ADD_VALUES));
+    }
+  }
+
+ private:
+  unsigned node_mask(int node) const {
+    const auto first = 3 * static_cast<std::size_t>(node);
+    return (solver_.constrained[first] ? 1u : 0u) | (solver_.constrained[first + 1] ? 2u : 0u) |
+           (solver_.constrained[first + 2] ? 4u : 0u);
+  }
+  /// Where the value of scalar row `offset` lives (Refill's encoding).
+  PetscScalar* destination(PetscInt offset) const { return offset >= 0 ? diag_ + offset : offdiag_ + (-offset - 2); }
+
+  /// The three rows of a 3×3 block at their offsets (adjacent columns).
+  template <typename Block>
+  void add_rows(const PetscInt* offsets, const Block& block) const {
+    for (int r = 0; r < 3; ++r) {
+      PetscScalar* dst = destination(offsets[r]);
+      for (int c = 0; c < 3; ++c) dst[c] += block(r, c);
+    }
+  }
+  /// The same without the rows in `row_mask` and the columns in `col_mask` (bit k = component k).
+  template <typename Block>
+  void add_rows_masked(const PetscInt* offsets, const Block& block, unsigned row_mask, unsigned col_mask) const {
+    for (int r = 0; r < 3; ++r) {
+      if (row_mask >> r & 1u) continue;
+      PetscScalar* dst = destination(offsets[r]);
+      for (int c = 0; c < 3; ++c)
+        if (!(col_mask >> c & 1u)) dst[c] += block(r, c);
+    }
+  }
+  /// First assembly: the whole 12×12 block through PETSc; rows of other ranks get index −1, which PETSc skips
+  /// (their owner adds them from its own row tets).
+  void set_tet(int e, const material::Matrix12d& block, unsigned mask) const {
+    const Problem& problem = solver_.problem;
+    material::Matrix12d masked = block;
+    for (int j = 0; j < 12; ++j) {
+      if (!(mask >> j & 1u)) continue;
+      masked.row(j).setZero();
+      masked.col(j).setZero();
+    }
+    PetscInt rows[4], cols[4];
+    for (int a = 0; a < 4; ++a) {
+      cols[a] = solver_.index_of(problem.tets(e, a));
+      rows[a] = solver_.owns(problem.tets(e, a)) ? cols[a] : -1;
+    }
+    SFLSH_PETSC(MatSetValuesBlocked(solver_.J, 4, rows, 4, cols, masked.data(), ADD_VALUES));
+  }
+
+  Impl& solver_;
+  PetscScalar* diag_;
+  PetscScalar* offdiag_;
+};
+
+// ---------------------------------------------------------------------------------------------------------
+// The terms
+
+void FullSpaceSolver::Impl::create_terms() {
+  subset = std::make_shared<model::TermSubset>();
+  subset->value_tets = my_tets;
+  subset->row_tets = row_tets;
+  for (int k = begin; k < end; ++k) subset->nodes.push_back(node_of(k));   // solver order: rows nearly in order
+  elastic_term = std::make_unique<model::ElasticTerm>(problem, subset);
+  inertia_term = std::make_unique<model::InertiaTerm>(problem, subset);
+  gravity_term = std::make_unique<model::GravityTerm>(problem, subset);
+  potential_term = std::make_unique<model::PotentialTerm>(problem);
+  tet_constrained.assign(row_tets.size(), 0);
+  for (std::size_t k = 0; k < row_tets.size(); ++k) {
+    for (int a = 0; a < 4; ++a) {
+      for (int c = 0; c < 3; ++c) {
+        if (constrained[3 * static_cast<std::size_t>(problem.tets(row_tets[k], a)) + static_cast<std::size_t>(c)])
+          tet_constrained[k] = static_cast<std::uint16_t>(tet_constrained[k] | (1u << (3 * a + c)));
+      }
+    }
+  }
 }
 
-}  // namespace
-
-// The potential sees constrained components at their prescribed values (so the free rows do not depend on
-// them) plus the penalty ½ D (x_d − x̄_d)², which is zero at every Newton iterate; its gradient and Hessian are
-// then exactly what residual() and jacobian() assemble.
+// Φ sees constrained components at their prescribed values (so the free rows do not depend on them) plus the
+// penalty ½ D (x_d − x̄_d)², which is zero at every Newton iterate; its gradient and Hessian are then exactly
+// what residual() and jacobian() assemble.
 double FullSpaceSolver::Impl::objective(const Eigen::VectorXd& x_in) {
   const auto t0 = Clock::now();
   const Eigen::VectorXd& x = with_prescribed(x_in);
-  double penalty = 0.0;
+  double local = 0.0;
   for (int k = begin; k < end; ++k) {
     for (int d = 3 * node_of(k); d < 3 * node_of(k) + 3; ++d) {
-      if (constrained[static_cast<std::size_t>(d)]) penalty += 0.5 * dirichlet_diagonal * std::pow(x_in[d] - x[d], 2);
+      if (constrained[static_cast<std::size_t>(d)]) local += 0.5 * dirichlet_diagonal * std::pow(x_in[d] - x[d], 2);   // ½ D (x_d − x̄_d)²
     }
   }
-  tbb::enumerable_thread_specific<double> partial(0.0);
-  arena->execute([&] {
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, my_tets.size(), 256), [&](const auto& range) {
-      double& acc = partial.local();
-      for (std::size_t k = range.begin(); k < range.end(); ++k) {
-        const int e = my_tets[k];
-        const auto se = static_cast<std::size_t>(e);
-        try {
-          const double scale = problem.tet_energy_scale.empty() ? 1.0 : problem.tet_energy_scale[se];
-          acc += scale * material::tet_elastic_energy(problem.tet_rest[se], tet_nodes(problem, x, e), problem.tet_material[se]);
-        } catch (const Error&) {
-          acc = kInfinity;   // the Fung exponent overflowed: this trial point is out of reach
-        }
-      }
-    });
-  });
-  double local = partial.combine(std::plus<double>()) + penalty;
-  const auto t_mass = Clock::now();
-  for (int k = begin; k < end; ++k) {
-    const int i = node_of(k);
-    const double m = problem.mass[i];
-    if (m == 0.0) continue;
-    const auto si = static_cast<std::size_t>(i);
-    const Eigen::Vector3d p = frame.A[si] * x.segment<3>(3 * i) + frame.d.row(i).transpose();
-    if (inertia) local += m / (2.0 * h * h) * (p - p_tilde.row(i).transpose()).squaredNorm();
-    local -= m * problem.gravity.dot(p);
+  const auto t_elastic = Clock::now();
+  double elastic = 0.0;
+  arena->execute([&] { elastic = elastic_term->value(x); });   // +∞ where the Fung exponent overflows
+  local += elastic;
+  const auto t_inertia = Clock::now();
+  if (stats) stats->elastic_seconds += std::chrono::duration<double>(t_inertia - t_elastic).count();
+  if (inertia) local += inertia_term->value(x);
+  local += gravity_term->value(x);
+  if (stats) stats->inertia_seconds += seconds_since(t_inertia);
+  if (potential_term->active()) {
+    const auto t_potential = Clock::now();
+    local += potential_term->value(x);
+    if (stats) stats->potential_seconds += seconds_since(t_potential);
   }
-  if (stats) stats->inertia_seconds += seconds_since(t_mass);
-  local += potential_energy(x);
   if (!std::isfinite(local)) local = kInfinity;
   double global = 0.0;
   MPI_Allreduce(&local, &global, 1, MPI_DOUBLE, MPI_SUM, comm);
@@ -66,47 +178,25 @@ bool FullSpaceSolver::Impl::residual(const Eigen::VectorXd& x_in, Vec out) {
   const auto t0 = Clock::now();
   const Eigen::VectorXd& x = with_prescribed(x_in);
   const int n = problem.num_nodes();
-  tbb::enumerable_thread_specific<Eigen::VectorXd> partial([n] { return Eigen::VectorXd::Zero(3 * n); });
-  tbb::enumerable_thread_specific<int> failed(0);
-  arena->execute([&] {
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, row_tets.size(), 256), [&](const auto& range) {
-      Eigen::VectorXd& g = partial.local();
-      for (std::size_t k = range.begin(); k < range.end(); ++k) {
-        const int e = row_tets[k];
-        const auto se = static_cast<std::size_t>(e);
-        try {
-          const double scale = problem.tet_energy_scale.empty() ? 1.0 : problem.tet_energy_scale[se];
-          const material::Vector12d ge =
-              scale * material::tet_elastic_dq(problem.tet_rest[se], tet_nodes(problem, x, e), problem.tet_material[se]);
-          for (int a = 0; a < 4; ++a) g.segment<3>(3 * problem.tets(e, a)) += ge.segment<3>(3 * a);
-        } catch (const Error&) {
-          ++failed.local();
-        }
-      }
-    });
-  });
   Eigen::VectorXd g = Eigen::VectorXd::Zero(3 * n);
-  for (const auto& part : partial) g += part;
-  int local_failed = failed.combine(std::plus<int>());
-  const auto t_mass = Clock::now();
-  for (int k = begin; k < end; ++k) {
-    const int i = node_of(k);
-    const double m = problem.mass[i];
-    if (m == 0.0) continue;
-    const auto si = static_cast<std::size_t>(i);
-    const Eigen::Vector3d p = frame.A[si] * x.segment<3>(3 * i) + frame.d.row(i).transpose();
-    Eigen::Vector3d force = -m * problem.gravity;
-    if (inertia) force += m / (h * h) * (p - p_tilde.row(i).transpose());
-    g.segment<3>(3 * i) += frame.A[si].transpose() * force;
+  bool ok = true;
+  arena->execute([&] { ok = elastic_term->add_gradient(x, g); });
+  const auto t_inertia = Clock::now();
+  if (stats) stats->elastic_seconds += std::chrono::duration<double>(t_inertia - t0).count();
+  if (inertia) ok = inertia_term->add_gradient(x, g) && ok;
+  ok = gravity_term->add_gradient(x, g) && ok;
+  if (stats) stats->inertia_seconds += seconds_since(t_inertia);
+  if (potential_term->active()) {
+    const auto t_potential = Clock::now();
+    ok = potential_term->add_gradient(x, g) && ok;
+    if (stats) stats->potential_seconds += seconds_since(t_potential);
   }
-  if (stats) stats->inertia_seconds += seconds_since(t_mass);
-  add_potential_gradient(x, g);
   // Constrained rows: D (x_d − x̄_d), zero at every iterate (x starts on the prescribed values and the Jacobian row
   // D e_d keeps it there), so that the residual's derivative is the assembled row (PETSc's Jacobian test).
   for (int d = 0; d < 3 * n; ++d) {
     if (constrained[static_cast<std::size_t>(d)]) g[d] = dirichlet_diagonal * (x_in[d] - prescribed[d]);
   }
-  if (!g.allFinite()) ++local_failed;
+  int local_failed = ok && g.allFinite() ? 0 : 1;
   int any_failed = 0;
   MPI_Allreduce(&local_failed, &any_failed, 1, MPI_INT, MPI_SUM, comm);
 
@@ -140,95 +230,24 @@ bool FullSpaceSolver::Impl::jacobian(const Eigen::VectorXd& x) {
   } else {
     SFLSH_PETSC(MatZeroEntries(J));
   }
-  auto add_rows = [&](const PetscInt* offsets, const auto& block) {   // 3 rows of a 3×3 block
-    for (int r = 0; r < 3; ++r) {
-      const PetscInt o = offsets[r];
-      PetscScalar* dst = o >= 0 ? diag_values + o : offdiag_values + (-o - 2);
-      for (int c = 0; c < 3; ++c) dst[c] += block(r, c);
-    }
-  };
-  constexpr std::size_t kBatch = 8192;
-  std::vector<material::Matrix12d> blocks(std::min(kBatch, row_tets.size()));
-  int local_failed = 0;
-  for (std::size_t first = 0; first < row_tets.size(); first += kBatch) {
-    const std::size_t count = std::min(kBatch, row_tets.size() - first);
-    tbb::enumerable_thread_specific<int> failed(0);
-    arena->execute([&] {
-      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 64), [&](const auto& range) {
-        for (std::size_t k = range.begin(); k < range.end(); ++k) {
-          const int e = row_tets[first + k];
-          const auto se = static_cast<std::size_t>(e);
-          material::Matrix12d& K = blocks[k];
-          try {
-            const double scale = problem.tet_energy_scale.empty() ? 1.0 : problem.tet_energy_scale[se];
-            K = scale * material::tet_elastic_dq2(problem.tet_rest[se], tet_nodes(problem, x, e), problem.tet_material[se],
-                                                  projection_now);
-          } catch (const Error&) {
-            K.setZero();
-            ++failed.local();
-          }
-          for (int a = 0; a < 4; ++a) {
-            for (int i = 0; i < 3; ++i) {
-              if (!constrained[static_cast<std::size_t>(3 * problem.tets(e, a) + i)]) continue;
-              K.row(3 * a + i).setZero();
-              K.col(3 * a + i).setZero();
-            }
-          }
-          if (!K.allFinite()) ++failed.local();
-        }
-      });
-    });
-    local_failed += failed.combine(std::plus<int>());
-    for (std::size_t k = 0; k < count; ++k) {
-      const int e = row_tets[first + k];
-      if (!refill.ready) {
-        // Rows of other ranks get a negative index, which PETSc skips: their owner adds them.
-        PetscInt rows[4], cols[4];
-        for (int a = 0; a < 4; ++a) {
-          cols[a] = index_of(problem.tets(e, a));
-          rows[a] = owns(problem.tets(e, a)) ? cols[a] : -1;
-        }
-        SFLSH_PETSC(MatSetValuesBlocked(J, 4, rows, 4, cols, blocks[k].data(), ADD_VALUES));
-        continue;
-      }
-      const PetscInt* offsets = refill.tet_offset.data() + 48 * (first + k);
-      for (int a = 0; a < 4; ++a) {
-        for (int b = 0; b < 4; ++b, offsets += 3) {
-          if (offsets[0] != -1) add_rows(offsets, blocks[k].block<3, 3>(3 * a, 3 * b));
-        }
-      }
-    }
+  PetscSink sink(*this, diag_values, offdiag_values);
+  bool ok = true;
+  elastic_term->set_projection(projection_now);
+  arena->execute([&] { ok = elastic_term->add_hessian(x, sink); });
+  const auto t_inertia = Clock::now();
+  if (stats) stats->elastic_seconds += std::chrono::duration<double>(t_inertia - t0).count();
+  // Lumped: M/ĥ² A_iᵀA_i on node i's diagonal block; consistent: tet blocks ρV/20 (1 + δ_ab) A_aᵀA_b/ĥ².
+  if (inertia && problem.mass_kind == model::MassKind::consistent && refill.ready) {
+    ok = add_cached_inertia_hessian(x, diag_values, offdiag_values) && ok;
+  } else if (inertia) {
+    ok = inertia_term->add_hessian(x, sink) && ok;
   }
-  const auto t_mass = Clock::now();
-  for (int row = begin; row < end; ++row) {
-    const int i = node_of(row);
-    const auto si = static_cast<std::size_t>(i);
-    Eigen::Matrix3d B = Eigen::Matrix3d::Zero();
-    if (inertia && problem.mass[i] > 0.0) B = problem.mass[i] / (h * h) * frame.A[si].transpose() * frame.A[si];
-    for (int k = 0; k < 3; ++k) {
-      if (!constrained[3 * si + static_cast<std::size_t>(k)]) continue;
-      B.row(k).setZero();
-      B.col(k).setZero();
-      B(k, k) = dirichlet_diagonal;
-    }
-    if (refill.ready) {
-      add_rows(refill.node_offset.data() + 3 * (row - begin), B);
-      continue;
-    }
-    const PetscInt block = row;
-    SFLSH_PETSC(MatSetValuesBlocked(J, 1, &block, 1, &block, B.data(), ADD_VALUES));
-  }
-  if (stats) stats->inertia_seconds += seconds_since(t_mass);
-  // Node potentials: one 3×3 block on the diagonal of each owned candidate (always in the pattern).
-  for (const auto& [node, block] : potential_hessian_blocks(x)) {
-    if (!block.allFinite()) ++local_failed;
-    const int row = index_of(node);
-    if (refill.ready) {
-      add_rows(refill.node_offset.data() + 3 * (row - begin), block);
-      continue;
-    }
-    const PetscInt index = row;
-    SFLSH_PETSC(MatSetValuesBlocked(J, 1, &index, 1, &index, block.data(), ADD_VALUES));
+  sink.add_dirichlet_rows();
+  if (stats) stats->inertia_seconds += seconds_since(t_inertia);
+  if (potential_term->active()) {   // one 3×3 block on the diagonal of each owned candidate (always in the pattern)
+    const auto t_potential = Clock::now();
+    ok = potential_term->add_hessian(x, sink) && ok;
+    if (stats) stats->potential_seconds += seconds_since(t_potential);
   }
   if (refill.ready) {
     SFLSH_PETSC(MatSeqAIJRestoreArray(refill.diag, &diag_values));
@@ -246,10 +265,27 @@ bool FullSpaceSolver::Impl::jacobian(const Eigen::VectorXd& x) {
     mark_diagonal_block_symmetric();
     build_refill();
   }
+  int local_failed = ok ? 0 : 1;
   int any_failed = 0;
   MPI_Allreduce(&local_failed, &any_failed, 1, MPI_INT, MPI_SUM, comm);
   if (stats) stats->jacobian_seconds += seconds_since(t0);
   return any_failed == 0;
+}
+
+bool FullSpaceSolver::Impl::add_cached_inertia_hessian(const Eigen::VectorXd& x, PetscScalar* diag_values,
+                                                      PetscScalar* offdiag_values) {
+  InertiaHessianCache& cache = inertia_cache;
+  bool ok = true;
+  if (cache.substep != substep_serial) {
+    cache.diag.assign(static_cast<std::size_t>(refill.diag_nnz), 0.0);
+    cache.offdiag.assign(static_cast<std::size_t>(refill.offdiag_nnz), 0.0);
+    PetscSink cache_sink(*this, cache.diag.data(), cache.offdiag.empty() ? nullptr : cache.offdiag.data());
+    ok = inertia_term->add_hessian(x, cache_sink);
+    cache.substep = ok ? substep_serial : -1;
+  }
+  for (std::size_t k = 0; k < cache.diag.size(); ++k) diag_values[k] += cache.diag[k];
+  for (std::size_t k = 0; k < cache.offdiag.size(); ++k) offdiag_values[k] += cache.offdiag[k];
+  return ok;
 }
 
 // J is marked symmetric, but the symmetry flag of the whole matrix does not reach its local diagonal block,

@@ -1,8 +1,28 @@
-// Backward Euler on PETSc: setup of the distributed problem, the SNES callbacks, and the step with its retry
-// ladder (backward_euler_impl.hpp; assembly in backward_euler_assembly.cpp).
+// The full-space solver on PETSc: setup of the distributed problem, the SNES callbacks, and the step of the
+// chosen integrator with its retry ladder (fullspace_solver_impl.hpp; Φ and its derivatives in
+// fullspace_assembly.cpp).
 #include "fullspace_solver_impl.hpp"
 
 namespace sflsh::fullspace {
+
+namespace {
+
+/// The integrator as error messages name it.
+std::string_view integrator_label(model::Integrator integrator) {
+  switch (integrator) {
+    case model::Integrator::backward_euler: return "backward Euler";
+    case model::Integrator::bdf2: return "BDF2";
+    case model::Integrator::newmark: return "Newmark";
+  }
+  return "backward Euler";
+}
+
+/// A 3N node-major vector of N×3 row-major positions.
+Eigen::VectorXd flattened(const RowMatrixX3d& positions) {
+  return Eigen::Map<const Eigen::VectorXd>(positions.data(), positions.size());
+}
+
+}  // namespace
 
 void FullSpaceSolver::Impl::setup() {
   MPI_Comm_rank(comm, &rank);
@@ -35,6 +55,7 @@ void FullSpaceSolver::Impl::setup() {
   auto by_lowest = [&](int a, int b) { return lowest[static_cast<std::size_t>(a)] < lowest[static_cast<std::size_t>(b)]; };
   std::stable_sort(my_tets.begin(), my_tets.end(), by_lowest);
   std::stable_sort(row_tets.begin(), row_tets.end(), by_lowest);
+  create_terms();
 
   // Block sparsity of the owned block rows (solver indices): every node pair sharing a tet.
   std::vector<std::vector<int>> adjacency(static_cast<std::size_t>(local));
@@ -249,59 +270,78 @@ PetscErrorCode FullSpaceSolver::Impl::linesearch_cb(SNESLineSearch ls, void* ctx
   return 0;
 }
 
+// One substep of the integrator (time_integrator.hpp): ĥ and p̃ from the posed history carried in the state,
+// Φ minimized by SNES, then the history advanced from the posed minimizer (every node, constrained ones too).
 bool FullSpaceSolver::Impl::solve_substep(State& s, double t0, double dt) {
+  const auto t_setup = Clock::now();
+  ++substep_serial;   // a new ĥ and new maps: the cached inertia Hessian is stale
   t1 = t0 + dt;
-  h = dt;
   inertia = !options.quasi_static && problem.dynamic();
   NodeFrame previous;
   problem.frame(t0, previous);
   problem.frame(t1, frame);
   const RowMatrixX3d p_n = posed_positions(previous, s.x);
-  p_tilde = p_n;
-  for (int i = 0; i < problem.num_nodes(); ++i) p_tilde.row(i) += dt * s.w.segment<3>(3 * i).transpose();
+  model::PosedHistory history = model::history_of(s, flattened(p_n));
+  // Without inertia the velocities are only reported: backward Euler's difference quotient.
+  target = model::inertia_target(inertia ? options.integrator : model::Integrator::backward_euler, history, dt);
+  if (inertia && target.integrator != options.integrator) ++stats->startup_steps;
+  if (inertia) inertia_term->set_step(frame, target);
+  gravity_term->set_frame(frame);
 
   // Start from the previous state, or from the inertial prediction pulled back through the maps.
   Eigen::VectorXd start = s.x;
   problem.apply_dirichlet(t1, start);
   prescribed = start;
-  begin_potentials(p_n, t0, dt);
+  stats->inertia_seconds += seconds_since(t_setup);
+  if (!problem.potentials.empty()) {
+    // The potentials see p_n and the skinned positions at t1 (rest state with the prescribed values at t1).
+    const auto t_potential = Clock::now();
+    Eigen::VectorXd rest_now = Eigen::Map<const Eigen::VectorXd>(problem.rest.data(), problem.num_dofs());
+    problem.apply_dirichlet(t1, rest_now);
+    potential_term->begin(p_n, t0, dt, frame, rest_now, [this](int node) { return owns(node); });
+    stats->potential_seconds += seconds_since(t_potential);
+  }
   if (inertia && options.use_predictor) {
+    const auto t_predict = Clock::now();
     Eigen::VectorXd predicted = start;
     for (int i = 0; i < problem.num_nodes(); ++i) {
       const auto si = static_cast<std::size_t>(i);
-      const Eigen::Vector3d xi = frame.A[si].lu().solve(p_tilde.row(i).transpose() - frame.d.row(i).transpose());
+      // x_i = A_i⁻¹ (p̃_i − d_i) on the free components
+      const Eigen::Vector3d xi = frame.A[si].lu().solve(target.p_tilde.segment<3>(3 * i) - frame.d.row(i).transpose());
       for (int k = 0; k < 3; ++k) {
         if (!constrained[3 * si + static_cast<std::size_t>(k)]) predicted[3 * i + k] = xi[k];
       }
     }
+    stats->inertia_seconds += seconds_since(t_predict);
     if (predicted.allFinite() && objective(predicted) < objective(start)) start = predicted;
   }
-  int max_refinements = 0;
-  for (const PotentialTerm& term : potential_terms) max_refinements = std::max(max_refinements, term.potential->max_refinements());
+  const int max_refinements = potential_term->active() ? potential_term->max_refinements() : 0;
+  Eigen::VectorXd x_new;
   for (int refinement = 0;; ++refinement) {
     if (!solve_from(start, dt)) return false;
-    Eigen::VectorXd x_new;
     gather(X, x_new);
     if (!x_new.allFinite()) return false;
-    if (accept_potentials(x_new)) break;
+    if (!potential_term->active()) break;
+    const auto t_accept = Clock::now();
+    const bool accepted = potential_term->accept(x_new);
+    stats->potential_seconds += seconds_since(t_accept);
+    if (accepted) break;
     if (refinement >= max_refinements) {
       logger()->warn("t = {:.6g}: contact still over its tolerance after {} refinement(s); the substep is kept", t1, refinement);
       break;
     }
     ++stats->potential_refinements;
   }
-  Eigen::VectorXd x_new;
-  gather(X, x_new);
   PetscReal fnorm = 0.0;
   VecNorm(F, NORM_2, &fnorm);
   stats->final_gradient = fnorm;
-  const RowMatrixX3d p_new = posed_positions(frame, x_new);
-  Eigen::VectorXd w_new(problem.num_dofs());
-  for (int i = 0; i < problem.num_nodes(); ++i) w_new.segment<3>(3 * i) = (p_new.row(i) - p_n.row(i)).transpose() / dt;
-  if (!w_new.allFinite()) return false;
+  const auto t_history = Clock::now();
+  model::advance_history(target, history, flattened(posed_positions(frame, x_new)));
+  stats->inertia_seconds += seconds_since(t_history);
+  if (!history.v.allFinite() || !history.a.allFinite()) return false;
   s.t = t1;
   s.x = std::move(x_new);
-  s.w = std::move(w_new);
+  model::store_history(history, s);
   return true;
 }
 
@@ -350,7 +390,16 @@ void FullSpaceSolver::initialize(const State& s) {
           "FullSpaceSolver: initial state has {} / {} entries, expected {}", s.x.size(), s.w.size(),
           impl_->problem.num_dofs());
   require(s.x.allFinite() && s.w.allFinite(), "FullSpaceSolver: initial state is not finite");
+  const Eigen::Index dofs = impl_->problem.num_dofs();
+  for (const Eigen::VectorXd* history : {&s.a, &s.p_previous, &s.w_previous}) {
+    require(history->size() == 0 || (history->size() == dofs && history->allFinite()),
+            "FullSpaceSolver: the initial state's history has {} entries (expected 0 or {}) or is not finite", history->size(), dofs);
+  }
   impl_->state = s;
+  // Newmark starts from the accelerations of the equations of motion when the state carries none.
+  const bool dynamic = !impl_->options.quasi_static && impl_->problem.dynamic();
+  if (impl_->options.integrator == model::Integrator::newmark && dynamic && s.a.size() != impl_->problem.num_dofs())
+    impl_->state.a = model::initial_acceleration(impl_->problem, impl_->state);
 }
 
 const State& FullSpaceSolver::state() const { return impl_->state; }
@@ -378,6 +427,7 @@ StepStats FullSpaceSolver::step(double h) {
     const int substeps = 1 << std::max(level, 0);
     const double dt = h / substeps;
     State s = saved;
+    const int startup_before = stats.startup_steps;   // counted for the accepted attempt only
     bool ok = true;
     for (int k = 0; k < substeps && ok; ++k) {
       // Substep ends land exactly on saved.t + h at the last one.
@@ -397,6 +447,7 @@ StepStats FullSpaceSolver::step(double h) {
       }
       return stats;
     }
+    stats.startup_steps = startup_before;
     if (level < 0) {
       ++stats.projected_retries;
     } else {
@@ -410,8 +461,8 @@ StepStats FullSpaceSolver::step(double h) {
   }
   impl_->restore_pc();
   impl_->stats = nullptr;
-  throw_error("backward Euler failed at t = {:.6g} s: no convergence even with {} substeps of {:.3g} s (last reason: {})",
-              saved.t + h, 1 << impl_->options.max_halvings, h / (1 << impl_->options.max_halvings),
+  throw_error("{} failed at t = {:.6g} s: no convergence even with {} substeps of {:.3g} s (last reason: {})",
+              integrator_label(impl_->options.integrator), saved.t + h, 1 << impl_->options.max_halvings, h / (1 << impl_->options.max_halvings),
               stats.converged_reason);
 }
 

@@ -1,12 +1,14 @@
 #pragma once
-// Internal to the backward-Euler integrator: its state (FullSpaceSolver::Impl) and the helpers shared by
-// backward_euler.cpp (setup, PETSc callbacks, the step) and backward_euler_assembly.cpp (potential,
-// residual and Hessian assembly, the direct refill of the AIJ arrays).
+// Internal to the full-space solver: its state (FullSpaceSolver::Impl) and the helpers shared by
+// fullspace_solver.cpp (setup, PETSc callbacks, the step with its integrator) and fullspace_assembly.cpp
+// (Φ, residual and Hessian as sums of model terms, the PETSc Hessian sink with the direct refill of the AIJ
+// arrays).
 #include <sflsh/fullspace/fullspace_solver.hpp>
 #include <sflsh/fullspace/node_partition.hpp>
 
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
+#include <sflsh/model/terms.hpp>
 
 #include <Eigen/LU>
 #include <petscsnes.h>
@@ -18,6 +20,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
 namespace sflsh::fullspace {
@@ -84,13 +87,24 @@ struct FullSpaceSolver::Impl {
 
   State state;
 
-  // The step being solved.
-  double t1 = 0.0, h = 0.0;
-  bool inertia = true;
-  NodeFrame frame;
-  RowMatrixX3d p_tilde;
+  // The substep being solved.
+  double t1 = 0.0;
+  bool inertia = true;              ///< Φ has the inertia term (dynamic problem, not quasi-static)
+  NodeFrame frame;                  ///< the maps at t1
+  model::InertiaTarget target;      ///< ĥ and p̃ of the substep (time_integrator.hpp)
   Eigen::VectorXd x_full;
   Eigen::VectorXd prescribed;       ///< x values at t1 (full), valid on constrained dofs
+
+  // Φ as a sum of terms (model/terms.hpp) over this rank's share: values over my_tets and the owned nodes,
+  // gradient and Hessian rows from row_tets (subset.row_tets = row_tets, so a sink's k indexes both).
+  std::shared_ptr<model::TermSubset> subset;
+  std::unique_ptr<model::ElasticTerm> elastic_term;
+  std::unique_ptr<model::InertiaTerm> inertia_term;
+  std::unique_ptr<model::GravityTerm> gravity_term;
+  std::unique_ptr<model::PotentialTerm> potential_term;
+  /// Per row tet: bit 3a + k set when component k of its node a is constrained (those Hessian rows and
+  /// columns are dropped; the constrained row is D e_d).
+  std::vector<std::uint16_t> tet_constrained;
 
   StepStats* stats = nullptr;
   bool linear_failure = false;      ///< the last substep failed in the linear solver
@@ -141,6 +155,14 @@ struct FullSpaceSolver::Impl {
     std::vector<PetscInt> node_offset;         ///< per owned node, 3 rows: offsets of its diagonal block
   } refill;
 
+  /// The consistent inertia's Hessian blocks depend only on the maps at t1 and ĥ: assembled once per substep
+  /// into copies of the AIJ value arrays and added to each Jacobian of that substep.
+  struct InertiaHessianCache {
+    long substep = -1;                          ///< the substep they belong to (−1: none)
+    std::vector<PetscScalar> diag, offdiag;     ///< same layout as refill.diag / refill.offdiag
+  } inertia_cache;
+  long substep_serial = 0;                      ///< counts solve_substep calls
+
   Impl(const Problem& p, MPI_Comm c, const FullSpaceOptions& o) : problem(p), comm(c), options(o) {}
 
   int index_of(int node) const { return partition.index_of[static_cast<std::size_t>(node)]; }
@@ -164,28 +186,17 @@ struct FullSpaceSolver::Impl {
     }
     return x_prescribed_buffer;
   }
-  // The problem's node potentials (contact) in the substep being solved: those whose begin_substep found
-  // candidates, with each candidate's mesh node and the candidates this rank owns (it adds their terms).
-  struct PotentialTerm {
-    NodePotential* potential = nullptr;
-    std::vector<int> node;     ///< per candidate: the mesh node
-    std::vector<int> owned;    ///< candidate entries whose node this rank owns
-  };
-  std::vector<PotentialTerm> potential_terms;
-  /// Calls begin_substep on every potential with the posed positions p_n at t0 and the skinned ones at t1
-  /// (frame must hold t1's maps) and keeps the active ones.
-  void begin_potentials(const RowMatrixX3d& p_n, double t0, double dt);
-  /// Σ u over the owned candidates at x (x with prescribed values), and their gradient / diagonal Hessian blocks.
-  double potential_energy(const Eigen::VectorXd& x) const;
-  void add_potential_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& g) const;
-  /// Per owned candidate: its mesh node and the 3×3 block Aᵀ ∇²u A (constrained rows and columns zeroed).
-  std::vector<std::pair<int, Eigen::Matrix3d>> potential_hessian_blocks(const Eigen::VectorXd& x) const;
-  /// accept_substep of every active potential at the new state (the same decision on every rank).
-  bool accept_potentials(const Eigen::VectorXd& x_new);
-
+  /// The terms over this rank's share (after the tet split of setup()).
+  void create_terms();
+  /// Σ of the terms' values at x_in (constrained components replaced by their prescribed values), plus the
+  /// Dirichlet penalty; summed over ranks.
   double objective(const Eigen::VectorXd& x);
   bool residual(const Eigen::VectorXd& x, Vec out);
   bool jacobian(const Eigen::VectorXd& x);
+  /// Receives the terms' Hessian blocks (fullspace_assembly.cpp).
+  class PetscSink;
+  /// Adds the consistent inertia's Hessian (refill storage only), assembling it when the substep is new.
+  bool add_cached_inertia_hessian(const Eigen::VectorXd& x, PetscScalar* diag_values, PetscScalar* offdiag_values);
   void build_refill();
   void mark_diagonal_block_symmetric();
   bool solve_substep(State& s, double t0, double dt);

@@ -66,6 +66,8 @@ TEST_P(CliSimulate, SurfaceMatchesMotionExportLayoutAndCarriesTheSoftTissueField
   EXPECT_TRUE(summary["timings"].contains("seconds_per_frame"));
   EXPECT_GE(summary["dynamics"]["sigma_mean_mm"].get<double>(), 0.0);
   EXPECT_EQ(summary["solver"]["name"].get<std::string>(), GetParam());
+  EXPECT_EQ(summary["integrator"].get<std::string>(), "backward_euler");   // the defaults (the paper's configuration)
+  EXPECT_EQ(summary["mass"].get<std::string>(), "lumped");
   if (std::string(GetParam()) == "reduced") {
     EXPECT_EQ(summary["reduced"]["point_handles"].get<int>(), 86);
     EXPECT_EQ(summary["reduced"]["coordinates"].get<int>(), 258);
@@ -100,6 +102,35 @@ TEST_P(CliSimulate, BadArgumentsGiveOneLineErrorsAndNoOutput) {
     EXPECT_NE(handles.err.find("point handles"), std::string::npos) << handles.err;
     EXPECT_FALSE(fs::exists(dir / "c" / "summary.json"));
   }
+}
+
+TEST_P(CliSimulate, IntegratorAndMassAreChosenAndRecorded) {
+  const fs::path dir = scratch_dir();
+  const auto r = run_sflsh(solver() + "--mesh coarse " + common() + " --integrator newmark --mass consistent --no-output --out " +
+                               (dir / "o").string(),
+                           dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json summary = read_json(dir / "o" / "summary.json");
+  EXPECT_EQ(summary["integrator"].get<std::string>(), "newmark");
+  EXPECT_EQ(summary["mass"].get<std::string>(), "consistent");
+  EXPECT_EQ(summary["solver"]["integrator"].get<std::string>(), "newmark");
+  EXPECT_EQ(summary["frames"].size(), 4u);
+}
+
+TEST_P(CliSimulate, UnknownIntegratorOrMassIsOneLineNamingTheOptionAndTheChoices) {
+  const fs::path dir = scratch_dir();
+  const auto integrator = run_sflsh(solver() + "--mesh coarse " + common() + " --integrator rk4 --out " + (dir / "a").string(), dir);
+  EXPECT_NE(integrator.exit_code, 0);
+  EXPECT_NE(integrator.err.find("--integrator"), std::string::npos) << integrator.err;
+  EXPECT_NE(integrator.err.find("backward_euler, bdf2, newmark"), std::string::npos) << integrator.err;
+  EXPECT_EQ(std::count(integrator.err.begin(), integrator.err.end(), '\n'), 1) << integrator.err;
+  EXPECT_FALSE(fs::exists(dir / "a" / "summary.json"));
+  const auto mass = run_sflsh(solver() + "--mesh coarse " + common() + " --mass heavy --out " + (dir / "b").string(), dir);
+  EXPECT_NE(mass.exit_code, 0);
+  EXPECT_NE(mass.err.find("--mass"), std::string::npos) << mass.err;
+  EXPECT_NE(mass.err.find("lumped, consistent"), std::string::npos) << mass.err;
+  EXPECT_EQ(std::count(mass.err.begin(), mass.err.end(), '\n'), 1) << mass.err;
+  EXPECT_FALSE(fs::exists(dir / "b" / "summary.json"));
 }
 
 INSTANTIATE_TEST_SUITE_P(Solvers, CliSimulate, ::testing::Values("full", "reduced"));

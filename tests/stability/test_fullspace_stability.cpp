@@ -25,6 +25,8 @@ namespace sflsh::fullspace {
 namespace {
 
 using namespace sflsh::stability;
+using model::BodyLayer;
+using model::build_body_layer;
 
 
 /// Runs backward Euler along the motion, checking every frame's state and energies for finiteness.

@@ -1,8 +1,11 @@
 #pragma once
-// Backward Euler as the minimization of the incremental potential with skinning-driven inertia
-// (physics.md §5, Kane et al. 2000), solved by Newton with an energy line search on PETSc SNES:
-//   Φ(x) = Σ_i m_i/(2h²) |A_i x_i + d_i − p̃_i|² + E(x) − Σ_i m_i gᵀ(A_i x_i + d_i),   p̃ = p_n + h w_n,
-//   ∇Φ = Aᵀ M (p(x) − p̃)/h² + ∇E(x) − Aᵀ M g,    ∇²Φ = Aᵀ M A/h² + ∇²E(x)   (3×3 blocks per node pair).
+// The full-space solver: each step of the chosen integrator (backward Euler, BDF2, Newmark;
+// model/time_integrator.hpp, docs/integrators.md) minimizes the incremental potential with skinning-driven
+// inertia (physics.md §5, Kane et al. 2000) by Newton with an energy line search on PETSc SNES:
+//   Φ(x) = 1/(2ĥ²) (p(x) − p̃)ᵀ M (p(x) − p̃) + E(x) − gᵀ M p(x) + U(p(x)),   p_i(x) = A_i x_i + d_i,
+// summed from the model's terms (model/terms.hpp: elastic, inertia with lumped or consistent M, gravity, node
+// potentials); the integrator sets ĥ and p̃ from the posed history carried in the State and updates it from the
+// minimizer. ∇²Φ = Aᵀ M A/ĥ² + ∇²E(x) + Aᵀ∇²U A has 3×3 blocks per node pair sharing a tet (consistent M too).
 // Distributed over MPI_COMM_WORLD: nodes are renumbered (reverse Cuthill–McKee, node_partition.hpp) and split
 // in contiguous ranges; each rank assembles the complete rows of its nodes from every tet touching them (so no
 // matrix or vector entry is sent between ranks) and counts in Φ the tets whose lowest node it owns; every
@@ -51,7 +54,8 @@ class FullSpaceSolver final : public model::BodySolver {
   FullSpaceSolver(const FullSpaceSolver&) = delete;
   FullSpaceSolver& operator=(const FullSpaceSolver&) = delete;
 
-  /// Sets the state (full vectors, identical on every rank).
+  /// Sets the state (full vectors, identical on every rank; the history entries empty or full). Newmark
+  /// computes the accelerations of the equations of motion when the state carries none.
   void initialize(const State& state);
   const State& state() const;
   State current_state() const override { return state(); }
