@@ -323,6 +323,8 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
 
 model::StepStats ReducedSolver::step(double h) {
   require(h > 0.0 && std::isfinite(h), "reduced: step must be positive, got {}", h);
+  require(history_.p.size() == 3 * static_cast<Eigen::Index>(inertia_.inertia_nodes().size()),
+          "reduced: the solver has no state; call initialize() before step()");
   const auto start = Clock::now();
   model::StepStats stats;
   const double t_save = t_;

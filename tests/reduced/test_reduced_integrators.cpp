@@ -17,6 +17,7 @@
 #include <petscsys.h>
 
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <string>
 
@@ -385,6 +386,21 @@ TEST(ReducedIntegrators, AQuasiStaticRunIsTheSameForEveryIntegrator) {
     last_q = reduced.q();
   }
   EXPECT_GT(last_q.cwiseAbs().maxCoeff(), 1e-6);   // it sagged
+}
+
+TEST(ReducedIntegrators, BadInputIsRefusedWithOneLine) {
+  auto c = testing::box_case({3, 3, 2});
+  const Subspace s = testing::box_subspace(c);
+  const Cubature all = exact_cubature(c.problem.num_tets());
+  ReducedOptions ro;
+  ro.integrator = model::Integrator::newmark;
+  ReducedSolver reduced(c.problem, s, all, ro);
+  EXPECT_THROW(reduced.step(0.01), Error);   // no state yet
+  model::State start = model::initial_state(c.problem, 0.0);
+  start.a = Eigen::VectorXd::Zero(7);
+  EXPECT_THROW(reduced.initialize(start), Error);   // accelerations of the wrong size
+  start.a = Eigen::VectorXd::Constant(c.problem.num_dofs(), std::numeric_limits<double>::quiet_NaN());
+  EXPECT_THROW(reduced.initialize(start), Error);   // not finite
 }
 
 TEST(ReducedIntegrators, SensitivitiesRefuseBdf2AndNewmark) {
