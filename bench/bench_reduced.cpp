@@ -2,15 +2,18 @@
 // with random shapes (each its own shape-dependent layer and material) and per-body time offsets on T
 // threads (parallel over bodies, as the paper's Fig. 1), with the per-frame breakdown: cubature forces and
 // Hessians, inertia (node maps, mass Hessian), dense solve, and skinning of the output surface.
-// A frame = one backward-Euler step of 1/60 s + the posed skin of the whole body (what a renderer needs).
+// A frame = one step of 1/60 s + the posed skin of the whole body (what a renderer needs). The one-body case runs
+// once per integrator × mass of the lists (fps, Newton iterations and factorizations per frame each); the crowd
+// uses the first of both.
 // Usage: bench_reduced [--mesh coarse] [--handles 86] [--cubature 200] [--frames 120] [--crowd 25]
-//                      [--threads 2] [--motion shake_hips] [--out bench_reduced.json]
+//                      [--threads 2] [--motion shake_hips] [--integrators backward_euler,bdf2,newmark]
+//                      [--masses lumped,consistent] [--out bench_reduced.json]
 #include <sflsh/body/body_io.hpp>
 #include <sflsh/body/motion.hpp>
+#include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
 #include <sflsh/core/summary.hpp>
 #include <sflsh/model/body_layer.hpp>
-#include <sflsh/fullspace/reference_integrator.hpp>
 #include <sflsh/reduced/reduced_solver.hpp>
 #include <sflsh/reduced/reduced_model.hpp>
 
@@ -23,6 +26,7 @@
 #include <iostream>
 #include <memory>
 #include <random>
+#include <sstream>
 
 namespace {
 
@@ -39,22 +43,36 @@ struct Body {
 
 struct Breakdown {
   double step = 0, elastic = 0, inertia = 0, solve = 0, output = 0;
-  long newton = 0;
+  long newton = 0, factorizations = 0, startup = 0, failed = 0, substeps = 0;
   void add(const model::StepStats& s) {
     step += s.seconds;
     elastic += s.elastic_seconds;
     inertia += s.inertia_seconds;
     solve += s.solve_seconds;
     newton += s.newton_iterations;
+    factorizations += s.factorizations;
+    startup += s.startup_steps;
+    failed += s.failed_attempts + s.projected_retries;
+    substeps += s.substeps;
   }
 };
 
+/// The entries of a comma-separated list.
+std::vector<std::string> split_list(const std::string& text) {
+  std::vector<std::string> out;
+  std::stringstream stream(text);
+  for (std::string item; std::getline(stream, item, ',');)
+    if (!item.empty()) out.push_back(item);
+  return out;
+}
+
 std::unique_ptr<Body> make_body(const body::BodyModel& model, const body::Betas& beta, const body::Motion& motion, double t0,
-                                const model::BodyLayerOptions& layer_options, const reduced::ReducedModelOptions& options) {
+                                const model::BodyLayerOptions& layer_options, const reduced::ReducedModelOptions& options,
+                                const reduced::ReducedOptions& solver_options) {
   auto b = std::make_unique<Body>();
   b->layer = model::build_body_layer(model, beta, motion, nullptr, 12, layer_options);
   b->model = reduced::build_reduced_model(b->layer, options);
-  b->integrator = std::make_unique<reduced::ReducedSolver>(b->layer.problem, b->model.subspace, b->model.cubature);
+  b->integrator = std::make_unique<reduced::ReducedSolver>(b->layer.problem, b->model.subspace, b->model.cubature, solver_options);
   b->integrator->initialize(model::initial_state(b->layer.problem, t0));
   b->t0 = t0;
   return b;
@@ -75,6 +93,7 @@ void advance(Body& b, double h, Breakdown& breakdown) {
 
 int main(int argc, char** argv) {
   std::string mesh = "coarse", motion_name = "shake_hips", out = "bench_reduced.json";
+  std::string integrator_list = "backward_euler", mass_list = "lumped";
   int handles = 86, cubature = 200, frames = 120, crowd = 25, threads = 2;
   for (int i = 1; i + 1 < argc; i += 2) {
     if (std::strcmp(argv[i], "--mesh") == 0) mesh = argv[i + 1];
@@ -84,6 +103,8 @@ int main(int argc, char** argv) {
     else if (std::strcmp(argv[i], "--crowd") == 0) crowd = std::stoi(argv[i + 1]);
     else if (std::strcmp(argv[i], "--threads") == 0) threads = std::stoi(argv[i + 1]);
     else if (std::strcmp(argv[i], "--motion") == 0) motion_name = argv[i + 1];
+    else if (std::strcmp(argv[i], "--integrators") == 0) integrator_list = argv[i + 1];
+    else if (std::strcmp(argv[i], "--masses") == 0) mass_list = argv[i + 1];
     else if (std::strcmp(argv[i], "--out") == 0) out = argv[i + 1];
     else {
       std::cerr << "bench_reduced: unknown option " << argv[i] << "\n";
@@ -102,17 +123,42 @@ int main(int argc, char** argv) {
     const int offset_frames = 60;   // crowd members start up to 1 s apart
     const body::Motion motion = body::make_procedural_motion(motion_name, 60.0, frames + offset_frames + 2);
 
-    // One body, one thread.
-    Breakdown one;
-    double one_wall = 0.0;
+    std::vector<model::Integrator> integrators;
+    for (const std::string& name : split_list(integrator_list)) integrators.push_back(model::parse_integrator(name, "--integrators"));
+    std::vector<model::MassKind> masses;
+    for (const std::string& name : split_list(mass_list)) masses.push_back(model::parse_mass_kind(name, "--masses"));
+    require(!integrators.empty() && !masses.empty(), "--integrators and --masses need at least one entry each");
+
+    // One body, one thread, per integrator × mass.
+    struct Case {
+      model::Integrator integrator;
+      model::MassKind mass;
+      Breakdown breakdown;
+      double wall = 0.0;
+    };
+    std::vector<Case> cases;
     int coordinates = 0;
-    {
-      auto body = make_body(model, body::Betas::Zero(), motion, 0.0, layer_options, options);
-      coordinates = body->model.subspace.num_dofs();
-      const auto t = Clock::now();
-      for (int f = 0; f < frames; ++f) advance(*body, h, one);
-      one_wall = seconds_since(t);
+    for (model::MassKind mass : masses) {
+      for (model::Integrator integrator : integrators) {
+        model::BodyLayerOptions case_layer = layer_options;
+        case_layer.mass = mass;
+        reduced::ReducedOptions solver_options;
+        solver_options.integrator = integrator;
+        auto body = make_body(model, body::Betas::Zero(), motion, 0.0, case_layer, options, solver_options);
+        coordinates = body->model.subspace.num_dofs();
+        Case c{integrator, mass, {}, 0.0};
+        const auto t = Clock::now();
+        for (int f = 0; f < frames; ++f) advance(*body, h, c.breakdown);
+        c.wall = seconds_since(t);
+        cases.push_back(c);
+      }
     }
+    const Breakdown& one = cases.front().breakdown;
+    const double one_wall = cases.front().wall;
+    model::BodyLayerOptions crowd_layer = layer_options;
+    crowd_layer.mass = masses.front();
+    reduced::ReducedOptions crowd_solver;
+    crowd_solver.integrator = integrators.front();
     // The crowd: random shapes (β ~ N(0, 1), clamped to ±2.5) and time offsets, parallel over bodies.
     std::mt19937 rng(20231212);
     std::normal_distribution<double> normal(0.0, 1.0);
@@ -122,7 +168,7 @@ int main(int argc, char** argv) {
     for (int b = 0; b < crowd; ++b) {
       body::Betas beta;
       for (int k = 0; k < beta.size(); ++k) beta[k] = std::clamp(normal(rng), -2.5, 2.5);
-      bodies.push_back(make_body(model, beta, motion, offset(rng) / 60.0, layer_options, options));
+      bodies.push_back(make_body(model, beta, motion, offset(rng) / 60.0, crowd_layer, options, crowd_solver));
     }
     const double build_seconds = seconds_since(t_build);
     std::vector<Breakdown> per_body(bodies.size());
@@ -141,33 +187,50 @@ int main(int argc, char** argv) {
       total.solve += b.solve;
       total.output += b.output;
       total.newton += b.newton;
+      total.factorizations += b.factorizations;
     }
 
     const double one_fps = frames / one_wall, crowd_fps = frames / crowd_wall;
     const auto ms = [&](double s, double n) { return 1e3 * s / n; };
     std::cout << fmt::format("reduced model: {} mesh, {} point handles ({} coordinates), {} cubature tets, {} frames of 1/60 s\n\n", mesh,
                              handles, coordinates, cubature, frames);
-    std::cout << fmt::format("{:<26} {:>8} {:>10} {:>10} {:>10} {:>10} {:>10} {:>8} {:>12}\n", "case", "fps", "ms/frame", "elastic",
-                             "inertia", "solve", "output", "newton", "paper fps");
-    std::cout << fmt::format("{:<26} {:>8.1f} {:>10.3f} {:>10.3f} {:>10.3f} {:>10.3f} {:>10.3f} {:>8.2f} {:>12}\n", "1 body, 1 thread", one_fps,
-                             ms(one_wall, frames), ms(one.elastic, frames), ms(one.inertia, frames), ms(one.solve, frames),
-                             ms(one.output, frames), static_cast<double>(one.newton) / frames, "30 (1 thr)");
+    std::cout << fmt::format("{:<36} {:>8} {:>10} {:>10} {:>10} {:>10} {:>10} {:>8} {:>8} {:>12}\n", "case", "fps", "ms/frame", "elastic",
+                             "inertia", "solve", "output", "newton", "factor", "paper fps");
+    nlohmann::json combinations = nlohmann::json::array();
+    for (const Case& c : cases) {
+      const Breakdown& b = c.breakdown;
+      const std::string label = fmt::format("1 body, {}, {}", model::to_string(c.integrator), model::to_string(c.mass));
+      std::cout << fmt::format("{:<36} {:>8.1f} {:>10.3f} {:>10.3f} {:>10.3f} {:>10.3f} {:>10.3f} {:>8.2f} {:>8.2f} {:>12}\n", label,
+                               frames / c.wall, ms(c.wall, frames), ms(b.elastic, frames), ms(b.inertia, frames), ms(b.solve, frames),
+                               ms(b.output, frames), static_cast<double>(b.newton) / frames, static_cast<double>(b.factorizations) / frames,
+                               &c == &cases.front() ? "30 (1 thr)" : "");
+      combinations.push_back({{"integrator", model::to_string(c.integrator)}, {"mass", model::to_string(c.mass)}, {"threads", 1},
+                              {"fps", frames / c.wall}, {"ms_per_frame", ms(c.wall, frames)}, {"elastic_ms", ms(b.elastic, frames)},
+                              {"inertia_ms", ms(b.inertia, frames)}, {"solve_ms", ms(b.solve, frames)}, {"output_ms", ms(b.output, frames)},
+                              {"newton_per_frame", static_cast<double>(b.newton) / frames},
+                              {"factorizations_per_frame", static_cast<double>(b.factorizations) / frames},
+                              {"startup_steps", b.startup}, {"failed_attempts", b.failed}, {"substeps", b.substeps}});
+    }
     const double n = static_cast<double>(frames) * crowd;
-    std::cout << fmt::format("{:<26} {:>8.1f} {:>10.3f} {:>10.3f} {:>10.3f} {:>10.3f} {:>10.3f} {:>8.2f} {:>12}\n",
+    std::cout << fmt::format("{:<36} {:>8.1f} {:>10.3f} {:>10.3f} {:>10.3f} {:>10.3f} {:>10.3f} {:>8.2f} {:>8.2f} {:>12}\n",
                              fmt::format("{} bodies, {} threads", crowd, threads), crowd_fps, ms(crowd_wall, frames), ms(total.elastic, n),
                              ms(total.inertia, n), ms(total.solve, n), ms(total.output, n), static_cast<double>(total.newton) / n,
-                             "1.2 (1 thr)");
-    std::cout << "\n(crowd breakdown columns are per body and frame; crowd built in " << fmt::format("{:.1f}", build_seconds) << " s)\n";
+                             static_cast<double>(total.factorizations) / n, "1.2 (1 thr)");
+    std::cout << fmt::format("\n(ms per frame; newton and factor: Newton iterations and Hessian factorizations per frame; the crowd runs {} "
+                             "with {} masses, its breakdown columns are per body and frame; crowd built in {:.1f} s)\n",
+                             model::to_string(integrators.front()), model::to_string(masses.front()), build_seconds);
     write_json(out, {{"benchmark", "reduced"},
                      {"mesh", mesh},
                      {"point_handles", handles},
                      {"coordinates", coordinates},
                      {"cubature", cubature},
                      {"frames", frames},
-                     {"one_body", {{"threads", 1}, {"fps", one_fps}, {"ms_per_frame", ms(one_wall, frames)},
+                     {"one_body", {{"threads", 1}, {"integrator", model::to_string(integrators.front())},
+                                   {"mass", model::to_string(masses.front())}, {"fps", one_fps}, {"ms_per_frame", ms(one_wall, frames)},
                                    {"elastic_ms", ms(one.elastic, frames)}, {"inertia_ms", ms(one.inertia, frames)},
                                    {"solve_ms", ms(one.solve, frames)}, {"output_ms", ms(one.output, frames)},
                                    {"newton_per_frame", static_cast<double>(one.newton) / frames}, {"paper_fps", 30.0}}},
+                     {"one_body_cases", combinations},
                      {"crowd", {{"bodies", crowd}, {"threads", threads}, {"fps", crowd_fps}, {"ms_per_frame", ms(crowd_wall, frames)},
                                 {"elastic_ms_per_body", ms(total.elastic, n)}, {"inertia_ms_per_body", ms(total.inertia, n)},
                                 {"solve_ms_per_body", ms(total.solve, n)}, {"output_ms_per_body", ms(total.output, n)},

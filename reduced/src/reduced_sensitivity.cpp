@@ -57,6 +57,9 @@ SensitivityIntegrator::SensitivityIntegrator(const model::Problem& problem, cons
       elastic_(problem, subspace, cubature),
       inertia_(problem, subspace),
       young_map_(std::move(young_map)) {
+  require(options.integrator == model::Integrator::backward_euler,
+          "sensitivity: forward sensitivities are derived for backward Euler only, not for integrator '{}'",
+          model::to_string(options.integrator));
   require(young_map_.rows() == cubature.size(), "sensitivity: the Young map has {} rows, expected one per cubature tet ({})",
           young_map_.rows(), cubature.size());
   require(young_map_.cols() >= 1 && young_map_.allFinite(), "sensitivity: the Young map must have ≥ 1 finite column");

@@ -2,10 +2,13 @@
 
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
+#include <sflsh/reduced/reduced_history.hpp>
 
 #include <Eigen/Cholesky>
 #include <Eigen/SparseCholesky>
 
+#include <array>
+#include <span>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -18,17 +21,28 @@ using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
+/// A term of the substep and the StepStats timer its evaluations count towards.
+struct TimedTerm {
+  const ReducedTerm* term = nullptr;
+  double* seconds = nullptr;
+};
+
+Eigen::VectorXd node_major(const meshing::RowMatrixX3d& rows) { return Eigen::Map<const Eigen::VectorXd>(rows.data(), rows.size()); }
+
 }  // namespace
 
-ReducedSolver::ReducedSolver(const model::Problem& problem, const Subspace& subspace, const Cubature& cubature,
-                                           const ReducedOptions& options)
+ReducedSolver::ReducedSolver(const model::Problem& problem, const Subspace& subspace, const Cubature& cubature, const ReducedOptions& options)
     : problem_(problem),
       subspace_(subspace),
       cubature_(cubature),
       options_(options),
       elastic_(problem, subspace, cubature),
       inertia_(problem, subspace),
-      potentials_(problem, subspace, inertia_.active_nodes()) {
+      potentials_(problem, subspace, inertia_.active_nodes()),
+      elastic_term_(elastic_),
+      inertia_term_(inertia_),
+      gravity_term_(inertia_),
+      potential_term_(potentials_, inertia_) {
   require(options.max_halvings >= 0 && options.max_newton >= 1, "reduced: max_halvings must be ≥ 0 and max_newton ≥ 1");
   // Attached nodes must be attached as a whole and carry no basis functions.
   std::vector<int> constrained_axes(static_cast<std::size_t>(problem.num_nodes()), 0);
@@ -49,10 +63,23 @@ Eigen::VectorXd ReducedSolver::prescribed_state(double t) const {
   return x;
 }
 
+Eigen::VectorXd ReducedSolver::initial_acceleration() const {
+  const auto size = 3 * static_cast<Eigen::Index>(inertia_.inertia_nodes().size());
+  if (options_.quasi_static || !problem_.dynamic()) return Eigen::VectorXd::Zero(size);
+  Eigen::VectorXd gradient = Eigen::VectorXd::Zero(subspace_.num_dofs());
+  elastic_.add_gradient(q_, gradient);
+  const Eigen::VectorXd zeta = gather_nodes(prescribed_acceleration(problem_, subspace_, q_, t_), inertia_.inertia_nodes());
+  return subspace_acceleration(inertia_, gradient, zeta);
+}
+
 void ReducedSolver::initialize(const model::State& state) {
-  require(state.x.size() == problem_.num_dofs() && state.w.size() == problem_.num_dofs(),
-          "reduced: initial state has {} / {} entries, expected {}", state.x.size(), state.w.size(), problem_.num_dofs());
+  const Eigen::Index dofs = problem_.num_dofs();
+  require(state.x.size() == dofs && state.w.size() == dofs, "reduced: initial state has {} / {} entries, expected {}", state.x.size(),
+          state.w.size(), dofs);
   require(state.x.allFinite() && state.w.allFinite(), "reduced: initial state is not finite");
+  require(state.a.size() == 0 || state.a.size() == dofs, "reduced: initial state has {} accelerations, expected 0 or {}", state.a.size(), dofs);
+  require(state.a.allFinite() && state.p_previous.allFinite() && state.w_previous.allFinite(),
+          "reduced: the initial state's history (a, p_previous, w_previous) is not finite");
   t_ = state.t;
   substeps_.clear();
   const Eigen::VectorXd x_prescribed = prescribed_state(t_);
@@ -71,51 +98,67 @@ void ReducedSolver::initialize(const model::State& state) {
     }
   }
   q_rate_.setZero();
+  factor_valid_ = false;
   if (has_drives_) elastic_.set_prescribed_state(x_prescribed);
   inertia_.set_time(t_, x_prescribed);
-  inertia_.posed(q_, p_);
-  const std::vector<int>& active = inertia_.active_nodes();
-  w_.resize(static_cast<Eigen::Index>(active.size()), 3);
-  for (std::size_t a = 0; a < active.size(); ++a) w_.row(static_cast<Eigen::Index>(a)) = state.w.segment<3>(3 * active[a]).transpose();
+  const std::vector<int>& nodes = inertia_.inertia_nodes();
+  meshing::RowMatrixX3d p;
+  inertia_.posed(q_, p);
+  history_ = model::PosedHistory{};
+  history_.p = node_major(p);
+  history_.v = gather_nodes(state.w, nodes);
+  if (state.a.size() == dofs) {
+    history_.a = gather_nodes(state.a, nodes);
+  } else if (options_.integrator == model::Integrator::newmark) {
+    history_.a = initial_acceleration();
+  }
+  if (state.p_previous.size() == dofs && state.w_previous.size() == dofs && state.h_previous > 0.0) {
+    history_.p_previous = gather_nodes(state.p_previous, nodes);
+    history_.v_previous = gather_nodes(state.w_previous, nodes);
+    history_.h_previous = state.h_previous;
+  }
 }
 
-bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProjection projection, model::StepStats& stats,
-                                         std::string& reason) {
+bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProjection projection, model::StepStats& stats, std::string& reason,
+                                  int& startup) {
   const double t1 = t0 + dt;
   const bool inertia_on = !options_.quasi_static && problem_.dynamic();
   auto clock = Clock::now();
   const Eigen::VectorXd x_prescribed = prescribed_state(t1);
   inertia_.set_time(t1, x_prescribed);
-  const meshing::RowMatrixX3d p_tilde = p_ + dt * w_;
-  const Eigen::VectorXd c = inertia_.linear_term(p_tilde, dt, inertia_on);
-  Eigen::MatrixXd mass_hessian;
-  if (inertia_on) inertia_.mass_hessian(dt, mass_hessian);
-  else mass_hessian.setZero(subspace_.num_dofs(), subspace_.num_dofs());
+  const model::InertiaTarget target = model::inertia_target(options_.integrator, history_, dt);
+  if (inertia_on) inertia_term_.set_step(target.p_tilde, target.h_eff);
+  gravity_term_.update();
   stats.inertia_seconds += seconds_since(clock);
   clock = Clock::now();
   if (has_drives_) elastic_.set_prescribed_state(x_prescribed);
+  elastic_term_.set_projection(projection);
   stats.elastic_seconds += seconds_since(clock);
   bool contact = false;
   if (!potentials_.empty()) {
     clock = Clock::now();
-    contact = potentials_.begin(t0, dt, p_, inertia_);
+    const auto inertia_nodes = static_cast<Eigen::Index>(inertia_.inertia_nodes().size());
+    const meshing::RowMatrixX3d p_start = Eigen::Map<const meshing::RowMatrixX3d>(history_.p.data(), inertia_nodes, 3);
+    contact = potentials_.begin(t0, dt, p_start, inertia_);
     stats.potential_seconds += seconds_since(clock);
   }
 
-  // Φ(q) = cᵀq + ½ qᵀ H_m q + E(q); +∞ where the material refuses the state.
+  // Φ = Σ of the substep's terms (reduced_terms.hpp).
+  std::array<TimedTerm, 4> terms_storage;
+  std::size_t num_terms = 0;
+  if (inertia_on) terms_storage[num_terms++] = {&inertia_term_, &stats.inertia_seconds};
+  terms_storage[num_terms++] = {&gravity_term_, &stats.inertia_seconds};
+  terms_storage[num_terms++] = {&elastic_term_, &stats.elastic_seconds};
+  if (contact) terms_storage[num_terms++] = {&potential_term_, &stats.potential_seconds};
+  const auto terms = std::span<const TimedTerm>(terms_storage.data(), num_terms);
+
+  // +∞ where a term refuses the state.
   auto potential = [&](const Eigen::VectorXd& q) {
-    const auto t = Clock::now();
-    double value = kInfinity;
-    try {
-      value = c.dot(q) + 0.5 * q.dot(mass_hessian * q) + elastic_.energy(q);
-    } catch (const Error&) {
-      value = kInfinity;
-    }
-    stats.elastic_seconds += seconds_since(t);
-    if (contact) {
-      const auto tc = Clock::now();
-      value += potentials_.energy(q, inertia_);
-      stats.potential_seconds += seconds_since(tc);
+    double value = 0.0;
+    for (const TimedTerm& term : terms) {
+      const auto t = Clock::now();
+      value += term.term->value(q);
+      *term.seconds += seconds_since(t);
     }
     return std::isfinite(value) ? value : kInfinity;
   };
@@ -141,28 +184,25 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
 
     Eigen::VectorXd gradient(subspace_.num_dofs());
     Eigen::MatrixXd hessian;
-    // A factor from another step length or projection, or any factor while contact is active (its Hessian
-    // changes with the candidates), is not reused.
-    if (!factor_valid_ || factor_h_ != dt || factor_projection_ != projection || !options_.reuse_factorization || contact)
+    // A factor from another ĥ or projection, or any factor while contact is active (its Hessian changes with the
+    // candidates), is not reused.
+    if (!factor_valid_ || factor_h_ != target.h_eff || factor_projection_ != projection || !options_.reuse_factorization || contact)
       factor_valid_ = false;
     bool fresh = false;          // the factor was computed at this step's current iterate
     bool refresh = !factor_valid_;
     double g0 = 0.0, g_previous = kInfinity;
     bool converged = false;
     for (int it = 0; it < options_.max_newton && !converged; ++it) {
-      clock = Clock::now();
-      gradient = c + mass_hessian * q;
-      try {
-        elastic_.add_gradient(q, gradient);
-      } catch (const Error& e) {
-        reason = e.what();
-        return false;
-      }
-      stats.elastic_seconds += seconds_since(clock);
-      if (contact) {
+      gradient.setZero();
+      for (const TimedTerm& term : terms) {
         clock = Clock::now();
-        potentials_.add_gradient(q, inertia_, gradient);
-        stats.potential_seconds += seconds_since(clock);
+        try {
+          term.term->add_gradient(q, gradient);
+        } catch (const Error& e) {
+          reason = e.what();
+          return false;
+        }
+        *term.seconds += seconds_since(clock);
       }
       const double g = gradient.norm();
       stats.final_gradient = g;
@@ -181,26 +221,23 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
       g_previous = g;
       for (int attempt = 0; attempt < 2; ++attempt) {
         if (refresh) {
-          clock = Clock::now();
-          hessian = mass_hessian;
-          try {
-            elastic_.add_hessian(q, hessian, projection);
-          } catch (const Error& e) {
-            reason = e.what();
-            return false;
-          }
-          stats.elastic_seconds += seconds_since(clock);
-          if (contact) {
+          hessian.setZero(subspace_.num_dofs(), subspace_.num_dofs());
+          for (const TimedTerm& term : terms) {
             clock = Clock::now();
-            potentials_.add_hessian(q, inertia_, hessian);
-            stats.potential_seconds += seconds_since(clock);
+            try {
+              term.term->add_hessian(q, hessian);
+            } catch (const Error& e) {
+              reason = e.what();
+              return false;
+            }
+            *term.seconds += seconds_since(clock);
           }
           clock = Clock::now();
           factor_.compute(hessian);
           stats.solve_seconds += seconds_since(clock);
           ++stats.factorizations;
           factor_valid_ = factor_.info() == Eigen::Success;
-          factor_h_ = dt;
+          factor_h_ = target.h_eff;
           factor_projection_ = projection;
           if (!factor_valid_) {
             reason = "indefinite Hessian";
@@ -274,8 +311,8 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
   clock = Clock::now();
   meshing::RowMatrixX3d p_new;
   inertia_.posed(q, p_new);
-  w_ = (p_new - p_) / dt;
-  p_ = std::move(p_new);
+  model::advance_history(target, history_, node_major(p_new));
+  if (target.integrator != options_.integrator) ++startup;   // BDF2 started (or restarted) as backward Euler
   q_rate_ = (q - q_) / dt;
   q_ = q;
   t_ = t1;
@@ -286,11 +323,13 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
 
 model::StepStats ReducedSolver::step(double h) {
   require(h > 0.0 && std::isfinite(h), "reduced: step must be positive, got {}", h);
+  require(history_.p.size() == 3 * static_cast<Eigen::Index>(inertia_.inertia_nodes().size()),
+          "reduced: the solver has no state; call initialize() before step()");
   const auto start = Clock::now();
   model::StepStats stats;
   const double t_save = t_;
   const Eigen::VectorXd q_save = q_, rate_save = q_rate_;
-  const meshing::RowMatrixX3d p_save = p_, w_save = w_;
+  const model::PosedHistory history_save = history_;
   substeps_.clear();
   std::vector<material::HessianProjection> ladder;
   if (options_.exact_hessian_first && !options_.quasi_static) ladder.push_back(material::HessianProjection::kNone);
@@ -301,10 +340,11 @@ model::StepStats ReducedSolver::step(double h) {
     const int substeps = 1 << halvings;
     const double dt = h / substeps;
     bool ok = true;
+    int startup = 0;
     for (int k = 0; k < substeps && ok; ++k) {
       bool done = false;
       for (std::size_t attempt = 0; attempt < ladder.size() && !done; ++attempt) {
-        done = solve_substep(t_save + k * dt, dt, ladder[attempt], stats, reason);
+        done = solve_substep(t_save + k * dt, dt, ladder[attempt], stats, reason, startup);
         if (!done) {
           ++stats.failed_attempts;
           if (attempt + 1 < ladder.size()) ++stats.projected_retries;
@@ -314,6 +354,7 @@ model::StepStats ReducedSolver::step(double h) {
     }
     if (ok) {
       stats.substeps = substeps;
+      stats.startup_steps = startup;
       stats.converged_reason = reason;
       stats.seconds = seconds_since(start);
       return stats;
@@ -322,8 +363,7 @@ model::StepStats ReducedSolver::step(double h) {
     t_ = t_save;
     q_ = q_save;
     q_rate_ = rate_save;
-    p_ = p_save;
-    w_ = w_save;
+    history_ = history_save;
     substeps_.clear();
   }
   throw_error("reduced: the step from t = {:.6f} s (h = {:.3e} s) failed even as {} substeps: {}", t_save, h, 1 << options_.max_halvings,
@@ -333,8 +373,24 @@ model::StepStats ReducedSolver::step(double h) {
 model::State ReducedSolver::full_state() const {
   model::State s = model::initial_state(problem_, t_);
   subspace_.add_displacement(q_, s.x);
-  const std::vector<int>& active = inertia_.active_nodes();
-  for (std::size_t a = 0; a < active.size(); ++a) s.w.segment<3>(3 * active[a]) = w_.row(static_cast<Eigen::Index>(a)).transpose();
+  const std::vector<int>& nodes = inertia_.inertia_nodes();
+  scatter_nodes(history_.v, nodes, s.w);
+  if (options_.integrator == model::Integrator::newmark && history_.a.size() == history_.p.size()) {
+    s.a = prescribed_acceleration(problem_, subspace_, q_, t_);   // off the inertia nodes: the prescribed motion's
+    scatter_nodes(history_.a, nodes, s.a);
+  }
+  if (options_.integrator == model::Integrator::bdf2 && history_.p_previous.size() == history_.p.size() && history_.h_previous > 0.0) {
+    // Off the inertia nodes x = x_D (no basis function there): the prescribed motion one step back.
+    const double t_previous = t_ - history_.h_previous;
+    const model::State previous = model::initial_state(problem_, t_previous);
+    model::NodeFrame frame;
+    problem_.frame(t_previous, frame);
+    s.p_previous = node_major(model::posed_positions(frame, previous.x));
+    s.w_previous = previous.w;
+    scatter_nodes(history_.p_previous, nodes, s.p_previous);
+    scatter_nodes(history_.v_previous, nodes, s.w_previous);
+    s.h_previous = history_.h_previous;
+  }
   return s;
 }
 

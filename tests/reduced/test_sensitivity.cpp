@@ -326,6 +326,38 @@ TEST(YoungSensitivity, BoxTrajectoryMatchesFiniteDifferencesOfCompleteSimulation
   }
 }
 
+// The consistent mass: M(t, t') couples the active nodes of neighbouring tets, the attached neighbours' targets
+// stay independent of Y (budget as above).
+TEST(YoungSensitivity, ConsistentMassTrajectoryMatchesFiniteDifferences) {
+  const model::ScalarDrive drive = shake(0.006, 4.0);
+  auto c = testing::box_case({4, 4, 3}, 1000.0, &drive);
+  c.problem.mass_kind = model::MassKind::consistent;
+  c.problem.validate();
+  const Eigen::MatrixX2d base = box_control_young();
+  set_box_young(c.problem, base);
+  const Subspace s = testing::box_subspace(c);
+  const Cubature cub = exact_cubature(c.problem.num_tets());
+  const model::State start = model::initial_state(c.problem, 0.0);
+  const double h = 1.0 / 60.0;
+  const int frames = 20;
+  const SensitivityResult result = simulate_with_sensitivities(c.problem, s, cub, box_young_map(c.problem, cub.tets), start, h, frames);
+  for (int column : {0, 3}) {
+    const int control = column % 2, modulus = column / 2;
+    const double delta = 1e-4 * base(control, modulus);
+    Eigen::MatrixX2d y = base;
+    y(control, modulus) += delta;
+    set_box_young(c.problem, y);
+    const auto plus = plain_run(c.problem, s, cub, start, h, frames);
+    y(control, modulus) -= 2 * delta;
+    set_box_young(c.problem, y);
+    const auto minus = plain_run(c.problem, s, cub, start, h, frames);
+    set_box_young(c.problem, base);
+    const auto fd = central_difference(plus, minus, delta);
+    EXPECT_GT(fd.back().norm(), 0.0);
+    EXPECT_LE(trajectory_error(result.dq_dyoung, column, fd), kTrajectoryTolerance) << "column " << column;
+  }
+}
+
 // Steps of changing size (as substeps make them): the prediction's velocity w_n = (p_n − p_{n−1})/h_prev then
 // enters with r = h/h_prev ≠ 1.
 TEST(YoungSensitivity, VariableStepTrajectoryMatchesFiniteDifferences) {

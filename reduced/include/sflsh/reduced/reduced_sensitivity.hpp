@@ -2,7 +2,7 @@
 // Forward sensitivities of the reduced backward-Euler trajectory with respect to the Young moduli of the
 // material's control points (beyond SFLSH §5, which differentiates σ by one-sided finite differences over
 // 1 + 3N simulations). Each converged (sub)step n → n+1 of size h solves ∇Φ(q_{n+1}; q_n, q_{n−1}, Y) = 0
-// (reduced_integrator.hpp), so by the implicit-function theorem S = dq/dY obeys
+// (reduced_solver.hpp), so by the implicit-function theorem S = dq/dY obeys
 //   H(q_{n+1}) S_{n+1} = −(∂G/∂Y + ∂G/∂q_n S_n + ∂G/∂q_{n−1} S_{n−1}),
 // with H the exact (unprojected) Hessian of Φ at the converged q_{n+1}, factorized afresh. The history
 // enters only through the prediction p̃ = p_n + h w_n, w_n = (p_n − p_{n−1})/h_prev with p_n = z_n + A_n B q_n:
@@ -12,7 +12,9 @@
 // elastic part: ∂G/∂Y_i = Σ_c W_ci ω_c V_c B_cᵀ vec(∂P/∂Y)_c for both moduli (young_derivative.hpp,
 // young_map.hpp). The initial state does not depend on Y: S_0 = 0, w_0 given. Substeps are steps of their own
 // size. Where H is not positive definite at a converged state the trajectory is not differentiable there
-// and the step throws instead of returning numbers.
+// and the step throws instead of returning numbers. With a consistent mass, M(t, t') sums M_ij over pairs of
+// active nodes: the targets p̃_j of their attached neighbours do not depend on Y. Backward Euler only: the
+// constructor refuses BDF2 and Newmark (their targets depend on more of the history).
 #include <sflsh/reduced/reduced_solver.hpp>
 
 #include <Eigen/Core>

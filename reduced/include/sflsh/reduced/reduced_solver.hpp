@@ -1,20 +1,25 @@
 #pragma once
-// Backward Euler for the reduced model: the full-space incremental potential (physics.md §5, Kane et al.
-// 2000) restricted to x = x_D + (B ⊗ I₃) q,
-//   Φ(q) = Σ_i m_i/(2h²) |p_i(q) − p̃_i|² − Σ_i m_i gᵀp_i(q) + Σ_c ω_c V_c Ψ(F_c(q)),   p̃ = p_n + h w_n,
-// minimized by dense Newton (Cholesky of the 3S × 3S Hessian) with a backtracking (Armijo) line search on Φ.
-// The inertia part is exactly quadratic (reduced_inertia.hpp), the elastic part comes from the cubature
-// (cubature_elastic.hpp) with κ per cubature tet. Robustness as in the full-space solver: the exact
-// Hessian first, a failed attempt (indefinite Hessian, failed line search, non-finite or over-cap
-// state) is repeated with PSD-projected dP/dF, then as 2, 4, … 2^max_halvings substeps, then a one-line
-// sflsh::Error naming the time and the reason; the state is never left half-updated.
-// Node potentials of the problem (contact, reduced_potentials.hpp) join Φ on their candidates of each substep.
+// The reduced model's time step: the full-space incremental potential of model/time_integrator.hpp restricted to
+// x = x_D + (B ⊗ I₃) q,
+//   Φ(q) = 1/(2ĥ²)(p(q) − p̃)ᵀM(p(q) − p̃) − gᵀMp(q) + Σ_c ω_c V_c Ψ(F_c(q)) + U(p(q)),
+// with the integrator's ĥ and p̃ (backward Euler, BDF2 or Newmark) from the posed history of the inertia nodes
+// (reduced_inertia.hpp), M lumped or consistent. Φ is the sum of the reduced terms (reduced_terms.hpp): inertia
+// and gravity exactly quadratic in q, elasticity by cubature with κ per cubature tet, node potentials (contact)
+// on their candidates of each substep. Minimized by dense Newton (Cholesky of the 3S × 3S Hessian) with a
+// backtracking (Armijo) line search on Φ; the converged substep advances the history (model::advance_history).
+// Robustness as in the full-space solver: the exact Hessian first, a failed attempt (indefinite Hessian, failed
+// line search, non-finite or over-cap state) is repeated with PSD-projected dP/dF, then as 2, 4, … 2^max_halvings
+// substeps, then a one-line sflsh::Error naming the time and the reason; the state and the history are never
+// left half-updated. BDF2 starts (and restarts after a step grew more than twofold) as backward Euler
+// (StepStats::startup_steps); Newmark needs p̈ at the start, computed in the subspace (reduced_history.hpp)
+// unless the initial state carries it.
 // Single-threaded on purpose: crowds parallelize over bodies.
 #include <sflsh/model/problem.hpp>
 #include <sflsh/reduced/cubature.hpp>
 #include <sflsh/reduced/cubature_elastic.hpp>
 #include <sflsh/reduced/reduced_inertia.hpp>
 #include <sflsh/reduced/reduced_potentials.hpp>
+#include <sflsh/reduced/reduced_terms.hpp>
 #include <sflsh/reduced/subspace.hpp>
 #include <sflsh/model/frame_loop.hpp>
 #include <sflsh/model/step_stats.hpp>
@@ -28,15 +33,15 @@
 namespace sflsh::reduced {
 
 struct ReducedOptions {
-  model::Integrator integrator = model::Integrator::backward_euler;   ///< time_integrator.hpp
+  model::Integrator integrator = model::Integrator::backward_euler;   ///< model/time_integrator.hpp
   bool quasi_static = false;   ///< drop inertia (gravity still acts through mass)
   int max_halvings = 6;
   int max_newton = 30;
   double gradient_rtol = 1e-8;     ///< ‖∇Φ‖ ≤ rtol·‖∇Φ₀‖ …
   double gradient_atol = 1e-9;     ///< … or ≤ atol [N]
   double step_tolerance = 1e-8;    ///< or a full Newton step with ‖Δq‖∞ below this [m]
-  /// Reuse the Cholesky factor of an earlier Hessian (from earlier iterations or steps of the same h and
-  /// projection) while it keeps reducing ‖∇Φ‖ by at least `refresh_ratio` per iteration; M/h² dominates
+  /// Reuse the Cholesky factor of an earlier Hessian (from earlier iterations or steps of the same ĥ and
+  /// projection) while it keeps reducing ‖∇Φ‖ by at least `refresh_ratio` per iteration; M/ĥ² dominates
   /// the dynamic Hessian, so it changes slowly and a refactorization (the dense O(n³) part) is rarely due.
   /// The minimizer is the same; only the path to it changes. Off: plain Newton.
   bool reuse_factorization = true;
@@ -60,20 +65,28 @@ class ReducedSolver final : public model::BodySolver {
   /// The problem, subspace and cubature must outlive the integrator; the problem must be validated and its
   /// constrained nodes fully constrained (all three components) with zero basis rows.
   ReducedSolver(const model::Problem& problem, const Subspace& subspace, const Cubature& cubature,
-                       const ReducedOptions& options = {});
+                const ReducedOptions& options = {});
+  ReducedSolver(const ReducedSolver&) = delete;   // the terms hold references to the members
+  ReducedSolver& operator=(const ReducedSolver&) = delete;
 
-  /// Sets the state from a full one (x projected onto the subspace by least squares on the active nodes,
-  /// w taken at the active nodes).
+  /// Sets the state from a full one: x projected onto the subspace by least squares on the active nodes; w, and
+  /// a (Newmark), p_previous, w_previous (BDF2) when the state has them, taken at the inertia nodes. Newmark
+  /// without a computes p̈ in the subspace (reduced_history.hpp); BDF2 without a previous step starts as
+  /// backward Euler.
   void initialize(const model::State& state);
   /// Advances by h [s]; throws sflsh::Error (state unchanged) when even 2^max_halvings substeps fail.
   model::StepStats step(double h) override;
 
   double time() const { return t_; }
   const Eigen::VectorXd& q() const { return q_; }
-  /// The full-space state: x = x_D + (B ⊗ I₃) q on every node; w from the steps at the active nodes and the
-  /// skinned velocity ẋ of the prescribed motion elsewhere.
+  /// The full-space state: x = x_D + (B ⊗ I₃) q on every node; w from the history at the inertia nodes and the
+  /// skinned velocity of the prescribed motion elsewhere. Newmark also returns a, BDF2 p_previous, w_previous and
+  /// h_previous (once a step was taken), from the history at the inertia nodes and the prescribed motion elsewhere.
   model::State full_state() const;
   model::State current_state() const override { return full_state(); }
+  /// The posed history of the inertia nodes (ReducedInertia::inertia_nodes()).
+  const model::PosedHistory& history() const { return history_; }
+  const ReducedInertia& inertia() const { return inertia_; }
   /// Φ's elastic part at the current state (cubature) [J].
   double elastic_energy() const;
   const Subspace& subspace() const { return subspace_; }
@@ -83,9 +96,12 @@ class ReducedSolver final : public model::BodySolver {
   const std::vector<ReducedSubstep>& last_substeps() const { return substeps_; }
 
  private:
-  struct Attempt;
   Eigen::VectorXd prescribed_state(double t) const;
-  bool solve_substep(double t0, double dt, material::HessianProjection projection, model::StepStats& stats, std::string& reason);
+  /// One substep from the current state; `startup` counts a BDF2 substep taken as backward Euler.
+  bool solve_substep(double t0, double dt, material::HessianProjection projection, model::StepStats& stats, std::string& reason,
+                     int& startup);
+  /// Newmark's p̈ at the inertia nodes for the current q and time (zero without inertia).
+  Eigen::VectorXd initial_acceleration() const;
 
   const model::Problem& problem_;
   const Subspace& subspace_;
@@ -94,16 +110,20 @@ class ReducedSolver final : public model::BodySolver {
   CubatureElastic elastic_;
   ReducedInertia inertia_;
   ReducedPotentials potentials_;
+  ReducedElasticTerm elastic_term_;
+  ReducedInertiaTerm inertia_term_;
+  ReducedGravityTerm gravity_term_;
+  ReducedPotentialTerm potential_term_;
   bool has_drives_ = false;
   // The reusable factorization and what it was computed for.
   Eigen::LLT<Eigen::MatrixXd> factor_;
   bool factor_valid_ = false;
-  double factor_h_ = 0.0;
+  double factor_h_ = 0.0;                 ///< ĥ of the factorized Hessian
   material::HessianProjection factor_projection_ = material::HessianProjection::kNone;
 
   double t_ = 0.0;
   Eigen::VectorXd q_, q_rate_;            ///< q and its backward difference (for the predictor)
-  meshing::RowMatrixX3d p_, w_;           ///< posed positions and velocities of the active nodes
+  model::PosedHistory history_;           ///< posed kinematics of the inertia nodes
   std::vector<ReducedSubstep> substeps_;
 };
 

@@ -1,0 +1,62 @@
+#include <sflsh/reduced/reduced_history.hpp>
+
+#include <sflsh/core/error.hpp>
+
+#include <Eigen/Cholesky>
+
+namespace sflsh::reduced {
+
+Eigen::VectorXd gather_nodes(const Eigen::VectorXd& full, const std::vector<int>& nodes) {
+  Eigen::VectorXd out(3 * static_cast<Eigen::Index>(nodes.size()));
+  for (std::size_t a = 0; a < nodes.size(); ++a) {
+    require(3 * nodes[a] + 2 < full.size(), "reduced: node {} outside a state of {} entries", nodes[a], full.size());
+    out.segment<3>(3 * static_cast<Eigen::Index>(a)) = full.segment<3>(3 * nodes[a]);
+  }
+  return out;
+}
+
+void scatter_nodes(const Eigen::VectorXd& values, const std::vector<int>& nodes, Eigen::VectorXd& full) {
+  require(values.size() == 3 * static_cast<Eigen::Index>(nodes.size()), "reduced: {} entries for {} nodes", values.size(), nodes.size());
+  for (std::size_t a = 0; a < nodes.size(); ++a) full.segment<3>(3 * nodes[a]) = values.segment<3>(3 * static_cast<Eigen::Index>(a));
+}
+
+Eigen::VectorXd prescribed_acceleration(const model::Problem& problem, const Subspace& subspace, const Eigen::VectorXd& q, double t) {
+  const int n = problem.num_nodes();
+  const Eigen::Index dofs = problem.num_dofs();
+  // ṗ(t') = Ȧ(t') x(t') + ḋ(t') + A(t') ẋ_D(t') at fixed q.
+  auto posed_velocity = [&](double time) {
+    Eigen::VectorXd x = Eigen::Map<const Eigen::VectorXd>(problem.rest.data(), dofs);
+    problem.apply_dirichlet(time, x);
+    subspace.add_displacement(q, x);
+    Eigen::VectorXd xdot = Eigen::VectorXd::Zero(dofs);
+    const Eigen::VectorXd du = problem.dirichlet.rates(time);
+    for (std::size_t k = 0; k < problem.dirichlet.dof.size(); ++k) xdot[problem.dirichlet.dof[k]] = du[static_cast<Eigen::Index>(k)];
+    model::NodeFrame frame, rate;
+    problem.frame(time, frame, &rate);
+    Eigen::VectorXd w(dofs);
+    for (int i = 0; i < n; ++i) {
+      const auto si = static_cast<std::size_t>(i);
+      w.segment<3>(3 * i) = rate.A[si] * x.segment<3>(3 * i) + rate.d.row(i).transpose() + frame.A[si] * xdot.segment<3>(3 * i);
+    }
+    return w;
+  };
+  constexpr double kDelta = 1e-6;   // [s]: the forcing is C¹ (cubic Hermite joints), its jerk bounded
+  return (posed_velocity(t + kDelta) - posed_velocity(t)) / kDelta;
+}
+
+Eigen::VectorXd subspace_acceleration(const ReducedInertia& inertia, const Eigen::VectorXd& elastic_gradient,
+                                      const Eigen::VectorXd& zeta) {
+  Eigen::MatrixXd mass;
+  inertia.mass_hessian(1.0, mass);   // JᵀMJ
+  require(elastic_gradient.size() == mass.rows(), "reduced: elastic gradient of {} entries for {} coordinates", elastic_gradient.size(),
+          mass.rows());
+  // (JᵀMJ) q̈ = −∇E + JᵀM g − JᵀM ζ, with −JᵀM g the gravity's linear term.
+  const Eigen::VectorXd rhs = -elastic_gradient - inertia.gravity_linear_term() - inertia.pull_back_mass(zeta);
+  const Eigen::LLT<Eigen::MatrixXd> factor(mass);
+  require(factor.info() == Eigen::Success, "reduced: the subspace mass JᵀMJ is singular (a basis function moves no mass); no Newmark start");
+  const Eigen::VectorXd a = inertia.posed_rate(factor.solve(rhs)) + zeta;
+  require(a.allFinite(), "reduced: the initial acceleration is not finite at t = {} s", inertia.time());
+  return a;
+}
+
+}  // namespace sflsh::reduced
