@@ -3,6 +3,8 @@
 // fullspace_assembly.cpp).
 #include "fullspace_solver_impl.hpp"
 
+#include <sflsh/model/step_ladder.hpp>
+
 namespace sflsh::fullspace {
 
 namespace {
@@ -411,59 +413,62 @@ std::vector<int> FullSpaceSolver::owned_nodes() const {
   return nodes;
 }
 
+namespace {
+
+/// The full-space solver on the model's robustness ladder (step_ladder.hpp). A substep whose linear solve broke
+/// down is tried once more with CG + Jacobi before the ladder moves on (the configured preconditioner comes back
+/// after the step).
+class FullSpaceLadder final : public model::LadderSolver {
+ public:
+  explicit FullSpaceLadder(FullSpaceSolver::Impl& impl) : impl_(impl) {}
+  double time() const override { return impl_.state.t; }
+  void save() override { saved_ = impl_.state; }
+  void restore() override { impl_.state = saved_; }
+  bool attempt(double dt, material::HessianProjection hessian, StepStats& stats, std::string& reason) override {
+    impl_.stats = &stats;
+    impl_.projection_now = hessian;
+    State s = impl_.state;
+    bool ok = impl_.solve_substep(s, s.t, dt);
+    if (!ok && impl_.linear_failure && impl_.saved_pc_type.empty() && hessian != material::HessianProjection::kNone) {
+      impl_.use_fallback_pc();
+      s = impl_.state;
+      ok = impl_.solve_substep(s, s.t, dt);
+    }
+    if (!ok) {
+      reason = stats.converged_reason;
+      return false;
+    }
+    impl_.state = std::move(s);
+    return true;
+  }
+
+ private:
+  FullSpaceSolver::Impl& impl_;
+  State saved_;
+};
+
+}  // namespace
+
 StepStats FullSpaceSolver::step(double h) {
-  require(std::isfinite(h) && h > 0.0, "FullSpaceSolver: step must be positive, got {}", h);
-  const auto t0 = Clock::now();
+  // Exact Hessian first when the mass term keeps the system positive definite in practice; a failed attempt
+  // repeats the same step with the problem's projection before any halving.
+  model::LadderOptions ladder_options;
+  ladder_options.exact_hessian_first = impl_->options.exact_hessian_first && !impl_->options.quasi_static &&
+                                       impl_->problem.dynamic() && impl_->problem.projection != material::HessianProjection::kNone;
+  ladder_options.projection = impl_->problem.projection;
+  ladder_options.max_halvings = impl_->options.max_halvings;
+  FullSpaceLadder ladder(*impl_);
   StepStats stats;
-  impl_->stats = &stats;
-  const State saved = impl_->state;
-  // Exact Hessian first when the mass term keeps the system positive definite in practice; a failed
-  // attempt repeats the same step with the problem's projection before any halving.
-  const bool exact_first = impl_->options.exact_hessian_first && !impl_->options.quasi_static &&
-                           impl_->problem.dynamic() && impl_->problem.projection != material::HessianProjection::kNone;
-  int level = exact_first ? -1 : 0;
-  for (; level <= impl_->options.max_halvings; ++level) {
-    impl_->projection_now = level < 0 ? material::HessianProjection::kNone : impl_->problem.projection;
-    const int substeps = 1 << std::max(level, 0);
-    const double dt = h / substeps;
-    State s = saved;
-    const int startup_before = stats.startup_steps;   // counted for the accepted attempt only
-    bool ok = true;
-    for (int k = 0; k < substeps && ok; ++k) {
-      // Substep ends land exactly on saved.t + h at the last one.
-      const double t_start = k == 0 ? saved.t : s.t;
-      const double t_end = k + 1 == substeps ? saved.t + h : saved.t + (k + 1) * dt;
-      ok = impl_->solve_substep(s, t_start, t_end - t_start);
-    }
-    if (ok) {
-      impl_->restore_pc();
-      impl_->state = std::move(s);
-      stats.substeps = substeps;
-      stats.seconds = seconds_since(t0);
-      impl_->stats = nullptr;
-      if (stats.failed_attempts > 0) {
-        logger()->info("t = {:.6g}: step recovered with {} substeps after {} failed attempt(s)", impl_->state.t, substeps,
-                       stats.failed_attempts);
-      }
-      return stats;
-    }
-    stats.startup_steps = startup_before;
-    if (level < 0) {
-      ++stats.projected_retries;
-    } else {
-      ++stats.failed_attempts;
-      if (impl_->linear_failure && impl_->saved_pc_type.empty()) {
-        // The same attempt again with the fallback preconditioner before halving the step.
-        impl_->use_fallback_pc();
-        --level;
-      }
-    }
+  try {
+    stats = model::step_with_ladder(ladder, h, ladder_options, integrator_label(impl_->options.integrator));
+  } catch (...) {
+    impl_->restore_pc();
+    impl_->stats = nullptr;
+    throw;
   }
   impl_->restore_pc();
   impl_->stats = nullptr;
-  throw_error("{} failed at t = {:.6g} s: no convergence even with {} substeps of {:.3g} s (last reason: {})",
-              integrator_label(impl_->options.integrator), saved.t + h, 1 << impl_->options.max_halvings, h / (1 << impl_->options.max_halvings),
-              stats.converged_reason);
+  return stats;
 }
 
 }  // namespace sflsh::fullspace

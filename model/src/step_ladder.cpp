@@ -20,8 +20,7 @@ StepStats step_with_ladder(LadderSolver& solver, double h, const LadderOptions& 
     int halvings;
     material::HessianProjection hessian;
   };
-  const material::HessianProjection projected =
-      options.projection == material::HessianProjection::kNone ? material::HessianProjection::kStressDerivative : options.projection;
+  const material::HessianProjection projected = options.projection;
   std::vector<Rung> rungs;
   if (options.exact_hessian_first) rungs.push_back({0, material::HessianProjection::kNone});
   for (int k = 0; k <= options.max_halvings; ++k) rungs.push_back({k, projected});
@@ -29,6 +28,7 @@ StepStats step_with_ladder(LadderSolver& solver, double h, const LadderOptions& 
   std::string reason;
   for (std::size_t r = 0; r < rungs.size(); ++r) {
     const int substeps = 1 << rungs[r].halvings;
+    const int startup_before = stats.startup_steps;   // counted for the accepted rung only
     bool ok = true;
     for (int k = 0; k < substeps && ok; ++k) {
       // Substep ends land exactly on t0 + h at the last one.
@@ -45,6 +45,7 @@ StepStats step_with_ladder(LadderSolver& solver, double h, const LadderOptions& 
       return stats;
     }
     solver.restore();
+    stats.startup_steps = startup_before;
     if (rungs[r].hessian == material::HessianProjection::kNone) {
       ++stats.projected_retries;
     } else {

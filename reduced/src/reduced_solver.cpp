@@ -1,5 +1,7 @@
 #include <sflsh/reduced/reduced_solver.hpp>
 
+#include <sflsh/model/step_ladder.hpp>
+
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
 #include <sflsh/reduced/reduced_history.hpp>
@@ -321,53 +323,51 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
   return true;
 }
 
+/// One substep per attempt from the current state; the ladder saves and restores the whole state, the posed
+/// history and the recorded substeps included.
+class ReducedSolver::Ladder final : public model::LadderSolver {
+ public:
+  explicit Ladder(ReducedSolver& solver) : solver_(solver) {}
+  double time() const override { return solver_.t_; }
+  void save() override {
+    t_ = solver_.t_;
+    q_ = solver_.q_;
+    rate_ = solver_.q_rate_;
+    history_ = solver_.history_;
+    solver_.substeps_.clear();
+  }
+  void restore() override {
+    solver_.t_ = t_;
+    solver_.q_ = q_;
+    solver_.q_rate_ = rate_;
+    solver_.history_ = history_;
+    solver_.substeps_.clear();
+  }
+  bool attempt(double dt, material::HessianProjection hessian, model::StepStats& stats, std::string& reason) override {
+    int startup = 0;
+    const bool ok = solver_.solve_substep(solver_.t_, dt, hessian, stats, reason, startup);
+    stats.startup_steps += startup;
+    return ok;
+  }
+
+ private:
+  ReducedSolver& solver_;
+  double t_ = 0.0;
+  Eigen::VectorXd q_, rate_;
+  model::PosedHistory history_;
+};
+
 model::StepStats ReducedSolver::step(double h) {
   require(h > 0.0 && std::isfinite(h), "reduced: step must be positive, got {}", h);
   require(history_.p.size() == 3 * static_cast<Eigen::Index>(inertia_.inertia_nodes().size()),
           "reduced: the solver has no state; call initialize() before step()");
-  const auto start = Clock::now();
-  model::StepStats stats;
-  const double t_save = t_;
-  const Eigen::VectorXd q_save = q_, rate_save = q_rate_;
-  const model::PosedHistory history_save = history_;
-  substeps_.clear();
-  std::vector<material::HessianProjection> ladder;
-  if (options_.exact_hessian_first && !options_.quasi_static) ladder.push_back(material::HessianProjection::kNone);
-  ladder.push_back(problem_.projection == material::HessianProjection::kNone ? material::HessianProjection::kStressDerivative
-                                                                              : problem_.projection);
-  std::string reason;
-  for (int halvings = 0; halvings <= options_.max_halvings; ++halvings) {
-    const int substeps = 1 << halvings;
-    const double dt = h / substeps;
-    bool ok = true;
-    int startup = 0;
-    for (int k = 0; k < substeps && ok; ++k) {
-      bool done = false;
-      for (std::size_t attempt = 0; attempt < ladder.size() && !done; ++attempt) {
-        done = solve_substep(t_save + k * dt, dt, ladder[attempt], stats, reason, startup);
-        if (!done) {
-          ++stats.failed_attempts;
-          if (attempt + 1 < ladder.size()) ++stats.projected_retries;
-        }
-      }
-      ok = done;
-    }
-    if (ok) {
-      stats.substeps = substeps;
-      stats.startup_steps = startup;
-      stats.converged_reason = reason;
-      stats.seconds = seconds_since(start);
-      return stats;
-    }
-    logger()->debug("reduced: step at t = {:.6f} s failed with {} substep(s): {}", t_save, substeps, reason);
-    t_ = t_save;
-    q_ = q_save;
-    q_rate_ = rate_save;
-    history_ = history_save;
-    substeps_.clear();
-  }
-  throw_error("reduced: the step from t = {:.6f} s (h = {:.3e} s) failed even as {} substeps: {}", t_save, h, 1 << options_.max_halvings,
-              reason);
+  model::LadderOptions ladder_options;
+  ladder_options.exact_hessian_first = options_.exact_hessian_first && !options_.quasi_static;
+  ladder_options.projection = problem_.projection == material::HessianProjection::kNone ? material::HessianProjection::kStressDerivative
+                                                                                         : problem_.projection;
+  ladder_options.max_halvings = options_.max_halvings;
+  Ladder ladder(*this);
+  return model::step_with_ladder(ladder, h, ladder_options, "reduced model");
 }
 
 model::State ReducedSolver::full_state() const {

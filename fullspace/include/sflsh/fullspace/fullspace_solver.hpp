@@ -65,8 +65,10 @@ class FullSpaceSolver final : public model::BodySolver {
   /// Local ownership (for reporting): the mesh nodes this rank owns, ascending.
   std::vector<int> owned_nodes() const;
 
- private:
+  /// Internal state (fullspace/src/fullspace_solver_impl.hpp), named here for the solver's own sources.
   struct Impl;
+
+ private:
   std::unique_ptr<Impl> impl_;
 };
 

@@ -96,6 +96,7 @@ class ReducedSolver final : public model::BodySolver {
   const std::vector<ReducedSubstep>& last_substeps() const { return substeps_; }
 
  private:
+  class Ladder;   ///< the solver on the model's robustness ladder (model/step_ladder.hpp)
   Eigen::VectorXd prescribed_state(double t) const;
   /// One substep from the current state; `startup` counts a BDF2 substep taken as backward Euler.
   bool solve_substep(double t0, double dt, material::HessianProjection projection, model::StepStats& stats, std::string& reason,
