@@ -255,7 +255,7 @@ void register_simulate_commands(CLI::App& app, const Invocation& invocation) {
   cmd->add_option("--substeps", opt->substeps, "Integrator steps per frame (step = 1 / (fps · substeps))");
   cmd->add_option("--integrator", opt->integrator,
                   "Time integrator: backward_euler (default; first order, damps) | bdf2 (second order, mild damping) | "
-                  "newmark (trapezoidal, no numerical damping); docs/fullspace.md");
+                  "newmark (trapezoidal, no numerical damping); docs/integrators.md");
   cmd->add_option("--mesh", opt->mesh, "Layer resolution: coarse | default | fine")
       ->check(CLI::IsMember({"coarse", "default", "fine"}));
   add_layer_options(*cmd, opt->layer);
