@@ -393,7 +393,8 @@ void FullSpaceSolver::initialize(const State& s) {
   const Eigen::Index dofs = impl_->problem.num_dofs();
   for (const Eigen::VectorXd* history : {&s.a, &s.p_previous, &s.w_previous}) {
     require(history->size() == 0 || (history->size() == dofs && history->allFinite()),
-            "FullSpaceSolver: the initial state's history has {} entries (expected 0 or {}) or is not finite", history->size(), dofs);
+            "FullSpaceSolver: the initial state's history has {} entries (expected 0 or {}) or is not finite",
+            history->size(), dofs);
   }
   impl_->state = s;
   // Newmark starts from the accelerations of the equations of motion when the state carries none.
@@ -462,7 +463,8 @@ StepStats FullSpaceSolver::step(double h) {
   impl_->restore_pc();
   impl_->stats = nullptr;
   throw_error("{} failed at t = {:.6g} s: no convergence even with {} substeps of {:.3g} s (last reason: {})",
-              integrator_label(impl_->options.integrator), saved.t + h, 1 << impl_->options.max_halvings, h / (1 << impl_->options.max_halvings),
+              integrator_label(impl_->options.integrator), saved.t + h, 1 << impl_->options.max_halvings,
+              h / (1 << impl_->options.max_halvings),
               stats.converged_reason);
 }
 
