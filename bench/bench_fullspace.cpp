@@ -101,9 +101,9 @@ int main(int argc, char** argv) {
   }
   try {
     nlohmann::json results = nlohmann::json::array();
-    std::cout << fmt::format("{:<8} {:>5} {:<14} {:<10} {:>8} {:>8} {:>8} {:>8} {:>7} {:>8} {:>7} {:>7} {:>7}\n", "size",
-                             "procs", "integrator", "mass", "tets", "nodes", "s/step", "median", "newton", "ksp/step",
-                             "assem %", "build s", "peak MB");
+    std::cout << fmt::format("{:<8} {:>5} {:<14} {:<10} {:>8} {:>8} {:>8} {:>8} {:>7} {:>8} {:>7} {:>7} {:>7}\n",
+                             "size", "procs", "integrator", "mass", "tets", "nodes", "s/step", "median", "newton",
+                             "ksp/step", "assem %", "build s", "peak MB");
     // (procs, integrator, mass) → (tets, s/step)
     std::map<std::string, std::pair<std::vector<double>, std::vector<double>>> scaling;
     const auto scratch = std::filesystem::temp_directory_path() / fmt::format("bench_fullspace_{}", ::getpid());
@@ -119,8 +119,8 @@ int main(int argc, char** argv) {
     for (const auto& [size, integrator, mass, np] : runs) {
       const auto dir = scratch / fmt::format("{}_{}_{}_{}", size, np, integrator, mass);
       std::string command = fmt::format(
-          "{} simulate --solver full --mesh {} --mesher {} --subject {} --motion {} --frames {} --integrator {} --mass {} "
-          "--no-output -q --out {}",
+          "{} simulate --solver full --mesh {} --mesher {} --subject {} --motion {} --frames {} --integrator {} "
+          "--mass {} --no-output -q --out {}",
           sflsh_path, size, mesher, subject, motion, frames + 1, integrator, mass, dir.string());
       if (np > 1) {
         command = fmt::format(
@@ -144,7 +144,8 @@ int main(int argc, char** argv) {
       const double median = median_seconds_per_step(summary);
       const double newton = summary["solver"]["newton_iterations"].get<double>() / steps;
       const double ksp = summary["solver"]["linear_iterations"].get<double>() / steps;
-      const double assembly = summary["timings"]["jacobian_seconds"].get<double>() + summary["timings"]["function_seconds"].get<double>();
+      const double assembly =
+          summary["timings"]["jacobian_seconds"].get<double>() + summary["timings"]["function_seconds"].get<double>();
       const long tets = summary["mesh"]["tets"].get<long>();
       nlohmann::json r = {{"size", size},
                           {"procs", np},
@@ -161,10 +162,10 @@ int main(int argc, char** argv) {
                           {"assembly_fraction", solve_s > 0 ? assembly / solve_s : 0.0},
                           {"build_seconds", summary["timings"]["build_seconds"]},
                           {"peak_rss_mb", peak_mb}};
-      std::cout << fmt::format("{:<8} {:>5} {:<14} {:<10} {:>8} {:>8} {:>8.3f} {:>8.3f} {:>7.2f} {:>8.1f} {:>7.0f} {:>7.1f} {:>7.0f}\n",
-                               size, np, integrator, mass, tets, summary["mesh"]["nodes"].get<long>(), per_step, median,
-                               newton, ksp, 100.0 * r["assembly_fraction"].get<double>(), r["build_seconds"].get<double>(),
-                               peak_mb);
+      std::cout << fmt::format(
+          "{:<8} {:>5} {:<14} {:<10} {:>8} {:>8} {:>8.3f} {:>8.3f} {:>7.2f} {:>8.1f} {:>7.0f} {:>7.1f} {:>7.0f}\n", size, np,
+          integrator, mass, tets, summary["mesh"]["nodes"].get<long>(), per_step, median, newton, ksp,
+          100.0 * r["assembly_fraction"].get<double>(), r["build_seconds"].get<double>(), peak_mb);
       const std::string key = fmt::format("{} process(es), {}, {} mass", np, integrator, mass);
       scaling[key].first.push_back(static_cast<double>(tets));
       scaling[key].second.push_back(per_step);

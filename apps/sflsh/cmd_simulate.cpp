@@ -104,10 +104,11 @@ void run_simulate(const SimulateOptions& opt, const Invocation& invocation, int 
                                                    opt.layer.control_points, layer_options);
   const double build_seconds = seconds_since(t_build);
   const model::Problem& problem = layer.problem;
-  logger()->info("simulate: {} nodes ({} free), {} tets, {} frames at {} fps, {} substep(s), {} + {} mass, {} process(es)",
-                 problem.num_nodes(), problem.num_nodes() - static_cast<int>(problem.dirichlet.dof.size() / 3),
-                 problem.num_tets(), motion.num_frames(), motion.fps, opt.substeps, model::to_string(integrator),
-                 model::to_string(problem.mass_kind), size);
+  logger()->info(
+      "simulate: {} nodes ({} free), {} tets, {} frames at {} fps, {} substep(s), {} + {} mass, {} process(es)",
+      problem.num_nodes(), problem.num_nodes() - static_cast<int>(problem.dirichlet.dof.size() / 3), problem.num_tets(),
+      motion.num_frames(), motion.fps, opt.substeps, model::to_string(integrator), model::to_string(problem.mass_kind),
+      size);
 
   const bool use_reduced = opt.solver == "reduced";
   require(!use_reduced || size == 1, "--solver reduced runs on one process (got {}); parallelize over bodies instead", size);
@@ -125,7 +126,8 @@ void run_simulate(const SimulateOptions& opt, const Invocation& invocation, int 
     reduced_model = reduced::build_reduced_model(layer, ro);
     reduced::ReducedOptions solver_options;
     solver_options.integrator = integrator;
-    fast = std::make_unique<reduced::ReducedSolver>(problem, reduced_model->subspace, reduced_model->cubature, solver_options);
+    fast = std::make_unique<reduced::ReducedSolver>(problem, reduced_model->subspace, reduced_model->cubature,
+                                                    solver_options);
     fast->initialize(model::initial_state(problem, 0.0));
   } else {
     fullspace::FullSpaceOptions solver_options;
@@ -255,7 +257,7 @@ void register_simulate_commands(CLI::App& app, const Invocation& invocation) {
   cmd->add_option("--substeps", opt->substeps, "Integrator steps per frame (step = 1 / (fps · substeps))");
   cmd->add_option("--integrator", opt->integrator,
                   "Time integrator: backward_euler (default; first order, damps) | bdf2 (second order, mild damping) | "
-                  "newmark (trapezoidal, no numerical damping); docs/fullspace.md");
+                  "newmark (trapezoidal, no numerical damping); docs/integrators.md");
   cmd->add_option("--mesh", opt->mesh, "Layer resolution: coarse | default | fine")
       ->check(CLI::IsMember({"coarse", "default", "fine"}));
   add_layer_options(*cmd, opt->layer);

@@ -17,7 +17,9 @@ void add_layer_options(CLI::App& cmd, LayerSettings& s) {
 }
 
 void add_mass_option(CLI::App& cmd, LayerSettings& s) {
-  cmd.add_option("--mass", s.mass, "Inertia: lumped (ρV/4 per node) | consistent (ρV/20 (1 + δ_ab) per tet node pair)");
+  cmd.add_option("--mass", s.mass,
+                 "Inertia: lumped (default; ρV/4 per node) | consistent (ρV/20 (1 + δ_ab) per tet node pair); "
+                 "docs/integrators.md");
 }
 
 void check_layer_settings(const LayerSettings& s) {

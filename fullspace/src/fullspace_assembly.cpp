@@ -150,7 +150,8 @@ double FullSpaceSolver::Impl::objective(const Eigen::VectorXd& x_in) {
   double local = 0.0;
   for (int k = begin; k < end; ++k) {
     for (int d = 3 * node_of(k); d < 3 * node_of(k) + 3; ++d) {
-      if (constrained[static_cast<std::size_t>(d)]) local += 0.5 * dirichlet_diagonal * std::pow(x_in[d] - x[d], 2);   // ½ D (x_d − x̄_d)²
+      // ½ D (x_d − x̄_d)²
+      if (constrained[static_cast<std::size_t>(d)]) local += 0.5 * dirichlet_diagonal * std::pow(x_in[d] - x[d], 2);
     }
   }
   const auto t_elastic = Clock::now();

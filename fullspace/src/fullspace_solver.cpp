@@ -395,7 +395,8 @@ void FullSpaceSolver::initialize(const State& s) {
   const Eigen::Index dofs = impl_->problem.num_dofs();
   for (const Eigen::VectorXd* history : {&s.a, &s.p_previous, &s.w_previous}) {
     require(history->size() == 0 || (history->size() == dofs && history->allFinite()),
-            "FullSpaceSolver: the initial state's history has {} entries (expected 0 or {}) or is not finite", history->size(), dofs);
+            "FullSpaceSolver: the initial state's history has {} entries (expected 0 or {}) or is not finite",
+            history->size(), dofs);
   }
   impl_->state = s;
   // Newmark starts from the accelerations of the equations of motion when the state carries none.

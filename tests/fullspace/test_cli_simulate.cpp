@@ -106,8 +106,8 @@ TEST_P(CliSimulate, BadArgumentsGiveOneLineErrorsAndNoOutput) {
 
 TEST_P(CliSimulate, IntegratorAndMassAreChosenAndRecorded) {
   const fs::path dir = scratch_dir();
-  const auto r = run_sflsh(solver() + "--mesh coarse " + common() + " --integrator newmark --mass consistent --no-output --out " +
-                               (dir / "o").string(),
+  const auto r = run_sflsh(solver() + "--mesh coarse " + common() +
+                               " --integrator newmark --mass consistent --no-output --out " + (dir / "o").string(),
                            dir);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const nlohmann::json summary = read_json(dir / "o" / "summary.json");
@@ -119,13 +119,15 @@ TEST_P(CliSimulate, IntegratorAndMassAreChosenAndRecorded) {
 
 TEST_P(CliSimulate, UnknownIntegratorOrMassIsOneLineNamingTheOptionAndTheChoices) {
   const fs::path dir = scratch_dir();
-  const auto integrator = run_sflsh(solver() + "--mesh coarse " + common() + " --integrator rk4 --out " + (dir / "a").string(), dir);
+  const auto integrator =
+      run_sflsh(solver() + "--mesh coarse " + common() + " --integrator rk4 --out " + (dir / "a").string(), dir);
   EXPECT_NE(integrator.exit_code, 0);
   EXPECT_NE(integrator.err.find("--integrator"), std::string::npos) << integrator.err;
   EXPECT_NE(integrator.err.find("backward_euler, bdf2, newmark"), std::string::npos) << integrator.err;
   EXPECT_EQ(std::count(integrator.err.begin(), integrator.err.end(), '\n'), 1) << integrator.err;
   EXPECT_FALSE(fs::exists(dir / "a" / "summary.json"));
-  const auto mass = run_sflsh(solver() + "--mesh coarse " + common() + " --mass heavy --out " + (dir / "b").string(), dir);
+  const auto mass =
+      run_sflsh(solver() + "--mesh coarse " + common() + " --mass heavy --out " + (dir / "b").string(), dir);
   EXPECT_NE(mass.exit_code, 0);
   EXPECT_NE(mass.err.find("--mass"), std::string::npos) << mass.err;
   EXPECT_NE(mass.err.find("lumped, consistent"), std::string::npos) << mass.err;

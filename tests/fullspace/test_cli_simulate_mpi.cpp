@@ -41,9 +41,10 @@ TEST_P(CliSimulateMpi, TwoProcessesMatchOne) {
   ASSERT_EQ(serial.exit_code, 0) << serial.err;
   // This test process is itself an MPI singleton (PETSc is initialized): its OMPI_*/PMIX_* variables must not
   // leak into the nested mpiexec, which would otherwise try to join the singleton's session.
-  const std::string mpi = "for v in $(env | sed -n 's/^\\(OMPI_[^=]*\\|PMIX_[^=]*\\)=.*/\\1/p'); do unset $v; done; "
-                          "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 mpiexec -n 2 " +
-                          std::string(SFLSH_CLI) + args + (dir / "two").string() + " >" + (dir / "mpi.log").string() + " 2>&1";
+  const std::string mpi =
+      "for v in $(env | sed -n 's/^\\(OMPI_[^=]*\\|PMIX_[^=]*\\)=.*/\\1/p'); do unset $v; done; "
+      "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 mpiexec -n 2 " +
+      std::string(SFLSH_CLI) + args + (dir / "two").string() + " >" + (dir / "mpi.log").string() + " 2>&1";
   ASSERT_EQ(std::system(mpi.c_str()), 0) << "mpiexec -n 2 failed; see " << (dir / "mpi.log");
   const vtk::Points one = vtk::read_points(dir / "one" / "body_000002.vtp");
   const vtk::Points two = vtk::read_points(dir / "two" / "body_000002.vtp");

@@ -32,7 +32,8 @@ Problem clamped_bar(MassKind mass) {
   material::SkinMaterial skin;
   skin.young_tangent = 5000.0;
   skin.young_normal = 5000.0;
-  p.tet_material.assign(static_cast<std::size_t>(p.num_tets()), material::make_orthotropic_fung(skin, Eigen::Vector3d::UnitZ()));
+  p.tet_material.assign(static_cast<std::size_t>(p.num_tets()),
+                        material::make_orthotropic_fung(skin, Eigen::Vector3d::UnitZ()));
   p.density = 1000.0;
   p.mass = lumped_masses(p.rest, p.tets, p.density);
   p.mass_kind = mass;
@@ -77,7 +78,8 @@ Mode lowest_mode(const Problem& p) {
   Eigen::VectorXd m_f(n);
   for (Eigen::Index i = 0; i < n; ++i) {
     m_f[i] = p.mass[free[static_cast<std::size_t>(i)] / 3];
-    for (Eigen::Index j = 0; j < n; ++j) K_ff(i, j) = K(free[static_cast<std::size_t>(i)], free[static_cast<std::size_t>(j)]);
+    for (Eigen::Index j = 0; j < n; ++j)
+      K_ff(i, j) = K(free[static_cast<std::size_t>(i)], free[static_cast<std::size_t>(j)]);
   }
   // K φ = ω² M φ with M diagonal: the symmetric problem M^(−½) K M^(−½) ψ = ω² ψ, φ = M^(−½) ψ.
   const Eigen::VectorXd scale = m_f.cwiseSqrt().cwiseInverse();
@@ -86,7 +88,8 @@ Mode lowest_mode(const Problem& p) {
   mode.omega = std::sqrt(eigen.eigenvalues()[0]);
   const Eigen::VectorXd phi = scale.asDiagonal() * eigen.eigenvectors().col(0);
   mode.shape = Eigen::VectorXd::Zero(p.num_dofs());
-  for (Eigen::Index i = 0; i < n; ++i) mode.shape[free[static_cast<std::size_t>(i)]] = phi[i] / phi.cwiseAbs().maxCoeff();
+  for (Eigen::Index i = 0; i < n; ++i)
+    mode.shape[free[static_cast<std::size_t>(i)]] = phi[i] / phi.cwiseAbs().maxCoeff();
   return mode;
 }
 
@@ -152,7 +155,8 @@ INSTANTIATE_TEST_SUITE_P(EveryMass, NewmarkEnergy, ::testing::Values(MassKind::l
 /// max over nodes of |x_a − x_b| [m].
 double node_distance(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
   double worst = 0.0;
-  for (Eigen::Index i = 0; i < a.size() / 3; ++i) worst = std::max(worst, (a.segment<3>(3 * i) - b.segment<3>(3 * i)).norm());
+  for (Eigen::Index i = 0; i < a.size() / 3; ++i)
+    worst = std::max(worst, (a.segment<3>(3 * i) - b.segment<3>(3 * i)).norm());
   return worst;
 }
 
@@ -180,7 +184,8 @@ TEST(Integrators, Bdf2IsSecondOrderAndBackwardEulerFirstOrder) {
   const State be_coarse = run(p, start, Integrator::backward_euler, duration, 16).first;
   const State be_fine = run(p, start, Integrator::backward_euler, duration, 32).first;
   EXPECT_EQ(bdf2_startup, 1);   // only the first step has no previous one
-  const double bdf2_order = std::log2(node_distance(bdf2_coarse.x, reference.x) / node_distance(bdf2_fine.x, reference.x));
+  const double bdf2_order =
+      std::log2(node_distance(bdf2_coarse.x, reference.x) / node_distance(bdf2_fine.x, reference.x));
   const double be_order = std::log2(node_distance(be_coarse.x, reference.x) / node_distance(be_fine.x, reference.x));
   // ωh = π/32 and π/64: close to, not at, the asymptotic regime, where the next term of the error expansion
   // still shifts the observed order by ~0.1–0.2.
@@ -199,13 +204,16 @@ Problem driven_bar(MassKind mass) {
   material::SkinMaterial skin;
   skin.young_tangent = 5000.0;
   skin.young_normal = 2000.0;
-  p.tet_material.assign(static_cast<std::size_t>(p.num_tets()), material::make_orthotropic_fung(skin, Eigen::Vector3d::UnitZ()));
+  p.tet_material.assign(static_cast<std::size_t>(p.num_tets()),
+                        material::make_orthotropic_fung(skin, Eigen::Vector3d::UnitZ()));
   p.density = 1000.0;
   p.mass = lumped_masses(p.rest, p.tets, p.density);
   p.mass_kind = mass;
   // u = A S(t/T) with the quintic smoothstep S(s) = 10s³ − 15s⁴ + 6s⁵: no jump in velocity or acceleration.
   constexpr double kAmplitude = 0.01, kRamp = 0.5;   // [m], [s]
-  auto smoothstep = [](double s) { return s <= 0.0 ? 0.0 : s >= 1.0 ? 1.0 : s * s * s * (10.0 - 15.0 * s + 6.0 * s * s); };
+  auto smoothstep = [](double s) {
+    return s <= 0.0 ? 0.0 : s >= 1.0 ? 1.0 : s * s * s * (10.0 - 15.0 * s + 6.0 * s * s);
+  };
   auto smoothstep_rate = [](double s) { return s <= 0.0 || s >= 1.0 ? 0.0 : 30.0 * s * s * (1.0 - s) * (1.0 - s); };
   p.dirichlet.drives.push_back({[=](double t) { return kAmplitude * smoothstep(t / kRamp); },
                                 [=](double t) { return kAmplitude / kRamp * smoothstep_rate(t / kRamp); }});
@@ -241,7 +249,8 @@ TEST_P(ConsistentMass, StaysFiniteAndCloseToLumpedOnADrivenBar) {
     b.step(1.0 / 60.0);
     ASSERT_TRUE(b.state().x.allFinite() && b.state().w.allFinite()) << "step " << k;
     ASSERT_TRUE(std::isfinite(energies(consistent, b.state()).kinetic));
-    largest_deformation = std::max(largest_deformation, node_distance(deformation(a.state()), Eigen::VectorXd::Zero(lumped.num_dofs())));
+    const Eigen::VectorXd zero = Eigen::VectorXd::Zero(lumped.num_dofs());
+    largest_deformation = std::max(largest_deformation, node_distance(deformation(a.state()), zero));
     largest_difference = std::max(largest_difference, node_distance(a.state().x, b.state().x));
   }
   EXPECT_GT(largest_deformation, 1e-4);   // the base's acceleration bends the bar by a fraction of a millimetre

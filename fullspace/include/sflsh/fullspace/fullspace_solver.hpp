@@ -5,7 +5,8 @@
 //   Φ(x) = 1/(2ĥ²) (p(x) − p̃)ᵀ M (p(x) − p̃) + E(x) − gᵀ M p(x) + U(p(x)),   p_i(x) = A_i x_i + d_i,
 // summed from the model's terms (model/terms.hpp: elastic, inertia with lumped or consistent M, gravity, node
 // potentials); the integrator sets ĥ and p̃ from the posed history carried in the State and updates it from the
-// minimizer. ∇²Φ = Aᵀ M A/ĥ² + ∇²E(x) + Aᵀ∇²U A has 3×3 blocks per node pair sharing a tet (consistent M too).
+// minimizer. ∇²Φ = Aᵀ M A/ĥ² + ∇²E(x) + Aᵀ∇²U A has 3×3 blocks per node pair sharing a tet (consistent M
+// too).
 // Distributed over MPI_COMM_WORLD: nodes are renumbered (reverse Cuthill–McKee, node_partition.hpp) and split
 // in contiguous ranges; each rank assembles the complete rows of its nodes from every tet touching them (so no
 // matrix or vector entry is sent between ranks) and counts in Φ the tets whose lowest node it owns; every
