@@ -53,8 +53,8 @@ StepStats step_with_ladder(LadderSolver& solver, double h, const LadderOptions& 
     }
     logger()->debug("{}: step from t = {:.6g} s failed as {} substep(s): {}", name, t0, substeps, reason);
   }
-  throw_error("{} failed at t = {:.6g} s: no convergence even with {} substeps of {:.3g} s ({})", name, t0 + h,
-              1 << options.max_halvings, h / (1 << options.max_halvings), reason);
+  throw_error("{} failed at t = {:.6g} s (the step from t = {:.6f} s): no convergence even with {} substeps of {:.3g} s ({})", name,
+              t0 + h, t0, 1 << options.max_halvings, h / (1 << options.max_halvings), reason);
 }
 
 }  // namespace sflsh::model
