@@ -185,8 +185,10 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
     Eigen::VectorXd gradient(subspace_.num_dofs());
     Eigen::MatrixXd hessian;
     // A factor from another ĥ or projection, or any factor while contact is active (its Hessian changes with the
-    // candidates), is not reused.
-    if (!factor_valid_ || factor_h_ != target.h_eff || factor_projection_ != projection || !options_.reuse_factorization || contact)
+    // candidates), is not reused. ĥ is compared to 1e-12 relative: the ladder's substeps end on t0 + h exactly, so
+    // equal steps differ in their last bits (and so do BDF2's coefficients), which must not force a new factor.
+    const bool same_h = std::abs(factor_h_ - target.h_eff) <= 1e-12 * target.h_eff;
+    if (!factor_valid_ || !same_h || factor_projection_ != projection || !options_.reuse_factorization || contact)
       factor_valid_ = false;
     bool fresh = false;          // the factor was computed at this step's current iterate
     bool refresh = !factor_valid_;
