@@ -197,14 +197,28 @@ void ReducedInertia::displacement(const Eigen::VectorXd& q, meshing::RowMatrixX3
   }
 }
 
-void ReducedInertia::posed(const Eigen::VectorXd& q, meshing::RowMatrixX3d& p) const {
-  meshing::RowMatrixX3d u;
-  displacement(q, u);
-  p = z_;
-  for (std::size_t a = 0; a < active_.size(); ++a) {
+void ReducedInertia::posed_into(const Eigen::VectorXd& q, double* out) const {
+  for (std::size_t a = 0; a < nodes_.size(); ++a) {
     const auto row = static_cast<Eigen::Index>(a);
-    p.row(row) = (frame_.A[a] * u.row(row).transpose()).transpose() + z_.row(row);
+    Eigen::Map<Eigen::Vector3d> p(out + 3 * a);
+    if (a >= active_.size()) {
+      p = z_.row(row).transpose();   // no basis function: the skinned prescribed state
+      continue;
+    }
+    Eigen::Vector3d u = Eigen::Vector3d::Zero();
+    for (SparseRowMatrix::InnerIterator it(subspace_.basis, active_[a]); it; ++it) u += it.value() * q.segment<3>(3 * it.col());
+    p = frame_.A[a] * u + z_.row(row).transpose();   // p_i = z_i + A_i u_i
   }
+}
+
+void ReducedInertia::posed(const Eigen::VectorXd& q, meshing::RowMatrixX3d& p) const {
+  p.resize(static_cast<Eigen::Index>(nodes_.size()), 3);
+  posed_into(q, p.data());
+}
+
+void ReducedInertia::posed(const Eigen::VectorXd& q, Eigen::VectorXd& p) const {
+  p.resize(3 * static_cast<Eigen::Index>(nodes_.size()));
+  posed_into(q, p.data());
 }
 
 Eigen::VectorXd ReducedInertia::posed_rate(const Eigen::VectorXd& v) const {

@@ -104,10 +104,8 @@ void ReducedSolver::initialize(const model::State& state) {
   if (has_drives_) elastic_.set_prescribed_state(x_prescribed);
   inertia_.set_time(t_, x_prescribed);
   const std::vector<int>& nodes = inertia_.inertia_nodes();
-  meshing::RowMatrixX3d p;
-  inertia_.posed(q_, p);
   history_ = model::PosedHistory{};
-  history_.p = node_major(p);
+  inertia_.posed(q_, history_.p);
   history_.v = gather_nodes(state.w, nodes);
   if (state.a.size() == dofs) {
     history_.a = gather_nodes(state.a, nodes);
@@ -187,8 +185,10 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
     Eigen::VectorXd gradient(subspace_.num_dofs());
     Eigen::MatrixXd hessian;
     // A factor from another ĥ or projection, or any factor while contact is active (its Hessian changes with the
-    // candidates), is not reused.
-    if (!factor_valid_ || factor_h_ != target.h_eff || factor_projection_ != projection || !options_.reuse_factorization || contact)
+    // candidates), is not reused. ĥ is compared to 1e-12 relative: the ladder's substeps end on t0 + h exactly, so
+    // equal steps differ in their last bits (and so do BDF2's coefficients), which must not force a new factor.
+    const bool same_h = std::abs(factor_h_ - target.h_eff) <= 1e-12 * target.h_eff;
+    if (!factor_valid_ || !same_h || factor_projection_ != projection || !options_.reuse_factorization || contact)
       factor_valid_ = false;
     bool fresh = false;          // the factor was computed at this step's current iterate
     bool refresh = !factor_valid_;
@@ -223,11 +223,15 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
       g_previous = g;
       for (int attempt = 0; attempt < 2; ++attempt) {
         if (refresh) {
-          hessian.setZero(subspace_.num_dofs(), subspace_.num_dofs());
-          for (const TimedTerm& term : terms) {
+          for (std::size_t k = 0; k < terms.size(); ++k) {
+            const TimedTerm& term = terms[k];
             clock = Clock::now();
             try {
-              term.term->add_hessian(q, hessian);
+              if (k == 0) {
+                term.term->hessian(q, hessian);   // assigns (the inertia term copies its constant JᵀMJ/ĥ²)
+              } else {
+                term.term->add_hessian(q, hessian);
+              }
             } catch (const Error& e) {
               reason = e.what();
               return false;
@@ -311,9 +315,9 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
     ++stats.potential_refinements;
   }
   clock = Clock::now();
-  meshing::RowMatrixX3d p_new;
+  Eigen::VectorXd p_new;
   inertia_.posed(q, p_new);
-  model::advance_history(target, history_, node_major(p_new));
+  model::advance_history(target, history_, p_new);
   if (target.integrator != options_.integrator) ++startup;   // BDF2 started (or restarted) as backward Euler
   q_rate_ = (q - q_) / dt;
   q_ = q;
@@ -324,26 +328,32 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
 }
 
 /// One substep per attempt from the current state; the ladder saves and restores the whole state, the posed
-/// history and the recorded substeps included.
+/// history and the recorded substeps included. A substep advances the history only when it converges, so a failed
+/// single-substep rung leaves it as saved: the history (several vectors per inertia node) is copied only before the
+/// first substep of a split rung, not on every step.
 class ReducedSolver::Ladder final : public model::LadderSolver {
  public:
-  explicit Ladder(ReducedSolver& solver) : solver_(solver) {}
+  Ladder(ReducedSolver& solver, double h) : solver_(solver), h_(h) {}
   double time() const override { return solver_.t_; }
   void save() override {
     t_ = solver_.t_;
     q_ = solver_.q_;
     rate_ = solver_.q_rate_;
-    history_ = solver_.history_;
+    history_saved_ = false;
     solver_.substeps_.clear();
   }
   void restore() override {
     solver_.t_ = t_;
     solver_.q_ = q_;
     solver_.q_rate_ = rate_;
-    solver_.history_ = history_;
+    if (history_saved_) solver_.history_ = history_;
     solver_.substeps_.clear();
   }
   bool attempt(double dt, material::HessianProjection hessian, model::StepStats& stats, std::string& reason) override {
+    if (!history_saved_ && solver_.t_ == t_ && dt < 0.75 * h_) {   // the first substep of a split rung
+      history_ = solver_.history_;
+      history_saved_ = true;
+    }
     int startup = 0;
     const bool ok = solver_.solve_substep(solver_.t_, dt, hessian, stats, reason, startup);
     stats.startup_steps += startup;
@@ -352,9 +362,11 @@ class ReducedSolver::Ladder final : public model::LadderSolver {
 
  private:
   ReducedSolver& solver_;
+  double h_;
   double t_ = 0.0;
   Eigen::VectorXd q_, rate_;
   model::PosedHistory history_;
+  bool history_saved_ = false;
 };
 
 model::StepStats ReducedSolver::step(double h) {
@@ -366,7 +378,7 @@ model::StepStats ReducedSolver::step(double h) {
   ladder_options.projection = problem_.projection == material::HessianProjection::kNone ? material::HessianProjection::kStressDerivative
                                                                                          : problem_.projection;
   ladder_options.max_halvings = options_.max_halvings;
-  Ladder ladder(*this);
+  Ladder ladder(*this, h);
   return model::step_with_ladder(ladder, h, ladder_options, "reduced model");
 }
 

@@ -1,6 +1,6 @@
 // The reduced model's integrators and masses: with every free node a handle and every tet as cubature it is the
-// full-space step (against a dense full-space reference for every integrator × mass, and against the PETSc
-// full-space solver); Newmark keeps the energy of a small free oscillation; BDF2 counts its start-up steps; a failed
+// full-space step (against a dense full-space reference and against the PETSc full-space solver, for every
+// integrator × mass); Newmark keeps the energy of a small free oscillation; BDF2 counts its start-up steps; a failed
 // step leaves the history untouched; a full state carries the history from one solver to another; the
 // sensitivities refuse what they are not derived for.
 #include "integrator_fixtures.hpp"
@@ -23,11 +23,6 @@
 
 namespace sflsh::reduced {
 namespace {
-
-/// The full-space solver's integrators and consistent mass are added alongside this model; until FullSpaceSolver
-/// honours FullSpaceOptions::integrator and Problem::mass_kind only backward Euler + lumped is compared with it
-/// (every combination is compared with the dense reference). Set to true when it does.
-constexpr bool kFullSpaceSolverHasIntegrators = false;
 
 model::ScalarDrive shake(double amplitude, double frequency) {
   const double w = 2.0 * M_PI * frequency;
@@ -145,9 +140,6 @@ TEST_P(FullBasis, ReproducesTheDenseFullSpaceReference) {
 
 TEST_P(FullBasis, ReproducesTheFullSpaceSolver) {
   const Combination combination = GetParam();
-  if (!kFullSpaceSolverHasIntegrators &&
-      !(combination.integrator == model::Integrator::backward_euler && combination.mass == model::MassKind::lumped))
-    GTEST_SKIP() << "the full-space solver runs backward Euler with lumped masses only so far";
   const model::ScalarDrive drive = shake(0.006, 4.0);
   const auto box = moving_box(combination, drive);
   const model::Problem& p = box.problem;

@@ -52,8 +52,10 @@ class ReducedInertia {
   /// displacement made at t'. M(t, t)/ĥ² = mass_hessian(ĥ). Used by forward sensitivities (reduced_sensitivity.hpp).
   void cross_mass(double t_other, Eigen::MatrixXd& M) const;
 
-  /// Posed positions of the inertia nodes at the current time for coordinates q (z_i + A_i u_i; z_j off the basis).
+  /// Posed positions of the inertia nodes at the current time for coordinates q (z_i + A_i u_i; z_j off the basis),
+  /// one row per node, or node-major (3 entries per node, the layout of the posed history).
   void posed(const Eigen::VectorXd& q, meshing::RowMatrixX3d& p) const;
+  void posed(const Eigen::VectorXd& q, Eigen::VectorXd& p) const;
   /// J v: the posed rate of the inertia nodes for a coordinate rate v at frozen maps (3 per node, 0 off the basis).
   Eigen::VectorXd posed_rate(const Eigen::VectorXd& v) const;
   /// The node maps (A_i, d_i) of the inertia nodes at the current time, and their posed positions at q = 0.
@@ -66,6 +68,7 @@ class ReducedInertia {
 
  private:
   void build_consistent(const model::Problem& problem);
+  void posed_into(const Eigen::VectorXd& q, double* out) const;   ///< node-major, 3 per inertia node
 
   const model::Problem& problem_;
   const Subspace& subspace_;

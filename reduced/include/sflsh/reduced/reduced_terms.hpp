@@ -29,6 +29,11 @@ class ReducedTerm {
   virtual void add_gradient(const Eigen::VectorXd& q, Eigen::VectorXd& gradient) const = 0;
   /// Adds ∂²/∂q² [N/m] to `hessian` (3S × 3S, full symmetric); throws like add_gradient.
   virtual void add_hessian(const Eigen::VectorXd& q, Eigen::MatrixXd& hessian) const = 0;
+  /// Sets `hessian` to ∂²/∂q² (3S × 3S): what the first term of a sum does instead of adding to zeros.
+  virtual void hessian(const Eigen::VectorXd& q, Eigen::MatrixXd& hessian) const {
+    hessian.setZero(q.size(), q.size());
+    add_hessian(q, hessian);
+  }
 };
 
 class ReducedElasticTerm final : public ReducedTerm {
@@ -53,10 +58,11 @@ class ReducedInertiaTerm final : public ReducedTerm {
   /// The step: target p̃ on the inertia nodes (3 per node) and ĥ [s], at the inertia's current time. Computes c_M
   /// and JᵀMJ/ĥ² once; the evaluations then cost one 3S × 3S product.
   void set_step(const Eigen::VectorXd& p_tilde, double h_eff);
-  const Eigen::MatrixXd& hessian() const { return hessian_; }
+  const Eigen::MatrixXd& mass_hessian() const { return hessian_; }
   double value(const Eigen::VectorXd& q) const override;
   void add_gradient(const Eigen::VectorXd& q, Eigen::VectorXd& gradient) const override;
   void add_hessian(const Eigen::VectorXd& q, Eigen::MatrixXd& hessian) const override;
+  void hessian(const Eigen::VectorXd&, Eigen::MatrixXd& hessian) const override { hessian = hessian_; }
 
  private:
   const ReducedInertia& inertia_;
