@@ -1,7 +1,7 @@
 // Benchmark: the numerical damping of fixed-step backward Euler at 30, 60, 120 and 240 fps against the
 // error-controlled SUNDIALS reference, on a subject's coarse layer along a motion. All runs share one forcing:
 // the motion is sampled at the finest rate and the skinning trajectory interpolates it (C¹), so the only
-// difference between runs is the integrator. For each rate the per-vertex dynamics amplitude σ (physics.md §4)
+// difference between runs is the integrator. For each rate the per-vertex dynamics amplitude σ (docs/physics.md §4)
 // is computed on that rate's own frame times, for the run and for the reference at the same times.
 // Reports mean σ ratio (BE / reference), the RMS trajectory error of the skin's elastic displacement relative
 // to the reference's RMS displacement, and wall time per simulated second.

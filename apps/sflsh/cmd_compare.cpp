@@ -1,5 +1,5 @@
 // sflsh compare: the full-space reference against a sweep of reduced models (handles × cubature) on the same
-// subject, motion and parameters. Reports the dynamics amplitude σ per vertex of each (physics.md §4), the
+// subject, motion and parameters. Reports the dynamics amplitude σ per vertex of each (docs/physics.md §4), the
 // fraction of the full-space dynamics each reduced model recovers, per-vertex error maps, the time per frame
 // and the error–time trade-off (tradeoff.csv / .md / .png, compare.vtp, summary.json).
 #include "commands.hpp"
@@ -303,7 +303,7 @@ void run_compare(const CompareOptions& opt, const Invocation& invocation, int ra
       run.stage("tradeoff.md"), "Full space against reduced models: " + title,
       {fmt::format("layer: {} nodes, {} tets, {} region vertices; step {:.4g} s", problem.num_nodes(), problem.num_tets(), R, h),
        fmt::format("full space: {} Newton and {} linear iterations on {} process(es)", full_newton, full_linear, size),
-       "σ: dynamics amplitude per vertex (physics.md §4), mean over the region; recovered = mean σ / mean σ of the full space",
+       "σ: dynamics amplitude per vertex (docs/physics.md §4), mean over the region; recovered = mean σ / mean σ of the full space",
        "RMS error: of |u − u_full| over region vertices and frames; relative: divided by the RMS of u_full"},
       rows, timings);
   std::string png = "tradeoff.png";

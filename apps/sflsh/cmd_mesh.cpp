@@ -93,7 +93,7 @@ void run_mesh(const MeshOptions& opt, const Invocation& invocation) {
   vtk::write_surface(run.stage("outer.vtp"), geometry.skin, mesh.region_surface.faces, surface);
   meshing::RowMatrixX3d inner = geometry.skin;
   for (int v = 0; v < inner.rows(); ++v)
-    inner.row(v) += geometry.thickness(v) * (geometry.skeleton.row(v) - geometry.skin.row(v));   // physics.md §1.4
+    inner.row(v) += geometry.thickness(v) * (geometry.skeleton.row(v) - geometry.skin.row(v));   // docs/physics.md §1.4
   vtk::write_surface(run.stage("inner.vtp"), inner, mesh.region_surface.faces, surface);
 
   std::map<std::string, long> kinds;

@@ -1,4 +1,4 @@
-// sflsh metrics: the paper's dynamics metric (physics.md §4) on DYNA registrations. Fits per-frame pose
+// sflsh metrics: the paper's dynamics metric (docs/physics.md §4) on DYNA registrations. Fits per-frame pose
 // (and β when not given) to one sequence of a DYNA HDF5 file, pulls the registrations back to the neutral
 // pose and writes the per-vertex σ, σ_n, σ_t [mm] on the shaped template surface, plus a table.
 // `sflsh metrics --dyna FILE.h5 --list` lists the subjects and sequences of a file.

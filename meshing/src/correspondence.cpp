@@ -1,4 +1,4 @@
-// Surface-to-skeleton correspondence and the layer geometry of a shape (physics.md §1.4).
+// Surface-to-skeleton correspondence and the layer geometry of a shape (docs/physics.md §1.4).
 #include <sflsh/core/error.hpp>
 #include <sflsh/meshing/correspondence.hpp>
 
@@ -111,7 +111,7 @@ Eigen::Vector3d LayerGeometry::position(const SurfaceAnchor& anchor) const {
     if (w == 0.0) continue;
     const int v = anchor.vertex[k];
     const Eigen::Vector3d s = skin.row(v).transpose();
-    p += w * (s + anchor.depth * thickness(v) * (skeleton.row(v).transpose() - s));  // physics.md §1.4
+    p += w * (s + anchor.depth * thickness(v) * (skeleton.row(v).transpose() - s));  // docs/physics.md §1.4
   }
   return p;
 }

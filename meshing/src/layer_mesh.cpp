@@ -1,5 +1,5 @@
 // Building the template layer mesh: region → correspondence → closed layer boundary → tets → node
-// kinds, anchors, parts and the skin embedding (DESIGN.md §3).
+// kinds, anchors, parts and the skin embedding (docs/architecture.md §3).
 #include "layered_mesh.hpp"
 #include "skin_embedding.hpp"
 

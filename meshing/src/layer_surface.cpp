@@ -1,4 +1,4 @@
-// The closed boundary of the soft-tissue layer (DESIGN.md §3).
+// The closed boundary of the soft-tissue layer (docs/architecture.md §3).
 #include <sflsh/core/error.hpp>
 #include <sflsh/meshing/layer_surface.hpp>
 

@@ -1,4 +1,4 @@
-// Retargeting the template layer to a shape and thickness (DESIGN.md §3).
+// Retargeting the template layer to a shape and thickness (docs/architecture.md §3).
 #include <sflsh/core/error.hpp>
 #include <sflsh/meshing/retarget.hpp>
 

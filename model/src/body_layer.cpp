@@ -10,7 +10,7 @@ namespace sflsh::model {
 namespace {
 
 /// Pose-corrective directions at every node (3N × 207): the skin's posedirs carried into the volume by
-/// the retargeter's harmonic extension and faded linearly with depth, so the bones see none (physics.md §5).
+/// the retargeter's harmonic extension and faded linearly with depth, so the bones see none (docs/physics.md §5).
 Eigen::MatrixXd node_pose_directions(const body::BodyModel& model, const meshing::LayerMesh& mesh,
                                      const meshing::Retargeter& retargeter, const Eigen::VectorXd& depth) {
   if (!model.has_pose_correctives()) return {};

@@ -26,7 +26,7 @@ void DynamicsAmplitude::add(const RowMatrixX3d& u) {
   ++frames_;
 }
 
-// mean_t ‖u − ū‖² = mean_t ‖u‖² − ‖ū‖² (physics.md §4 step 5), clamped at 0 against round-off.
+// mean_t ‖u − ū‖² = mean_t ‖u‖² − ‖ū‖² (docs/physics.md §4 step 5), clamped at 0 against round-off.
 Eigen::VectorXd DynamicsAmplitude::sigma() const {
   if (frames_ == 0) return Eigen::VectorXd::Zero(normals_.rows());
   const double inv = 1.0 / frames_;
@@ -40,7 +40,7 @@ Eigen::VectorXd DynamicsAmplitude::sigma_normal() const {
   return (sum_sq_n_ * inv - (sum_n_ * inv).array().square().matrix()).cwiseMax(0.0).cwiseSqrt();
 }
 
-// σ² = σ_n² + σ_t² (physics.md §4 step 6).
+// σ² = σ_n² + σ_t² (docs/physics.md §4 step 6).
 Eigen::VectorXd DynamicsAmplitude::sigma_tangent() const {
   const Eigen::VectorXd s = sigma(), sn = sigma_normal();
   return (s.array().square() - sn.array().square()).cwiseMax(0.0).sqrt().matrix();
@@ -83,7 +83,7 @@ namespace sflsh::model {
 
 namespace {
 
-/// Unit normals of the shaped neutral body at the region's vertices (the σ_n / σ_t split of physics.md §4).
+/// Unit normals of the shaped neutral body at the region's vertices (the σ_n / σ_t split of docs/physics.md §4).
 RowMatrixX3d region_normals(const BodyLayer& layer) {
   const RowMatrixX3d all = vertex_normals(layer.shaped, layer.model->faces);
   const std::vector<int>& region = layer.mesh->region_surface.vertices;

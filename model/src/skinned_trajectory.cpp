@@ -135,7 +135,7 @@ SkinnedTrajectory::SkinnedTrajectory(std::shared_ptr<const MotionCurve> curve,
           3 * num_nodes(), body::kNumPoseFeatures);
 }
 
-// p_i = A_i (x_i + b_i) + c_i = A_i x_i + d_i with d_i = A_i b_i + c_i (physics.md §5).
+// p_i = A_i (x_i + b_i) + c_i = A_i x_i + d_i with d_i = A_i b_i + c_i (docs/physics.md §5).
 void SkinnedTrajectory::evaluate(double t, NodeFrame& frame, NodeFrame* rate) const {
   JointTransforms m, dm;
   curve_->transforms(t, m, rate ? &dm : nullptr);

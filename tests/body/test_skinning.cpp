@@ -1,4 +1,4 @@
-// SMPL model equations: FK/LBS identities on a synthetic body (physics.md §3.1).
+// SMPL model equations: FK/LBS identities on a synthetic body (docs/physics.md §3.1).
 #include "synthetic_body.hpp"
 
 #include <sflsh/body/skinning.hpp>

@@ -1,5 +1,5 @@
 #pragma once
-// Central differences and error measures for the derivative tests (STYLE.md §4: a small helper in
+// Central differences and error measures for the derivative tests (docs/style.md §4: a small helper in
 // tests/, no dependency). Central differences have truncation error h²/6·|f'''| and rounding error
 // ~ε_mach·|f|/h; with h = 1e-6 on quantities of order one both are ≲ 1e-9 relative.
 #include <Eigen/Core>

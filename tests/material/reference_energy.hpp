@@ -25,7 +25,7 @@ struct ReferenceMaterial {
 inline ReferenceMaterial reference_material(const material::SkinMaterial& m, const Eigen::Vector3d& normal) {
   const double E[3] = {m.young_tangent, m.young_tangent, m.young_normal};
   const double nu = m.poisson;
-  // ν_ij = ν √(E_i/E_j), G_ij = √(E_i E_j)/(2(1+ν)) (physics.md §1.2, small-strain constants).
+  // ν_ij = ν √(E_i/E_j), G_ij = √(E_i E_j)/(2(1+ν)) (docs/physics.md §1.2, small-strain constants).
   auto nu_ij = [&](int i, int j) { return nu * std::sqrt(E[i] / E[j]); };
   auto g_ij = [&](int i, int j) { return std::sqrt(E[i] * E[j]) / (2.0 * (1.0 + nu)); };
   Eigen::Matrix<double, 6, 6> compliance = Eigen::Matrix<double, 6, 6>::Zero();

@@ -198,7 +198,7 @@ TEST(OrthotropicFung, RotationInvariance) {
 }
 
 // At F = I, dP/dF is the linear stiffness ℂ (dP = ℂ:sym dF). Invert its normal block into the compliance
-// and read E_i = 1/S_ii, ν_ij = −S_ij E_i; G_ij = ∂P_ij/∂F_ij. They must be the constants of physics.md
+// and read E_i = 1/S_ii, ν_ij = −S_ij E_i; G_ij = ∂P_ij/∂F_ij. They must be the constants of docs/physics.md
 // §1.2 and of small_strain_constants(). The 3×3 inverse is well conditioned (≲ 30): 1e-12 relative.
 TEST(OrthotropicFung, SmallStrainLimitIsTheLinearOrthotropicMaterial) {
   for (int axis : {2, 0}) {  // n = z, and n = x (checks that the frame follows n)
@@ -261,7 +261,7 @@ TEST(OrthotropicFung, FungFactorStiffensAsTheClosedForm) {
       EXPECT_NEAR(S11, c11 * E * std::exp(k * E * E), 1e-12 * std::abs(S11));
     }
   }
-  // physics.md §1.2's reading of saturation 4 (ν ignored, c = Y_t/4): the secant stiffness S/E grows by
+  // docs/physics.md §1.2's reading of saturation 4 (ν ignored, c = Y_t/4): the secant stiffness S/E grows by
   // exactly e at a tangential Green strain of 0.5.
   const OrthotropicFung m = make_orthotropic_fung(skin(5000.0, 2000.0, 0.0, 4.0), Eigen::Vector3d::UnitZ());
   const double stretch = std::sqrt(2.0);  // E = ½(λ² − 1) = 0.5

@@ -59,7 +59,7 @@ TEST(FieldParameters, ValidationNamesTheField) {
 
 TEST(FieldParameters, FieldStaysWithinTheBoundsAndInterpolates) {
   // κ(s) = Σ φ_i κ_i with φ ≥ 0 and Σφ = 1 is a convex combination: every vertex lies in the bounds when the
-  // κ_i do, including 100× stiffness contrasts between neighbours (DESIGN.md §8). Round-off: Σφ = 1 to
+  // κ_i do, including 100× stiffness contrasts between neighbours (docs/architecture.md §8). Round-off: Σφ = 1 to
   // ~1e-15, so the field can exceed a bound by that relative amount; 1e-12 relative is the tolerance.
   const auto mesh = sflsh::testing::body_region();
   const std::vector<int> s = place_control_points(mesh.V, mesh.F, 24);

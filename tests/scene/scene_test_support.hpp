@@ -1,5 +1,5 @@
 #pragma once
-// Central differences for the scene tests (STYLE.md §4). With h = 1e-6 m on distances of order 0.1 m
+// Central differences for the scene tests (docs/style.md §4). With h = 1e-6 m on distances of order 0.1 m
 // the truncation error h²/6·|φ'''| (|φ'''| ~ 1/ρ² with ρ ≳ 0.05 m) and the rounding error ε/h are
 // both ≲ 1e-8, far below the 1e-6 tolerances used.
 #include <Eigen/Core>

@@ -1,5 +1,5 @@
 #pragma once
-// What the stability suites of both solvers share (DESIGN.md §8): the open body on the coarse layer, a
+// What the stability suites of both solvers share (docs/architecture.md §8): the open body on the coarse layer, a
 // material with per-control-point κ, the skinned layer's kinetic energy (the energy scale the skeleton feeds
 // into the tissue) and the bounded-energy check.
 #include <sflsh/body/body_io.hpp>

@@ -1,4 +1,4 @@
-// The hard cases of DESIGN.md §8 for the full-space solver: extreme shapes, thin and thick layers, large
+// The hard cases of docs/architecture.md §8 for the full-space solver: extreme shapes, thin and thick layers, large
 // steps, a 100× stiffness contrast, the landing of a jump and an initially inverted element. Each run must
 // finish with a finite state at every frame and bounded energy (or fail with a clear sflsh::Error, which
 // these cases must not need).

@@ -1,4 +1,4 @@
-// The hard cases of DESIGN.md §8 for the reduced model (the same cases as the full-space suite): extreme
+// The hard cases of docs/architecture.md §8 for the reduced model (the same cases as the full-space suite): extreme
 // shapes, thin and thick layers, large steps, a 100× stiffness contrast, the landing of a jump, and an
 // element inverted by the initial state. Each run must finish with a finite state at every frame and
 // bounded energy (or, for impossible thicknesses, be refused by the retargeter before any solve).

@@ -1,4 +1,4 @@
-// The dynamics metric of physics.md §4 on synthetic registrations with known sinusoidal displacements:
+// The dynamics metric of docs/physics.md §4 on synthetic registrations with known sinusoidal displacements:
 // exact with the true poses (also in a rotated world frame), close with fitted poses.
 #include <sflsh/validate/dynamics_metrics.hpp>
 #include <sflsh/validate/dynamics_report.hpp>

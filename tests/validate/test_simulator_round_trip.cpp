@@ -1,4 +1,4 @@
-// physics.md §4, last paragraph: for a simulation driven by the same poses, inverse skinning returns the
+// docs/physics.md §4, last paragraph: for a simulation driven by the same poses, inverse skinning returns the
 // elastic displacement exactly, so the metric pipeline run on the simulator's posed surfaces (written to and
 // read back from a DYNA file) must reproduce the simulator's own σ on the region's vertices.
 #include <sflsh/fullspace/fullspace_solver.hpp>

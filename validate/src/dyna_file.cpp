@@ -1,4 +1,4 @@
-// Reading DYNA registration files (physics.md §3.2).
+// Reading DYNA registration files (docs/physics.md §3.2).
 #include <sflsh/validate/dyna_file.hpp>
 
 #include "hdf5_util.hpp"

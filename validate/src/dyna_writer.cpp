@@ -1,4 +1,4 @@
-// Writing DYNA registration files in the layout of physics.md §3.2 (used for synthetic ground truth).
+// Writing DYNA registration files in the layout of docs/physics.md §3.2 (used for synthetic ground truth).
 #include <sflsh/validate/dyna_file.hpp>
 
 #include "hdf5_util.hpp"

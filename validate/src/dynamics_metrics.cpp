@@ -1,4 +1,4 @@
-// The dynamics metric of physics.md §4 (SFLSH §3, §5): inverse skinning to the neutral pose, deviation from
+// The dynamics metric of docs/physics.md §4 (SFLSH §3, §5): inverse skinning to the neutral pose, deviation from
 // the SMPL baseline, per-vertex amplitude with the static offset removed, normal / tangential split.
 #include <sflsh/validate/dynamics_metrics.hpp>
 

@@ -1,4 +1,4 @@
-// AMASS .npz motions (physics.md §3.3): poses (T×156 SMPL+H or T×72 SMPL), trans (T×3),
+// AMASS .npz motions (docs/physics.md §3.3): poses (T×156 SMPL+H or T×72 SMPL), trans (T×3),
 // mocap_framerate or mocap_frame_rate. AMASS is Z-up; SMPL+H poses map onto SMPL as
 // θ = [poses[:, :66], 0₆] (SMPL's hand joints 22, 23 do not exist in SMPL+H).
 #include <sflsh/body/motion.hpp>

@@ -67,7 +67,7 @@ Jet hermite_quintic(const Jet& a, const Jet& b, double h, double s);
 Jet sin2_bump_integral(double u, double width);
 
 /// Vertical motion of periodic hopping with a flight phase, as a point mass under gravity with a
-/// smooth contact acceleration (DESIGN.md §2, one-leg jump).
+/// smooth contact acceleration (docs/architecture.md §2, one-leg jump).
 ///
 /// One period T: stance u ∈ [0, τ) from touchdown (u = 0) to take-off, then ballistic flight
 /// (ÿ = −g exactly) until the next touchdown at u = T. The contact acceleration is an M-shaped

@@ -4,7 +4,7 @@
 // slightly in antiphase (more flexed at the bottom), the legs tilt forward by the ankles' shift about
 // the pivot (rig.hpp planted_leg) so the body stays over the balls of the feet, and the root height follows
 // from the nominal leg geometry so that the balls of the feet stay planted:
-//   y = planted_leg_height(κ, p)   (DESIGN.md §2: 2–4 cm at 2.5–3 Hz).
+//   y = planted_leg_height(κ, p)   (docs/architecture.md §2: 2–4 cm at 2.5–3 Hz).
 // With p = 18° ± 7° and κ = 8° ∓ 5° at 2.75 Hz the root bounces ≈ 3.1 cm peak to peak (≈ 0.6 g peak
 // acceleration). Everything is scaled by a 0.5 s ease-in from the T-pose.
 #include "curves.hpp"

@@ -29,7 +29,7 @@ enum Joint : int {
 enum class Side : int { kLeft = 1, kRight = -1 };
 inline double sign(Side s) { return static_cast<double>(static_cast<int>(s)); }
 
-/// Nominal leg dimensions [m] (Drillis & Contini fractions of a 1.70 m stature, DESIGN.md §2), used
+/// Nominal leg dimensions [m] (Drillis & Contini fractions of a 1.70 m stature, docs/architecture.md §2), used
 /// only to keep feet planted; a real body's proportions differ a little, so feet may slide by a few mm.
 struct NominalLeg {
   static constexpr double thigh = 0.42;        ///< hip → knee

@@ -1,4 +1,4 @@
-// Orthotropic StVK with Fung saturation (physics.md §1.2). The derivation, step by step:
+// Orthotropic StVK with Fung saturation (docs/physics.md §1.2). The derivation, step by step:
 //
 //   Ψ₀(F) = μ₀ Ê:Ê + (λ₀/2)(tr Ê)²,   Ê = P_Y E P_Y,   E = ½(FᵀF − I)
 //   dΨ₀   = (2μ₀ Ê + λ₀ tr(Ê) I) : dÊ = S₀ : dE          (P_Y symmetric, so A:P_Y dE P_Y = P_Y A P_Y : dE)
@@ -40,7 +40,7 @@ Strain strain_of(const Eigen::Matrix3d& F, const OrthotropicFung& m) {
   require_finite(F);
   Strain s;
   const Eigen::Matrix3d E = green_strain(F);
-  s.E_hat = m.scaling * E * m.scaling;                 // Ê = P_Y E P_Y (physics.md §1.2)
+  s.E_hat = m.scaling * E * m.scaling;                 // Ê = P_Y E P_Y (docs/physics.md §1.2)
   const double tr = s.E_hat.trace();
   s.psi0 = m.mu0 * s.E_hat.squaredNorm() + 0.5 * m.lambda0 * tr * tr;  // tr(Ê²) = ‖Ê‖²_F (Ê symmetric)
   require(std::isfinite(s.psi0), "orthotropic Fung: the StVK energy overflows (‖F‖ = {:.4g})", F.norm());
@@ -77,7 +77,7 @@ Fung fung_factor(double x, const OrthotropicFung& m) {
 }
 
 double psi_from(const Strain& s, const Fung& f, const OrthotropicFung& m) {
-  return m.inv_c == 0.0 ? s.psi0 : 0.5 * m.c * f.phi;  // Ψ = (c/2)(exp(2Ψ₀/c) − 1) (physics.md §1.2)
+  return m.inv_c == 0.0 ? s.psi0 : 0.5 * m.c * f.phi;  // Ψ = (c/2)(exp(2Ψ₀/c) − 1) (docs/physics.md §1.2)
 }
 
 /// ∂²Ψ₀/∂F² column by column: column k is dP₀ for dF = e_i e_jᵀ, k = i + 3j.
@@ -90,7 +90,7 @@ Matrix9d stvk_hessian(const Eigen::Matrix3d& F, const Strain& s, const Orthotrop
       FtdF.col(j) = F.row(i).transpose();
       const Eigen::Matrix3d dE = 0.5 * (FtdF + FtdF.transpose());       // dE = sym(FᵀdF)
       const Eigen::Matrix3d dE_hat = m.scaling * dE * m.scaling;        // dÊ = P_Y dE P_Y
-      const Eigen::Matrix3d dS0 =                                        // ℂ₀:dE (physics.md §1.2)
+      const Eigen::Matrix3d dS0 =                                        // ℂ₀:dE (docs/physics.md §1.2)
           m.scaling * (2.0 * m.mu0 * dE_hat + m.lambda0 * dE_hat.trace() * Eigen::Matrix3d::Identity()) * m.scaling;
       Eigen::Matrix3d dP = F * dS0;                                      // F dS₀
       dP.row(i) += s.S0.row(j);                                          // + dF S₀ = e_i (row j of S₀)
@@ -110,7 +110,7 @@ OrthotropicFung make_orthotropic_fung(const SkinMaterial& material, const Eigen:
   OrthotropicFung m;
   m.normal = normal.normalized();
   const Eigen::Matrix3d nn = m.normal * m.normal.transpose();
-  // P_Y = Y_t^{1/4}(I − nnᵀ) + Y_n^{1/4} nnᵀ (physics.md §1.2)
+  // P_Y = Y_t^{1/4}(I − nnᵀ) + Y_n^{1/4} nnᵀ (docs/physics.md §1.2)
   m.scaling = std::pow(material.young_tangent, 0.25) * (Eigen::Matrix3d::Identity() - nn) +
               std::pow(material.young_normal, 0.25) * nn;
   m.mu0 = unit_lame_mu(material.poisson);
@@ -158,7 +158,7 @@ OrthoFungValues eval_ortho_fung(const Eigen::Matrix3d& F, const OrthotropicFung&
   const Eigen::Matrix3d P0 = F * s.S0;
   v.P = f.dphi * P0;
   if (with_hessian) {
-    // dP = g[dF S₀ + F ℂ₀:dE] + (2g/c)(P₀:dF) P₀ (physics.md §1.2, dS = g[ℂ₀:dE + (2/c)(S₀:dE)S₀])
+    // dP = g[dF S₀ + F ℂ₀:dE] + (2g/c)(P₀:dF) P₀ (docs/physics.md §1.2, dS = g[ℂ₀:dE + (2/c)(S₀:dE)S₀])
     v.dPdF = f.dphi * stvk_hessian(F, s, m);
     if (m.inv_c != 0.0) {
       const Eigen::Map<const Vector9d> p0(P0.data());

@@ -13,7 +13,7 @@ Eigen::Matrix<double, N, N> project_psd_fixed(const Eigen::Matrix<double, N, N>&
   const Eigen::SelfAdjointEigenSolver<Matrix> eig(sym);  // fixed size: no heap allocation
   const auto& lambda = eig.eigenvalues();
   if (lambda.minCoeff() >= 0.0) return A;  // already PSD: unchanged
-  // V max(Λ, 0) Vᵀ (physics.md §1.2 [P]: eigenvalue clamping)
+  // V max(Λ, 0) Vᵀ (docs/physics.md §1.2 [P]: eigenvalue clamping)
   const Eigen::Matrix<double, N, 1> clamped = lambda.cwiseMax(0.0);
   return eig.eigenvectors() * clamped.asDiagonal() * eig.eigenvectors().transpose();
 }

@@ -18,15 +18,15 @@ void validate(const SkinMaterial& material, const SkinMaterialNames& names) {
           "{} must be positive, got {}", names.saturation, material.saturation);
 }
 
-double unit_lame_mu(double poisson) { return 1.0 / (2.0 * (1.0 + poisson)); }  // physics.md §1.2
+double unit_lame_mu(double poisson) { return 1.0 / (2.0 * (1.0 + poisson)); }  // docs/physics.md §1.2
 
-double unit_lame_lambda(double poisson) {  // physics.md §1.2
+double unit_lame_lambda(double poisson) {  // docs/physics.md §1.2
   return poisson / ((1.0 + poisson) * (1.0 - 2.0 * poisson));
 }
 
 double fung_scale_c(const SkinMaterial& material) {
   switch (material.fung_scale) {
-    case FungScale::kTangentOverSaturation: return material.young_tangent / material.saturation;  // physics.md §1.2
+    case FungScale::kTangentOverSaturation: return material.young_tangent / material.saturation;  // docs/physics.md §1.2
     case FungScale::kTangentTimesSaturation: return material.young_tangent * material.saturation;
     case FungScale::kNone: return std::numeric_limits<double>::infinity();
   }
@@ -35,7 +35,7 @@ double fung_scale_c(const SkinMaterial& material) {
 
 OrthotropicConstants small_strain_constants(const SkinMaterial& material) {
   validate(material);
-  // ℂ_ijkl = ℂ⁰_ijkl (E_i E_j E_k E_l)^{1/4} (Li & Barbič 2014; physics.md §1.2). Its compliance is
+  // ℂ_ijkl = ℂ⁰_ijkl (E_i E_j E_k E_l)^{1/4} (Li & Barbič 2014; docs/physics.md §1.2). Its compliance is
   // D⁻¹ S⁰ D⁻¹ with D = diag(√E_i) and S⁰ the unit-Young isotropic compliance, so S_ij = −ν/√(E_i E_j) for
   // i ≠ j; with FEBio's S_ij = −ν_ij/E_i that is ν_ij = ν √(E_i/E_j). Shear: ℂ_ijij = μ₀ √(E_i E_j).
   const double nu = material.poisson;

@@ -17,7 +17,7 @@ Eigen::Matrix3d edge_matrix(const TetNodes& x) {
 
 /// V Bᵀ vec(P) without forming B: node a gets V P w_aᵀ (w_a as in tet_dF_dq).
 Vector12d gradient_from(const TetRest& rest, const Eigen::Matrix3d& P) {
-  const Eigen::Matrix3d G = rest.volume * P * rest.dm_inv.transpose();  // columns: nodes 1..3 (physics.md §1.2)
+  const Eigen::Matrix3d G = rest.volume * P * rest.dm_inv.transpose();  // columns: nodes 1..3 (docs/physics.md §1.2)
   Vector12d g;
   g.segment<3>(3) = G.col(0);
   g.segment<3>(6) = G.col(1);
@@ -57,7 +57,7 @@ TetRest make_tet_rest(const TetNodes& rest) {
 }
 
 Eigen::Matrix3d tet_deformation_gradient(const TetRest& rest, const TetNodes& x) {
-  return edge_matrix(x) * rest.dm_inv;  // F = D_s D_m⁻¹ (physics.md §1.2)
+  return edge_matrix(x) * rest.dm_inv;  // F = D_s D_m⁻¹ (docs/physics.md §1.2)
 }
 
 Matrix9x12d tet_dF_dq(const TetRest& rest) {

@@ -1,4 +1,4 @@
-// Heterogeneous material fields on the layer mesh (DESIGN.md §4).
+// Heterogeneous material fields on the layer mesh (docs/architecture.md §4).
 #include <sflsh/core/error.hpp>
 #include <sflsh/material/control_points.hpp>
 #include <sflsh/material/layer_material.hpp>

@@ -1,4 +1,4 @@
-// Through-thickness normals from the depth field (physics.md §1.3).
+// Through-thickness normals from the depth field (docs/physics.md §1.3).
 #include <sflsh/core/error.hpp>
 #include <sflsh/material/through_thickness.hpp>
 

@@ -2,7 +2,7 @@
 // The two tet-meshing backends behind tetrahedralize() (private to sflsh::meshing).
 // Each returns the backend's raw output; tetrahedralize() checks the input before and orients,
 // compacts and validates the output after. cgal_mesher.cpp is the only translation unit that
-// instantiates CGAL Mesh_3 (BUILD.md: ~1.5 min and 3–4 GB to compile), so nothing else includes it.
+// instantiates CGAL Mesh_3 (docs/build.md: ~1.5 min and 3–4 GB to compile), so nothing else includes it.
 #include <sflsh/meshing/tet_backend.hpp>
 
 namespace sflsh::meshing::detail {

@@ -1,6 +1,6 @@
 // gmsh backend (gmsh 4.8 C++ API). The input triangles become discrete surfaces (one per patch) that
 // gmsh keeps as they are; the volume on their surface loop is meshed with HXT and optimized. So every
-// input vertex stays a node (BUILD.md, "Volume meshing between triangulated surfaces").
+// input vertex stays a node (docs/build.md, "Volume meshing between triangulated surfaces").
 //
 // gmsh is process-global state: one mesher at a time (mutex), initialize/finalize around each call,
 // and its errors (thrown as std::string in 4.8) become sflsh::Error.

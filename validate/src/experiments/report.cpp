@@ -229,7 +229,7 @@ void Report::write(RunFolder& run, nlohmann::json& summary) const {
     write_text_atomically(run.stage("table2.csv"), csv);
     std::ostringstream doc;
     doc << "# Table 2: standard deviation of per-vertex dynamics [mm]\n\n"
-        << "Mean over the soft region's skin vertices of σ_i (physics.md §4), averaged over the motions of each split.\n"
+        << "Mean over the soft region's skin vertices of σ_i (docs/physics.md §4), averaged over the motions of each split.\n"
         << "Train motions: ";
     for (const auto& m : config.train_motions) doc << m << " ";
     doc << "· test motions: ";

@@ -1,5 +1,5 @@
 #pragma once
-// A parametric body in SMPL's array layout (Loper et al. 2015; physics.md §3.1).
+// A parametric body in SMPL's array layout (Loper et al. 2015; docs/physics.md §3.1).
 // Units: metres, Y up, the body faces +Z, its left side is +X (as SMPL).
 #include <Eigen/Core>
 #include <Eigen/SparseCore>

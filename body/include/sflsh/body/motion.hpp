@@ -1,6 +1,6 @@
 #pragma once
 // Motions: sequences of SMPL poses θ(t) and root translations at a fixed frame rate.
-// Procedural versions of the five DYNA motion kinds (DESIGN.md §2) and AMASS .npz files.
+// Procedural versions of the five DYNA motion kinds (docs/architecture.md §2) and AMASS .npz files.
 #include <sflsh/body/skinning.hpp>
 
 #include <filesystem>

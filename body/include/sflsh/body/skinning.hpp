@@ -1,5 +1,5 @@
 #pragma once
-// SMPL's model equations (physics.md §3.1): shape blend shapes, joint regression from the shaped
+// SMPL's model equations (docs/physics.md §3.1): shape blend shapes, joint regression from the shaped
 // template, Rodrigues forward kinematics, pose correctives, linear blend skinning, root translation.
 #include <sflsh/body/body_model.hpp>
 

@@ -1,5 +1,5 @@
 #pragma once
-// Error reporting in three tiers (STYLE.md §11):
+// Error reporting in three tiers (docs/style.md §11):
 //  - assert() for internal invariants,
 //  - sflsh::Error for bad input and non-convergence: always on, one line, naming the file/field,
 //  - never bool returns with prints, never exit() from library code.

@@ -1,7 +1,7 @@
 #pragma once
 // The full-space solver: each step of the chosen integrator (backward Euler, BDF2, Newmark;
 // model/time_integrator.hpp, docs/integrators.md) minimizes the incremental potential with skinning-driven
-// inertia (physics.md §5, Kane et al. 2000) by Newton with an energy line search on PETSc SNES:
+// inertia (docs/physics.md §5, Kane et al. 2000) by Newton with an energy line search on PETSc SNES:
 //   Φ(x) = 1/(2ĥ²) (p(x) − p̃)ᵀ M (p(x) − p̃) + E(x) − gᵀ M p(x) + U(p(x)),   p_i(x) = A_i x_i + d_i,
 // summed from the model's terms (model/terms.hpp: elastic, inertia with lumped or consistent M, gravity, node
 // potentials); the integrator sets ĥ and p̃ from the posed history carried in the State and updates it from the

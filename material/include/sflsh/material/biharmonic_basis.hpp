@@ -2,7 +2,7 @@
 // Biharmonic basis functions φ_i of the material control points on a triangle surface (SFLSH §3:
 // κ(s) = Σ_i φ_i(s) κ_i; §4: φ_i is also the window of the local regularizer Q_i), computed as bounded
 // biharmonic weights (Jacobson, Baran, Popović, Sorkine 2011, "Bounded biharmonic weights for real-time
-// deformation", Eq. 2–3; physics.md §2.3). For each control point i:
+// deformation", Eq. 2–3; docs/physics.md §2.3). For each control point i:
 // \f[ \phi_i = \arg\min_{\phi} \tfrac12\,\phi^T L M^{-1} L\,\phi
 //     \quad\text{s.t.}\quad \phi(s_j) = \delta_{ij},\; 0 \le \phi \le 1, \f]
 // with L the PSD cotangent Laplacian and M the lumped mass (surface_operators.hpp); natural boundary

@@ -1,7 +1,7 @@
 #pragma once
 // The heterogeneous material of a layer mesh: control points on the layer's skin region, their
 // biharmonic basis, and κ = (h, Y_t, Y_n) carried from the control points to every skin vertex, node
-// and tet (DESIGN.md §4), with the through-thickness normal per tet.
+// and tet (docs/architecture.md §4), with the through-thickness normal per tet.
 #include <sflsh/material/biharmonic_basis.hpp>
 #include <sflsh/material/material_file.hpp>
 #include <sflsh/material/parameters.hpp>
@@ -28,7 +28,7 @@ std::vector<int> layer_control_points(const body::BodyModel& model, const meshin
 BiharmonicBasis layer_basis(const body::BodyModel& model, const meshing::LayerMesh& mesh,
                             const std::vector<int>& control_body_vertices);
 
-/// Provisional defaults until the full-space calibration (physics.md §6): h = 0.5, Y_t = 5 kPa,
+/// Provisional defaults until the full-space calibration (docs/physics.md §6): h = 0.5, Y_t = 5 kPa,
 /// Y_n = 2 kPa at every control point.
 Kappa default_kappa();
 

@@ -1,6 +1,6 @@
 #pragma once
 // Orthotropic Saint Venant–Kirchhoff with Fung-type saturation: energy density, first Piola–Kirchhoff
-// stress and its derivative (SFLSH §3 after Romero et al. 2020; the formulas are physics.md §1.2).
+// stress and its derivative (SFLSH §3 after Romero et al. 2020; the formulas are docs/physics.md §1.2).
 //
 // Flatten order (used by every 9-vector and 9×9 matrix of sflsh::material): vec(F) is column-major,
 // entry i + 3j holds F(i, j), i.e. vec(F) = [F₀₀ F₁₀ F₂₀ F₀₁ F₁₁ F₂₁ F₀₂ F₁₂ F₂₂]ᵀ — Eigen's own storage
@@ -42,7 +42,7 @@ OrthotropicFung make_orthotropic_fung(const SkinMaterial& material, const Eigen:
 /// Green–Lagrange strain E = ½(FᵀF − I).
 Eigen::Matrix3d green_strain(const Eigen::Matrix3d& F);
 
-/// The orthotropic StVK part alone (physics.md §1.2):
+/// The orthotropic StVK part alone (docs/physics.md §1.2):
 /// \f[ \Psi_0 = \mu_0\,\mathrm{tr}(\hat E^2) + \tfrac{\lambda_0}{2}(\mathrm{tr}\,\hat E)^2,\quad \hat E = P_Y E P_Y \f]
 double psi_ortho_stvk(const Eigen::Matrix3d& F, const OrthotropicFung& m);
 /// \f[ \partial\Psi_0/\partial F = F S_0,\quad S_0 = P_Y(2\mu_0\hat E + \lambda_0\,\mathrm{tr}(\hat E) I)P_Y \f] [Pa]
@@ -54,7 +54,7 @@ Matrix9d d2psi_ortho_stvk_dF2(const Eigen::Matrix3d& F, const OrthotropicFung& m
 /// state before evaluating (x > kFungExponentCap throws under ExponentOverflow::kThrow).
 double fung_exponent(const Eigen::Matrix3d& F, const OrthotropicFung& m);
 
-/// The full energy density [J/m³] (physics.md §1.2, FEBio's W = ½c(e^Q − 1) with Q = 2Ψ₀/c):
+/// The full energy density [J/m³] (docs/physics.md §1.2, FEBio's W = ½c(e^Q − 1) with Q = 2Ψ₀/c):
 /// \f[ \Psi = \tfrac{c}{2}\left(e^{2\Psi_0/c} - 1\right) \f]
 /// evaluated with expm1 so that Ψ → Ψ₀ keeps full precision at small strain.
 double psi_ortho_fung(const Eigen::Matrix3d& F, const OrthotropicFung& m);
@@ -62,7 +62,7 @@ double psi_ortho_fung(const Eigen::Matrix3d& F, const OrthotropicFung& m);
 Eigen::Matrix3d dpsi_ortho_fung_dF(const Eigen::Matrix3d& F, const OrthotropicFung& m);
 /// dP/dF [Pa] (9×9, symmetric, vec order above):
 /// \f[ \partial^2\Psi/\partial F^2 = g\,\partial^2\Psi_0/\partial F^2 + \tfrac{2g}{c}\,\mathrm{vec}(FS_0)\,\mathrm{vec}(FS_0)^T \f]
-/// — the same as physics.md's dS = g[ℂ₀:dE + (2/c)(S₀:dE)S₀] since S₀:sym(FᵀdF) = (F S₀):dF.
+/// — the same as docs/physics.md's dS = g[ℂ₀:dE + (2/c)(S₀:dE)S₀] since S₀:sym(FᵀdF) = (F S₀):dF.
 Matrix9d d2psi_ortho_fung_dF2(const Eigen::Matrix3d& F, const OrthotropicFung& m);
 
 /// Ψ, P and dP/dF from one evaluation of the shared terms (what an element needs).

@@ -3,13 +3,13 @@
 // field κ(s) = Σ_i φ_i(s) κ_i over the surface. For the fit they are "normalized by their maximum
 // values" (SFLSH §4): κ̂ = κ / κ_max, component-wise, with κ_max the upper bounds below.
 //
-// Bounds (SFLSH gives no ranges; physics.md §6.5 proposes Y in ~0.5–50 kPa and h in [0.2, 0.9]):
-//   thickness      h   ∈ [0.1, 0.9]       fraction of the maximum surface-to-skeleton thickness (DESIGN.md §3);
+// Bounds (SFLSH gives no ranges; docs/physics.md §6.5 proposes Y in ~0.5–50 kPa and h in [0.2, 0.9]):
+//   thickness      h   ∈ [0.1, 0.9]       fraction of the maximum surface-to-skeleton thickness (docs/architecture.md §3);
 //                                         0.1 rather than 0.2 leaves room for thin layers while keeping
 //                                         elements away from zero height; 0.9 keeps the inner surface off
 //                                         the bones.
-//   young_tangent  Y_t ∈ [500, 50000] Pa  two decades around soft-tissue values (physics.md §6.5),
-//   young_normal   Y_n ∈ [500, 50000] Pa  which also contains DESIGN.md §8's 100× contrast.
+//   young_tangent  Y_t ∈ [500, 50000] Pa  two decades around soft-tissue values (docs/physics.md §6.5),
+//   young_normal   Y_n ∈ [500, 50000] Pa  which also contains docs/architecture.md §8's 100× contrast.
 // Normalized, these are h ∈ [0.111, 1], Y ∈ [0.01, 1]. A φ that is a convex combination (bounded
 // biharmonic basis: φ ≥ 0, Σφ = 1) keeps the field κ(s) inside the bounds wherever the κ_i are.
 #include <Eigen/Core>

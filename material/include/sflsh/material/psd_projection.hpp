@@ -1,6 +1,6 @@
 #pragma once
 // Projection of symmetric element matrices onto the positive semi-definite cone by eigenvalue
-// clamping (physics.md §1.2 [P]): A = V Λ Vᵀ ↦ V max(Λ, 0) Vᵀ, the nearest PSD matrix in the
+// clamping (docs/physics.md §1.2 [P]): A = V Λ Vᵀ ↦ V max(Λ, 0) Vᵀ, the nearest PSD matrix in the
 // Frobenius norm. StVK-type energies are indefinite in compression; Newton needs a PSD Hessian.
 // Fixed sizes only (Eigen's SelfAdjointEigenSolver on fixed-size matrices does not allocate).
 #include <Eigen/Core>

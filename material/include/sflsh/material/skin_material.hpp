@@ -6,16 +6,16 @@
 //
 // Units: Young moduli, shear moduli and c are in Pa (stress units); the energy density is in J/m³.
 // The thickness fraction h of SFLSH's κ = (h, Y_t, Y_n) is geometry (it moves the inner surface,
-// physics.md §1.4), not part of the energy, so it is not a field here.
+// docs/physics.md §1.4), not part of the energy, so it is not a field here.
 #include <string_view>
 
 namespace sflsh::material {
 
-/// How the Fung scale c (stress units) is derived from the parameters. physics.md §1.2 proposes
-/// c = Y_t / saturation; what SFLSH's "saturation = 4" multiplies is not published (physics.md §6.1),
+/// How the Fung scale c (stress units) is derived from the parameters. docs/physics.md §1.2 proposes
+/// c = Y_t / saturation; what SFLSH's "saturation = 4" multiplies is not published (docs/physics.md §6.1),
 /// so the reading is a choice.
 enum class FungScale {
-  kTangentOverSaturation,   ///< c = Y_t / s (default, physics.md §1.2): exponent ≈ s·ε² in tangential stretch
+  kTangentOverSaturation,   ///< c = Y_t / s (default, docs/physics.md §1.2): exponent ≈ s·ε² in tangential stretch
   kTangentTimesSaturation,  ///< c = s·Y_t: the alternative reading (saturation sets in ~s² times later)
   kNone,                    ///< c = ∞: Fung factor off, Ψ = Ψ₀ (plain orthotropic StVK)
 };
@@ -33,7 +33,7 @@ enum class ExponentOverflow {
 /// no tissue state, only a diverging Newton step, gets there.
 inline constexpr double kFungExponentCap = 100.0;
 
-/// Parameters of the orthotropic StVK–Fung skin material at one point (SFLSH §3, physics.md §1.2).
+/// Parameters of the orthotropic StVK–Fung skin material at one point (SFLSH §3, docs/physics.md §1.2).
 struct SkinMaterial {
   double young_tangent = 0.0;  ///< Y_t [Pa]: Young modulus in the tangent plane (⊥ n), isotropic in that plane
   double young_normal = 0.0;   ///< Y_n [Pa]: Young modulus along the through-thickness normal n
@@ -56,9 +56,9 @@ struct SkinMaterialNames {
 /// is positive definite (Li & Barbič 2014) and c is a positive number.
 void validate(const SkinMaterial& material, const SkinMaterialNames& names = {});
 
-/// μ₀ = 1/(2(1+ν)): the shear modulus of the unit-Young isotropic material (physics.md §1.2).
+/// μ₀ = 1/(2(1+ν)): the shear modulus of the unit-Young isotropic material (docs/physics.md §1.2).
 double unit_lame_mu(double poisson);
-/// λ₀ = ν/((1+ν)(1−2ν)): the first Lamé parameter of the unit-Young isotropic material (physics.md §1.2).
+/// λ₀ = ν/((1+ν)(1−2ν)): the first Lamé parameter of the unit-Young isotropic material (docs/physics.md §1.2).
 double unit_lame_lambda(double poisson);
 
 /// The Fung scale c [Pa] under material.fung_scale; +∞ for FungScale::kNone.

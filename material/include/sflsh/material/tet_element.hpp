@@ -1,5 +1,5 @@
 #pragma once
-// One linear tetrahedron of the orthotropic StVK–Fung material: F = D_s D_m⁻¹ (physics.md §1.2),
+// One linear tetrahedron of the orthotropic StVK–Fung material: F = D_s D_m⁻¹ (docs/physics.md §1.2),
 // energy V·Ψ(F), gradient V·Bᵀ vec(P), Hessian V·Bᵀ (dP/dF) B with B = ∂vec(F)/∂q (9×12), following
 // Bartels' linear_tet_*_dq / _dq2 layering. Fixed sizes, no heap allocation.
 //
@@ -8,7 +8,7 @@
 //  - D_m = [X₁−X₀, X₂−X₀, X₃−X₀] at rest (positive orientation, det D_m > 0), D_s the same at x.
 //  - vec(F) is column-major (orthotropic_fung.hpp).
 //  - Sign: tet_elastic_dq is ∂(VΨ)/∂q; the internal elastic forces on the nodes are its negative,
-//    f = −∂(VΨ)/∂q, so f_{1..3} = −V P D_m⁻ᵀ (columns) and f₀ = −(f₁ + f₂ + f₃) (physics.md §1.2).
+//    f = −∂(VΨ)/∂q, so f_{1..3} = −V P D_m⁻ᵀ (columns) and f₀ = −(f₁ + f₂ + f₃) (docs/physics.md §1.2).
 //
 // PSD projection (psd_projection.hpp): HessianProjection::kStressDerivative clamps the eigenvalues of the
 // 9×9 dP/dF and maps it, K₊ = V Bᵀ [dP/dF]₊ B. We prefer it to clamping the 12×12 K: (1) a 9×9
@@ -39,7 +39,7 @@ struct TetRest {
 /// @param[in] rest  3×4 rest (unposed) node positions [m], positively oriented
 TetRest make_tet_rest(const TetNodes& rest);
 
-/// F = D_s D_m⁻¹ (physics.md §1.2).
+/// F = D_s D_m⁻¹ (docs/physics.md §1.2).
 Eigen::Matrix3d tet_deformation_gradient(const TetRest& rest, const TetNodes& x);
 
 /// B = ∂vec(F)/∂q (9×12), constant per tet: B(i + 3j, 3a + i) = w_a(j), w_a = row a−1 of D_m⁻¹ for

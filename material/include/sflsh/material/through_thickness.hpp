@@ -1,5 +1,5 @@
 #pragma once
-// The through-thickness normal n per tet (physics.md §1.3): the normalized gradient of a Laplace field
+// The through-thickness normal n per tet (docs/physics.md §1.3): the normalized gradient of a Laplace field
 // that is 0 on the skin and 1 on the inner surface (the layer's depth coordinate), pointing outward
 // (towards the skin). n is the axis of the transversely isotropic skin material.
 #include <sflsh/meshing/types.hpp>

@@ -1,5 +1,5 @@
 #pragma once
-// Smooth surface-to-skeleton correspondence c(s) of the layer's skin points (physics.md §1.4).
+// Smooth surface-to-skeleton correspondence c(s) of the layer's skin points (docs/physics.md §1.4).
 // c is stored as an affine combination of joint positions, c(s) = Σ_j a_j(s) J_j with Σ_j a_j = 1,
 // so it follows the skeleton of any shape β exactly: c(s, β) = Σ_j a_j(s) J_j(β).
 #include <sflsh/body/skinning.hpp>

@@ -1,7 +1,7 @@
 #pragma once
 // Laplacian (harmonic) interpolation on a tet mesh: boundary values prescribed, interior values
 // minimize the discrete Dirichlet energy. One sparse SPD factorization per mesh, then a solve per use.
-// Used to retarget node positions (DESIGN.md §3) and to carry surface fields into the volume.
+// Used to retarget node positions (docs/architecture.md §3) and to carry surface fields into the volume.
 #include <sflsh/meshing/types.hpp>
 
 #include <Eigen/SparseCholesky>

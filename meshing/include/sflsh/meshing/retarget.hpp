@@ -1,5 +1,5 @@
 #pragma once
-// Retargeting the one common layer discretization to a shape β and thickness field h (DESIGN.md §3):
+// Retargeting the one common layer discretization to a shape β and thickness field h (docs/architecture.md §3):
 // boundary nodes follow their anchors on the shaped skin and the new inner surface; interior nodes
 // follow by Laplacian interpolation (one factorization per mesh) in layer coordinates: the skin point
 // S and the column vector C = h (c − s) of the boundary anchors are interpolated harmonically, and
@@ -35,7 +35,7 @@ class Retargeter {
   /// their anchors (depth does not change the value), inside by the same Laplacian interpolation.
   Eigen::MatrixXd extend_surface_field(const Eigen::MatrixXd& per_region_vertex) const;
 
-  /// The depth coordinate at every node (physics.md §1.3): 0 on the skin, 1 on the inner surface, the
+  /// The depth coordinate at every node (docs/physics.md §1.3): 0 on the skin, 1 on the inner surface, the
   /// anchor's depth on the side walls, harmonic inside. Its gradient gives the through-thickness normal.
   Eigen::VectorXd depth_field() const;
 

@@ -1,7 +1,7 @@
 #pragma once
 // Tet meshing of a closed, outward-oriented triangulated surface: CGAL Mesh_3 or gmsh.
 // Both backends sit behind this small non-template interface so that the one translation unit that
-// instantiates Mesh_3 rarely recompiles (BUILD.md).
+// instantiates Mesh_3 rarely recompiles (docs/build.md).
 #include <sflsh/meshing/types.hpp>
 
 #include <string>

@@ -33,7 +33,7 @@ const char* part_name(Part part);
 /// Where a boundary point of the layer sits, in terms that follow any shape β and thickness field h:
 /// a point on the region's skin (barycentric combination of up to three region vertices) and a depth
 /// fraction along its column towards the skeleton (0 = skin, 1 = inner surface). Its position is
-///   p = Σ_k weight_k · [ s_k + depth · h_k · (c_k − s_k) ]                       (physics.md §1.4)
+///   p = Σ_k weight_k · [ s_k + depth · h_k · (c_k − s_k) ]                       (docs/physics.md §1.4)
 /// with s the shaped skin, c the skeleton correspondence and h the thickness fraction at vertex k.
 /// Indices are local region-vertex indices (see Region::vertices).
 struct SurfaceAnchor {

@@ -1,5 +1,5 @@
 #pragma once
-// A subject's soft-tissue layer set up for the full-space solver (DESIGN.md §4, physics.md §5): the template
+// A subject's soft-tissue layer set up for the full-space solver (docs/architecture.md §4, docs/physics.md §5): the template
 // layer retargeted to β and the material's thickness field, the heterogeneous κ per tet, lumped masses,
 // inner and side nodes attached to the skinned body (Dirichlet: zero elastic displacement), and the
 // skinning trajectory that carries the unposed elastic state to posed positions along a motion.
@@ -22,7 +22,7 @@ struct BodyLayerOptions {
   std::filesystem::path cache_dir;    ///< template mesh cache; empty: meshing::default_cache_dir()
   double density = 1000.0;            ///< ρ [kg/m³]
   MassKind mass = MassKind::lumped;    ///< lumped or consistent inertia (mass.hpp)
-  bool gravity = false;               ///< g = (0, −9.81, 0) in the world frame (Y up); off by default (physics.md §5)
+  bool gravity = false;               ///< g = (0, −9.81, 0) in the world frame (Y up); off by default (docs/physics.md §5)
   double stiffness_scale = 1.0;       ///< multiplies Y_t and Y_n
   material::ExponentOverflow overflow = material::ExponentOverflow::kThrow;
 };

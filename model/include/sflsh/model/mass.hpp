@@ -1,5 +1,5 @@
 #pragma once
-// Mass of a linear-tet mesh (physics.md §5, docs/integrators.md): the consistent matrix M_ij = ρ∫N_iN_j dV,
+// Mass of a linear-tet mesh (docs/physics.md §5, docs/integrators.md): the consistent matrix M_ij = ρ∫N_iN_j dV,
 // per tet ρV/20 (1 + δ_ab) for its node pair (a, b), and the lumped diagonal ρV/4 per node, which is the row
 // sum of the consistent one (so gravity, Σ_j M_ij g = m_i g, is the same for both). Both act on each axis of
 // the posed positions: the kinetic energy is ½ Σ_ij M_ij ṗ_i·ṗ_j.

@@ -2,7 +2,7 @@
 // What every integrator solves (the full-space solver on PETSc, the SUNDIALS reference, the reduced model in
 // its subspace): a tet mesh with a per-tet orthotropic StVK–Fung material, lumped or consistent masses
 // (mass.hpp), prescribed (Dirichlet) components, and
-// a per-node affine map from the unposed elastic state x to posed positions p (physics.md §5):
+// a per-node affine map from the unposed elastic state x to posed positions p (docs/physics.md §5):
 //   p_i(t) = A_i(t) x_i + d_i(t),   d_i = A_i b_i + c_i  (b_i: pose corrective, [A_i | c_i]: blended LBS).
 // The elastic energy E(x) is measured in the unposed frame; inertia and gravity act on p.
 // Equation of motion (Euler–Lagrange of ½ṗᵀMṗ − E(x) + gᵀMp): A_iᵀ [M (p̈ − g)]_i = −∇_i E(x), with M the
@@ -107,7 +107,7 @@ struct Problem {
   void apply_dirichlet(double t, Eigen::Ref<Eigen::VectorXd> x) const;
 };
 
-/// Lumped masses ρV/4 per node (physics.md §5): the row sums of the consistent matrix.
+/// Lumped masses ρV/4 per node (docs/physics.md §5): the row sums of the consistent matrix.
 Eigen::VectorXd lumped_masses(const RowMatrixX3d& rest, const RowMatrixX4i& tets, double density);
 
 /// Elastic energy, gradient and (optionally) the element Hessians of the whole mesh at x (3N, node-major).

@@ -1,7 +1,7 @@
 #pragma once
 // Frame output of a body simulation: the posed body surface per frame as `sflsh motion export` writes it
 // (same points, same order, body.pvd), optionally the tet layer (layer.pvd), and the per-vertex dynamics
-// amplitude σ of physics.md §4 accumulated on the fly (the elastic displacement u of the skin is what
+// amplitude σ of docs/physics.md §4 accumulated on the fly (the elastic displacement u of the skin is what
 // inverse skinning returns for a simulation driven by the same poses).
 #include <sflsh/core/run_folder.hpp>
 #include <sflsh/core/vtk_io.hpp>
@@ -13,7 +13,7 @@
 
 namespace sflsh::model {
 
-/// Per-vertex σ, σ_n, σ_t (physics.md §4 steps 4–6) from a stream of displacement fields.
+/// Per-vertex σ, σ_n, σ_t (docs/physics.md §4 steps 4–6) from a stream of displacement fields.
 class DynamicsAmplitude {
  public:
   /// `normals`: unit normals per vertex (n×3) for the normal/tangential split.

@@ -1,5 +1,5 @@
 #pragma once
-// The node maps of a body layer along a motion (physics.md §5): p_i(t) = A_i(t)(x_i + b_i(t)) + c_i(t) with
+// The node maps of a body layer along a motion (docs/physics.md §5): p_i(t) = A_i(t)(x_i + b_i(t)) + c_i(t) with
 // [A_i | c_i] = Σ_k w_ik M_k(t) the blended skinning transforms (M_k = world_from_body · G'_k) and b_i the
 // pose correctives carried into the volume, fading to zero at the bones. The motion's frames are joined by
 // C¹ cubic Hermite (Catmull–Rom) curves through the per-frame M_k and pose features, so that the adaptive
@@ -27,7 +27,7 @@ class MotionCurve {
   /// M_k(t) for all joints and, when `rate` is not null, dM_k/dt. Times outside [0, duration] clamp to
   /// the ends (with zero rate).
   void transforms(double t, JointTransforms& m, JointTransforms* rate = nullptr) const;
-  /// Pose features f(t) (physics.md §3.1) and optionally df/dt; only meaningful with pose correctives.
+  /// Pose features f(t) (docs/physics.md §3.1) and optionally df/dt; only meaningful with pose correctives.
   void features(double t, PoseFeatures& f, PoseFeatures* rate = nullptr) const;
 
  private:

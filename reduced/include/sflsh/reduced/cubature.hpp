@@ -1,5 +1,5 @@
 #pragma once
-// Cubature of the elastic energy in the handle subspace (physics.md §2.2; An, Kim, James 2008 for the
+// Cubature of the elastic energy in the handle subspace (docs/physics.md §2.2; An, Kim, James 2008 for the
 // form, Tapia et al. 2021 for doing without training simulations):
 // \f[ E(q) \approx \sum_{c \in C} \omega_c V_c \Psi(F_c(q)),\quad
 //     f = -\sum_c \omega_c V_c B_c^T \mathrm{vec}(P_c),\quad H = \sum_c \omega_c V_c B_c^T \tfrac{\partial P}{\partial F}\Big|_c B_c \f]

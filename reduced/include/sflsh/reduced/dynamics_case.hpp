@@ -1,7 +1,7 @@
 #pragma once
 // One (subject, motion) pair of the fit (SFLSH §5): the subject's layer built once for the motion, and the
 // reduced simulation of it for any control-point material κ, measured as the paper's per-vertex dynamics
-// of the region skin in the neutral pose (physics.md §4; for a simulation driven by the motion's own poses
+// of the region skin in the neutral pose (docs/physics.md §4; for a simulation driven by the motion's own poses
 // inverse skinning returns the elastic displacement exactly, so d̃ = u − mean_t u).
 #include <sflsh/model/body_layer.hpp>
 #include <sflsh/reduced/layer_parameterization.hpp>

@@ -1,5 +1,5 @@
 #pragma once
-// The derivative of the per-vertex dynamics amplitudes σ_n, σ_t (physics.md §4 steps 4–6; the fit's σ of
+// The derivative of the per-vertex dynamics amplitudes σ_n, σ_t (docs/physics.md §4 steps 4–6; the fit's σ of
 // SFLSH §5) with respect to parameters p, from a stream of skin displacements u_t and their derivatives du_t/dp
 // (SkinDisplacementMap with the forward sensitivities of reduced_sensitivity.hpp). With d̃ = u − ū (mean zero):
 //   σ_n² = mean_t (n·d̃)²,   σ² = mean_t |d̃|²,   σ_t² = σ² − σ_n²,

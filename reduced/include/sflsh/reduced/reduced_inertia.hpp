@@ -1,5 +1,5 @@
 #pragma once
-// The inertia and gravity terms of the incremental potential restricted to the subspace (physics.md §5,
+// The inertia and gravity terms of the incremental potential restricted to the subspace (docs/physics.md §5,
 // model/time_integrator.hpp): for every node i the basis moves (the "active" nodes), p_i(q) = z_i + A_i u_i(q)
 // with z_i = A_i x_D,i + d_i (the skinned prescribed state) and u_i = Σ_s b_is t_s; every other node sits at
 // p_j = z_j. With the node-level mass M (lumped m_i or consistent M_ij, model/mass.hpp),

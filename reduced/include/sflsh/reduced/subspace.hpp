@@ -1,5 +1,5 @@
 #pragma once
-// The reduced kinematics (physics.md §2.1, Wang et al. 2015): the unposed elastic state is
+// The reduced kinematics (docs/physics.md §2.1, Wang et al. 2015): the unposed elastic state is
 //   x = x_D(t) + (B ⊗ I₃) q,
 // with x_D the rest positions with the prescribed (attached or driven) components at their values, B an
 // N × S sparse matrix of scalar basis functions b_s (one per point handle for translational handles,

@@ -1,6 +1,6 @@
 #pragma once
 // Smooth, linearly precise handle weights on a tet mesh (Wang, Jacobson, Barbič, Kavan 2015, "Linear
-// Subspace Design for Real-Time Shape Deformation", §4; physics.md §2.1):
+// Subspace Design for Real-Time Shape Deformation", §4; docs/physics.md §2.1):
 // \f[ w_j = \arg\min_w\; w^T K^T M^{-1} K\, w \quad\text{s.t.}\quad w = \delta_{jk} \text{ on handle } k, \f]
 // with K = L − N: L the linear-FEM stiffness (L_ab = Σ_e V_e ∇φ_a·∇φ_b, positive semi-definite), N the
 // boundary normal-derivative term N_ab = ∮ φ_a ∇φ_b·n dA, and M the lumped volume. For every globally

@@ -1,6 +1,6 @@
 #pragma once
 // The derivative of the orthotropic StVK–Fung stress with respect to the two Young moduli of a point, at a
-// fixed deformation gradient (physics.md §1.2, orthotropic_fung.hpp): what the forward sensitivities of the
+// fixed deformation gradient (docs/physics.md §1.2, orthotropic_fung.hpp): what the forward sensitivities of the
 // reduced model need for ∂(ω V ∂Ψ/∂q)/∂Y (reduced_sensitivity.hpp).
 //
 //   P = φ'(x) F S₀,  x = 2Ψ₀/c,  S₀ = P_Y M P_Y,  M = 2μ₀Ê + λ₀ tr(Ê) I,  Ê = P_Y E P_Y,

@@ -1,6 +1,6 @@
 #pragma once
 // How the Young moduli of the material's control points reach the cubature tets and how the reduced
-// coordinates reach the skin, as linear maps (SFLSH §3, layer_material.hpp, physics.md §2.1):
+// coordinates reach the skin, as linear maps (SFLSH §3, layer_material.hpp, docs/physics.md §2.1):
 //   Y_tet = W Y_control,  W = stiffness_scale · T · X · φ,
 // with φ the region's biharmonic basis (R × N), X the retargeter's harmonic extension of a skin field to the
 // nodes (linear for fixed geometry) and T the mean over a tet's four nodes; the same W serves Y_t and Y_n. The

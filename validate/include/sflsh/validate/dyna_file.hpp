@@ -1,5 +1,5 @@
 #pragma once
-// DYNA registrations in HDF5 (physics.md §3.2): `dyna_female.h5` / `dyna_male.h5` hold a `faces`
+// DYNA registrations in HDF5 (docs/physics.md §3.2): `dyna_female.h5` / `dyna_male.h5` hold a `faces`
 // dataset (F×3 integer) and one dataset per "<subject>_<sequence>" of shape (V, 3, T), float32 or
 // float64, metres. Element [v][c][t] is coordinate c of vertex v in frame t; we hand out T frames of V×3.
 // Optional attributes (ours, written by DynaWriter): "fps" on the file or a dataset (DYNA is 60 fps

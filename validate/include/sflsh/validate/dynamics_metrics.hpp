@@ -1,5 +1,5 @@
 #pragma once
-// The paper's dynamics metric (SFLSH §3, §5, Fig. 3, Table 2; precise definition in physics.md §4).
+// The paper's dynamics metric (SFLSH §3, §5, Fig. 3, Table 2; precise definition in docs/physics.md §4).
 // For a subject with shape β, per-frame pose θ_t, root translation trans_t and registered (or simulated)
 // vertices v_i(t):
 //   1. A_i(t) = Σ_k w_ik G'_k(θ_t)                                 (blended transform, incl. trans_t)
@@ -34,7 +34,7 @@ class NeutralPullback {
   /// Throws when a blended transform is singular (|det A_i| < 1e-6), naming the vertex.
   RowMatrixX3d unposed(const body::Pose& theta, const Eigen::Vector3d& trans, const Eigen::Matrix3d& world_from_body,
                        const RowMatrixX3d& posed) const;
-  /// d(t) = ū(t) − (T_S + B_P(θ)) (n×3) [m], SFLSH §3 / physics.md §4 step 3.
+  /// d(t) = ū(t) − (T_S + B_P(θ)) (n×3) [m], SFLSH §3 / docs/physics.md §4 step 3.
   RowMatrixX3d deviation(const body::Pose& theta, const Eigen::Vector3d& trans, const Eigen::Matrix3d& world_from_body,
                          const RowMatrixX3d& posed) const;
 

@@ -1,8 +1,8 @@
 #pragma once
-// Synthetic ground truth (DESIGN.md §5): the full-space backward-Euler solver run on a subject of the open
+// Synthetic ground truth (docs/architecture.md §5): the full-space backward-Euler solver run on a subject of the open
 // body with the hidden material of true_material.hpp, recorded as the paper measures captured data —
 // posed whole-body surfaces per frame (the DYNA layout) and the per-vertex dynamics σ*_n, σ*_t of the
-// region's skin in the neutral pose (physics.md §4) that the fits try to reproduce.
+// region's skin in the neutral pose (docs/physics.md §4) that the fits try to reproduce.
 #include <sflsh/body/motion.hpp>
 #include <sflsh/core/run_folder.hpp>
 #include <sflsh/model/body_layer.hpp>

@@ -1,6 +1,6 @@
 #pragma once
 // Fitting SMPL pose θ_t, root translation trans_t (and shape β) to registrations with the body's topology
-// (vertex-to-vertex; physics.md §3.2 "poses are not in the file"). Nonlinear least squares on vertex
+// (vertex-to-vertex; docs/physics.md §3.2 "poses are not in the file"). Nonlinear least squares on vertex
 // positions,
 //   min Σ_i w_i ‖v_i(β, θ_t, trans_t) − y_i(t)‖²,   w_i = soft_weight in the soft region, 1 elsewhere,
 // so that the soft tissue's dynamics is not explained by pose. Solved with Eigen's Levenberg–Marquardt

@@ -2,7 +2,7 @@
 // SMPL's posed vertices as a function of pose θ (72) and root translation (3), with their analytic Jacobian,
 // for the per-frame pose fit (pose_fit.hpp). β is fixed: the shaped template T_S and the joints J(β) are given.
 //
-//   v_i = R_wb Σ_k w_ik G'_k(θ, trans) [T_S,i + B_P,i(θ); 1]            (physics.md §3.1)
+//   v_i = R_wb Σ_k w_ik G'_k(θ, trans) [T_S,i + B_P,i(θ); 1]            (docs/physics.md §3.1)
 //
 // Rotating joint j by dω_j moves every point carried by a joint k below j (k = j included) about the
 // posed joint o_j: d(G'_k x) = (G_par(j) S(ω_j) dω_j) × (G'_k x − o_j), with S(ω) the left Jacobian of
