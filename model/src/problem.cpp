@@ -1,5 +1,7 @@
 #include <sflsh/model/problem.hpp>
 
+#include <sflsh/model/kinematics.hpp>
+
 #include <sflsh/core/error.hpp>
 
 #include <Eigen/Geometry>
@@ -267,21 +269,11 @@ Energies energies(const Problem& problem, const State& state) {
 }
 
 State initial_state(const Problem& problem, double t0) {
-  const int n = problem.num_nodes();
   State s;
   s.t = t0;
-  s.x = Eigen::Map<const Eigen::VectorXd>(problem.rest.data(), 3 * static_cast<Eigen::Index>(n));
+  s.x = Eigen::Map<const Eigen::VectorXd>(problem.rest.data(), problem.num_dofs());
   problem.apply_dirichlet(t0, s.x);
-  Eigen::VectorXd xdot = Eigen::VectorXd::Zero(s.x.size());
-  const Eigen::VectorXd du = problem.dirichlet.rates(t0);
-  for (std::size_t k = 0; k < problem.dirichlet.dof.size(); ++k) xdot[problem.dirichlet.dof[k]] = du[static_cast<Eigen::Index>(k)];
-  NodeFrame frame, rate;
-  problem.frame(t0, frame, &rate);
-  s.w.resize(s.x.size());
-  for (int i = 0; i < n; ++i) {
-    const auto si = static_cast<std::size_t>(i);
-    s.w.segment<3>(3 * i) = rate.A[si] * s.x.segment<3>(3 * i) + rate.d.row(i).transpose() + frame.A[si] * xdot.segment<3>(3 * i);
-  }
+  s.w = kinematic_velocity(problem, s.x, t0);
   return s;
 }
 

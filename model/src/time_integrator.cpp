@@ -1,6 +1,7 @@
 #include <sflsh/model/time_integrator.hpp>
 
 #include <sflsh/core/error.hpp>
+#include <sflsh/model/kinematics.hpp>
 
 #include <Eigen/LU>
 #include <Eigen/SparseCholesky>
@@ -119,26 +120,12 @@ Eigen::VectorXd initial_acceleration(const Problem& problem, const State& state)
   Eigen::VectorXd a = Eigen::VectorXd::Zero(dofs);
   if (!problem.dynamic()) return a;
 
-  // The prescribed motion's acceleration on every node (forward difference of ṗ = Ȧx + ḋ + A ẋ at fixed x,
-  // ẋ = du/dt on constrained components); free components are replaced below.
+  // The prescribed motion's acceleration on every node (kinematics.hpp: free components of x held, prescribed ones
+  // following u(t)); free components are replaced below.
   const std::vector<char> constrained = problem.dirichlet.mask(n);
   Eigen::VectorXd x = state.x;
   problem.apply_dirichlet(state.t, x);
-  auto kinematic_velocity = [&](double t) {
-    NodeFrame frame, rate;
-    problem.frame(t, frame, &rate);
-    Eigen::VectorXd xdot = Eigen::VectorXd::Zero(dofs);
-    const Eigen::VectorXd du = problem.dirichlet.rates(t);
-    for (std::size_t k = 0; k < problem.dirichlet.dof.size(); ++k) xdot[problem.dirichlet.dof[k]] = du[static_cast<Eigen::Index>(k)];
-    Eigen::VectorXd w(dofs);
-    for (int i = 0; i < n; ++i) {
-      const auto si = static_cast<std::size_t>(i);
-      w.segment<3>(3 * i) = rate.A[si] * x.segment<3>(3 * i) + rate.d.row(i).transpose() + frame.A[si] * xdot.segment<3>(3 * i);
-    }
-    return w;
-  };
-  constexpr double kDelta = 1e-6;   // [s]: the forcing is C¹ (cubic Hermite joints), its jerk bounded
-  a = (kinematic_velocity(state.t + kDelta) - kinematic_velocity(state.t)) / kDelta;
+  a = kinematic_acceleration(problem, x, state.t);
 
   // Posed forces r_i = −A_i⁻ᵀ ∇_i E + m_i g on the free components.
   NodeFrame frame;

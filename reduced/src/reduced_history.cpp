@@ -1,5 +1,7 @@
 #include <sflsh/reduced/reduced_history.hpp>
 
+#include <sflsh/model/kinematics.hpp>
+
 #include <sflsh/core/error.hpp>
 
 #include <Eigen/Cholesky>
@@ -21,27 +23,9 @@ void scatter_nodes(const Eigen::VectorXd& values, const std::vector<int>& nodes,
 }
 
 Eigen::VectorXd prescribed_acceleration(const model::Problem& problem, const Subspace& subspace, const Eigen::VectorXd& q, double t) {
-  const int n = problem.num_nodes();
-  const Eigen::Index dofs = problem.num_dofs();
-  // ṗ(t') = Ȧ(t') x(t') + ḋ(t') + A(t') ẋ_D(t') at fixed q.
-  auto posed_velocity = [&](double time) {
-    Eigen::VectorXd x = Eigen::Map<const Eigen::VectorXd>(problem.rest.data(), dofs);
-    problem.apply_dirichlet(time, x);
-    subspace.add_displacement(q, x);
-    Eigen::VectorXd xdot = Eigen::VectorXd::Zero(dofs);
-    const Eigen::VectorXd du = problem.dirichlet.rates(time);
-    for (std::size_t k = 0; k < problem.dirichlet.dof.size(); ++k) xdot[problem.dirichlet.dof[k]] = du[static_cast<Eigen::Index>(k)];
-    model::NodeFrame frame, rate;
-    problem.frame(time, frame, &rate);
-    Eigen::VectorXd w(dofs);
-    for (int i = 0; i < n; ++i) {
-      const auto si = static_cast<std::size_t>(i);
-      w.segment<3>(3 * i) = rate.A[si] * x.segment<3>(3 * i) + rate.d.row(i).transpose() + frame.A[si] * xdot.segment<3>(3 * i);
-    }
-    return w;
-  };
-  constexpr double kDelta = 1e-6;   // [s]: the forcing is C¹ (cubic Hermite joints), its jerk bounded
-  return (posed_velocity(t + kDelta) - posed_velocity(t)) / kDelta;
+  Eigen::VectorXd x = Eigen::Map<const Eigen::VectorXd>(problem.rest.data(), problem.num_dofs());
+  subspace.add_displacement(q, x);   // no basis function on prescribed components: they follow u(t)
+  return model::kinematic_acceleration(problem, x, t);
 }
 
 Eigen::VectorXd subspace_acceleration(const ReducedInertia& inertia, const Eigen::VectorXd& elastic_gradient,

@@ -14,21 +14,7 @@
 namespace sflsh::model {
 namespace {
 
-class DenseSink final : public HessianSink {
- public:
-  explicit DenseSink(const Problem& problem) : problem_(problem), H(Eigen::MatrixXd::Zero(problem.num_dofs(), problem.num_dofs())) {}
-  void add_tet(std::size_t, int e, const material::Matrix12d& block) override {
-    for (int a = 0; a < 4; ++a)
-      for (int b = 0; b < 4; ++b) H.block<3, 3>(3 * problem_.tets(e, a), 3 * problem_.tets(e, b)) += block.block<3, 3>(3 * a, 3 * b);
-  }
-  void add_node(int node, const Eigen::Matrix3d& block) override { H.block<3, 3>(3 * node, 3 * node) += block; }
-
- private:
-  const Problem& problem_;
-
- public:
-  Eigen::MatrixXd H;
-};
+using testing::DenseSink;
 
 TEST(Mass, ConsistentRowSumsAreTheLumpedMasses) {
   Problem p = testing::box_problem({0.1, 0.05, 0.03}, {3, 2, 2}, 1100.0, MassKind::consistent, testing::box_material(5e3, 2e3));

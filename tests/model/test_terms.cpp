@@ -14,22 +14,7 @@
 namespace sflsh::model {
 namespace {
 
-/// The Hessian as one dense matrix.
-class DenseSink final : public HessianSink {
- public:
-  explicit DenseSink(const Problem& problem) : problem_(problem), H(Eigen::MatrixXd::Zero(problem.num_dofs(), problem.num_dofs())) {}
-  void add_tet(std::size_t, int e, const material::Matrix12d& block) override {
-    for (int a = 0; a < 4; ++a)
-      for (int b = 0; b < 4; ++b) H.block<3, 3>(3 * problem_.tets(e, a), 3 * problem_.tets(e, b)) += block.block<3, 3>(3 * a, 3 * b);
-  }
-  void add_node(int node, const Eigen::Matrix3d& block) override { H.block<3, 3>(3 * node, 3 * node) += block; }
-
- private:
-  const Problem& problem_;
-
- public:
-  Eigen::MatrixXd H;
-};
+using testing::DenseSink;
 
 /// A smooth penalty below the plane y = level on every node: u = k/3 (level − p_y)³ where p_y < level.
 class CubicFloor final : public NodePotential {
