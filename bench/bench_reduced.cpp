@@ -95,6 +95,7 @@ int main(int argc, char** argv) {
   std::string mesh = "coarse", motion_name = "shake_hips", out = "bench_reduced.json";
   std::string integrator_list = "backward_euler", mass_list = "lumped";
   int handles = 86, cubature = 200, frames = 120, crowd = 25, threads = 2;
+  reduced::ReducedOptions tuned;   // solver settings from the command line
   for (int i = 1; i + 1 < argc; i += 2) {
     if (std::strcmp(argv[i], "--mesh") == 0) mesh = argv[i + 1];
     else if (std::strcmp(argv[i], "--handles") == 0) handles = std::stoi(argv[i + 1]);
@@ -106,6 +107,11 @@ int main(int argc, char** argv) {
     else if (std::strcmp(argv[i], "--integrators") == 0) integrator_list = argv[i + 1];
     else if (std::strcmp(argv[i], "--masses") == 0) mass_list = argv[i + 1];
     else if (std::strcmp(argv[i], "--out") == 0) out = argv[i + 1];
+    else if (std::strcmp(argv[i], "--step-tolerance") == 0) tuned.step_tolerance = std::stod(argv[i + 1]);
+    else if (std::strcmp(argv[i], "--gradient-rtol") == 0) tuned.gradient_rtol = std::stod(argv[i + 1]);
+    else if (std::strcmp(argv[i], "--refresh-ratio") == 0) tuned.refresh_ratio = std::stod(argv[i + 1]);
+    else if (std::strcmp(argv[i], "--predictor-order") == 0) tuned.predictor_order = std::stoi(argv[i + 1]);
+    else if (std::strcmp(argv[i], "--guard") == 0) tuned.guard = std::stoi(argv[i + 1]) != 0;
     else {
       std::cerr << "bench_reduced: unknown option " << argv[i] << "\n";
       return 2;
@@ -135,6 +141,7 @@ int main(int argc, char** argv) {
       model::MassKind mass;
       Breakdown breakdown;
       double wall = 0.0;
+      int guard_full_checks = 0, guard_checks = 0, cubature_added = 0;
     };
     std::vector<Case> cases;
     int coordinates = 0;
@@ -142,7 +149,7 @@ int main(int argc, char** argv) {
       for (model::Integrator integrator : integrators) {
         model::BodyLayerOptions case_layer = layer_options;
         case_layer.mass = mass;
-        reduced::ReducedOptions solver_options;
+        reduced::ReducedOptions solver_options = tuned;
         solver_options.integrator = integrator;
         auto body = make_body(model, body::Betas::Zero(), motion, 0.0, case_layer, options, solver_options);
         coordinates = body->model.subspace.num_dofs();
@@ -150,6 +157,15 @@ int main(int argc, char** argv) {
         const auto t = Clock::now();
         for (int f = 0; f < frames; ++f) advance(*body, h, c.breakdown);
         c.wall = seconds_since(t);
+        if (const reduced::CubatureGuard* guard = body->integrator->guard()) {
+          c.guard_full_checks = guard->full_checks();
+          c.guard_checks = guard->checks();
+        }
+        c.cubature_added = body->integrator->cubature_added();
+        if (const reduced::CubatureGuard* guard = body->integrator->guard())
+          std::cerr << fmt::format("guard: {} checks, {} per-tet passes, {} renewals, {} exact evaluations ({} tets guarded), {} tets added\n",
+                                   guard->checks(), guard->tet_passes(), guard->full_checks(), guard->exact_evaluations(), guard->num_guarded(),
+                                   c.cubature_added);
         cases.push_back(c);
       }
     }
@@ -157,7 +173,7 @@ int main(int argc, char** argv) {
     const double one_wall = cases.front().wall;
     model::BodyLayerOptions crowd_layer = layer_options;
     crowd_layer.mass = masses.front();
-    reduced::ReducedOptions crowd_solver;
+    reduced::ReducedOptions crowd_solver = tuned;
     crowd_solver.integrator = integrators.front();
     // The crowd: random shapes (β ~ N(0, 1), clamped to ±2.5) and time offsets, parallel over bodies.
     std::mt19937 rng(20231212);

@@ -16,6 +16,7 @@ void accumulate(StepStats& total, const StepStats& step) {
   total.fallback_preconditioner += step.fallback_preconditioner;
   total.potential_refinements += step.potential_refinements;
   total.startup_steps += step.startup_steps;
+  total.cubature_added += step.cubature_added;
   total.seconds += step.seconds;
   total.function_seconds += step.function_seconds;
   total.jacobian_seconds += step.jacobian_seconds;

@@ -5,7 +5,12 @@
 #include <sflsh/reduced/cubature_elastic.hpp>
 #include <sflsh/reduced/nnls.hpp>
 
+#include <Eigen/Eigenvalues>
+#include <fmt/format.h>
+
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <numeric>
 #include <random>
 
@@ -150,6 +155,50 @@ Cubature select_cubature(const model::Problem& problem, const Subspace& subspace
   logger()->debug("cubature: NNLS over {} samples: {} of {} points carry weight, volume ratio {:.4f}, {} iterations", used, nonzero,
                   K, fitted_volume, fit.iterations);
   return out;
+}
+
+Eigen::MatrixXd rest_stiffness(const model::Problem& problem, const Subspace& subspace, const Cubature& cubature) {
+  const CubatureElastic elastic(problem, subspace, cubature);
+  Eigen::MatrixXd K = Eigen::MatrixXd::Zero(subspace.num_dofs(), subspace.num_dofs());
+  elastic.add_hessian(Eigen::VectorXd::Zero(subspace.num_dofs()), K, material::HessianProjection::kNone);
+  return K;
+}
+
+CubatureCoverage cubature_coverage(const Eigen::MatrixXd& exact_stiffness, const Eigen::MatrixXd& cubature_stiffness) {
+  require(exact_stiffness.rows() == cubature_stiffness.rows() && exact_stiffness.cols() == cubature_stiffness.cols(),
+          "cubature: stiffness matrices of {} and {} rows", exact_stiffness.rows(), cubature_stiffness.rows());
+  CubatureCoverage c;
+  if (exact_stiffness.rows() == 0) return c;
+  const Eigen::LLT<Eigen::MatrixXd> factor(cubature_stiffness);
+  if (factor.info() != Eigen::Success) {
+    c.max_ratio = std::numeric_limits<double>::infinity();
+    return c;
+  }
+  // L⁻¹ K_x L⁻ᵀ has the generalized eigenvalues of (K_x, K_c = L Lᵀ).
+  Eigen::MatrixXd A = factor.matrixL().solve(exact_stiffness);
+  A = factor.matrixL().solve(Eigen::MatrixXd(A.transpose()));
+  const Eigen::VectorXd lambda = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(0.5 * (A + A.transpose()), Eigen::EigenvaluesOnly).eigenvalues();
+  c.max_ratio = lambda.maxCoeff();
+  c.min_ratio = lambda.minCoeff();
+  return c;
+}
+
+Cubature select_covering_cubature(const model::Problem& problem, const Subspace& subspace, const CubatureOptions& options,
+                                  double max_ratio, double growth) {
+  require(max_ratio >= 1.0 && growth > 1.0, "cubature: coverage ratio {} must be ≥ 1 and growth {} > 1", max_ratio, growth);
+  const Eigen::MatrixXd exact = rest_stiffness(problem, subspace, exact_cubature(problem.num_tets()));
+  CubatureOptions o = options;
+  for (;;) {
+    Cubature c = o.count >= problem.num_tets() ? exact_cubature(problem.num_tets()) : select_cubature(problem, subspace, o);
+    const CubatureCoverage coverage = cubature_coverage(exact, rest_stiffness(problem, subspace, c));
+    c.stiffness_ratio_max = coverage.max_ratio;
+    c.stiffness_ratio_min = coverage.min_ratio;
+    logger()->info("cubature: {} tets ({}): exact / cubature rest stiffness over the subspace's directions in [{:.3g}, {:.3g}]{}",
+                   c.size(), c.method, coverage.min_ratio, coverage.max_ratio,
+                   coverage.max_ratio <= max_ratio ? "" : fmt::format(" (above {:.3g}: more tets)", max_ratio));
+    if (coverage.max_ratio <= max_ratio || c.method == "exact") return c;
+    o.count = std::min(problem.num_tets(), static_cast<int>(std::ceil(growth * o.count)));
+  }
 }
 
 }  // namespace sflsh::reduced

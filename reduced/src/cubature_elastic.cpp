@@ -8,52 +8,66 @@
 namespace sflsh::reduced {
 
 CubatureElastic::CubatureElastic(const model::Problem& problem, const Subspace& subspace, const Cubature& cubature)
-    : problem_(problem) {
+    : problem_(problem), subspace_(subspace) {
   require(subspace.num_nodes() == problem.num_nodes(), "cubature: subspace has {} nodes, problem {}", subspace.num_nodes(),
           problem.num_nodes());
   require(cubature.tets.size() == cubature.weights.size(), "cubature: {} tets but {} weights", cubature.tets.size(),
           cubature.weights.size());
   offset_.push_back(0);
+  x_prescribed_.resize(problem.num_dofs());
+  for (int i = 0; i < problem.num_nodes(); ++i) x_prescribed_.segment<3>(3 * i) = problem.rest.row(i).transpose();
+  for (std::size_t p = 0; p < cubature.tets.size(); ++p) add_point(cubature.tets[p], cubature.weights[p]);
+}
+
+int CubatureElastic::add_point(int e, double weight) {
+  require(e >= 0 && e < problem_.num_tets(), "cubature: tet {} out of range [0, {})", e, problem_.num_tets());
+  require(std::isfinite(weight) && weight >= 0.0, "cubature: weight {} of tet {} is not non-negative", weight, e);
+  const material::TetRest& rest = problem_.tet_rest[static_cast<std::size_t>(e)];
+  // Shape-function gradients: g_a = row a−1 of D_m⁻¹ (a = 1..3), g_0 = −(g_1 + g_2 + g_3).
+  Eigen::Matrix<double, 4, 3> g;
+  g.bottomRows<3>() = rest.dm_inv;
+  g.row(0) = -rest.dm_inv.colwise().sum();
   std::vector<std::pair<int, Eigen::Vector3d>> local;
-  for (std::size_t p = 0; p < cubature.tets.size(); ++p) {
-    const int e = cubature.tets[p];
-    require(e >= 0 && e < problem.num_tets(), "cubature: tet {} out of range [0, {})", e, problem.num_tets());
-    require(std::isfinite(cubature.weights[p]) && cubature.weights[p] >= 0.0, "cubature: weight {} of tet {} is not non-negative",
-            cubature.weights[p], e);
-    const material::TetRest& rest = problem.tet_rest[static_cast<std::size_t>(e)];
-    // Shape-function gradients: g_a = row a−1 of D_m⁻¹ (a = 1..3), g_0 = −(g_1 + g_2 + g_3).
-    Eigen::Matrix<double, 4, 3> g;
-    g.bottomRows<3>() = rest.dm_inv;
-    g.row(0) = -rest.dm_inv.colwise().sum();
-    local.clear();
-    for (int a = 0; a < 4; ++a) {
-      for (SparseRowMatrix::InnerIterator it(subspace.basis, problem.tets(e, a)); it; ++it) {
-        const int s = static_cast<int>(it.col());
-        auto found = std::find_if(local.begin(), local.end(), [s](const auto& entry) { return entry.first == s; });
-        const Eigen::Vector3d contribution = it.value() * g.row(a).transpose();
-        if (found == local.end()) local.emplace_back(s, contribution);
-        else found->second += contribution;
-      }
+  for (int a = 0; a < 4; ++a) {
+    for (SparseRowMatrix::InnerIterator it(subspace_.basis, problem_.tets(e, a)); it; ++it) {
+      const int s = static_cast<int>(it.col());
+      auto found = std::find_if(local.begin(), local.end(), [s](const auto& entry) { return entry.first == s; });
+      const Eigen::Vector3d contribution = it.value() * g.row(a).transpose();
+      if (found == local.end()) local.emplace_back(s, contribution);
+      else found->second += contribution;
     }
-    std::sort(local.begin(), local.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-    for (const auto& [s, c] : local) {
-      function_.push_back(s);
-      c_.push_back(c);
-    }
-    offset_.push_back(static_cast<int>(function_.size()));
-    max_local_ = std::max(max_local_, static_cast<int>(local.size()));
-    point_tet_.push_back(e);
-    const double scale = problem.tet_energy_scale.empty() ? 1.0 : problem.tet_energy_scale[static_cast<std::size_t>(e)];
-    point_weight_.push_back(cubature.weights[p] * rest.volume * scale);
   }
-  f_prescribed_.assign(point_tet_.size(), Eigen::Matrix3d::Identity());
-  Eigen::VectorXd rest(problem.num_dofs());
-  for (int i = 0; i < problem.num_nodes(); ++i) rest.segment<3>(3 * i) = problem.rest.row(i).transpose();
-  set_prescribed_state(rest);
+  std::sort(local.begin(), local.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  for (const auto& [s, c] : local) {
+    function_.push_back(s);
+    c_.push_back(c);
+  }
+  offset_.push_back(static_cast<int>(function_.size()));
+  max_local_ = std::max(max_local_, static_cast<int>(local.size()));
+  point_tet_.push_back(e);
+  const double scale = problem_.tet_energy_scale.empty() ? 1.0 : problem_.tet_energy_scale[static_cast<std::size_t>(e)];
+  tet_scale_.push_back(rest.volume * scale);
+  point_weight_.push_back(weight * rest.volume * scale);
+  material::TetNodes nodes;
+  for (int a = 0; a < 4; ++a) nodes.col(a) = x_prescribed_.segment<3>(3 * problem_.tets(e, a));
+  f_prescribed_.push_back(material::tet_deformation_gradient(rest, nodes));
+  return num_points() - 1;
+}
+
+void CubatureElastic::set_point_weight(int p, double weight) {
+  require(p >= 0 && p < num_points() && std::isfinite(weight) && weight >= 0.0, "cubature: weight {} for point {} of {}", weight, p,
+          num_points());
+  point_weight_[static_cast<std::size_t>(p)] = weight * tet_scale_[static_cast<std::size_t>(p)];
+}
+
+double CubatureElastic::point_weight_factor(int p) const {
+  const double scale = tet_scale_[static_cast<std::size_t>(p)];
+  return scale > 0.0 ? point_weight_[static_cast<std::size_t>(p)] / scale : 0.0;
 }
 
 void CubatureElastic::set_prescribed_state(const Eigen::VectorXd& x) {
   require(x.size() == problem_.num_dofs(), "cubature: prescribed state has {} entries, expected {}", x.size(), problem_.num_dofs());
+  x_prescribed_ = x;
   for (std::size_t p = 0; p < point_tet_.size(); ++p) {
     const int e = point_tet_[p];
     material::TetNodes nodes;

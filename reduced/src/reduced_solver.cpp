@@ -38,7 +38,7 @@ ReducedSolver::ReducedSolver(const model::Problem& problem, const Subspace& subs
       subspace_(subspace),
       cubature_(cubature),
       options_(options),
-      elastic_(problem, subspace, cubature),
+      elastic_(problem, subspace, cubature_),
       inertia_(problem, subspace),
       potentials_(problem, subspace, inertia_.active_nodes()),
       elastic_term_(elastic_),
@@ -46,6 +46,7 @@ ReducedSolver::ReducedSolver(const model::Problem& problem, const Subspace& subs
       gravity_term_(inertia_),
       potential_term_(potentials_, inertia_) {
   require(options.max_halvings >= 0 && options.max_newton >= 1, "reduced: max_halvings must be ≥ 0 and max_newton ≥ 1");
+  if (options.guard) guard_ = std::make_unique<CubatureGuard>(problem, subspace, cubature_, options.guard_exponent);
   // Attached nodes must be attached as a whole and carry no basis functions.
   std::vector<int> constrained_axes(static_cast<std::size_t>(problem.num_nodes()), 0);
   for (int d : problem.dirichlet.dof) ++constrained_axes[static_cast<std::size_t>(d / 3)];
@@ -57,6 +58,7 @@ ReducedSolver::ReducedSolver(const model::Problem& problem, const Subspace& subs
   for (int id : problem.dirichlet.drive) has_drives_ = has_drives_ || id >= 0;
   q_ = Eigen::VectorXd::Zero(subspace.num_dofs());
   q_rate_ = q_;
+  q_rate_previous_ = q_;
 }
 
 Eigen::VectorXd ReducedSolver::prescribed_state(double t) const {
@@ -100,8 +102,13 @@ void ReducedSolver::initialize(const model::State& state) {
     }
   }
   q_rate_.setZero();
+  q_rate_previous_.setZero();
+  rate_steps_ = 0;
   factor_valid_ = false;
-  if (has_drives_) elastic_.set_prescribed_state(x_prescribed);
+  if (has_drives_) {
+    elastic_.set_prescribed_state(x_prescribed);
+    if (guard_) guard_->set_prescribed_state(x_prescribed);
+  }
   inertia_.set_time(t_, x_prescribed);
   const std::vector<int>& nodes = inertia_.inertia_nodes();
   history_ = model::PosedHistory{};
@@ -131,7 +138,10 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
   gravity_term_.update();
   stats.inertia_seconds += seconds_since(clock);
   clock = Clock::now();
-  if (has_drives_) elastic_.set_prescribed_state(x_prescribed);
+  if (has_drives_) {
+    elastic_.set_prescribed_state(x_prescribed);
+    if (guard_) guard_->set_prescribed_state(x_prescribed);
+  }
   elastic_term_.set_projection(projection);
   stats.elastic_seconds += seconds_since(clock);
   bool contact = false;
@@ -166,11 +176,15 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
   // Solved again from the same start when a node potential refuses the result (penetration over its
   // tolerance: the potential stiffened itself).
   Eigen::VectorXd q;
-  for (int refinement = 0;; ++refinement) {
+  int enlargements = 0;
+  for (int refinement = 0;;) {
     q = q_;
     double phi = potential(q);
-    if (options_.use_predictor && q_rate_.size() == q_.size()) {
-      const Eigen::VectorXd predicted = q_ + dt * q_rate_;
+    if (options_.use_predictor && rate_steps_ >= 1) {
+      // q_n + h q̇_n, plus ½h² q̈_n from the last two backward differences once there are two.
+      Eigen::VectorXd predicted = q_ + dt * q_rate_;
+      if (options_.predictor_order >= 2 && rate_steps_ >= 2 && rate_dt_ > 0.0)
+        predicted += (0.5 * dt * dt / rate_dt_) * (q_rate_ - q_rate_previous_);
       const double phi_predicted = potential(predicted);
       if (phi_predicted < phi) {
         q = predicted;
@@ -193,6 +207,7 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
     bool fresh = false;          // the factor was computed at this step's current iterate
     bool refresh = !factor_valid_;
     double g0 = 0.0, g_previous = kInfinity;
+    double previous_move = 0.0;   // ‖Δ‖∞ of the last full step [m]
     bool converged = false;
     for (int it = 0; it < options_.max_newton && !converged; ++it) {
       gradient.setZero();
@@ -286,7 +301,13 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
           return false;
         }
         fresh = false;
-        if (alpha == 1.0 && delta.cwiseAbs().maxCoeff() <= options_.step_tolerance) {
+        // The distance left to the minimizer, estimated from the contraction of the last two full steps:
+        // ‖q_k − q*‖ ≲ ρ/(1 − ρ) ‖Δ_k‖ with ρ = ‖Δ_k‖/‖Δ_{k−1}‖ (‖Δ_k‖ itself until there are two) [m].
+        const double moved = delta.cwiseAbs().maxCoeff();
+        const double ratio = alpha == 1.0 && previous_move > 0.0 ? moved / previous_move : 1.0;
+        const double left = ratio < 0.5 ? ratio / (1.0 - ratio) * moved : moved;
+        previous_move = alpha == 1.0 ? moved : 0.0;
+        if (alpha == 1.0 && left <= options_.step_tolerance) {
           converged = true;
           reason = "step";
         }
@@ -302,6 +323,25 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
       reason = "non-finite state";
       return false;
     }
+    if (guard_) {   // the tets outside the cubature: over the limit → into the cubature, and solve again
+      clock = Clock::now();
+      const std::vector<GuardViolation> over = guard_->check(q);
+      stats.elastic_seconds += seconds_since(clock);
+      if (!over.empty()) {
+        if (enlargements >= options_.max_enlargements) {
+          reason = fmt::format("tet {} outside the cubature still leaves the material's range (Fung exponent {:.3g} > {}) after {} "
+                               "enlargements of the cubature",
+                               over.front().tet, over.front().exponent, options_.guard_exponent, enlargements);
+          factor_valid_ = false;
+          return false;
+        }
+        enlarge_cubature(over, t1);
+        stats.cubature_added += static_cast<int>(over.size());
+        ++enlargements;
+        factor_valid_ = false;
+        continue;
+      }
+    }
     if (!contact) break;
     clock = Clock::now();
     const bool accepted = potentials_.accept(q, inertia_);
@@ -312,6 +352,7 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
       logger()->warn("reduced: t = {:.6g}: contact still over its tolerance after {} refinement(s); the substep is kept", t1, refinement);
       break;
     }
+    ++refinement;
     ++stats.potential_refinements;
   }
   clock = Clock::now();
@@ -319,7 +360,10 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
   inertia_.posed(q, p_new);
   model::advance_history(target, history_, p_new);
   if (target.integrator != options_.integrator) ++startup;   // BDF2 started (or restarted) as backward Euler
+  q_rate_previous_ = q_rate_;
   q_rate_ = (q - q_) / dt;
+  rate_dt_ = dt;
+  ++rate_steps_;
   q_ = q;
   t_ = t1;
   if (options_.record_substeps) substeps_.push_back({t0, dt, q_});
@@ -339,6 +383,9 @@ class ReducedSolver::Ladder final : public model::LadderSolver {
     t_ = solver_.t_;
     q_ = solver_.q_;
     rate_ = solver_.q_rate_;
+    rate_previous_ = solver_.q_rate_previous_;
+    rate_dt_ = solver_.rate_dt_;
+    rate_steps_ = solver_.rate_steps_;
     history_saved_ = false;
     solver_.substeps_.clear();
   }
@@ -346,6 +393,9 @@ class ReducedSolver::Ladder final : public model::LadderSolver {
     solver_.t_ = t_;
     solver_.q_ = q_;
     solver_.q_rate_ = rate_;
+    solver_.q_rate_previous_ = rate_previous_;
+    solver_.rate_dt_ = rate_dt_;
+    solver_.rate_steps_ = rate_steps_;
     if (history_saved_) solver_.history_ = history_;
     solver_.substeps_.clear();
   }
@@ -364,7 +414,9 @@ class ReducedSolver::Ladder final : public model::LadderSolver {
   ReducedSolver& solver_;
   double h_;
   double t_ = 0.0;
-  Eigen::VectorXd q_, rate_;
+  Eigen::VectorXd q_, rate_, rate_previous_;
+  double rate_dt_ = 0.0;
+  int rate_steps_ = 0;
   model::PosedHistory history_;
   bool history_saved_ = false;
 };

@@ -15,6 +15,7 @@ struct StepStats {
   int fallback_preconditioner = 0; ///< attempts repeated with CG + Jacobi after a linear-solver failure
   int potential_refinements = 0;   ///< substeps solved again because a node potential refused the result
   int startup_steps = 0;           ///< substeps a multistep integrator (BDF2) took as backward Euler
+  int cubature_added = 0;          ///< tets the reduced model's guard added to its cubature (cubature_guard.hpp)
   double seconds = 0.0;            ///< wall time of the step [s]
   double function_seconds = 0.0;   ///< objective and gradient evaluations (full space) [s]
   double jacobian_seconds = 0.0;   ///< Hessian assembly (full space) [s]

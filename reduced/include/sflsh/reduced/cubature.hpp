@@ -21,6 +21,9 @@ struct Cubature {
   std::vector<int> tets;
   std::vector<double> weights;
   std::string method = "exact";   ///< "exact" | "voronoi" | "nnls"
+  /// The coverage of the subspace's rest stiffness (cubature_coverage()); 0 when not measured.
+  double stiffness_ratio_max = 0.0;
+  double stiffness_ratio_min = 0.0;
   int size() const { return static_cast<int>(tets.size()); }
 };
 
@@ -49,5 +52,23 @@ std::vector<double> voronoi_weights(const model::Problem& problem, const std::ve
 /// Data-oblivious cubature for `problem` in `subspace`. Falls back to Voronoi weights (logged) when the
 /// NNLS fit leaves the volume off by more than 5%.
 Cubature select_cubature(const model::Problem& problem, const Subspace& subspace, const CubatureOptions& options);
+
+/// The reduced rest stiffness K = ∂²E/∂q² at q = 0 of a cubature (3S × 3S).
+Eigen::MatrixXd rest_stiffness(const model::Problem& problem, const Subspace& subspace, const Cubature& cubature);
+
+/// How the cubature's rest stiffness K_c covers the exact one K_x over the subspace: the extreme generalized
+/// eigenvalues of K_x v = λ K_c v, i.e. max and min over directions v of vᵀK_x v / vᵀK_c v. A large λ_max is a
+/// direction that strains tets the cubature does not see (they can leave the material's range at no cost to the
+/// reduced energy); λ_max = +∞ when K_c is singular.
+struct CubatureCoverage {
+  double max_ratio = 0.0;
+  double min_ratio = 0.0;
+};
+CubatureCoverage cubature_coverage(const Eigen::MatrixXd& exact_stiffness, const Eigen::MatrixXd& cubature_stiffness);
+
+/// The smallest cubature of the farthest-point sequence, from options.count up by factors of `growth`, whose
+/// coverage λ_max is ≤ max_ratio (the exact cubature when none below every tet is). Records the coverage.
+Cubature select_covering_cubature(const model::Problem& problem, const Subspace& subspace, const CubatureOptions& options,
+                                  double max_ratio, double growth = 1.25);
 
 }  // namespace sflsh::reduced

@@ -10,6 +10,7 @@
 #include <sflsh/reduced/cubature.hpp>
 #include <sflsh/reduced/subspace.hpp>
 
+#include <span>
 #include <vector>
 
 namespace sflsh::reduced {
@@ -29,6 +30,22 @@ class CubatureElastic {
   /// One point's contribution weight · ω V ∂Ψ/∂q, added to `gradient` (for cubature fitting).
   void add_point_gradient(int point, const Eigen::VectorXd& q, Eigen::VectorXd& gradient, double weight) const;
 
+  /// Appends tet e as a point of weight ω (multiplying V_e Ψ_e); returns its point index.
+  int add_point(int tet, double weight);
+  /// Sets a point's ω.
+  void set_point_weight(int point, double weight);
+  /// A point's ω (its weight ω V divided by V · energy scale).
+  double point_weight_factor(int point) const;
+  /// The basis functions s touching a point and their vectors c_s (F = F_D + Σ_s t_s c_sᵀ), parallel spans.
+  std::span<const int> point_functions(int point) const {
+    const auto p = static_cast<std::size_t>(point);
+    return {function_.data() + offset_[p], static_cast<std::size_t>(offset_[p + 1] - offset_[p])};
+  }
+  std::span<const Eigen::Vector3d> point_vectors(int point) const {
+    const auto p = static_cast<std::size_t>(point);
+    return {c_.data() + offset_[p], static_cast<std::size_t>(offset_[p + 1] - offset_[p])};
+  }
+
   int num_points() const { return static_cast<int>(point_tet_.size()); }
   /// F_c(q) of one point.
   Eigen::Matrix3d point_deformation_gradient(int point, const Eigen::VectorXd& q) const { return deformation_gradient(point, q); }
@@ -45,7 +62,10 @@ class CubatureElastic {
   Eigen::Matrix3d deformation_gradient(int point, const Eigen::VectorXd& q) const;
 
   const model::Problem& problem_;
+  const Subspace& subspace_;
+  Eigen::VectorXd x_prescribed_;       ///< the prescribed state x_D (3N) of f_prescribed_
   std::vector<int> point_tet_;
+  std::vector<double> tet_scale_;      ///< V_c (· energy scale) per point
   std::vector<double> point_weight_;   ///< ω_c V_c (· energy scale)
   std::vector<int> offset_;            ///< point p's functions are function_[offset_[p] .. offset_[p+1])
   std::vector<int> function_;

@@ -17,6 +17,7 @@
 #include <sflsh/model/problem.hpp>
 #include <sflsh/reduced/cubature.hpp>
 #include <sflsh/reduced/cubature_elastic.hpp>
+#include <sflsh/reduced/cubature_guard.hpp>
 #include <sflsh/reduced/reduced_inertia.hpp>
 #include <sflsh/reduced/reduced_potentials.hpp>
 #include <sflsh/reduced/reduced_terms.hpp>
@@ -27,6 +28,7 @@
 
 #include <Eigen/Cholesky>
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -47,9 +49,16 @@ struct ReducedOptions {
   bool reuse_factorization = true;
   double refresh_ratio = 0.25;
   bool exact_hessian_first = true;
-  bool use_predictor = true;       ///< start Newton from q_n + h q̇_n when its Φ is lower than at q_n
+  bool use_predictor = true;       ///< start Newton from the extrapolated q when its Φ is lower than at q_n
+  int predictor_order = 2;         ///< 1: q_n + h q̇_n; 2: + ½h² q̈_n (backward differences)
   /// Keep the converged substeps of the last step (last_substeps()), for forward sensitivities.
   bool record_substeps = false;
+  /// Guard the tets outside the cubature (cubature_guard.hpp): a tet whose Fung exponent x = 2Ψ₀/c passes
+  /// `guard_exponent` at a converged substep joins the cubature (weight 1, its volume taken from the nearest point's
+  /// weight) and the substep is solved again, at most `max_enlargements` times per substep.
+  bool guard = true;
+  double guard_exponent = 25.0;
+  int max_enlargements = 8;
 };
 
 /// One converged substep of an accepted step: from t0 over dt to coordinates q.
@@ -90,7 +99,12 @@ class ReducedSolver final : public model::BodySolver {
   /// Φ's elastic part at the current state (cubature) [J].
   double elastic_energy() const;
   const Subspace& subspace() const { return subspace_; }
+  /// The cubature in use: the model's, plus the tets the guard added (cubature_added()).
   const Cubature& cubature() const { return cubature_; }
+  /// Tets the guard added to the cubature since construction.
+  int cubature_added() const { return added_; }
+  /// The guard (nullptr when options.guard is off).
+  const CubatureGuard* guard() const { return guard_.get(); }
   const ReducedOptions& options() const { return options_; }
   /// The substeps of the last successful step(), in order (empty unless options.record_substeps).
   const std::vector<ReducedSubstep>& last_substeps() const { return substeps_; }
@@ -103,12 +117,16 @@ class ReducedSolver final : public model::BodySolver {
                      int& startup);
   /// Newmark's p̈ at the inertia nodes for the current q and time (zero without inertia).
   Eigen::VectorXd initial_acceleration() const;
+  /// Adds the guard's violations to the cubature (reduced_solver_guard.cpp).
+  void enlarge_cubature(const std::vector<GuardViolation>& over, double t);
 
   const model::Problem& problem_;
   const Subspace& subspace_;
-  const Cubature& cubature_;
+  Cubature cubature_;                     ///< the model's cubature, grown by the guard
   ReducedOptions options_;
   CubatureElastic elastic_;
+  std::unique_ptr<CubatureGuard> guard_;
+  int added_ = 0;
   ReducedInertia inertia_;
   ReducedPotentials potentials_;
   ReducedElasticTerm elastic_term_;
@@ -124,6 +142,9 @@ class ReducedSolver final : public model::BodySolver {
 
   double t_ = 0.0;
   Eigen::VectorXd q_, q_rate_;            ///< q and its backward difference (for the predictor)
+  Eigen::VectorXd q_rate_previous_;       ///< the backward difference one step earlier
+  double rate_dt_ = 0.0;                  ///< the step of q_rate_ [s]
+  int rate_steps_ = 0;                    ///< substeps behind q_rate_ (0, 1, ≥ 2)
   model::PosedHistory history_;           ///< posed kinematics of the inertia nodes
   std::vector<ReducedSubstep> substeps_;
 };
