@@ -161,6 +161,7 @@ void run_sweep(const SweepOptions& opt, const Invocation& invocation, int size) 
                  subjects.size(), motions.size(), opt.base.frames, opt.base.solver,
                  opt.base.solver == "full" ? std::string("one at a time (PETSc)") : fmt::format("{} thread(s)", opt.threads));
 
+  // One info line per run (failures too: the report lists them, and with -q only the final line remains).
   std::atomic<int> done{0};
   auto run_one = [&](std::size_t i) {
     sweep::SweepRun& r = runs[i];
@@ -170,7 +171,7 @@ void run_sweep(const SweepOptions& opt, const Invocation& invocation, int size) 
       logger()->info("sweep [{}/{}] {} {} {}: ok, mean σ {:.2f} mm, {:.2f} Newton/frame, {:.1f} s", k, runs.size(), r.mesh, r.subject,
                      r.motion, r.sigma_mm, r.newton_per_frame, r.seconds);
     else
-      logger()->warn("sweep [{}/{}] {} {} {}: failed after {} frames: {}", k, runs.size(), r.mesh, r.subject, r.motion, r.frames, r.error);
+      logger()->info("sweep [{}/{}] {} {} {}: FAILED after {} frames: {}", k, runs.size(), r.mesh, r.subject, r.motion, r.frames, r.error);
   };
   {
     std::optional<tbb::global_control> threads;
