@@ -17,6 +17,7 @@
 #include <nlohmann/json.hpp>
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <atomic>
 #include <cmath>
@@ -107,6 +108,12 @@ void run_case(const SweepOptions& opt, sweep::SweepRun& run) {
   reporting.progress = false;
   reporting.log_details = false;
   reporting.on_frame = [&run](int frame) { run.frames = frame + 1; };
+  reporting.on_setup = [&run](const nlohmann::json& setup) {
+    run.frames = 1;   // the rest state
+    run.tets = setup["tets"].get<int>();
+    run.coordinates = setup["coordinates"].get<int>();
+    run.cubature_tets = setup["cubature"].get<int>();
+  };
   const auto t0 = Clock::now();
   try {
     const nlohmann::json s = run_body_simulation(settings, nullptr, 0, 1, reporting);
@@ -156,10 +163,11 @@ void run_sweep(const SweepOptions& opt, const Invocation& invocation, int size) 
         r.frames_requested = opt.base.frames;
         runs.push_back(r);
       }
+  const int threads = opt.base.solver == "full" ? 1 : (opt.threads > 0 ? opt.threads : tbb::this_task_arena::max_concurrency());
   RunFolder run_folder(opt.out);   // the staging folder: the report appears at once when every case has ended
   logger()->info("sweep: {} run(s) ({} mesh(es) × {} subject(s) × {} motion(s)), {} frames, --solver {}, {}", runs.size(), meshes.size(),
                  subjects.size(), motions.size(), opt.base.frames, opt.base.solver,
-                 opt.base.solver == "full" ? std::string("one at a time (PETSc)") : fmt::format("{} thread(s)", opt.threads));
+                 opt.base.solver == "full" ? std::string("one at a time (PETSc)") : fmt::format("{} thread(s)", threads));
 
   // One info line per run (failures too: the report lists them, and with -q only the final line remains).
   std::atomic<int> done{0};
@@ -174,8 +182,8 @@ void run_sweep(const SweepOptions& opt, const Invocation& invocation, int size) 
       logger()->info("sweep [{}/{}] {} {} {}: FAILED after {} frames: {}", k, runs.size(), r.mesh, r.subject, r.motion, r.frames, r.error);
   };
   {
-    std::optional<tbb::global_control> threads;
-    if (opt.threads > 0) threads.emplace(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(opt.threads));
+    std::optional<tbb::global_control> parallelism;
+    if (opt.threads > 0) parallelism.emplace(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(opt.threads));
     const std::size_t per_mesh = subjects.size() * motions.size();
     for (std::size_t m = 0; m < meshes.size(); ++m) {
       const std::size_t first = m * per_mesh;
@@ -203,8 +211,7 @@ void run_sweep(const SweepOptions& opt, const Invocation& invocation, int size) 
       {fmt::format("each run is `sflsh simulate --solver {} --mesh M --subject S --motion X --frames {} --integrator {} --mass {}{} "
                    "--no-output`",
                    opt.base.solver, opt.base.frames, opt.base.integrator, opt.base.layer.mass, reduced_text),
-       fmt::format("{} run(s), {} failed; wall time {:.1f} s on {} thread(s)", runs.size(), failures.size(), wall_seconds,
-                   opt.base.solver == "full" ? 1 : opt.threads),
+       fmt::format("{} run(s), {} failed; wall time {:.1f} s on {} thread(s)", runs.size(), failures.size(), wall_seconds, threads),
        "σ: dynamics amplitude per region vertex (docs/physics.md §4); frames: output frames computed, the rest state included; "
        "retried attempts: substep attempts rejected and repeated (PSD projection, then splitting)"},
       runs);
@@ -214,7 +221,7 @@ void run_sweep(const SweepOptions& opt, const Invocation& invocation, int size) 
                       {"subjects", subjects},              {"motions", motions},
                       {"frames", opt.base.frames},         {"fps", opt.base.fps},
                       {"substeps", opt.base.substeps},     {"integrator", opt.base.integrator},
-                      {"mass", opt.base.layer.mass},       {"threads", opt.threads}};
+                      {"mass", opt.base.layer.mass},       {"threads", threads}};
   if (opt.base.solver == "reduced")
     summary["sweep"]["reduced"] = {{"handles", opt.base.handles}, {"cubature", opt.base.cubature},
                                    {"cubature_weights", opt.base.cubature_weights}, {"affine", opt.base.affine}};

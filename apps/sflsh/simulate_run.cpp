@@ -87,6 +87,10 @@ nlohmann::json run_body_simulation(const BodyRunSettings& opt, RunFolder* frames
     full->initialize(model::initial_state(problem, 0.0));
   }
   const double model_seconds = seconds_since(t_model);
+  if (reporting.on_setup)
+    reporting.on_setup({{"tets", problem.num_tets()},
+                        {"coordinates", reduced_model ? reduced_model->subspace.num_dofs() : 0},
+                        {"cubature", reduced_model ? reduced_model->cubature.size() : 0}});
   model::BodySolver& solver = use_reduced ? static_cast<model::BodySolver&>(*fast) : *full;
 
   model::SimulationWriter writer(layer, rank == 0 ? frames_to : nullptr, opt.write_layer);

@@ -38,6 +38,9 @@ struct BodyRunReporting {
   bool progress = true;                        ///< the frame progress line
   bool log_details = true;                     ///< the layer/solver line at info level (else debug)
   std::function<void(int frame)> on_frame;     ///< called after every converged output frame (may be empty)
+  /// Called once the solver is set up, before the first step (may be empty): {"tets", "coordinates", "cubature"}
+  /// (the last two 0 in full space), so that a run that fails later can still say what it ran.
+  std::function<void(const nlohmann::json& setup)> on_setup;
 };
 
 /// --handles, --cubature, --cubature-weights, --affine with simulate's help texts.

@@ -44,15 +44,15 @@ std::string csv_field(const std::string& text) {
 void write_sweep_csv(const std::filesystem::path& path, const std::vector<SweepRun>& runs) {
   std::string text = std::string(kSweepHeader) + "\n";
   for (const SweepRun& r : runs) {
+    // A failed run has no σ, iteration counts or solve time: those cells stay empty (its wall time is known).
     const std::string measured =
-        r.ok ? fmt::format("{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g}", r.sigma_mm, r.newton_per_frame, r.seconds, r.fps, r.sigma_max_mm,
-                           r.solve_seconds)
-             : fmt::format(",,{:.6g},,,", r.seconds);
+        r.ok ? fmt::format("{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{},{}", r.sigma_mm, r.newton_per_frame, r.seconds, r.fps,
+                           r.sigma_max_mm, r.solve_seconds, r.failed_attempts, r.factorizations)
+             : fmt::format(",,{:.6g},,,,,", r.seconds);
     const std::string sizes = r.coordinates > 0 ? fmt::format("{},{},{}", r.tets, r.coordinates, r.cubature_tets)
                                                 : (r.tets > 0 ? fmt::format("{},,", r.tets) : std::string(",,"));
-    text += fmt::format("{},{},{},{},{},{},{},{},{},{}\n", csv_field(r.mesh), csv_field(r.subject), csv_field(r.motion),
-                        r.ok ? "ok" : "failed", csv_field(one_line(r.error)), r.frames, measured, r.failed_attempts, r.factorizations,
-                        sizes);
+    text += fmt::format("{},{},{},{},{},{},{},{}\n", csv_field(r.mesh), csv_field(r.subject), csv_field(r.motion), r.ok ? "ok" : "failed",
+                        csv_field(one_line(r.error)), r.frames, measured, sizes);
   }
   write_text_atomically(path, text);
 }
