@@ -2,19 +2,7 @@
 // `sflsh simulate --solver … --no-output` would (run_body_simulation), its error is caught and recorded, and the
 // report (sweep.csv, sweep.md, summary.json) is written whether or not cases failed; the exit code says whether
 // any did.
-#include "commands.hpp"
-#include "simulate_run.hpp"
-#include "sweep_report.hpp"
-
-#include <sflsh/body/motion.hpp>
-#include <sflsh/body/subjects.hpp>
-#include <sflsh/core/error.hpp>
-#include <sflsh/core/log.hpp>
-#include <sflsh/core/run_folder.hpp>
-#include <sflsh/core/summary.hpp>
-
 #include <fmt/format.h>
-#include <nlohmann/json.hpp>
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
@@ -22,8 +10,19 @@
 #include <atomic>
 #include <cmath>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <optional>
+#include <sflsh/body/motion.hpp>
+#include <sflsh/body/subjects.hpp>
+#include <sflsh/core/error.hpp>
+#include <sflsh/core/log.hpp>
+#include <sflsh/core/run_folder.hpp>
+#include <sflsh/core/summary.hpp>
 #include <sstream>
+
+#include "commands.hpp"
+#include "simulate_run.hpp"
+#include "sweep_report.hpp"
 
 namespace sflsh::app {
 
@@ -33,7 +32,7 @@ constexpr const char* kDefaultSubjects = "table1,OPEN_TRAIN_1,OPEN_TEST_3";
 constexpr const char* kDefaultMotions = "one_leg_jump,running_on_spot,shake_hips,jiggle_on_toes,shake_shoulders,dance";
 
 struct SweepOptions {
-  BodyRunSettings base;                 ///< solver, frames, fps, integrator, layer, reduced model (subject, motion, mesh per case)
+  BodyRunSettings base;  ///< solver, frames, fps, integrator, layer, reduced model (subject, motion, mesh per case)
   std::string meshes = "coarse";
   std::string subjects = kDefaultSubjects;
   std::string motions = kDefaultMotions;
@@ -63,16 +62,18 @@ std::vector<std::string> expand_subjects(const std::string& text) {
   for (const std::string& item : split_list(text)) {
     if (item == "table1" || item == "open" || item == "all") {
       for (const body::Subject& s : known)
-        if (item == "all" || (item == "table1" && s.body == "smpl") || (item == "open" && s.body == "open")) add_unique(names, s.name);
+        if (item == "all" || (item == "table1" && s.body == "smpl") || (item == "open" && s.body == "open"))
+          add_unique(names, s.name);
     } else {
-      add_unique(names, body::find_subject(known, item).name);   // throws, listing the known names
+      add_unique(names, body::find_subject(known, item).name);  // throws, listing the known names
     }
   }
   require(!names.empty(), "--subjects {}: no subject (expected names, table1, open or all)", text);
   return names;
 }
 
-/// Motion names of --motions: procedural or showcase names, AMASS paths, or `all` (every procedural and showcase motion).
+/// Motion names of --motions: procedural or showcase names, AMASS paths, or `all` (every procedural and showcase
+/// motion).
 std::vector<std::string> expand_motions(const std::string& text, double fps) {
   std::vector<std::string> names;
   for (const std::string& item : split_list(text)) {
@@ -80,7 +81,7 @@ std::vector<std::string> expand_motions(const std::string& text, double fps) {
       for (const std::string& m : body::procedural_motion_names()) add_unique(names, m);
       for (const std::string& m : body::showcase_motion_names()) add_unique(names, m);
     } else {
-      (void)body::load_motion(item, fps, 2);   // an unknown name or unreadable file fails here, before any run
+      (void)body::load_motion(item, fps, 2);  // an unknown name or unreadable file fails here, before any run
       add_unique(names, item);
     }
   }
@@ -91,7 +92,8 @@ std::vector<std::string> expand_motions(const std::string& text, double fps) {
 std::vector<std::string> expand_meshes(const std::string& text) {
   std::vector<std::string> meshes;
   for (const std::string& item : split_list(text)) {
-    require(item == "coarse" || item == "default" || item == "fine", "--mesh {}: '{}' is not coarse, default or fine", text, item);
+    require(item == "coarse" || item == "default" || item == "fine", "--mesh {}: '{}' is not coarse, default or fine",
+            text, item);
     add_unique(meshes, item);
   }
   require(!meshes.empty(), "--mesh {}: no mesh (expected coarse, default and/or fine)", text);
@@ -109,7 +111,7 @@ void run_case(const SweepOptions& opt, sweep::SweepRun& run) {
   reporting.log_details = false;
   reporting.on_frame = [&run](int frame) { run.frames = frame + 1; };
   reporting.on_setup = [&run](const nlohmann::json& setup) {
-    run.frames = 1;   // the rest state
+    run.frames = 1;  // the rest state
     run.tets = setup["tets"].get<int>();
     run.coordinates = setup["coordinates"].get<int>();
     run.cubature_tets = setup["cubature"].get<int>();
@@ -146,7 +148,8 @@ void run_sweep(const SweepOptions& opt, const Invocation& invocation, int size) 
   require(size == 1, "sweep runs on one process (got {}); use --threads for parallel cases", size);
   require(opt.base.frames >= 2, "--frames must be at least 2, got {}", opt.base.frames);
   require(opt.threads >= 0, "--threads must be non-negative, got {}", opt.threads);
-  require(opt.base.solver == "full" || opt.base.solver == "reduced", "--solver {}: expected full or reduced", opt.base.solver);
+  require(opt.base.solver == "full" || opt.base.solver == "reduced", "--solver {}: expected full or reduced",
+          opt.base.solver);
   check_layer_settings(opt.base.layer);
   const std::vector<std::string> meshes = expand_meshes(opt.meshes);
   const std::vector<std::string> subjects = expand_subjects(opt.subjects);
@@ -163,11 +166,13 @@ void run_sweep(const SweepOptions& opt, const Invocation& invocation, int size) 
         r.frames_requested = opt.base.frames;
         runs.push_back(r);
       }
-  const int threads = opt.base.solver == "full" ? 1 : (opt.threads > 0 ? opt.threads : tbb::this_task_arena::max_concurrency());
-  RunFolder run_folder(opt.out);   // the staging folder: the report appears at once when every case has ended
-  logger()->info("sweep: {} run(s) ({} mesh(es) × {} subject(s) × {} motion(s)), {} frames, --solver {}, {}", runs.size(), meshes.size(),
-                 subjects.size(), motions.size(), opt.base.frames, opt.base.solver,
-                 opt.base.solver == "full" ? std::string("one at a time (PETSc)") : fmt::format("{} thread(s)", threads));
+  const int threads =
+      opt.base.solver == "full" ? 1 : (opt.threads > 0 ? opt.threads : tbb::this_task_arena::max_concurrency());
+  RunFolder run_folder(opt.out);  // the staging folder: the report appears at once when every case has ended
+  logger()->info(
+      "sweep: {} run(s) ({} mesh(es) × {} subject(s) × {} motion(s)), {} frames, --solver {}, {}", runs.size(),
+      meshes.size(), subjects.size(), motions.size(), opt.base.frames, opt.base.solver,
+      opt.base.solver == "full" ? std::string("one at a time (PETSc)") : fmt::format("{} thread(s)", threads));
 
   // One info line per run (failures too: the report lists them, and with -q only the final line remains).
   std::atomic<int> done{0};
@@ -176,14 +181,16 @@ void run_sweep(const SweepOptions& opt, const Invocation& invocation, int size) 
     run_case(opt, r);
     const int k = ++done;
     if (r.ok)
-      logger()->info("sweep [{}/{}] {} {} {}: ok, mean σ {:.2f} mm, {:.2f} Newton/frame, {:.1f} s", k, runs.size(), r.mesh, r.subject,
-                     r.motion, r.sigma_mm, r.newton_per_frame, r.seconds);
+      logger()->info("sweep [{}/{}] {} {} {}: ok, mean σ {:.2f} mm, {:.2f} Newton/frame, {:.1f} s", k, runs.size(),
+                     r.mesh, r.subject, r.motion, r.sigma_mm, r.newton_per_frame, r.seconds);
     else
-      logger()->info("sweep [{}/{}] {} {} {}: FAILED after {} frames: {}", k, runs.size(), r.mesh, r.subject, r.motion, r.frames, r.error);
+      logger()->info("sweep [{}/{}] {} {} {}: FAILED after {} frames: {}", k, runs.size(), r.mesh, r.subject, r.motion,
+                     r.frames, r.error);
   };
   {
     std::optional<tbb::global_control> parallelism;
-    if (opt.threads > 0) parallelism.emplace(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(opt.threads));
+    if (opt.threads > 0)
+      parallelism.emplace(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(opt.threads));
     const std::size_t per_mesh = subjects.size() * motions.size();
     for (std::size_t m = 0; m < meshes.size(); ++m) {
       const std::size_t first = m * per_mesh;
@@ -191,9 +198,11 @@ void run_sweep(const SweepOptions& opt, const Invocation& invocation, int size) 
       // other case of that mesh then reads from the cache.
       run_one(first);
       if (opt.base.solver == "full") {
-        for (std::size_t i = first + 1; i < first + per_mesh; ++i) run_one(i);   // PETSc objects are not shared across threads
+        for (std::size_t i = first + 1; i < first + per_mesh; ++i)
+          run_one(i);  // PETSc objects are not shared across threads
       } else {
-        tbb::parallel_for(first + 1, first + per_mesh, [&](std::size_t i) { run_one(i); }, tbb::simple_partitioner());
+        tbb::parallel_for(
+            first + 1, first + per_mesh, [&](std::size_t i) { run_one(i); }, tbb::simple_partitioner());
       }
     }
   }
@@ -201,30 +210,36 @@ void run_sweep(const SweepOptions& opt, const Invocation& invocation, int size) 
 
   const nlohmann::json counts = sweep::counts_per_mesh(runs);
   const nlohmann::json failures = sweep::failures_json(runs);
-  const std::string reduced_text =
-      opt.base.solver == "reduced"
-          ? fmt::format(" --handles {} --cubature {}{}", opt.base.handles, opt.base.cubature, opt.base.affine ? " --affine" : "")
-          : std::string();
+  const std::string reduced_text = opt.base.solver == "reduced"
+                                       ? fmt::format(" --handles {} --cubature {}{}", opt.base.handles,
+                                                     opt.base.cubature, opt.base.affine ? " --affine" : "")
+                                       : std::string();
   sweep::write_sweep_csv(run_folder.stage("sweep.csv"), runs);
   sweep::write_sweep_markdown(
-      run_folder.stage("sweep.md"), fmt::format("Sweep: --solver {}, {} frames at {:g} fps", opt.base.solver, opt.base.frames, opt.base.fps),
-      {fmt::format("each run is `sflsh simulate --solver {} --mesh M --subject S --motion X --frames {} --integrator {} --mass {}{} "
+      run_folder.stage("sweep.md"),
+      fmt::format("Sweep: --solver {}, {} frames at {:g} fps", opt.base.solver, opt.base.frames, opt.base.fps),
+      {fmt::format("each run is `sflsh simulate --solver {} --mesh M --subject S --motion X --frames {} --integrator "
+                   "{} --mass {}{} "
                    "--no-output`",
                    opt.base.solver, opt.base.frames, opt.base.integrator, opt.base.layer.mass, reduced_text),
-       fmt::format("{} run(s), {} failed; wall time {:.1f} s on {} thread(s)", runs.size(), failures.size(), wall_seconds, threads),
-       "σ: dynamics amplitude per region vertex (docs/physics.md §4); frames: output frames computed, the rest state included; "
+       fmt::format("{} run(s), {} failed; wall time {:.1f} s on {} thread(s)", runs.size(), failures.size(),
+                   wall_seconds, threads),
+       "σ: dynamics amplitude per region vertex (docs/physics.md §4); frames: output frames computed, the rest state "
+       "included; "
        "retried attempts: substep attempts rejected and repeated (PSD projection, then splitting)"},
       runs);
 
   nlohmann::json summary = summary_header("sweep", invocation.argc, invocation.argv);
-  summary["sweep"] = {{"solver", opt.base.solver},         {"meshes", meshes},
-                      {"subjects", subjects},              {"motions", motions},
-                      {"frames", opt.base.frames},         {"fps", opt.base.fps},
-                      {"substeps", opt.base.substeps},     {"integrator", opt.base.integrator},
-                      {"mass", opt.base.layer.mass},       {"threads", threads}};
+  summary["sweep"] = {{"solver", opt.base.solver},     {"meshes", meshes},
+                      {"subjects", subjects},          {"motions", motions},
+                      {"frames", opt.base.frames},     {"fps", opt.base.fps},
+                      {"substeps", opt.base.substeps}, {"integrator", opt.base.integrator},
+                      {"mass", opt.base.layer.mass},   {"threads", threads}};
   if (opt.base.solver == "reduced")
-    summary["sweep"]["reduced"] = {{"handles", opt.base.handles}, {"cubature", opt.base.cubature},
-                                   {"cubature_weights", opt.base.cubature_weights}, {"affine", opt.base.affine}};
+    summary["sweep"]["reduced"] = {{"handles", opt.base.handles},
+                                   {"cubature", opt.base.cubature},
+                                   {"cubature_weights", opt.base.cubature_weights},
+                                   {"affine", opt.base.affine}};
   summary["material"] = material_summary(opt.base.layer, load_layer_material(opt.base.layer));
   summary["counts"] = counts;
   summary["runs"] = runs.size();
@@ -238,7 +253,8 @@ void run_sweep(const SweepOptions& opt, const Invocation& invocation, int size) 
 
   std::string where;
   for (const auto& [mesh, c] : counts.items())
-    where += fmt::format("{}{} {}/{}", where.empty() ? "" : ", ", mesh, c["failures"].get<long>(), c["runs"].get<long>());
+    where +=
+        fmt::format("{}{} {}/{}", where.empty() ? "" : ", ", mesh, c["failures"].get<long>(), c["runs"].get<long>());
   if (!failures.empty())
     throw_error("sweep: {} of {} runs failed ({}); see {}", failures.size(), runs.size(), where,
                 (run_folder.dir() / "sweep.md").string());
@@ -251,33 +267,37 @@ void register_sweep_commands(CLI::App& app, const Invocation& invocation) {
   auto opt = std::make_shared<SweepOptions>();
   opt->base.solver = "reduced";
   opt->base.frames = 120;
-  auto* cmd = app.add_subcommand(
-      "sweep",
-      "Robustness sweep: run every subject × motion × mesh as `sflsh simulate … --no-output` would (in-process, in parallel "
-      "with --threads) and report each run's status, error, σ, Newton iterations and time (sweep.csv, sweep.md, summary.json). "
-      "The report is written even when runs fail; the exit code is then 1, with one line saying how many failed and where the "
-      "table is.");
+  auto* cmd = app.add_subcommand("sweep",
+                                 "Robustness sweep: run every subject × motion × mesh as `sflsh simulate … "
+                                 "--no-output` would (in-process, in parallel "
+                                 "with --threads) and report each run's status, error, σ, Newton iterations and time "
+                                 "(sweep.csv, sweep.md, summary.json). "
+                                 "The report is written even when runs fail; the exit code is then 1, with one line "
+                                 "saying how many failed and where the "
+                                 "table is.");
   cmd->add_option("--solver", opt->base.solver, "full | reduced (full-space runs go one at a time)")
       ->capture_default_str()
       ->check(CLI::IsMember({"full", "reduced"}));
-  cmd->add_option("--mesh", opt->meshes, "Layer resolutions, comma-separated: coarse, default, fine")->capture_default_str();
+  cmd->add_option("--mesh", opt->meshes, "Layer resolutions, comma-separated: coarse, default, fine")
+      ->capture_default_str();
   cmd->add_option("--subjects", opt->subjects,
                   "Subjects, comma-separated: names, table1 (DYNA_1–5, TEST_1–5), open (every OPEN_*), all")
       ->capture_default_str();
-  cmd->add_option("--motions", opt->motions, "Motions, comma-separated: procedural names, AMASS .npz paths, or all")->capture_default_str();
+  cmd->add_option("--motions", opt->motions, "Motions, comma-separated: procedural names, AMASS .npz paths, or all")
+      ->capture_default_str();
   cmd->add_option("--frames", opt->base.frames, "Frames per run (the rest state included)")->capture_default_str();
   cmd->add_option("--fps", opt->base.fps, "Frame rate (and motion sampling)")->capture_default_str();
   cmd->add_option("--substeps", opt->base.substeps, "Integrator steps per frame")->capture_default_str();
-  cmd->add_option("--threads", opt->threads, "Runs in parallel (TBB; 0: all cores; full-space runs always go one at a time)")
+  cmd->add_option("--threads", opt->threads,
+                  "Runs in parallel (TBB; 0: all cores; full-space runs always go one at a time)")
       ->capture_default_str();
   add_reduced_run_options(*cmd, opt->base);
   add_integrator_option(*cmd, opt->base.integrator);
   add_layer_options(*cmd, opt->base.layer);
   add_mass_option(*cmd, opt->base.layer);
   cmd->add_option("--out", opt->out, "Output folder (sweep.csv, sweep.md, summary.json)")->required();
-  cmd->callback([opt, invocation] {
-    with_petsc(invocation, [&](int, int size) { run_sweep(*opt, invocation, size); });
-  });
+  cmd->callback(
+      [opt, invocation] { with_petsc(invocation, [&](int, int size) { run_sweep(*opt, invocation, size); }); });
 }
 
 }  // namespace sflsh::app

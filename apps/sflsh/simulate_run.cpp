@@ -1,5 +1,9 @@
 #include "simulate_run.hpp"
 
+#include <fmt/format.h>
+
+#include <memory>
+#include <optional>
 #include <sflsh/body/motion.hpp>
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
@@ -13,16 +17,12 @@
 #include <sflsh/reduced/reduced_model.hpp>
 #include <sflsh/reduced/reduced_solver.hpp>
 
-#include <fmt/format.h>
-
-#include <memory>
-#include <optional>
-
 namespace sflsh::app {
 
 void add_reduced_run_options(CLI::App& cmd, BodyRunSettings& s) {
   cmd.add_option("--handles", s.handles, "Reduced: point handles inside the layer (plus the 24 bone handles)");
-  cmd.add_option("--cubature", s.cubature, "Reduced: cubature tets K (default −1 = auto: max(200, 0.8 × coordinates); 0 = every tet, exact)");
+  cmd.add_option("--cubature", s.cubature,
+                 "Reduced: cubature tets K (default −1 = auto: max(200, 0.8 × coordinates); 0 = every tet, exact)");
   cmd.add_option("--cubature-weights", s.cubature_weights, "Reduced: nnls (training-free force matching) | voronoi")
       ->check(CLI::IsMember({"nnls", "voronoi"}));
   cmd.add_flag("--affine", s.affine, "Reduced: affine point handles (12 coordinates each instead of 3)");
@@ -59,14 +59,16 @@ nlohmann::json run_body_simulation(const BodyRunSettings& opt, RunFolder* frames
                                                    opt.layer.control_points, layer_options);
   const double build_seconds = seconds_since(t_build);
   const model::Problem& problem = layer.problem;
-  logger()->log(reporting.log_details ? spdlog::level::info : spdlog::level::debug,
-                "simulate: {} nodes ({} free), {} tets, {} frames at {} fps, {} substep(s), {} + {} mass, {} process(es)",
-                problem.num_nodes(), problem.num_nodes() - static_cast<int>(problem.dirichlet.dof.size() / 3), problem.num_tets(),
-                motion.num_frames(), motion.fps, opt.substeps, model::to_string(integrator), model::to_string(problem.mass_kind),
-                size);
+  logger()->log(
+      reporting.log_details ? spdlog::level::info : spdlog::level::debug,
+      "simulate: {} nodes ({} free), {} tets, {} frames at {} fps, {} substep(s), {} + {} mass, {} process(es)",
+      problem.num_nodes(), problem.num_nodes() - static_cast<int>(problem.dirichlet.dof.size() / 3), problem.num_tets(),
+      motion.num_frames(), motion.fps, opt.substeps, model::to_string(integrator), model::to_string(problem.mass_kind),
+      size);
 
   const bool use_reduced = opt.solver == "reduced";
-  require(!use_reduced || size == 1, "--solver reduced runs on one process (got {}); parallelize over bodies instead", size);
+  require(!use_reduced || size == 1, "--solver reduced runs on one process (got {}); parallelize over bodies instead",
+          size);
   std::optional<reduced::ReducedModel> reduced_model;
   std::unique_ptr<fullspace::FullSpaceSolver> full;
   std::unique_ptr<reduced::ReducedSolver> fast;
@@ -75,10 +77,12 @@ nlohmann::json run_body_simulation(const BodyRunSettings& opt, RunFolder* frames
     ReducedSettings reduced_settings;
     reduced_settings.cubature_weights = opt.cubature_weights;
     reduced_settings.affine = opt.affine;
-    reduced_model = reduced::build_reduced_model(layer, reduced_model_options(reduced_settings, opt.handles, opt.cubature, opt.layer.cache));
+    reduced_model = reduced::build_reduced_model(
+        layer, reduced_model_options(reduced_settings, opt.handles, opt.cubature, opt.layer.cache));
     reduced::ReducedOptions solver_options;
     solver_options.integrator = integrator;
-    fast = std::make_unique<reduced::ReducedSolver>(problem, reduced_model->subspace, reduced_model->cubature, solver_options);
+    fast = std::make_unique<reduced::ReducedSolver>(problem, reduced_model->subspace, reduced_model->cubature,
+                                                    solver_options);
     fast->initialize(model::initial_state(problem, 0.0));
   } else {
     fullspace::FullSpaceOptions solver_options;
@@ -142,9 +146,13 @@ nlohmann::json run_body_simulation(const BodyRunSettings& opt, RunFolder* frames
   summary["body"] = opt.subject.body_path.empty() ? "open_body" : opt.subject.body_path;
   summary["subject"] = subject_label;
   summary["beta"] = std::vector<double>(beta.data(), beta.data() + beta.size());
-  summary["motion"] = {{"name", motion.name}, {"source", motion.source}, {"fps", motion.fps}, {"frames", motion.num_frames()}};
-  summary["mesh"] = {{"mesher", opt.layer.mesher}, {"size", opt.mesh}, {"nodes", problem.num_nodes()},
-                     {"tets", problem.num_tets()}, {"constrained_dofs", problem.dirichlet.dof.size()}};
+  summary["motion"] = {
+      {"name", motion.name}, {"source", motion.source}, {"fps", motion.fps}, {"frames", motion.num_frames()}};
+  summary["mesh"] = {{"mesher", opt.layer.mesher},
+                     {"size", opt.mesh},
+                     {"nodes", problem.num_nodes()},
+                     {"tets", problem.num_tets()},
+                     {"constrained_dofs", problem.dirichlet.dof.size()}};
   summary["material"] = material_summary(opt.layer, material_file);
   if (reduced_model) {
     summary["reduced"] = {{"point_handles", reduced_model->handles.point_nodes.size()},

@@ -1,10 +1,9 @@
 #include "sweep_report.hpp"
 
-#include <sflsh/core/atomic_file.hpp>
-
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <sflsh/core/atomic_file.hpp>
 
 namespace sflsh::app::sweep {
 
@@ -46,13 +45,13 @@ void write_sweep_csv(const std::filesystem::path& path, const std::vector<SweepR
   for (const SweepRun& r : runs) {
     // A failed run has no σ, iteration counts or solve time: those cells stay empty (its wall time is known).
     const std::string measured =
-        r.ok ? fmt::format("{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{},{}", r.sigma_mm, r.newton_per_frame, r.seconds, r.fps,
-                           r.sigma_max_mm, r.solve_seconds, r.failed_attempts, r.factorizations)
+        r.ok ? fmt::format("{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{},{}", r.sigma_mm, r.newton_per_frame, r.seconds,
+                           r.fps, r.sigma_max_mm, r.solve_seconds, r.failed_attempts, r.factorizations)
              : fmt::format(",,{:.6g},,,,,", r.seconds);
     const std::string sizes = r.coordinates > 0 ? fmt::format("{},{},{}", r.tets, r.coordinates, r.cubature_tets)
                                                 : (r.tets > 0 ? fmt::format("{},,", r.tets) : std::string(",,"));
-    text += fmt::format("{},{},{},{},{},{},{},{}\n", csv_field(r.mesh), csv_field(r.subject), csv_field(r.motion), r.ok ? "ok" : "failed",
-                        csv_field(one_line(r.error)), r.frames, measured, sizes);
+    text += fmt::format("{},{},{},{},{},{},{},{}\n", csv_field(r.mesh), csv_field(r.subject), csv_field(r.motion),
+                        r.ok ? "ok" : "failed", csv_field(one_line(r.error)), r.frames, measured, sizes);
   }
   write_text_atomically(path, text);
 }
@@ -71,29 +70,36 @@ nlohmann::json failures_json(const std::vector<SweepRun>& runs) {
   nlohmann::json failures = nlohmann::json::array();
   for (const SweepRun& r : runs)
     if (!r.ok)
-      failures.push_back({{"mesh", r.mesh}, {"subject", r.subject}, {"motion", r.motion}, {"frames", r.frames}, {"error", one_line(r.error)}});
+      failures.push_back({{"mesh", r.mesh},
+                          {"subject", r.subject},
+                          {"motion", r.motion},
+                          {"frames", r.frames},
+                          {"error", one_line(r.error)}});
   return failures;
 }
 
-void write_sweep_markdown(const std::filesystem::path& path, const std::string& title, const std::vector<std::string>& context,
-                          const std::vector<SweepRun>& runs) {
+void write_sweep_markdown(const std::filesystem::path& path, const std::string& title,
+                          const std::vector<std::string>& context, const std::vector<SweepRun>& runs) {
   std::string text = fmt::format("# {}\n\n", title);
   for (const std::string& line : context) text += fmt::format("- {}\n", line);
   text += "\n| mesh | runs | ok | failed |\n|---|---:|---:|---:|\n";
   const nlohmann::json counts = counts_per_mesh(runs);
   for (const auto& [mesh, c] : counts.items())
-    text += fmt::format("| {} | {} | {} | {} |\n", mesh, c["runs"].get<long>(), c["ok"].get<long>(), c["failures"].get<long>());
+    text += fmt::format("| {} | {} | {} | {} |\n", mesh, c["runs"].get<long>(), c["ok"].get<long>(),
+                        c["failures"].get<long>());
 
-  text += "\n| mesh | subject | motion | status | frames | mean σ [mm] | max σ [mm] | Newton/frame | retried attempts | "
-          "cubature tets | run [s] | frames/s |\n|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+  text +=
+      "\n| mesh | subject | motion | status | frames | mean σ [mm] | max σ [mm] | Newton/frame | retried attempts | "
+      "cubature tets | run [s] | frames/s |\n|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
   for (const SweepRun& r : runs) {
     const std::string cubature = r.cubature_tets > 0 ? fmt::format("{}", r.cubature_tets) : std::string("–");
     if (r.ok)
-      text += fmt::format("| {} | {} | {} | ok | {} | {:.3f} | {:.3f} | {:.2f} | {} | {} | {:.2f} | {:.1f} |\n", r.mesh, r.subject, r.motion,
-                          r.frames, r.sigma_mm, r.sigma_max_mm, r.newton_per_frame, r.failed_attempts, cubature, r.seconds, r.fps);
+      text += fmt::format("| {} | {} | {} | ok | {} | {:.3f} | {:.3f} | {:.2f} | {} | {} | {:.2f} | {:.1f} |\n", r.mesh,
+                          r.subject, r.motion, r.frames, r.sigma_mm, r.sigma_max_mm, r.newton_per_frame,
+                          r.failed_attempts, cubature, r.seconds, r.fps);
     else
-      text += fmt::format("| {} | {} | {} | **failed** | {} of {} | – | – | – | – | {} | {:.2f} | – |\n", r.mesh, r.subject, r.motion,
-                          r.frames, r.frames_requested, cubature, r.seconds);
+      text += fmt::format("| {} | {} | {} | **failed** | {} of {} | – | – | – | – | {} | {:.2f} | – |\n", r.mesh,
+                          r.subject, r.motion, r.frames, r.frames_requested, cubature, r.seconds);
   }
   const nlohmann::json failures = failures_json(runs);
   if (failures.empty()) {
@@ -101,8 +107,9 @@ void write_sweep_markdown(const std::filesystem::path& path, const std::string& 
   } else {
     text += fmt::format("\n## Failures ({})\n\n", failures.size());
     for (const auto& f : failures)
-      text += fmt::format("- {} · {} · {} (after {} frames): {}\n", f["mesh"].get<std::string>(), f["subject"].get<std::string>(),
-                          f["motion"].get<std::string>(), f["frames"].get<int>(), md_cell(f["error"].get<std::string>()));
+      text += fmt::format("- {} · {} · {} (after {} frames): {}\n", f["mesh"].get<std::string>(),
+                          f["subject"].get<std::string>(), f["motion"].get<std::string>(), f["frames"].get<int>(),
+                          md_cell(f["error"].get<std::string>()));
   }
   write_text_atomically(path, text);
 }

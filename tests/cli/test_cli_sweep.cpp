@@ -1,17 +1,16 @@
 // `sflsh sweep`: a representative slice (2 subjects × 2 motions × 40 frames on the coarse layer) runs without a
 // failure and writes the report with its exact columns; a failing case is reported in the table and the exit code
 // while the report is still written; bad lists fail at once with one line and write nothing.
-#include "run_command.hpp"
-#include "scratch_dir.hpp"
-
-#include <sflsh/core/summary.hpp>
-
 #include <fmt/format.h>
 #include <gmock/gmock.h>
 
 #include <cmath>
 #include <fstream>
+#include <sflsh/core/summary.hpp>
 #include <sstream>
+
+#include "run_command.hpp"
+#include "scratch_dir.hpp"
 
 using sflsh::read_json;
 using sflsh::testing::count_entries;
@@ -73,10 +72,11 @@ void expect_report(const fs::path& out) {
 TEST(CliSweep, ARepresentativeSliceRunsWithoutFailures) {
   const fs::path dir = sflsh::testing::scratch_dir();
   const fs::path out = dir / "sweep";
-  const auto result = run_sflsh(fmt::format("-q sweep --mesh coarse --subjects DYNA_1,OPEN_TEST_3 --motions shake_hips,dance "
-                                            "--frames 40 --threads 2 --cache {} --out {}",
-                                            SFLSH_TEST_CACHE, out.string()),
-                                dir);
+  const auto result =
+      run_sflsh(fmt::format("-q sweep --mesh coarse --subjects DYNA_1,OPEN_TEST_3 --motions shake_hips,dance "
+                            "--frames 40 --threads 2 --cache {} --out {}",
+                            SFLSH_TEST_CACHE, out.string()),
+                dir);
   ASSERT_EQ(result.exit_code, 0) << result.err;
   expect_report(out);
 
@@ -99,11 +99,11 @@ TEST(CliSweep, ARepresentativeSliceRunsWithoutFailures) {
       EXPECT_TRUE(std::isfinite(v)) << lines[i];
       EXPECT_GT(v, 0.0) << lines[i];
     }
-    EXPECT_LT(std::stod(c[6]), 50.0) << lines[i];   // mean σ in mm: the tissue moves and stays on the body
+    EXPECT_LT(std::stod(c[6]), 50.0) << lines[i];  // mean σ in mm: the tissue moves and stays on the body
     EXPECT_GE(std::stod(c[10]), std::stod(c[6])) << lines[i];
     EXPECT_GE(std::stoi(c[12]), 0);
     EXPECT_GT(std::stoi(c[14]), 0);
-    EXPECT_EQ(std::stoi(c[15]), 3 * 86);   // 86 translational point handles
+    EXPECT_EQ(std::stoi(c[15]), 3 * 86);  // 86 translational point handles
     EXPECT_GE(std::stoi(c[16]), 200);     // the automatic cubature: max(200, 0.8 × coordinates)
   }
 
@@ -125,10 +125,11 @@ TEST(CliSweep, AFailedRunIsReportedAndTheExitCodeSaysSo) {
   const fs::path dir = sflsh::testing::scratch_dir();
   const fs::path out = dir / "sweep";
   // More point handles than the layer has nodes for: the run fails after its layer is built (a per-run error).
-  const auto result = run_sflsh(fmt::format("-q sweep --subjects OPEN_TEST_3 --motions shake_hips --frames 3 --handles 100000 "
-                                            "--cache {} --out {}",
-                                            SFLSH_TEST_CACHE, out.string()),
-                                dir);
+  const auto result =
+      run_sflsh(fmt::format("-q sweep --subjects OPEN_TEST_3 --motions shake_hips --frames 3 --handles 100000 "
+                            "--cache {} --out {}",
+                            SFLSH_TEST_CACHE, out.string()),
+                dir);
   EXPECT_NE(result.exit_code, 0);
   EXPECT_THAT(result.err, HasSubstr("sweep: 1 of 1 runs failed (coarse 1/1); see " + (out / "sweep.md").string()));
   EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
@@ -140,7 +141,7 @@ TEST(CliSweep, AFailedRunIsReportedAndTheExitCodeSaysSo) {
   ASSERT_EQ(c.size(), 17u) << lines[1];
   EXPECT_EQ(c[3], "failed");
   EXPECT_THAT(c[4], HasSubstr("100000 point handles requested"));
-  EXPECT_EQ(c[6], "");   // no σ for a failed run
+  EXPECT_EQ(c[6], "");  // no σ for a failed run
   const nlohmann::json summary = read_json(out / "summary.json");
   EXPECT_EQ(summary["failures"].get<int>(), 1);
   EXPECT_EQ(summary["counts"]["coarse"]["failures"].get<int>(), 1);
@@ -166,7 +167,8 @@ TEST(CliSweep, BadListsGiveOneLineAndWriteNothing) {
       {"--frames 1", "--frames must be at least 2"},
   };
   for (const Case& c : cases) {
-    const auto result = run_sflsh(fmt::format("-q sweep {} --cache {} --out {}", c.args, SFLSH_TEST_CACHE, out.string()), dir);
+    const auto result =
+        run_sflsh(fmt::format("-q sweep {} --cache {} --out {}", c.args, SFLSH_TEST_CACHE, out.string()), dir);
     EXPECT_NE(result.exit_code, 0) << c.args;
     EXPECT_THAT(result.err, HasSubstr(c.message)) << c.args;
     EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
