@@ -85,10 +85,19 @@ struct Configuration {
   long newton = 0, retries = 0;
   Eigen::VectorXd sigma;                    ///< per region vertex [m]
   Eigen::VectorXd error_sq;                 ///< Σ_t |u − u_full|² per region vertex [m²]
+  double trajectory_sq = 0.0;               ///< Σ over frames 1..F and region vertices of |p − p_full|² [m²]
+  double trajectory_max = 0.0;              ///< max over frames 1..F and region vertices of |p − p_full| [m]
   std::string invalid;                      ///< when and why the full-space state left the material's range
 };
 
 double per_frame(double total, int steps) { return steps > 0 ? total / steps : 0.0; }
+
+/// Pearson correlation of two vectors (NaN when either is constant).
+double correlation(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+  const Eigen::ArrayXd da = a.array() - a.mean(), db = b.array() - b.mean();
+  const double norm = std::sqrt((da * da).sum() * (db * db).sum());
+  return norm > 0.0 ? (da * db).sum() / norm : std::nan("");
+}
 
 void run_compare(const CompareOptions& opt, const Invocation& invocation, int rank, int size) {
   const auto t_start = Clock::now();
@@ -140,9 +149,17 @@ void run_compare(const CompareOptions& opt, const Invocation& invocation, int ra
                  problem.num_nodes(), problem.num_tets(), R, motion.num_frames(), motion.fps, size,
                  handle_sweep.size() * cubature_sweep.size());
 
-  // The full-space reference: its skin displacement per frame is kept for the error maps.
-  std::vector<model::RowMatrixX3d> u_full;
+  // The full-space reference: its skin displacement per frame is kept for the error maps, its posed region surface
+  // for the trajectory error.
+  std::vector<model::RowMatrixX3d> u_full, posed_full;
   u_full.reserve(motion.num_frames());
+  posed_full.reserve(motion.num_frames());
+  auto posed_region = [&](const model::RowMatrixX3d& u, double t) {
+    const model::RowMatrixX3d all = layer.posed_surface_from_displacement(u, t);
+    model::RowMatrixX3d rows(R, 3);
+    for (Eigen::Index r = 0; r < R; ++r) rows.row(r) = all.row(region[static_cast<std::size_t>(r)]);
+    return rows;
+  };
   const model::RowMatrixX3d normals = region_normals(layer);
   model::DynamicsAmplitude full_amplitude(normals);
   double full_seconds = 0.0;
@@ -168,6 +185,7 @@ void run_compare(const CompareOptions& opt, const Invocation& invocation, int ra
     full_retries = total.failed_attempts;
   }
   for (const auto& u : u_full) full_amplitude.add(u);
+  for (std::size_t f = 0; f < u_full.size(); ++f) posed_full.push_back(posed_region(u_full[f], motion.time(f)));
   const Eigen::VectorXd sigma_full = full_amplitude.sigma();
   double full_sq = 0.0;
   for (const auto& u : u_full) full_sq += u.squaredNorm();
@@ -193,6 +211,11 @@ void run_compare(const CompareOptions& opt, const Invocation& invocation, int ra
       require(u.allFinite(), "compare: reduced {} state at t = {} is not finite", name, motion.time(f));
       amplitude.add(u);
       c.error_sq += (u - u_full[f]).rowwise().squaredNorm();
+      if (f > 0) {
+        const Eigen::VectorXd d2 = (posed_region(u, motion.time(f)) - posed_full[f]).rowwise().squaredNorm();
+        c.trajectory_sq += d2.sum();
+        c.trajectory_max = std::max(c.trajectory_max, std::sqrt(d2.maxCoeff()));
+      }
       if (c.invalid.empty()) {
         try {
           (void)model::energies(problem, state);
@@ -229,6 +252,7 @@ void run_compare(const CompareOptions& opt, const Invocation& invocation, int ra
   full_row.frames_per_second = full_seconds > 0 ? steps / full_seconds : 0.0;
   full_row.sigma_mean_mm = 1e3 * sigma_full.mean();
   full_row.recovered_fraction = 1.0;
+  full_row.sigma_correlation = 1.0;
   rows.push_back(full_row);
   auto scatter = [&](const Eigen::VectorXd& region_values) {
     Eigen::MatrixXd out = Eigen::MatrixXd::Zero(layer.shaped.rows(), 1);
@@ -254,6 +278,9 @@ void run_compare(const CompareOptions& opt, const Invocation& invocation, int ra
     row.rms_error_mm = 1e3 * std::sqrt(c.error_sq.sum() / samples);
     row.relative_rms_error = full_rms > 0 ? std::sqrt(c.error_sq.sum() / samples) / full_rms : std::nan("");
     row.valid = c.invalid.empty();
+    row.sigma_correlation = correlation(c.sigma, sigma_full);
+    row.trajectory_rms_mm = 1e3 * std::sqrt(c.trajectory_sq / (static_cast<double>(R) * static_cast<double>(steps)));
+    row.trajectory_max_mm = 1e3 * c.trajectory_max;
     rows.push_back(row);
     const std::string suffix = compare::config_suffix(row.handles, row.cubature);
     const Eigen::VectorXd rms_vertex = (c.error_sq / static_cast<double>(u_full.size())).cwiseSqrt();
@@ -284,6 +311,9 @@ void run_compare(const CompareOptions& opt, const Invocation& invocation, int ra
                             {"rms_error_mm", row.rms_error_mm},
                             {"max_vertex_rms_error_mm", 1e3 * rms_vertex.maxCoeff()},
                             {"relative_rms_error", row.relative_rms_error},
+                            {"sigma_correlation", row.sigma_correlation},
+                            {"trajectory_rms_mm", row.trajectory_rms_mm},
+                            {"trajectory_max_mm", row.trajectory_max_mm},
                             {"within_material_range", row.valid},
                             {"out_of_range", c.invalid.empty() ? nlohmann::json(nullptr) : nlohmann::json(c.invalid)}});
     logger()->info("reduced {} handles, {} cubature tets: {:.2f} ms per frame ({:.0f}× faster), {:.0f}% of the dynamics, relative "
@@ -304,7 +334,9 @@ void run_compare(const CompareOptions& opt, const Invocation& invocation, int ra
       {fmt::format("layer: {} nodes, {} tets, {} region vertices; step {:.4g} s", problem.num_nodes(), problem.num_tets(), R, h),
        fmt::format("full space: {} Newton and {} linear iterations on {} process(es)", full_newton, full_linear, size),
        "σ: dynamics amplitude per vertex (docs/physics.md §4), mean over the region; recovered = mean σ / mean σ of the full space",
-       "RMS error: of |u − u_full| over region vertices and frames; relative: divided by the RMS of u_full"},
+       "RMS error: of |u − u_full| over region vertices and frames; relative: divided by the RMS of u_full",
+       "σ correlation: Pearson correlation of σ and σ_full over the region's vertices; trajectory RMS / max: of |p − p_full| over "
+       "region vertices and frames 1..F, p the posed body surface that `sflsh simulate` writes"},
       rows, timings);
   std::string png = "tradeoff.png";
   try {
@@ -341,7 +373,7 @@ void run_compare(const CompareOptions& opt, const Invocation& invocation, int ra
   summary["timings"] = {{"build_seconds", build_seconds}, {"models_seconds", models_seconds}, {"total_seconds", seconds_since(t_start)}};
   summary["output"] = {{"fields", "compare.vtp"}, {"table", "tradeoff.csv"}, {"markdown", "tradeoff.md"},
                        {"plot", png.empty() ? nlohmann::json(nullptr) : nlohmann::json(png)}};
-  summary["units"] = {{"sigma", "mm"}, {"rms_error", "mm"}, {"seconds_per_frame", "s"}};
+  summary["units"] = {{"sigma", "mm"}, {"rms_error", "mm"}, {"trajectory_rms", "mm"}, {"trajectory_max", "mm"}, {"seconds_per_frame", "s"}};
   write_json(run.stage("summary.json"), summary);
   run.commit();
   logger()->info("compare: wrote {} ({} configurations, {:.1f} s)", run.dir().string(), configs.size(), seconds_since(t_start));

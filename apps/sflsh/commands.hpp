@@ -31,6 +31,8 @@ void register_verify_commands(CLI::App& app, const Invocation& invocation);
 void register_simulate_commands(CLI::App& app, const Invocation& invocation);
 /// `sflsh compare`: full space against a sweep of reduced models (cmd_compare.cpp).
 void register_compare_commands(CLI::App& app, const Invocation& invocation);
+/// `sflsh sweep`: subjects × motions × meshes through the simulate code path, failures reported (cmd_sweep.cpp).
+void register_sweep_commands(CLI::App& app, const Invocation& invocation);
 /// `sflsh tradeoff`: accuracy against time over models, meshes and steps (cmd_tradeoff.cpp).
 void register_tradeoff_commands(CLI::App& app, const Invocation& invocation);
 /// `sflsh validate`: the paper's experiments on synthetic ground truth (cmd_validate.cpp).

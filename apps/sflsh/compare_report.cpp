@@ -28,9 +28,9 @@ void write_tradeoff_csv(const std::filesystem::path& path, const std::vector<Tra
   std::string text = std::string(kTradeoffHeader) + "\n";
   for (const TradeoffRow& r : rows) {
     const std::string sizes = r.reduced ? fmt::format("{},{},{}", r.handles, r.cubature, r.coordinates) : ",,";
-    text += fmt::format("{},{},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g}\n", r.reduced ? "reduced" : "full", sizes,
+    text += fmt::format("{},{},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g}\n", r.reduced ? "reduced" : "full", sizes,
                         r.seconds_per_frame, r.frames_per_second, r.sigma_mean_mm, r.recovered_fraction, r.rms_error_mm,
-                        r.relative_rms_error);
+                        r.relative_rms_error, r.sigma_correlation, r.trajectory_rms_mm, r.trajectory_max_mm);
   }
   write_text_atomically(path, text);
 }
@@ -40,13 +40,15 @@ void write_tradeoff_markdown(const std::filesystem::path& path, const std::strin
   std::string text = fmt::format("# {}\n\n", title);
   for (const std::string& line : context) text += fmt::format("- {}\n", line);
   text += "\n| model | handles | cubature | coordinates | s/frame | frames/s | mean σ [mm] | recovered | RMS error [mm] | "
-          "relative RMS error |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+          "relative RMS error | σ correlation | trajectory RMS [mm] | trajectory max [mm] |\n"
+          "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
   for (const TradeoffRow& r : rows) {
     const std::string sizes =
         r.reduced ? fmt::format("{} | {} | {}", r.handles, r.cubature, r.coordinates) : std::string("– | – | –");
-    text += fmt::format("| {} | {} | {:.4g} | {:.4g} | {:.3f} | {:.0f}% | {:.3f} | {:.3f}{} |\n", r.reduced ? "reduced" : "full", sizes,
-                        r.seconds_per_frame, r.frames_per_second, r.sigma_mean_mm, 100.0 * r.recovered_fraction, r.rms_error_mm,
-                        r.relative_rms_error, r.valid ? "" : " (*)");
+    text += fmt::format("| {} | {} | {:.4g} | {:.4g} | {:.3f} | {:.0f}% | {:.3f} | {:.3f}{} | {:.3f} | {:.3f} | {:.3f} |\n",
+                        r.reduced ? "reduced" : "full", sizes, r.seconds_per_frame, r.frames_per_second, r.sigma_mean_mm,
+                        100.0 * r.recovered_fraction, r.rms_error_mm, r.relative_rms_error, r.valid ? "" : " (*)", r.sigma_correlation,
+                        r.trajectory_rms_mm, r.trajectory_max_mm);
   }
   if (std::any_of(rows.begin(), rows.end(), [](const TradeoffRow& r) { return !r.valid; }))
     text += "\n(*) the reduced state left the material's range in tets outside the cubature (summary.json: out_of_range): "

@@ -20,12 +20,15 @@ struct TradeoffRow {
   double rms_error_mm = 0.0;           ///< RMS of |u − u_full| over region vertices and frames
   double relative_rms_error = 0.0;     ///< rms_error / RMS of u_full
   bool valid = true;                   ///< every full-space tet stayed within the material's range
+  double sigma_correlation = 0.0;      ///< Pearson correlation of σ and σ_full over the region's vertices
+  double trajectory_rms_mm = 0.0;      ///< RMS of |p − p_full| (posed body surface) over region vertices and frames 1..F
+  double trajectory_max_mm = 0.0;      ///< largest |p − p_full| over region vertices and frames 1..F
 };
 
 /// The exact CSV header of tradeoff.csv.
 inline constexpr const char* kTradeoffHeader =
     "model,handles,cubature,coordinates,seconds_per_frame,frames_per_second,sigma_mean_mm,recovered_fraction,"
-    "rms_error_mm,relative_rms_error";
+    "rms_error_mm,relative_rms_error,sigma_correlation,trajectory_rms_mm,trajectory_max_mm";
 
 /// "h<H>_k<K>": the suffix of a configuration's field names (K: cubature tets used).
 std::string config_suffix(int handles, int cubature);

@@ -51,6 +51,7 @@ int main(int argc, char** argv) {
   sflsh::app::register_verify_commands(app, invocation);
   sflsh::app::register_simulate_commands(app, invocation);
   sflsh::app::register_compare_commands(app, invocation);
+  sflsh::app::register_sweep_commands(app, invocation);
   sflsh::app::register_tradeoff_commands(app, invocation);
   sflsh::app::register_validate_commands(app, invocation);
   sflsh::app::register_groundtruth_commands(app, invocation);
