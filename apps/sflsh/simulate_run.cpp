@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
 #include <memory>
 #include <optional>
 #include <sflsh/body/motion.hpp>
@@ -26,6 +27,8 @@ void add_reduced_run_options(CLI::App& cmd, BodyRunSettings& s) {
   cmd.add_option("--cubature-weights", s.cubature_weights, "Reduced: nnls (training-free force matching) | voronoi")
       ->check(CLI::IsMember({"nnls", "voronoi"}));
   cmd.add_flag("--affine", s.affine, "Reduced: affine point handles (12 coordinates each instead of 3)");
+  cmd.add_option("--newton-tolerance", s.newton_tolerance,
+                 "Reduced: stop Newton when the estimated distance of every handle to the step's solution is below this [m]");
 }
 
 void add_integrator_option(CLI::App& cmd, std::string& integrator) {
@@ -81,6 +84,9 @@ nlohmann::json run_body_simulation(const BodyRunSettings& opt, RunFolder* frames
         layer, reduced_model_options(reduced_settings, opt.handles, opt.cubature, opt.layer.cache));
     reduced::ReducedOptions solver_options;
     solver_options.integrator = integrator;
+    require(opt.newton_tolerance > 0.0 && std::isfinite(opt.newton_tolerance), "--newton-tolerance must be a positive length in metres, got {}",
+            opt.newton_tolerance);
+    solver_options.step_tolerance = opt.newton_tolerance;
     fast = std::make_unique<reduced::ReducedSolver>(problem, reduced_model->subspace, reduced_model->cubature,
                                                     solver_options);
     fast->initialize(model::initial_state(problem, 0.0));
@@ -160,8 +166,19 @@ nlohmann::json run_body_simulation(const BodyRunSettings& opt, RunFolder* frames
                           {"affine", opt.affine},
                           {"coordinates", reduced_model->subspace.num_dofs()},
                           {"basis_nonzeros", reduced_model->subspace.basis.nonZeros()},
-                          {"cubature", reduced_model->cubature.size()},
+                          {"cubature", fast->cubature().size()},
+                          {"cubature_model", reduced_model->cubature.size()},
+                          {"cubature_added", fast->cubature_added()},
                           {"cubature_method", reduced_model->cubature.method},
+                          {"stiffness_ratio_max", reduced_model->cubature.stiffness_ratio_max},
+                          {"stiffness_ratio_min", reduced_model->cubature.stiffness_ratio_min},
+                          {"guard", fast->guard() ? nlohmann::json{{"exponent_limit", fast->guard()->exponent_limit()},
+                                                                   {"guarded_tets", fast->guard()->num_guarded()},
+                                                                   {"checks", fast->guard()->checks()},
+                                                                   {"per_tet_passes", fast->guard()->tet_passes()},
+                                                                   {"renewals", fast->guard()->full_checks()}}
+                                                  : nlohmann::json(nullptr)},
+                          {"newton_tolerance_m", opt.newton_tolerance},
                           {"cache", reduced_model->cache_outcome},
                           {"factorizations", total.factorizations},
                           {"model_seconds", reduced_model->build_seconds}};

@@ -29,6 +29,7 @@ struct BodyRunSettings {
   int cubature = -1;                      ///< −1 auto, 0 every tet, else a tet count
   std::string cubature_weights = "nnls";  ///< nnls | voronoi
   bool affine = false;
+  double newton_tolerance = 1e-5;         ///< [m] reduced::ReducedOptions::step_tolerance
 };
 
 /// How a run reports while it runs.

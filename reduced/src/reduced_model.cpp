@@ -18,7 +18,7 @@ namespace sflsh::reduced {
 namespace {
 
 /// Bump when what a cache entry holds changes.
-constexpr int kReducedFormat = 1;
+constexpr int kReducedFormat = 2;   // 2: the cubature records its stiffness coverage; auto K grows until covered
 
 std::uint64_t fnv1a(std::uint64_t hash, const void* data, std::size_t bytes) {
   const auto* p = static_cast<const unsigned char*>(data);
@@ -34,7 +34,8 @@ std::string cache_key(const meshing::LayerMesh& mesh, const ReducedModelOptions&
   h = fnv1a(h, mesh.nodes.data(), sizeof(double) * static_cast<std::size_t>(mesh.nodes.size()));
   h = fnv1a(h, mesh.tets.data(), sizeof(int) * static_cast<std::size_t>(mesh.tets.size()));
   const std::string settings =
-      fmt::format("v{} P{} K{} w{} drop{} max{} affine{} len{}", kReducedFormat, options.point_handles, options.cubature,
+      fmt::format("v{} P{} K{} cover{} w{} drop{} max{} affine{} len{}", kReducedFormat, options.point_handles, options.cubature,
+                  options.cubature_auto ? options.coverage_ratio : 0.0,
                   options.weighting == CubatureWeighting::nnls ? "nnls" : "voronoi", options.basis.drop_below,
                   options.basis.max_influences, options.basis.affine ? 1 : 0, options.basis.affine_length);
   h = fnv1a(h, settings.data(), settings.size());
@@ -70,7 +71,8 @@ void save_model(const std::filesystem::path& path, const ReducedModel& m) {
                     {"point_vertices", npz::make_i64({m.handles.point_vertices.size()}, to_i64(m.handles.point_vertices))},
                     {"cubature_tets", npz::make_i64({m.cubature.tets.size()}, to_i64(m.cubature.tets))},
                     {"cubature_weights", npz::make_f64({m.cubature.weights.size()}, m.cubature.weights)},
-                    {"cubature_method", npz::make_string(m.cubature.method)}});
+                    {"cubature_method", npz::make_string(m.cubature.method)},
+                    {"cubature_coverage", npz::make_f64({2}, {m.cubature.stiffness_ratio_min, m.cubature.stiffness_ratio_max})}});
 }
 
 /// Reads a cache entry into `m` (handles' bone map is recomputed by the caller). False when stale.
@@ -95,6 +97,10 @@ bool load_model(const std::filesystem::path& path, const std::string& key, Reduc
   m.cubature.tets = to_int(reader.read("cubature_tets").to_int64());
   m.cubature.weights = reader.read("cubature_weights").to_doubles();
   m.cubature.method = reader.read("cubature_method").to_string();
+  const std::vector<double> coverage = reader.read("cubature_coverage").to_doubles();
+  require(coverage.size() == 2, "{}: key 'cubature_coverage' must hold 2 numbers", path.string());
+  m.cubature.stiffness_ratio_min = coverage[0];
+  m.cubature.stiffness_ratio_max = coverage[1];
   require(m.cubature.tets.size() == m.cubature.weights.size(), "{}: cubature arrays differ in length", path.string());
   return true;
 }
@@ -207,6 +213,7 @@ ReducedModel build_reduced_model(const model::BodyLayer& layer, const ReducedMod
           "reduced: {} point handles requested; the layer allows 1 to {}", requested.point_handles, max_point_handles(layer));
   ReducedModelOptions options = requested;
   options.cubature = std::min(resolved_cubature_count(requested), mesh.num_tets());
+  options.cubature_auto = requested.cubature == -1;
   const int coordinates = options.point_handles * (options.basis.affine ? 12 : 3);
   if (options.cubature > 0 && options.cubature < 0.75 * coordinates)
     logger()->warn("reduced: {} cubature tets for {} coordinates: below ≈ 0.75 per coordinate unsampled tets can leave the "
@@ -243,6 +250,7 @@ ReducedModel build_reduced_model(const model::BodyLayer& layer, const ReducedMod
     m.subspace = point_handle_subspace(weights, attached, mesh.nodes, m.handles.point_nodes, options.basis);
     if (options.cubature == 0) {
       m.cubature = exact_cubature(mesh.num_tets());
+      m.cubature.stiffness_ratio_max = m.cubature.stiffness_ratio_min = 1.0;
     } else {
       CubatureOptions co;
       co.count = options.cubature;
@@ -250,7 +258,16 @@ ReducedModel build_reduced_model(const model::BodyLayer& layer, const ReducedMod
       co.density.resize(static_cast<std::size_t>(mesh.num_tets()));
       for (int e = 0; e < mesh.num_tets(); ++e)
         co.density[static_cast<std::size_t>(e)] = mesh.tet_part[static_cast<std::size_t>(e)] == meshing::Part::torso ? material::kTorsoDensity : 1.0;
-      m.cubature = select_cubature(template_problem(layer), m.subspace, co);
+      const model::Problem problem = template_problem(layer);
+      if (options.cubature_auto) {
+        m.cubature = select_covering_cubature(problem, m.subspace, co, options.coverage_ratio);
+      } else {
+        m.cubature = select_cubature(problem, m.subspace, co);
+        const CubatureCoverage coverage = cubature_coverage(rest_stiffness(problem, m.subspace, exact_cubature(problem.num_tets())),
+                                                            rest_stiffness(problem, m.subspace, m.cubature));
+        m.cubature.stiffness_ratio_max = coverage.max_ratio;
+        m.cubature.stiffness_ratio_min = coverage.min_ratio;
+      }
     }
     m.cache_outcome = options.use_cache ? "built" : "off";
     if (options.use_cache) {
@@ -263,9 +280,14 @@ ReducedModel build_reduced_model(const model::BodyLayer& layer, const ReducedMod
     }
   }
   m.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  logger()->info("reduced model: {} point handles ({} coordinates), {} bone handles, {} cubature tets ({}), cache {}, {:.2f} s",
+  logger()->info("reduced model: {} point handles ({} coordinates), {} bone handles, {} cubature tets ({}; exact / cubature rest "
+                 "stiffness in [{:.3g}, {:.3g}]), cache {}, {:.2f} s",
                  m.handles.point_nodes.size(), m.subspace.num_dofs(), m.handles.bone_joints().size(), m.cubature.size(),
-                 m.cubature.method, m.cache_outcome, m.build_seconds);
+                 m.cubature.method, m.cubature.stiffness_ratio_min, m.cubature.stiffness_ratio_max, m.cache_outcome, m.build_seconds);
+  if (!options.cubature_auto && m.cubature.stiffness_ratio_max > options.coverage_ratio)
+    logger()->warn("reduced: with {} cubature tets a direction of the subspace is {:.3g}× stiffer than the cubature sees (auto "
+                   "cubature grows until ≤ {}); tets outside the set are guarded while solving (docs/reduced.md)",
+                   m.cubature.size(), m.cubature.stiffness_ratio_max, options.coverage_ratio);
   return m;
 }
 

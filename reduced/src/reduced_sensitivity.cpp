@@ -52,6 +52,7 @@ SensitivityIntegrator::SensitivityIntegrator(const model::Problem& problem, cons
                   [&] {
                     ReducedOptions o = options;
                     o.record_substeps = true;
+                    o.step_tolerance = std::min(o.step_tolerance, 1e-9);   // dq/dY at a converged state
                     return o;
                   }()),
       elastic_(problem, subspace, cubature),

@@ -22,6 +22,11 @@ struct ReducedModelOptions {
   /// coarse layer (sflsh compare): with K below ≈ 0.75 · coordinates the subspace finds deformations the
   /// cubature does not see — stable on the sampled tets while unsampled ones leave the material's range.
   int cubature = -1;
+  /// Auto cubature (cubature = −1) starts at max(200, ⌈0.8 · coordinates⌉) tets and grows by 25 % until every
+  /// direction of the subspace is at most this many times stiffer in the exact rest stiffness than in the cubature's
+  /// (cubature.hpp, cubature_coverage); explicit counts are only measured against it.
+  double coverage_ratio = 4.0;
+  bool cubature_auto = false;           ///< set by build_reduced_model (part of the cache key)
   CubatureWeighting weighting = CubatureWeighting::nnls;
   BasisOptions basis;
   std::filesystem::path cache_dir;      ///< empty: meshing::default_cache_dir()

@@ -41,7 +41,10 @@ struct ReducedOptions {
   int max_newton = 30;
   double gradient_rtol = 1e-8;     ///< ‖∇Φ‖ ≤ rtol·‖∇Φ₀‖ …
   double gradient_atol = 1e-9;     ///< … or ≤ atol [N]
-  double step_tolerance = 1e-8;    ///< or a full Newton step with ‖Δq‖∞ below this [m]
+  /// … or the distance left to the step's solution, estimated from the contraction of the last two full Newton
+  /// steps (ρ/(1 − ρ)‖Δq‖∞, ‖Δq‖∞ after the first), below this [m]. 10 µm is 0.1–0.3 % of the σ the
+  /// motions produce (docs/reduced.md "Newton iterations"); sensitivities solve tighter (1e-9 m).
+  double step_tolerance = 1e-5;
   /// Reuse the Cholesky factor of an earlier Hessian (from earlier iterations or steps of the same ĥ and
   /// projection) while it keeps reducing ‖∇Φ‖ by at least `refresh_ratio` per iteration; M/ĥ² dominates
   /// the dynamic Hessian, so it changes slowly and a refactorization (the dense O(n³) part) is rarely due.
