@@ -5,6 +5,7 @@
 #include "layer_setup.hpp"
 
 #include <sflsh/body/motion.hpp>
+#include <sflsh/core/background_jobs.hpp>
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
 #include <sflsh/core/progress.hpp>
@@ -47,6 +48,7 @@ struct SimulateOptions {
   std::string integrator = "backward_euler";   ///< backward_euler | bdf2 | newmark (time_integrator.hpp)
   bool write_layer = false;
   bool no_output = false;
+  int every = 1;                             ///< write every N-th frame (the first and the last always)
   std::string out;
   // Reduced model.
   int handles = 86;
@@ -56,6 +58,7 @@ struct SimulateOptions {
   // Scene files.
   std::string scene;
   int threads = 0;
+  bool every_given = false;                  ///< --every overrides the scene's [output] every
 };
 
 // sflsh simulate --scene FILE: bodies, objects and the effects the scene calls for (scene_runner.hpp).
@@ -67,6 +70,7 @@ void run_scene_file(const SimulateOptions& opt, const Invocation& invocation, in
   options.cache_dir = opt.layer.cache;
   options.threads = opt.threads;
   options.write_frames = !opt.no_output;
+  options.every = opt.every_given ? opt.every : 0;
   options.rank = rank;
   options.header = summary_header("simulate", invocation.argc, invocation.argv);
   const nlohmann::json summary = scene::run_scene(scene, options);
@@ -79,6 +83,7 @@ void run_scene_file(const SimulateOptions& opt, const Invocation& invocation, in
 }
 
 void run_simulate(const SimulateOptions& opt, const Invocation& invocation, int rank, int size) {
+  require(opt.every >= 1, "--every must be at least 1, got {}", opt.every);
   if (!opt.scene.empty()) return run_scene_file(opt, invocation, rank);
   require(!opt.motion.empty(), "simulate: --motion is required (or give a scene with --scene FILE)");
   const auto t_start = Clock::now();
@@ -141,8 +146,15 @@ void run_simulate(const SimulateOptions& opt, const Invocation& invocation, int 
   const bool write = rank == 0 && !opt.no_output;
   std::optional<RunFolder> run;
   if (rank == 0) run.emplace(opt.out);
-  model::SimulationWriter writer(layer, write ? &*run : nullptr, opt.write_layer);
-  writer.add_frame(0.0, solver.current_state());
+  // Declared after the run folder: a failing run drops its pending writes before the folder is removed.
+  std::optional<BackgroundJobs> jobs;
+  if (write) jobs.emplace(8);
+  model::SimulationWriterOptions writer_options;
+  writer_options.write_layer = opt.write_layer;
+  writer_options.jobs = jobs ? &*jobs : nullptr;
+  model::SimulationWriter writer(layer, write ? &*run : nullptr, writer_options);
+  const int num_frames = static_cast<int>(motion.num_frames());
+  writer.add_frame(0, 0.0, solver.current_state(), true);
 
   nlohmann::json frames = nlohmann::json::array();
   frames.push_back({{"frame", 0}, {"t", 0.0}, {"newton_iterations", 0}, {"linear_iterations", 0}, {"seconds", 0.0}});
@@ -158,7 +170,7 @@ void run_simulate(const SimulateOptions& opt, const Invocation& invocation, int 
     const auto t_output = Clock::now();
     const model::State state = solver.current_state();
     const model::Energies e = model::energies(problem, state);
-    writer.add_frame(motion.time(f), state);
+    writer.add_frame(frame, motion.time(f), state, model::is_written_frame(frame, num_frames, opt.every));
     output_seconds += seconds_since(t_output);
     frames.push_back({{"frame", f},
                       {"t", motion.time(f)},
@@ -173,6 +185,9 @@ void run_simulate(const SimulateOptions& opt, const Invocation& invocation, int 
   const double solve_seconds = total.seconds;
   if (rank != 0) return;
 
+  const auto t_drain = Clock::now();
+  if (jobs) jobs->wait();
+  output_seconds += seconds_since(t_drain);
   writer.finish();
   nlohmann::json summary = summary_header("simulate", invocation.argc, invocation.argv);
   summary["integrator"] = model::to_string(integrator);
@@ -217,11 +232,15 @@ void run_simulate(const SimulateOptions& opt, const Invocation& invocation, int 
                         {"potential_seconds", total.potential_seconds},
                         {"dense_solve_seconds", total.solve_seconds},
                         {"output_seconds", output_seconds},
+                        {"posing_seconds", writer.posing_seconds()},
+                        {"writer_seconds", jobs ? jobs->busy_seconds() : 0.0},
+                        {"writer_wait_seconds", jobs ? jobs->waited_seconds() : 0.0},
                         {"frames_per_second", solve_seconds > 0 ? static_cast<double>(motion.num_frames() - 1) / solve_seconds : 0.0},
                         {"seconds_per_frame", motion.num_frames() > 1 ? solve_seconds / static_cast<double>(motion.num_frames() - 1) : 0.0},
                         {"total_seconds", seconds_since(t_start)}};
   summary["output"] = opt.no_output ? nlohmann::json("summary.json only")
-                                    : nlohmann::json({{"series", "body.pvd"}, {"layer", opt.write_layer ? "layer.pvd" : ""}});
+                                    : nlohmann::json({{"series", "body.pvd"}, {"layer", opt.write_layer ? "layer.pvd" : ""},
+                                                      {"every", opt.every}, {"compression", vtk::to_string(writer_options.compression)}});
   write_json(run->stage("summary.json"), summary);
   run->commit();
   logger()->info("simulated {} frames in {:.1f} s ({:.3f} s per frame); mean σ = {:.2f} mm", motion.num_frames(),
@@ -247,7 +266,7 @@ void register_simulate_commands(CLI::App& app, const Invocation& invocation) {
   add_body_option(*cmd, opt->subject);
   add_subject_options(*cmd, opt->subject);
   cmd->add_option("--scene", opt->scene,
-                  "Scene file (TOML, docs/scenes.md, data/scenes/): bodies, objects and effects; then only --frames, "
+                  "Scene file (TOML, docs/scenes.md, data/scenes/): bodies, objects and effects; then only --frames, --every, "
                   "--out, --cache, --threads and --no-output apply")
       ->check(CLI::ExistingFile);
   cmd->add_option("--threads", opt->threads, "Scenes: threads for bodies that do not interact (0: all cores)");
@@ -264,6 +283,10 @@ void register_simulate_commands(CLI::App& app, const Invocation& invocation) {
   add_mass_option(*cmd, opt->layer);
   cmd->add_flag("--write-layer", opt->write_layer, "Also write the tet layer per frame (layer.pvd)");
   cmd->add_flag("--no-output", opt->no_output, "Write only summary.json");
+  cmd->add_option("--every", opt->every,
+                  "Write every N-th frame (frame 0 and the last frame always; σ and the summary still use every frame); "
+                  "with --scene it overrides [output] every")
+      ->each([opt](const std::string&) { opt->every_given = true; });
   cmd->add_option("--out", opt->out, "Output folder")->required();
   cmd->callback([opt, invocation] {
     with_petsc(invocation, [&](int rank, int size) { run_simulate(*opt, invocation, rank, size); });
