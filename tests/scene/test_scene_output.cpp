@@ -123,11 +123,11 @@ TEST(SceneOutput, BadOutputValuesAreOneLineNamingTheKey) {
     std::string output, expected;
   };
   for (const Case& c : std::vector<Case>{
-           {"every = 0", "scene.toml:7: 'every' in [output] = 0 must be an integer ≥ 1"},
-           {"every = 1.5", "scene.toml:7: 'every'"},
-           {R"(fields = ["displacement", "sigma"])", "scene.toml:7: unknown field 'sigma' in 'fields' of [output] (expected some of"},
-           {R"(fields = "displacement")", "scene.toml:7: 'fields' in [output] must be an array of strings"},
-           {R"(compression = "gzip")", "scene.toml:7: 'compression' in [output] = 'gzip' is not one of lz4 | zlib | none"},
+           {"every = 0", "scene.toml:8: 'every' in [output] = 0 must be an integer ≥ 1"},
+           {"every = 1.5", "scene.toml:8: 'every'"},
+           {R"(fields = ["displacement", "sigma"])", "scene.toml:8: unknown field 'sigma' in 'fields' of [output] (expected some of"},
+           {R"(fields = "displacement")", "scene.toml:8: 'fields' in [output] must be an array of strings"},
+           {R"(compression = "gzip")", "scene.toml:8: 'compression' in [output] = 'gzip' is not one of lz4 | zlib | none"},
        }) {
     SCOPED_TRACE(c.output);
     const auto path = write_scene(dir, c.output);
