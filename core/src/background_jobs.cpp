@@ -12,9 +12,9 @@ using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 }  // namespace
 
-BackgroundJobs::BackgroundJobs(std::size_t capacity) : capacity_(capacity) {
-  require(capacity >= 1, "background jobs: the queue needs a capacity of at least 1");
-  worker_ = std::thread([this] { work(); });
+BackgroundJobs::BackgroundJobs(std::size_t capacity, int workers) : capacity_(capacity) {
+  require(capacity >= 1 && workers >= 1, "background jobs: need a capacity and workers of at least 1 (got {}, {})", capacity, workers);
+  for (int k = 0; k < workers; ++k) workers_.emplace_back([this] { work(); });
 }
 
 BackgroundJobs::~BackgroundJobs() {
@@ -24,7 +24,7 @@ BackgroundJobs::~BackgroundJobs() {
     queue_.clear();
   }
   changed_.notify_all();
-  worker_.join();
+  for (std::thread& worker : workers_) worker.join();
 }
 
 void BackgroundJobs::rethrow_error_locked() {
@@ -48,7 +48,7 @@ void BackgroundJobs::submit(std::function<void()> job) {
 void BackgroundJobs::wait() {
   std::unique_lock lock(mutex_);
   const auto t0 = Clock::now();
-  changed_.wait(lock, [&] { return (queue_.empty() && !running_job_) || error_; });
+  changed_.wait(lock, [&] { return (queue_.empty() && running_jobs_ == 0) || error_; });
   waited_seconds_ += seconds_since(t0);
   rethrow_error_locked();
 }
@@ -65,7 +65,7 @@ void BackgroundJobs::work() {
     if (stopping_) return;
     std::function<void()> job = std::move(queue_.front());
     queue_.pop_front();
-    running_job_ = true;
+    ++running_jobs_;
     lock.unlock();
     changed_.notify_all();   // a slot is free
     const auto t0 = Clock::now();
@@ -78,7 +78,7 @@ void BackgroundJobs::work() {
     const double seconds = seconds_since(t0);
     lock.lock();
     busy_seconds_ += seconds;
-    running_job_ = false;
+    --running_jobs_;
     if (error && !error_) {
       error_ = error;
       queue_.clear();

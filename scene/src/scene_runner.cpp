@@ -65,6 +65,7 @@ class SceneRun {
     every_ = options_.every > 0 ? options_.every : scene_.output.every;
     // Declared after the run folder: a failing run drops its pending writes before the folder is removed.
     std::optional<BackgroundJobs> jobs;
+    // One writer thread: on 2 cores a second one only competed with the stepping threads (measured).
     if (folder && options_.background_writing) jobs.emplace(std::max<std::size_t>(8, 2 * bodies_.size() + 1));
     jobs_ = jobs ? &*jobs : nullptr;
     open_writers(folder);

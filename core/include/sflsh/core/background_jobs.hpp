@@ -1,5 +1,6 @@
 #pragma once
-// One worker thread that runs submitted jobs in order (e.g. writing frame files while the solver goes on),
+// Worker threads that run submitted jobs (e.g. writing frame files while the solver goes on; with one worker
+// in submission order, with several in any order),
 // with a bounded queue: submit() waits while `capacity` jobs are pending, so a slow disk slows the producer
 // down instead of filling the memory. The first job that throws stops the worker: the pending jobs are
 // dropped and the exception is rethrown by the next submit() or by wait(). The destructor drops pending jobs
@@ -10,13 +11,14 @@
 #include <functional>
 #include <mutex>
 #include <thread>
+#include <vector>
 
 namespace sflsh {
 
 class BackgroundJobs {
  public:
-  /// capacity ≥ 1: pending jobs (not counting the one running) before submit() waits.
-  explicit BackgroundJobs(std::size_t capacity);
+  /// capacity ≥ 1: pending jobs (not counting the running ones) before submit() waits; workers ≥ 1 threads.
+  explicit BackgroundJobs(std::size_t capacity, int workers = 1);
   ~BackgroundJobs();
   BackgroundJobs(const BackgroundJobs&) = delete;
   BackgroundJobs& operator=(const BackgroundJobs&) = delete;
@@ -26,7 +28,7 @@ class BackgroundJobs {
   /// Waits until every submitted job has run; rethrows the first job error.
   void wait();
 
-  /// Seconds the worker spent running jobs, and seconds submit()/wait() waited for it (caller's thread).
+  /// Seconds the workers spent running jobs (summed), and seconds submit()/wait() waited for them (caller's thread).
   double busy_seconds() const;
   double waited_seconds() const { return waited_seconds_; }
 
@@ -38,12 +40,12 @@ class BackgroundJobs {
   mutable std::mutex mutex_;
   std::condition_variable changed_;
   std::deque<std::function<void()>> queue_;
-  bool running_job_ = false;
+  int running_jobs_ = 0;
   bool stopping_ = false;
   std::exception_ptr error_;
   double busy_seconds_ = 0.0;
   double waited_seconds_ = 0.0;
-  std::thread worker_;
+  std::vector<std::thread> workers_;
 };
 
 }  // namespace sflsh
