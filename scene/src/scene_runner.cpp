@@ -378,6 +378,15 @@ class SceneRun {
       check_seconds_ += seconds_since(clock);
     }
     const bool write = output && folder;
+    if (!write) {
+      // Only σ: each soft body's skin displacement, independent of the others (in parallel, like the steps).
+      tbb::parallel_for(std::size_t{0}, bodies_.size(), [&](std::size_t b) {
+        if (bodies_[b]->soft() && bodies_[b]->solver() != SolverKind::full) writers_[b]->add_frame(f, t, bodies_[b]->state(), false);
+      });
+      for (std::size_t b = 0; b < bodies_.size(); ++b)
+        if (bodies_[b]->solver() == SolverKind::full) writers_[b]->add_frame(f, t, bodies_[b]->state(), false);
+      return;
+    }
     for (std::size_t b = 0; b < bodies_.size(); ++b) {
       SceneBody& body = *bodies_[b];
       if (body.soft()) {
