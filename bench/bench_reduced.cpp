@@ -228,13 +228,20 @@ int main(int argc, char** argv) {
                               {"startup_steps", b.startup}, {"failed_attempts", b.failed}, {"substeps", b.substeps}});
     }
     const double n = static_cast<double>(frames) * crowd;
-    std::cout << fmt::format("{:<36} {:>8.1f} {:>10.3f} {:>10.3f} {:>10.3f} {:>10.3f} {:>10.3f} {:>8.2f} {:>8.2f} {:>12}\n",
+    if (crowd > 0)   // --crowd 0: no crowd row (nothing was run)
+      std::cout << fmt::format("{:<36} {:>8.1f} {:>10.3f} {:>10.3f} {:>10.3f} {:>10.3f} {:>10.3f} {:>8.2f} {:>8.2f} {:>12}\n",
                              fmt::format("{} bodies, {} threads", crowd, threads), crowd_fps, ms(crowd_wall, frames), ms(total.elastic, n),
                              ms(total.inertia, n), ms(total.solve, n), ms(total.output, n), static_cast<double>(total.newton) / n,
                              static_cast<double>(total.factorizations) / n, "1.2 (1 thr)");
     std::cout << fmt::format("\n(ms per frame; newton and factor: Newton iterations and Hessian factorizations per frame; the crowd runs {} "
                              "with {} masses, its breakdown columns are per body and frame; crowd built in {:.1f} s)\n",
                              model::to_string(integrators.front()), model::to_string(masses.front()), build_seconds);
+    const nlohmann::json crowd_json =
+        crowd > 0 ? nlohmann::json{{"bodies", crowd}, {"threads", threads}, {"fps", crowd_fps}, {"ms_per_frame", ms(crowd_wall, frames)},
+                                   {"elastic_ms_per_body", ms(total.elastic, n)}, {"inertia_ms_per_body", ms(total.inertia, n)},
+                                   {"solve_ms_per_body", ms(total.solve, n)}, {"output_ms_per_body", ms(total.output, n)},
+                                   {"build_seconds", build_seconds}, {"paper_fps", 1.2}}
+                  : nlohmann::json(nullptr);
     write_json(out, {{"benchmark", "reduced"},
                      {"mesh", mesh},
                      {"point_handles", handles},
@@ -247,10 +254,7 @@ int main(int argc, char** argv) {
                                    {"solve_ms", ms(one.solve, frames)}, {"output_ms", ms(one.output, frames)},
                                    {"newton_per_frame", static_cast<double>(one.newton) / frames}, {"paper_fps", 30.0}}},
                      {"one_body_cases", combinations},
-                     {"crowd", {{"bodies", crowd}, {"threads", threads}, {"fps", crowd_fps}, {"ms_per_frame", ms(crowd_wall, frames)},
-                                {"elastic_ms_per_body", ms(total.elastic, n)}, {"inertia_ms_per_body", ms(total.inertia, n)},
-                                {"solve_ms_per_body", ms(total.solve, n)}, {"output_ms_per_body", ms(total.output, n)},
-                                {"build_seconds", build_seconds}, {"paper_fps", 1.2}}}});
+                     {"crowd", crowd_json}});
     std::cout << "wrote " << out << "\n";
   } catch (const std::exception& e) {
     std::cerr << "bench_reduced: " << e.what() << "\n";

@@ -25,10 +25,12 @@ namespace {
 struct SimulateOptions {
   BodyRunSettings body;                      ///< solver, subject, motion, frames, mesh, layer, integrator, reduced model
   bool no_output = false;
+  int every = 1;                             ///< write every N-th frame (the first and the last always)
   std::string out;
   // Scene files.
   std::string scene;
   int threads = 0;
+  bool every_given = false;                  ///< --every overrides the scene's [output] every
 };
 
 // sflsh simulate --scene FILE: bodies, objects and the effects the scene calls for (scene_runner.hpp).
@@ -40,6 +42,7 @@ void run_scene_file(const SimulateOptions& opt, const Invocation& invocation, in
   options.cache_dir = opt.body.layer.cache;
   options.threads = opt.threads;
   options.write_frames = !opt.no_output;
+  options.every = opt.every_given ? opt.every : 0;
   options.rank = rank;
   options.header = summary_header("simulate", invocation.argc, invocation.argv);
   const nlohmann::json summary = scene::run_scene(scene, options);
@@ -52,17 +55,24 @@ void run_scene_file(const SimulateOptions& opt, const Invocation& invocation, in
 }
 
 void run_simulate(const SimulateOptions& opt, const Invocation& invocation, int rank, int size) {
+  require(opt.every >= 1, "--every must be at least 1, got {}", opt.every);
   if (!opt.scene.empty()) return run_scene_file(opt, invocation, rank);
   require(!opt.body.motion.empty(), "simulate: --motion is required (or give a scene with --scene FILE)");
   std::optional<RunFolder> run;
   if (rank == 0) run.emplace(opt.out);
   const bool write = rank == 0 && !opt.no_output;
   nlohmann::json summary = summary_header("simulate", invocation.argc, invocation.argv);
-  const nlohmann::json body = run_body_simulation(opt.body, write ? &*run : nullptr, rank, size);
+  BodyRunSettings settings = opt.body;
+  settings.every = opt.every;
+  const nlohmann::json body = run_body_simulation(settings, write ? &*run : nullptr, rank, size);
   if (rank != 0) return;
   summary.update(body);
   summary["output"] = opt.no_output ? nlohmann::json("summary.json only")
-                                    : nlohmann::json({{"series", "body.pvd"}, {"layer", opt.body.write_layer ? "layer.pvd" : ""}});
+                                    : nlohmann::json({{"series", "body.pvd"},
+                                                      {"layer", opt.body.write_layer ? "layer.pvd" : ""},
+                                                      {"every", opt.every},
+                                                      {"compression", body.value("compression", std::string("lz4"))}});
+  summary.erase("compression");
   write_json(run->stage("summary.json"), summary);
   run->commit();
   logger()->info("simulated {} frames in {:.1f} s ({:.3f} s per frame); mean σ = {:.2f} mm", summary["motion"]["frames"].get<long>(),
@@ -84,7 +94,7 @@ void register_simulate_commands(CLI::App& app, const Invocation& invocation) {
   add_body_option(*cmd, opt->body.subject);
   add_subject_options(*cmd, opt->body.subject);
   cmd->add_option("--scene", opt->scene,
-                  "Scene file (TOML, docs/scenes.md, data/scenes/): bodies, objects and effects; then only --frames, "
+                  "Scene file (TOML, docs/scenes.md, data/scenes/): bodies, objects and effects; then only --frames, --every, "
                   "--out, --cache, --threads and --no-output apply")
       ->check(CLI::ExistingFile);
   cmd->add_option("--threads", opt->threads, "Scenes: threads for bodies that do not interact (0: all cores)");
@@ -99,6 +109,10 @@ void register_simulate_commands(CLI::App& app, const Invocation& invocation) {
   add_mass_option(*cmd, opt->body.layer);
   cmd->add_flag("--write-layer", opt->body.write_layer, "Also write the tet layer per frame (layer.pvd)");
   cmd->add_flag("--no-output", opt->no_output, "Write only summary.json");
+  cmd->add_option("--every", opt->every,
+                  "Write every N-th frame (frame 0 and the last frame always; σ and the summary still use every frame); "
+                  "with --scene it overrides [output] every")
+      ->each([opt](const std::string&) { opt->every_given = true; });
   cmd->add_option("--out", opt->out, "Output folder")->required();
   cmd->callback([opt, invocation] {
     with_petsc(invocation, [&](int rank, int size) { run_simulate(*opt, invocation, rank, size); });

@@ -6,6 +6,8 @@
 #include <memory>
 #include <optional>
 #include <sflsh/body/motion.hpp>
+#include <sflsh/core/background_jobs.hpp>
+#include <sflsh/core/vtk_io.hpp>
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
 #include <sflsh/core/progress.hpp>
@@ -103,8 +105,16 @@ nlohmann::json run_body_simulation(const BodyRunSettings& opt, RunFolder* frames
                         {"cubature", reduced_model ? reduced_model->cubature.size() : 0}});
   model::BodySolver& solver = use_reduced ? static_cast<model::BodySolver&>(*fast) : *full;
 
-  model::SimulationWriter writer(layer, rank == 0 ? frames_to : nullptr, opt.write_layer);
-  writer.add_frame(0.0, solver.current_state());
+  // Declared after the run folder (the caller's): a failing run drops its pending writes before the folder is removed.
+  std::optional<BackgroundJobs> jobs;
+  const bool write = rank == 0 && frames_to != nullptr;
+  if (write) jobs.emplace(8);
+  model::SimulationWriterOptions writer_options;
+  writer_options.write_layer = opt.write_layer;
+  writer_options.jobs = jobs ? &*jobs : nullptr;
+  model::SimulationWriter writer(layer, write ? frames_to : nullptr, writer_options);
+  const int num_frames = static_cast<int>(motion.num_frames());
+  writer.add_frame(0, 0.0, solver.current_state(), true);
 
   nlohmann::json frames = nlohmann::json::array();
   frames.push_back({{"frame", 0}, {"t", 0.0}, {"newton_iterations", 0}, {"linear_iterations", 0}, {"seconds", 0.0}});
@@ -120,7 +130,7 @@ nlohmann::json run_body_simulation(const BodyRunSettings& opt, RunFolder* frames
     const auto t_output = Clock::now();
     const model::State state = solver.current_state();
     const model::Energies e = model::energies(problem, state);
-    writer.add_frame(motion.time(f), state);
+    writer.add_frame(frame, motion.time(f), state, model::is_written_frame(frame, num_frames, opt.every));
     output_seconds += seconds_since(t_output);
     frames.push_back({{"frame", f},
                       {"t", motion.time(f)},
@@ -136,8 +146,12 @@ nlohmann::json run_body_simulation(const BodyRunSettings& opt, RunFolder* frames
   const double solve_seconds = total.seconds;
   if (rank != 0) return {};
 
+  const auto t_drain = Clock::now();
+  if (jobs) jobs->wait();
+  output_seconds += seconds_since(t_drain);
   writer.finish();
   nlohmann::json summary = nlohmann::json::object();
+  summary["compression"] = vtk::to_string(writer_options.compression);
   summary["integrator"] = model::to_string(integrator);
   summary["mass"] = model::to_string(problem.mass_kind);
   summary["solver"] = {{"name", opt.solver},
@@ -196,6 +210,9 @@ nlohmann::json run_body_simulation(const BodyRunSettings& opt, RunFolder* frames
                         {"potential_seconds", total.potential_seconds},
                         {"dense_solve_seconds", total.solve_seconds},
                         {"output_seconds", output_seconds},
+                        {"posing_seconds", writer.posing_seconds()},
+                        {"writer_seconds", jobs ? jobs->busy_seconds() : 0.0},
+                        {"writer_wait_seconds", jobs ? jobs->waited_seconds() : 0.0},
                         {"frames_per_second", solve_seconds > 0 ? steps / solve_seconds : 0.0},
                         {"seconds_per_frame", steps > 0 ? solve_seconds / steps : 0.0},
                         {"total_seconds", seconds_since(t_start)}};

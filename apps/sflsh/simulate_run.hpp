@@ -24,6 +24,7 @@ struct BodyRunSettings {
   LayerSettings layer;                        ///< mesher, material, cache, density, gravity, stiffness, mass
   std::string integrator = "backward_euler";  ///< backward_euler | bdf2 | newmark (time_integrator.hpp)
   bool write_layer = false;                   ///< also write layer.pvd (when frames are written)
+  int every = 1;                              ///< write every N-th frame (frame 0 and the last always)
   // Reduced model.
   int handles = 86;
   int cubature = -1;                      ///< −1 auto, 0 every tet, else a tet count

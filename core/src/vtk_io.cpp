@@ -8,6 +8,7 @@
 #include <vtkDoubleArray.h>
 #include <vtkFieldData.h>
 #include <vtkIntArray.h>
+#include <vtkLZ4DataCompressor.h>
 #include <vtkNew.h>
 #include <vtkPointData.h>
 #include <vtkPointSet.h>
@@ -47,9 +48,17 @@ vtkSmartPointer<vtkDataArray> make_array(const Field& field, Eigen::Index expect
   array->SetName(field.name.c_str());
   array->SetNumberOfComponents(static_cast<int>(field.values.cols()));
   array->SetNumberOfTuples(field.values.rows());
-  for (Eigen::Index r = 0; r < field.values.rows(); ++r)
-    for (Eigen::Index c = 0; c < field.values.cols(); ++c)
-      array->SetComponent(r, static_cast<int>(c), field.values(r, c));
+  const Eigen::Index rows = field.values.rows(), cols = field.values.cols();
+  // Straight into the arrays' memory (row-major tuples); SetComponent per value is a virtual call each.
+  if (field.integer) {
+    int* out = static_cast<vtkIntArray*>(array.Get())->GetPointer(0);
+    for (Eigen::Index r = 0; r < rows; ++r)
+      for (Eigen::Index c = 0; c < cols; ++c) out[r * cols + c] = static_cast<int>(field.values(r, c));
+  } else {
+    double* out = static_cast<vtkDoubleArray*>(array.Get())->GetPointer(0);
+    for (Eigen::Index r = 0; r < rows; ++r)
+      for (Eigen::Index c = 0; c < cols; ++c) out[r * cols + c] = field.values(r, c);
+  }
   return array;
 }
 
@@ -74,14 +83,17 @@ void attach_fields(vtkDataSet* data, const Fields& fields, Eigen::Index num_poin
 }
 
 template <typename Writer>
-void write_with(Writer* writer, vtkDataObject* data, const std::filesystem::path& path) {
+void write_with(Writer* writer, vtkDataObject* data, const std::filesystem::path& path, Compression compression) {
   write_atomically(path, [&](const std::filesystem::path& tmp) {
     writer->SetFileName(tmp.c_str());
     writer->SetInputData(data);
     writer->SetDataModeToAppended();
     writer->EncodeAppendedDataOff();
-    vtkNew<vtkZLibDataCompressor> compressor;
-    writer->SetCompressor(compressor);
+    vtkSmartPointer<vtkDataCompressor> compressor;
+    if (compression == Compression::zlib) compressor = vtkSmartPointer<vtkZLibDataCompressor>::New();
+    else if (compression == Compression::lz4) compressor = vtkSmartPointer<vtkLZ4DataCompressor>::New();
+    if (compressor) writer->SetCompressor(compressor);
+    else writer->SetCompressorTypeToNone();
     require(writer->Write() == 1, "{}: VTK writer failed", path.string());
   });
 }
@@ -105,19 +117,35 @@ vtkSmartPointer<vtkPointSet> read_any(const std::filesystem::path& path) {
 
 }  // namespace
 
+Compression parse_compression(const std::string& name, const std::string& what) {
+  if (name == "zlib") return Compression::zlib;
+  if (name == "lz4") return Compression::lz4;
+  if (name == "none") return Compression::none;
+  throw_error("{} = '{}' is not one of zlib | lz4 | none", what, name);
+}
+
+const char* to_string(Compression compression) {
+  switch (compression) {
+    case Compression::zlib: return "zlib";
+    case Compression::lz4: return "lz4";
+    case Compression::none: return "none";
+  }
+  return "?";
+}
+
 void write_surface(const std::filesystem::path& path, const Eigen::Ref<const Points>& points,
-                   const Eigen::Ref<const Cells>& triangles, const Fields& fields) {
+                   const Eigen::Ref<const Cells>& triangles, const Fields& fields, Compression compression) {
   require(triangles.cols() == 3, "{}: surface cells need 3 vertices, got {}", path.string(), triangles.cols());
   vtkNew<vtkPolyData> poly;
   poly->SetPoints(make_points(points));
   poly->SetPolys(make_cells(triangles, points.rows()));
   attach_fields(poly, fields, points.rows(), triangles.rows());
   vtkNew<vtkXMLPolyDataWriter> writer;
-  write_with(writer.Get(), poly, path);
+  write_with(writer.Get(), poly, path, compression);
 }
 
 void write_unstructured(const std::filesystem::path& path, const Eigen::Ref<const Points>& points,
-                        const Eigen::Ref<const Cells>& cells, const Fields& fields) {
+                        const Eigen::Ref<const Cells>& cells, const Fields& fields, Compression compression) {
   require(cells.cols() == 3 || cells.cols() == 4, "{}: cells need 3 (triangle) or 4 (tetrahedron) vertices, got {}",
           path.string(), cells.cols());
   vtkNew<vtkUnstructuredGrid> grid;
@@ -125,7 +153,7 @@ void write_unstructured(const std::filesystem::path& path, const Eigen::Ref<cons
   grid->SetCells(cells.cols() == 4 ? VTK_TETRA : VTK_TRIANGLE, make_cells(cells, points.rows()));
   attach_fields(grid, fields, points.rows(), cells.rows());
   vtkNew<vtkXMLUnstructuredGridWriter> writer;
-  write_with(writer.Get(), grid, path);
+  write_with(writer.Get(), grid, path, compression);
 }
 
 void PvdSeries::write() const {

@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 
 namespace sflsh::model {
@@ -60,20 +61,31 @@ RowMatrixX3d vertex_normals(const RowMatrixX3d& vertices, const Eigen::Matrix<in
   return normals;
 }
 
+namespace {
+
+double tet_energy_density(const Problem& problem, const Eigen::VectorXd& x, int e) {
+  material::TetNodes nodes;
+  for (int a = 0; a < 4; ++a) nodes.col(a) = x.segment<3>(3 * problem.tets(e, a));
+  const auto se = static_cast<std::size_t>(e);
+  const double scale = problem.tet_energy_scale.empty() ? 1.0 : problem.tet_energy_scale[se];
+  try {
+    return scale * material::tet_elastic_energy(problem.tet_rest[se], nodes, problem.tet_material[se]) / problem.tet_rest[se].volume;
+  } catch (const Error&) {
+    return std::numeric_limits<double>::infinity();
+  }
+}
+
+}  // namespace
+
 Eigen::VectorXd strain_energy_density(const Problem& problem, const Eigen::VectorXd& x) {
   Eigen::VectorXd psi(problem.num_tets());
-  for (int e = 0; e < problem.num_tets(); ++e) {
-    material::TetNodes nodes;
-    for (int a = 0; a < 4; ++a) nodes.col(a) = x.segment<3>(3 * problem.tets(e, a));
-    const auto se = static_cast<std::size_t>(e);
-    const double scale = problem.tet_energy_scale.empty() ? 1.0 : problem.tet_energy_scale[se];
-    try {
-      psi[e] = scale * material::tet_elastic_energy(problem.tet_rest[se], nodes, problem.tet_material[se]) /
-               problem.tet_rest[se].volume;
-    } catch (const Error&) {
-      psi[e] = std::numeric_limits<double>::infinity();
-    }
-  }
+  for (int e = 0; e < problem.num_tets(); ++e) psi[e] = tet_energy_density(problem, x, e);
+  return psi;
+}
+
+Eigen::VectorXd strain_energy_density(const Problem& problem, const Eigen::VectorXd& x, const std::vector<int>& tets) {
+  Eigen::VectorXd psi(static_cast<Eigen::Index>(tets.size()));
+  for (std::size_t k = 0; k < tets.size(); ++k) psi[static_cast<Eigen::Index>(k)] = tet_energy_density(problem, x, tets[k]);
   return psi;
 }
 
@@ -114,11 +126,37 @@ double median(Eigen::VectorXd v) {
 
 }  // namespace
 
+const std::vector<std::string>& frame_field_names() {
+  static const std::vector<std::string> names = {"displacement", "velocity", "skin_weights_argmax", "soft_tissue_displacement",
+                                                 "elastic_displacement", "strain_energy_density", "thickness", "young_tangent",
+                                                 "young_normal", "contact_force", "penetration"};
+  return names;
+}
+
+void check_frame_field_names(const std::vector<std::string>& names, const std::string& where, const std::string& context) {
+  const std::vector<std::string>& known = frame_field_names();
+  for (const std::string& name : names) {
+    if (std::find(known.begin(), known.end(), name) != known.end()) continue;
+    std::string list;
+    for (const std::string& k : known) list += (list.empty() ? "" : ", ") + k;
+    throw_error("{}: unknown field '{}'{} (expected some of {})", where, name, context, list);
+  }
+}
+
+bool is_written_frame(int frame, int frames, int every) {
+  return frame == 0 || frame == frames - 1 || (every > 0 && frame % every == 0);
+}
+
 SimulationWriter::SimulationWriter(const BodyLayer& layer, RunFolder* run, bool write_layer)
-    : SimulationWriter(layer, run, SimulationWriterOptions{.write_layer = write_layer}) {}
+    : SimulationWriter(layer, run, [write_layer] {
+        SimulationWriterOptions options;
+        options.write_layer = write_layer;
+        return options;
+      }()) {}
 
 SimulationWriter::SimulationWriter(const BodyLayer& layer, RunFolder* run, const SimulationWriterOptions& options)
     : layer_(layer), run_(run), options_(options), write_layer_(options.write_layer), amplitude_(region_normals(layer)) {
+  if (options_.fields) check_frame_field_names(*options_.fields, "simulation output");
   const body::BodyModel& model = *layer.model;
   dominant_joint_.resize(model.num_vertices(), 1);
   for (Eigen::Index v = 0; v < model.num_vertices(); ++v) {
@@ -134,67 +172,107 @@ SimulationWriter::SimulationWriter(const BodyLayer& layer, RunFolder* run, const
   }
 }
 
+bool SimulationWriter::wants(const std::string& field) const {
+  return !options_.fields || std::find(options_.fields->begin(), options_.fields->end(), field) != options_.fields->end();
+}
+
+void SimulationWriter::run_job(std::function<void()> job) {
+  if (options_.jobs) options_.jobs->submit(std::move(job));
+  else job();
+}
+
 void SimulationWriter::add_frame(double t, const State& state, const std::vector<vtk::Field>& extra) {
-  const Problem& problem = layer_.problem;
+  add_frame(frame_, t, state, true, extra);
+}
+
+// The caller's thread does what needs the solver's objects (the skin displacement, posing along the motion);
+// the job gets copies and computes the strain energies, places the fields and writes the file.
+void SimulationWriter::add_frame(int index, double t, const State& state, bool write, const std::vector<vtk::Field>& extra) {
   require(state.x.allFinite() && state.w.allFinite(), "simulation output: the state at t = {} is not finite", t);
   const RowMatrixX3d u = layer_.surface_displacement(state.x);
   amplitude_.add(u);
-  RowMatrixX3d posed = layer_.posed_surface(state.x, t);
-  if (run_) {
-    const body::BodyModel& model = *layer_.model;
-    const Eigen::Map<const Eigen::VectorXd> rest(problem.rest.data(), problem.num_dofs());
-    const RowMatrixX3d skinned = layer_.posed_surface(rest, t);
-    const Eigen::VectorXd psi = strain_energy_density(problem, state.x);
-    const meshing::SkinEmbedding& skin = layer_.mesh->skin;
-    Eigen::VectorXd vertex_psi(static_cast<Eigen::Index>(skin.tet.size()));
-    for (std::size_t r = 0; r < skin.tet.size(); ++r) vertex_psi[static_cast<Eigen::Index>(r)] = psi[skin.tet[r]];
+  ++frame_;
+  if (!run_ || !write) return;
 
-    vtk::Fields fields;
-    fields.point_data.push_back({"displacement", posed - layer_.shaped, false});
+  const auto clock = std::chrono::steady_clock::now();
+  RowMatrixX3d posed = layer_.posed_surface_from_displacement(u, t);
+  RowMatrixX3d skinned;
+  if (wants("soft_tissue_displacement")) skinned = layer_.posed_surface_from_displacement(RowMatrixX3d::Zero(u.rows(), 3), t);
+  posing_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - clock).count();
+
+  vtk::Fields fields;
+  if (wants("displacement")) fields.point_data.push_back({"displacement", posed - layer_.shaped, false});
+  if (wants("velocity")) {
     Eigen::MatrixXd velocity = Eigen::MatrixXd::Zero(posed.rows(), 3);
-    if (frame_ > 0 && t > previous_t_) velocity = (posed - previous_posed_) / (t - previous_t_);
+    if (previous_posed_.rows() == posed.rows() && t > previous_t_) velocity = (posed - previous_posed_) / (t - previous_t_);
     fields.point_data.push_back({"velocity", velocity, false});
-    fields.point_data.push_back({"skin_weights_argmax", dominant_joint_, true});
-    fields.point_data.push_back({"soft_tissue_displacement", posed - skinned, false});
-    fields.point_data.push_back({"elastic_displacement", scatter(layer_, u), false});
-    fields.point_data.push_back({"strain_energy_density", scatter(layer_, vertex_psi), false});
-    add_kappa_fields(fields.point_data, vertex_kappa_);
-    fields.field_data.push_back({"TimeValue", Eigen::MatrixXd::Constant(1, 1, t), false});
+  }
+  if (wants("skin_weights_argmax")) fields.point_data.push_back({"skin_weights_argmax", dominant_joint_, true});
+  if (wants("soft_tissue_displacement")) fields.point_data.push_back({"soft_tissue_displacement", posed - skinned, false});
+  if (wants("elastic_displacement")) fields.point_data.push_back({"elastic_displacement", scatter(layer_, u), false});
+  const bool energy = wants("strain_energy_density");
+  if (energy) fields.point_data.push_back({"strain_energy_density", Eigen::MatrixXd(), false});   // filled by the job
+  for (int k = 0; k < material::kNumKappa; ++k) {
+    const std::string name(material::kKappaNames[static_cast<std::size_t>(k)]);
+    if (wants(name)) fields.point_data.push_back({name, vertex_kappa_.col(k), false});
+  }
+  fields.field_data.push_back({"TimeValue", Eigen::MatrixXd::Constant(1, 1, t), false});
+  const std::size_t own_fields = fields.point_data.size();   // the extra ones are in the world frame already
+  for (const vtk::Field& f : extra)
+    if (wants(f.name)) fields.point_data.push_back(f);
+  const std::string name = fmt::format("{}_{:06d}.vtp", options_.prefix, index);
+  body_series_->add(t, name);
+  const std::filesystem::path path = run_->stage(name);
+  run_job([this, path, posed, own_fields, fields = std::move(fields), x = energy ? state.x : Eigen::VectorXd()]() mutable {
+    if (x.size() > 0) {
+      // Only the tets under the skin's vertices (a sixth of the layer's on the coarse mesh).
+      const Eigen::VectorXd vertex_psi = strain_energy_density(layer_.problem, x, layer_.mesh->skin.tet);
+      for (vtk::Field& f : fields.point_data)
+        if (f.name == "strain_energy_density" && f.values.size() == 0) f.values = scatter(layer_, vertex_psi);
+    }
     const bool placed = !options_.rotation.isIdentity(0.0) || !options_.translation.isZero(0.0);
     if (placed) {
-      for (vtk::Field& f : fields.point_data)
+      for (std::size_t k = 0; k < own_fields; ++k) {
+        vtk::Field& f = fields.point_data[k];
         if (f.values.cols() == 3 && !f.integer) f.values = (f.values * options_.rotation.transpose()).eval();
+      }
+      posed = ((posed * options_.rotation.transpose()).rowwise() + options_.translation.transpose()).eval();
     }
-    for (const vtk::Field& f : extra) fields.point_data.push_back(f);
-    const std::string name = fmt::format("{}_{:06d}.vtp", options_.prefix, frame_);
-    const RowMatrixX3d written = placed ? RowMatrixX3d((posed * options_.rotation.transpose()).rowwise() + options_.translation.transpose()) : posed;
-    vtk::write_surface(run_->stage(name), written, model.faces, fields);
-    body_series_->add(t, name);
-
-    if (write_layer_) {
-      NodeFrame frame;
-      problem.frame(t, frame);
-      RowMatrixX3d nodes = posed_positions(frame, state.x);
-      if (placed) nodes = ((nodes * options_.rotation.transpose()).rowwise() + options_.translation.transpose()).eval();
-      const Eigen::Map<const RowMatrixX3d> x(state.x.data(), problem.num_nodes(), 3);
-      const Eigen::Map<const RowMatrixX3d> w(state.w.data(), problem.num_nodes(), 3);
-      vtk::Fields layer_fields;
-      layer_fields.point_data.push_back({"displacement", nodes - problem.rest, false});
-      layer_fields.point_data.push_back({"elastic_displacement", x - problem.rest, false});
-      layer_fields.point_data.push_back({"velocity", w, false});
-      add_kappa_fields(layer_fields.point_data, layer_.fields.node);
-      add_kappa_fields(layer_fields.cell_data, layer_.fields.tet);
-      layer_fields.cell_data.push_back({"strain_energy_density", psi, false});
-      layer_fields.field_data.push_back({"TimeValue", Eigen::MatrixXd::Constant(1, 1, t), false});
-      const std::string layer_name =
-          options_.prefix == "body" ? fmt::format("layer_{:06d}.vtu", frame_) : fmt::format("{}_layer_{:06d}.vtu", options_.prefix, frame_);
-      vtk::write_unstructured(run_->stage(layer_name), nodes, problem.tets, layer_fields);
-      layer_series_->add(t, layer_name);
-    }
-  }
+    vtk::write_surface(path, posed, layer_.model->faces, fields, options_.compression);
+  });
+  if (write_layer_) write_layer_frame(index, t, state);
   previous_posed_ = std::move(posed);
   previous_t_ = t;
-  ++frame_;
+}
+
+void SimulationWriter::write_layer_frame(int index, double t, const State& state) {
+  const Problem& problem = layer_.problem;
+  NodeFrame frame;
+  problem.frame(t, frame);
+  RowMatrixX3d nodes = posed_positions(frame, state.x);
+  const std::string name =
+      options_.prefix == "body" ? fmt::format("layer_{:06d}.vtu", index) : fmt::format("{}_layer_{:06d}.vtu", options_.prefix, index);
+  layer_series_->add(t, name);
+  const std::filesystem::path path = run_->stage(name);
+  run_job([this, &problem, path, t, nodes = std::move(nodes), x = Eigen::VectorXd(state.x), w = Eigen::VectorXd(state.w)]() mutable {
+    const bool placed = !options_.rotation.isIdentity(0.0) || !options_.translation.isZero(0.0);
+    if (placed) nodes = ((nodes * options_.rotation.transpose()).rowwise() + options_.translation.transpose()).eval();
+    const Eigen::Map<const RowMatrixX3d> elastic(x.data(), problem.num_nodes(), 3);
+    const Eigen::Map<const RowMatrixX3d> velocity(w.data(), problem.num_nodes(), 3);
+    vtk::Fields fields;
+    if (wants("displacement")) fields.point_data.push_back({"displacement", nodes - problem.rest, false});
+    if (wants("elastic_displacement")) fields.point_data.push_back({"elastic_displacement", elastic - problem.rest, false});
+    if (wants("velocity")) fields.point_data.push_back({"velocity", velocity, false});
+    for (int k = 0; k < material::kNumKappa; ++k) {
+      const std::string kappa(material::kKappaNames[static_cast<std::size_t>(k)]);
+      if (!wants(kappa)) continue;
+      fields.point_data.push_back({kappa, layer_.fields.node.col(k), false});
+      fields.cell_data.push_back({kappa, layer_.fields.tet.col(k), false});
+    }
+    if (wants("strain_energy_density")) fields.cell_data.push_back({"strain_energy_density", strain_energy_density(problem, x), false});
+    fields.field_data.push_back({"TimeValue", Eigen::MatrixXd::Constant(1, 1, t), false});
+    vtk::write_unstructured(path, nodes, problem.tets, fields, options_.compression);
+  });
 }
 
 void SimulationWriter::finish() {

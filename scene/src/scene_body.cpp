@@ -120,6 +120,12 @@ model::State SceneBody::state() const {
   return fast_ ? fast_->full_state() : full_->state();
 }
 
+double SceneBody::max_elastic_displacement() const {
+  if (!soft()) return 0.0;
+  const RowMatrixX3d u = layer_->surface_displacement(state().x);
+  return u.rows() > 0 ? u.rowwise().norm().maxCoeff() : 0.0;
+}
+
 // Without inertia and gravity the only load is contact: when no potential finds a candidate for the step
 // the equilibrium is the rest state, which needs no solve.
 bool SceneBody::at_rest_this_step(double t0, double h) const {

@@ -3,6 +3,7 @@
 
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/toml_reader.hpp>
+#include <sflsh/model/simulation_output.hpp>
 
 #include <cmath>
 #include <set>
@@ -171,9 +172,20 @@ class SceneReader : public TomlReader {
 
   void read_output(const toml::node& node, OutputSpec& output) const {
     const toml::table& t = table(node, "output");
-    check_keys(t, {"layer", "frames"}, " in [output]");
+    check_keys(t, {"layer", "frames", "every", "fields", "compression"}, " in [output]");
     if (const toml::node* n = t.get("layer")) output.layer = boolean(*n, "layer", " in [output]");
     if (const toml::node* n = t.get("frames")) output.frames = boolean(*n, "frames", " in [output]");
+    if (const toml::node* n = t.get("every")) output.every = count(*n, "every", " in [output]", 1);
+    if (const toml::node* n = t.get("fields")) {
+      std::vector<std::string> names;
+      const toml::array* list = n->as_array();
+      require(list != nullptr, "{}: 'fields' in [output] must be an array of strings", at(*n));
+      for (const toml::node& item : *list) names.push_back(string_value(item, "fields", " in [output]"));
+      model::check_frame_field_names(names, at(*n), " in 'fields' of [output]");
+      output.fields = names;
+    }
+    if (const toml::node* n = t.get("compression"))
+      output.compression = vtk::parse_compression(choice(*n, "compression", {"lz4", "zlib", "none"}, " in [output]"), "compression");
   }
 
   std::vector<SceneKeyframe> keyframes(const toml::node& node, std::string_view key, std::string_view context, bool with_rotation) const {

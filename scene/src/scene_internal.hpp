@@ -89,6 +89,8 @@ class SceneBody {
   /// the body at the end of a step, for the other bodies' contact).
   RowMatrixX3d predicted_world_surface(double t) const;
   model::State state() const;
+  /// The largest elastic displacement of the skin now [m] (0 for a skinned body).
+  double max_elastic_displacement() const;
 
   // Counters for summary.json.
   long steps = 0, idle_steps = 0, newton_iterations = 0, refinements = 0, failed_attempts = 0;

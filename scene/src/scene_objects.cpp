@@ -51,4 +51,27 @@ SceneObject make_object(const ObjectSpec& spec, const Eigen::Vector3d& gravity) 
   return object;
 }
 
+Surface merged_object_surfaces(const std::vector<SceneObject>& objects, Eigen::MatrixXd& ids) {
+  std::vector<Surface> surfaces;
+  Eigen::Index vertices = 0, triangles = 0;
+  for (const SceneObject& o : objects) {
+    surfaces.push_back(o.world_shape->surface(32));
+    vertices += surfaces.back().vertices.rows();
+    triangles += surfaces.back().triangles.rows();
+  }
+  Surface merged;
+  merged.vertices.resize(vertices, 3);
+  merged.triangles.resize(triangles, 3);
+  ids.resize(triangles, 1);
+  Eigen::Index v0 = 0, f0 = 0;
+  for (std::size_t j = 0; j < surfaces.size(); ++j) {
+    merged.vertices.middleRows(v0, surfaces[j].vertices.rows()) = surfaces[j].vertices;
+    merged.triangles.middleRows(f0, surfaces[j].triangles.rows()) = surfaces[j].triangles.array() + static_cast<int>(v0);
+    ids.middleRows(f0, surfaces[j].triangles.rows()).setConstant(static_cast<double>(j));
+    v0 += surfaces[j].vertices.rows();
+    f0 += surfaces[j].triangles.rows();
+  }
+  return merged;
+}
+
 }  // namespace sflsh::scene::detail

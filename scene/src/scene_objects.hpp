@@ -23,6 +23,8 @@ struct SceneObject {
 std::shared_ptr<Obstacle> make_shape(const ObjectSpec& spec);
 /// The object with its world motion; gravity applies to free objects.
 SceneObject make_object(const ObjectSpec& spec, const Eigen::Vector3d& gravity);
+/// Every object's surface in the world at its current pose, merged (`object_id` per triangle in `ids`).
+Surface merged_object_surfaces(const std::vector<SceneObject>& objects, Eigen::MatrixXd& ids);
 /// The world pose of a spec's position and axis-angle rotation [degrees].
 Pose spec_pose(const Eigen::Vector3d& position, const Eigen::Vector3d& rotation_degrees);
 

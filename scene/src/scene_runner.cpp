@@ -1,11 +1,14 @@
 // Running a scene (scene_runner.hpp): bodies, objects, contact on demand, stepping, output and summary.
 #include <sflsh/scene/scene_runner.hpp>
 
+#include "body_groups.hpp"
 #include "crowd.hpp"
+#include "scene_contact.hpp"
 #include "scene_internal.hpp"
 #include "scene_objects.hpp"
 
 #include <sflsh/body/body_io.hpp>
+#include <sflsh/core/background_jobs.hpp>
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
 #include <sflsh/core/progress.hpp>
@@ -16,13 +19,22 @@
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <chrono>
+#include <functional>
 #include <map>
+#include <numeric>
 
 namespace sflsh::scene {
 
 namespace {
 
+using detail::BodyContact;
+using detail::BodyReach;
+using detail::contact_fields;
+using detail::contact_parameters;
+using detail::deepest;
+using detail::node_areas;
 using detail::Rigid;
 using detail::SceneBody;
 using detail::SceneObject;
@@ -31,57 +43,6 @@ using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 const Eigen::Vector3d kGravity(0.0, -9.81, 0.0);
-
-/// A soft body's contact: its potentials against the objects and against the other bodies.
-struct BodyContact {
-  std::shared_ptr<ContactPotential> objects;          ///< null without object contact
-  std::vector<std::shared_ptr<detail::PlacedMotion>> placed;   ///< per scene object (object potential)
-  std::shared_ptr<ContactPotential> bodies;           ///< null without body contact
-  std::vector<int> other;                             ///< per body obstacle: the other body's index
-  std::vector<std::shared_ptr<TriangleMesh>> surfaces;   ///< per body obstacle, in this body's frame
-  std::vector<int> entry_of_node;                     ///< per layer node: its entry in the potentials, or −1
-  double surface_seconds = 0.0;                       ///< updating the other bodies' surfaces
-  double max_penetration = 0.0;                       ///< measured at the written frames on the skin [m]
-};
-
-/// Lumped skin area per contact node: the region vertex's (lumped_vertex_areas) on the node it sits on;
-/// nodes without a region vertex (embedded skins) get the mean.
-std::vector<double> node_areas(const SceneBody& body, const std::vector<int>& nodes) {
-  const model::BodyLayer& layer = body.layer();
-  const std::vector<double> vertex_area = lumped_vertex_areas(layer.rest_skin, layer.mesh->region_surface.faces);
-  std::map<int, double> area;
-  double sum = 0.0;
-  for (std::size_t r = 0; r < vertex_area.size(); ++r) {
-    sum += vertex_area[r];
-    const int node = layer.mesh->skin.node[r];
-    if (node >= 0) area[node] += vertex_area[r];
-  }
-  const double mean = vertex_area.empty() ? 2.25e-4 : sum / static_cast<double>(vertex_area.size());
-  std::vector<double> out;
-  for (int node : nodes) {
-    const auto it = area.find(node);
-    out.push_back(it == area.end() ? mean : it->second);
-  }
-  return out;
-}
-
-ContactParameters contact_parameters(const ContactSpec& spec) {
-  ContactParameters p;
-  if (spec.stiffness > 0.0) p.stiffness = spec.stiffness;
-  p.tolerance = spec.tolerance;
-  p.margin = spec.margin;
-  p.max_refinements = spec.max_refinements;
-  p.validate();
-  return p;
-}
-
-/// Deepest penetration [m] of the listed world points into the shapes.
-double deepest(const RowMatrixX3d& points, const std::vector<const Obstacle*>& shapes) {
-  double d = 0.0;
-  for (const Obstacle* shape : shapes)
-    for (Eigen::Index i = 0; i < points.rows(); ++i) d = std::max(d, -shape->distance(points.row(i).transpose()));
-  return d;
-}
 
 class SceneRun {
  public:
@@ -101,30 +62,41 @@ class SceneRun {
     std::optional<RunFolder> run;
     if (!options_.out.empty() && options_.rank == 0) run.emplace(options_.out);
     RunFolder* folder = run && options_.write_frames && scene_.output.frames ? &*run : nullptr;
+    every_ = options_.every > 0 ? options_.every : scene_.output.every;
+    // Declared after the run folder: a failing run drops its pending writes before the folder is removed.
+    std::optional<BackgroundJobs> jobs;
+    // One writer thread: on 2 cores a second one only competed with the stepping threads (measured).
+    if (folder && options_.background_writing) jobs.emplace(std::max<std::size_t>(8, 2 * bodies_.size() + 1));
+    jobs_ = jobs ? &*jobs : nullptr;
     open_writers(folder);
     write_frame(0, folder);
 
     const double h = 1.0 / (scene_.fps * scene_.substeps);
-    const bool coupled = scene_.effects.body_contact || any_free_object();
     std::optional<tbb::global_control> threads;
     if (options_.threads > 0) threads.emplace(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(options_.threads));
     Progress progress("scene frames", frames_ - 1, options_.rank == 0);
     const auto t_loop = Clock::now();
     for (int f = 1; f < frames_; ++f) {
-      for (int k = 0; k < scene_.substeps; ++k) {
-        const double t0 = ((f - 1) * scene_.substeps + k) * h;
-        if (coupled) step_coupled(t0, h);
-        else step_independent(t0, h);
-      }
+      const auto t_step = Clock::now();
+      for (int k = 0; k < scene_.substeps; ++k) step(((f - 1) * scene_.substeps + k) * h, h);
+      step_seconds_ += seconds_since(t_step);
       const auto t_out = Clock::now();
       write_frame(f, folder);
       output_seconds_ += seconds_since(t_out);
       progress.advance();
     }
+    const auto t_drain = Clock::now();
+    if (jobs) jobs->wait();
+    output_seconds_ += seconds_since(t_drain);
     progress.finish();
     const double loop_seconds = seconds_since(t_loop);
     if (folder) finish_writers(*folder);
     nlohmann::json summary = make_summary(setup_seconds, loop_seconds, seconds_since(t_start), h);
+    if (jobs) {
+      summary["timings"]["writer_seconds"] = jobs->busy_seconds();
+      summary["timings"]["writer_wait_seconds"] = jobs->waited_seconds();
+    }
+    jobs_ = nullptr;
     if (run) {
       write_json(run->stage("summary.json"), summary);
       run->commit();
@@ -176,12 +148,6 @@ class SceneRun {
     }
   }
 
-  bool any_free_object() const {
-    for (const SceneObject& o : objects_)
-      if (o.motion->reacts()) return true;
-    return false;
-  }
-
   // Contact potentials exist only for the contact effects the scene asks for, and only on soft bodies.
   void build_contact() {
     contact_.resize(bodies_.size());
@@ -224,49 +190,103 @@ class SceneRun {
   }
 
   // --- stepping ------------------------------------------------------------------------------------------
-  // No coupling between bodies: every body steps on its own, reduced and skinned ones in parallel (each
-  // integrator is single-threaded), full-space ones one after another (PETSc runs them on all ranks).
-  void step_independent(double t0, double h) {
+  // The bodies fall into groups that cannot touch each other in this step (every body its own group without
+  // body contact). Within a group the bodies step as one Gauss–Seidel sweep in scene order; groups of reduced
+  // and skinned bodies step in parallel (each integrator is single-threaded), groups with a full-space body
+  // one after another (PETSc runs them on all ranks). Free objects react once per step, after all bodies
+  // (lagged), so they do not couple the bodies within a step.
+  void step(double t0, double h) {
+    const double t1 = t0 + h;
+    std::vector<RowMatrixX3d> predicted;
+    std::vector<std::vector<std::size_t>> groups;
+    if (scene_.effects.body_contact) {
+      predicted.resize(bodies_.size());
+      std::vector<BodyReach> reach(bodies_.size());
+      tbb::parallel_for(std::size_t{0}, bodies_.size(), [&](std::size_t b) {
+        if (bodies_[b]->solver() == SolverKind::full) return;   // PETSc objects: on the calling thread below
+        reach[b] = body_reach(b, t1, predicted[b]);
+      });
+      for (std::size_t b = 0; b < bodies_.size(); ++b)
+        if (bodies_[b]->solver() == SolverKind::full) reach[b] = body_reach(b, t1, predicted[b]);
+      if (options_.group_bodies) {
+        groups = contact_groups(reach, contact_reach());
+      } else {
+        groups.emplace_back(bodies_.size());
+        std::iota(groups.back().begin(), groups.back().end(), std::size_t{0});
+      }
+    } else {
+      for (std::size_t b = 0; b < bodies_.size(); ++b) groups.push_back({b});
+    }
     std::vector<std::size_t> parallel, serial;
-    for (std::size_t b = 0; b < bodies_.size(); ++b) (bodies_[b]->solver() == SolverKind::full ? serial : parallel).push_back(b);
+    for (std::size_t g = 0; g < groups.size(); ++g) {
+      bool full = false;
+      for (std::size_t b : groups[g]) full = full || bodies_[b]->solver() == SolverKind::full;
+      (full ? serial : parallel).push_back(g);
+    }
     std::vector<detail::EffectSeconds> seconds(bodies_.size());
-    std::vector<std::string> errors(bodies_.size());
+    std::vector<std::string> errors(groups.size());
     tbb::parallel_for(std::size_t{0}, parallel.size(), [&](std::size_t k) {
-      const std::size_t b = parallel[k];
+      const std::size_t g = parallel[k];
       try {
-        bodies_[b]->step(t0, h, seconds[b]);
+        step_group(groups[g], predicted, t0, h, seconds);
       } catch (const std::exception& e) {
-        errors[b] = e.what();
+        errors[g] = e.what();
       }
     });
     for (const std::string& e : errors)
       if (!e.empty()) throw_error("{}", e);
-    for (std::size_t b : serial) bodies_[b]->step(t0, h, seconds[b]);
+    for (std::size_t g : serial) step_group(groups[g], predicted, t0, h, seconds);
     for (const auto& s : seconds) add(s);
-    commit_objects(t0 + h);
+    ++steps_;
+    groups_ += static_cast<long>(groups.size());
+    commit_objects(t1);
   }
 
-  // Gauss–Seidel over the bodies: each sees the bodies before it at the step's end and the ones after it
-  // predicted (their current elastic displacement carried by the new pose).
-  void step_coupled(double t0, double h) {
+  /// The distance within which two bodies' reaches link them [m]: the potentials' margin and broad-phase
+  /// safety plus 5 cm for the elastic motion of a step.
+  double contact_reach() const {
+    const ContactParameters p = contact_parameters(scene_.contact);
+    return p.margin + p.broad_phase_safety + 0.05;
+  }
+
+  /// Body b's box over the step [t0, t1] (its surface now and predicted at t1, which is kept) and pad.
+  BodyReach body_reach(std::size_t b, double t1, RowMatrixX3d& predicted) const {
+    const SceneBody& body = *bodies_[b];
+    const RowMatrixX3d now = body.world_surface();
+    predicted = body.predicted_world_surface(t1);
+    BodyReach r;
+    double motion = 0.0;
+    for (Eigen::Index v = 0; v < now.rows(); ++v) {
+      r.box.extend(now.row(v).transpose());
+      r.box.extend(predicted.row(v).transpose());
+      motion = std::max(motion, (predicted.row(v) - now.row(v)).norm());
+    }
+    r.pad = motion + 2.0 * body.max_elastic_displacement();
+    return r;
+  }
+
+  // One Gauss–Seidel sweep over a group: each body sees the group's bodies before it at the step's end and
+  // the ones after it predicted (their current elastic displacement carried by the new pose); bodies of other
+  // groups are out of reach and are seen predicted.
+  void step_group(const std::vector<std::size_t>& group, const std::vector<RowMatrixX3d>& predicted, double t0, double h,
+                  std::vector<detail::EffectSeconds>& seconds) {
     const double t1 = t0 + h;
-    for (std::size_t b = 0; b < bodies_.size(); ++b) {
+    for (std::size_t b : group) {
       BodyContact& c = contact_[b];
       if (c.bodies) {
         const auto clock = Clock::now();
         const Rigid body_from_world = bodies_[b]->placement().inverse();
         for (std::size_t k = 0; k < c.other.size(); ++k) {
-          const SceneBody& other = *bodies_[static_cast<std::size_t>(c.other[k])];
-          const RowMatrixX3d world = other.time() >= t1 - 1e-12 ? other.world_surface() : other.predicted_world_surface(t1);
-          c.surfaces[k]->set_vertices(body_from_world.apply(world));
+          const auto o = static_cast<std::size_t>(c.other[k]);
+          const bool in_group = std::find(group.begin(), group.end(), o) != group.end();
+          const SceneBody& other = *bodies_[o];
+          const bool stepped = in_group && other.time() >= t1 - 1e-12;
+          c.surfaces[k]->set_vertices(body_from_world.apply(stepped ? other.world_surface() : predicted[o]));
         }
         c.surface_seconds += seconds_since(clock);
       }
-      detail::EffectSeconds s;
-      bodies_[b]->step(t0, h, s);
-      add(s);
+      bodies_[b]->step(t0, h, seconds[b]);
     }
-    commit_objects(t1);
   }
 
   // Free objects: the reaction of every body, summed, moves the object once per step.
@@ -306,6 +326,9 @@ class SceneRun {
       o.write_layer = scene_.output.layer;
       o.rotation = body->placement().R;
       o.translation = body->placement().t;
+      o.fields = scene_.output.fields;
+      o.compression = scene_.output.compression;
+      o.jobs = jobs_;
       writers_.push_back(std::make_unique<model::SimulationWriter>(body->layer(), folder, o));
     }
     if (folder) {
@@ -313,27 +336,6 @@ class SceneRun {
         if (!body->soft()) skinned_series_.emplace(body->name(), std::make_unique<vtk::PvdSeries>(folder->stage(body->name() + ".pvd")));
       if (!objects_.empty()) objects_series_ = std::make_unique<vtk::PvdSeries>(folder->stage("objects.pvd"));
     }
-  }
-
-  /// contact_force [N] and penetration [m] per body vertex from the body's potentials (world frame).
-  std::vector<vtk::Field> contact_fields(std::size_t b) const {
-    const BodyContact& c = contact_[b];
-    if (!c.objects && !c.bodies) return {};
-    const SceneBody& body = *bodies_[b];
-    const auto n = static_cast<Eigen::Index>(body.model().num_vertices());
-    Eigen::MatrixXd force = Eigen::MatrixXd::Zero(n, 3), depth = Eigen::MatrixXd::Zero(n, 1);
-    for (Eigen::Index v = 0; v < n; ++v) {
-      const int node = body.vertex_node()[static_cast<std::size_t>(v)];
-      if (node < 0) continue;
-      const int k = c.entry_of_node[static_cast<std::size_t>(node)];
-      if (k < 0) continue;
-      for (const ContactPotential* p : {c.objects.get(), c.bodies.get()}) {
-        if (!p) continue;
-        force.row(v) += p->contact_force().row(k) * body.placement().R.transpose();
-        depth(v, 0) = std::max(depth(v, 0), p->penetration()[k]);
-      }
-    }
-    return {{"contact_force", force, false}, {"penetration", depth, false}};
   }
 
   // Independent check of the contact: the soft skin's deepest point inside any object or other body.
@@ -365,53 +367,61 @@ class SceneRun {
     }
   }
 
+  // Frame f: σ of every soft body; when f is an output frame (every N-th, the first and the last) also the
+  // independent penetration check and, with a run folder, the frame files (posed here, written by the jobs).
   void write_frame(int f, RunFolder* folder) {
     const double t = f / scene_.fps;
-    const auto clock = Clock::now();
-    if (scene_.effects.object_contact || scene_.effects.body_contact) measure_penetration(t);
-    check_seconds_ += seconds_since(clock);
+    const bool output = model::is_written_frame(f, frames_, every_);
+    if (output && (scene_.effects.object_contact || scene_.effects.body_contact)) {
+      const auto clock = Clock::now();
+      measure_penetration(t);
+      check_seconds_ += seconds_since(clock);
+    }
+    const bool write = output && folder;
+    if (!write) {
+      // Only σ: each soft body's skin displacement, independent of the others (in parallel, like the steps).
+      tbb::parallel_for(std::size_t{0}, bodies_.size(), [&](std::size_t b) {
+        if (bodies_[b]->soft() && bodies_[b]->solver() != SolverKind::full) writers_[b]->add_frame(f, t, bodies_[b]->state(), false);
+      });
+      for (std::size_t b = 0; b < bodies_.size(); ++b)
+        if (bodies_[b]->solver() == SolverKind::full) writers_[b]->add_frame(f, t, bodies_[b]->state(), false);
+      return;
+    }
     for (std::size_t b = 0; b < bodies_.size(); ++b) {
       SceneBody& body = *bodies_[b];
       if (body.soft()) {
-        writers_[b]->add_frame(t, body.state(), folder ? contact_fields(b) : std::vector<vtk::Field>{});
+        writers_[b]->add_frame(f, t, body.state(), write, write ? contact_fields(contact_[b], *bodies_[b]) : std::vector<vtk::Field>{});
         continue;
       }
-      if (!folder) continue;
+      if (!write) continue;
       const auto t_skin = Clock::now();
       const RowMatrixX3d posed = body.world_surface();
       seconds_.skinning += seconds_since(t_skin);
       vtk::Fields fields;
       fields.field_data.push_back({"TimeValue", Eigen::MatrixXd::Constant(1, 1, t), false});
       const std::string name = fmt::format("{}_{:06d}.vtp", body.name(), f);
-      vtk::write_surface(folder->stage(name), posed, body.model().faces, fields);
       skinned_series_.at(body.name())->add(t, name);
+      submit([path = folder->stage(name), posed, &faces = body.model().faces, fields = std::move(fields), this] {
+        vtk::write_surface(path, posed, faces, fields, scene_.output.compression);
+      });
     }
-    if (folder && objects_series_) {
-      std::vector<Surface> surfaces;
-      Eigen::Index vertices = 0, triangles = 0;
-      for (const SceneObject& o : objects_) {
-        surfaces.push_back(o.world_shape->surface(32));
-        vertices += surfaces.back().vertices.rows();
-        triangles += surfaces.back().triangles.rows();
-      }
-      vtk::Points points(vertices, 3);
-      vtk::Cells cells(triangles, 3);
-      Eigen::MatrixXd id(triangles, 1);
-      Eigen::Index v0 = 0, f0 = 0;
-      for (std::size_t j = 0; j < surfaces.size(); ++j) {
-        points.middleRows(v0, surfaces[j].vertices.rows()) = surfaces[j].vertices;
-        cells.middleRows(f0, surfaces[j].triangles.rows()) = surfaces[j].triangles.array() + static_cast<int>(v0);
-        id.middleRows(f0, surfaces[j].triangles.rows()).setConstant(static_cast<double>(j));
-        v0 += surfaces[j].vertices.rows();
-        f0 += surfaces[j].triangles.rows();
-      }
+    if (write && objects_series_) {
+      Eigen::MatrixXd ids;
+      Surface surface = detail::merged_object_surfaces(objects_, ids);
       vtk::Fields fields;
-      fields.cell_data.push_back({"object_id", id, true});
+      fields.cell_data.push_back({"object_id", ids, true});
       fields.field_data.push_back({"TimeValue", Eigen::MatrixXd::Constant(1, 1, t), false});
       const std::string name = fmt::format("objects_{:06d}.vtp", f);
-      vtk::write_surface(folder->stage(name), points, cells, fields);
       objects_series_->add(t, name);
+      submit([path = folder->stage(name), surface = std::move(surface), fields = std::move(fields), this] {
+        vtk::write_surface(path, surface.vertices, surface.triangles, fields, scene_.output.compression);
+      });
     }
+  }
+
+  void submit(std::function<void()> job) {
+    if (jobs_) jobs_->submit(std::move(job));
+    else job();
   }
 
   void finish_writers(RunFolder& folder) {
@@ -420,6 +430,14 @@ class SceneRun {
     for (auto& [name, series] : skinned_series_) series->write();
     if (objects_series_) objects_series_->write();
     (void)folder;
+  }
+
+  /// Seconds spent posing the written frames' surfaces (soft bodies' writers and skinned bodies).
+  double posing_seconds() const {
+    double seconds = seconds_.skinning;
+    for (const auto& w : writers_)
+      if (w) seconds += w->posing_seconds();
+    return seconds;
   }
 
   // --- summary -------------------------------------------------------------------------------------------
@@ -522,10 +540,15 @@ class SceneRun {
                       {"skeleton_response", false}};
     s["timings"] = {{"setup_seconds", setup_seconds},
                     {"loop_seconds", loop_seconds},
+                    {"step_seconds", step_seconds_},
                     {"output_seconds", output_seconds_},
+                    {"posing_seconds", posing_seconds()},
                     {"penetration_check_seconds", check_seconds_},
                     {"frames_per_second", loop_seconds > 0 ? (frames_ - 1) / loop_seconds : 0.0},
                     {"total_seconds", total_seconds}};
+    s["output"] = {{"every", every_}, {"compression", vtk::to_string(scene_.output.compression)}, {"frames", scene_.output.frames}};
+    if (scene_.output.fields) s["output"]["fields"] = *scene_.output.fields;
+    if (e.body_contact) s["body_groups_per_step"] = steps_ > 0 ? static_cast<double>(groups_) / static_cast<double>(steps_) : 0.0;
     if (!crowd_.bodies.empty()) s["crowd"] = {{"avatars", crowd_.bodies.size()}, {"shape_model", crowd_.shape_model}};
     return s;
   }
@@ -541,8 +564,11 @@ class SceneRun {
   std::vector<std::unique_ptr<model::SimulationWriter>> writers_;
   std::map<std::string, std::unique_ptr<vtk::PvdSeries>> skinned_series_;
   std::unique_ptr<vtk::PvdSeries> objects_series_;
+  BackgroundJobs* jobs_ = nullptr;   ///< the frame writer of run() (null: write at once)
+  int every_ = 1;
   detail::EffectSeconds seconds_;
-  double output_seconds_ = 0.0, check_seconds_ = 0.0, deepest_time_ = 0.0;
+  double output_seconds_ = 0.0, step_seconds_ = 0.0, check_seconds_ = 0.0, deepest_time_ = 0.0;
+  long steps_ = 0, groups_ = 0;
 };
 
 }  // namespace

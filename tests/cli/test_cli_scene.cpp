@@ -38,5 +38,28 @@ TEST(CliScene, BadSceneIsOneLineAndWritesNothing) {
   EXPECT_NE(m.err.find("--motion is required (or give a scene with --scene FILE)"), std::string::npos) << m.err;
 }
 
+TEST(CliScene, EveryWritesTheChosenFramesAndBadValuesWriteNothing) {
+  const auto dir = testing::scratch_dir();
+  const std::string scene = std::string(SFLSH_DATA_DIR) + "/scenes/skinning_only.toml";
+  const auto r = testing::run_sflsh("simulate --scene " + scene + " --frames 6 --every 4 --out " + (dir / "out").string(), dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (int f = 0; f < 6; ++f) {
+    const bool written = f == 0 || f == 4 || f == 5;
+    EXPECT_EQ(std::filesystem::exists(dir / "out" / ("dancer_00000" + std::to_string(f) + ".vtp")), written) << f;
+  }
+  std::ifstream in(dir / "out" / "summary.json");
+  EXPECT_EQ(nlohmann::json::parse(in)["output"]["every"], 4);
+
+  const auto zero = testing::run_sflsh("simulate --scene " + scene + " --every 0 --out " + (dir / "zero").string(), dir);
+  EXPECT_NE(zero.exit_code, 0);
+  EXPECT_NE(zero.err.find("--every must be at least 1, got 0"), std::string::npos) << zero.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "zero"));
+  std::ofstream(dir / "bad.toml") << "[scene]\nfps = 30\n[output]\nevery = -2\n[[body]]\nmotion = \"rest\"\n";
+  const auto bad = testing::run_sflsh("simulate --scene " + (dir / "bad.toml").string() + " --out " + (dir / "bad").string(), dir);
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_NE(bad.err.find("bad.toml:4: 'every' in [output] = -2 must be an integer ≥ 1"), std::string::npos) << bad.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "bad"));
+}
+
 }  // namespace
 }  // namespace sflsh

@@ -3,6 +3,7 @@
 // (same points, same order, body.pvd), optionally the tet layer (layer.pvd), and the per-vertex dynamics
 // amplitude σ of docs/physics.md §4 accumulated on the fly (the elastic displacement u of the skin is what
 // inverse skinning returns for a simulation driven by the same poses).
+#include <sflsh/core/background_jobs.hpp>
 #include <sflsh/core/run_folder.hpp>
 #include <sflsh/core/vtk_io.hpp>
 #include <sflsh/model/body_layer.hpp>
@@ -10,6 +11,9 @@
 #include <nlohmann/json.hpp>
 
 #include <memory>
+#include <optional>
+#include <string>
+#include <vector>
 
 namespace sflsh::model {
 
@@ -38,6 +42,19 @@ RowMatrixX3d vertex_normals(const RowMatrixX3d& vertices, const Eigen::Matrix<in
 
 /// Strain-energy density ψ = E_e / V_e per tet [J/m³] at elastic state x.
 Eigen::VectorXd strain_energy_density(const Problem& problem, const Eigen::VectorXd& x);
+/// ψ [J/m³] of the listed tets only (one value per entry of `tets`).
+Eigen::VectorXd strain_energy_density(const Problem& problem, const Eigen::VectorXd& x, const std::vector<int>& tets);
+
+/// The point/cell arrays a body frame (and a layer frame) can carry: displacement, velocity,
+/// skin_weights_argmax, soft_tissue_displacement, elastic_displacement, strain_energy_density, thickness,
+/// young_tangent, young_normal, and in scenes with contact contact_force, penetration.
+const std::vector<std::string>& frame_field_names();
+/// Throws sflsh::Error "<where>: unknown field '<name>'<context> (expected …)" for a name not in frame_field_names().
+void check_frame_field_names(const std::vector<std::string>& names, const std::string& where, const std::string& context = "");
+
+/// Whether frame `frame` of `frames` (0 … frames − 1) is written with `every` ≥ 1: every N-th frame, plus
+/// always the first and the last one (a series starts at rest and ends where the run ends).
+bool is_written_frame(int frame, int frames, int every);
 
 /// Where and how a SimulationWriter writes (scenes write several bodies, each placed in the world).
 struct SimulationWriterOptions {
@@ -47,6 +64,14 @@ struct SimulationWriterOptions {
   /// rotation to every written vector field; σ is unaffected.
   Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
   Eigen::Vector3d translation = Eigen::Vector3d::Zero();
+  /// The arrays written into the frames (names of frame_field_names()); nullopt: all of them. Only the
+  /// requested ones are computed.
+  std::optional<std::vector<std::string>> fields;
+  /// Compression of the frame files (dynamics.vtp stays zlib).
+  vtk::Compression compression = vtk::Compression::lz4;
+  /// Non-null: the frame files are written by these jobs (a background thread); the caller waits for them
+  /// before committing the run folder. Null: written at once.
+  BackgroundJobs* jobs = nullptr;
 };
 
 /// Writes a body simulation frame by frame into a run folder and accumulates σ.
@@ -65,9 +90,14 @@ class SimulationWriter {
   SimulationWriter(const BodyLayer& layer, RunFolder* run, bool write_layer);
   /// With a prefix and a placement; prefix "body" gives the file names above.
   SimulationWriter(const BodyLayer& layer, RunFolder* run, const SimulationWriterOptions& options);
-  /// Records (and writes) the frame at time t; `extra` point fields (one row per body vertex, world frame)
-  /// are written beside the others.
+  /// Records (and writes) the frame at time t, numbered by the frames added so far; `extra` point fields
+  /// (one row per body vertex, world frame) are written beside the others.
   void add_frame(double t, const State& state, const std::vector<vtk::Field>& extra = {});
+  /// Records frame `index` at time t into σ; with `write` (and a run folder) also poses the surface and
+  /// writes <prefix>_<index>.vtp. Frames that are not written cost only the skin's displacement.
+  void add_frame(int index, double t, const State& state, bool write, const std::vector<vtk::Field>& extra = {});
+  /// Whether a frame array is requested (SimulationWriterOptions::fields).
+  bool wants(const std::string& field) const;
   /// Writes the .pvd collections and dynamics.vtp.
   void finish();
   /// σ statistics over the region's vertices in mm: sigma_mean_mm, sigma_median_mm, sigma_max_mm,
@@ -75,8 +105,10 @@ class SimulationWriter {
   nlohmann::json dynamics_summary() const;
   /// Per body vertex σ in metres (zero outside the region).
   Eigen::VectorXd sigma_per_vertex() const;
-  /// The posed surface of the last frame added (n×3).
+  /// The posed surface of the last frame written (n×3; empty before the first one or without a run folder).
   const RowMatrixX3d& last_posed() const { return previous_posed_; }
+  /// Seconds spent posing the written frames' surfaces (caller's thread).
+  double posing_seconds() const { return posing_seconds_; }
 
  private:
   const BodyLayer& layer_;
@@ -90,6 +122,11 @@ class SimulationWriter {
   RowMatrixX3d previous_posed_;
   double previous_t_ = 0.0;
   int frame_ = 0;
+  double posing_seconds_ = 0.0;
+
+  void write_layer_frame(int index, double t, const State& state);
+  /// Runs the job on the background jobs, or at once without them.
+  void run_job(std::function<void()> job);
 };
 
 }  // namespace sflsh::model

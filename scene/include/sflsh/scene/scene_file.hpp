@@ -2,6 +2,7 @@
 // Scene files (TOML, docs/scenes.md, examples in data/scenes/): bodies, rigid objects, the effects the scene
 // calls for, time stepping and output. The simulator builds only what the effects ask for (scene_runner.hpp).
 // Every error names the file and line: unknown keys, missing keys, wrong types, impossible values.
+#include <sflsh/core/vtk_io.hpp>
 #include <sflsh/model/time_integrator.hpp>
 #include <Eigen/Core>
 
@@ -117,6 +118,10 @@ struct CrowdSpec {
 struct OutputSpec {
   bool layer = false;        ///< also the tet layers (<body>_layer.pvd)
   bool frames = true;        ///< the .pvd series (off: summary.json only)
+  int every = 1;             ///< write every N-th frame (frame 0 and the last frame always)
+  /// The arrays of the body (and layer) frames, names of model::frame_field_names(); nullopt: all.
+  std::optional<std::vector<std::string>> fields;
+  vtk::Compression compression = vtk::Compression::lz4;   ///< of the frame files: lz4 | zlib | none
 };
 
 struct Scene {

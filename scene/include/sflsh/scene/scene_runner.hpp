@@ -26,6 +26,11 @@ struct SceneRunOptions {
   std::filesystem::path data_dir;     ///< the project's data folder (default shape model of crowds)
   int threads = 0;                    ///< bodies solved in parallel when they do not interact (0: all cores)
   bool write_frames = true;           ///< false: summary.json only
+  int every = 0;                      ///< > 0 overrides the scene's [output] every (write every N-th frame)
+  bool background_writing = true;     ///< false: frame files are written on the stepping thread
+  /// true: bodies that cannot touch each other in a step form separate groups stepped in parallel; false: one
+  /// Gauss–Seidel sweep over all bodies (the reference the groups must reproduce exactly).
+  bool group_bodies = true;
   int rank = 0;                       ///< MPI rank: only rank 0 writes
   nlohmann::json header;              ///< summary header (command line, versions)
 };

@@ -1,0 +1,63 @@
+// A soft body's contact in a scene (scene_contact.hpp).
+#include "scene_contact.hpp"
+
+#include <algorithm>
+#include <map>
+
+namespace sflsh::scene::detail {
+
+std::vector<double> node_areas(const SceneBody& body, const std::vector<int>& nodes) {
+  const model::BodyLayer& layer = body.layer();
+  const std::vector<double> vertex_area = lumped_vertex_areas(layer.rest_skin, layer.mesh->region_surface.faces);
+  std::map<int, double> area;
+  double sum = 0.0;
+  for (std::size_t r = 0; r < vertex_area.size(); ++r) {
+    sum += vertex_area[r];
+    const int node = layer.mesh->skin.node[r];
+    if (node >= 0) area[node] += vertex_area[r];
+  }
+  const double mean = vertex_area.empty() ? 2.25e-4 : sum / static_cast<double>(vertex_area.size());
+  std::vector<double> out;
+  for (int node : nodes) {
+    const auto it = area.find(node);
+    out.push_back(it == area.end() ? mean : it->second);
+  }
+  return out;
+}
+
+ContactParameters contact_parameters(const ContactSpec& spec) {
+  ContactParameters p;
+  if (spec.stiffness > 0.0) p.stiffness = spec.stiffness;
+  p.tolerance = spec.tolerance;
+  p.margin = spec.margin;
+  p.max_refinements = spec.max_refinements;
+  p.validate();
+  return p;
+}
+
+double deepest(const RowMatrixX3d& points, const std::vector<const Obstacle*>& shapes) {
+  double d = 0.0;
+  for (const Obstacle* shape : shapes)
+    for (Eigen::Index i = 0; i < points.rows(); ++i) d = std::max(d, -shape->distance(points.row(i).transpose()));
+  return d;
+}
+
+std::vector<vtk::Field> contact_fields(const BodyContact& c, const SceneBody& body) {
+  if (!c.objects && !c.bodies) return {};
+  const auto n = static_cast<Eigen::Index>(body.model().num_vertices());
+  Eigen::MatrixXd force = Eigen::MatrixXd::Zero(n, 3), depth = Eigen::MatrixXd::Zero(n, 1);
+  for (Eigen::Index v = 0; v < n; ++v) {
+    const int node = body.vertex_node()[static_cast<std::size_t>(v)];
+    if (node < 0) continue;
+    const int k = c.entry_of_node[static_cast<std::size_t>(node)];
+    if (k < 0) continue;
+    for (const ContactPotential* p : {c.objects.get(), c.bodies.get()}) {
+      if (!p) continue;
+      force.row(v) += p->contact_force().row(k) * body.placement().R.transpose();
+      depth(v, 0) = std::max(depth(v, 0), p->penetration()[k]);
+    }
+  }
+  return {{"contact_force", force, false}, {"penetration", depth, false}};
+}
+
+}  // namespace sflsh::scene::detail
