@@ -5,7 +5,10 @@
 // A frame = one step of 1/60 s + the posed skin of the whole body (what a renderer needs). The one-body case runs
 // once per integrator × mass of the lists (fps, Newton iterations and factorizations per frame each); the crowd
 // uses the first of both.
+// The guard of the tets outside the cubature (cubature_guard.hpp) is part of "elastic"; its share is the "(guard)" column.
 // Usage: bench_reduced [--mesh coarse] [--handles 86] [--cubature 200] [--frames 120] [--crowd 25]
+//                      [--step-tolerance M] [--gradient-rtol R] [--refresh-ratio R] [--predictor-order 1|2]
+//                      [--guard 0|1] [--guard-exponent X]
 //                      [--threads 2] [--motion shake_hips] [--integrators backward_euler,bdf2,newmark]
 //                      [--masses lumped,consistent] [--out bench_reduced.json]
 #include <sflsh/body/body_io.hpp>
@@ -111,6 +114,7 @@ int main(int argc, char** argv) {
     else if (std::strcmp(argv[i], "--gradient-rtol") == 0) tuned.gradient_rtol = std::stod(argv[i + 1]);
     else if (std::strcmp(argv[i], "--refresh-ratio") == 0) tuned.refresh_ratio = std::stod(argv[i + 1]);
     else if (std::strcmp(argv[i], "--predictor-order") == 0) tuned.predictor_order = std::stoi(argv[i + 1]);
+    else if (std::strcmp(argv[i], "--guard-exponent") == 0) tuned.guard_exponent = std::stod(argv[i + 1]);
     else if (std::strcmp(argv[i], "--guard") == 0) tuned.guard = std::stoi(argv[i + 1]) != 0;
     else {
       std::cerr << "bench_reduced: unknown option " << argv[i] << "\n";
@@ -141,7 +145,8 @@ int main(int argc, char** argv) {
       model::MassKind mass;
       Breakdown breakdown;
       double wall = 0.0;
-      int guard_full_checks = 0, guard_checks = 0, cubature_added = 0;
+      int guard_full_checks = 0, guard_checks = 0, guard_passes = 0, cubature_added = 0;
+      double guard_seconds = 0.0;   ///< per-tet passes and renewals [s]
     };
     std::vector<Case> cases;
     int coordinates = 0;
@@ -160,12 +165,11 @@ int main(int argc, char** argv) {
         if (const reduced::CubatureGuard* guard = body->integrator->guard()) {
           c.guard_full_checks = guard->full_checks();
           c.guard_checks = guard->checks();
+          c.guard_passes = guard->tet_passes();
+          c.guard_seconds = guard->pass_seconds() + guard->renew_seconds();
         }
         c.cubature_added = body->integrator->cubature_added();
-        if (const reduced::CubatureGuard* guard = body->integrator->guard())
-          std::cerr << fmt::format("guard: {} checks, {} per-tet passes, {} renewals, {} exact evaluations ({} tets guarded), {} tets added\n",
-                                   guard->checks(), guard->tet_passes(), guard->full_checks(), guard->exact_evaluations(), guard->num_guarded(),
-                                   c.cubature_added);
+
         cases.push_back(c);
       }
     }
@@ -210,28 +214,31 @@ int main(int argc, char** argv) {
     const auto ms = [&](double s, double n) { return 1e3 * s / n; };
     std::cout << fmt::format("reduced model: {} mesh, {} point handles ({} coordinates), {} cubature tets, {} frames of 1/60 s\n\n", mesh,
                              handles, coordinates, cubature, frames);
-    std::cout << fmt::format("{:<36} {:>8} {:>10} {:>10} {:>10} {:>10} {:>10} {:>8} {:>8} {:>12}\n", "case", "fps", "ms/frame", "elastic",
-                             "inertia", "solve", "output", "newton", "factor", "paper fps");
+    std::cout << fmt::format("{:<36} {:>8} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10} {:>8} {:>8} {:>12}\n", "case", "fps", "ms/frame",
+                             "elastic", "(guard)", "inertia", "solve", "output", "newton", "factor", "paper fps");
     nlohmann::json combinations = nlohmann::json::array();
     for (const Case& c : cases) {
       const Breakdown& b = c.breakdown;
       const std::string label = fmt::format("1 body, {}, {}", model::to_string(c.integrator), model::to_string(c.mass));
-      std::cout << fmt::format("{:<36} {:>8.1f} {:>10.3f} {:>10.3f} {:>10.3f} {:>10.3f} {:>10.3f} {:>8.2f} {:>8.2f} {:>12}\n", label,
-                               frames / c.wall, ms(c.wall, frames), ms(b.elastic, frames), ms(b.inertia, frames), ms(b.solve, frames),
-                               ms(b.output, frames), static_cast<double>(b.newton) / frames, static_cast<double>(b.factorizations) / frames,
-                               &c == &cases.front() ? "30 (1 thr)" : "");
+      std::cout << fmt::format("{:<36} {:>8.1f} {:>10.3f} {:>10.3f} {:>10.3f} {:>10.3f} {:>10.3f} {:>10.3f} {:>8.2f} {:>8.2f} {:>12}\n",
+                               label, frames / c.wall, ms(c.wall, frames), ms(b.elastic, frames), ms(c.guard_seconds, frames),
+                               ms(b.inertia, frames), ms(b.solve, frames), ms(b.output, frames), static_cast<double>(b.newton) / frames,
+                               static_cast<double>(b.factorizations) / frames, &c == &cases.front() ? "30 (1 thr)" : "");
       combinations.push_back({{"integrator", model::to_string(c.integrator)}, {"mass", model::to_string(c.mass)}, {"threads", 1},
                               {"fps", frames / c.wall}, {"ms_per_frame", ms(c.wall, frames)}, {"elastic_ms", ms(b.elastic, frames)},
                               {"inertia_ms", ms(b.inertia, frames)}, {"solve_ms", ms(b.solve, frames)}, {"output_ms", ms(b.output, frames)},
                               {"newton_per_frame", static_cast<double>(b.newton) / frames},
                               {"factorizations_per_frame", static_cast<double>(b.factorizations) / frames},
-                              {"startup_steps", b.startup}, {"failed_attempts", b.failed}, {"substeps", b.substeps}});
+                              {"startup_steps", b.startup}, {"failed_attempts", b.failed}, {"substeps", b.substeps},
+                              {"guard", {{"ms_per_frame", ms(c.guard_seconds, frames)}, {"checks", c.guard_checks},
+                                         {"per_tet_passes", c.guard_passes}, {"renewals", c.guard_full_checks},
+                                         {"cubature_added", c.cubature_added}}}});
     }
     const double n = static_cast<double>(frames) * crowd;
     if (crowd > 0)   // --crowd 0: no crowd row (nothing was run)
-      std::cout << fmt::format("{:<36} {:>8.1f} {:>10.3f} {:>10.3f} {:>10.3f} {:>10.3f} {:>10.3f} {:>8.2f} {:>8.2f} {:>12}\n",
+      std::cout << fmt::format("{:<36} {:>8.1f} {:>10.3f} {:>10.3f} {:>10} {:>10.3f} {:>10.3f} {:>10.3f} {:>8.2f} {:>8.2f} {:>12}\n",
                              fmt::format("{} bodies, {} threads", crowd, threads), crowd_fps, ms(crowd_wall, frames), ms(total.elastic, n),
-                             ms(total.inertia, n), ms(total.solve, n), ms(total.output, n), static_cast<double>(total.newton) / n,
+                             "", ms(total.inertia, n), ms(total.solve, n), ms(total.output, n), static_cast<double>(total.newton) / n,
                              static_cast<double>(total.factorizations) / n, "1.2 (1 thr)");
     std::cout << fmt::format("\n(ms per frame; newton and factor: Newton iterations and Hessian factorizations per frame; the crowd runs {} "
                              "with {} masses, its breakdown columns are per body and frame; crowd built in {:.1f} s)\n",

@@ -3,10 +3,11 @@
 // its points, so a subspace state can strain a tet outside the set far beyond the material's range while the
 // reduced energy stays low. The guard watches every tet that carries no cubature weight, cheaply. At a reference
 // state q_ref every guarded tet gets the radius r_e in F within which its Fung exponent x = 2Ψ₀/c stays below the
-// limit (Ψ₀ ≤ (μ₀ + 3/2 λ₀⁺)‖Ê‖², ‖Ê − Ê_ref‖ ≤ ‖P_Y‖² ‖E − E_ref‖, ‖E − E_ref‖ ≤ ‖F_ref‖ r + r²/2), and since
+// limit (Ψ₀ ≤ (μ₀ + 3/2 λ₀⁺)‖Ê‖², ‖Ê − Ê_ref‖ ≤ ‖P_Y‖² ‖E − E_ref‖, ‖E − E_ref‖ ≤ ‖F_ref‖₂ r + r²/2), and since
 //   ‖F_e(q) − F_e(q_ref)‖_F ≤ Σ_{s ∈ S_e} ‖t_s − t_ref,s‖ ‖c_s‖      (F = F_D + Σ_s t_s c_sᵀ, cubature_elastic.hpp)
-// a check costs one short dot product per tet: a tet whose bound stays within r_e cannot have crossed the limit; the
-// others are evaluated exactly. When many need it the reference moves to q (every tet evaluated, radii renewed).
+// a check first compares each ‖t_s − t_ref,s‖ with the budget β_s = min over the tets touching s of r_e / L_e (O(S));
+// only the tets touching a function beyond its budget get their own bound, and those whose bound exceeds r_e are
+// evaluated exactly. When many need it the reference moves to q (every tet evaluated, radii renewed).
 // Tets over the limit are returned: the solver adds them to the cubature and solves the substep again
 // (reduced_solver.hpp).
 #include <sflsh/model/problem.hpp>
@@ -44,6 +45,9 @@ class CubatureGuard {
   long exact_evaluations() const { return exact_; }
   /// Checks that needed the per-tet bound (some function moved beyond its budget β_s).
   int tet_passes() const { return tet_passes_; }
+  /// Wall time of the per-tet passes and of the renewals [s] (the O(S) checks are not timed).
+  double pass_seconds() const { return pass_seconds_; }
+  double renew_seconds() const { return renew_seconds_; }
   double exponent_limit() const { return limit_; }
   /// The largest exponent of a guarded tet at the last renewal of the reference.
   double last_max_exponent() const { return last_max_; }
@@ -64,12 +68,17 @@ class CubatureGuard {
   Eigen::VectorXd q_reference_;
   std::vector<double> moved_;            ///< ‖t_s − t_ref,s‖ per function (scratch)
   std::vector<double> budget_;           ///< β_s = min over the tets touching s of r_e / L_e, per function
+  std::vector<int> function_offset_;     ///< function s touches the points function_points_[offset[s] .. offset[s+1])
+  std::vector<int> function_points_;
+  std::vector<unsigned> visited_;        ///< per point: the generation of the check that last bounded it
+  unsigned generation_ = 0;
   bool valid_ = false;                   ///< a reference is set
   double limit_ = 0.0;
   double renew_fraction_ = 0.05;         ///< renew the reference when more tets than this fraction need evaluating
   double last_max_ = 0.0;
   int guarded_ = 0, full_checks_ = 0, checks_ = 0, tet_passes_ = 0;
   long exact_ = 0;
+  double pass_seconds_ = 0.0, renew_seconds_ = 0.0;
 };
 
 }  // namespace sflsh::reduced
