@@ -17,8 +17,8 @@ namespace sflsh::reduced {
 
 namespace {
 
-/// Bump when what a cache entry holds changes.
-constexpr int kReducedFormat = 1;
+/// Bump when what a cache entry holds changes (2: the key hashes the attached nodes; the skin's rim is attached).
+constexpr int kReducedFormat = 2;
 
 std::uint64_t fnv1a(std::uint64_t hash, const void* data, std::size_t bytes) {
   const auto* p = static_cast<const unsigned char*>(data);
@@ -29,10 +29,14 @@ std::uint64_t fnv1a(std::uint64_t hash, const void* data, std::size_t bytes) {
   return hash;
 }
 
-std::string cache_key(const meshing::LayerMesh& mesh, const ReducedModelOptions& options) {
+/// Hash of what the handles, basis and cubature are built from: template nodes and tets, the attached
+/// (Dirichlet) components — they make the bone handles and where every basis function vanishes — and the options.
+std::string cache_key(const meshing::LayerMesh& mesh, const model::Dirichlet& dirichlet, const ReducedModelOptions& options) {
   std::uint64_t h = 1469598103934665603ULL;
   h = fnv1a(h, mesh.nodes.data(), sizeof(double) * static_cast<std::size_t>(mesh.nodes.size()));
   h = fnv1a(h, mesh.tets.data(), sizeof(int) * static_cast<std::size_t>(mesh.tets.size()));
+  const std::vector<char> attached = dirichlet.mask(mesh.num_nodes());
+  h = fnv1a(h, attached.data(), attached.size());
   const std::string settings =
       fmt::format("v{} P{} K{} w{} drop{} max{} affine{} len{}", kReducedFormat, options.point_handles, options.cubature,
                   options.weighting == CubatureWeighting::nnls ? "nnls" : "voronoi", options.basis.drop_below,
@@ -215,7 +219,7 @@ ReducedModel build_reduced_model(const model::BodyLayer& layer, const ReducedMod
   require(requested.cubature >= -1 && requested.cubature <= mesh.num_tets(),
           "reduced: --cubature {} must be between 0 (exact) and {} tets, or −1 (auto)", requested.cubature, mesh.num_tets());
   ReducedModel m;
-  m.cache_key = cache_key(mesh, options);
+  m.cache_key = cache_key(mesh, layer.problem.dirichlet, options);
   const std::filesystem::path dir = options.cache_dir.empty() ? meshing::default_cache_dir() : options.cache_dir;
   const std::filesystem::path path = cache_file(dir, m.cache_key);
   bool loaded = false;
