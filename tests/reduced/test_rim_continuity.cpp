@@ -125,6 +125,30 @@ TEST(RimContinuity, TheSkinsRimIsAttachedOnEveryBoundaryCurve) {
   EXPECT_EQ(rim.size(), loop_vertices);
 }
 
+TEST(RimContinuity, ReducedCacheKeyFollowsTheAttachedNodes) {
+  // Attaching more nodes changes the bone handles and where every basis function vanishes: a cached subspace
+  // of the old attachment must not be loaded.
+  const body::Motion motion = body::make_procedural_motion("jiggle_on_toes", 60.0, 2);
+  model::BodyLayer layer = coarse_layer(motion);
+  const std::filesystem::path dir = std::filesystem::path(SFLSH_TEST_CACHE) / "reduced-attachment-test";
+  std::filesystem::remove_all(dir);
+  ReducedModelOptions ro;
+  ro.point_handles = 24;
+  ro.cubature = 60;
+  ro.cache_dir = dir;
+  const ReducedModel first = build_reduced_model(layer, ro);
+  EXPECT_EQ(first.cache_outcome, "built");
+  EXPECT_EQ(build_reduced_model(layer, ro).cache_outcome, "hit");
+  const std::vector<char> attached = layer.problem.dirichlet.mask(layer.problem.num_nodes());
+  int free_node = 0;
+  while (attached[static_cast<std::size_t>(3 * free_node)]) ++free_node;
+  layer.problem.dirichlet.add(free_node, 0b111u);
+  const ReducedModel second = build_reduced_model(layer, ro);
+  EXPECT_EQ(second.cache_outcome, "built");
+  EXPECT_NE(second.cache_key, first.cache_key);
+  std::filesystem::remove_all(dir);
+}
+
 // Tolerances. The full-space reference stretches the skin near the rim by ≤ 3% on these frames (measured
 // 0.97–1.03); a free rim gave 0.84–1.18 by frame 10 (a collar line at the neck, 0.42–1.54 later). The
 // reduced model (86 handles, 200 cubature tets) is coarser: ≤ 10% at the rim and ≤ 25% anywhere on the layer
