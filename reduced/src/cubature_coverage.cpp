@@ -3,6 +3,7 @@
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
 
+#include <algorithm>
 #include <map>
 
 namespace sflsh::reduced {
