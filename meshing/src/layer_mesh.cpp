@@ -87,6 +87,23 @@ std::vector<int> LayerMesh::nodes_of_kind(NodeKind wanted) const {
   return list;
 }
 
+std::vector<int> LayerMesh::rim_nodes() const {
+  std::vector<char> on_boundary(static_cast<std::size_t>(region_surface.num_vertices()), 0);
+  for (const auto& loop : region_surface.boundary_loops)
+    for (int v : loop) on_boundary[static_cast<std::size_t>(v)] = 1;
+  constexpr double kOffRim = 1e-6;   // anchor weight allowed on vertices off the boundary curves (round-off)
+  std::vector<int> list;
+  for (int i = 0; i < num_nodes(); ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    if (kind[k] != NodeKind::outer) continue;
+    double off_rim = 0.0;   // Σ_k w_k over anchor vertices not on a boundary curve
+    for (int s = 0; s < 3; ++s)
+      if (!on_boundary[static_cast<std::size_t>(anchor[k].vertex[static_cast<std::size_t>(s)])]) off_rim += std::abs(anchor[k].weight(s));
+    if (off_rim <= kOffRim) list.push_back(i);
+  }
+  return list;
+}
+
 Eigen::VectorXd LayerMesh::template_thickness_field() const {
   return Eigen::VectorXd::Constant(region_surface.num_vertices(), template_thickness);
 }

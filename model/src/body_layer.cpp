@@ -92,9 +92,11 @@ BodyLayer build_body_layer(const body::BodyModel& model, const body::Betas& beta
   p.mass = lumped_masses(p.rest, p.tets, options.density);
   p.mass_kind = options.mass;
   if (options.gravity) p.gravity = Eigen::Vector3d(0.0, -9.81, 0.0);
-  // Inner nodes ride on the bones and the side wall follows the skinned body: zero elastic displacement.
+  // Inner nodes ride on the bones; the side wall and the skin's rim (its top edge) follow the skinned body:
+  // zero elastic displacement, so the skin is continuous with the skinned body outside the region.
   for (meshing::NodeKind kind : {meshing::NodeKind::inner, meshing::NodeKind::side})
     for (int v : mesh.nodes_of_kind(kind)) p.dirichlet.add(v, 0b111u);
+  for (int v : mesh.rim_nodes()) p.dirichlet.add(v, 0b111u);
   p.trajectory = out.trajectory;
   p.validate();
   out.rest_skin = mesh.skin_positions(p.rest);

@@ -2,6 +2,7 @@
 
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
+#include <sflsh/reduced/cubature_coverage.hpp>
 #include <sflsh/reduced/cubature_elastic.hpp>
 #include <sflsh/reduced/nnls.hpp>
 
@@ -27,6 +28,9 @@ meshing::RowMatrixX3d tet_centroids(const model::Problem& problem) {
   }
   return c;
 }
+
+/// Farthest-point tets with Voronoi or NNLS weights (defined below select_cubature).
+Cubature fitted_cubature(const model::Problem& problem, const Subspace& subspace, const CubatureOptions& options);
 
 }  // namespace
 
@@ -84,6 +88,14 @@ std::vector<double> voronoi_weights(const model::Problem& problem, const std::ve
 }
 
 Cubature select_cubature(const model::Problem& problem, const Subspace& subspace, const CubatureOptions& options) {
+  Cubature out = fitted_cubature(problem, subspace, options);
+  if (options.coverage > 0.0 && subspace.num_dofs() > 0) cover_every_function(problem, subspace, out, options.coverage);
+  return out;
+}
+
+namespace {
+
+Cubature fitted_cubature(const model::Problem& problem, const Subspace& subspace, const CubatureOptions& options) {
   Cubature out;
   out.tets = farthest_point_tets(problem, options.count, options.density);
   out.weights = voronoi_weights(problem, out.tets);
@@ -156,6 +168,8 @@ Cubature select_cubature(const model::Problem& problem, const Subspace& subspace
                   K, fitted_volume, fit.iterations);
   return out;
 }
+
+}  // namespace
 
 Eigen::MatrixXd rest_stiffness(const model::Problem& problem, const Subspace& subspace, const Cubature& cubature) {
   const CubatureElastic elastic(problem, subspace, cubature);

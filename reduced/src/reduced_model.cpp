@@ -17,8 +17,10 @@ namespace sflsh::reduced {
 
 namespace {
 
-/// Bump when what a cache entry holds changes.
-constexpr int kReducedFormat = 2;   // 2: the cubature records its stiffness coverage; auto K grows until covered
+/// Bump when what a cache entry holds changes (2: the key hashes the attached nodes, the skin's rim is attached,
+/// per-function cubature coverage; 3: point handles avoid the nodes next to the rim; 4: the cubature records its
+/// stiffness coverage and auto K grows until the subspace is covered).
+constexpr int kReducedFormat = 4;
 
 std::uint64_t fnv1a(std::uint64_t hash, const void* data, std::size_t bytes) {
   const auto* p = static_cast<const unsigned char*>(data);
@@ -29,10 +31,14 @@ std::uint64_t fnv1a(std::uint64_t hash, const void* data, std::size_t bytes) {
   return hash;
 }
 
-std::string cache_key(const meshing::LayerMesh& mesh, const ReducedModelOptions& options) {
+/// Hash of what the handles, basis and cubature are built from: template nodes and tets, the attached
+/// (Dirichlet) components — they make the bone handles and where every basis function vanishes — and the options.
+std::string cache_key(const meshing::LayerMesh& mesh, const model::Dirichlet& dirichlet, const ReducedModelOptions& options) {
   std::uint64_t h = 1469598103934665603ULL;
   h = fnv1a(h, mesh.nodes.data(), sizeof(double) * static_cast<std::size_t>(mesh.nodes.size()));
   h = fnv1a(h, mesh.tets.data(), sizeof(int) * static_cast<std::size_t>(mesh.tets.size()));
+  const std::vector<char> attached = dirichlet.mask(mesh.num_nodes());
+  h = fnv1a(h, attached.data(), attached.size());
   const std::string settings =
       fmt::format("v{} P{} K{} cover{} w{} drop{} max{} affine{} len{}", kReducedFormat, options.point_handles, options.cubature,
                   options.cubature_auto ? options.coverage_ratio : 0.0,
@@ -156,16 +162,30 @@ BodyHandles place_body_handles(const model::BodyLayer& layer, int point_handles)
   const std::vector<int> sites = material::layer_control_points(*layer.model, mesh, point_handles);
   const meshing::RowMatrixX3d skin = mesh.skin_positions(mesh.nodes);
   std::vector<char> taken(static_cast<std::size_t>(n), 0);
+  // Nodes sharing a tet with the skin's rim are taken last: a handle there drags one ring of skin against
+  // the attached rim (the first free ring would carry the whole handle displacement in one edge).
+  std::vector<char> by_rim(static_cast<std::size_t>(n), 0);
+  {
+    std::vector<char> rim(static_cast<std::size_t>(n), 0);
+    for (int v : mesh.rim_nodes()) rim[static_cast<std::size_t>(v)] = 1;
+    for (Eigen::Index e = 0; e < mesh.tets.rows(); ++e) {
+      bool touches = false;
+      for (int a = 0; a < 4; ++a) touches = touches || rim[static_cast<std::size_t>(mesh.tets(e, a))];
+      if (touches)
+        for (int a = 0; a < 4; ++a) by_rim[static_cast<std::size_t>(mesh.tets(e, a))] = 1;
+    }
+  }
   for (int v : sites) {
     const int r = mesh.region_surface.local_of[static_cast<std::size_t>(v)];
     const Eigen::RowVector3d s = skin.row(r);
     int best = -1;
     double best_d = std::numeric_limits<double>::infinity();
-    for (int pass = 0; pass < 2 && best < 0; ++pass) {
+    for (int pass = 0; pass < 3 && best < 0; ++pass) {
       for (int i = 0; i < n; ++i) {
         if (attached[static_cast<std::size_t>(3 * i)] || taken[static_cast<std::size_t>(i)]) continue;
+        if (pass < 2 && by_rim[static_cast<std::size_t>(i)]) continue;
         const double depth = layer.depth[i];
-        if (pass == 0 && (depth < 0.3 || depth > 0.7)) continue;   // mid-depth first, any free node otherwise
+        if (pass == 0 && (depth < 0.3 || depth > 0.7)) continue;   // mid-depth first, any free node, then next to the rim
         const double d = (mesh.nodes.row(i) - s).squaredNorm();
         if (d < best_d) {
           best_d = d;
@@ -222,7 +242,7 @@ ReducedModel build_reduced_model(const model::BodyLayer& layer, const ReducedMod
   require(requested.cubature >= -1 && requested.cubature <= mesh.num_tets(),
           "reduced: --cubature {} must be between 0 (exact) and {} tets, or −1 (auto)", requested.cubature, mesh.num_tets());
   ReducedModel m;
-  m.cache_key = cache_key(mesh, options);
+  m.cache_key = cache_key(mesh, layer.problem.dirichlet, options);
   const std::filesystem::path dir = options.cache_dir.empty() ? meshing::default_cache_dir() : options.cache_dir;
   const std::filesystem::path path = cache_file(dir, m.cache_key);
   bool loaded = false;

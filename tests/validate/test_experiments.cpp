@@ -66,8 +66,10 @@ TEST(Experiments, SmallConfigurationReproducesPinnedTable2) {
   // Ground truth: a deterministic full-space run (Newton to ‖∇Φ‖ ≤ 1e-8 relative); 1 % covers compiler and
   // BLAS differences. Fitted rows: the trust-region path may differ slightly across platforms; 4 % is
   // about a third of the spread between the rows and the truth.
-  EXPECT_NEAR(row_value(summary, "Ground truth", "train_motions"), 0.840, 0.01 * 0.840);
-  EXPECT_NEAR(row_value(summary, "Ground truth", "test_motions"), 0.583, 0.01 * 0.583);
+  // Ground truth moved from 0.840 and 0.583 (−4 %) when the skin's rim was attached like the side wall
+  // (issue 18): the rim no longer moves and the ring next to it moves less.
+  EXPECT_NEAR(row_value(summary, "Ground truth", "train_motions"), 0.805, 0.01 * 0.805);
+  EXPECT_NEAR(row_value(summary, "Ground truth", "test_motions"), 0.559, 0.01 * 0.559);
   EXPECT_NEAR(row_value(summary, "Independent", "train_motions"), 0.753, 0.04 * 0.753);
   EXPECT_NEAR(row_value(summary, "Full opt. ours", "train_motions"), 0.751, 0.04 * 0.751);
   EXPECT_NEAR(row_value(summary, "Full opt. L2", "test_motions"), 0.546, 0.04 * 0.546);

@@ -49,6 +49,9 @@ struct LayerMesh {
   int num_tets() const { return static_cast<int>(tets.rows()); }
   /// Indices of nodes of a kind, ascending.
   std::vector<int> nodes_of_kind(NodeKind kind) const;
+  /// The skin nodes on the region's boundary curves (outer nodes whose anchor lies on a boundary loop:
+  /// where the side wall meets the skin), ascending. They close the layer like the side wall.
+  std::vector<int> rim_nodes() const;
   /// The template thickness as a field over the region's vertices.
   Eigen::VectorXd template_thickness_field() const;
   /// Skin positions (R×3) read from node positions through the embedding.

@@ -40,6 +40,9 @@ struct CubatureOptions {
   unsigned seed = 20231212;
   /// Per-tet sampling density factor (empty = 1): distances are multiplied by it, as for the handles.
   std::vector<double> density;
+  /// α: after the weights, every basis function keeps at least α of its exact Dirichlet energy in the
+  /// cubature (cubature_coverage.hpp); 0 = off.
+  double coverage = 0.5;
 };
 
 /// Farthest-point sample of `count` tets by centroid, started at the tet nearest the volume-weighted
@@ -50,7 +53,8 @@ std::vector<int> farthest_point_tets(const model::Problem& problem, int count, c
 std::vector<double> voronoi_weights(const model::Problem& problem, const std::vector<int>& tets);
 
 /// Data-oblivious cubature for `problem` in `subspace`. Falls back to Voronoi weights (logged) when the
-/// NNLS fit leaves the volume off by more than 5%.
+/// NNLS fit leaves the volume off by more than 5%; then raises functions the weights leave uncovered
+/// (options.coverage, which may append tets).
 Cubature select_cubature(const model::Problem& problem, const Subspace& subspace, const CubatureOptions& options);
 
 /// The reduced rest stiffness K = ∂²E/∂q² at q = 0 of a cubature (3S × 3S).
