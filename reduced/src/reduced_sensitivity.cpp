@@ -140,6 +140,10 @@ SensitivityStepStats SensitivityIntegrator::step(double h) {
   require(valid_, "sensitivity: the integrator is not initialized or an earlier step failed; call initialize()");
   SensitivityStepStats stats;
   stats.step = integrator_.step(h);   // on failure the state (and S) are unchanged
+  if (integrator_.cubature_added() > 0)
+    throw_error("sensitivity: at t = {:.6f} s the guard added {} tet(s) to the cubature (tets outside it left the material's "
+                "range); dq/dY is defined on the model's cubature only: use a larger --cubature for this case",
+                integrator_.time(), integrator_.cubature_added());
   const auto start = Clock::now();
   valid_ = false;
   for (const ReducedSubstep& substep : integrator_.last_substeps()) {

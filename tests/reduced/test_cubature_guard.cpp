@@ -1,0 +1,161 @@
+// The guard of the tets outside the cubature (cubature_guard.hpp): its bound never misses a tet over the limit
+// (checked against every tet's exact Fung exponent along a random walk of states), and in the solver a state that
+// strains tets the cubature does not see is caught, the tets join the cubature and the step is solved again, where
+// without the guard the same step leaves the material's range.
+#include "reduced_fixtures.hpp"
+
+#include <sflsh/core/error.hpp>
+#include <sflsh/material/orthotropic_fung.hpp>
+#include <sflsh/reduced/cubature_guard.hpp>
+#include <sflsh/reduced/reduced_solver.hpp>
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <limits>
+#include <set>
+
+namespace sflsh::reduced {
+namespace {
+
+/// Every tet's Fung exponent at the full state x (+∞ where F is not finite or the strain energy overflows).
+std::vector<double> exponents(const model::Problem& p, const Eigen::VectorXd& x) {
+  std::vector<double> out(static_cast<std::size_t>(p.num_tets()));
+  for (int e = 0; e < p.num_tets(); ++e) {
+    material::TetNodes nodes;
+    for (int a = 0; a < 4; ++a) nodes.col(a) = x.segment<3>(3 * p.tets(e, a));
+    try {
+      out[static_cast<std::size_t>(e)] =
+          material::fung_exponent(material::tet_deformation_gradient(p.tet_rest[static_cast<std::size_t>(e)], nodes),
+                                  p.tet_material[static_cast<std::size_t>(e)]);
+    } catch (const Error&) {
+      out[static_cast<std::size_t>(e)] = std::numeric_limits<double>::infinity();
+    }
+  }
+  return out;
+}
+
+Eigen::VectorXd state_of(const model::Problem& p, const Subspace& s, const Eigen::VectorXd& q) {
+  Eigen::VectorXd x = Eigen::Map<const Eigen::VectorXd>(p.rest.data(), p.num_dofs());
+  s.add_displacement(q, x);
+  return x;
+}
+
+/// A cubature of `count` tets with Voronoi-like weights that keep the volume: the farthest-point tets.
+Cubature sparse_cubature(const model::Problem& p, int count) {
+  Cubature c;
+  c.tets = farthest_point_tets(p, count, {});
+  c.weights = voronoi_weights(p, c.tets);
+  c.method = "voronoi";
+  return c;
+}
+
+TEST(CubatureGuard, TheBoundNeverMissesATetOverTheLimit) {
+  const auto c = testing::box_case({5, 4, 3});
+  const Subspace s = testing::box_subspace(c);
+  const Cubature cubature = sparse_cubature(c.problem, 4);
+  constexpr double kLimit = 5.0;   // low, so that the walk crosses it on many tets
+  CubatureGuard guard(c.problem, s, cubature, kLimit);
+  std::set<int> weighted(cubature.tets.begin(), cubature.tets.end());
+  // A random walk from rest with growing steps: the bound must pass every tet under the limit only when it is.
+  Eigen::VectorXd q = Eigen::VectorXd::Zero(s.num_dofs());
+  int crossed = 0, states = 0;
+  for (int step = 0; step < 60; ++step) {
+    q += testing::random_q(s.num_dofs(), 0.0005 * (1 + step / 10), 1000 + static_cast<unsigned>(step));
+    const std::vector<double> x = exponents(c.problem, state_of(c.problem, s, q));
+    std::set<int> expected;
+    for (int e = 0; e < c.problem.num_tets(); ++e)
+      if (!weighted.count(e) && !(x[static_cast<std::size_t>(e)] <= kLimit)) expected.insert(e);
+    std::set<int> reported;
+    for (const GuardViolation& v : guard.check(q)) {
+      reported.insert(v.tet);
+      EXPECT_NEAR(v.exponent, x[static_cast<std::size_t>(v.tet)], 1e-9 * std::max(1.0, v.exponent)) << "tet " << v.tet;
+    }
+    EXPECT_EQ(reported, expected) << "state " << step;
+    crossed += expected.empty() ? 0 : 1;
+    ++states;
+  }
+  EXPECT_GT(crossed, 5) << "the walk must cross the limit for the test to mean anything";
+  // The bound saves work: fewer exact evaluations than every guarded tet at every check.
+  EXPECT_LT(guard.exact_evaluations(), static_cast<long>(states) * guard.num_guarded());
+}
+
+TEST(CubatureGuard, ReleasedTetsAreNoLongerWatched) {
+  const auto c = testing::box_case({4, 4, 3});
+  const Subspace s = testing::box_subspace(c);
+  CubatureGuard guard(c.problem, s, sparse_cubature(c.problem, 4), 1e-6);
+  const Eigen::VectorXd q = testing::random_q(s.num_dofs(), 0.01, 7);
+  const std::vector<GuardViolation> first = guard.check(q);
+  ASSERT_FALSE(first.empty());
+  const int before = guard.num_guarded();
+  for (const GuardViolation& v : first) guard.release(v.tet);
+  EXPECT_EQ(guard.num_guarded(), before - static_cast<int>(first.size()));
+  EXPECT_TRUE(guard.check(q).empty());
+}
+
+/// The box's free nodes thrown upwards at `speed` [m/s]: the handles carry the layer away from its attached floor.
+model::State thrown(const model::Problem& p, double speed) {
+  model::State state = model::initial_state(p, 0.0);
+  const std::vector<char> fixed = p.dirichlet.mask(p.num_nodes());
+  for (int i = 0; i < p.num_nodes(); ++i)
+    if (!fixed[static_cast<std::size_t>(3 * i)]) state.w[3 * i + 2] = speed;
+  return state;
+}
+
+TEST(CubatureGuard, TheSolverRepairsAStateThatLeavesTheMaterialOutsideTheCubature) {
+  const auto c = testing::box_case({5, 4, 3});
+  const Subspace s = testing::box_subspace(c);
+  // One cubature tet carrying the whole volume: most of the layer is invisible to the reduced energy.
+  Cubature cubature;
+  cubature.tets = {farthest_point_tets(c.problem, 1, {}).front()};
+  cubature.weights = voronoi_weights(c.problem, cubature.tets);
+  cubature.method = "voronoi";
+  constexpr double kSpeed = 3.0;   // [m/s] against a 6 cm tall box: strains far beyond the material's range unless resisted
+  constexpr double kStep = 1.0 / 60.0;
+
+  ReducedOptions unguarded;
+  unguarded.guard = false;
+  ReducedSolver blind(c.problem, s, cubature, unguarded);
+  blind.initialize(thrown(c.problem, kSpeed));
+  double worst = 0.0;
+  for (int k = 0; k < 6; ++k) {
+    try {
+      blind.step(kStep);
+    } catch (const Error&) {
+      worst = std::numeric_limits<double>::infinity();
+      break;
+    }
+    const std::vector<double> x = exponents(c.problem, blind.full_state().x);
+    worst = std::max(worst, *std::max_element(x.begin(), x.end()));
+  }
+  ASSERT_GT(worst, material::kFungExponentCap) << "without the guard this case must leave the material's range";
+
+  ReducedOptions guarded;
+  ReducedSolver solver(c.problem, s, cubature, guarded);
+  solver.initialize(thrown(c.problem, kSpeed));
+  int added = 0;
+  for (int k = 0; k < 6; ++k) {
+    model::StepStats stats;
+    ASSERT_NO_THROW(stats = solver.step(kStep)) << "step " << k;
+    added += stats.cubature_added;
+    const std::vector<double> x = exponents(c.problem, solver.full_state().x);
+    // Tets outside the cubature stay under the guard's limit; those inside under the material's cap.
+    for (int e = 0; e < c.problem.num_tets(); ++e) {
+      const bool in_cubature = std::find(solver.cubature().tets.begin(), solver.cubature().tets.end(), e) != solver.cubature().tets.end();
+      EXPECT_LE(x[static_cast<std::size_t>(e)], in_cubature ? material::kFungExponentCap : guarded.guard_exponent) << "tet " << e << ", step " << k;
+    }
+  }
+  EXPECT_GT(added, 0);
+  EXPECT_EQ(added, solver.cubature_added());
+  EXPECT_EQ(solver.cubature().size(), 1 + added);
+  // The volume the cubature integrates is kept when tets join it.
+  double volume = 0.0, integrated = 0.0;
+  for (int e = 0; e < c.problem.num_tets(); ++e) volume += c.problem.tet_rest[static_cast<std::size_t>(e)].volume;
+  for (int k = 0; k < solver.cubature().size(); ++k)
+    integrated += solver.cubature().weights[static_cast<std::size_t>(k)] *
+                  c.problem.tet_rest[static_cast<std::size_t>(solver.cubature().tets[static_cast<std::size_t>(k)])].volume;
+  EXPECT_NEAR(integrated, volume, 1e-9 * volume);
+}
+
+}  // namespace
+}  // namespace sflsh::reduced
