@@ -11,7 +11,7 @@ namespace sflsh::app::compare {
 struct TradeoffRow {
   bool reduced = false;
   int handles = 0;             ///< point handles (reduced)
-  int cubature = 0;            ///< cubature tets actually used (reduced; every tet for exact cubature)
+  int cubature = 0;            ///< cubature tets requested (reduced; every tet for exact cubature)
   int coordinates = 0;         ///< reduced coordinates 3S
   double seconds_per_frame = 0.0;
   double frames_per_second = 0.0;

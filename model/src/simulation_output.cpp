@@ -188,8 +188,19 @@ void SimulationWriter::add_frame(double t, const State& state, const std::vector
 // The caller's thread does what needs the solver's objects (the skin displacement, posing along the motion);
 // the job gets copies and computes the strain energies, places the fields and writes the file.
 void SimulationWriter::add_frame(int index, double t, const State& state, bool write, const std::vector<vtk::Field>& extra) {
-  require(state.x.allFinite() && state.w.allFinite(), "simulation output: the state at t = {} is not finite", t);
-  const RowMatrixX3d u = layer_.surface_displacement(state.x);
+  require(state.w.allFinite(), "simulation output: the velocities at t = {} are not finite", t);
+  add(index, t, state.x, &state, write, extra);
+}
+
+void SimulationWriter::add_positions(int index, double t, const Eigen::VectorXd& x, bool write, const std::vector<vtk::Field>& extra) {
+  require(!(write && write_layer_ && run_), "simulation output: layer frames need the full state (add_frame)");
+  add(index, t, x, nullptr, write, extra);
+}
+
+void SimulationWriter::add(int index, double t, const Eigen::VectorXd& x_state, const State* state, bool write,
+                           const std::vector<vtk::Field>& extra) {
+  require(x_state.allFinite(), "simulation output: the state at t = {} is not finite", t);
+  const RowMatrixX3d u = layer_.surface_displacement(x_state);
   amplitude_.add(u);
   ++frame_;
   if (!run_ || !write) return;
@@ -223,7 +234,7 @@ void SimulationWriter::add_frame(int index, double t, const State& state, bool w
   const std::string name = fmt::format("{}_{:06d}.vtp", options_.prefix, index);
   body_series_->add(t, name);
   const std::filesystem::path path = run_->stage(name);
-  run_job([this, path, posed, own_fields, fields = std::move(fields), x = energy ? state.x : Eigen::VectorXd()]() mutable {
+  run_job([this, path, posed, own_fields, fields = std::move(fields), x = energy ? x_state : Eigen::VectorXd()]() mutable {
     if (x.size() > 0) {
       // Only the tets under the skin's vertices (a sixth of the layer's on the coarse mesh).
       const Eigen::VectorXd vertex_psi = strain_energy_density(layer_.problem, x, layer_.mesh->skin.tet);
@@ -240,7 +251,7 @@ void SimulationWriter::add_frame(int index, double t, const State& state, bool w
     }
     vtk::write_surface(path, posed, layer_.model->faces, fields, options_.compression);
   });
-  if (write_layer_) write_layer_frame(index, t, state);
+  if (write_layer_ && state) write_layer_frame(index, t, *state);
   previous_posed_ = std::move(posed);
   previous_t_ = t;
 }

@@ -458,6 +458,12 @@ model::State ReducedSolver::full_state() const {
   return s;
 }
 
+Eigen::VectorXd ReducedSolver::positions() const {
+  Eigen::VectorXd x = prescribed_state(t_);
+  subspace_.add_displacement(q_, x);
+  return x;
+}
+
 double ReducedSolver::elastic_energy() const { return elastic_.energy(q_); }
 
 }  // namespace sflsh::reduced

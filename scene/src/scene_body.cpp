@@ -120,9 +120,14 @@ model::State SceneBody::state() const {
   return fast_ ? fast_->full_state() : full_->state();
 }
 
+Eigen::VectorXd SceneBody::positions() const {
+  if (fast_) return fast_->positions();
+  return state().x;
+}
+
 double SceneBody::max_elastic_displacement() const {
   if (!soft()) return 0.0;
-  const RowMatrixX3d u = layer_->surface_displacement(state().x);
+  const RowMatrixX3d u = layer_->surface_displacement(positions());
   return u.rows() > 0 ? u.rowwise().norm().maxCoeff() : 0.0;
 }
 
@@ -208,12 +213,12 @@ RowMatrixX3d SceneBody::skinned_world_surface(double t) const {
 
 RowMatrixX3d SceneBody::world_surface() const {
   if (!soft()) return skinned_world_surface(t_);
-  return placement_.apply(layer_->posed_surface(state().x, t_));
+  return placement_.apply(layer_->posed_surface(positions(), t_));
 }
 
 RowMatrixX3d SceneBody::predicted_world_surface(double t) const {
   if (!soft()) return skinned_world_surface(t);
-  return placement_.apply(layer_->posed_surface(state().x, t));
+  return placement_.apply(layer_->posed_surface(positions(), t));
 }
 
 }  // namespace sflsh::scene::detail

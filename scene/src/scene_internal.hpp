@@ -89,6 +89,8 @@ class SceneBody {
   /// the body at the end of a step, for the other bodies' contact).
   RowMatrixX3d predicted_world_surface(double t) const;
   model::State state() const;
+  /// The node positions alone [m] (reduced bodies: without building the full state).
+  Eigen::VectorXd positions() const;
   /// The largest elastic displacement of the skin now [m] (0 for a skinned body).
   double max_elastic_displacement() const;
 

@@ -381,7 +381,7 @@ class SceneRun {
     if (!write) {
       // Only σ: each soft body's skin displacement, independent of the others (in parallel, like the steps).
       tbb::parallel_for(std::size_t{0}, bodies_.size(), [&](std::size_t b) {
-        if (bodies_[b]->soft() && bodies_[b]->solver() != SolverKind::full) writers_[b]->add_frame(f, t, bodies_[b]->state(), false);
+        if (bodies_[b]->soft() && bodies_[b]->solver() != SolverKind::full) writers_[b]->add_positions(f, t, bodies_[b]->positions(), false);
       });
       for (std::size_t b = 0; b < bodies_.size(); ++b)
         if (bodies_[b]->solver() == SolverKind::full) writers_[b]->add_frame(f, t, bodies_[b]->state(), false);
@@ -390,7 +390,9 @@ class SceneRun {
     for (std::size_t b = 0; b < bodies_.size(); ++b) {
       SceneBody& body = *bodies_[b];
       if (body.soft()) {
-        writers_[b]->add_frame(f, t, body.state(), write, write ? contact_fields(contact_[b], *bodies_[b]) : std::vector<vtk::Field>{});
+        const std::vector<vtk::Field> extra = write ? contact_fields(contact_[b], *bodies_[b]) : std::vector<vtk::Field>{};
+        if (scene_.output.layer) writers_[b]->add_frame(f, t, body.state(), write, extra);   // layer frames need the full state
+        else writers_[b]->add_positions(f, t, body.positions(), write, extra);
         continue;
       }
       if (!write) continue;

@@ -368,6 +368,7 @@ TEST(ReducedIntegrators, AQuasiStaticRunIsTheSameForEveryIntegrator) {
     ReducedOptions ro;
     ro.integrator = integrator;
     ro.quasi_static = true;
+    ro.step_tolerance = 1e-12;   // compared to 1e-9 below: solve far below the default 10 µm stopping distance
     ReducedSolver reduced(c.problem, s, all, ro);
     reduced.initialize(model::initial_state(c.problem, 0.0));
     for (int k = 0; k < 3; ++k) reduced.step(0.01);

@@ -96,6 +96,8 @@ class SimulationWriter {
   /// Records frame `index` at time t into σ; with `write` (and a run folder) also poses the surface and
   /// writes <prefix>_<index>.vtp. Frames that are not written cost only the skin's displacement.
   void add_frame(int index, double t, const State& state, bool write, const std::vector<vtk::Field>& extra = {});
+  /// The same from the node positions x [m] alone (what σ and the written fields need; no velocities).
+  void add_positions(int index, double t, const Eigen::VectorXd& x, bool write, const std::vector<vtk::Field>& extra = {});
   /// Whether a frame array is requested (SimulationWriterOptions::fields).
   bool wants(const std::string& field) const;
   /// Writes the .pvd collections and dynamics.vtp.
@@ -111,6 +113,7 @@ class SimulationWriter {
   double posing_seconds() const { return posing_seconds_; }
 
  private:
+  void add(int index, double t, const Eigen::VectorXd& x, const State* state, bool write, const std::vector<vtk::Field>& extra);
   const BodyLayer& layer_;
   RunFolder* run_;
   SimulationWriterOptions options_;

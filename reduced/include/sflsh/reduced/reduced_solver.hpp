@@ -96,6 +96,9 @@ class ReducedSolver final : public model::BodySolver {
   /// h_previous (once a step was taken), from the history at the inertia nodes and the prescribed motion elsewhere.
   model::State full_state() const;
   model::State current_state() const override { return full_state(); }
+  /// The node positions x = x_D + (B ⊗ I₃) q alone [m] (3N): what the skin displacement and σ need, without the
+  /// velocities and the prescribed motion's node maps that full_state() evaluates.
+  Eigen::VectorXd positions() const;
   /// The posed history of the inertia nodes (ReducedInertia::inertia_nodes()).
   const model::PosedHistory& history() const { return history_; }
   const ReducedInertia& inertia() const { return inertia_; }
