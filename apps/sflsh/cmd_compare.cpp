@@ -61,6 +61,10 @@ std::vector<int> parse_sweep(const std::string& text, const char* option, int mi
     item = item.substr(first, last - first + 1);
     std::size_t used = 0;
     int v = 0;
+    if (minimum == 0 && item == "auto") {   // the cubature the reduced model picks itself (reduced_model.hpp)
+      if (std::find(values.begin(), values.end(), -1) == values.end()) values.push_back(-1);
+      continue;
+    }
     try {
       v = std::stoi(item, &used);
     } catch (const std::exception&) {
@@ -401,7 +405,7 @@ void register_compare_commands(CLI::App& app, const Invocation& invocation) {
       ->capture_default_str()
       ->check(CLI::IsMember({"coarse", "default", "fine"}));
   cmd->add_option("--handles", opt->handles, "Sweep of point-handle counts, comma-separated (plus the bone handles)")->capture_default_str();
-  cmd->add_option("--cubature", opt->cubature, "Sweep of cubature tet counts K, comma-separated (0 = every tet)")->capture_default_str();
+  cmd->add_option("--cubature", opt->cubature, "Sweep of cubature tet counts K, comma-separated (0 = every tet; auto = the automatic count that covers the subspace)")->capture_default_str();
   cmd->add_flag("--exact-cubature", opt->exact_cubature, "Also run every handle count with exact cubature (every tet)");
   add_reduced_options(*cmd, opt->reduced);
   add_layer_options(*cmd, opt->layer);
