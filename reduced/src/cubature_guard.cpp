@@ -1,6 +1,7 @@
 #include <sflsh/reduced/cubature_guard.hpp>
 
 #include <sflsh/core/error.hpp>
+#include <sflsh/material/fung_strain.hpp>
 #include <sflsh/material/orthotropic_fung.hpp>
 
 #include <Eigen/Eigenvalues>
@@ -89,12 +90,17 @@ double CubatureGuard::exponent(int p, const Eigen::VectorXd& q, double* radius) 
   const Eigen::Matrix3d F = tets_.point_deformation_gradient(p, q);
   if (!F.allFinite()) return kInfinity;
   const material::OrthotropicFung& m = problem_.tet_material[static_cast<std::size_t>(tets_.point_tet(p))];
-  const Eigen::Matrix3d E_hat = m.scaling * material::green_strain(F) * m.scaling;   // Ê = P_Y E P_Y
-  const double tr = E_hat.trace();
-  const double x = 2.0 * (m.mu0 * E_hat.squaredNorm() + 0.5 * m.lambda0 * tr * tr) * m.inv_c;   // x = 2Ψ₀/c
+  material::FungStrain strain;
+  try {
+    strain = material::fung_strain(F, m);   // x = 2Ψ₀/c and ‖Ê‖ (the material's own definitions)
+  } catch (const Error&) {
+    return kInfinity;   // the StVK energy overflows: far outside the range
+  }
+  const double x = strain.exponent;
   if (radius) {
     // The radius r in F with ‖Ê_ref‖ + ‖P_Y‖²(‖F_ref‖₂ r + r²/2) ≤ allowed (‖F_refᵀΔ‖_F ≤ ‖F_ref‖₂‖Δ‖_F).
-    const double d = (allowed_[k] - E_hat.norm()) / spectral_[k];
+    const double e_hat = strain.scaled_strain;
+    const double d = (allowed_[k] - e_hat) / spectral_[k];
     const double f = std::sqrt(F.cwiseAbs().colwise().sum().maxCoeff() * F.cwiseAbs().rowwise().sum().maxCoeff());   // ‖F‖₂ ≤ √(‖F‖₁‖F‖∞)
     *radius = !std::isfinite(allowed_[k]) ? kInfinity : d > 0.0 ? -f + std::sqrt(f * f + 2.0 * d) : 0.0;
   }

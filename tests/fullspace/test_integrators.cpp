@@ -1,6 +1,7 @@
 // The full-space solver's time integrators (model/time_integrator.hpp) and consistent mass on small clamped
 // blocks: Newmark keeps the energy of an undamped oscillation, BDF2 and backward Euler converge at their
 // orders, and consistent mass stays finite and close to lumped for every integrator.
+#include "dense_hessian.hpp"
 #include <sflsh/fullspace/fullspace_solver.hpp>
 #include <sflsh/fullspace/msh_reader.hpp>
 #include <sflsh/material/skin_material.hpp>
@@ -42,22 +43,6 @@ Problem clamped_bar(MassKind mass) {
   return p;
 }
 
-/// Collects the elastic Hessian blocks into a dense matrix.
-class DenseSink final : public model::HessianSink {
- public:
-  DenseSink(const Problem& problem, Eigen::MatrixXd& K) : problem_(problem), K_(K) {}
-  void add_tet(std::size_t, int e, const material::Matrix12d& block) override {
-    for (int a = 0; a < 4; ++a)
-      for (int b = 0; b < 4; ++b)
-        K_.block<3, 3>(3 * problem_.tets(e, a), 3 * problem_.tets(e, b)) += block.block<3, 3>(3 * a, 3 * b);
-  }
-  void add_node(int node, const Eigen::Matrix3d& block) override { K_.block<3, 3>(3 * node, 3 * node) += block; }
-
- private:
-  const Problem& problem_;
-  Eigen::MatrixXd& K_;
-};
-
 /// The lowest mode of the clamped bar at rest with its lumped masses (whatever p.mass_kind says): its angular
 /// frequency [rad/s] and shape (3N, zero on the clamped face, largest component 1).
 struct Mode {
@@ -66,9 +51,9 @@ struct Mode {
 };
 Mode lowest_mode(const Problem& p) {
   const Eigen::VectorXd rest = Eigen::Map<const Eigen::VectorXd>(p.rest.data(), p.num_dofs());
-  Eigen::MatrixXd K = Eigen::MatrixXd::Zero(p.num_dofs(), p.num_dofs());
-  DenseSink sink(p, K);
+  sflsh::testing::DenseHessian sink(p);
   model::ElasticTerm(p, model::TermSubset::whole(p)).add_hessian(rest, sink);
+  const Eigen::MatrixXd& K = sink.H;
   const std::vector<char> constrained = p.dirichlet.mask(p.num_nodes());
   std::vector<int> free;
   for (int d = 0; d < p.num_dofs(); ++d)

@@ -1,6 +1,7 @@
 #pragma once
 // Small problems for the model tests: a box of Kuhn-split cubes (six positively oriented tets per cell) with
 // a homogeneous material, and random node maps (invertible, near rotations).
+#include "dense_hessian.hpp"
 #include <sflsh/material/orthotropic_fung.hpp>
 #include <sflsh/model/problem.hpp>
 #include <sflsh/model/terms.hpp>
@@ -11,23 +12,6 @@
 #include <random>
 
 namespace sflsh::testing {
-
-/// A term's Hessian as one dense matrix (3N × 3N).
-class DenseSink final : public model::HessianSink {
- public:
-  explicit DenseSink(const model::Problem& problem) : problem_(problem), H(Eigen::MatrixXd::Zero(problem.num_dofs(), problem.num_dofs())) {}
-  void add_tet(std::size_t, int e, const material::Matrix12d& block) override {
-    for (int a = 0; a < 4; ++a)
-      for (int b = 0; b < 4; ++b) H.block<3, 3>(3 * problem_.tets(e, a), 3 * problem_.tets(e, b)) += block.block<3, 3>(3 * a, 3 * b);
-  }
-  void add_node(int node, const Eigen::Matrix3d& block) override { H.block<3, 3>(3 * node, 3 * node) += block; }
-
- private:
-  const model::Problem& problem_;
-
- public:
-  Eigen::MatrixXd H;
-};
 
 /// A box [0, size] split into cells, six tets per cell, nodes in x-fastest order.
 inline void kuhn_box(const Eigen::Vector3d& size, std::array<int, 3> cells, model::RowMatrixX3d& nodes, model::RowMatrixX4i& tets) {

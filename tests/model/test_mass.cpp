@@ -14,7 +14,7 @@
 namespace sflsh::model {
 namespace {
 
-using testing::DenseSink;
+using testing::DenseHessian;
 
 TEST(Mass, ConsistentRowSumsAreTheLumpedMasses) {
   Problem p = testing::box_problem({0.1, 0.05, 0.03}, {3, 2, 2}, 1100.0, MassKind::consistent, testing::box_material(5e3, 2e3));
@@ -40,7 +40,7 @@ std::array<double, 2> axial_frequencies(int layers, MassKind kind, double length
   Problem p = testing::box_problem({side, side, length}, {2, 2, layers}, density, kind, testing::box_material(young, young, 0.0));
   for (int i = 0; i < p.num_nodes(); ++i) p.dirichlet.add(i, p.rest(i, 2) < 1e-12 ? 7u : 3u);
   p.validate();
-  DenseSink sink(p);
+  DenseHessian sink(p);
   ElasticTerm(p, TermSubset::whole(p)).add_hessian(Eigen::Map<const Eigen::VectorXd>(p.rest.data(), p.num_dofs()), sink);
   const Eigen::MatrixXd M_nodes(p.mass_matrix());
   const std::vector<char> constrained = p.dirichlet.mask(p.num_nodes());

@@ -14,7 +14,7 @@
 namespace sflsh::model {
 namespace {
 
-using testing::DenseSink;
+using testing::DenseHessian;
 
 /// A smooth penalty below the plane y = level on every node: u = k/3 (level − p_y)³ where p_y < level.
 class CubicFloor final : public NodePotential {
@@ -61,7 +61,7 @@ void check_derivatives(const Term& term, const Problem& problem, const Eigen::Ve
   }
   const double g_scale = std::max(g.cwiseAbs().maxCoeff(), 1e-12);
   EXPECT_LE((g - g_fd).cwiseAbs().maxCoeff() / g_scale, kTolerance) << term.name() << ": gradient";
-  DenseSink sink(problem);
+  DenseHessian sink(problem);
   ASSERT_TRUE(term.add_hessian(x, sink)) << term.name();
   if (exact_hessian) {
     const double H_scale = std::max(H_fd.cwiseAbs().maxCoeff(), 1e-12);
@@ -100,7 +100,7 @@ TEST_F(TermsFixture, ElasticProjectedHessianIsPositiveSemiDefinite) {
   for (double amplitude : kAmplitudes) {
     const Eigen::VectorXd x = perturbed(4.0 * amplitude);
     check_derivatives(term, problem, x, false);
-    DenseSink sink(problem);
+    DenseHessian sink(problem);
     ASSERT_TRUE(term.add_hessian(x, sink));
     const Eigen::VectorXd eigenvalues = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(sink.H).eigenvalues();
     EXPECT_GE(eigenvalues.minCoeff(), -1e-9 * eigenvalues.cwiseAbs().maxCoeff());

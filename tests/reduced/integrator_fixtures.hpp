@@ -3,6 +3,7 @@
 // a small dense full-space reference that minimizes the same incremental potential with the model's terms
 // (model/terms.hpp, checked by finite differences in tests/model) and integrators (model/time_integrator.hpp),
 // independent of the reduced code and of PETSc.
+#include "dense_hessian.hpp"
 #include <sflsh/core/error.hpp>
 #include <sflsh/model/problem.hpp>
 #include <sflsh/model/terms.hpp>
@@ -50,23 +51,6 @@ class SwingTrajectory final : public model::NodeTrajectory {
   double shift_omega_;
 };
 
-/// A dense Hessian of the whole mesh (3N × 3N).
-class DenseHessian final : public model::HessianSink {
- public:
-  explicit DenseHessian(const model::Problem& problem) : problem_(problem), H(Eigen::MatrixXd::Zero(problem.num_dofs(), problem.num_dofs())) {}
-  void add_tet(std::size_t, int e, const material::Matrix12d& block) override {
-    for (int a = 0; a < 4; ++a)
-      for (int b = 0; b < 4; ++b) H.block<3, 3>(3 * problem_.tets(e, a), 3 * problem_.tets(e, b)) += block.block<3, 3>(3 * a, 3 * b);
-  }
-  void add_node(int node, const Eigen::Matrix3d& block) override { H.block<3, 3>(3 * node, 3 * node) += block; }
-
- private:
-  const model::Problem& problem_;
-
- public:
-  Eigen::MatrixXd H;
-};
-
 /// The full-space step of any integrator and mass by dense Newton on the free components (small meshes only):
 /// Φ(x) = 1/(2ĥ²)(p − p̃)ᵀM(p − p̃) + E(x) − gᵀMp, minimized until ‖∇Φ‖ ≤ 1e-13 ‖∇Φ₀‖ (or a step below 1e-15 m),
 /// from x_n with the prescribed components at t_{n+1}.
@@ -110,7 +94,7 @@ class DenseReference {
       Eigen::LLT<Eigen::MatrixXd> llt;
       for (material::HessianProjection projection : {material::HessianProjection::kNone, material::HessianProjection::kStressDerivative}) {
         elastic_.set_projection(projection);
-        DenseHessian sink(problem_);
+        sflsh::testing::DenseHessian sink(problem_);
         require(elastic_.add_hessian(x, sink) && inertia_.add_hessian(x, sink) && gravity_.add_hessian(x, sink),
                 "dense reference: Hessian failed");
         llt.compute(sink.H(free_, free_));

@@ -12,6 +12,7 @@
 // Overflow: beyond x_cap = kFungExponentCap either throw, or continue φ by its tangent,
 // φ(x) = e^{x_cap}(1 + x − x_cap) − 1, φ' = e^{x_cap}, φ'' = 0 (C¹ and consistent derivatives).
 #include <sflsh/core/error.hpp>
+#include <sflsh/material/fung_strain.hpp>
 #include <sflsh/material/orthotropic_fung.hpp>
 
 #include <Eigen/LU>
@@ -137,6 +138,11 @@ Matrix9d d2psi_ortho_stvk_dF2(const Eigen::Matrix3d& F, const OrthotropicFung& m
 
 double fung_exponent(const Eigen::Matrix3d& F, const OrthotropicFung& m) {
   return 2.0 * strain_of(F, m).psi0 * m.inv_c;
+}
+
+FungStrain fung_strain(const Eigen::Matrix3d& F, const OrthotropicFung& m) {
+  const Strain s = strain_of(F, m);
+  return {2.0 * s.psi0 * m.inv_c, s.E_hat.norm()};
 }
 
 // The three share eval_ortho_fung so that they return bit-identical numbers to one combined evaluation.
