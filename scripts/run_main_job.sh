@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The main job on the embedded default data (no licensed data needed):
-# installs the Debian packages, builds sflsh (release), and poses the open body along a
+# installs the Debian packages, builds the sflsh executable (release; not the tests), and poses the open body along a
 # procedural motion, writing a ParaView series to out/main_job/body.pvd; then meshes the soft-tissue
 # layer of the same subject, writes its material fields, and simulates its soft tissue with the
 # full-space reference solver and with the reduced model.
@@ -9,13 +9,13 @@ cd "$(dirname "$0")/.."
 
 scripts/setup.sh
 cmake --preset release >/dev/null
-cmake --build --preset release -j"$(nproc)"
+cmake --build --preset release -j"$(nproc)" --target sflsh   # only what the main job runs; the tests build in command 2
 
 out=${SFLSH_OUT:-out/main_job}
 sflsh=build/release/apps/sflsh/sflsh
 "$sflsh" motion export --motion jiggle_on_toes --subject OPEN_TRAIN_1 --out "$out"
 # The soft-tissue layer (the template mesh is cached in ~/.cache/sflsh after the first run) and its material.
-"$sflsh" mesh --subject OPEN_TRAIN_1 --thickness 0.5 --mesher cgal --size default --out "$out/layer"
+"$sflsh" mesh --subject OPEN_TRAIN_1 --thickness 0.5 --mesher cgal --mesh default --out "$out/layer"
 "$sflsh" material show --subject OPEN_TRAIN_1 --control-points 24 --out "$out/material"
 # The full-space reference solver on the same subject and motion (coarse layer, 2 s): soft tissue in motion.
 "$sflsh" simulate --solver full --mesh coarse --subject OPEN_TRAIN_1 --motion jiggle_on_toes --frames 121 \

@@ -119,7 +119,7 @@ void add_material_show_command(CLI::App& material, const Invocation& invocation)
   cmd->add_option("--mesher", opt->mesher, "Layer mesher: cgal | gmsh | layered")
       ->check(CLI::IsMember({"cgal", "gmsh", "layered"}))
       ->capture_default_str();
-  cmd->add_option("--size", opt->size, "Layer size preset: coarse | default | fine")
+  cmd->add_option("--mesh,--size", opt->size, "Layer resolution: coarse | default | fine (--size: older spelling)")
       ->check(CLI::IsMember({"coarse", "default", "fine"}))
       ->capture_default_str();
   cmd->add_option("--cache", opt->cache, "Cache folder for template meshes (default $SFLSH_CACHE or ~/.cache/sflsh)");

@@ -146,7 +146,7 @@ void register_mesh_commands(CLI::App& app, const Invocation& invocation) {
   cmd->add_option("--mesher", opt->mesher, "Tet mesher: cgal | gmsh | layered (extruded prisms, valid for any h)")
       ->check(CLI::IsMember({"cgal", "gmsh", "layered"}))
       ->capture_default_str();
-  cmd->add_option("--size", opt->size, "Size preset: coarse (~10k tets) | default (~50k) | fine (~200k)")
+  cmd->add_option("--mesh,--size", opt->size, "Layer resolution preset: coarse (~10k tets) | default (~50k) | fine (~200k) (--size: older spelling)")
       ->check(CLI::IsMember({"coarse", "default", "fine"}))
       ->capture_default_str();
   cmd->add_option("--region", opt->region, "Comma-separated parts: torso, upper_arms, thighs, left_upper_arm, …")

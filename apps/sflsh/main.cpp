@@ -64,7 +64,10 @@ int main(int argc, char** argv) {
   try {
     app.parse(own_argc, own_argv.data());
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
+    // A command line that cannot be used: one line, like every other refusal, and the usage-error status 2.
+    std::cerr << "sflsh: error: " << e.what() << " (see --help)" << std::endl;
+    return 2;
   } catch (const std::exception& e) {
     std::cerr << "sflsh: error: " << e.what() << std::endl;
     abort_other_ranks_if_parallel();

@@ -1,6 +1,7 @@
 #include <sflsh/fullspace/petsc_session.hpp>
 
 #include <sflsh/core/error.hpp>
+#include <sflsh/core/interrupt_cleanup.hpp>
 
 #include <petscsys.h>
 
@@ -84,6 +85,7 @@ PetscSession::PetscSession(const std::vector<std::string>& options, const std::s
   require(ierr == 0, "PETSc failed to initialize (error {}){}", static_cast<int>(ierr),
           options_file.empty() ? std::string() : " with options file " + options_file);
   owns_ = true;
+  reinstall_interrupt_cleanup();  // PETSc's own handlers for SIGTERM/SIGHUP would leave staging folders behind
 }
 
 PetscSession::~PetscSession() {

@@ -16,7 +16,7 @@ using sflsh::testing::run_sflsh;
 using ::testing::HasSubstr;
 
 namespace {
-std::string common_args() { return fmt::format("--mesher layered --size coarse --cache {}", SFLSH_TEST_CACHE); }
+std::string common_args() { return fmt::format("--mesher layered --mesh coarse --cache {}", SFLSH_TEST_CACHE); }
 }  // namespace
 
 TEST(CliMaterialShow, WritesFieldsControlPointsAndARoundTrippableMaterialFile) {

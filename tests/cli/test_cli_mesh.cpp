@@ -18,7 +18,7 @@ using ::testing::HasSubstr;
 namespace {
 
 // The coarse gmsh layer of the open body, cached in the build tree (shared with the meshing tests).
-std::string common_args() { return fmt::format("--mesher gmsh --size coarse --cache {}", SFLSH_TEST_CACHE); }
+std::string common_args() { return fmt::format("--mesher gmsh --mesh coarse --cache {}", SFLSH_TEST_CACHE); }
 
 }  // namespace
 
@@ -76,6 +76,7 @@ TEST(CliMesh, CorruptCacheIsReportedWithTheFile) {
   const auto cache = dir / "cache";
   std::filesystem::create_directories(cache);
   // Find the file name the command uses by building once, then corrupt it.
+  // --size is the older spelling of --mesh and still names the preset.
   auto result = run_sflsh(fmt::format("-q mesh --region left_thigh --mesher layered --size coarse --cache {} --out {}",
                                       cache.string(), (dir / "a").string()),
                           dir);

@@ -2,11 +2,15 @@
 
 #include <sflsh/core/atomic_file.hpp>
 #include <sflsh/core/error.hpp>
+#include <sflsh/core/interrupt_cleanup.hpp>
 #include <sflsh/core/run_folder.hpp>
 #include <sflsh/core/summary.hpp>
 #include <sflsh/core/vtk_io.hpp>
 
 #include <gmock/gmock.h>
+
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <fstream>
 
@@ -29,15 +33,18 @@ TEST(AtomicFile, FailedWriterLeavesTargetUntouched) {
 }
 
 TEST(RunFolder, NothingAppearsUntilCommit) {
-  const auto dir = sflsh::testing::scratch_dir() / "run";
+  const auto scratch = sflsh::testing::scratch_dir();
+  const auto dir = scratch / "run";
   {
     RunFolder run(dir);
     write_text_atomically(run.stage("x.txt"), "x");
     write_text_atomically(run.stage("sub/y.txt"), "y");
     EXPECT_FALSE(std::filesystem::exists(dir / "x.txt"));
+    EXPECT_EQ(run.staging().parent_path(), dir.parent_path());  // beside DIR, never inside the user's folder
     // destroyed without commit: as if the run failed
   }
-  EXPECT_EQ(sflsh::testing::count_entries(dir), 0u);
+  EXPECT_FALSE(std::filesystem::exists(dir));  // a failed run creates no (empty) output folder
+  EXPECT_EQ(sflsh::testing::count_entries(scratch), 0u);
   {
     RunFolder run(dir);
     write_text_atomically(run.stage("x.txt"), "x");
@@ -47,6 +54,70 @@ TEST(RunFolder, NothingAppearsUntilCommit) {
   EXPECT_TRUE(std::filesystem::exists(dir / "x.txt"));
   EXPECT_TRUE(std::filesystem::exists(dir / "sub/y.txt"));
   EXPECT_EQ(sflsh::testing::count_entries(dir), 3u);  // x.txt, sub, sub/y.txt
+  EXPECT_EQ(sflsh::testing::count_entries(scratch), 4u);  // and no staging folder beside it
+  {  // into an existing folder: files replaced one by one, others kept
+    RunFolder run(dir / "");  // a trailing separator names the same folder
+    write_text_atomically(run.stage("x.txt"), "x2");
+    run.commit();
+  }
+  std::ifstream in(dir / "x.txt");
+  std::string content;
+  in >> content;
+  EXPECT_EQ(content, "x2");
+  EXPECT_TRUE(std::filesystem::exists(dir / "sub/y.txt"));
+}
+
+TEST(RunFolder, FailedRunRemovesTheParentsItCreated) {
+  const auto scratch = sflsh::testing::scratch_dir();
+  { RunFolder run(scratch / "a" / "b" / "run"); }
+  EXPECT_FALSE(std::filesystem::exists(scratch / "a"));
+  {
+    RunFolder run(scratch / "a" / "b" / "run");
+    write_text_atomically(run.stage("x.txt"), "x");
+    run.commit();
+  }
+  EXPECT_TRUE(std::filesystem::exists(scratch / "a" / "b" / "run" / "x.txt"));
+}
+
+TEST(RunFolder, RefusesAFileAsFolder) {
+  const auto scratch = sflsh::testing::scratch_dir();
+  write_text_atomically(scratch / "file", "x");
+  EXPECT_THAT([&] { RunFolder run(scratch / "file"); }, ::testing::ThrowsMessage<Error>(::testing::HasSubstr("is not a folder")));
+}
+
+/// A pid that belonged to a process which has ended.
+long dead_pid() {
+  const pid_t child = ::fork();
+  if (child == 0) std::_Exit(0);
+  int status = 0;
+  ::waitpid(child, &status, 0);
+  return static_cast<long>(child);
+}
+
+TEST(RunFolder, RemovesStagingFoldersOfDeadProcesses) {
+  const auto scratch = sflsh::testing::scratch_dir();
+  const long dead = dead_pid();
+  const auto stale = scratch / fmt::format(".other.staging-{}", dead);
+  const auto stale_old_layout = scratch / "run" / fmt::format(".staging-{}", dead);
+  const auto alive = scratch / fmt::format(".busy.staging-{}", static_cast<long>(::getppid()));  // a live process
+  for (const auto& p : {stale, stale_old_layout, alive}) {
+    std::filesystem::create_directories(p);
+    write_text_atomically(p / "frame.vtp", "partial");
+  }
+  { RunFolder run(scratch / "run"); }
+  EXPECT_FALSE(std::filesystem::exists(stale));
+  EXPECT_FALSE(std::filesystem::exists(stale_old_layout));
+  EXPECT_TRUE(std::filesystem::exists(alive));
+}
+
+TEST(InterruptCleanup, RemovesATreeWithSignalSafeCalls) {
+  const auto scratch = sflsh::testing::scratch_dir();
+  const auto tree = scratch / "tree";
+  for (int i = 0; i < 7; ++i) std::filesystem::create_directories(tree / fmt::format("d{}", i) / "deeper");
+  for (int i = 0; i < 300; ++i) write_text_atomically(tree / fmt::format("d{}", i % 7) / fmt::format("f{}.txt", i), "x");
+  EXPECT_TRUE(remove_tree_signal_safe(tree.c_str()));
+  EXPECT_FALSE(std::filesystem::exists(tree));
+  EXPECT_TRUE(remove_tree_signal_safe((scratch / "missing").c_str()));
 }
 
 TEST(VtkOutput, SurfaceAndTetsReadBackWithVtkReaders) {
