@@ -12,6 +12,7 @@ packages=(
   libzip-dev zlib1g-dev libtbb-dev libmuparser-dev
   googletest libgtest-dev libgmock-dev
   xvfb xauth
+  python3-meshio
 )
 
 missing=()

@@ -67,11 +67,14 @@ void run_simulate(const SimulateOptions& opt, const Invocation& invocation, int 
   const nlohmann::json body = run_body_simulation(settings, write ? &*run : nullptr, rank, size);
   if (rank != 0) return;
   summary.update(body);
+  const bool xdmf = opt.body.format == "xdmf";
   summary["output"] = opt.no_output ? nlohmann::json("summary.json only")
-                                    : nlohmann::json({{"series", "body.pvd"},
-                                                      {"layer", opt.body.write_layer ? "layer.pvd" : ""},
+                                    : nlohmann::json({{"format", opt.body.format},
+                                                      {"series", xdmf ? "body.xmf" : "body.pvd"},
+                                                      {"layer", opt.body.write_layer ? (xdmf ? "layer.xmf" : "layer.pvd") : ""},
                                                       {"every", opt.every},
-                                                      {"compression", body.value("compression", std::string("lz4"))}});
+                                                      {"compression", xdmf ? "none" : body.value("compression", std::string("lz4"))},
+                                                      {"precision", xdmf ? opt.body.precision : "float64"}});
   summary.erase("compression");
   write_json(run->stage("summary.json"), summary);
   run->commit();
@@ -108,6 +111,14 @@ void register_simulate_commands(CLI::App& app, const Invocation& invocation) {
   add_layer_options(*cmd, opt->body.layer);
   add_mass_option(*cmd, opt->body.layer);
   cmd->add_flag("--write-layer", opt->body.write_layer, "Also write the tet layer per frame (layer.pvd)");
+  cmd->add_option("--format", opt->body.format,
+                  "Time series: vtk (body.pvd of one .vtp per frame, layer.pvd of .vtu) | xdmf (body.xmf + body.h5: triangles "
+                  "and fixed fields once, one HDF5 dataset per field and frame; docs/output.md)")
+      ->check(CLI::IsMember({"vtk", "xdmf"}))
+      ->capture_default_str();
+  cmd->add_option("--precision", opt->body.precision, "Floating-point precision of an xdmf series: float64 | float32")
+      ->check(CLI::IsMember({"float64", "float32"}))
+      ->capture_default_str();
   cmd->add_flag("--no-output", opt->no_output, "Write only summary.json");
   cmd->add_option("--every", opt->every,
                   "Write every N-th frame (frame 0 and the last frame always; σ and the summary still use every frame); "

@@ -113,6 +113,8 @@ nlohmann::json run_body_simulation(const BodyRunSettings& opt, RunFolder* frames
   model::SimulationWriterOptions writer_options;
   writer_options.write_layer = opt.write_layer;
   writer_options.jobs = jobs ? &*jobs : nullptr;
+  writer_options.format = opt.format;
+  writer_options.precision = xdmf::parse_precision(opt.precision, "--precision");
   model::SimulationWriter writer(layer, write ? frames_to : nullptr, writer_options);
   const int num_frames = static_cast<int>(motion.num_frames());
   writer.add_frame(0, 0.0, solver.current_state(), true);

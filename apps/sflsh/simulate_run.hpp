@@ -25,6 +25,8 @@ struct BodyRunSettings {
   std::string integrator = "backward_euler";  ///< backward_euler | bdf2 | newmark (time_integrator.hpp)
   bool write_layer = false;                   ///< also write layer.pvd (when frames are written)
   int every = 1;                              ///< write every N-th frame (frame 0 and the last always)
+  std::string format = "vtk";                 ///< vtk (.pvd of .vtp/.vtu) | xdmf (.xmf + .h5), docs/output.md
+  std::string precision = "float64";          ///< float64 | float32 (xdmf datasets)
   // Reduced model.
   int handles = 86;
   int cubature = -1;                      ///< −1 auto, 0 every tet, else a tet count

@@ -1,6 +1,7 @@
 #include <sflsh/core/atomic_file.hpp>
 #include <sflsh/core/chart.hpp>
 #include <sflsh/core/error.hpp>
+#include <sflsh/core/virtual_display.hpp>
 
 #include <fmt/format.h>
 #include <vtkAutoInit.h>
@@ -90,8 +91,7 @@ std::array<unsigned char, 3> palette(std::size_t i) {
 }
 
 void write_chart_png(const std::filesystem::path& path, const Chart& chart) {
-  const char* display = std::getenv("DISPLAY");
-  require(display != nullptr && *display, "plot: no X display; run under `xvfb-run -a` (Debian's VTK renders through X)");
+  require_display("plot");  // $DISPLAY, or a virtual display started for this process
   require(!chart.series.empty(), "plot: no series to draw");
   double x_lo = std::numeric_limits<double>::infinity(), x_hi = -x_lo, y_lo = x_lo, y_hi = -x_lo;
   for (const Series& s : chart.series) {

@@ -1,5 +1,6 @@
 #include <sflsh/core/atomic_file.hpp>
 #include <sflsh/core/error.hpp>
+#include <sflsh/core/virtual_display.hpp>
 #include <sflsh/core/render.hpp>
 
 #include <vtkActor.h>
@@ -60,8 +61,7 @@ vtkSmartPointer<vtkPolyData> to_polydata(const Surface& s) {
 }  // namespace
 
 void render_png(const std::filesystem::path& path, const std::vector<Surface>& surfaces, const View& view) {
-  const char* display = std::getenv("DISPLAY");
-  require(display != nullptr && *display, "render: no X display; run under `xvfb-run -a` (Debian's VTK renders through X)");
+  require_display("render");  // $DISPLAY, or a virtual display started for this process
   require(!surfaces.empty(), "render: nothing to draw");
 
   vtkNew<vtkRenderer> renderer;

@@ -165,11 +165,39 @@ SimulationWriter::SimulationWriter(const BodyLayer& layer, RunFolder* run, const
     dominant_joint_(v) = static_cast<double>(k);
   }
   vertex_kappa_ = scatter(layer, layer.fields.vertex);
-  if (run_) {
+  check_output_format(options_.format, "simulation output");
+  const std::string layer_prefix = options_.prefix == "body" ? "layer" : options_.prefix + "_layer";
+  if (run_ && options_.format == "xdmf") {
+    // The fields that do not change go in once; every frame then holds positions and the moving fields.
+    run_->stage(options_.prefix + ".h5");
+    body_xdmf_ = std::make_unique<xdmf::Series>(run_->stage(options_.prefix + ".xmf"), layer.model->faces, options_.precision);
+    vtk::Fields fixed;
+    if (wants("skin_weights_argmax")) fixed.point_data.push_back({"skin_weights_argmax", dominant_joint_, true});
+    for (int k = 0; k < material::kNumKappa; ++k) {
+      const std::string kappa(material::kKappaNames[static_cast<std::size_t>(k)]);
+      if (wants(kappa)) fixed.point_data.push_back({kappa, vertex_kappa_.col(k), false});
+    }
+    body_xdmf_->set_static(fixed);
+    if (write_layer_) {
+      run_->stage(layer_prefix + ".h5");
+      layer_xdmf_ = std::make_unique<xdmf::Series>(run_->stage(layer_prefix + ".xmf"), layer.problem.tets, options_.precision);
+      vtk::Fields layer_fixed;
+      for (int k = 0; k < material::kNumKappa; ++k) {
+        const std::string kappa(material::kKappaNames[static_cast<std::size_t>(k)]);
+        if (!wants(kappa)) continue;
+        layer_fixed.point_data.push_back({kappa, layer.fields.node.col(k), false});
+        layer_fixed.cell_data.push_back({kappa, layer.fields.tet.col(k), false});
+      }
+      layer_xdmf_->set_static(layer_fixed);
+    }
+  } else if (run_) {
     body_series_ = std::make_unique<vtk::PvdSeries>(run_->stage(options_.prefix + ".pvd"));
-    if (write_layer_)
-      layer_series_ = std::make_unique<vtk::PvdSeries>(run_->stage(options_.prefix == "body" ? "layer.pvd" : options_.prefix + "_layer.pvd"));
+    if (write_layer_) layer_series_ = std::make_unique<vtk::PvdSeries>(run_->stage(layer_prefix + ".pvd"));
   }
+}
+
+void check_output_format(const std::string& format, const std::string& where) {
+  require(format == "vtk" || format == "xdmf", "{}: format '{}' is not an output format (expected vtk or xdmf)", where, format);
 }
 
 bool SimulationWriter::wants(const std::string& field) const {
@@ -218,23 +246,27 @@ void SimulationWriter::add(int index, double t, const Eigen::VectorXd& x_state, 
     if (previous_posed_.rows() == posed.rows() && t > previous_t_) velocity = (posed - previous_posed_) / (t - previous_t_);
     fields.point_data.push_back({"velocity", velocity, false});
   }
-  if (wants("skin_weights_argmax")) fields.point_data.push_back({"skin_weights_argmax", dominant_joint_, true});
+  const bool xdmf = body_xdmf_ != nullptr;   // the fixed fields are in the series once
+  if (wants("skin_weights_argmax") && !xdmf) fields.point_data.push_back({"skin_weights_argmax", dominant_joint_, true});
   if (wants("soft_tissue_displacement")) fields.point_data.push_back({"soft_tissue_displacement", posed - skinned, false});
   if (wants("elastic_displacement")) fields.point_data.push_back({"elastic_displacement", scatter(layer_, u), false});
   const bool energy = wants("strain_energy_density");
   if (energy) fields.point_data.push_back({"strain_energy_density", Eigen::MatrixXd(), false});   // filled by the job
   for (int k = 0; k < material::kNumKappa; ++k) {
     const std::string name(material::kKappaNames[static_cast<std::size_t>(k)]);
-    if (wants(name)) fields.point_data.push_back({name, vertex_kappa_.col(k), false});
+    if (wants(name) && !xdmf) fields.point_data.push_back({name, vertex_kappa_.col(k), false});
   }
   fields.field_data.push_back({"TimeValue", Eigen::MatrixXd::Constant(1, 1, t), false});
   const std::size_t own_fields = fields.point_data.size();   // the extra ones are in the world frame already
   for (const vtk::Field& f : extra)
     if (wants(f.name)) fields.point_data.push_back(f);
-  const std::string name = fmt::format("{}_{:06d}.vtp", options_.prefix, index);
-  body_series_->add(t, name);
-  const std::filesystem::path path = run_->stage(name);
-  run_job([this, path, posed, own_fields, fields = std::move(fields), x = energy ? x_state : Eigen::VectorXd()]() mutable {
+  std::filesystem::path path;
+  if (!xdmf) {
+    const std::string name = fmt::format("{}_{:06d}.vtp", options_.prefix, index);
+    body_series_->add(t, name);
+    path = run_->stage(name);
+  }
+  run_job([this, path, t, posed, own_fields, fields = std::move(fields), x = energy ? x_state : Eigen::VectorXd()]() mutable {
     if (x.size() > 0) {
       // Only the tets under the skin's vertices (a sixth of the layer's on the coarse mesh).
       const Eigen::VectorXd vertex_psi = strain_energy_density(layer_.problem, x, layer_.mesh->skin.tet);
@@ -249,7 +281,8 @@ void SimulationWriter::add(int index, double t, const Eigen::VectorXd& x_state, 
       }
       posed = ((posed * options_.rotation.transpose()).rowwise() + options_.translation.transpose()).eval();
     }
-    vtk::write_surface(path, posed, layer_.model->faces, fields, options_.compression);
+    if (body_xdmf_) body_xdmf_->write(t, posed, fields);
+    else vtk::write_surface(path, posed, layer_.model->faces, fields, options_.compression);
   });
   if (write_layer_ && state) write_layer_frame(index, t, *state);
   previous_posed_ = std::move(posed);
@@ -261,10 +294,13 @@ void SimulationWriter::write_layer_frame(int index, double t, const State& state
   NodeFrame frame;
   problem.frame(t, frame);
   RowMatrixX3d nodes = posed_positions(frame, state.x);
-  const std::string name =
-      options_.prefix == "body" ? fmt::format("layer_{:06d}.vtu", index) : fmt::format("{}_layer_{:06d}.vtu", options_.prefix, index);
-  layer_series_->add(t, name);
-  const std::filesystem::path path = run_->stage(name);
+  std::filesystem::path path;
+  if (!layer_xdmf_) {
+    const std::string name =
+        options_.prefix == "body" ? fmt::format("layer_{:06d}.vtu", index) : fmt::format("{}_layer_{:06d}.vtu", options_.prefix, index);
+    layer_series_->add(t, name);
+    path = run_->stage(name);
+  }
   run_job([this, &problem, path, t, nodes = std::move(nodes), x = Eigen::VectorXd(state.x), w = Eigen::VectorXd(state.w)]() mutable {
     const bool placed = !options_.rotation.isIdentity(0.0) || !options_.translation.isZero(0.0);
     if (placed) nodes = ((nodes * options_.rotation.transpose()).rowwise() + options_.translation.transpose()).eval();
@@ -274,7 +310,7 @@ void SimulationWriter::write_layer_frame(int index, double t, const State& state
     if (wants("displacement")) fields.point_data.push_back({"displacement", nodes - problem.rest, false});
     if (wants("elastic_displacement")) fields.point_data.push_back({"elastic_displacement", elastic - problem.rest, false});
     if (wants("velocity")) fields.point_data.push_back({"velocity", velocity, false});
-    for (int k = 0; k < material::kNumKappa; ++k) {
+    for (int k = 0; k < material::kNumKappa && !layer_xdmf_; ++k) {   // an xdmf series holds them once
       const std::string kappa(material::kKappaNames[static_cast<std::size_t>(k)]);
       if (!wants(kappa)) continue;
       fields.point_data.push_back({kappa, layer_.fields.node.col(k), false});
@@ -282,14 +318,17 @@ void SimulationWriter::write_layer_frame(int index, double t, const State& state
     }
     if (wants("strain_energy_density")) fields.cell_data.push_back({"strain_energy_density", strain_energy_density(problem, x), false});
     fields.field_data.push_back({"TimeValue", Eigen::MatrixXd::Constant(1, 1, t), false});
-    vtk::write_unstructured(path, nodes, problem.tets, fields, options_.compression);
+    if (layer_xdmf_) layer_xdmf_->write(t, nodes, fields);
+    else vtk::write_unstructured(path, nodes, problem.tets, fields, options_.compression);
   });
 }
 
 void SimulationWriter::finish() {
   if (!run_) return;
-  body_series_->write();
+  if (body_series_) body_series_->write();
   if (layer_series_) layer_series_->write();
+  if (body_xdmf_) body_xdmf_->close();
+  if (layer_xdmf_) layer_xdmf_->close();
   vtk::Fields fields;
   fields.point_data.push_back({"sigma", scatter(layer_, 1e3 * amplitude_.sigma()), false});
   fields.point_data.push_back({"sigma_normal", scatter(layer_, 1e3 * amplitude_.sigma_normal()), false});

@@ -9,6 +9,7 @@
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
+#include <hdf5.h>
 
 #include <algorithm>
 
@@ -74,6 +75,49 @@ TEST_P(CliSimulate, SurfaceMatchesMotionExportLayoutAndCarriesTheSoftTissueField
     EXPECT_GE(summary["reduced"]["cubature"].get<int>(), 200);
     EXPECT_TRUE(summary["timings"].contains("elastic_seconds"));
   }
+}
+
+/// A float64 dataset of an HDF5 file, row-major.
+std::vector<double> read_h5(const fs::path& file, const std::string& path) {
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // a missing dataset is an expected answer here, not an error to print
+  const hid_t f = H5Fopen(file.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  const hid_t d = H5Dopen2(f, path.c_str(), H5P_DEFAULT);
+  std::vector<double> values;
+  if (d >= 0) {
+    const hid_t space = H5Dget_space(d);
+    values.resize(static_cast<std::size_t>(H5Sget_simple_extent_npoints(space)));
+    H5Dread(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data());
+    H5Sclose(space);
+    H5Dclose(d);
+  }
+  H5Fclose(f);
+  return values;
+}
+
+TEST_P(CliSimulate, XdmfSeriesHoldsTheSameFramesAsTheVtkSeries) {
+  const fs::path dir = scratch_dir();
+  const auto vtk_run = run_sflsh(solver() + "--mesh coarse " + common() + " --out " + (dir / "vtk").string(), dir);
+  ASSERT_EQ(vtk_run.exit_code, 0) << vtk_run.err;
+  const auto xdmf_run = run_sflsh(solver() + "--mesh coarse " + common() + " --format xdmf --write-layer --out " + (dir / "xdmf").string(), dir);
+  ASSERT_EQ(xdmf_run.exit_code, 0) << xdmf_run.err;
+  for (const char* file : {"body.xmf", "body.h5", "layer.xmf", "layer.h5", "dynamics.vtp", "summary.json"})
+    EXPECT_TRUE(fs::exists(dir / "xdmf" / file)) << file;
+  EXPECT_FALSE(fs::exists(dir / "xdmf" / "body_000000.vtp"));
+  // The same solve: the posed surface and the soft-tissue field of the last frame agree bit for bit.
+  const vtk::Points last = vtk::read_points(dir / "vtk" / "body_000003.vtp");
+  const std::vector<double> geometry = read_h5(dir / "xdmf" / "body.h5", "/geometry/000003");
+  ASSERT_EQ(geometry.size(), static_cast<std::size_t>(last.size()));
+  EXPECT_EQ(Eigen::Map<const vtk::Points>(geometry.data(), last.rows(), 3), last);
+  const Eigen::MatrixXd soft = vtk::read_point_array(dir / "vtk" / "body_000003.vtp", "soft_tissue_displacement");
+  const std::vector<double> soft_h5 = read_h5(dir / "xdmf" / "body.h5", "/point/soft_tissue_displacement/000003");
+  ASSERT_EQ(soft_h5.size(), static_cast<std::size_t>(soft.size()));
+  EXPECT_EQ(Eigen::Map<const vtk::Points>(soft_h5.data(), soft.rows(), 3), vtk::Points(soft));
+  // Fixed fields once, not per frame.
+  EXPECT_FALSE(read_h5(dir / "xdmf" / "body.h5", "/static/point/young_tangent").empty());
+  EXPECT_TRUE(read_h5(dir / "xdmf" / "body.h5", "/point/young_tangent/000003").empty());
+  const nlohmann::json summary = read_json(dir / "xdmf" / "summary.json");
+  EXPECT_EQ(summary["output"]["format"], "xdmf");
+  EXPECT_EQ(summary["output"]["series"], "body.xmf");
 }
 
 TEST_P(CliSimulate, NoOutputWritesOnlyTheSummary) {

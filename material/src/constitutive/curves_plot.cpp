@@ -1,6 +1,7 @@
 // curves.png: the material curves drawn with VTK's 2-D charts (vtkChartXY in a vtkContextView), offscreen.
 #include <sflsh/core/atomic_file.hpp>
 #include <sflsh/core/error.hpp>
+#include <sflsh/core/virtual_display.hpp>
 #include <sflsh/material/curves.hpp>
 
 #include <vtkAxis.h>
@@ -46,9 +47,7 @@ vtkSmartPointer<vtkTable> table_of(const MaterialCurve& curve) {
 
 void plot_curves_png(const std::filesystem::path& path, const std::vector<MaterialCurve>& curves,
                      const std::string& title) {
-  const char* display = std::getenv("DISPLAY");
-  require(display != nullptr && *display,
-          "plot: no X display; run under `xvfb-run -a` (Debian's VTK renders through X)");
+  require_display("plot");  // $DISPLAY, or a virtual display started for this process
   require(!curves.empty(), "plot: no curves to draw");
 
   vtkNew<vtkContextView> view;

@@ -1,8 +1,8 @@
 #pragma once
 // Small 2-D charts (points and lines, optional log axes) written as PNG with VTK's charts (vtkChartXY in an
 // offscreen vtkContextView), the approach of the material curves plot. Debian's VTK renders through X: on a
-// machine without a display run the command under `xvfb-run -a`; without one write_chart_png throws
-// sflsh::Error, so callers treat the picture as optional.
+// machine without a display a virtual one is started (virtual_display.hpp); when that is impossible
+// write_chart_png throws sflsh::Error, so callers treat the picture as optional.
 //
 // Link note: the implementation needs VTK's ChartsCore, ViewsContext2D, RenderingContext2D and
 // RenderingContextOpenGL2 modules, which sflsh::core does not link itself; a target that calls it must link

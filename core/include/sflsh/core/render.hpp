@@ -1,6 +1,6 @@
 #pragma once
-// Offscreen pictures of triangle surfaces with VTK (PNG). Debian's VTK renders through X, so on a
-// machine without a display run the command under `xvfb-run -a` (scripts/render_subjects.sh does).
+// Offscreen pictures of triangle surfaces with VTK (PNG). Debian's VTK renders through X; on a machine
+// without a display a virtual one is started (virtual_display.hpp).
 #include <sflsh/core/vtk_io.hpp>
 
 #include <filesystem>
@@ -26,7 +26,7 @@ struct View {
   std::optional<std::pair<double, double>> scalar_range;
 };
 
-/// Renders the surfaces into one PNG (atomic write). Throws sflsh::Error when no X display is available.
+/// Renders the surfaces into one PNG (atomic write). Throws sflsh::Error when no X display can be had.
 void render_png(const std::filesystem::path& path, const std::vector<Surface>& surfaces, const View& view);
 
 }  // namespace sflsh::render

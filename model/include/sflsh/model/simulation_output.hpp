@@ -6,6 +6,7 @@
 #include <sflsh/core/background_jobs.hpp>
 #include <sflsh/core/run_folder.hpp>
 #include <sflsh/core/vtk_io.hpp>
+#include <sflsh/core/xdmf_series.hpp>
 #include <sflsh/model/body_layer.hpp>
 
 #include <nlohmann/json.hpp>
@@ -49,6 +50,8 @@ Eigen::VectorXd strain_energy_density(const Problem& problem, const Eigen::Vecto
 /// skin_weights_argmax, soft_tissue_displacement, elastic_displacement, strain_energy_density, thickness,
 /// young_tangent, young_normal, and in scenes with contact contact_force, penetration.
 const std::vector<std::string>& frame_field_names();
+/// The frame output formats: "vtk", "xdmf"; throws sflsh::Error "<where>: …" for another name.
+void check_output_format(const std::string& format, const std::string& where);
 /// Throws sflsh::Error "<where>: unknown field '<name>'<context> (expected …)" for a name not in frame_field_names().
 void check_frame_field_names(const std::vector<std::string>& names, const std::string& where, const std::string& context = "");
 
@@ -69,6 +72,11 @@ struct SimulationWriterOptions {
   std::optional<std::vector<std::string>> fields;
   /// Compression of the frame files (dynamics.vtp stays zlib).
   vtk::Compression compression = vtk::Compression::lz4;
+  /// The time series: "vtk" (.pvd of one .vtp/.vtu per frame) or "xdmf" (<prefix>.xmf + <prefix>.h5: the
+  /// triangles and the fields that do not change stored once, one dataset per field and frame).
+  std::string format = "vtk";
+  /// Precision of the xdmf series' floating-point datasets (the vtk frames stay Float64).
+  xdmf::Precision precision = xdmf::Precision::float64;
   /// Non-null: the frame files are written by these jobs (a background thread); the caller waits for them
   /// before committing the run folder. Null: written at once.
   BackgroundJobs* jobs = nullptr;
@@ -119,6 +127,7 @@ class SimulationWriter {
   SimulationWriterOptions options_;
   bool write_layer_;
   std::unique_ptr<vtk::PvdSeries> body_series_, layer_series_;
+  std::unique_ptr<xdmf::Series> body_xdmf_, layer_xdmf_;   ///< format "xdmf" instead of the .pvd series
   Eigen::MatrixXd dominant_joint_;      ///< per body vertex: argmax of the skinning weights
   Eigen::MatrixXd vertex_kappa_;        ///< per body vertex (h, Y_t, Y_n), zero outside the region
   DynamicsAmplitude amplitude_;

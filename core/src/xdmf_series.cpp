@@ -1,0 +1,225 @@
+// XDMF 3 + HDF5 time series (xdmf_series.hpp), written with the HDF5 C library.
+#include <sflsh/core/atomic_file.hpp>
+#include <sflsh/core/error.hpp>
+#include <sflsh/core/xdmf_series.hpp>
+
+#include <hdf5.h>
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <mutex>
+#include <optional>
+
+namespace sflsh::xdmf {
+
+namespace fs = std::filesystem;
+
+Precision parse_precision(const std::string& name, const std::string& what) {
+  if (name == "float64") return Precision::float64;
+  if (name == "float32") return Precision::float32;
+  throw_error("{}: '{}' is not a precision (expected float64 or float32)", what, name);
+}
+
+namespace {
+
+/// Debian's HDF5 is built without thread safety, and it is one library state for every file: the series
+/// of several bodies written by background threads take turns.
+std::mutex& hdf5_mutex() {
+  static std::mutex m;  // NOLINT: guards the HDF5 library's own process-wide state
+  return m;
+}
+
+/// One dataset reference of the XML: its HDF5 path, shape and number type.
+struct Item {
+  std::string path;
+  hsize_t rows = 0, columns = 1;
+  bool integer = false;
+};
+
+struct Attribute {
+  std::string name;
+  bool cell = false;
+  Item item;
+};
+
+struct Step {
+  double time = 0.0;
+  Item geometry;
+  std::vector<Attribute> attributes;
+};
+
+/// Closes an HDF5 handle when it goes out of scope.
+struct Handle {
+  hid_t id;
+  herr_t (*close)(hid_t);
+  ~Handle() {
+    if (id >= 0) close(id);
+  }
+};
+
+void create_groups(hid_t file, const std::string& path) {
+  for (std::size_t at = path.find('/', 1); at != std::string::npos; at = path.find('/', at + 1)) {
+    const std::string group = path.substr(0, at);
+    if (H5Lexists(file, group.c_str(), H5P_DEFAULT) > 0) continue;
+    Handle g{H5Gcreate2(file, group.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose};
+    require(g.id >= 0, "xdmf: cannot create group {}", group);
+  }
+}
+
+std::string attribute_type(hsize_t columns) {
+  return columns == 1 ? "Scalar" : columns == 3 ? "Vector" : columns == 9 ? "Tensor" : "Matrix";
+}
+
+}  // namespace
+
+struct Series::Impl {
+  fs::path xmf;
+  fs::path h5;
+  Precision precision;
+  hid_t file = -1;
+  Item topology;
+  std::string topology_type;
+  std::vector<Attribute> static_attributes;
+  std::vector<Step> steps;
+  std::optional<vtk::Points> last_points;
+  bool closed = false;
+
+  Item write_dataset(const std::string& path, const double* values, hsize_t rows, hsize_t columns, bool integer) {
+    create_groups(file, path);
+    const hsize_t dims[2] = {rows, columns};
+    Handle space{H5Screate_simple(columns == 1 ? 1 : 2, dims, nullptr), H5Sclose};
+    const bool single = precision == Precision::float32;
+    const hid_t stored = integer ? H5T_STD_I32LE : single ? H5T_IEEE_F32LE : H5T_IEEE_F64LE;
+    Handle set{H5Dcreate2(file, path.c_str(), stored, space.id, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Dclose};
+    require(set.id >= 0, "{}: cannot create dataset {}", h5.string(), path);
+    herr_t status = 0;
+    if (integer) {
+      std::vector<int> v(rows * columns);
+      for (std::size_t i = 0; i < v.size(); ++i) v[i] = static_cast<int>(std::lround(values[i]));
+      status = H5Dwrite(set.id, H5T_NATIVE_INT, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data());
+    } else if (single) {
+      std::vector<float> v(values, values + rows * columns);
+      status = H5Dwrite(set.id, H5T_NATIVE_FLOAT, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data());
+    } else {
+      status = H5Dwrite(set.id, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, values);
+    }
+    require(status >= 0, "{}: cannot write dataset {} (disk full?)", h5.string(), path);
+    return {path, rows, columns, integer};
+  }
+
+  /// Row-major copy of a field's values (Eigen matrices are column-major).
+  Item write_field(const std::string& path, const vtk::Field& field) {
+    const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> rows = field.values;
+    return write_dataset(path, rows.data(), static_cast<hsize_t>(rows.rows()), static_cast<hsize_t>(rows.cols()), field.integer);
+  }
+
+  std::string data_item(const Item& item) const {
+    const std::string dims = item.columns == 1 ? fmt::format("{}", item.rows) : fmt::format("{} {}", item.rows, item.columns);
+    const char* type = item.integer ? "Int" : "Float";
+    const int bytes = item.integer ? 4 : precision == Precision::float32 ? 4 : 8;
+    return fmt::format(R"(<DataItem Dimensions="{}" NumberType="{}" Precision="{}" Format="HDF">{}:{}</DataItem>)", dims, type, bytes,
+                       h5.filename().string(), item.path);
+  }
+
+  std::string attribute_xml(const Attribute& a) const {
+    return fmt::format(R"(        <Attribute Name="{}" AttributeType="{}" Center="{}">{}</Attribute>
+)",
+                       a.name, attribute_type(a.item.columns), a.cell ? "Cell" : "Node", data_item(a.item));
+  }
+
+  std::string xml() const {
+    std::string s = R"(<?xml version="1.0"?>
+<Xdmf Version="3.0" xmlns:xi="http://www.w3.org/2001/XInclude">
+  <Domain>
+    <Grid Name="series" GridType="Collection" CollectionType="Temporal">
+)";
+    for (std::size_t k = 0; k < steps.size(); ++k) {
+      const Step& step = steps[k];
+      s += fmt::format(R"(      <Grid Name="step_{:06d}" GridType="Uniform">
+        <Time Value="{:.17g}"/>
+        <Topology TopologyType="{}" NumberOfElements="{}">{}</Topology>
+        <Geometry GeometryType="XYZ">{}</Geometry>
+)",
+                       k, step.time, topology_type, topology.rows, data_item(topology), data_item(step.geometry));
+      for (const Attribute& a : static_attributes) s += attribute_xml(a);
+      for (const Attribute& a : step.attributes) s += attribute_xml(a);
+      s += "      </Grid>\n";
+    }
+    s += "    </Grid>\n  </Domain>\n</Xdmf>\n";
+    return s;
+  }
+};
+
+Series::Series(fs::path xmf_path, const Eigen::Ref<const vtk::Cells>& cells, Precision precision) : impl_(std::make_unique<Impl>()) {
+  const std::lock_guard<std::mutex> lock(hdf5_mutex());
+  Impl& m = *impl_;
+  m.xmf = std::move(xmf_path);
+  m.h5 = fs::path(m.xmf).replace_extension(".h5");
+  m.precision = precision;
+  require(cells.cols() == 3 || cells.cols() == 4, "xdmf: cells need 3 (triangles) or 4 (tetrahedra) nodes, got {}", cells.cols());
+  m.topology_type = cells.cols() == 3 ? "Triangle" : "Tetrahedron";
+  m.file = H5Fcreate(m.h5.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+  require(m.file >= 0, "{}: cannot create the HDF5 file", m.h5.string());
+  const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> topology = cells.cast<double>();
+  m.topology = m.write_dataset("/topology", topology.data(), static_cast<hsize_t>(cells.rows()), static_cast<hsize_t>(cells.cols()), true);
+}
+
+Series::~Series() {
+  try {
+    close();
+  } catch (...) {  // a destructor must not throw; close() reports errors when called explicitly
+  }
+}
+
+void Series::set_static(const vtk::Fields& fields) {
+  const std::lock_guard<std::mutex> lock(hdf5_mutex());
+  Impl& m = *impl_;
+  require(m.steps.empty(), "{}: static fields must be set before the first step", m.xmf.string());
+  for (const vtk::Field& f : fields.point_data) m.static_attributes.push_back({f.name, false, m.write_field("/static/point/" + f.name, f)});
+  for (const vtk::Field& f : fields.cell_data) m.static_attributes.push_back({f.name, true, m.write_field("/static/cell/" + f.name, f)});
+}
+
+void Series::write(double time, const Eigen::Ref<const vtk::Points>& points, const vtk::Fields& fields) {
+  const std::lock_guard<std::mutex> lock(hdf5_mutex());
+  Impl& m = *impl_;
+  require(!m.closed, "{}: series already closed", m.xmf.string());
+  require(std::isfinite(time), "{}: step time is not finite", m.xmf.string());
+  const std::string step = fmt::format("{:06d}", m.steps.size());
+  Step s;
+  s.time = time;
+  if (m.last_points && m.last_points->rows() == points.rows() && *m.last_points == points) {
+    s.geometry = m.steps.back().geometry;  // the nodes did not move: reuse the dataset
+  } else {
+    s.geometry = m.write_dataset("/geometry/" + step, points.data(), static_cast<hsize_t>(points.rows()), 3, false);
+    m.last_points = points;
+  }
+  for (const vtk::Field& f : fields.point_data) s.attributes.push_back({f.name, false, m.write_field("/point/" + f.name + "/" + step, f)});
+  for (const vtk::Field& f : fields.cell_data) s.attributes.push_back({f.name, true, m.write_field("/cell/" + f.name + "/" + step, f)});
+  m.steps.push_back(std::move(s));
+}
+
+void Series::close() {
+  const std::lock_guard<std::mutex> lock(hdf5_mutex());
+  Impl& m = *impl_;
+  if (m.closed) return;
+  m.closed = true;
+  const herr_t status = m.file >= 0 ? H5Fclose(m.file) : 0;
+  m.file = -1;
+  require(status >= 0, "{}: closing the HDF5 file failed (disk full?)", m.h5.string());
+  write_text_atomically(m.xmf, m.xml());
+}
+
+std::size_t Series::steps() const { return impl_->steps.size(); }
+
+std::uintmax_t Series::bytes() const {
+  {
+    const std::lock_guard<std::mutex> lock(hdf5_mutex());
+    if (impl_->file >= 0) H5Fflush(impl_->file, H5F_SCOPE_LOCAL);
+  }
+  std::error_code ec;
+  const auto n = fs::file_size(impl_->h5, ec);
+  return ec ? 0 : n;
+}
+
+}  // namespace sflsh::xdmf
