@@ -20,11 +20,10 @@ fs::path normalized_folder(const fs::path& dir) {
   require(!dir.empty(), "--out: an output folder is required");
   fs::path p = dir.lexically_normal();
   if (p.filename().empty()) p = p.parent_path();  // "out/run/" → "out/run"
-  if (p.filename() == "." || p.filename() == ".." || p.filename().empty()) p = fs::absolute(p).lexically_normal();
-  if (p.filename().empty()) p = p.parent_path();
-  require(!p.filename().empty() && p.has_parent_path() && p != p.root_path(),
-          "{}: cannot be used as a run folder (expected a folder name)", dir.string());
-  return p;
+  if (p.empty() || p.filename() == "." || p.filename() == "..") p = fs::absolute(p.empty() ? fs::path(".") : p).lexically_normal();
+  if (p.filename().empty()) p = p.parent_path();  // "/home/me/" → "/home/me"
+  require(!p.filename().empty() && p != p.root_path(), "{}: cannot be used as a run folder (expected a folder name)", dir.string());
+  return p;  // relative names stay relative ("run" lives in ".")
 }
 
 /// The pid in a staging folder's name (`….staging-<pid>`), or 0.
@@ -62,7 +61,7 @@ RunFolder::RunFolder(fs::path dir) : dir_(normalized_folder(dir)) {
   std::error_code ec;
   if (fs::exists(dir_, ec) && !fs::is_directory(dir_, ec))
     throw_error("{}: exists and is not a folder (expected an output folder)", dir_.string());
-  const fs::path parent = dir_.parent_path();
+  const fs::path parent = dir_.has_parent_path() ? dir_.parent_path() : fs::path(".");
   for (fs::path p = parent; !p.empty() && !fs::exists(p, ec); p = p.parent_path()) {
     created_parents_.push_back(p);
     if (p == p.parent_path()) break;

@@ -67,6 +67,25 @@ TEST(RunFolder, NothingAppearsUntilCommit) {
   EXPECT_TRUE(std::filesystem::exists(dir / "sub/y.txt"));
 }
 
+TEST(RunFolder, RelativeNamesAndDotWork) {
+  const auto scratch = sflsh::testing::scratch_dir();
+  const auto cwd = std::filesystem::current_path();
+  std::filesystem::current_path(scratch);
+  for (const char* name : {"run", "./run2", "sub/run3", "sub/../run4/"}) {
+    RunFolder run(name);
+    write_text_atomically(run.stage("x.txt"), "x");
+    run.commit();
+  }
+  {
+    RunFolder run(".");  // the current folder itself: files are moved into it
+    write_text_atomically(run.stage("y.txt"), "y");
+    run.commit();
+  }
+  std::filesystem::current_path(cwd);
+  for (const char* file : {"run/x.txt", "run2/x.txt", "sub/run3/x.txt", "run4/x.txt", "y.txt"})
+    EXPECT_TRUE(std::filesystem::exists(scratch / file)) << file;
+}
+
 TEST(RunFolder, FailedRunRemovesTheParentsItCreated) {
   const auto scratch = sflsh::testing::scratch_dir();
   { RunFolder run(scratch / "a" / "b" / "run"); }
