@@ -6,7 +6,7 @@
 // files into xtensor types only); the .npy header is a short Python-dict literal, and the zip part
 // is delegated to libzip.
 //
-// Input limits (docs/architecture.md, "Input limits"): a member holds at most kMaxMemberBytes once
+// Input limits (docs/physics.md §3.5): a member holds at most kMaxMemberBytes once
 // inflated, its CRC-32 must match the archive's, a header's shape × itemsize must fit the bytes that
 // follow it (computed without overflow), and only the dtypes real SMPL/AMASS files use are accepted:
 // float16/32/64, int8–64, uint8–64, bool, and fixed-width strings ('U', 'S'). Every refusal is one
