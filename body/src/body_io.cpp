@@ -75,8 +75,8 @@ BodyModel load_body(const std::filesystem::path& path) {
   const npz::Array s = read_key(reader, "shapedirs");
   checked(s, file, "shapedirs", {v.shape[0], 3, 0}, "(" + ns + ", 3, >=10)", true);
   require(s.shape[2] >= kNumBetas && s.shape[2] <= kMaxShapeComponents,
-          "{}: shapedirs: shape {}, expected ({}, 3, B) with B in {}..{}", file, s.shape_string(), n, kNumBetas,
-          kMaxShapeComponents);
+          "{}: shapedirs: shape {}, expected ({}, 3, >={}) with at most {} shape components", file, s.shape_string(), n,
+          kNumBetas, kMaxShapeComponents);
   {
     const std::vector<double> sv = bounded_values(s, file, "shapedirs", kMaxBodyMetres, "displacements [m]");
     const auto b = static_cast<Eigen::Index>(s.shape[2]);

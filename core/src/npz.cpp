@@ -1,8 +1,7 @@
-#include <sflsh/core/atomic_file.hpp>
+// The .npy format: arrays, their conversions (float16 included) and the header parser, which checks the
+// dtype, the shape and the byte count before copying anything. Archives are in npz_archive.cpp.
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/npz.hpp>
-
-#include <zip.h>
 
 #include <algorithm>
 #include <cctype>

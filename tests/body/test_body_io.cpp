@@ -105,8 +105,8 @@ TEST(BodyIo, EveryMalformedKeyNamesTheKeyAndTheExpectedShape) {
        "v_template: shape (" + ns + ", 2), expected (n, 3)"},
       {"f as floats", [&](Members& m) { replace_key(m, "f", npz::make_f64({2, 3}, {0, 1, 2, 1, 2, 3})); },
        "f: dtype <f8, expected an integer array"},
-      {"f out of range", [&](Members& m) { replace_key(m, "f", npz::make_i64({1, 3}, {0, 1, static_cast<std::int64_t>(n)})); },
-       "f: face 0 indexes vertex " + ns + ", expected 0.." + std::to_string(n - 1)},
+      {"f out of range", [&](Members& m) { replace_key(m, "f", npz::make_i64({4, 3}, {0, 1, 2, 1, 2, 3, 2, 3, 0, 0, 1, static_cast<std::int64_t>(n)})); },
+       "f: face 3 indexes vertex " + ns + ", expected 0.." + std::to_string(n - 1)},
       {"shapedirs too few", [&](Members& m) { replace_key(m, "shapedirs", npz::make_f64({n, 3, 4}, std::vector<double>(n * 12))); },
        "expected (" + ns + ", 3, >=10)"},
       {"shapedirs wrong n", [&](Members& m) { replace_key(m, "shapedirs", npz::make_f64({n - 1, 3, 10}, std::vector<double>((n - 1) * 30))); },
@@ -156,6 +156,7 @@ TEST(BodyIo, EveryMalformedKeyNamesTheKeyAndTheExpectedShape) {
          b.bytes.assign(n * 24, 1);
          replace_key(m, "weights", b);
        }, "weights: dtype |b1, expected a float array (<f8, <f4 or <f2)"},
+      {"too few faces", [&](Members& m) { replace_key(m, "f", npz::make_i64({1, 3}, {0, 1, 2})); }, "f: 1 faces, expected 4..4000000"},
       {"too few vertices", [&](Members& m) { replace_key(m, "v_template", npz::make_f64({3, 3}, std::vector<double>(9, 0.1))); },
        "v_template: 3 vertices, expected 4..1000000"},
       {"infinite J_regressor", [&](Members& m) {

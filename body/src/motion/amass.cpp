@@ -20,8 +20,8 @@ constexpr std::size_t kSmplPoseWidth = 3 * kNumJoints;  // 72
 constexpr std::size_t kBodyPoseWidth = 66;               // root + 21 body joints
 constexpr const char* kFrameKey = "sflsh_world_from_body";
 
-/// "<file>: <key>: <dtype> is not numeric" unless the array holds floats or integers (bool and strings
-/// are not motion data).
+/// "<file>: <key>: dtype …, expected …" unless the array holds floats or integers (bool and strings are
+/// not motion data).
 void require_number_kind(const npz::Array& array, const std::string& file, const std::string& key,
                          const char* expected) {
   require(array.kind == 'f' || array.kind == 'i' || array.kind == 'u', "{}: {}: dtype {} ({}), expected {}", file, key,
@@ -41,8 +41,8 @@ std::vector<double> read_numbers(const npz::Reader& reader, const std::string& k
 void require_bounded(const std::vector<double>& values, std::size_t cols, const std::string& file,
                      const std::string& key, double bound, const char* unit, const char* meaning) {
   for (std::size_t i = 0; i < values.size(); ++i) {
-    require(std::isfinite(values[i]), "{}: {}: non-finite value ({}) at frame {}, column {}, expected finite {}", file,
-            key, values[i], i / cols, i % cols, meaning);
+    require(std::isfinite(values[i]), "{}: {}: non-finite value ({}) at frame {}, column {}, expected {} within ±{:g} {}",
+            file, key, values[i], i / cols, i % cols, meaning, bound, unit);
     require(std::abs(values[i]) <= bound, "{}: {}: {} {} at frame {}, column {} is beyond ±{:g} {}, not {}", file, key,
             values[i], unit, i / cols, i % cols, bound, unit, meaning);
   }
