@@ -65,10 +65,10 @@ void run_metrics(const MetricsOptions& opt, const Invocation& invocation) {
   require(opt.frames >= 0, "metrics: --frames must be non-negative, got {}", opt.frames);
   require(opt.soft_weight >= 0.0 && opt.soft_weight <= 1.0, "metrics: --soft-weight must be in [0, 1], got {}", opt.soft_weight);
 
+  file.info(opt.sequence);  // an unknown sequence is named (with the file's list) before the body is loaded
   const body::BodyModel model = load_selected_body(opt.subject);
   file.require_vertices(model);
-  validate::DynaSequence sequence = file.read(opt.sequence);
-  if (opt.frames > 0 && opt.frames < sequence.num_frames()) sequence.frames.resize(static_cast<std::size_t>(opt.frames));
+  const validate::DynaSequence sequence = file.read(opt.sequence, opt.frames);  // reads only the first N frames
   require(sequence.num_frames() >= 2, "metrics: sequence '{}' has {} frame(s), σ needs at least 2", opt.sequence, sequence.num_frames());
   std::optional<body::Betas> given_beta;
   if (!opt.subject.betas.empty()) given_beta = body::parse_betas(opt.subject.betas);

@@ -21,48 +21,50 @@ int joint_index(const std::string& name) {
   throw_error("unknown joint '{}' (expected one of SMPL's 24 joint names, e.g. 'left_hip')", name);
 }
 
-void BodyModel::validate() const {
+void BodyModel::validate() const { validate(name.empty() ? std::string("body model") : name); }
+
+void BodyModel::validate(const std::string& who) const {
   const Eigen::Index n = num_vertices();
-  const std::string who = name.empty() ? std::string("body model") : name;
-  require(n >= 4, "{}: v_template has {} rows, expected (n, 3) with n >= 4", who, n);
-  require(v_template.allFinite(), "{}: v_template holds non-finite values", who);
-  require(faces.rows() >= 4, "{}: f has {} rows, expected (m, 3) with m >= 4", who, faces.rows());
-  require(faces.minCoeff() >= 0 && faces.maxCoeff() < n, "{}: f indexes vertex {}..{}, expected 0..{}", who,
+  require(n >= 4, "{}: v_template: {} rows, expected (n, 3) with n >= 4", who, n);
+  require(v_template.allFinite(), "{}: v_template: non-finite values, expected finite positions [m]", who);
+  require(faces.rows() >= 4, "{}: f: {} rows, expected (m, 3) with m >= 4", who, faces.rows());
+  require(faces.minCoeff() >= 0 && faces.maxCoeff() < n, "{}: f: vertex indices {}..{}, expected 0..{}", who,
           faces.minCoeff(), faces.maxCoeff(), n - 1);
   require(shapedirs.rows() == 3 * n && shapedirs.cols() >= kNumBetas,
-          "{}: shapedirs is ({}, 3, {}), expected ({}, 3, >= {})", who, shapedirs.rows() / 3, shapedirs.cols(), n,
+          "{}: shapedirs: ({}, 3, {}), expected ({}, 3, >= {})", who, shapedirs.rows() / 3, shapedirs.cols(), n,
           kNumBetas);
-  require(shapedirs.allFinite(), "{}: shapedirs holds non-finite values", who);
+  require(shapedirs.allFinite(), "{}: shapedirs: non-finite values, expected finite displacements [m]", who);
   if (posedirs.size() > 0) {
     require(posedirs.rows() == 3 * n && posedirs.cols() == kNumPoseFeatures,
-            "{}: posedirs is ({}, 3, {}), expected ({}, 3, {})", who, posedirs.rows() / 3, posedirs.cols(), n,
+            "{}: posedirs: ({}, 3, {}), expected ({}, 3, {})", who, posedirs.rows() / 3, posedirs.cols(), n,
             kNumPoseFeatures);
-    require(posedirs.allFinite(), "{}: posedirs holds non-finite values", who);
+    require(posedirs.allFinite(), "{}: posedirs: non-finite values, expected finite displacements [m]", who);
   }
   require(joint_regressor.rows() == kNumJoints && joint_regressor.cols() == n,
-          "{}: J_regressor is ({}, {}), expected ({}, {})", who, joint_regressor.rows(), joint_regressor.cols(),
+          "{}: J_regressor: ({}, {}), expected ({}, {})", who, joint_regressor.rows(), joint_regressor.cols(),
           kNumJoints, n);
   for (int k = 0; k < kNumJoints; ++k) {
     double sum = 0.0;
     for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator it(joint_regressor, k); it; ++it) {
-      require(std::isfinite(it.value()), "{}: J_regressor row {} holds non-finite values", who, k);
+      require(std::isfinite(it.value()), "{}: J_regressor: row {} ({}) holds a non-finite value, expected finite weights",
+              who, k, kJointNames[static_cast<std::size_t>(k)]);
       sum += it.value();
     }
-    require(std::abs(sum - 1.0) < 1e-3, "{}: J_regressor row {} ({}) sums to {:.6f}, expected 1", who, k,
+    require(std::abs(sum - 1.0) < 1e-3, "{}: J_regressor: row {} ({}) sums to {:.6f}, expected 1", who, k,
             kJointNames[static_cast<std::size_t>(k)], sum);
   }
-  require(weights.rows() == n && weights.cols() == kNumJoints, "{}: weights is ({}, {}), expected ({}, {})", who,
+  require(weights.rows() == n && weights.cols() == kNumJoints, "{}: weights: ({}, {}), expected ({}, {})", who,
           weights.rows(), weights.cols(), n, kNumJoints);
-  require(weights.allFinite(), "{}: weights holds non-finite values", who);
+  require(weights.allFinite(), "{}: weights: non-finite values, expected finite skinning weights", who);
   for (Eigen::Index i = 0; i < n; ++i) {
     const double sum = weights.row(i).sum();
-    require(std::abs(sum - 1.0) < 1e-3, "{}: weights row {} sums to {:.6f}, expected 1", who, i, sum);
+    require(std::abs(sum - 1.0) < 1e-3, "{}: weights: row {} sums to {:.6f}, expected 1", who, i, sum);
   }
-  require(parents[0] == -1, "{}: kintree_table[0, 0] is {}, expected the root marker (-1 or 4294967295)", who,
+  require(parents[0] == -1, "{}: kintree_table[0, 0]: {}, expected the root marker (-1 or 4294967295)", who,
           parents[0]);
   for (int k = 1; k < kNumJoints; ++k) {
     const int p = parents[static_cast<std::size_t>(k)];
-    require(p >= 0 && p < k, "{}: kintree_table[0, {}] is {}, expected a parent index in 0..{}", who, k, p, k - 1);
+    require(p >= 0 && p < k, "{}: kintree_table[0, {}]: parent {}, expected a parent index in 0..{}", who, k, p, k - 1);
   }
 }
 

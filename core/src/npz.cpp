@@ -1,13 +1,15 @@
-#include <sflsh/core/atomic_file.hpp>
+// The .npy format: arrays, their conversions (float16 included) and the header parser, which checks the
+// dtype, the shape and the byte count before copying anything. Archives are in npz_archive.cpp.
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/npz.hpp>
 
-#include <zip.h>
-
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <numeric>
+#include <optional>
 #include <regex>
 
 namespace sflsh::npz {
@@ -29,7 +31,48 @@ std::string trim(const std::string& s) {
   return s.substr(first, s.find_last_not_of(" \t\n") - first + 1);
 }
 
+/// IEEE 754 binary16 → double, exact: 1 sign, 5 exponent (bias 15), 10 mantissa bits.
+double half_to_double(std::uint16_t h) {
+  const bool negative = (h & 0x8000u) != 0;
+  const int exponent = (h >> 10) & 0x1F;
+  const int mantissa = h & 0x3FF;
+  double magnitude = 0.0;
+  if (exponent == 0) magnitude = std::ldexp(static_cast<double>(mantissa), -24);  // zero and subnormals
+  else if (exponent == 31) magnitude = mantissa == 0 ? std::numeric_limits<double>::infinity()
+                                                     : std::numeric_limits<double>::quiet_NaN();
+  else magnitude = std::ldexp(static_cast<double>(mantissa | 0x400), exponent - 25);
+  return negative ? -magnitude : magnitude;
+}
+
+/// A whole number made of decimal digits only (no sign, no spaces), at most `limit`; nullopt otherwise.
+std::optional<std::size_t> parse_count(const std::string& text, std::size_t limit) {
+  if (text.empty() || text.size() > 19) return std::nullopt;
+  std::size_t value = 0;
+  for (const char c : text) {
+    if (!std::isdigit(static_cast<unsigned char>(c))) return std::nullopt;
+    value = 10 * value + static_cast<std::size_t>(c - '0');
+  }
+  if (value > limit) return std::nullopt;
+  return value;
+}
+
+/// The item sizes NumPy uses for each kind we accept.
+bool supported_itemsize(char kind, std::size_t itemsize) {
+  switch (kind) {
+    case 'f': return itemsize == 2 || itemsize == 4 || itemsize == 8;
+    case 'i':
+    case 'u': return itemsize == 1 || itemsize == 2 || itemsize == 4 || itemsize == 8;
+    case 'b': return itemsize == 1;
+    default: return itemsize > 0;  // 'U', 'S': bounded by kMaxStringLength when parsed
+  }
+}
+
+constexpr const char* kSupportedDtypes =
+    "expected float16/32/64, int8-64, uint8-64, bool or a fixed-width string (<f8, <i4, |b1, <U6, ...)";
+
 }  // namespace
+
+std::string Array::describe() const { return origin.empty() ? std::string("array") : origin; }
 
 std::size_t Array::size() const {
   return std::accumulate(shape.begin(), shape.end(), std::size_t{1}, std::multiplies<>());
@@ -51,7 +94,9 @@ std::string Array::shape_string() const {
 }
 
 std::vector<double> Array::to_doubles() const {
-  require(is_numeric(), "array of dtype {} is not numeric", dtype());
+  require(is_numeric(), "{}: dtype {} is not numeric, expected numbers", describe(), dtype());
+  require(supported_itemsize(kind, itemsize) && bytes.size() / itemsize >= size(),
+          "{}: dtype {} with shape {} and {} bytes is inconsistent", describe(), dtype(), shape_string(), bytes.size());
   const std::size_t n = size();
   std::vector<double> out(n);
   const std::uint8_t* p = bytes.data();
@@ -60,7 +105,7 @@ std::vector<double> Array::to_doubles() const {
       case 'f':
         if (itemsize == 8) out[i] = load_le<double>(p);
         else if (itemsize == 4) out[i] = static_cast<double>(load_le<float>(p));
-        else throw_error("unsupported float size {} bytes", itemsize);
+        else out[i] = half_to_double(load_le<std::uint16_t>(p));
         break;
       case 'i':
         if (itemsize == 8) out[i] = static_cast<double>(load_le<std::int64_t>(p));
@@ -82,7 +127,9 @@ std::vector<double> Array::to_doubles() const {
 }
 
 std::vector<std::int64_t> Array::to_int64() const {
-  require(is_numeric(), "array of dtype {} is not numeric", dtype());
+  require(is_numeric(), "{}: dtype {} is not numeric, expected integers", describe(), dtype());
+  require(supported_itemsize(kind, itemsize) && bytes.size() / itemsize >= size(),
+          "{}: dtype {} with shape {} and {} bytes is inconsistent", describe(), dtype(), shape_string(), bytes.size());
   if (kind == 'u' && itemsize == 8) {
     std::vector<std::int64_t> out(size());
     for (std::size_t i = 0; i < out.size(); ++i)
@@ -97,16 +144,17 @@ std::vector<std::int64_t> Array::to_int64() const {
   const std::vector<double> values = to_doubles();
   std::vector<std::int64_t> out(values.size());
   for (std::size_t i = 0; i < values.size(); ++i) {
-    require(std::isfinite(values[i]) && std::floor(values[i]) == values[i],
-            "array of dtype {} holds a non-integer value {} where integers are expected", dtype(), values[i]);
+    require(std::isfinite(values[i]) && std::floor(values[i]) == values[i] && std::abs(values[i]) <= 9.0e15,
+            "{}: element {} is {} (dtype {}), expected an integer", describe(), i, values[i], dtype());
     out[i] = static_cast<std::int64_t>(values[i]);
   }
   return out;
 }
 
 std::string Array::to_string() const {
-  require(kind == 'U' || kind == 'S', "array of dtype {} is not a string", dtype());
-  require(size() == 1, "expected a single string, got shape {}", shape_string());
+  require(kind == 'U' || kind == 'S', "{}: dtype {} is not a string, expected <U… or |S…", describe(), dtype());
+  require(size() == 1, "{}: shape {}, expected a single string", describe(), shape_string());
+  require(bytes.size() >= itemsize, "{}: {} bytes for a string of {} bytes", describe(), bytes.size(), itemsize);
   std::string out;
   if (kind == 'S') {
     for (std::size_t i = 0; i < itemsize && bytes[i] != 0; ++i) out.push_back(static_cast<char>(bytes[i]));
@@ -191,7 +239,8 @@ Array make_scalar(double value) { return make_f64({}, {value}); }
 
 Array parse_npy(const std::vector<std::uint8_t>& buffer, const std::string& what) {
   require(buffer.size() >= 10 && std::memcmp(buffer.data(), kMagic, 6) == 0,
-          "{}: not a .npy array (bad magic)", what);
+          "{}: not a .npy array (no \\x93NUMPY magic in the first {} bytes), expected a NumPy array", what,
+          std::min<std::size_t>(buffer.size(), 6));
   const int major = buffer[6];
   std::size_t header_len = 0;
   std::size_t offset = 0;
@@ -199,60 +248,77 @@ Array parse_npy(const std::vector<std::uint8_t>& buffer, const std::string& what
     header_len = load_le<std::uint16_t>(buffer.data() + 8);
     offset = 10;
   } else if (major == 2 || major == 3) {
-    require(buffer.size() >= 12, "{}: truncated .npy header", what);
+    require(buffer.size() >= 12, "{}: .npy header truncated ({} bytes), expected at least 12", what, buffer.size());
     header_len = load_le<std::uint32_t>(buffer.data() + 8);
     offset = 12;
   } else {
-    throw_error("{}: unsupported .npy format version {}", what, major);
+    throw_error("{}: .npy format version {}, expected 1, 2 or 3", what, major);
   }
-  require(offset + header_len <= buffer.size(), "{}: truncated .npy header", what);
+  require(header_len <= buffer.size() - offset, "{}: .npy header of {} bytes runs past the member's {} bytes", what,
+          header_len, buffer.size());
   const std::string header(reinterpret_cast<const char*>(buffer.data() + offset), header_len);
 
   static const std::regex descr_re(R"('descr'\s*:\s*'([^']*)')");
   static const std::regex order_re(R"('fortran_order'\s*:\s*(True|False))");
   static const std::regex shape_re(R"('shape'\s*:\s*\(([^)]*)\))");
   std::smatch m;
-  require(std::regex_search(header, m, descr_re), "{}: .npy header has no 'descr'", what);
+  require(std::regex_search(header, m, descr_re),
+          "{}: .npy header has no plain 'descr' (structured dtypes are not supported), {}", what, kSupportedDtypes);
   const std::string descr = m[1];
-  require(std::regex_search(header, m, order_re), "{}: .npy header has no 'fortran_order'", what);
+  require(std::regex_search(header, m, order_re), "{}: .npy header has no 'fortran_order', expected True or False",
+          what);
   const bool fortran = m[1] == "True";
-  require(std::regex_search(header, m, shape_re), "{}: .npy header has no 'shape'", what);
+  require(std::regex_search(header, m, shape_re), "{}: .npy header has no 'shape', expected a tuple such as (6890, 3)",
+          what);
   const std::string shape_text = m[1];
 
   Array a;
-  require(descr.size() >= 3, "{}: unsupported dtype '{}'", what, descr);
+  a.origin = what;
+  require(descr.size() >= 3, "{}: dtype '{}' is not supported, {}", what, descr, kSupportedDtypes);
   const char byteorder = descr[0];
   a.kind = descr[1];
   require(a.kind != 'O', "{}: dtype 'O' (pickled Python objects) is not supported; save plain arrays", what);
-  require(std::string("fiubUS").find(a.kind) != std::string::npos, "{}: unsupported dtype '{}'", what, descr);
-  std::size_t count = 0;
-  try {
-    count = std::stoul(descr.substr(2));
-  } catch (const std::exception&) {
-    throw_error("{}: unsupported dtype '{}'", what, descr);
-  }
-  a.itemsize = a.kind == 'U' ? 4 * count : count;
-  require(byteorder != '>' || a.itemsize == 1, "{}: big-endian dtype '{}' is not supported", what, descr);
-  require(a.itemsize > 0, "{}: zero-size dtype '{}'", what, descr);
+  require(std::string("<|=>").find(byteorder) != std::string::npos && std::string("fiubUS").find(a.kind) != std::string::npos,
+          "{}: dtype '{}' is not supported, {}", what, descr, kSupportedDtypes);
+  const std::optional<std::size_t> count = parse_count(descr.substr(2), kMaxStringLength);
+  require(count.has_value() && *count > 0, "{}: dtype '{}' is not supported, {}", what, descr, kSupportedDtypes);
+  a.itemsize = a.kind == 'U' ? 4 * *count : *count;
+  require(supported_itemsize(a.kind, a.itemsize), "{}: dtype '{}' is not supported, {}", what, descr, kSupportedDtypes);
+  require(byteorder != '>' || a.itemsize == 1 || a.kind == 'S',
+          "{}: big-endian dtype '{}' is not supported, expected little-endian ('<{}')", what, descr, descr.substr(1));
 
   std::size_t start = 0;
+  std::size_t elements = 1;
+  bool overflow = false;
   while (start < shape_text.size()) {
     std::size_t comma = shape_text.find(',', start);
     if (comma == std::string::npos) comma = shape_text.size();
     const std::string token = trim(shape_text.substr(start, comma - start));
     if (!token.empty()) {
-      try {
-        a.shape.push_back(std::stoul(token));
-      } catch (const std::exception&) {
-        throw_error("{}: bad shape '({})'", what, shape_text);
-      }
+      // Python may write 6890L for a long on old files.
+      const std::string digits = token.back() == 'L' ? token.substr(0, token.size() - 1) : token;
+      const std::optional<std::size_t> extent = parse_count(digits, std::numeric_limits<std::size_t>::max());
+      require(extent.has_value(), "{}: shape ({}) has '{}', expected non-negative whole numbers", what, shape_text,
+              token);
+      a.shape.push_back(*extent);
+      require(a.shape.size() <= kMaxDimensions, "{}: shape ({}) has more than {} dimensions", what, shape_text,
+              kMaxDimensions);
+      overflow = overflow || __builtin_mul_overflow(elements, *extent, &elements);
     }
     start = comma + 1;
   }
+  std::size_t nbytes = 0;
+  overflow = overflow || __builtin_mul_overflow(elements, a.itemsize, &nbytes);
+  if (std::find(a.shape.begin(), a.shape.end(), std::size_t{0}) != a.shape.end()) {
+    overflow = false;  // a zero extent makes the array empty whatever the other extents are
+    nbytes = 0;
+  }
   const std::size_t data_offset = offset + header_len;
-  const std::size_t nbytes = a.size() * a.itemsize;
-  require(buffer.size() - data_offset >= nbytes, "{}: data truncated: shape {} needs {} bytes, file has {}", what,
-          a.shape_string(), nbytes, buffer.size() - data_offset);
+  const std::size_t available = buffer.size() - data_offset;
+  require(!overflow, "{}: shape {} of dtype {} needs more than 2^64 bytes, the member has {}", what,
+          a.shape_string(), a.dtype(), available);
+  require(available >= nbytes, "{}: data truncated: shape {} of dtype {} needs {} bytes, the member has {}", what,
+          a.shape_string(), a.dtype(), nbytes, available);
   a.bytes.assign(buffer.begin() + static_cast<std::ptrdiff_t>(data_offset),
                  buffer.begin() + static_cast<std::ptrdiff_t>(data_offset + nbytes));
 
@@ -296,83 +362,6 @@ std::vector<std::uint8_t> serialize_npy(const Array& array) {
   out.insert(out.end(), header.begin(), header.end());
   out.insert(out.end(), array.bytes.begin(), array.bytes.end());
   return out;
-}
-
-struct Reader::Impl {
-  zip_t* archive = nullptr;
-};
-
-Reader::Reader(const std::filesystem::path& path) : path_(path), impl_(std::make_unique<Impl>()) {
-  require(std::filesystem::exists(path), "{}: file not found", path.string());
-  int err = 0;
-  impl_->archive = zip_open(path.c_str(), ZIP_RDONLY, &err);
-  if (!impl_->archive) {
-    zip_error_t ze;
-    zip_error_init_with_code(&ze, err);
-    const std::string msg = zip_error_strerror(&ze);
-    zip_error_fini(&ze);
-    throw_error("{}: not a readable .npz (zip) archive: {}", path.string(), msg);
-  }
-  const zip_int64_t n = zip_get_num_entries(impl_->archive, 0);
-  for (zip_int64_t i = 0; i < n; ++i) {
-    std::string name = zip_get_name(impl_->archive, static_cast<zip_uint64_t>(i), 0);
-    if (name.size() > 4 && name.ends_with(".npy")) name.resize(name.size() - 4);
-    keys_.push_back(name);
-  }
-}
-
-Reader::~Reader() {
-  if (impl_ && impl_->archive) zip_discard(impl_->archive);
-}
-
-bool Reader::has(const std::string& key) const {
-  return std::find(keys_.begin(), keys_.end(), key) != keys_.end();
-}
-
-Array Reader::read(const std::string& key) const {
-  const std::string what = fmt::format("{}: key '{}'", path_.string(), key);
-  require(has(key), "{}: missing key '{}'", path_.string(), key);
-  zip_stat_t st;
-  std::string member = key + ".npy";
-  if (zip_stat(impl_->archive, member.c_str(), 0, &st) != 0) {
-    member = key;
-    require(zip_stat(impl_->archive, member.c_str(), 0, &st) == 0, "{}: cannot stat member", what);
-  }
-  zip_file_t* file = zip_fopen(impl_->archive, member.c_str(), 0);
-  require(file != nullptr, "{}: cannot open member", what);
-  std::vector<std::uint8_t> buffer(st.size);
-  const zip_int64_t got = zip_fread(file, buffer.data(), st.size);
-  zip_fclose(file);
-  require(got == static_cast<zip_int64_t>(st.size), "{}: cannot read member (corrupt archive?)", what);
-  return parse_npy(buffer, what);
-}
-
-void write(const std::filesystem::path& path, const std::vector<std::pair<std::string, Array>>& members) {
-  write_atomically(path, [&](const std::filesystem::path& tmp) {
-    int err = 0;
-    zip_t* archive = zip_open(tmp.c_str(), ZIP_CREATE | ZIP_TRUNCATE, &err);
-    require(archive != nullptr, "{}: cannot create archive", path.string());
-    // libzip reads the source buffers at zip_close, so keep them alive until then.
-    std::vector<std::vector<std::uint8_t>> buffers;
-    buffers.reserve(members.size());
-    for (const auto& [key, array] : members) {
-      buffers.push_back(serialize_npy(array));
-      zip_source_t* src = zip_source_buffer(archive, buffers.back().data(), buffers.back().size(), 0);
-      const std::string name = key + ".npy";
-      const zip_int64_t idx = src ? zip_file_add(archive, name.c_str(), src, ZIP_FL_OVERWRITE) : -1;
-      if (idx < 0) {
-        if (src) zip_source_free(src);
-        zip_discard(archive);
-        throw_error("{}: cannot add member '{}'", path.string(), key);
-      }
-      zip_set_file_compression(archive, static_cast<zip_uint64_t>(idx), ZIP_CM_DEFLATE, 6);
-    }
-    if (zip_close(archive) != 0) {
-      const std::string msg = zip_strerror(archive);
-      zip_discard(archive);
-      throw_error("{}: cannot write archive: {}", path.string(), msg);
-    }
-  });
 }
 
 }  // namespace sflsh::npz

@@ -19,6 +19,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -203,31 +204,31 @@ TEST(AmassMotion, MalformedFilesNameFileAndKey) {
   };
   const std::vector<Case> cases = {
       {"no_poses.npz", "missing key 'poses'", [](Members& m) { m.erase(m.begin()); }},
-      {"wide.npz", "key 'poses' has shape (10, 100), expected (T, 156) or (T, 72)",
+      {"wide.npz", "poses: shape (10, 100), expected (T, 156) or (T, 72)",
        [](Members& m) { m[0].second = npz::make_f64({10, 100}, std::vector<double>(1000, 0.0)); }},
-      {"flat.npz", "key 'poses' has shape (156,)",
+      {"flat.npz", "poses: shape (156,)",
        [](Members& m) { m[0].second = npz::make_f64({156}, std::vector<double>(156, 0.0)); }},
-      {"empty.npz", "key 'poses' has shape (0, 156), expected at least 1 frame",
+      {"empty.npz", "poses: shape (0, 156), expected at least 1 frame",
        [](Members& m) { m[0].second = npz::make_f64({0, 156}, {}); }},
-      {"rows.npz", "key 'trans' has 9 rows but 'poses' has 10",
+      {"rows.npz", "trans: 9 rows but 'poses' has 10",
        [](Members& m) { m[1].second = npz::make_f64({9, 3}, std::vector<double>(27, 0.0)); }},
-      {"trans_shape.npz", "key 'trans' has shape (10, 2), expected (T, 3)",
+      {"trans_shape.npz", "trans: shape (10, 2), expected (T, 3)",
        [](Members& m) { m[1].second = npz::make_f64({10, 2}, std::vector<double>(20, 0.0)); }},
       {"no_trans.npz", "missing key 'trans'", [](Members& m) { m.erase(m.begin() + 1); }},
-      {"rate0.npz", "key 'mocap_framerate' is 0, expected a positive frame rate",
+      {"rate0.npz", "mocap_framerate: 0 Hz is outside [1, 10000] Hz",
        [](Members& m) { m[2].second = npz::make_scalar(0.0); }},
-      {"rate_neg.npz", "key 'mocap_framerate' is -30", [](Members& m) { m[2].second = npz::make_scalar(-30.0); }},
+      {"rate_neg.npz", "mocap_framerate: -30 Hz is outside [1, 10000] Hz", [](Members& m) { m[2].second = npz::make_scalar(-30.0); }},
       {"no_rate.npz", "missing key 'mocap_framerate' (or 'mocap_frame_rate')",
        [](Members& m) { m.erase(m.begin() + 2); }},
-      {"rate_text.npz", "key 'mocap_framerate' has dtype <U2",
+      {"rate_text.npz", "mocap_framerate: dtype <U2",
        [](Members& m) { m[2].second = npz::make_string("60"); }},
-      {"nan.npz", "key 'poses' holds a non-finite value (nan) at frame 3, column 5",
+      {"nan.npz", "poses: non-finite value (nan) at frame 3, column 5",
        [](Members& m) {
          auto v = test_poses(10, 156);
          v[3 * 156 + 5] = std::numeric_limits<double>::quiet_NaN();
          m[0].second = npz::make_f64({10, 156}, v);
        }},
-      {"inf_trans.npz", "key 'trans' holds a non-finite value",
+      {"inf_trans.npz", "trans: non-finite value",
        [](Members& m) {
          auto v = test_trans(10);
          v[4] = std::numeric_limits<double>::infinity();
@@ -251,6 +252,85 @@ TEST(AmassMotion, MalformedFilesNameFileAndKey) {
   EXPECT_NE(msg.find("zip"), std::string::npos) << msg;
   msg = error_of([&] { load_amass(temp_dir() / "absent.npz", 60.0); });
   EXPECT_NE(msg.find("absent.npz"), std::string::npos) << msg;
+}
+
+/// An array of raw element bytes (bool, float16) with the given shape.
+npz::Array raw_array(char kind, std::size_t itemsize, std::vector<std::size_t> shape, std::vector<std::uint8_t> bytes) {
+  npz::Array a;
+  a.kind = kind;
+  a.itemsize = itemsize;
+  a.shape = std::move(shape);
+  a.bytes = std::move(bytes);
+  return a;
+}
+
+TEST(AmassMotion, AbsurdRatesTypesAndValuesAreRefusedBeforeAllocating) {
+  struct Case {
+    std::string file, expect;
+    std::function<void(Members&)> edit;
+    double fps = 60.0;
+  };
+  const std::vector<Case> cases = {
+      // 1e-9 Hz once made resampling allocate ~1e10 frames; 5e-324 was taken as one frame.
+      {"rate_tiny.npz", "mocap_framerate: 1e-09 Hz is outside [1, 10000] Hz",
+       [](Members& m) { m[2].second = npz::make_scalar(1e-9); }},
+      {"rate_denormal.npz", "mocap_framerate: 4.94066e-324 Hz is outside [1, 10000] Hz",
+       [](Members& m) { m[2].second = npz::make_scalar(5e-324); }},
+      {"rate_huge.npz", "mocap_framerate: 100000 Hz is outside [1, 10000] Hz",
+       [](Members& m) { m[2].second = npz::make_scalar(1e5); }},
+      {"rate_inf.npz", "mocap_framerate: inf Hz is outside [1, 10000] Hz",
+       [](Members& m) { m[2].second = npz::make_scalar(std::numeric_limits<double>::infinity()); }},
+      {"poses_bool.npz", "poses: dtype |b1 (bool), expected float axis-angle poses [rad]",
+       [](Members& m) { m[0].second = raw_array('b', 1, {10, 156}, std::vector<std::uint8_t>(1560, 1)); }},
+      {"poses_huge.npz", "poses: 1e+300 rad at frame 0, column 4 is beyond ±1000 rad, not a joint angle",
+       [](Members& m) {
+         auto v = test_poses(10, 156);
+         v[4] = 1e300;
+         m[0].second = npz::make_f64({10, 156}, v);
+       }},
+      {"trans_far.npz", "trans: 100000 m at frame 2, column 1 is beyond ±10000 m, not a root translation",
+       [](Members& m) {
+         auto v = test_trans(10);
+         v[7] = 1e5;
+         m[1].second = npz::make_f64({10, 3}, v);
+       }},
+      {"too_long.npz", "poses: 3602 frames at 1 Hz last 3601 s, above the limit of 3600 s",
+       [](Members& m) {
+         m = amass_members(3602, 72, 1.0);
+       }},
+      {"too_many_resampled.npz", "poses: 2999 s resampled to 10000 fps is 2.999e+07 frames, above the limit of 1000000 frames",
+       [](Members& m) { m = amass_members(3000, 72, 1.0); }, 10000.0},
+      {"fps_request.npz", "requested fps 0.5 is outside [1, 10000] Hz", [](Members&) {}, 0.5},
+  };
+  for (const Case& c : cases) {
+    Members members = amass_members(10, 156, 120.0);
+    c.edit(members);
+    const auto path = write_members(c.file, members);
+    const std::string msg = error_of([&] { load_amass(path, c.fps); });
+    EXPECT_EQ(msg.rfind(path.string() + ": ", 0), 0u) << c.file << ": " << msg;  // starts with the file
+    EXPECT_NE(msg.find(c.expect), std::string::npos) << c.file << ": " << msg;
+    EXPECT_EQ(msg.find('\n'), std::string::npos) << c.file << ": " << msg;
+  }
+  // The bounds themselves are accepted; so is the older key spelling.
+  Members edge = amass_members(4, 72, 10000.0);
+  edge[2].first = "mocap_frame_rate";
+  EXPECT_EQ(load_amass(write_members("edge.npz", edge), 10000.0).num_frames(), 4u);
+}
+
+TEST(AmassMotion, Float16PosesAreReadExactly) {
+  // 0x3C00 = 1, 0xB800 = -0.5, 0x3555 = 0.333251953125, 0x0001 = 2^-24 (smallest subnormal).
+  const std::uint16_t halves[4] = {0x3C00, 0xB800, 0x3555, 0x0001};
+  std::vector<std::uint8_t> bytes(2 * 72 * 2, 0);
+  for (std::size_t i = 0; i < 4; ++i) std::memcpy(bytes.data() + 2 * (72 + i), &halves[i], 2);  // frame 1, columns 0..3
+  Members members = amass_members(2, 72, 60.0);
+  members[0].second = raw_array('f', 2, {2, 72}, bytes);
+  const Motion m = load_amass(write_members("half.npz", members), 60.0);
+  ASSERT_EQ(m.num_frames(), 2u);
+  EXPECT_EQ(m.poses[0], Pose::Zero());
+  EXPECT_EQ(m.poses[1](0), 1.0);
+  EXPECT_EQ(m.poses[1](1), -0.5);
+  EXPECT_EQ(m.poses[1](2), 0.333251953125);
+  EXPECT_EQ(m.poses[1](3), std::ldexp(1.0, -24));
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -9,6 +9,7 @@
 #include "scratch_dir.hpp"
 #include "validate_fixtures.hpp"
 
+#include <H5Cpp.h>
 #include <fmt/format.h>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -57,6 +58,86 @@ TEST(CliMetrics, ListsSubjectsAndSequences) {
   EXPECT_THAT(r.out, HasSubstr("3 sequences"));
   EXPECT_THAT(r.out, HasSubstr("50004: jiggle_on_toes (3 frames) shake_hips (8 frames)"));
   EXPECT_THAT(r.out, HasSubstr("50020: shake_hips (2 frames)"));
+}
+
+TEST(CliMetrics, ListsSubjectsWhoseNamesContainUnderscores) {
+  const auto dir = sflsh::testing::scratch_dir();
+  const auto path = dir / "open.h5";
+  const std::vector<RowMatrixX3d> frames(3, open_body().v_template);
+  write_dyna_file(path, open_body().faces,
+                  {DynaSequence{"OPEN_TRAIN_1_jiggle_on_toes", frames, {}, 60.0},
+                   DynaSequence{"OPEN_TRAIN_1_shake_hips", {frames[0], frames[1]}, {}, 60.0},
+                   DynaSequence{"OPEN_TEST_2_one_leg_jump", frames, {}, 60.0}});
+  const auto r = run_sflsh("metrics --dyna " + path.string() + " --list", dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("OPEN_TRAIN_1: jiggle_on_toes (3 frames) shake_hips (2 frames)"));
+  EXPECT_THAT(r.out, HasSubstr("OPEN_TEST_2: one_leg_jump (3 frames)"));
+  EXPECT_THAT(r.out, ::testing::Not(HasSubstr("OPEN: ")));
+}
+
+TEST(CliMetrics, BadRegistrationsAreRefusedAtLoadNamingFileAndDataset) {
+  const auto dir = sflsh::testing::scratch_dir();
+  const auto out = dir / "out";
+  const auto n = static_cast<std::size_t>(open_body().num_vertices());
+
+  // A file with faces only: the sequence is missing (it used to say "the registrations have 0 vertices").
+  const auto empty = dir / "empty.h5";
+  {
+    H5::H5File file(empty.string(), H5F_ACC_TRUNC);
+    const hsize_t fd[2] = {static_cast<hsize_t>(open_body().faces.rows()), 3};
+    file.createDataSet("faces", H5::PredType::STD_I32LE, H5::DataSpace(2, fd)).write(open_body().faces.data(), H5::PredType::NATIVE_INT);
+  }
+  auto r = run_sflsh("metrics --dyna " + empty.string() + " --sequence 50004_shake_hips --out " + out.string(), dir);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_THAT(r.err, HasSubstr(empty.string() + ": 50004_shake_hips: no such sequence in the file, which holds no sequence dataset"));
+  EXPECT_TRUE(one_error_line(r.err)) << r.err;
+
+  // All-zero registrations of the body's vertex count: refused before any fitting (they used to run for
+  // minutes and exit 0).
+  const auto zeros = dir / "zeros.h5";
+  write_dyna_file(zeros, open_body().faces, {DynaSequence{"50004_shake_hips", {RowMatrixX3d::Zero(static_cast<Eigen::Index>(n), 3),
+                                                                               RowMatrixX3d::Zero(static_cast<Eigen::Index>(n), 3)}, {}, 60.0}});
+  r = run_sflsh("metrics --dyna " + zeros.string() + " --sequence 50004_shake_hips --out " + out.string(), dir);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_THAT(r.err, HasSubstr(zeros.string() + ": 50004_shake_hips: frame 0 is degenerate"));
+  EXPECT_TRUE(one_error_line(r.err)) << r.err;
+  EXPECT_EQ(sflsh::testing::count_entries(out), 0u);
+}
+
+TEST(CliMetrics, FramesOfAHugeSparseDatasetAreReadAlone) {
+  // (V, 3, 10^7) with only the first 3 frames stored: --frames 3 reads those (it used to allocate all).
+  const auto dir = sflsh::testing::scratch_dir();
+  const CliFile f = write_file(dir);
+  const auto path = dir / "sparse.h5";
+  const auto n = static_cast<hsize_t>(open_body().num_vertices());
+  {
+    H5::H5File file(path.string(), H5F_ACC_TRUNC);
+    const hsize_t fd[2] = {static_cast<hsize_t>(open_body().faces.rows()), 3};
+    file.createDataSet("faces", H5::PredType::STD_I32LE, H5::DataSpace(2, fd)).write(open_body().faces.data(), H5::PredType::NATIVE_INT);
+    const hsize_t dims[3] = {n, 3, 10000000}, chunk[3] = {std::min<hsize_t>(n, 1024), 3, 16};
+    H5::DSetCreatPropList properties;
+    properties.setChunk(3, chunk);
+    const H5::DataSet dataset = file.createDataSet("50004_shake_hips", H5::PredType::IEEE_F64LE, H5::DataSpace(3, dims), properties);
+    const hsize_t count[3] = {n, 3, 3}, start[3] = {0, 0, 0};
+    std::vector<double> values;
+    for (hsize_t v = 0; v < n; ++v)
+      for (int c = 0; c < 3; ++c)
+        for (std::size_t t = 0; t < 3; ++t) values.push_back(f.truth.frames[t](static_cast<Eigen::Index>(v), c));
+    H5::DataSpace selection = dataset.getSpace();
+    selection.selectHyperslab(H5S_SELECT_SET, count, start);
+    dataset.write(values.data(), H5::PredType::NATIVE_DOUBLE, H5::DataSpace(3, count), selection);
+  }
+  const auto out = dir / "out";
+  auto r = run_sflsh("metrics --dyna " + path.string() + " --sequence 50004_shake_hips --frames 3 --betas " + betas_arg(some_beta()) +
+                         " --out " + out.string() + " -q",
+                     dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(read_json(out / "summary.json")["dyna"]["frames"].get<int>(), 3);
+  // Without --frames the whole dataset is refused by the read bound, naming file and dataset.
+  r = run_sflsh("metrics --dyna " + path.string() + " --sequence 50004_shake_hips --out " + (dir / "all").string(), dir);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_THAT(r.err, HasSubstr(path.string() + ": 50004_shake_hips: 10000000 frames of " + std::to_string(n) + " vertices need"));
+  EXPECT_TRUE(one_error_line(r.err)) << r.err;
 }
 
 TEST(CliMetrics, WritesTheSigmaSurfaceTableAndSummary) {
@@ -113,7 +194,8 @@ TEST(CliMetrics, BadArgumentsFailCleanlyAndWriteNothing) {
 
   auto r = run_sflsh("metrics" + dyna + " --sequence 50004_knees --out " + out.string(), dir);
   EXPECT_NE(r.exit_code, 0);
-  EXPECT_THAT(r.err, HasSubstr("no sequence '50004_knees'; available: 50004_jiggle_on_toes, 50004_shake_hips, 50020_shake_hips"));
+  EXPECT_THAT(r.err, HasSubstr(f.path.string() + ": 50004_knees: no such sequence in the file, expected one of 50004_jiggle_on_toes, "
+                               "50004_shake_hips, 50020_shake_hips"));
   EXPECT_TRUE(one_error_line(r.err)) << r.err;
 
   r = run_sflsh("metrics" + dyna + " --out " + out.string(), dir);

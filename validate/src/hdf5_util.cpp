@@ -16,7 +16,7 @@ std::string describe(const H5::Exception& e) {
   return what.empty() ? e.getFuncName() : what;
 }
 
-Attributes read_attributes(const H5::H5Object& object) {
+Attributes read_attributes(const H5::H5Object& object, const std::string& where) {
   Attributes out;
   const int count = object.getNumAttrs();
   for (int a = 0; a < count; ++a) {
@@ -26,6 +26,8 @@ Attributes read_attributes(const H5::H5Object& object) {
     const H5::DataSpace space = attribute.getSpace();
     const auto n = static_cast<std::size_t>(space.getSimpleExtentNpoints());
     if (type_class == H5T_FLOAT || type_class == H5T_INTEGER) {
+      require(n <= kMaxAttributeValues, "{}: attribute '{}': {} values, above the limit of {}", where, name, n,
+              kMaxAttributeValues);
       std::vector<double> values(n);
       if (n > 0) attribute.read(H5::PredType::NATIVE_DOUBLE, values.data());
       out.numbers[name] = std::move(values);

@@ -16,8 +16,12 @@ void quiet_hdf5();
 /// "H5File::openDataSet: unable to open dataset" → a short detail for our messages.
 std::string describe(const H5::Exception& e);
 
-/// Reads every numeric and string attribute of `object` (others are skipped).
-Attributes read_attributes(const H5::H5Object& object);
+/// Largest number of values of one numeric attribute we read (a subject's β has 10).
+inline constexpr std::size_t kMaxAttributeValues = 1000000;
+
+/// Reads every numeric and string attribute of `object` (others are skipped); `where` ("<file>" or
+/// "<file>: <dataset>") names it when an attribute is above kMaxAttributeValues.
+Attributes read_attributes(const H5::H5Object& object, const std::string& where);
 /// Writes `attributes` on `object` (a number vector of size 1 as a scalar, strings variable-length).
 void write_attributes(H5::H5Object& object, const Attributes& attributes);
 

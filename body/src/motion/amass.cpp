@@ -20,20 +20,32 @@ constexpr std::size_t kSmplPoseWidth = 3 * kNumJoints;  // 72
 constexpr std::size_t kBodyPoseWidth = 66;               // root + 21 body joints
 constexpr const char* kFrameKey = "sflsh_world_from_body";
 
-/// Reads a numeric member as doubles, with errors naming the file and the key.
-std::vector<double> read_numeric(const npz::Reader& reader, const std::string& key, npz::Array& array) {
+/// "<file>: <key>: dtype …, expected …" unless the array holds floats or integers (bool and strings are
+/// not motion data).
+void require_number_kind(const npz::Array& array, const std::string& file, const std::string& key,
+                         const char* expected) {
+  require(array.kind == 'f' || array.kind == 'i' || array.kind == 'u', "{}: {}: dtype {} ({}), expected {}", file, key,
+          array.dtype(), array.kind == 'b' ? "bool" : array.is_numeric() ? "numbers" : "not numeric", expected);
+}
+
+/// Reads a member holding floats or integers as doubles, with errors naming the file and the key.
+std::vector<double> read_numbers(const npz::Reader& reader, const std::string& key, npz::Array& array,
+                                 const char* expected) {
   array = reader.read(key);
-  require(array.is_numeric(), "{}: key '{}' has dtype {}, expected a numeric array", reader.path().string(), key,
-          array.dtype());
+  require_number_kind(array, reader.path().string(), key, expected);
   return array.to_doubles();
 }
 
-/// First non-finite entry of a row-major (rows × cols) array, as "frame r, column c".
-void require_finite(const std::vector<double>& values, std::size_t cols, const std::string& file,
-                    const std::string& key) {
-  for (std::size_t i = 0; i < values.size(); ++i)
-    require(std::isfinite(values[i]), "{}: key '{}' holds a non-finite value ({}) at frame {}, column {}", file, key,
-            values[i], i / cols, i % cols);
+/// First value of a row-major (rows × cols) array that is not finite or beyond ±bound, as
+/// "<file>: <key>: <value> at frame r, column c is …".
+void require_bounded(const std::vector<double>& values, std::size_t cols, const std::string& file,
+                     const std::string& key, double bound, const char* unit, const char* meaning) {
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    require(std::isfinite(values[i]), "{}: {}: non-finite value ({}) at frame {}, column {}, expected {} within ±{:g} {}",
+            file, key, values[i], i / cols, i % cols, meaning, bound, unit);
+    require(std::abs(values[i]) <= bound, "{}: {}: {} {} at frame {}, column {} is beyond ±{:g} {}, not {}", file, key,
+            values[i], unit, i / cols, i % cols, bound, unit, meaning);
+  }
 }
 
 double read_frame_rate(const npz::Reader& reader) {
@@ -41,13 +53,12 @@ double read_frame_rate(const npz::Reader& reader) {
   std::string key;
   if (reader.has("mocap_framerate")) key = "mocap_framerate";
   else if (reader.has("mocap_frame_rate")) key = "mocap_frame_rate";
-  else throw_error("{}: missing key 'mocap_framerate' (or 'mocap_frame_rate'), the capture rate [1/s]", file);
+  else throw_error("{}: missing key 'mocap_framerate' (or 'mocap_frame_rate'), the capture rate [Hz]", file);
   npz::Array array;
-  const std::vector<double> v = read_numeric(reader, key, array);
-  require(v.size() == 1, "{}: key '{}' has shape {}, expected a scalar (0-d or 1 element)", file, key,
-          array.shape_string());
-  require(std::isfinite(v[0]) && v[0] > 0.0, "{}: key '{}' is {}, expected a positive frame rate [1/s]", file, key,
-          v[0]);
+  const std::vector<double> v = read_numbers(reader, key, array, "a frame rate in Hz (float)");
+  require(v.size() == 1, "{}: {}: shape {}, expected a scalar (0-d or 1 element)", file, key, array.shape_string());
+  require(std::isfinite(v[0]) && v[0] >= kMinMotionFps && v[0] <= kMaxMotionFps, "{}: {}: {:g} Hz is outside [{:g}, {:g}] Hz",
+          file, key, v[0], kMinMotionFps, kMaxMotionFps);
   return v[0];
 }
 
@@ -55,14 +66,14 @@ Eigen::Matrix3d read_world_from_body(const npz::Reader& reader) {
   if (!reader.has(kFrameKey)) return amass_world_from_body();
   const std::string file = reader.path().string();
   npz::Array array;
-  const std::vector<double> v = read_numeric(reader, kFrameKey, array);
-  require(array.shape == std::vector<std::size_t>{3, 3}, "{}: key '{}' has shape {}, expected (3, 3)", file,
-          kFrameKey, array.shape_string());
+  const std::vector<double> v = read_numbers(reader, kFrameKey, array, "a 3×3 rotation matrix (float)");
+  require(array.shape == std::vector<std::size_t>{3, 3}, "{}: {}: shape {}, expected (3, 3)", file, kFrameKey,
+          array.shape_string());
   Eigen::Matrix3d r;
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) r(i, j) = v[static_cast<std::size_t>(3 * i + j)];
   require(r.allFinite() && (r * r.transpose() - Eigen::Matrix3d::Identity()).norm() < 1e-6 && r.determinant() > 0.0,
-          "{}: key '{}' is not a rotation matrix", file, kFrameKey);
+          "{}: {}: not a rotation matrix, expected R with RᵀR = I and det R = 1", file, kFrameKey);
   return r;
 }
 
@@ -74,31 +85,44 @@ Eigen::Matrix3d amass_world_from_body() {
 }
 
 Motion load_amass(const std::filesystem::path& path, double fps) {
-  require(std::isfinite(fps) && fps > 0.0, "{}: requested fps must be a positive number, got {}", path.string(), fps);
+  require(std::isfinite(fps) && fps >= kMinMotionFps && fps <= kMaxMotionFps,
+          "{}: requested fps {:g} is outside [{:g}, {:g}] Hz", path.string(), fps, kMinMotionFps, kMaxMotionFps);
   const npz::Reader reader(path);  // "<path>: file not found" / "not a readable .npz (zip) archive"
   const std::string file = path.string();
 
+  // The rate first: it bounds the duration before the large arrays are converted.
+  const double rate = read_frame_rate(reader);
+
   require(reader.has("poses"), "{}: missing key 'poses', expected (T, 156) SMPL+H or (T, 72) SMPL axis-angle poses",
           file);
-  npz::Array poses_array;
-  const std::vector<double> poses = read_numeric(reader, "poses", poses_array);
+  npz::Array poses_array = reader.read("poses");
+  require_number_kind(poses_array, file, "poses", "float axis-angle poses [rad]");
   const auto& ps = poses_array.shape;
   require(ps.size() == 2 && (ps[1] == kSmplhPoseWidth || ps[1] == kSmplPoseWidth),
-          "{}: key 'poses' has shape {}, expected (T, 156) or (T, 72)", file, poses_array.shape_string());
+          "{}: poses: shape {}, expected (T, 156) or (T, 72)", file, poses_array.shape_string());
   const std::size_t frames = ps[0], width = ps[1];
-  require(frames >= 1, "{}: key 'poses' has shape {}, expected at least 1 frame", file, poses_array.shape_string());
-  require_finite(poses, width, file, "poses");
+  require(frames >= 1, "{}: poses: shape {}, expected at least 1 frame", file, poses_array.shape_string());
+  require(frames <= kMaxMotionFrames, "{}: poses: {} frames is above the limit of {} frames", file, frames,
+          kMaxMotionFrames);
+  const double duration = static_cast<double>(frames - 1) / rate;
+  require(duration <= kMaxMotionSeconds, "{}: poses: {} frames at {:g} Hz last {:g} s, above the limit of {:g} s", file,
+          frames, rate, duration, kMaxMotionSeconds);
+  const double resampled = std::floor(duration * fps + 1e-9) + 1.0;
+  require(resampled <= static_cast<double>(kMaxMotionFrames),
+          "{}: poses: {:g} s resampled to {:g} fps is {:g} frames, above the limit of {} frames", file, duration, fps,
+          resampled, kMaxMotionFrames);
+  const std::vector<double> poses = poses_array.to_doubles();
+  require_bounded(poses, width, file, "poses", kMaxPoseRadians, "rad", "a joint angle");
 
   require(reader.has("trans"), "{}: missing key 'trans', expected (T, 3) root translations [m]", file);
   npz::Array trans_array;
-  const std::vector<double> trans = read_numeric(reader, "trans", trans_array);
-  require(trans_array.shape.size() == 2 && trans_array.shape[1] == 3,
-          "{}: key 'trans' has shape {}, expected (T, 3)", file, trans_array.shape_string());
-  require(trans_array.shape[0] == frames, "{}: key 'trans' has {} rows but 'poses' has {}, expected equal counts",
-          file, trans_array.shape[0], frames);
-  require_finite(trans, 3, file, "trans");
+  const std::vector<double> trans = read_numbers(reader, "trans", trans_array, "float root translations [m]");
+  require(trans_array.shape.size() == 2 && trans_array.shape[1] == 3, "{}: trans: shape {}, expected (T, 3)", file,
+          trans_array.shape_string());
+  require(trans_array.shape[0] == frames, "{}: trans: {} rows but 'poses' has {}, expected equal counts", file,
+          trans_array.shape[0], frames);
+  require_bounded(trans, 3, file, "trans", kMaxRootMetres, "m", "a root translation");
 
-  const double rate = read_frame_rate(reader);
   for (const char* ignored : {"gender", "betas", "dmpls"})
     if (reader.has(ignored)) logger()->debug("{}: ignoring key '{}'", file, ignored);
 

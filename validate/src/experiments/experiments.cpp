@@ -137,8 +137,7 @@ DynaTruth load_dyna_truth(const ValidateConfig& config, const body::BodyModel& m
     std::optional<body::Betas> beta;
     for (const std::string& m : motions) {
       const auto& [file, key] = where.at(id + "_" + m);
-      DynaSequence seq = file->read(key);
-      if (config.frames > 0 && seq.num_frames() > config.frames) seq.frames.resize(static_cast<std::size_t>(config.frames));
+      DynaSequence seq = file->read(key, config.frames);  // only the frames used are read
       const PoseFitResult fit = fit_motion(model, seq.frames, seq.fps, beta, po);
       if (!beta) beta = fit.beta;   // β from the subject's first sequence, then shared
       logger()->info("validate: DYNA {}: poses fitted (mean RMS {:.2f} mm, {} unconverged frames)", key, 1e3 * fit.mean_rms,

@@ -7,12 +7,21 @@
 // integer dtype of the right shape is accepted.
 #include <sflsh/body/body_model.hpp>
 
+#include <cstddef>
 #include <filesystem>
 
 namespace sflsh::body {
 
-/// Loads a body model; every missing key, wrong shape or dtype is a one-line sflsh::Error naming the
-/// file, the key and the expected shape. The result is validated.
+/// Bounds on a body file, checked from the shapes before any array is converted: 4..1,000,000
+/// vertices, 4..4,000,000 faces, 10..10,000 shape components; positions and displacements within
+/// ±100 m (a body in metres; millimetre files are refused).
+inline constexpr std::size_t kMaxBodyVertices = 1000000;
+inline constexpr std::size_t kMaxBodyFaces = 4000000;
+inline constexpr std::size_t kMaxShapeComponents = 10000;
+inline constexpr double kMaxBodyMetres = 100.0;
+
+/// Loads a body model; every missing key, wrong shape, dtype, index or value is a one-line
+/// sflsh::Error "<file>: <key>: found, expected". The result is validated.
 BodyModel load_body(const std::filesystem::path& path);
 
 /// Saves a body model (atomic write).

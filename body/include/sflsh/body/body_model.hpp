@@ -43,9 +43,11 @@ struct BodyModel {
   Eigen::Index num_faces() const { return faces.rows(); }
   bool has_pose_correctives() const { return posedirs.size() > 0; }
 
-  /// Checks sizes, index ranges, finiteness and the kinematic tree; throws sflsh::Error naming the
-  /// offending array and what was expected.
+  /// Checks sizes, index ranges, finiteness and the kinematic tree; throws sflsh::Error
+  /// "<name>: <array>: found, expected".
   void validate() const;
+  /// The same checks, the message starting with `source` (e.g. the file the model was read from).
+  void validate(const std::string& source) const;
 };
 
 }  // namespace sflsh::body

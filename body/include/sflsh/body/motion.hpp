@@ -3,11 +3,23 @@
 // Procedural versions of the five DYNA motion kinds (docs/architecture.md §2) and AMASS .npz files.
 #include <sflsh/body/skinning.hpp>
 
+#include <cstddef>
 #include <filesystem>
 #include <string>
 #include <vector>
 
 namespace sflsh::body {
+
+/// Bounds a motion file must stay within (checked by load_amass before anything large is allocated):
+/// frame rates (the file's and the requested one) in [1, 10000] Hz, at most one hour and at most
+/// 1,000,000 frames (before and after resampling), joint angles within ±1000 rad and root
+/// translations within ±10 km. Anything beyond is not motion capture data.
+inline constexpr double kMinMotionFps = 1.0;
+inline constexpr double kMaxMotionFps = 10000.0;
+inline constexpr double kMaxMotionSeconds = 3600.0;
+inline constexpr std::size_t kMaxMotionFrames = 1000000;
+inline constexpr double kMaxPoseRadians = 1000.0;
+inline constexpr double kMaxRootMetres = 10000.0;
 
 struct Motion {
   std::string name;
@@ -68,7 +80,8 @@ Motion offset_motion(const Motion& motion, double seconds);
 /// and maps it onto SMPL's 24 joints (SMPL-H body joints 0..21; SMPL hand joints 22, 23 get zero).
 /// The result is resampled to `fps` (quaternion slerp per joint, linear translation); a file whose
 /// rate equals `fps` is used frame for frame. world_from_body is amass_world_from_body() unless the
-/// file carries "sflsh_world_from_body" (written by save_amass). Errors name the file and the key.
+/// file carries "sflsh_world_from_body" (written by save_amass). Errors name the file and the key
+/// ("<file>: <key>: found, expected"); the bounds above are checked before the arrays are converted.
 Motion load_amass(const std::filesystem::path& path, double fps = 60.0);
 
 /// Writes a motion in AMASS layout (poses T×72, trans T×3, mocap_framerate, gender) atomically, plus

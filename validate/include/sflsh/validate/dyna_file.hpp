@@ -5,12 +5,14 @@
 // Optional attributes (ours, written by DynaWriter): "fps" on the file or a dataset (DYNA is 60 fps
 // when absent), and any string / number / number-array attribute such as a subject's "beta".
 //
-// Every problem is one sflsh::Error line naming the file (and the dataset): not an HDF5 file, missing
+// Every problem is one sflsh::Error line "<file>: <dataset>: found, expected": not an HDF5 file, missing
 // `faces`, wrong rank or shape (found and expected), face indices out of range, an unknown key (with the
-// available ones), non-finite values (dataset and frame), a vertex count that is not the body's.
+// available ones), sizes beyond the bounds below, non-finite values (dataset and frame), coordinates
+// beyond ±10 km, a frame collapsed to less than 1 cm, a vertex count that is not the body's.
 // HDF5's own error stack printing is switched off.
 #include <sflsh/body/body_model.hpp>
 
+#include <cstddef>
 #include <filesystem>
 #include <map>
 #include <memory>
@@ -26,6 +28,20 @@ using body::RowMatrixX3i;
 /// The frame rate of DYNA captures when a file carries no "fps" attribute.
 inline constexpr double kDynaFps = 60.0;
 
+/// Bounds on a DYNA file. Opening checks the counts from the dataset shapes; reading checks the bytes it
+/// is about to allocate (V × 3 × frames read × 8 B) and then every value.
+inline constexpr std::size_t kMaxDynaVertices = 1000000;      ///< vertices per registration
+inline constexpr std::size_t kMaxDynaFaces = 4000000;         ///< rows of `faces`
+inline constexpr std::size_t kMaxDynaFrames = 2147483647;     ///< frames of one dataset (fits `int`)
+inline constexpr std::size_t kMaxDynaReadBytes = std::size_t{1} << 31;  ///< positions read at once: 2 GiB
+inline constexpr double kMaxDynaMetres = 1e4;                 ///< |coordinate| of a registered vertex [m]
+inline constexpr double kMinDynaSpan = 0.01;                  ///< smallest extent of one frame's vertices [m]
+inline constexpr double kMinDynaFps = 1.0;                    ///< "fps" attribute bounds [Hz]
+inline constexpr double kMaxDynaFps = 10000.0;
+
+/// DYNA sequence names (docs/physics.md §3.2), used to split keys whose subject contains '_'.
+const std::vector<std::string>& dyna_sequence_names();
+
 /// Attributes of the file or of one dataset. A number attribute keeps all its values (a scalar is one).
 struct Attributes {
   std::map<std::string, std::vector<double>> numbers;
@@ -36,9 +52,12 @@ struct Attributes {
   bool empty() const { return numbers.empty() && strings.empty(); }
 };
 
-/// "50004_jiggle_on_toes" → "50004" (up to the first '_'; the whole key when there is none).
+/// "50004_jiggle_on_toes" → "50004", "OPEN_TRAIN_1_jiggle_on_toes" → "OPEN_TRAIN_1". Subject names may
+/// contain '_', so the key is split before the longest known sequence name it ends with (DYNA's and the
+/// procedural motions'); failing that, after the first all-digit part ("S_7_walk" → "S_7"); failing that,
+/// at the first '_' (the whole key when there is none).
 std::string subject_of(const std::string& key);
-/// "50004_jiggle_on_toes" → "jiggle_on_toes" (after the first '_'; empty when there is none).
+/// The rest of the key after subject_of(key) and its '_' (empty when there is none).
 std::string sequence_of(const std::string& key);
 
 /// One sequence as read from (or to be written to) a DYNA file.
@@ -83,9 +102,12 @@ class DynaFile {
   const DynaSequenceInfo& info(const std::string& key) const;
   const Attributes& attributes() const { return attributes_; }
 
-  /// Reads one sequence; an unknown key lists the available ones, a NaN/Inf names the frame.
-  DynaSequence read(const std::string& key) const;
-  /// Throws unless the file's vertex count is the body model's.
+  /// Reads one sequence, only its first `max_frames` frames when max_frames > 0 (a hyperslab: the rest
+  /// is neither read nor allocated). An unknown key lists the available ones; more than
+  /// kMaxDynaReadBytes to read, a NaN/Inf, a coordinate beyond ±kMaxDynaMetres or a frame whose vertices
+  /// span less than kMinDynaSpan (all zeros, collapsed) is refused naming the dataset and the frame.
+  DynaSequence read(const std::string& key, int max_frames = 0) const;
+  /// Throws unless the file's vertex count is the body model's (and when the file holds no sequence).
   void require_vertices(const body::BodyModel& model) const;
 
  private:
