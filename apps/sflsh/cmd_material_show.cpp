@@ -41,7 +41,7 @@ void run_show(const ShowOptions& opt, const Invocation& invocation) {
   material::MaterialFile file;   // read first: a bad file fails before any meshing
   if (!opt.material.empty()) {
     file = material::load_material_file(opt.material);
-    material::check_against_body(file, model.v_template);
+    material::check_against_body(file, model);
   }
   meshing::LayerMeshOptions mesh_options;
   mesh_options.mesher = meshing::parse_mesher(opt.mesher);

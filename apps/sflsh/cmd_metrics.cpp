@@ -7,6 +7,7 @@
 #include <sflsh/body/motion.hpp>
 #include <sflsh/body/subjects.hpp>
 #include <sflsh/core/error.hpp>
+#include <sflsh/core/input_file.hpp>
 #include <sflsh/core/log.hpp>
 #include <sflsh/core/run_folder.hpp>
 #include <sflsh/core/summary.hpp>
@@ -55,6 +56,7 @@ nlohmann::json vector_json(const Eigen::VectorXd& v) { return std::vector<double
 void run_metrics(const MetricsOptions& opt, const Invocation& invocation) {
   const auto t_start = std::chrono::steady_clock::now();
   require(!opt.dyna.empty(), "metrics: --dyna FILE.h5 is required");
+  require_input_file(opt.dyna, "a DYNA registration .h5 file");
   const validate::DynaFile file(opt.dyna);
   if (opt.list) {
     list_file(file);

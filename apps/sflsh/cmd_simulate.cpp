@@ -44,6 +44,7 @@ void run_scene_file(const SimulateOptions& opt, const Invocation& invocation, in
   options.write_frames = !opt.no_output;
   options.every = opt.every_given ? opt.every : 0;
   options.rank = rank;
+  options.allow_long = opt.body.allow_long;
   options.header = summary_header("simulate", invocation.argc, invocation.argv);
   const nlohmann::json summary = scene::run_scene(scene, options);
   if (rank != 0) return;
@@ -98,8 +99,7 @@ void register_simulate_commands(CLI::App& app, const Invocation& invocation) {
   add_subject_options(*cmd, opt->body.subject);
   cmd->add_option("--scene", opt->scene,
                   "Scene file (TOML, docs/scenes.md, data/scenes/): bodies, objects and effects; then only --frames, --every, "
-                  "--out, --cache, --threads and --no-output apply")
-      ->check(CLI::ExistingFile);
+                  "--out, --cache, --threads, --no-output and --allow-long apply");
   cmd->add_option("--threads", opt->threads, "Scenes: threads for bodies that do not interact (0: all cores)");
   cmd->add_option("--motion", opt->body.motion, "Motion: a procedural name (sflsh motion list) or an AMASS .npz path (required without --scene)");
   cmd->add_option("--frames", opt->body.frames, "Number of frames (0: the motion's length)");
@@ -124,6 +124,9 @@ void register_simulate_commands(CLI::App& app, const Invocation& invocation) {
                   "Write every N-th frame (frame 0 and the last frame always; σ and the summary still use every frame); "
                   "with --scene it overrides [output] every")
       ->each([opt](const std::string&) { opt->every_given = true; });
+  cmd->add_flag("--allow-long", opt->body.allow_long,
+                "Run even when the work estimate (solver steps, bodies, body-frames, memory) exceeds the limits of "
+                "docs/scenes.md (\"Input limits\")");
   cmd->add_option("--out", opt->out, "Output folder")->required();
   cmd->callback([opt, invocation] {
     with_petsc(invocation, [&](int rank, int size) { run_simulate(*opt, invocation, rank, size); });

@@ -288,6 +288,8 @@ void register_sweep_commands(CLI::App& app, const Invocation& invocation) {
   cmd->add_option("--frames", opt->base.frames, "Frames per run (the rest state included)")->capture_default_str();
   cmd->add_option("--fps", opt->base.fps, "Frame rate (and motion sampling)")->capture_default_str();
   cmd->add_option("--substeps", opt->base.substeps, "Integrator steps per frame")->capture_default_str();
+  cmd->add_flag("--allow-long", opt->base.allow_long,
+                "Run cases whose work estimate exceeds the limits of docs/scenes.md (\"Input limits\")");
   cmd->add_option("--threads", opt->threads,
                   "Runs in parallel (TBB; 0: all cores; full-space runs always go one at a time)")
       ->capture_default_str();

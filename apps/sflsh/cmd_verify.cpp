@@ -9,6 +9,7 @@
 #include <sflsh/core/run_folder.hpp>
 #include <sflsh/core/summary.hpp>
 #include <sflsh/core/vtk_io.hpp>
+#include <sflsh/core/work_limit.hpp>
 #include <sflsh/fullspace/fullspace_solver.hpp>
 #include <sflsh/fullspace/reference_integrator.hpp>
 #include <sflsh/fullspace/verify_problem.hpp>
@@ -28,7 +29,20 @@ struct VerifyOptions {
   std::string problem;
   std::string out;
   bool no_vtk = false;
+  bool allow_long = false;
 };
+
+/// Steps, recorded samples and their memory, before the solver is built.
+WorkEstimate verify_work(const fullspace::VerifyProblem& spec, const model::Problem& problem) {
+  WorkEstimate e;
+  e.steps = spec.duration / spec.step;
+  e.bodies = 1.0;
+  const double samples = std::floor(e.steps / spec.record_every) + 1.0;
+  e.body_frames = samples;
+  // Every sample holds the whole mesh (3 doubles per node); every step a line of summary.json (~200 B).
+  e.bytes = samples * 24.0 * problem.num_nodes() + 200.0 * e.steps;
+  return e;
+}
 
 /// One recorded sample of the whole mesh.
 struct Record {
@@ -61,6 +75,10 @@ void run_verify(const VerifyOptions& opt, const Invocation& invocation, int rank
   require(!reference || size == 1, "{}: the SUNDIALS reference integrator runs on one process (got {})", opt.problem, size);
 
   const double step = spec.step;
+  check_work(verify_work(spec, problem), WorkLimits{}, opt.allow_long,
+             fmt::format("{}: time.duration / time.step (and record.every)", opt.problem));
+  require(spec.duration / step < 1e15, "{}: time.step: {} s gives more than 1e15 steps over time.duration = {} s",
+          opt.problem, step, spec.duration);
   const auto steps = static_cast<long>(std::llround(spec.duration / step));
   require(std::abs(static_cast<double>(steps) * step - spec.duration) <= 1e-9 * std::max(1.0, spec.duration),
           "{}: time.duration = {} is not a whole number of steps of {}", opt.problem, spec.duration, step);
@@ -184,6 +202,8 @@ void register_verify_commands(CLI::App& app, const Invocation& invocation) {
   cmd->add_option("problem", opt->problem, "Problem description (.toml)")->required();
   cmd->add_option("--out", opt->out, "Output folder (history.csv, summary.json, solution.pvd)")->required();
   cmd->add_flag("--no-vtk", opt->no_vtk, "Skip the .vtu series of the whole mesh");
+  cmd->add_flag("--allow-long", opt->allow_long,
+                "Run even when the work estimate (steps, recorded samples, memory) exceeds the limits of docs/fullspace.md");
   cmd->callback([opt, invocation] {
     with_petsc(invocation, [&](int rank, int size) { run_verify(*opt, invocation, rank, size); });
   });

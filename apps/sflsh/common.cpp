@@ -3,6 +3,7 @@
 #include <sflsh/body/body_io.hpp>
 #include <sflsh/body/subjects.hpp>
 #include <sflsh/core/error.hpp>
+#include <sflsh/core/input_file.hpp>
 #include <sflsh/core/log.hpp>
 #include <sflsh/fullspace/petsc_session.hpp>
 
@@ -47,6 +48,7 @@ body::BodyModel load_selected_body(const SubjectOptions& options) {
   if (options.body_path.empty() && !std::filesystem::exists(path)) {
     throw_error("{}: the open body is missing; regenerate it with `sflsh body generate`", path.string());
   }
+  if (!options.body_path.empty()) require_input_file(path, "a body model .npz file");
   body::BodyModel model = body::load_body(path);
   logger()->debug("body {}: {} vertices, {} faces", path.string(), model.num_vertices(), model.num_faces());
   return model;

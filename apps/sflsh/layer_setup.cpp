@@ -23,8 +23,10 @@ void add_mass_option(CLI::App& cmd, LayerSettings& s) {
 }
 
 void check_layer_settings(const LayerSettings& s) {
-  require(s.density > 0.0, "--density must be positive, got {}", s.density);
-  require(s.stiffness_scale > 0.0, "--stiffness-scale must be positive, got {}", s.stiffness_scale);
+  // The same physical ranges as a scene's [[body]] density and stiffness_scale (docs/scenes.md, "Input limits").
+  require(s.density >= 1.0 && s.density <= 1e5, "--density: {} kg/m³ is outside [1, 100000] kg/m³", s.density);
+  require(s.stiffness_scale >= 1e-3 && s.stiffness_scale <= 1e3, "--stiffness-scale: {} is outside [0.001, 1000]",
+          s.stiffness_scale);
   model::parse_mass_kind(s.mass, "--mass");
 }
 

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <optional>
@@ -11,6 +12,7 @@
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
 #include <sflsh/core/progress.hpp>
+#include <sflsh/core/work_limit.hpp>
 #include <sflsh/fullspace/fullspace_solver.hpp>
 #include <sflsh/material/material_file.hpp>
 #include <sflsh/model/body_layer.hpp>
@@ -40,6 +42,20 @@ void add_integrator_option(CLI::App& cmd, std::string& integrator) {
                  "newmark (trapezoidal, no numerical damping); docs/integrators.md");
 }
 
+namespace {
+
+/// One body's steps (frames × substeps), frames and per-frame records (motion sample, summary entry: ~1 kB).
+void check_body_run_work(const BodyRunSettings& opt, double frames) {
+  WorkEstimate e;
+  e.bodies = 1.0;
+  e.body_frames = frames;
+  e.steps = std::max(0.0, frames - 1.0) * opt.substeps;
+  e.bytes = 1024.0 * frames;
+  check_work(e, WorkLimits{}, opt.allow_long, "--frames × --substeps (or the motion's length)");
+}
+
+}  // namespace
+
 nlohmann::json run_body_simulation(const BodyRunSettings& opt, RunFolder* frames_to, int rank, int size,
                                    const BodyRunReporting& reporting) {
   const auto t_start = Clock::now();
@@ -55,8 +71,11 @@ nlohmann::json run_body_simulation(const BodyRunSettings& opt, RunFolder* frames
   const body::BodyModel model = load_selected_body(opt.subject);
   std::string subject_label;
   const body::Betas beta = selected_betas(opt.subject, subject_label, "simulate");
+  // Before the motion is sampled (frames × 600 B) or anything is built: --frames and --substeps as given …
+  check_body_run_work(opt, opt.frames);
   const body::Motion motion = body::load_motion(opt.motion, opt.fps, opt.frames);
   motion.validate();
+  check_body_run_work(opt, static_cast<double>(motion.num_frames()));   // … and with the motion's own length
 
   const std::optional<material::MaterialFile> material_file = load_layer_material(opt.layer);
   const model::BodyLayerOptions layer_options = body_layer_options(opt.layer, opt.mesh);

@@ -33,6 +33,7 @@ struct BodyRunSettings {
   std::string cubature_weights = "nnls";  ///< nnls | voronoi
   bool affine = false;
   double newton_tolerance = 1e-5;         ///< [m] reduced::ReducedOptions::step_tolerance
+  bool allow_long = false;                ///< run even when the work estimate exceeds WorkLimits (--allow-long)
 };
 
 /// How a run reports while it runs.

@@ -121,9 +121,14 @@ class MshLines {
     return ints(count, what, at_least);
   }
 
-  /// A non-negative count that fits an int.
+  /// A non-negative count that fits an int and that the rest of the file can hold: every counted entry takes
+  /// at least a character and a line break, so a header announcing more cannot be true. Reading never
+  /// reserves or loops on a count the file does not back (memory and time stay bounded by the file's size).
   int count(long long value, std::string_view what) const {
     if (value < 0 || value > 2'000'000'000) fail("{} = {} is not a valid count", what, value);
+    const std::size_t rest = pos_ < text_.size() ? text_.size() - pos_ : 0;
+    if (static_cast<std::size_t>(value) > rest / 2)
+      fail("{} = {} is more than the rest of the file ({} bytes) can hold", what, value, rest);
     return static_cast<int>(value);
   }
 

@@ -1,7 +1,9 @@
 // Verification problems (verify_problem.hpp): the TOML reader with "<file>:<line>: key: …" errors,
 // muparser drives, and the full-space Problem they define.
 #include <sflsh/core/error.hpp>
+#include <sflsh/core/input_file.hpp>
 #include <sflsh/fullspace/verify_problem.hpp>
+#include <sflsh/material/parameters.hpp>
 
 #include <fmt/format.h>
 #include <muParser.h>
@@ -127,6 +129,13 @@ class Reader {
     return value;
   }
 
+  /// A number in [min, max] (both > 0 for a physical range) with its unit in the message.
+  double in_range(const toml::node& node, const std::string& key, double min, double max, std::string_view unit) const {
+    const double value = number(node, key);
+    if (!(value >= min && value <= max)) fail(node, key, "{:.6g}{} is outside [{:.6g}, {:.6g}]{}", value, unit, min, max, unit);
+    return value;
+  }
+
   Eigen::Vector3d vector3(const toml::node& node, const std::string& key) const {
     const toml::array* array = node.as_array();
     if (array == nullptr || array->size() != 3) fail(node, key, "must be an array of 3 numbers");
@@ -166,15 +175,24 @@ class Reader {
     const toml::table& m = table(root, "material");
     check_keys(m, {"young_tangent", "young_normal", "poisson", "saturation", "normal", "fung_scale", "overflow"},
                "material.");
-    p.material.young_tangent = positive(required(m, "young_tangent", "material."), "material.young_tangent");
-    p.material.young_normal = positive(required(m, "young_normal", "material."), "material.young_normal");
+    // The physical ranges of material files (parameters.hpp): no run starts with a modulus or saturation that
+    // overflows the energy.
+    const material::ParameterRange young = material::kYoungModulusLimits;
+    p.material.young_tangent =
+        in_range(required(m, "young_tangent", "material."), "material.young_tangent", young.min, young.max, " Pa");
+    p.material.young_normal =
+        in_range(required(m, "young_normal", "material."), "material.young_normal", young.min, young.max, " Pa");
     if (const toml::node* n = m.get("poisson")) {
       p.material.poisson = number(*n, "material.poisson");
       if (!(p.material.poisson > -1.0 && p.material.poisson < 0.5)) {
         fail(*n, "material.poisson", "must be in (-1, 0.5), got {}", p.material.poisson);
       }
     }
-    if (const toml::node* n = m.get("saturation")) p.material.saturation = positive(*n, "material.saturation");
+    if (const toml::node* n = m.get("saturation")) {
+      p.material.saturation = positive(*n, "material.saturation");
+      if (p.material.saturation > material::kSaturationMax)
+        fail(*n, "material.saturation", "{} is outside (0, {}]", p.material.saturation, material::kSaturationMax);
+    }
     if (const toml::node* n = m.get("normal")) {
       p.normal = vector3(*n, "material.normal");
       if (!(p.normal.norm() > 0.0)) fail(*n, "material.normal", "must be a non-zero vector");
@@ -225,8 +243,10 @@ class Reader {
              "\"backward_euler\" (or no integrator)", s);
       }
     }
-    if (const toml::node* n = t.get("rtol")) p.rtol = positive(*n, "time.rtol");
-    if (const toml::node* n = t.get("atol")) p.atol = positive(*n, "time.atol");
+    // Tolerances of the reference integrator: tighter than these, CVODE's steps shrink towards round-off and
+    // the run does not end.
+    if (const toml::node* n = t.get("rtol")) p.rtol = in_range(*n, "time.rtol", 1e-12, 0.1, "");
+    if (const toml::node* n = t.get("atol")) p.atol = in_range(*n, "time.atol", 1e-15, 0.1, "");
   }
 
   void read_record_and_solver(const toml::table& root, VerifyProblem& p) const {
@@ -325,7 +345,7 @@ class Reader {
   }
 
   VerifyProblem read() const {
-    require(std::filesystem::is_regular_file(path_), "{}: problem file not found", path_.string());
+    require_input_file(path_, "a verify problem TOML file");
     toml::table root;
     try {
       root = toml::parse_file(path_.string());
@@ -337,8 +357,11 @@ class Reader {
     p.file = path_;
     const toml::node& mesh = required(root, "mesh", "");
     p.mesh_path = (path_.parent_path() / string(mesh, "mesh")).lexically_normal();
-    if (!std::filesystem::is_regular_file(p.mesh_path))
-      fail(mesh, "mesh", "mesh file {} not found", p.mesh_path.string());
+    try {
+      require_input_file(p.mesh_path, "a gmsh .msh file");
+    } catch (const Error& err) {
+      fail(mesh, "mesh", "{}", err.what());
+    }
     try {
       p.mesh = read_msh(p.mesh_path);
     } catch (const Error& err) {

@@ -51,7 +51,7 @@ BodyLayer build_body_layer(const body::BodyModel& model, const body::Betas& beta
   const meshing::LayerMesh& mesh = *out.mesh;
 
   if (material) {
-    material::check_against_body(*material, model.v_template);
+    material::check_against_body(*material, model);
     out.material = *material;
   } else {
     require(control_points >= 1, "body layer: --control-points must be at least 1, got {}", control_points);

@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <set>
+#include <utility>
 
 namespace sflsh::scene {
 
@@ -51,7 +52,7 @@ class SceneReader : public TomlReader {
   using TomlReader::TomlReader;
 
   Scene read() const {
-    const toml::table root = parse("scene file");
+    const toml::table root = parse("a scene TOML file");
     check_keys(root, {"scene", "effects", "body", "object", "contact", "crowd", "output"}, "");
     Scene scene;
     scene.file = path();
@@ -87,6 +88,16 @@ class SceneReader : public TomlReader {
   std::string relative(const std::string& file) const {
     const std::filesystem::path p(file);
     return p.is_absolute() ? file : (path().parent_path() / p).lexically_normal().string();
+  }
+
+  /// A file named by `key`: "<scene>:<line>: <key><context>: <path>: is a directory, expected …" when it cannot be read.
+  void input_file(const toml::node& node, std::string_view key, std::string_view context, const std::string& file,
+                  std::string_view what) const {
+    try {
+      require_input_file(file, what);
+    } catch (const Error& e) {
+      fail(node, fmt::format("{}{}", key, context), "{}", e.what());
+    }
   }
 
   double positive(const toml::node& node, std::string_view key, std::string_view context) const {
@@ -141,7 +152,10 @@ class SceneReader : public TomlReader {
     scene.name = t.get("name") ? string_value(*t.get("name"), "name") : path().stem().string();
     if (const toml::node* n = t.get("fps")) scene.fps = positive(*n, "fps", " in [scene]");
     if (const toml::node* n = t.get("frames")) scene.frames = count(*n, "frames", " in [scene]", 1);
-    if (const toml::node* n = t.get("duration")) scene.duration = positive(*n, "duration", " in [scene]");
+    if (const toml::node* n = t.get("duration")) {
+      scene.duration = positive(*n, "duration", " in [scene]");
+      number_in(*n, "duration", " in [scene]", 0.0, kMaxSceneDuration, "s");
+    }
     if (const toml::node* n = t.get("substeps")) scene.substeps = count(*n, "substeps", " in [scene]", 1);
     require(scene.fps <= 10000.0, "{}: 'fps' = {} is beyond 10000", at(t), scene.fps);
   }
@@ -243,7 +257,8 @@ class SceneReader : public TomlReader {
       b.motion = string_value(*n, "motion");
       if (b.motion.ends_with(".npz")) b.motion = relative(b.motion);
     }
-    if (const toml::node* n = t->get("motion_offset")) b.motion_offset = non_negative(*n, "motion_offset", context);
+    if (const toml::node* n = t->get("motion_offset"))
+      b.motion_offset = number_in(*n, "motion_offset", context, 0.0, kMaxMotionOffset, "s");
     if (const toml::node* n = t->get("approach")) b.approach = keyframes(*n, "approach", context, false);
     if (const toml::node* n = t->get("placement")) b.placement = placement(*n, context);
     if (const toml::node* n = t->get("solver")) b.solver = solver(*n, context);
@@ -252,15 +267,13 @@ class SceneReader : public TomlReader {
     if (const toml::node* n = t->get("control_points")) b.control_points = count(*n, "control_points", context, 1);
     if (const toml::node* n = t->get("handles")) b.handles = count(*n, "handles", context, 1);
     if (const toml::node* n = t->get("cubature")) b.cubature = count(*n, "cubature", context, -1);
-    if (const toml::node* n = t->get("density")) b.density = positive(*n, "density", context);
-    if (const toml::node* n = t->get("stiffness_scale")) b.stiffness_scale = positive(*n, "stiffness_scale", context);
+    if (const toml::node* n = t->get("density")) b.density = number_in(*n, "density", context, 1.0, 1e5, "kg/m³");
+    if (const toml::node* n = t->get("stiffness_scale")) b.stiffness_scale = number_in(*n, "stiffness_scale", context, 1e-3, 1e3);
     if (const toml::node* n = t->get("integrator")) b.integrator = integrator(*n, context);
     if (const toml::node* n = t->get("mass")) b.mass = mass(*n, context);
-    for (const std::string* file : {&b.body_path, &b.material}) {
-      require(file->empty() || std::filesystem::exists(*file), "{}: file '{}'{} not found", at(node), *file, context);
-    }
-    require(!b.motion.ends_with(".npz") || std::filesystem::exists(b.motion), "{}: motion file '{}'{} not found", at(node), b.motion,
-            context);
+    if (!b.body_path.empty()) input_file(*t->get("body"), "body", context, b.body_path, "a body model .npz file");
+    if (!b.material.empty()) input_file(*t->get("material"), "material", context, b.material, "a material TOML file");
+    if (b.motion.ends_with(".npz")) input_file(*t->get("motion"), "motion", context, b.motion, "an AMASS motion .npz file");
     return b;
   }
 
@@ -302,10 +315,16 @@ class SceneReader : public TomlReader {
     }
     if (const toml::node* n = only_for("file", {ShapeKind::mesh})) {
       o.mesh_path = relative(string_value(*n, "file"));
-      require(std::filesystem::exists(o.mesh_path), "{}: mesh file '{}'{} not found", at(*n), o.mesh_path, context);
+      input_file(*n, "file", context, o.mesh_path, "a triangle mesh file (.obj, .stl, .ply)");
     }
     if (const toml::node* n = only_for("scale", {ShapeKind::mesh})) o.scale = positive(*n, "scale", context);
     require(o.shape != ShapeKind::mesh || !o.mesh_path.empty(), "{}: a mesh object needs 'file'{}", at(node), context);
+    // The size of every shape is given, never a silent default (docs/scenes.md).
+    const std::pair<ShapeKind, const char*> needed[] = {{ShapeKind::sphere, "radius"}, {ShapeKind::capsule, "radius"},
+                                                        {ShapeKind::capsule, "length"}, {ShapeKind::box, "half_extents"},
+                                                        {ShapeKind::plane, "normal"}};
+    for (const auto& [kind, key] : needed)
+      if (o.shape == kind && t->get(key) == nullptr) fail(node, fmt::format("{}{}", key, context), "missing (a {} needs it)", shape);
     if (const toml::node* n = t->get("position")) o.position = vector3(*n, "position", context);
     if (const toml::node* n = t->get("rotation")) o.rotation = vector3(*n, "rotation", context);
     if (const toml::node* n = t->get("motion")) {
@@ -344,14 +363,17 @@ class SceneReader : public TomlReader {
     if (const toml::node* n = t.get("shape_sigma")) c.shape_sigma = non_negative(*n, "shape_sigma", context);
     if (const toml::node* n = t.get("motion")) {
       c.motion = string_value(*n, "motion");
-      if (c.motion.ends_with(".npz")) c.motion = relative(c.motion);
+      if (c.motion.ends_with(".npz")) {
+        c.motion = relative(c.motion);
+        input_file(*n, "motion", context, c.motion, "an AMASS motion .npz file");
+      }
     }
-    if (const toml::node* n = t.get("max_offset")) c.max_offset = non_negative(*n, "max_offset", context);
+    if (const toml::node* n = t.get("max_offset")) c.max_offset = number_in(*n, "max_offset", context, 0.0, kMaxMotionOffset, "s");
     if (const toml::node* n = t.get("spacing")) c.spacing = positive(*n, "spacing", context);
     if (const toml::node* n = t.get("columns")) c.columns = count(*n, "columns", context, 1);
     if (const toml::node* n = t.get("shape_model")) {
       c.shape_model = relative(string_value(*n, "shape_model"));
-      require(std::filesystem::exists(c.shape_model), "{}: shape model '{}'{} not found", at(*n), c.shape_model, context);
+      input_file(*n, "shape_model", context, c.shape_model, "a shape-model TOML file");
     }
     if (const toml::node* n = t.get("solver")) c.solver = solver(*n, context);
     if (const toml::node* n = t.get("mesh")) c.mesh = choice(*n, "mesh", {"coarse", "default", "fine"}, context);

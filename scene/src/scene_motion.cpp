@@ -27,7 +27,10 @@ Eigen::Vector3d approach_at(const std::vector<SceneKeyframe>& keys, double t) {
 
 body::Motion scene_motion(const std::string& name, double offset, const std::vector<SceneKeyframe>& approach, double fps, int frames) {
   require(frames >= 1, "scene motion: at least one frame, got {}", frames);
-  const int skip = static_cast<int>(std::lround(offset * fps));
+  require(std::isfinite(offset) && offset >= 0.0 && offset <= kMaxMotionOffset,
+          "motion '{}': motion_offset {} s is outside [0, {}] s", name, offset, kMaxMotionOffset);
+  // Whole frames skipped; the bound above keeps this far inside long long (≤ 3600 s × 10000 fps).
+  const long long skip = std::llround(offset * fps);
   body::Motion motion;
   if (name == "rest") {
     motion.name = "rest";
@@ -35,10 +38,13 @@ body::Motion scene_motion(const std::string& name, double offset, const std::vec
     motion.fps = fps;
     motion.poses.assign(static_cast<std::size_t>(frames), body::Pose::Zero());
     motion.trans.assign(static_cast<std::size_t>(frames), Eigen::Vector3d::Zero());
+  } else if (body::is_procedural_motion(name)) {
+    // Only the frames asked for, sampled where the offset puts them: O(frames), not O(offset · fps).
+    motion = body::procedural_motion_window(name, fps, skip, frames);
   } else {
-    motion = body::load_motion(name, fps, name.ends_with(".npz") ? 0 : frames + skip);
+    motion = body::load_motion(name, fps, 0);
     if (std::abs(motion.fps - fps) > 1e-9 * fps) motion = body::resample(motion, fps);
-    require(static_cast<int>(motion.num_frames()) > skip, "motion '{}': the offset {} s is beyond its {} frames", name, offset,
+    require(static_cast<long long>(motion.num_frames()) > skip, "motion '{}': the offset {} s is beyond its {} frames", name, offset,
             motion.num_frames());
     motion.poses.erase(motion.poses.begin(), motion.poses.begin() + skip);
     motion.trans.erase(motion.trans.begin(), motion.trans.begin() + skip);

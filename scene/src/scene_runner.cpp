@@ -50,6 +50,10 @@ class SceneRun {
 
   nlohmann::json run() {
     const auto t_start = Clock::now();
+    // Before anything is built or expanded: a mistyped duration or crowd count is refused with its estimate.
+    check_work(estimate_scene_work(scene_, options_), WorkLimits{}, options_.allow_long,
+               fmt::format("{}: [scene] duration × fps (or frames, --frames) × substeps × bodies{}", scene_.file.string(),
+                           scene_.crowd ? fmt::format(" ([crowd] count at line {})", scene_.crowd->line) : ""));
     frames_ = options_.frames > 0 ? options_.frames : scene_.num_frames();
     Scene scene = scene_;
     scene.frames = frames_;

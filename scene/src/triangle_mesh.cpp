@@ -12,7 +12,6 @@
 #include <vtkCleanPolyData.h>
 #include <vtkIdList.h>
 #include <vtkNew.h>
-#include <vtkOBJReader.h>
 #include <vtkPLYReader.h>
 #include <vtkPoints.h>
 #include <vtkPolyData.h>
@@ -25,6 +24,7 @@
 #include <cctype>
 #include <cmath>
 #include <sflsh/core/error.hpp>
+#include "obj_file.hpp"
 #include <sflsh/scene/obstacle.hpp>
 #include <unordered_map>
 
@@ -75,6 +75,54 @@ TriangleFeature closest_on_triangle(const Eigen::Vector3d& p, const Eigen::Vecto
 
 std::int64_t edge_key(int i, int j) {
   return (static_cast<std::int64_t>(std::min(i, j)) << 32) | static_cast<std::uint32_t>(std::max(i, j));
+}
+
+/// .stl and .ply through VTK's readers: polygons triangulated, coincident points merged (STL stores each
+/// triangle's own), unused points dropped.
+void read_with_vtk(const std::filesystem::path& path, const std::string& ext, RowMatrixX3d& vertices,
+                   RowMatrixX3i& triangles) {
+  vtkSmartPointer<vtkPolyDataAlgorithm> reader;
+  if (ext == ".stl") {
+    auto r = vtkSmartPointer<vtkSTLReader>::New();
+    r->SetFileName(path.string().c_str());
+    reader = r;
+  } else if (ext == ".ply") {
+    auto r = vtkSmartPointer<vtkPLYReader>::New();
+    r->SetFileName(path.string().c_str());
+    reader = r;
+  } else {
+    throw_error("{}: unsupported mesh format '{}' (expected .obj, .stl or .ply)", path.string(), ext);
+  }
+  vtkNew<vtkTriangleFilter> triangulate;  // polygons → triangles
+  triangulate->SetInputConnection(reader->GetOutputPort());
+  triangulate->PassLinesOff();
+  triangulate->PassVertsOff();
+  vtkNew<vtkCleanPolyData> clean;  // merge coincident points (STL stores each triangle's own)
+  clean->SetInputConnection(triangulate->GetOutputPort());
+  clean->PointMergingOn();
+  clean->SetTolerance(0.0);
+  clean->Update();
+  vtkPolyData* poly = clean->GetOutput();
+  require(poly != nullptr && poly->GetNumberOfPolys() > 0, "{}: no triangles could be read", path.string());
+
+  vertices.resize(poly->GetNumberOfPoints(), 3);
+  for (vtkIdType i = 0; i < poly->GetNumberOfPoints(); ++i) {
+    double x[3];
+    poly->GetPoint(i, x);
+    vertices.row(i) << x[0], x[1], x[2];
+  }
+  triangles.resize(poly->GetNumberOfPolys(), 3);
+  vtkCellArray* polys = poly->GetPolys();
+  polys->InitTraversal();
+  vtkNew<vtkIdList> ids;
+  Eigen::Index f = 0;
+  while (polys->GetNextCell(ids)) {
+    if (ids->GetNumberOfIds() != 3) continue;
+    triangles.row(f++) << static_cast<int>(ids->GetId(0)), static_cast<int>(ids->GetId(1)),
+        static_cast<int>(ids->GetId(2));
+  }
+  triangles.conservativeResize(f, 3);
+  require(f > 0, "{}: no triangles could be read", path.string());
 }
 
 }  // namespace
@@ -216,52 +264,17 @@ std::unique_ptr<TriangleMesh> TriangleMesh::load(const std::filesystem::path& pa
   std::string ext = path.extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(),
                  [](unsigned char ch) { return static_cast<char>(std::tolower(ch)); });
-  vtkSmartPointer<vtkPolyDataAlgorithm> reader;
+  RowMatrixX3d vertices;
+  RowMatrixX3i triangles;
   if (ext == ".obj") {
-    auto r = vtkSmartPointer<vtkOBJReader>::New();
-    r->SetFileName(path.string().c_str());
-    reader = r;
-  } else if (ext == ".stl") {
-    auto r = vtkSmartPointer<vtkSTLReader>::New();
-    r->SetFileName(path.string().c_str());
-    reader = r;
-  } else if (ext == ".ply") {
-    auto r = vtkSmartPointer<vtkPLYReader>::New();
-    r->SetFileName(path.string().c_str());
-    reader = r;
+    detail::ObjMesh obj = detail::read_obj(path);   // strict: bad indices and non-finite vertices are errors
+    vertices = scale * obj.vertices;
+    triangles = std::move(obj.triangles);
   } else {
-    throw_error("{}: unsupported mesh format '{}' (expected .obj, .stl or .ply)", path.string(), ext);
+    read_with_vtk(path, ext, vertices, triangles);
+    vertices *= scale;
   }
-  vtkNew<vtkTriangleFilter> triangulate;  // polygons → triangles
-  triangulate->SetInputConnection(reader->GetOutputPort());
-  triangulate->PassLinesOff();
-  triangulate->PassVertsOff();
-  vtkNew<vtkCleanPolyData> clean;  // merge coincident points (STL stores each triangle's own)
-  clean->SetInputConnection(triangulate->GetOutputPort());
-  clean->PointMergingOn();
-  clean->SetTolerance(0.0);
-  clean->Update();
-  vtkPolyData* poly = clean->GetOutput();
-  require(poly != nullptr && poly->GetNumberOfPolys() > 0, "{}: no triangles could be read", path.string());
-
-  RowMatrixX3d vertices(poly->GetNumberOfPoints(), 3);
-  for (vtkIdType i = 0; i < poly->GetNumberOfPoints(); ++i) {
-    double x[3];
-    poly->GetPoint(i, x);
-    vertices.row(i) << scale * x[0], scale * x[1], scale * x[2];
-  }
-  RowMatrixX3i triangles(poly->GetNumberOfPolys(), 3);
-  vtkCellArray* polys = poly->GetPolys();
-  polys->InitTraversal();
-  vtkNew<vtkIdList> ids;
-  Eigen::Index f = 0;
-  while (polys->GetNextCell(ids)) {
-    if (ids->GetNumberOfIds() != 3) continue;
-    triangles.row(f++) << static_cast<int>(ids->GetId(0)), static_cast<int>(ids->GetId(1)),
-        static_cast<int>(ids->GetId(2));
-  }
-  triangles.conservativeResize(f, 3);
-  require(f > 0, "{}: no triangles could be read", path.string());
+  const Eigen::Index f = triangles.rows();
   require(vertices.allFinite(), "{}: non-finite vertex coordinates", path.string());
 
   // A closed mesh stored inward (negative enclosed volume) is flipped so that φ < 0 inside.

@@ -121,7 +121,7 @@ TEST_F(Cli, MalformedInputsFailWithOneLineAndWriteNothing) {
       {"motion export " + b + " --motion shake_hips" + o, "one of --subject NAME or --betas"},
       {"motion export " + b + " --motion shake_hips --betas 0 --fps 0" + o, "--fps must be positive"},
       {"motion export --body " + (dir_ / "missing.npz").string() + " --motion shake_hips --betas 0" + o,
-       "missing.npz: file not found"},
+       "missing.npz: not found, expected a body model .npz file"},
       {"motion export --body " + (dir_ / "garbage.npz").string() + " --motion shake_hips --betas 0" + o,
        "garbage.npz: not a readable .npz"},
       {"motion export " + b + " --motion " + (dir_ / "garbage.npz").string() + " --betas 0" + o, "garbage.npz"},

@@ -124,7 +124,7 @@ TEST(MaterialFile, BadFilesGiveOneLineErrorsWithFileLineAndField) {
       {replaced(kBase, "body = \"sflsh-open-body\"", "body = 3"), ":2: 'body' must be a string"},
       {replaced(kBase, "poisson = 0.2", "poisson = \"x\""), ":4: 'poisson' must be a number"},
       {replaced(kBase, "poisson = 0.2", "poisson = 0.5"), ":4: 'poisson' = 0.5 is outside (-1, 0.5)"},
-      {replaced(kBase, "saturation = 4.0", "saturation = 0"), ":5: 'saturation' = 0 must be > 0"},
+      {replaced(kBase, "saturation = 4.0", "saturation = 0"), ":5: saturation: 0 is outside (0, 100]"},
       {replaced(kBase, "version = 1", "version = 2"), ":1: 'version' must be the integer 1"},
       {replaced(kBase, "poisson = 0.2", "poisson = = 0.2"), ":4:"},  // TOML syntax
       {replaced(kBase, "subject", "colour = 1\nsubject"), ":3: unknown key 'colour'"},
@@ -157,7 +157,7 @@ TEST(MaterialFile, BadFilesGiveOneLineErrorsWithFileLineAndField) {
     EXPECT_THAT(message, HasSubstr(path.string())) << "case " << k;
     EXPECT_EQ(message.find('\n'), std::string::npos) << "one line, case " << k;
   }
-  EXPECT_THAT(error_of([&] { load_material_file(dir / "absent.toml"); }), HasSubstr("material file not found"));
+  EXPECT_THAT(error_of([&] { load_material_file(dir / "absent.toml"); }), HasSubstr("absent.toml: not found, expected a material TOML file"));
 }
 
 TEST(MaterialFile, RefusesToWriteAnInvalidFile) {

@@ -154,7 +154,7 @@ TEST(MaterialForBeta, ClampsIntoTheBoundsAndPassesTheMaterialChecks) {
               ((k.rowwise() - m.bounds.maximum()).array() == 0.0).any());   // some entry was clamped
   body::BodyModel other = body;
   other.name = "other";
-  EXPECT_NE(error_of([&] { material_for_beta(model, other, body::Betas::Zero()); }).find("not 'other'"), std::string::npos);
+  EXPECT_NE(error_of([&] { material_for_beta(model, other, body::Betas::Zero()); }).find("the run uses body 'other'"), std::string::npos);
   other = body;
   other.v_template.row(10).x() += 0.01;   // control point #1 sits elsewhere on this body
   EXPECT_NE(error_of([&] { material_for_beta(model, other, body::Betas::Zero()); }).find("control_point #1"),

@@ -64,17 +64,17 @@ TEST(SceneFile, BadInputNamesFileAndLine) {
       {"[scene]\n[effects]\nbody_contact = true\n" + std::string(kBody), "fewer than two bodies"},
       {"[scene]\n[effects]\nself_contact = true\n" + std::string(kBody), "scene.toml:3: 'self_contact' = true is not available"},
       {"[scene]\n" + std::string(kBody) + "solver = \"fast\"\n", "scene.toml:5: 'solver' in body #0 = 'fast' is not one of full | reduced | skinned"},
-      {"[scene]\n" + std::string(kBody) + "material = \"nope.toml\"\n", "file '"},
+      {"[scene]\n" + std::string(kBody) + "material = \"nope.toml\"\n", "nope.toml: not found, expected a material TOML file"},
       {"[scene]\n" + std::string(kBody) + "integrator = \"rk4\"\n",
        "scene.toml:5: 'integrator' in body #0 = 'rk4' is not one of backward_euler | bdf2 | newmark"},
       {"[scene]\n" + std::string(kBody) + "mass = \"diagonal\"\n", "scene.toml:5: 'mass' in body #0 = 'diagonal' is not one of lumped | consistent"},
       {"[scene]\n" + std::string(kBody) + "[[object]]\nshape = \"sphere\"\nradius = -0.1\n", "scene.toml:7: 'radius' in object #0 = -0.1 must be positive"},
       {"[scene]\n" + std::string(kBody) + "[[object]]\nshape = \"box\"\nradius = 0.1\n", "'radius' in object #0 does not apply to a box"},
       {"[scene]\n" + std::string(kBody) +
-           "[[object]]\nshape = \"sphere\"\nmotion = \"prescribed\"\nkeyframes = [{ t = 0.5, position = [0, 0, 0] }, { t = 0.2, position = [0, 0, 1] }]\n",
+           "[[object]]\nshape = \"sphere\"\nradius = 0.1\nmotion = \"prescribed\"\nkeyframes = [{ t = 0.5, position = [0, 0, 0] }, { t = 0.2, position = [0, 0, 1] }]\n",
        "keyframe times in 'keyframes' in object #0 must increase"},
-      {"[scene]\n" + std::string(kBody) + "[[object]]\nshape = \"sphere\"\nmotion = \"prescribed\"\n", "a prescribed object needs 'keyframes'"},
-      {"[scene]\n[effects]\nobject_contact = true\n[crowd]\ncount = 4\n[[object]]\nshape = \"sphere\"\n", "a [crowd] runs without contact"},
+      {"[scene]\n" + std::string(kBody) + "[[object]]\nshape = \"sphere\"\nradius = 0.1\nmotion = \"prescribed\"\n", "a prescribed object needs 'keyframes'"},
+      {"[scene]\n[effects]\nobject_contact = true\n[crowd]\ncount = 4\n[[object]]\nshape = \"sphere\"\nradius = 0.1\n", "a [crowd] runs without contact"},
       {"[scene]\n" + std::string(kBody) + "[[body]]\nname = \"a\"\n", "the name 'a' is used twice"},
       {"[scene]\nfps = \n", "scene.toml:2:"},
       {"[effects]\n" + std::string(kBody), "missing key 'scene'"},
@@ -85,7 +85,7 @@ TEST(SceneFile, BadInputNamesFileAndLine) {
     EXPECT_NE(message.find(c.expected), std::string::npos) << message;
     EXPECT_EQ(message.find('\n'), std::string::npos) << "one line: " << message;
   }
-  EXPECT_NE(error_of(dir / "missing.toml").find("missing.toml: scene file not found"), std::string::npos);
+  EXPECT_NE(error_of(dir / "missing.toml").find("missing.toml: not found, expected a scene TOML file"), std::string::npos);
 }
 
 TEST(SceneFile, IntegratorAndMassPerBodyAndCrowd) {

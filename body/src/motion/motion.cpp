@@ -4,6 +4,7 @@
 #include "procedural.hpp"
 
 #include <sflsh/core/error.hpp>
+#include <sflsh/core/input_file.hpp>
 #include <sflsh/core/log.hpp>
 
 #include <algorithm>
@@ -116,12 +117,11 @@ std::string procedural_motion_description(const std::string& name) {
   return std::string(spec->description);
 }
 
-Motion make_procedural_motion(const std::string& name, double fps, int frames, double time_offset) {
-  const motion_detail::ProceduralSpec* spec = motion_detail::find_spec(name);
-  require(spec != nullptr, "unknown procedural motion '{}' (known: {})", name, motion_detail::known_names());
-  require(std::isfinite(fps) && fps > 0.0, "motion '{}': fps must be a positive number, got {}", name, fps);
-  require(std::isfinite(time_offset), "motion '{}': the time offset must be finite, got {}", name, time_offset);
-  const long count = frames > 0 ? frames : std::max(1L, std::lround(spec->default_seconds * fps));
+namespace {
+
+/// Frames first … first + count − 1 of a procedural motion (frame i at t = i / fps).
+Motion sample_procedural(const motion_detail::ProceduralSpec& spec, const std::string& name, double fps,
+                         long long first, long long count, double time_offset) {
   Motion motion;
   motion.name = name;
   motion.source = "procedural";
@@ -129,16 +129,39 @@ Motion make_procedural_motion(const std::string& name, double fps, int frames, d
   motion.time_offset = time_offset;
   motion.poses.reserve(static_cast<std::size_t>(count));
   motion.trans.reserve(static_cast<std::size_t>(count));
-  for (long i = 0; i < count; ++i) {
+  for (long long i = first; i < first + count; ++i) {
     const double t = static_cast<double>(i) / fps;
     // Periodic motions shift the phase of their steady part; the others start later (held at rest
     // before t = 0 for negative offsets).
-    const motion_detail::PoseSample s = spec->sample_offset ? spec->sample_offset(t, time_offset)
-                                                            : spec->sample(std::max(0.0, t + time_offset));
+    const motion_detail::PoseSample s = spec.sample_offset ? spec.sample_offset(t, time_offset)
+                                                           : spec.sample(std::max(0.0, t + time_offset));
     motion.poses.push_back(s.theta);
     motion.trans.push_back(s.trans);
   }
   return motion;
+}
+
+}  // namespace
+
+bool is_procedural_motion(const std::string& name) { return motion_detail::find_spec(name) != nullptr; }
+
+Motion procedural_motion_window(const std::string& name, double fps, long long first, int frames) {
+  const motion_detail::ProceduralSpec* spec = motion_detail::find_spec(name);
+  require(spec != nullptr, "unknown procedural motion '{}' (known: {})", name, motion_detail::known_names());
+  require(std::isfinite(fps) && fps > 0.0, "motion '{}': fps must be a positive number, got {}", name, fps);
+  require(first >= 0 && frames >= 1 && first < (1LL << 53) - frames,
+          "motion '{}': frames {} … {} are not a valid window (first >= 0, at least one frame)", name, first,
+          first + frames - 1);
+  return sample_procedural(*spec, name, fps, first, frames, 0.0);
+}
+
+Motion make_procedural_motion(const std::string& name, double fps, int frames, double time_offset) {
+  const motion_detail::ProceduralSpec* spec = motion_detail::find_spec(name);
+  require(spec != nullptr, "unknown procedural motion '{}' (known: {})", name, motion_detail::known_names());
+  require(std::isfinite(fps) && fps > 0.0, "motion '{}': fps must be a positive number, got {}", name, fps);
+  require(std::isfinite(time_offset), "motion '{}': the time offset must be finite, got {}", name, time_offset);
+  const long count = frames > 0 ? frames : std::max(1L, std::lround(spec->default_seconds * fps));
+  return sample_procedural(*spec, name, fps, 0, count, time_offset);
 }
 
 Motion offset_motion(const Motion& motion, double seconds) {
@@ -175,8 +198,9 @@ Motion load_motion(const std::string& name_or_path, double fps, int frames, doub
     return make_procedural_motion(name_or_path, fps, frames, time_offset);
   const std::filesystem::path path(name_or_path);
   std::error_code ec;
-  require(std::filesystem::is_regular_file(path, ec), "motion '{}': not a procedural motion ({}) and no such file",
+  require(std::filesystem::exists(path, ec), "motion '{}': not a procedural motion ({}) and no such file",
           name_or_path, motion_detail::known_names());
+  require_input_file(path, "an AMASS motion .npz file (or a procedural motion name)");
   Motion motion = load_amass(path, fps);
   if (frames > 0) {
     const auto wanted = static_cast<std::size_t>(frames);

@@ -59,9 +59,10 @@ class Reader : public TomlReader {
   }
 
   MaterialFile read() const {
-    const toml::table root = parse("material file");
+    const toml::table root = parse("a material TOML file");
     check_keys(root, {"version", "body", "subject", "poisson", "saturation", "bounds", "control_point"}, "");
     MaterialFile file;
+    file.source = path().string();
     if (const toml::node* version = root.get("version")) {
       const auto value = version->value_exact<std::int64_t>();
       require(value.has_value() && *value == kMaterialFileVersion,
@@ -75,7 +76,9 @@ class Reader : public TomlReader {
             file.poisson);
     const toml::node& saturation = required(root, "saturation", "");
     file.saturation = number(saturation, "saturation", "");
-    require(file.saturation > 0.0, "{}: 'saturation' = {} must be > 0", at(saturation), file.saturation);
+    if (!(file.saturation > 0.0 && file.saturation <= kSaturationMax))
+      fail(saturation, "saturation", "{} is outside (0, {}] (the Fung saturation; docs/material.md)", file.saturation,
+           kSaturationMax);
     if (const toml::node* bounds = root.get("bounds")) read_bounds(*bounds, file.bounds);
 
     const toml::node* list = root.get("control_point");

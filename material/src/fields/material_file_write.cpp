@@ -2,6 +2,7 @@
 #include <sflsh/core/atomic_file.hpp>
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/toml_reader.hpp>
+#include <sflsh/body/body_model.hpp>
 #include <sflsh/material/material_file.hpp>
 
 #include <toml++/toml.h>
@@ -42,8 +43,8 @@ void validate(const MaterialFile& material, std::string_view what) {
   require(!material.subject.empty(), "{}: 'subject' must not be empty", what);
   require(std::isfinite(material.poisson) && material.poisson > -1.0 && material.poisson < 0.5,
           "{}: 'poisson' = {} is outside (-1, 0.5)", what, material.poisson);
-  require(std::isfinite(material.saturation) && material.saturation > 0.0, "{}: 'saturation' = {} must be > 0", what,
-          material.saturation);
+  require(std::isfinite(material.saturation) && material.saturation > 0.0 && material.saturation <= kSaturationMax,
+          "{}: saturation: {} is outside (0, {}]", what, material.saturation, kSaturationMax);
   try {
     validate(material.bounds);
   } catch (const Error& e) {
@@ -64,6 +65,7 @@ void validate(const MaterialFile& material, std::string_view what) {
 
 void check_against_body(const MaterialFile& material, const RowMatrixX3d& V, double position_tolerance,
                         std::string_view what) {
+  if (what.empty()) what = material.source.empty() ? std::string_view("material") : std::string_view(material.source);
   for (std::size_t i = 0; i < material.control_points.size(); ++i) {
     const MaterialControlPoint& p = material.control_points[i];
     const std::string at = where(what, p);
@@ -77,6 +79,14 @@ void check_against_body(const MaterialFile& material, const RowMatrixX3d& V, dou
             "(tolerance {:.3g} m): the file belongs to another body or template",
             at, i, distance, p.vertex, material.body, actual.x(), actual.y(), actual.z(), position_tolerance);
   }
+}
+
+void check_against_body(const MaterialFile& material, const body::BodyModel& body, double position_tolerance) {
+  const std::string_view what = material.source.empty() ? std::string_view("material") : std::string_view(material.source);
+  require(material.body == body.name,
+          "{}: body: the material is for body '{}', but the run uses body '{}' (write one for it with `sflsh material`)",
+          what, material.body, body.name);
+  check_against_body(material, body.v_template, position_tolerance, what);
 }
 
 void save_material_file(const std::filesystem::path& path, const MaterialFile& material, const std::string& header) {

@@ -36,6 +36,12 @@ void validate(const ParameterBounds& bounds) {
   }
   require(bounds.thickness.max <= 1.0, "parameter bounds: thickness max {} exceeds 1 (h is a fraction)",
           bounds.thickness.max);
+  for (int c : {kYoungTangent, kYoungNormal}) {
+    const ParameterRange& r = bounds[c];
+    require(r.min >= kYoungModulusLimits.min && r.max <= kYoungModulusLimits.max,
+            "parameter bounds: {} = [{:.6g}, {:.6g}] Pa is outside the physical range [{:.6g}, {:.6g}] Pa",
+            kKappaNames[static_cast<std::size_t>(c)], r.min, r.max, kYoungModulusLimits.min, kYoungModulusLimits.max);
+  }
 }
 
 void validate(const Kappa& kappa, const ParameterBounds& bounds, std::string_view what) {

@@ -80,8 +80,8 @@ void validate(const ShapeModelFile& model, std::string_view what) {
   require(!model.body.empty(), "{}: 'body' must not be empty", what);
   require(std::isfinite(model.poisson) && model.poisson > -1.0 && model.poisson < 0.5,
           "{}: 'poisson' = {} is outside (-1, 0.5)", what, model.poisson);
-  require(std::isfinite(model.saturation) && model.saturation > 0.0, "{}: 'saturation' = {} must be > 0", what,
-          model.saturation);
+  require(std::isfinite(model.saturation) && model.saturation > 0.0 && model.saturation <= material::kSaturationMax,
+          "{}: saturation: {} is outside (0, {}]", what, model.saturation, material::kSaturationMax);
   try {
     material::validate(model.bounds);
   } catch (const Error& e) {
@@ -151,11 +151,26 @@ void save_shape_model_file(const std::filesystem::path& path, const ShapeModelFi
 
 std::filesystem::path default_shape_model_path() { return body::data_dir() / "shape_models" / "default.toml"; }
 
+void check_layer_match(const ShapeModelFile& model, const std::string& layer_region, const std::string& layer_mesh,
+                       std::string_view user) {
+  const std::string at = model.basis_line > 0 ? fmt::format("{}:{}", model.source, model.basis_line)
+                                              : (model.source.empty() ? std::string("shape model") : model.source);
+  require(model.region.empty() || model.region == layer_region,
+          "{}: region in [basis]: the shape model was fitted on region '{}', but {} uses layers of region '{}'", at,
+          model.region, user, layer_region);
+  require(model.mesh.empty() || model.mesh == layer_mesh,
+          "{}: mesh in [basis]: the shape model was fitted on the '{}' mesh, but {} uses the '{}' mesh", at, model.mesh,
+          user, layer_mesh);
+}
+
 material::MaterialFile material_for_beta(const ShapeModelFile& model, const body::BodyModel& body,
                                          const body::Betas& beta, const std::string& subject) {
-  validate(model, "material_for_beta");
-  require(model.body == body.name, "material_for_beta: the shape model is for body '{}', not '{}'", model.body, body.name);
-  require(beta.allFinite(), "material_for_beta: β has non-finite entries");
+  // Messages name the shape-model file (the material is derived from it), or "shape model" when built in memory.
+  const std::string what = model.source.empty() ? std::string("shape model") : model.source;
+  validate(model, what);
+  require(model.body == body.name, "{}: body: the shape model is for body '{}', but the run uses body '{}'", what,
+          model.body, body.name);
+  require(beta.allFinite(), "{}: β has non-finite entries (subject '{}')", what, subject);
   const material::KappaMatrix normalized = clamp_normalized(model.elasticity().kappa_normalized(beta), model.bounds);
   material::KappaMatrix kappa = material::denormalize(normalized, model.bounds);   // κ = κ̂ κ_max
   // κ̂_min · κ_max can differ from κ_min by an ulp: clamp once more in physical units.
@@ -166,20 +181,22 @@ material::MaterialFile material_for_beta(const ShapeModelFile& model, const body
   material::MaterialFile file;
   file.body = model.body;
   file.subject = subject.empty() ? "beta" : subject;
+  file.source = model.source;   // later checks name the shape model and its control point's line
   file.poisson = model.poisson;
   file.saturation = model.saturation;
   file.bounds = model.bounds;
   for (int i = 0; i < model.num_controls(); ++i) {
     const ShapeModelControlPoint& p = model.control_points[static_cast<std::size_t>(i)];
     material::MaterialControlPoint cp;
+    cp.line = p.line;   // messages point at the shape model's control point
     cp.vertex = p.vertex;
     cp.position = p.position;
     if (!cp.position && p.vertex >= 0 && p.vertex < body.num_vertices()) cp.position = body.v_template.row(p.vertex).transpose();
     cp.kappa = material::from_row(kappa.row(i));
     file.control_points.push_back(cp);
   }
-  material::validate(file, "material_for_beta");
-  material::check_against_body(file, body.v_template, 1e-6, "material_for_beta");
+  material::validate(file, what);
+  material::check_against_body(file, body.v_template, 1e-6, what);
   return file;
 }
 

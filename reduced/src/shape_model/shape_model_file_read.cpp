@@ -1,10 +1,12 @@
 // Reading shape-model files (shape_model_file.hpp), errors as "<file>:<line>: …".
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/toml_reader.hpp>
+#include <sflsh/meshing/region.hpp>
 #include <sflsh/reduced/shape_model_file.hpp>
 
 #include <toml++/toml.h>
 
+#include <algorithm>
 #include <cmath>
 #include <initializer_list>
 #include <limits>
@@ -44,8 +46,25 @@ class Reader : public TomlReader {
     const std::string k = string_value(kind, "kind", " in [basis]");
     require(k == kShapeModelBasisKind, "{}: 'kind' in [basis] = '{}' (the only basis is '{}')", at(kind), k,
             kShapeModelBasisKind);
-    if (const toml::node* region = table.get("region")) file.region = string_value(*region, "region", " in [basis]");
-    if (const toml::node* mesh = table.get("mesh")) file.mesh = string_value(*mesh, "mesh", " in [basis]");
+    file.basis_line = static_cast<int>(table.source().begin.line);
+    if (const toml::node* region = table.get("region")) {
+      // Names of meshing::known_region_names joined by '+' (meshing::region_key), stored in key order.
+      const std::string value = string_value(*region, "region", " in [basis]");
+      std::vector<std::string> names;
+      std::string csv = value;
+      std::replace(csv.begin(), csv.end(), '+', ',');
+      try {
+        names = meshing::parse_region_names(csv);
+      } catch (const Error& e) {
+        fail(*region, "region in [basis]", "'{}' is not a layer region ({})", value, e.what());
+      }
+      file.region = meshing::region_key(names);
+    }
+    if (const toml::node* mesh = table.get("mesh")) {
+      file.mesh = string_value(*mesh, "mesh", " in [basis]");
+      if (file.mesh != "coarse" && file.mesh != "default" && file.mesh != "fine")
+        fail(*mesh, "mesh in [basis]", "'{}' is not a mesh preset (expected coarse, default or fine)", file.mesh);
+    }
   }
 
   ShapeModelFit read_fit(const toml::node& node) const {
@@ -88,9 +107,10 @@ class Reader : public TomlReader {
   }
 
   ShapeModelFile read() const {
-    const toml::table root = parse("shape model file");
+    const toml::table root = parse("a shape-model TOML file");
     check_keys(root, {"version", "body", "poisson", "saturation", "bounds", "basis", "fit", "control_point"}, "");
     ShapeModelFile file;
+    file.source = path().string();
     const toml::node& version = required(root, "version", "");
     const auto value = version.value_exact<std::int64_t>();
     require(value.has_value() && *value == kShapeModelFileVersion,
@@ -102,7 +122,9 @@ class Reader : public TomlReader {
             file.poisson);
     const toml::node& saturation = required(root, "saturation", "");
     file.saturation = number(saturation, "saturation", "");
-    require(file.saturation > 0.0, "{}: 'saturation' = {} must be > 0", at(saturation), file.saturation);
+    if (!(file.saturation > 0.0 && file.saturation <= material::kSaturationMax))
+      fail(saturation, "saturation", "{} is outside (0, {}] (the Fung saturation; docs/material.md)", file.saturation,
+           material::kSaturationMax);
     if (const toml::node* bounds = root.get("bounds")) read_bounds(*bounds, file.bounds);
     read_basis(required(root, "basis", ""), file);
     if (const toml::node* fit = root.get("fit")) file.fit = read_fit(*fit);

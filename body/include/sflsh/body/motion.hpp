@@ -70,6 +70,13 @@ double procedural_motion_period(const std::string& name);
 /// Throws sflsh::Error for an unknown name (listing the known ones).
 Motion make_procedural_motion(const std::string& name, double fps = 60.0, int frames = 0, double time_offset = 0.0);
 
+/// Frames first … first + frames − 1 of make_procedural_motion(name, fps, first + frames), sample for sample,
+/// without generating the frames before `first`: memory and time grow with `frames` only, however far into the
+/// motion it starts (first ≥ 0, frames ≥ 1, first + frames < 2⁵³).
+Motion procedural_motion_window(const std::string& name, double fps, long long first, int frames);
+/// Whether `name` is a procedural or showcase motion (make_procedural_motion accepts it).
+bool is_procedural_motion(const std::string& name);
+
 /// The motion started `seconds` later, same fps and frame count: a procedural motion (source
 /// "procedural", a known name) is regenerated with that time_offset (see make_procedural_motion); data
 /// motions show the input at t_i + seconds clamped to [0, duration] (per-joint slerp between frames,

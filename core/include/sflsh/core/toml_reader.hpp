@@ -3,6 +3,7 @@
 // every reader needs (unknown keys, missing keys, types, finite numbers, fixed-size arrays, control-point
 // vertices), on toml++; and the two value formatters their writers share.
 #include <sflsh/core/error.hpp>
+#include <sflsh/core/input_file.hpp>
 
 #include <toml++/toml.h>
 
@@ -28,9 +29,10 @@ class TomlReader {
 
   const std::filesystem::path& path() const { return path_; }
 
-  /// Parses the file; a missing file or a syntax error is one line naming the file (and line).
+  /// Parses the file; a missing, unreadable or directory path or a syntax error is one line naming the file
+  /// (and line). `what` names the kind with its article ("a material TOML file").
   toml::table parse(std::string_view what) const {
-    require(std::filesystem::exists(path_), "{}: {} not found", path_.string(), what);
+    require_input_file(path_, what);
     try {
       return toml::parse_file(path_.string());
     } catch (const toml::parse_error& e) {
@@ -39,6 +41,24 @@ class TomlReader {
   }
 
   std::string at(const toml::node& node) const { return fmt::format("{}:{}", path_.string(), node.source().begin.line); }
+
+  /// Throws "<file>:<line>: <field>: <what>" — the project's one-line error convention.
+  template <typename... Args>
+  [[noreturn]] void fail(const toml::node& node, std::string_view field, fmt::format_string<Args...> format,
+                         Args&&... args) const {
+    throw_error("{}: {}: {}", at(node), field, fmt::format(format, std::forward<Args>(args)...));
+  }
+
+  /// A number in the closed range [min, max]; outside: "<file>:<line>: <key><context>: <value> <unit> is outside
+  /// [min, max] <unit>". `unit` is "" or e.g. "s", "Pa".
+  double number_in(const toml::node& node, std::string_view key, std::string_view context, double min, double max,
+                   std::string_view unit = "") const {
+    const double value = number(node, key, context);
+    const std::string u = unit.empty() ? std::string() : fmt::format(" {}", unit);
+    if (!(value >= min && value <= max))
+      fail(node, fmt::format("{}{}", key, context), "{:.6g}{} is outside [{:.6g}, {:.6g}]{}", value, u, min, max, u);
+    return value;
+  }
 
   /// Every key of `table` must be one of `allowed`.
   void check_keys(const toml::table& table, std::initializer_list<std::string_view> allowed, std::string_view context) const {

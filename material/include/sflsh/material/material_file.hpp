@@ -6,7 +6,7 @@
 // the control points of a smaller N).
 //
 //   version = 1
-//   body = "sflsh-open-body"
+//   body = "open_body"                        # the body model's name (the stem of its .npz)
 //   subject = "OPEN_TRAIN_1"
 //   poisson = 0.2
 //   saturation = 4.0
@@ -25,6 +25,10 @@
 // syntax) is a one-line sflsh::Error "<file>:<line>: <what>" naming the field.
 #include <sflsh/material/parameters.hpp>
 #include <sflsh/material/surface_operators.hpp>
+
+namespace sflsh::body {
+struct BodyModel;
+}
 
 #include <filesystem>
 #include <optional>
@@ -50,6 +54,7 @@ struct MaterialFile {
   double saturation = 4.0;  ///< Fung saturation s > 0, uniform (SFLSH §3)
   ParameterBounds bounds;   ///< ranges the κ_i must lie in; their maxima normalize κ
   std::vector<MaterialControlPoint> control_points;
+  std::string source;       ///< the file it was read from (load_material_file); empty when built in memory
 
   std::vector<int> vertices() const;  ///< control vertices, in file order
   KappaMatrix kappa() const;          ///< N by 3 physical κ_i, in file order
@@ -68,9 +73,12 @@ void save_material_file(const std::filesystem::path& path, const MaterialFile& m
 void validate(const MaterialFile& material, std::string_view what = "material");
 
 /// Checks the file against the body it names: every vertex < #V, and every given position within
-/// `position_tolerance` [m] of V.row(vertex). `what` starts each message (e.g. the file name); points
-/// read from a file add their line.
+/// `position_tolerance` [m] of V.row(vertex). `what` starts each message (empty: the file it was read from,
+/// else "material"); points read from a file add their line.
 void check_against_body(const MaterialFile& material, const RowMatrixX3d& V, double position_tolerance = 1e-6,
-                        std::string_view what = "material");
+                        std::string_view what = "");
+/// The same against a body model, after checking that the file names it (material.body == body.name):
+/// a material written for another body (e.g. 'smpl' used with the open body) is refused naming both.
+void check_against_body(const MaterialFile& material, const body::BodyModel& body, double position_tolerance = 1e-6);
 
 }  // namespace sflsh::material

@@ -40,6 +40,14 @@ struct ParameterRange {
   double max = 0.0;
 };
 
+/// The physical range any Young modulus (bounds, control points, verify problems) must lie in [Pa]: generous
+/// (from gels to cartilage-like stiffness, four decades either side of the default bounds) but finite enough
+/// that the Fung energy, its Hessian and the solvers stay in double range. Files outside it are refused at load.
+inline constexpr ParameterRange kYoungModulusLimits{1.0, 1e9};
+/// The largest Fung saturation s accepted (s > 0): with c = Y_t/s the exponent is ≈ s·E², so s = 100 already
+/// stiffens 10 % strain by e; 1e308 overflows the energy at any strain.
+inline constexpr double kSaturationMax = 100.0;
+
 /// Closed ranges of the physical parameters; the maxima are the normalization scales.
 struct ParameterBounds {
   ParameterRange thickness{0.1, 0.9};
@@ -51,8 +59,8 @@ struct ParameterBounds {
   Eigen::RowVector3d maximum() const;
 };
 
-/// Throws sflsh::Error naming the field unless every range is finite with 0 < min ≤ max, and the
-/// thickness maximum is ≤ 1 (h is a fraction).
+/// Throws sflsh::Error naming the field unless every range is finite with 0 < min ≤ max, the thickness
+/// maximum is ≤ 1 (h is a fraction) and the Young modulus ranges lie within kYoungModulusLimits.
 void validate(const ParameterBounds& bounds);
 
 /// Throws sflsh::Error "<what>: <field> = <value> is outside [min, max] <unit>" (or not finite).

@@ -11,7 +11,7 @@
 // file; JSON has none), and toml++ keeps source lines, so every bad entry is reported as "<file>:<line>".
 //
 //   version = 1
-//   body = "sflsh-open-body"
+//   body = "open_body"
 //   poisson = 0.2
 //   saturation = 4.0
 //   [bounds]                                   # optional; defaults of ParameterBounds
@@ -20,8 +20,8 @@
 //   young_normal = [500.0, 50000.0]            # Pa
 //   [basis]                                    # φ of build_body_layer (material::layer_basis)
 //   kind = "bounded_biharmonic"                # the only kind: 0 ≤ φ ≤ 1, Σφ = 1, Voronoi mass
-//   region = "torso"                           # optional: the layer region of the fit
-//   mesh = "coarse"                            # optional: the layer mesh size preset of the fit
+//   region = "thighs+torso+upper_arms"         # optional: the layer region of the fit (names of meshing::known_region_names, '+')
+//   mesh = "coarse"                            # optional: the layer mesh size preset of the fit (coarse | default | fine)
 //   [fit]                                      # optional metadata
 //   regularizer = "local"                      # "l2" | "local" (eq. 7)
 //   lambda = 1.0                               # λ of eq. 7, ≥ 0
@@ -75,10 +75,12 @@ struct ShapeModelFile {
   double poisson = 0.2;                 ///< ν ∈ (−1, ½), uniform (SFLSH §3)
   double saturation = 4.0;              ///< Fung saturation s > 0, uniform (SFLSH §3)
   material::ParameterBounds bounds;     ///< κ ranges; their maxima normalize κ (κ̂ = κ / κ_max)
-  std::string region;                   ///< layer region of the fit (empty: not recorded)
-  std::string mesh;                     ///< layer mesh size preset of the fit (empty: not recorded)
+  std::string region;                   ///< layer region of the fit, a meshing::region_key (empty: not recorded)
+  std::string mesh;                     ///< layer mesh size preset of the fit: coarse | default | fine (empty: not recorded)
   std::optional<ShapeModelFit> fit;
   std::vector<ShapeModelControlPoint> control_points;
+  std::string source;                   ///< the file it was read from (load_shape_model_file); empty in memory
+  int basis_line = 0;                   ///< line of [basis] in `source` (0: not read from a file)
 
   int num_controls() const { return static_cast<int>(control_points.size()); }
   std::vector<int> vertices() const;    ///< control vertices, in file order
@@ -98,7 +100,12 @@ ShapeModelFile load_shape_model_file(const std::filesystem::path& path);
 /// gives back identical A_i, b_i. `header` becomes a leading comment block (one "# " line per line).
 void save_shape_model_file(const std::filesystem::path& path, const ShapeModelFile& model, const std::string& header = "");
 
-/// Checks the body name non-empty, ν ∈ (−1, ½), s > 0, the bounds, at least one control point, vertices
+/// Throws unless a shape model recorded with `region` and `mesh` (when it records them) fits layers of region
+/// `layer_region` (a meshing::region_key) and mesh preset `layer_mesh`: "<file>:<line>: region in [basis]: …".
+void check_layer_match(const ShapeModelFile& model, const std::string& layer_region, const std::string& layer_mesh,
+                       std::string_view user);
+
+/// Checks the body name non-empty, ν ∈ (−1, ½), 0 < s ≤ material::kSaturationMax, the bounds, at least one control point, vertices
 /// ≥ 0 and distinct, every number finite, λ ≥ 0. Messages start with `what` (load passes "<file>:<line>").
 void validate(const ShapeModelFile& model, std::string_view what = "shape model");
 

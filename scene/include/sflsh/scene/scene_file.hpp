@@ -40,6 +40,14 @@ struct SceneKeyframe {
   Eigen::Vector3d rotation = Eigen::Vector3d::Zero();  ///< axis-angle [degrees] (objects only)
 };
 
+/// The largest `motion_offset` (and crowd `max_offset`) accepted [s]: an hour, longer than any recorded
+/// motion; procedural motions are periodic or settle well within it.
+inline constexpr double kMaxMotionOffset = 3600.0;
+
+/// The longest `duration` accepted [s] (a day; at most 10000 fps that is < 2³¹ frames). Runs far shorter
+/// than this are still refused without --allow-long when their work estimate is too large (scene_runner.hpp).
+inline constexpr double kMaxSceneDuration = 86400.0;
+
 struct BodySpec {
   std::string name;
   int line = 0;                       ///< of its [[body]] table

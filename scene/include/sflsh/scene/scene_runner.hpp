@@ -11,6 +11,7 @@
 // Output in the run folder: <body>.pvd / <body>_NNNNNN.vtp per body in world coordinates (with contact_force
 // and penetration fields when contact is on), objects.pvd, summary.json with "effects" (the effects that ran
 // and their time).
+#include <sflsh/core/work_limit.hpp>
 #include <sflsh/scene/scene_file.hpp>
 
 #include <nlohmann/json.hpp>
@@ -31,9 +32,14 @@ struct SceneRunOptions {
   /// true: bodies that cannot touch each other in a step form separate groups stepped in parallel; false: one
   /// Gauss–Seidel sweep over all bodies (the reference the groups must reproduce exactly).
   bool group_bodies = true;
+  bool allow_long = false;            ///< run even when the work estimate exceeds WorkLimits (--allow-long)
   int rank = 0;                       ///< MPI rank: only rank 0 writes
   nlohmann::json header;              ///< summary header (command line, versions)
 };
+
+/// The size of the run before anything is built: bodies (the crowd's count included), their solver steps
+/// (elastic bodies only: frames × substeps each) and body-frames, and the per-frame data held for the run.
+WorkEstimate estimate_scene_work(const Scene& scene, const SceneRunOptions& options);
 
 /// Runs the scene; returns the summary (also written as summary.json). Throws sflsh::Error naming the body,
 /// object or file on failure; nothing is left in the output folder then.
