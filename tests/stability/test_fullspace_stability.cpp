@@ -31,12 +31,13 @@ using model::build_body_layer;
 
 /// Runs backward Euler along the motion, checking every frame's state and energies for finiteness.
 Outcome run_case(const body::Betas& beta, const body::Motion& motion, const material::MaterialFile* material,
-                 int substeps = 1, const std::function<void(const Problem&, State&)>& perturb = {}) {
+                 int substeps = 1, const std::function<void(const Problem&, State&)>& perturb = {},
+                 const FullSpaceOptions& options = {}) {
   const model::BodyLayer layer = model::build_body_layer(open_body(), beta, motion, material, 12, coarse());
   const Problem& p = layer.problem;
   State state = initial_state(p, 0.0);
   if (perturb) perturb(p, state);
-  FullSpaceSolver integrator(p, MPI_COMM_WORLD);
+  FullSpaceSolver integrator(p, MPI_COMM_WORLD, options);
   integrator.initialize(state);
   if (std::getenv("SFLSH_PROBE")) std::cerr << fmt::format("{} nodes {} tets {} constrained\n", p.num_nodes(), p.num_tets(), p.dirichlet.dof.size());
   Outcome out;
@@ -45,7 +46,7 @@ Outcome run_case(const body::Betas& beta, const body::Motion& motion, const mate
     if (f > 0) {
       for (int k = 0; k < substeps; ++k) {
         const StepStats st = integrator.step(1.0 / (motion.fps * substeps));
-        out.failed_attempts += st.failed_attempts;
+        record_step(st, out);
         if (std::getenv("SFLSH_PROBE"))
           std::cerr << fmt::format("f {} newton {} lin {} sub {} fail {} s {:.3f} fn {:.3f} jac {:.3f} reason {}\n", f,
                                    st.newton_iterations, st.linear_iterations, st.substeps, st.failed_attempts, st.seconds,

@@ -41,7 +41,7 @@ Outcome run_case(const body::Betas& beta, const body::Motion& motion, const mate
   Outcome out;
   out.initial_elastic = model::energies(p, integrator.full_state()).elastic;
   for (std::size_t f = 0; f < motion.num_frames(); ++f) {
-    if (f > 0) out.failed_attempts += integrator.step(1.0 / motion.fps).failed_attempts;
+    if (f > 0) record_step(integrator.step(1.0 / motion.fps), out);
     record_frame(p, integrator.full_state(), motion.time(f), f, out);
   }
   return out;
