@@ -184,7 +184,9 @@ nlohmann::json run_body_simulation(const BodyRunSettings& opt, RunFolder* frames
                        {"substeps", opt.substeps},
                        {"newton_iterations", total.newton_iterations},
                        {"linear_iterations", total.linear_iterations},
-                       {"failed_attempts", total.failed_attempts}};
+                       {"failed_attempts", total.failed_attempts},
+                       {"projected_retries", total.projected_retries},
+                       {"truncated_solves", total.truncated_solves}};
   summary["body"] = opt.subject.body_path.empty() ? "open_body" : opt.subject.body_path;
   summary["subject"] = subject_label;
   summary["beta"] = std::vector<double>(beta.data(), beta.data() + beta.size());

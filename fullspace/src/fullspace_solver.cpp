@@ -367,6 +367,11 @@ bool FullSpaceSolver::Impl::solve_from(const Eigen::VectorXd& start, double dt) 
   stats->linear_iterations += static_cast<int>(lits);
   stats->converged_reason = code != 0 ? fmt::format("PETSc error {}", static_cast<int>(code)) : SNESConvergedReasons[reason];
   linear_failure = code == 0 && reason == SNES_DIVERGED_LINEAR_SOLVE;
+  if (truncated_newton) {
+    PetscInt failures = 0;
+    SNESGetLinearSolveFailures(snes, &failures);
+    stats->truncated_solves += static_cast<int>(failures);
+  }
   if (code != 0 || reason <= 0) {
     logger()->debug("t = {:.6g}: substep of {:.3g} s failed ({})", t1, dt, stats->converged_reason);
     return false;
@@ -428,6 +433,7 @@ class FullSpaceLadder final : public model::LadderSolver {
   bool attempt(double dt, material::HessianProjection hessian, StepStats& stats, std::string& reason) override {
     impl_.stats = &stats;
     impl_.projection_now = hessian;
+    impl_.set_truncated_newton(hessian == material::HessianProjection::kNone && impl_.options.truncate_on_negative_curvature);
     State s = impl_.state;
     bool ok = impl_.solve_substep(s, s.t, dt);
     if (!ok && impl_.linear_failure && impl_.saved_pc_type.empty() && hessian != material::HessianProjection::kNone) {

@@ -134,6 +134,15 @@ struct FullSpaceSolver::Impl {
     SFLSH_PETSC(PCSetFromOptions(pc));
     saved_pc_type.clear();
   }
+  /// Truncated Newton–CG for this attempt (FullSpaceOptions::truncate_on_negative_curvature): linear solves
+  /// that stop early (negative curvature) do not end the SNES solve; the line search judges their direction
+  /// (a zero direction, negative curvature at the first CG iteration, fails it). Every other attempt ends at
+  /// the first failed linear solve, so the projected rungs keep their CG + Jacobi fallback.
+  bool truncated_newton = false;
+  void set_truncated_newton(bool on) {
+    truncated_newton = on;
+    SFLSH_PETSC(SNESSetMaxLinearSolveFailures(snes, on ? options.default_snes_max_it + 1 : 1));
+  }
   /// The elastic Hessian of this attempt: exact first in dynamic steps when options.exact_hessian_first,
   /// problem.projection otherwise and on every retry.
   material::HessianProjection projection_now = material::HessianProjection::kStressDerivative;

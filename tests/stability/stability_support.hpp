@@ -4,6 +4,7 @@
 // into the tissue) and the bounded-energy check.
 #include <sflsh/body/body_io.hpp>
 #include <sflsh/model/body_layer.hpp>
+#include <sflsh/model/step_stats.hpp>
 #include <sflsh/material/layer_material.hpp>
 #include <sflsh/meshing/layer_cache.hpp>
 
@@ -43,8 +44,19 @@ struct Outcome {
   double skinned_kinetic = 0.0;      ///< max over frames of the kinetic energy of the purely skinned layer [J]
   double initial_elastic = 0.0;
   long failed_attempts = 0;
+  long projected_retries = 0;        ///< exact-Hessian attempts repeated with the projected Hessian
+  long newton_iterations = 0;        ///< summed over the run
+  int max_newton_per_frame = 0;      ///< the largest Newton count of one frame
   int frames = 0;
 };
+
+/// A step's counters folded into `out` (one frame = one step here).
+inline void record_step(const model::StepStats& st, Outcome& out) {
+  out.failed_attempts += st.failed_attempts;
+  out.projected_retries += st.projected_retries;
+  out.newton_iterations += st.newton_iterations;
+  out.max_newton_per_frame = std::max(out.max_newton_per_frame, st.newton_iterations);
+}
 
 /// ½ Σ m_i |d/dt (A_i x̄_i + d_i)|² at time t: the kinetic energy of the layer moving rigidly with the skin.
 inline double skinned_kinetic_energy(const model::Problem& p, double t) {

@@ -41,7 +41,7 @@ Outcome run_case(const body::Betas& beta, const body::Motion& motion, const mate
   Outcome out;
   out.initial_elastic = model::energies(p, integrator.full_state()).elastic;
   for (std::size_t f = 0; f < motion.num_frames(); ++f) {
-    if (f > 0) out.failed_attempts += integrator.step(1.0 / motion.fps).failed_attempts;
+    if (f > 0) record_step(integrator.step(1.0 / motion.fps), out);
     record_frame(p, integrator.full_state(), motion.time(f), f, out);
   }
   return out;
@@ -130,6 +130,36 @@ TEST(ReducedStability, ElementInvertedByTheInitialState) {
   EXPECT_GT(inverted, 0);
   EXPECT_GT(o.initial_elastic, 0.0);
   expect_bounded(o);
+}
+
+
+/// A second of shake_hips on a uniform material Y_t = Y_n = young.
+Outcome shake_hips_with(double young) {
+  const body::Motion motion = body::make_procedural_motion("shake_hips", 60.0, 61);
+  const material::MaterialFile file = material_with([young](int) { return material::Kappa{0.5, young, young}; });
+  return run_case(body::Betas::Zero(), motion, &file);
+}
+
+TEST(ReducedStability, StiffestMaterialOnShakeHips) {
+  // Issue 23: the stiff end of the documented bounds (Y_t = Y_n = 50 kPa, docs/physics.md §6.5) finishes a second of
+  // shake_hips without a failed attempt; measured 118 Newton iterations in 60 frames, at most 2 in one. 10 leaves
+  // room (the default material takes 3–5) and is a third of the solver's 30-iteration cap of one attempt.
+  const Outcome o = shake_hips_with(50000.0);
+  expect_bounded(o);
+  EXPECT_EQ(o.failed_attempts, 0);
+  EXPECT_EQ(o.projected_retries, 0);
+  EXPECT_LE(o.max_newton_per_frame, 10);
+}
+
+// Open (issue 23): the soft end (500 Pa) finishes without a failed attempt, but the exact elastic energy of the
+// reduced state reaches 6.4e6 J against a budget of 77 J: the guard lets a tet outside the cubature reach the Fung
+// exponent 25, and one such tet holds (c/2) e^25 V ≈ 1e6 J at c = 125 Pa (docs/reduced.md "The ends of the material
+// bounds"). Enabled once the guard's limit bounds the energy rather than the exponent.
+TEST(ReducedStability, DISABLED_SoftestMaterialOnShakeHipsKeepsBoundedEnergy) {
+  const Outcome o = shake_hips_with(500.0);
+  expect_bounded(o);
+  EXPECT_EQ(o.failed_attempts, 0);
+  EXPECT_LE(o.max_newton_per_frame, 30);
 }
 
 }  // namespace

@@ -44,6 +44,13 @@ struct FullSpaceOptions {
   /// (≈ 4 µs of the ≈ 5 µs per tet, bench_element) is skipped. A failed attempt (indefinite system, failed
   /// line search) repeats the step with problem.projection before halving. The solution is the same.
   bool exact_hessian_first = true;
+  /// In the exact-Hessian attempt, a CG solve that meets negative curvature (an indefinite Hessian: StVK in
+  /// compression, amplified by the Fung factor e^{2Ψ₀/c} of a tet stretched at the same time) ends with the
+  /// iterate before it, a descent direction of Φ (truncated Newton–CG), and the energy line search takes it;
+  /// the next iteration uses the exact Hessian again, so Newton is quadratic again once the iterates leave the
+  /// indefinite region. Off: the first indefinite solve fails the attempt, which the ladder repeats with the
+  /// projected Hessian from the start of the step (linear convergence; docs/fullspace.md "Hard cases").
+  bool truncate_on_negative_curvature = true;
 };
 
 
