@@ -103,15 +103,19 @@ TEST_P(CliSimulate, XdmfSeriesHoldsTheSameFramesAsTheVtkSeries) {
   for (const char* file : {"body.xmf", "body.h5", "layer.xmf", "layer.h5", "dynamics.vtp", "summary.json"})
     EXPECT_TRUE(fs::exists(dir / "xdmf" / file)) << file;
   EXPECT_FALSE(fs::exists(dir / "xdmf" / "body_000000.vtp"));
-  // The same solve: the posed surface and the soft-tissue field of the last frame agree bit for bit.
+  // The same solve written two ways: the posed surface and the soft-tissue field of the last frame agree to the
+  // solvers' noise. Two processes solving the same steps to ‖∇Φ‖ ≤ 1e-12 relative may sum in another order
+  // (threads), which moves positions of ~1 m by round-off (≤ 1e-15 m, as in CliSimulateMpi); 1e-12 m is far
+  // above that and far below the tissue's motion (≥ 1e-5 m here). Float64 datasets lose nothing on the way.
   const vtk::Points last = vtk::read_points(dir / "vtk" / "body_000003.vtp");
   const std::vector<double> geometry = read_h5(dir / "xdmf" / "body.h5", "/geometry/000003");
   ASSERT_EQ(geometry.size(), static_cast<std::size_t>(last.size()));
-  EXPECT_EQ(Eigen::Map<const vtk::Points>(geometry.data(), last.rows(), 3), last);
+  EXPECT_LT((Eigen::Map<const vtk::Points>(geometry.data(), last.rows(), 3) - last).cwiseAbs().maxCoeff(), 1e-12);
   const Eigen::MatrixXd soft = vtk::read_point_array(dir / "vtk" / "body_000003.vtp", "soft_tissue_displacement");
   const std::vector<double> soft_h5 = read_h5(dir / "xdmf" / "body.h5", "/point/soft_tissue_displacement/000003");
   ASSERT_EQ(soft_h5.size(), static_cast<std::size_t>(soft.size()));
-  EXPECT_EQ(Eigen::Map<const vtk::Points>(soft_h5.data(), soft.rows(), 3), vtk::Points(soft));
+  EXPECT_GT(soft.cwiseAbs().maxCoeff(), 1e-5);
+  EXPECT_LT((Eigen::Map<const vtk::Points>(soft_h5.data(), soft.rows(), 3) - vtk::Points(soft)).cwiseAbs().maxCoeff(), 1e-12);
   // Fixed fields once, not per frame.
   EXPECT_FALSE(read_h5(dir / "xdmf" / "body.h5", "/static/point/young_tangent").empty());
   EXPECT_TRUE(read_h5(dir / "xdmf" / "body.h5", "/point/young_tangent/000003").empty());
