@@ -5,7 +5,9 @@
 
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cstdlib>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -43,6 +45,11 @@ std::vector<std::string> lines_of(const std::string& text) {
 }
 
 }  // namespace
+
+int cases_per_kind() {
+  const char* v = std::getenv("SFLSH_FUZZ_CASES");
+  return v ? std::max(1, std::atoi(v)) : 10;
+}
 
 std::vector<fs::path> leftovers_in(const fs::path& dir) {
   std::vector<fs::path> found;

@@ -31,6 +31,9 @@ struct Outcome {
   std::string detail;      ///< the error line, or why the verdict is what it is
 };
 
+/// Random cases per input kind: $SFLSH_FUZZ_CASES, default 10 (fuzz.many_cases sets 80).
+int cases_per_kind();
+
 /// Seconds after which a run counts as a hang (SIGTERM, then SIGKILL 5 s later).
 constexpr double kHangSeconds = 90.0;
 

@@ -27,11 +27,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-int cases_per_kind() {
-  const char* v = std::getenv("SFLSH_FUZZ_CASES");
-  return v ? std::max(1, std::atoi(v)) : 10;
-}
-
 /// One input kind: how to write the mutated file, and the command that reads it.
 struct Kind {
   std::string name;

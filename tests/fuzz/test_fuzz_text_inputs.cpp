@@ -18,11 +18,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-int cases_per_kind() {
-  const char* v = std::getenv("SFLSH_FUZZ_CASES");
-  return v ? std::max(1, std::atoi(v)) : 10;
-}
-
 const std::string kObstacle = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
 
 /// Skinning only (no effect asked for): bodies, a crowd and every object shape, 3 frames.
