@@ -8,6 +8,8 @@
 #include <sflsh/core/vtk_io.hpp>
 #include <sflsh/material/layer_material.hpp>
 #include <sflsh/meshing/layer_cache.hpp>
+#include <sflsh/meshing/region.hpp>
+#include <sflsh/reduced/shape_model_file.hpp>
 
 #include <chrono>
 
@@ -17,6 +19,7 @@ namespace {
 struct ShowOptions {
   SubjectOptions subject;
   std::string material;          ///< material file; empty: defaults at --control-points points
+  std::string shape_model;       ///< shape model file: the material of the subject's β (SFLSH eq. 1)
   int control_points = 24;
   bool phi = false;
   std::string mesher = "cgal";
@@ -42,6 +45,11 @@ void run_show(const ShowOptions& opt, const Invocation& invocation) {
   if (!opt.material.empty()) {
     file = material::load_material_file(opt.material);
     material::check_against_body(file, model);
+  } else if (!opt.shape_model.empty()) {
+    const reduced::ShapeModelFile shape_model = reduced::load_shape_model_file(opt.shape_model);
+    reduced::check_layer_match(shape_model, meshing::region_key(meshing::default_region_names()), opt.size,
+                               "--shape-model");
+    file = reduced::material_for_beta(shape_model, model, beta, subject_label);
   }
   meshing::LayerMeshOptions mesh_options;
   mesh_options.mesher = meshing::parse_mesher(opt.mesher);
@@ -49,7 +57,7 @@ void run_show(const ShowOptions& opt, const Invocation& invocation) {
   const meshing::LayerMesh mesh = meshing::cached_layer_mesh(
       model, mesh_options, opt.cache.empty() ? meshing::default_cache_dir() : std::filesystem::path(opt.cache));
 
-  if (opt.material.empty()) file = material::default_material(model, mesh, opt.control_points, subject_label);
+  if (opt.material.empty() && opt.shape_model.empty()) file = material::default_material(model, mesh, opt.control_points, subject_label);
   const material::BiharmonicBasis basis = material::layer_basis(model, mesh, file.vertices());
   const material::KappaMatrix kappa = file.kappa();
   const meshing::Retargeter retargeter(model, mesh);
@@ -87,7 +95,8 @@ void run_show(const ShowOptions& opt, const Invocation& invocation) {
   nlohmann::json summary = summary_header("material show", invocation.argc, invocation.argv);
   summary["subject"] = subject_label;
   summary["beta"] = std::vector<double>(beta.data(), beta.data() + beta.size());
-  summary["material"] = opt.material.empty() ? "defaults" : opt.material;
+  summary["material"] = !opt.material.empty() ? opt.material : !opt.shape_model.empty() ? opt.shape_model : "defaults";
+  summary["material_source"] = !opt.material.empty() ? "material file" : !opt.shape_model.empty() ? "shape model" : "defaults";
   summary["control_points"] = count;
   summary["mesher"] = meshing::mesher_name(mesh.mesher);
   summary["tets"] = mesh.num_tets();
@@ -112,7 +121,11 @@ void add_material_show_command(CLI::App& material, const Invocation& invocation)
       "show", "Write the material fields of a subject's layer: κ per skin vertex and tet, control points, φ_i");
   add_body_option(*cmd, opt->subject);
   add_subject_options(*cmd, opt->subject);
-  cmd->add_option("--material", opt->material, "Material file (TOML); default: provisional defaults at --control-points points");
+  CLI::Option* material_option = cmd->add_option(
+      "--material", opt->material, "Material file (TOML); default: provisional defaults at --control-points points");
+  cmd->add_option("--shape-model", opt->shape_model,
+                  "Shape model file (TOML, e.g. data/shape_models/default.toml): the material of the subject's shape")
+      ->excludes(material_option);
   cmd->add_option("--control-points", opt->control_points, "Number of control points N when no --material is given (1, 12, 24, 84, …)")
       ->capture_default_str();
   cmd->add_flag("--phi", opt->phi, "Also write the basis functions φ_i as point data of surface.vtp");

@@ -488,7 +488,7 @@ void register_tradeoff_commands(CLI::App& app, const Invocation& invocation) {
   cmd->add_option("--reference-substeps", opt->reference_substeps, "Substeps per frame of a stepping reference (quick 32, full 16)");
   cmd->add_option("--rtol", opt->rtol, "SUNDIALS reference: relative tolerance")->capture_default_str();
   cmd->add_option("--atol", opt->atol, "SUNDIALS reference: absolute tolerance [m, m/s]")->capture_default_str();
-  cmd->add_option("--meshes", opt->meshes, "Meshes of the full-space rows, comma-separated")
+  cmd->add_option("--meshes,--mesh", opt->meshes, "Meshes of the full-space rows, comma-separated (--mesh: the spelling of the other commands)")
       ->delimiter(',')
       ->check(CLI::IsMember({"coarse", "default", "fine"}));
   cmd->add_option("--substeps", opt->substeps, "Substeps per frame of the full-space rows, comma-separated (1,2,4,8 at 30 fps: 1/30 to 1/240 s)")

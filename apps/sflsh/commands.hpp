@@ -42,6 +42,9 @@ void register_groundtruth_commands(CLI::App& app, const Invocation& invocation);
 /// `sflsh metrics --dyna FILE.h5 --sequence KEY … --out DIR` and `--list` (cmd_metrics.cpp).
 void register_metrics_commands(CLI::App& app, const Invocation& invocation);
 
+/// `sflsh render --run DIR --out FILE.png`: a simulation's posed body coloured by its soft-tissue motion (cmd_render.cpp).
+void register_render_commands(CLI::App& app, const Invocation& invocation);
+
 /// Runs `body` with PETSc (and MPI) initialized from the invocation's PETSc options. Under mpirun, an
 /// error on any rank is printed with the rank and stops every rank (MPI_Abort) instead of deadlocking.
 void with_petsc(const Invocation& invocation, const std::function<void(int rank, int size)>& body);

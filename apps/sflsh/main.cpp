@@ -56,6 +56,7 @@ int main(int argc, char** argv) {
   sflsh::app::register_validate_commands(app, invocation);
   sflsh::app::register_groundtruth_commands(app, invocation);
   sflsh::app::register_metrics_commands(app, invocation);
+  sflsh::app::register_render_commands(app, invocation);
 
   app.parse_complete_callback([&] {
     sflsh::logger()->set_level(quiet ? spdlog::level::warn : spdlog::level::from_str(log_level));

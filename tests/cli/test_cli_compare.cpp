@@ -1,5 +1,6 @@
 // `sflsh compare`: full space against a sweep of reduced models — the output files, the exact trade-off
 // table, the per-vertex error maps on the body surface, and one-line errors that write nothing.
+#include "png_check.hpp"
 #include "run_command.hpp"
 #include "scratch_dir.hpp"
 
@@ -49,54 +50,21 @@ std::vector<std::string> lines_of(const fs::path& path) {
   return lines;
 }
 
-/// Unsets DISPLAY while alive (xvfb-run provides its own to the child).
-class NoDisplay {
- public:
-  NoDisplay() {
-    if (const char* d = std::getenv("DISPLAY")) saved_ = d;
-    ::unsetenv("DISPLAY");
-  }
-  ~NoDisplay() {
-    if (saved_) ::setenv("DISPLAY", saved_->c_str(), 1);
-  }
-  NoDisplay(const NoDisplay&) = delete;
-  NoDisplay& operator=(const NoDisplay&) = delete;
-
- private:
-  std::optional<std::string> saved_;
-};
-
 }  // namespace
 
 TEST(CliCompare, WritesTheTradeoffTableAndErrorMapsForEveryConfiguration) {
   const fs::path dir = sflsh::testing::scratch_dir();
   const fs::path out = dir / "cmp";
   const std::string args = "-q compare " + clip_args() + " --handles 30,86 --cubature 200 --exact-cubature --out " + out.string();
-  // Under xvfb-run when it is installed, so that the chart is drawn too; otherwise the PNG is skipped.
-  const bool xvfb = std::system("command -v xvfb-run >/dev/null 2>&1") == 0;
-  sflsh::testing::CommandResult result;
-  if (xvfb) {
-    const NoDisplay no_display;
-    const std::string command =
-        "xvfb-run -a " + std::string(SFLSH_CLI) + " " + args + " >" + (dir / "out.txt").string() + " 2>" + (dir / "err.txt").string();
-    const int status = std::system(command.c_str());
-    result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    std::ifstream err(dir / "err.txt");
-    std::stringstream ss;
-    ss << err.rdbuf();
-    result.err = ss.str();
-  } else {
-    result = run_sflsh(args, dir);
-  }
+  // Headless, as on a cluster node: sflsh starts its own virtual display for the chart.
+  const sflsh::testing::NoDisplay no_display;
+  const sflsh::testing::CommandResult result = run_sflsh(args, dir);
   ASSERT_EQ(result.exit_code, 0) << result.err;
   for (const char* file : {"compare.vtp", "tradeoff.csv", "tradeoff.md", "summary.json"})
     EXPECT_TRUE(fs::exists(out / file)) << file;
   const nlohmann::json summary = read_json(out / "summary.json");
-  if (xvfb) {
-    ASSERT_TRUE(fs::exists(out / "tradeoff.png"));
-    EXPECT_GT(fs::file_size(out / "tradeoff.png"), 5000u);   // a drawn chart, not an empty image
-    EXPECT_EQ(summary["output"]["plot"], "tradeoff.png");
-  }
+  sflsh::testing::expect_drawn_png(out / "tradeoff.png", 400, 300);   // a drawn chart, not an empty image
+  EXPECT_EQ(summary["output"]["plot"], "tradeoff.png");
 
   // The table: the exact header, the reference, then one row per configuration in sweep order.
   const std::vector<std::string> lines = lines_of(out / "tradeoff.csv");

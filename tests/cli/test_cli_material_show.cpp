@@ -51,3 +51,40 @@ TEST(CliMaterialShow, BadMaterialFileGivesOneLineAndWritesNothing) {
   EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
   EXPECT_EQ(count_entries(out), 0u);
 }
+
+// --shape-model: the material of a subject's shape from the shipped shape model (SFLSH eq. 1). The fields vary
+// over the body (more than one control point, each with its own κ) and between subjects of different shape.
+TEST(CliMaterialShow, ShapeModelGivesAShapeDependentMaterial) {
+  const auto dir = sflsh::testing::scratch_dir();
+  const std::string model = std::string(SFLSH_DATA_DIR) + "/shape_models/default.toml";
+  Eigen::VectorXd mean_young(2);
+  int i = 0;
+  for (const char* subject : {"OPEN_TRAIN_1", "OPEN_TEST_3"}) {
+    const auto out = dir / subject;
+    const auto result = run_sflsh(fmt::format("-q material show --subject {} --shape-model {} {} --out {}", subject,
+                                              model, common_args(), out.string()),
+                                  dir);
+    ASSERT_EQ(result.exit_code, 0) << result.err;
+    const nlohmann::json summary = read_json(out / "summary.json");
+    EXPECT_EQ(summary["material_source"], "shape model");
+    const Eigen::MatrixXd young = vtk::read_point_array(out / "surface.vtp", "young_tangent");
+    const Eigen::MatrixXd thickness = vtk::read_point_array(out / "surface.vtp", "thickness");
+    // Heterogeneous: the shipped model's four control points differ by more than 5 % (a uniform material would
+    // give max/min = 1 up to round-off, as the defaults did).
+    const double lo = young.col(0).minCoeff(), hi = young.col(0).maxCoeff();
+    EXPECT_GT(lo, 0.0);
+    EXPECT_GT(hi / lo, 1.05) << subject;
+    EXPECT_GT(thickness.col(0).maxCoeff() - thickness.col(0).minCoeff(), 1e-3) << subject;
+    mean_young(i++) = young.col(0).mean();
+  }
+  // Shape-dependent: two subjects of different shape get different materials.
+  EXPECT_GT(std::abs(mean_young(0) - mean_young(1)), 1e-3 * mean_young(0));
+  // --material and --shape-model exclude each other: one line, nothing written.
+  const auto out = dir / "both";
+  const auto both = run_sflsh(fmt::format("material show --material x.toml --shape-model {} {} --out {}", model,
+                                          common_args(), out.string()),
+                              dir);
+  EXPECT_EQ(both.exit_code, 2);
+  EXPECT_THAT(both.err, HasSubstr("--shape-model"));
+  EXPECT_EQ(count_entries(out), 0u);
+}

@@ -1,6 +1,7 @@
 // `sflsh tradeoff`: a tiny hierarchy of models on the coarse layer — the output files with the exact columns,
 // the reference scoring zero, the error of backward Euler falling with its step, the recommendation being the
 // cheapest row within the budget, and one-line errors that write nothing.
+#include "png_check.hpp"
 #include "run_command.hpp"
 #include "scratch_dir.hpp"
 
@@ -63,11 +64,13 @@ TEST(CliTradeoff, ScoresEveryModelAgainstTheReferenceAndRecommendsTheCheapestWit
   // Budget 0.05 mm. Measured on this clip: backward Euler 1/30 s 0.076 mm, 1/60 s 0.032 mm, reduced 30
   // handles 0.11 mm at 1 ms per frame: the cheapest row overall is outside the budget, so a recommendation
   // that ignored it would fail the check below.
+  const sflsh::testing::NoDisplay no_display;  // headless: sflsh starts its own virtual display for the chart
   const auto result = run_sflsh(fmt::format("-q tradeoff {} --substeps 1,2 --budget-mm 0.05 --out {}",
                                             tiny_case(), out.string()),
                                 dir);
   ASSERT_EQ(result.exit_code, 0) << result.err;
   for (const char* file : {"tradeoff.csv", "tradeoff.md", "summary.json"}) EXPECT_TRUE(fs::exists(out / file)) << file;
+  sflsh::testing::expect_drawn_png(out / "tradeoff.png", 900, 600);  // the error–time chart, drawn
 
   const Table t = read_table(out / "tradeoff.csv");
   EXPECT_EQ(t.header, kHeader);

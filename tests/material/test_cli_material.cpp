@@ -1,5 +1,6 @@
 // `sflsh material curve` as users' scripts see it: the CSV/summary contract, the PNG with and without a
 // display, and one-line errors that name the option and write nothing.
+#include "png_check.hpp"
 #include "run_command.hpp"
 #include "scratch_dir.hpp"
 
@@ -14,6 +15,7 @@
 #include <optional>
 
 using sflsh::testing::count_entries;
+using sflsh::testing::NoDisplay;
 using sflsh::testing::run_sflsh;
 using ::testing::HasSubstr;
 
@@ -23,22 +25,6 @@ std::size_t count_lines(const std::string& text) {
   return static_cast<std::size_t>(std::count(text.begin(), text.end(), '\n'));
 }
 
-/// Unsets DISPLAY for the lifetime of the object (the child process inherits the environment).
-class NoDisplay {
- public:
-  NoDisplay() {
-    if (const char* d = std::getenv("DISPLAY")) saved_ = d;
-    ::unsetenv("DISPLAY");
-  }
-  ~NoDisplay() {
-    if (saved_) ::setenv("DISPLAY", saved_->c_str(), 1);
-  }
-  NoDisplay(const NoDisplay&) = delete;
-  NoDisplay& operator=(const NoDisplay&) = delete;
-
- private:
-  std::optional<std::string> saved_;
-};
 
 std::vector<std::string> lines_of(const std::filesystem::path& path) {
   std::ifstream in(path);
@@ -66,6 +52,7 @@ TEST(CliMaterial, CurveWritesCsvSummaryAndThePngWithoutDisplay) {
   const auto r = run_sflsh("material curve --young-tangent 5000 --young-normal 2000 --out " + out.string(), dir);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   expect_png_with_content(out / "curves.png", 5000u);  // a 900×600 chart with three curves, not an empty image
+  sflsh::testing::expect_drawn_png(out / "curves.png", 900, 600);
   EXPECT_EQ(count_entries(out), 3u);  // curves.csv + curves.png + summary.json, no staging leftovers
 
   const auto lines = lines_of(out / "curves.csv");

@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include "png_check.hpp"
 #include "run_command.hpp"
 #include "scratch_dir.hpp"
 
@@ -42,7 +43,9 @@ TEST(Experiments, SmallConfigurationReproducesPinnedTable2) {
   config.threads = 2;
   config.progress = false;
   config.cache_dir = SFLSH_TEST_CACHE;
+  const sflsh::testing::NoDisplay no_display;  // headless: the λ-sweep chart starts its own virtual display
   const nlohmann::json summary = validate::run_validation(config, dir, nlohmann::json::object());
+  sflsh::testing::expect_drawn_png(dir / "lambda_sweep.png", 900, 600);
 
   for (const char* file : {"table2.csv", "table2.md", "table2_error.csv", "cross_validation.csv", "lambda_sweep.csv",
                            "covariance.csv", "parameter_error.csv", "dynamics.vtp", "fits.csv", "summary.json",
