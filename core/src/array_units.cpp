@@ -1,7 +1,6 @@
 // The units of the output arrays (array_units.hpp). Every name here has a row in docs/output.md.
-#include <sflsh/core/array_units.hpp>
-
 #include <array>
+#include <sflsh/core/array_units.hpp>
 #include <utility>
 
 namespace sflsh::units {
@@ -47,7 +46,10 @@ constexpr std::array kUnits = {
 
 // Families named by a prefix: the basis functions, the σ maps of compare and validate, their errors.
 constexpr std::array kFamilies = {
-    Family{"phi_", "1"}, Family{"sigma_", "mm"}, Family{"rms_error_", "mm"}, Family{"covariance_", "1"},
+    Family{"phi_", "1"},
+    Family{"sigma_", "mm"},
+    Family{"rms_error_", "mm"},
+    Family{"covariance_", "1"},
 };
 
 }  // namespace

@@ -5,10 +5,14 @@ namespace sflsh::meshing {
 
 const char* node_kind_name(NodeKind kind) {
   switch (kind) {
-    case NodeKind::interior: return "interior";
-    case NodeKind::outer: return "outer";
-    case NodeKind::inner: return "inner";
-    case NodeKind::side: return "side";
+    case NodeKind::interior:
+      return "interior";
+    case NodeKind::outer:
+      return "outer";
+    case NodeKind::inner:
+      return "inner";
+    case NodeKind::side:
+      return "side";
   }
   return "unknown";
 }

@@ -1,14 +1,12 @@
 // What a scene writes (scene_output.hpp).
 #include "scene_output.hpp"
 
-#include <sflsh/core/error.hpp>
-
-#include <tbb/parallel_for.h>
-
 #include <fmt/format.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <chrono>
+#include <sflsh/core/error.hpp>
 
 namespace sflsh::scene::detail {
 
@@ -20,8 +18,8 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 }  // namespace
 
 SceneOutput::SceneOutput(const Scene& scene, const std::vector<std::unique_ptr<SceneBody>>& bodies,
-                         const std::vector<SceneObject>& objects, const std::vector<BodyContact>& contact, RunFolder* folder,
-                         BackgroundJobs* jobs)
+                         const std::vector<SceneObject>& objects, const std::vector<BodyContact>& contact,
+                         RunFolder* folder, BackgroundJobs* jobs)
     : scene_(scene), bodies_(bodies), objects_(objects), contact_(contact), folder_(folder), jobs_(jobs) {
   model::check_output_format(scene_.output.format, "[output] format");
   writers_.resize(bodies_.size());
@@ -50,7 +48,7 @@ SceneOutput::SceneOutput(const Scene& scene, const std::vector<std::unique_ptr<S
   if (!folder_) return;
   if (!objects_.empty() && xdmf()) {
     Eigen::MatrixXd ids;
-    const Surface surface = merged_object_surfaces(objects_, ids);   // the objects' triangles do not change
+    const Surface surface = merged_object_surfaces(objects_, ids);  // the objects' triangles do not change
     folder_->stage("objects.h5");
     objects_xdmf_ = std::make_unique<xdmf::Series>(folder_->stage("objects.xmf"), surface.triangles);
     vtk::Fields fixed;
@@ -67,7 +65,8 @@ void SceneOutput::frame(int f, double t, bool write) {
   if (!write) {
     // Only σ: each soft body's skin displacement, independent of the others (in parallel, like the steps).
     tbb::parallel_for(std::size_t{0}, bodies_.size(), [&](std::size_t b) {
-      if (bodies_[b]->soft() && bodies_[b]->solver() != SolverKind::full) writers_[b]->add_positions(f, t, bodies_[b]->positions(), false);
+      if (bodies_[b]->soft() && bodies_[b]->solver() != SolverKind::full)
+        writers_[b]->add_positions(f, t, bodies_[b]->positions(), false);
     });
     for (std::size_t b = 0; b < bodies_.size(); ++b)
       if (bodies_[b]->solver() == SolverKind::full) writers_[b]->add_frame(f, t, bodies_[b]->state(), false);
@@ -77,13 +76,16 @@ void SceneOutput::frame(int f, double t, bool write) {
     SceneBody& body = *bodies_[b];
     if (body.soft()) {
       const std::vector<vtk::Field> extra = contact_fields(contact_[b], body);
-      if (scene_.output.layer) writers_[b]->add_frame(f, t, body.state(), true, extra);   // layer frames need the full state
-      else writers_[b]->add_positions(f, t, body.positions(), true, extra);
+      if (scene_.output.layer)
+        writers_[b]->add_frame(f, t, body.state(), true, extra);  // layer frames need the full state
+      else
+        writers_[b]->add_positions(f, t, body.positions(), true, extra);
     } else {
       write_skinned(b, f, t);
     }
     // Soft and skinned bodies' frames are both <name>_NNNNNN.vtp, in the world.
-    if (scene_series_) scene_series_->add(t, fmt::format("{}_{:06d}.vtp", body.name(), f), static_cast<int>(b), body.name());
+    if (scene_series_)
+      scene_series_->add(t, fmt::format("{}_{:06d}.vtp", body.name(), f), static_cast<int>(b), body.name());
   }
   if (!objects_.empty()) write_objects(f, t);
 }
@@ -104,9 +106,9 @@ void SceneOutput::write_skinned(std::size_t b, int f, double t) {
   }
   const std::string name = fmt::format("{}_{:06d}.vtp", body.name(), f);
   skinned_series_[b]->add(t, name);
-  submit([path = folder_->stage(name), posed = std::move(posed), &faces = body.model().faces, fields = std::move(fields), this] {
-    vtk::write_surface(path, posed, faces, fields, scene_.output.compression);
-  });
+  submit([path = folder_->stage(name), posed = std::move(posed), &faces = body.model().faces,
+          fields = std::move(fields),
+          this] { vtk::write_surface(path, posed, faces, fields, scene_.output.compression); });
 }
 
 void SceneOutput::write_objects(int f, double t) {
@@ -131,8 +133,10 @@ void SceneOutput::write_objects(int f, double t) {
 }
 
 void SceneOutput::submit(std::function<void()> job) {
-  if (jobs_) jobs_->submit(std::move(job));
-  else job();
+  if (jobs_)
+    jobs_->submit(std::move(job));
+  else
+    job();
 }
 
 void SceneOutput::finish() {
@@ -165,7 +169,8 @@ nlohmann::json SceneOutput::collections() const {
   nlohmann::json j = nlohmann::json::array();
   if (!folder_ || xdmf()) return j;
   j.push_back("scene.pvd");
-  if (std::any_of(writers_.begin(), writers_.end(), [](const auto& w) { return w != nullptr; })) j.push_back("scene_dynamics.pvd");
+  if (std::any_of(writers_.begin(), writers_.end(), [](const auto& w) { return w != nullptr; }))
+    j.push_back("scene_dynamics.pvd");
   return j;
 }
 

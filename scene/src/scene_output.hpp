@@ -4,20 +4,18 @@
 // that open the whole scene at once: scene.pvd (every body and the objects, in the world, per written frame)
 // and scene_dynamics.pvd (every soft body's σ map where it stands). With [output] format = "xdmf" the series
 // are <name>.xmf + <name>.h5 and there are no collections (ParaView's .pvd reader opens VTK XML files only).
-#include "scene_contact.hpp"
-#include "scene_internal.hpp"
-#include "scene_objects.hpp"
-
+#include <functional>
+#include <memory>
+#include <nlohmann/json.hpp>
 #include <sflsh/core/background_jobs.hpp>
 #include <sflsh/core/run_folder.hpp>
 #include <sflsh/core/vtk_io.hpp>
 #include <sflsh/core/xdmf_series.hpp>
-
-#include <nlohmann/json.hpp>
-
-#include <functional>
-#include <memory>
 #include <vector>
+
+#include "scene_contact.hpp"
+#include "scene_internal.hpp"
+#include "scene_objects.hpp"
 
 namespace sflsh::scene::detail {
 
@@ -25,8 +23,9 @@ class SceneOutput {
  public:
   /// `folder` null: nothing is written (σ is still accumulated); `jobs` null: files are written at once. The
   /// bodies, objects and contacts must outlive the output.
-  SceneOutput(const Scene& scene, const std::vector<std::unique_ptr<SceneBody>>& bodies, const std::vector<SceneObject>& objects,
-              const std::vector<BodyContact>& contact, RunFolder* folder, BackgroundJobs* jobs);
+  SceneOutput(const Scene& scene, const std::vector<std::unique_ptr<SceneBody>>& bodies,
+              const std::vector<SceneObject>& objects, const std::vector<BodyContact>& contact, RunFolder* folder,
+              BackgroundJobs* jobs);
   /// Frame f at time t [s]: σ of every soft body; with `write` (and a folder) also the files of every body and
   /// of the objects (posed here, written by the jobs).
   void frame(int f, double t, bool write);
@@ -53,12 +52,12 @@ class SceneOutput {
   const std::vector<BodyContact>& contact_;
   RunFolder* folder_;
   BackgroundJobs* jobs_;
-  std::vector<std::unique_ptr<model::SimulationWriter>> writers_;   ///< per body; null for skinned bodies
-  std::vector<std::unique_ptr<vtk::PvdSeries>> skinned_series_;     ///< per body; vtk format, skinned bodies
-  std::vector<std::unique_ptr<xdmf::Series>> skinned_xdmf_;         ///< per body; xdmf format, skinned bodies
+  std::vector<std::unique_ptr<model::SimulationWriter>> writers_;  ///< per body; null for skinned bodies
+  std::vector<std::unique_ptr<vtk::PvdSeries>> skinned_series_;    ///< per body; vtk format, skinned bodies
+  std::vector<std::unique_ptr<xdmf::Series>> skinned_xdmf_;        ///< per body; xdmf format, skinned bodies
   std::unique_ptr<vtk::PvdSeries> objects_series_;
   std::unique_ptr<xdmf::Series> objects_xdmf_;
-  std::unique_ptr<vtk::PvdSeries> scene_series_;                    ///< scene.pvd (vtk format)
+  std::unique_ptr<vtk::PvdSeries> scene_series_;  ///< scene.pvd (vtk format)
   double skinning_seconds_ = 0.0;
 };
 

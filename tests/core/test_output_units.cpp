@@ -1,20 +1,19 @@
 // Self-describing output: the `units` field data names every array's unit, label names travel as string field
 // data, surfaces carry unit outward normals, a .pvd lists parts with names, an xdmf series says its units,
 // and every name of the units table (core/array_units.cpp) has its row in docs/output.md.
-#include "scratch_dir.hpp"
-#include "self_described.hpp"
-
-#include <sflsh/core/array_units.hpp>
-#include <sflsh/core/vtk_io.hpp>
-#include <sflsh/core/xdmf_series.hpp>
-
 #include <fmt/format.h>
 #include <gmock/gmock.h>
 #include <hdf5.h>
 
 #include <cmath>
 #include <fstream>
+#include <sflsh/core/array_units.hpp>
+#include <sflsh/core/vtk_io.hpp>
+#include <sflsh/core/xdmf_series.hpp>
 #include <sstream>
+
+#include "scratch_dir.hpp"
+#include "self_described.hpp"
 
 namespace sflsh {
 namespace {
@@ -52,8 +51,10 @@ TEST(ArrayUnits, NamesFamiliesAndUnknownNames) {
 TEST(ArrayUnits, EveryNameHasItsRowInTheOutputDocs) {
   const std::string docs = text_of(fs::path(SFLSH_DATA_DIR).parent_path() / "docs" / "output.md");
   ASSERT_FALSE(docs.empty());
-  for (const std::string& name : units::listed_names()) EXPECT_THAT(docs, ::testing::HasSubstr(fmt::format("| `{}`", name))) << name;
-  for (const units::Family& f : units::families()) EXPECT_THAT(docs, ::testing::HasSubstr(fmt::format("`{}", f.prefix))) << f.prefix;
+  for (const std::string& name : units::listed_names())
+    EXPECT_THAT(docs, ::testing::HasSubstr(fmt::format("| `{}`", name))) << name;
+  for (const units::Family& f : units::families())
+    EXPECT_THAT(docs, ::testing::HasSubstr(fmt::format("`{}", f.prefix))) << f.prefix;
 }
 
 TEST(VtkOutput, UnitsLabelsAndNormalsAreWrittenBesideTheArrays) {
@@ -78,7 +79,7 @@ TEST(VtkOutput, UnitsLabelsAndNormalsAreWrittenBesideTheArrays) {
   ASSERT_EQ(normals.rows(), 6);
   const Eigen::RowVector3d centre = points.colwise().mean();
   for (Eigen::Index v = 0; v < 6; ++v) {
-    EXPECT_NEAR(normals.row(v).norm(), 1.0, 1e-6);   // stored as Float32
+    EXPECT_NEAR(normals.row(v).norm(), 1.0, 1e-6);  // stored as Float32
     EXPECT_NEAR(normals.row(v).dot((points.row(v) - centre).normalized()), 1.0, 1e-6) << v;
   }
   EXPECT_EQ(vtk::read_cells(dir / "s.vtp"), triangles);
@@ -105,7 +106,8 @@ TEST(VtkOutput, CollectionListsPartsWithNamesAndUntimedFiles) {
   scene.add_untimed("a_dynamics.vtp", 0, "a");
   scene.write();
   const std::string xml = text_of(dir / "scene.pvd");
-  EXPECT_THAT(xml, ::testing::HasSubstr(R"(<DataSet timestep="0" group="" part="1" name="objects" file="objects_000000.vtp"/>)"));
+  EXPECT_THAT(xml, ::testing::HasSubstr(
+                       R"(<DataSet timestep="0" group="" part="1" name="objects" file="objects_000000.vtp"/>)"));
   EXPECT_THAT(xml, ::testing::HasSubstr(R"(<DataSet group="" part="0" name="a" file="a_dynamics.vtp"/>)"));
 }
 

@@ -2,21 +2,19 @@
 // world; scene_dynamics.pvd lists the σ maps, each where its body stands. The frames describe themselves
 // (units, soft_region, Normals of the placed posed surface), and [output] format = "xdmf" writes one series
 // per body and for the objects. Coarse layer, 30 handles, 4 frames.
-#include <sflsh/core/vtk_io.hpp>
-#include <sflsh/scene/scene_file.hpp>
-#include <sflsh/scene/scene_runner.hpp>
-
+#include <fmt/format.h>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "scratch_dir.hpp"
-#include "self_described.hpp"
-
-#include <fmt/format.h>
-
 #include <fstream>
 #include <regex>
+#include <sflsh/core/vtk_io.hpp>
+#include <sflsh/scene/scene_file.hpp>
+#include <sflsh/scene/scene_runner.hpp>
 #include <sstream>
+
+#include "scratch_dir.hpp"
+#include "self_described.hpp"
 
 namespace sflsh::scene {
 namespace {
@@ -55,8 +53,8 @@ radius = 0.06
 motion = "prescribed"
 keyframes = [{{ t = 0.0, position = [{2}, 0.064, {8}] }}, {{ t = 0.05, position = [{2}, 0.064, {9}] }}]
 )",
-                                                   frames, output, kSoftAt.x(), kSoftAt.y(), kSoftAt.z(), kStillAt.x(), kStillAt.y(),
-                                                   kStillAt.z(), kSoftAt.z() + 0.19, kSoftAt.z() + 0.16);
+                                                   frames, output, kSoftAt.x(), kSoftAt.y(), kSoftAt.z(), kStillAt.x(),
+                                                   kStillAt.y(), kStillAt.z(), kSoftAt.z() + 0.19, kSoftAt.z() + 0.16);
   SceneRunOptions options;
   options.cache_dir = SFLSH_TEST_CACHE;
   options.out = dir / "out";
@@ -71,7 +69,8 @@ struct Entry {
 std::vector<Entry> collection(const fs::path& pvd) {
   std::ifstream in(pvd);
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  const std::regex entry(R"re(<DataSet (?:timestep="([^"]+)" )?group="" part="([0-9]+)" name="([^"]+)" file="([^"]+)"/>)re");
+  const std::regex entry(
+      R"re(<DataSet (?:timestep="([^"]+)" )?group="" part="([0-9]+)" name="([^"]+)" file="([^"]+)"/>)re");
   std::vector<Entry> out;
   for (auto it = std::sregex_iterator(text.begin(), text.end(), entry); it != std::sregex_iterator(); ++it)
     out.push_back({(*it)[1].str(), (*it)[2].str(), (*it)[3].str(), (*it)[4].str()});
@@ -139,13 +138,13 @@ TEST(SceneCollection, ScenePvdHoldsEveryBodyAndTheObjectsPerFrameAndTheMapsArePl
     if (region(v) == 1.0) {
       ASSERT_GT(h(v), 0.0) << v;
     }
-  EXPECT_GT(sigma.maxCoeff(), 0.0);   // the ball moved the tissue
+  EXPECT_GT(sigma.maxCoeff(), 0.0);  // the ball moved the tissue
 
   // Normals: unit, those of the written (posed, placed) triangles, mostly away from the body's centre.
   const vtk::Points points = vtk::read_points(frame);
   const Eigen::MatrixXd normals = vtk::read_point_array(frame, "Normals");
   const vtk::Points expected = vtk::vertex_normals(points, vtk::read_cells(frame));
-  EXPECT_LT((normals - expected).cwiseAbs().maxCoeff(), 1e-6);   // Float32
+  EXPECT_LT((normals - expected).cwiseAbs().maxCoeff(), 1e-6);  // Float32
   const Eigen::RowVector3d c = points.colwise().mean();
   double outward = 0.0;
   int positive = 0;
@@ -165,9 +164,11 @@ TEST(SceneCollection, XdmfFormatWritesASeriesPerBodyAndForTheObjects) {
   const fs::path out = dir / "out";
   EXPECT_EQ(s["output"]["format"], "xdmf");
   EXPECT_TRUE(s["output"]["collections"].empty());
-  for (const char* file : {"soft.xmf", "soft.h5", "still.xmf", "still.h5", "objects.xmf", "objects.h5", "soft_dynamics.vtp"})
+  for (const char* file :
+       {"soft.xmf", "soft.h5", "still.xmf", "still.h5", "objects.xmf", "objects.h5", "soft_dynamics.vtp"})
     EXPECT_TRUE(fs::exists(out / file)) << file;
-  for (const char* file : {"scene.pvd", "soft.pvd", "soft_000001.vtp", "objects.pvd"}) EXPECT_FALSE(fs::exists(out / file)) << file;
+  for (const char* file : {"scene.pvd", "soft.pvd", "soft_000001.vtp", "objects.pvd"})
+    EXPECT_FALSE(fs::exists(out / file)) << file;
   std::ifstream in(out / "soft.xmf");
   std::stringstream xml;
   xml << in.rdbuf();

@@ -2,8 +2,6 @@
 // Checks that an output file describes its arrays (docs/output.md): the field data `units` has exactly one
 // entry "<name>: <unit>" per numeric array name, every unit known (not "?"); label arrays come with their
 // names. Read back with VTK's own readers.
-#include <sflsh/core/vtk_io.hpp>
-
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -11,6 +9,7 @@
 #include <filesystem>
 #include <map>
 #include <set>
+#include <sflsh/core/vtk_io.hpp>
 #include <string>
 
 namespace sflsh::testing {
@@ -45,7 +44,8 @@ inline void expect_self_described(const std::filesystem::path& path) {
 }
 
 /// A label array's values are 0 … size − 1 of its names `<names>` (field data).
-inline void expect_labels_named(const std::filesystem::path& path, const Eigen::MatrixXd& values, const std::string& names) {
+inline void expect_labels_named(const std::filesystem::path& path, const Eigen::MatrixXd& values,
+                                const std::string& names) {
   const std::vector<std::string> labels = vtk::read_field_strings(path, names);
   ASSERT_GT(values.size(), 0);
   EXPECT_GE(values.minCoeff(), 0.0) << names;
