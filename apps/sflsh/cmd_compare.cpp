@@ -268,7 +268,8 @@ void run_compare(const CompareOptions& opt, const Invocation& invocation, int ra
   };
   vtk::Fields fields;
   fields.point_data.push_back({"sigma_full", scatter(1e3 * sigma_full), false});
-  fields.point_data.push_back({"region", scatter(Eigen::VectorXd::Ones(R)), true});
+  fields.point_data.push_back({"soft_region", scatter(Eigen::VectorXd::Ones(R)), true});
+  fields.point_data.push_back({"region", scatter(Eigen::VectorXd::Ones(R)), true});   // soft_region's older name
   std::vector<compare::ReducedTimings> timings;
   nlohmann::json reduced_json = nlohmann::json::array();
   for (const auto& cp : configs) {

@@ -28,7 +28,9 @@ struct ShowOptions {
   std::string out;
 };
 
+/// thickness_fraction (also under its older name thickness), young_tangent, young_normal (docs/output.md).
 void add_kappa_fields(std::vector<vtk::Field>& fields, const material::KappaMatrix& kappa) {
+  fields.push_back({"thickness_fraction", kappa.col(0), false});
   for (int k = 0; k < material::kNumKappa; ++k)
     fields.push_back({std::string(material::kKappaNames[static_cast<std::size_t>(k)]), kappa.col(k), false});
 }

@@ -6,6 +6,7 @@
 #include <sflsh/core/run_folder.hpp>
 #include <sflsh/core/summary.hpp>
 #include <sflsh/core/vtk_io.hpp>
+#include <sflsh/meshing/label_names.hpp>
 #include <sflsh/meshing/layer_cache.hpp>
 #include <sflsh/meshing/retarget.hpp>
 
@@ -82,6 +83,8 @@ void run_mesh(const MeshOptions& opt, const Invocation& invocation) {
   fields.cell_data.push_back({"volume", quality.volume, false});
   fields.cell_data.push_back({"min_dihedral_deg", quality.min_dihedral_deg, false});
   fields.cell_data.push_back({"radius_edge", quality.radius_edge, false});
+  fields.labels.push_back({"part_names", meshing::part_names()});
+  fields.labels.push_back({"node_kind_names", meshing::node_kind_names()});
   vtk::write_unstructured(run.stage("layer.vtu"), layer.nodes, mesh.tets, fields);
 
   vtk::Fields surface;
@@ -90,6 +93,7 @@ void run_mesh(const MeshOptions& opt, const Invocation& invocation) {
   surface.point_data.push_back({"max_thickness", geometry.max_thickness(), false});
   surface.point_data.push_back({"part", as_column(mesh.region_surface.part), true});
   surface.point_data.push_back({"to_skeleton", geometry.skeleton - geometry.skin, false});
+  surface.labels.push_back({"part_names", meshing::part_names()});
   vtk::write_surface(run.stage("outer.vtp"), geometry.skin, mesh.region_surface.faces, surface);
   meshing::RowMatrixX3d inner = geometry.skin;
   for (int v = 0; v < inner.rows(); ++v)

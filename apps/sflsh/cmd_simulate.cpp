@@ -31,11 +31,13 @@ struct SimulateOptions {
   std::string scene;
   int threads = 0;
   bool every_given = false;                  ///< --every overrides the scene's [output] every
+  bool format_given = false;                 ///< --format overrides the scene's [output] format
 };
 
 // sflsh simulate --scene FILE: bodies, objects and the effects the scene calls for (scene_runner.hpp).
 void run_scene_file(const SimulateOptions& opt, const Invocation& invocation, int rank) {
-  const scene::Scene scene = scene::load_scene(opt.scene);
+  scene::Scene scene = scene::load_scene(opt.scene);
+  if (opt.format_given) scene.output.format = opt.body.format;
   scene::SceneRunOptions options;
   options.frames = opt.body.frames;
   options.out = opt.out;
@@ -99,7 +101,7 @@ void register_simulate_commands(CLI::App& app, const Invocation& invocation) {
   add_subject_options(*cmd, opt->body.subject);
   cmd->add_option("--scene", opt->scene,
                   "Scene file (TOML, docs/scenes.md, data/scenes/): bodies, objects and effects; then only --frames, --every, "
-                  "--out, --cache, --threads, --no-output and --allow-long apply");
+                  "--format, --out, --cache, --threads, --no-output and --allow-long apply");
   cmd->add_option("--threads", opt->threads, "Scenes: threads for bodies that do not interact (0: all cores)");
   cmd->add_option("--motion", opt->body.motion, "Motion: a procedural name (sflsh motion list) or an AMASS .npz path (required without --scene)");
   cmd->add_option("--frames", opt->body.frames, "Number of frames (0: the motion's length)");
@@ -113,9 +115,11 @@ void register_simulate_commands(CLI::App& app, const Invocation& invocation) {
   cmd->add_flag("--write-layer", opt->body.write_layer, "Also write the tet layer per frame (layer.pvd)");
   cmd->add_option("--format", opt->body.format,
                   "Time series: vtk (body.pvd of one .vtp per frame, layer.pvd of .vtu) | xdmf (body.xmf + body.h5: triangles "
-                  "and fixed fields once, one HDF5 dataset per field and frame; docs/output.md)")
+                  "and fixed fields once, one HDF5 dataset per field and frame; docs/output.md); with --scene it overrides "
+                  "[output] format")
       ->check(CLI::IsMember({"vtk", "xdmf"}))
-      ->capture_default_str();
+      ->capture_default_str()
+      ->each([opt](const std::string&) { opt->format_given = true; });
   cmd->add_option("--precision", opt->body.precision, "Floating-point precision of an xdmf series: float64 | float32")
       ->check(CLI::IsMember({"float64", "float32"}))
       ->capture_default_str();

@@ -1,12 +1,17 @@
+#include <sflsh/core/array_units.hpp>
 #include <sflsh/core/atomic_file.hpp>
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/vtk_io.hpp>
+
+#include <Eigen/Geometry>
 
 #include <vtkCellArray.h>
 #include <vtkCellData.h>
 #include <vtkDataArray.h>
 #include <vtkDoubleArray.h>
 #include <vtkFieldData.h>
+#include <vtkFloatArray.h>
+#include <vtkIdList.h>
 #include <vtkIntArray.h>
 #include <vtkLZ4DataCompressor.h>
 #include <vtkNew.h>
@@ -15,6 +20,7 @@
 #include <vtkPoints.h>
 #include <vtkPolyData.h>
 #include <vtkSmartPointer.h>
+#include <vtkStringArray.h>
 #include <vtkUnstructuredGrid.h>
 #include <vtkXMLPolyDataReader.h>
 #include <vtkXMLPolyDataWriter.h>
@@ -22,6 +28,7 @@
 #include <vtkXMLUnstructuredGridWriter.h>
 #include <vtkZLibDataCompressor.h>
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -76,10 +83,58 @@ vtkSmartPointer<vtkCellArray> make_cells(const Eigen::Ref<const Cells>& cells, E
   return out;
 }
 
+vtkSmartPointer<vtkStringArray> make_strings(const std::string& name, const std::vector<std::string>& values) {
+  auto array = vtkSmartPointer<vtkStringArray>::New();
+  array->SetName(name.c_str());
+  array->SetNumberOfValues(static_cast<vtkIdType>(values.size()));
+  for (std::size_t k = 0; k < values.size(); ++k) array->SetValue(static_cast<vtkIdType>(k), values[k]);
+  return array;
+}
+
+/// The `units` entries of every numeric array of the dataset, one per distinct name, in the order written.
+std::vector<std::string> unit_entries(vtkDataSet* data) {
+  std::vector<std::string> names;
+  for (vtkFieldData* group : {static_cast<vtkFieldData*>(data->GetPointData()), static_cast<vtkFieldData*>(data->GetCellData()),
+                              data->GetFieldData()}) {
+    for (int i = 0; i < group->GetNumberOfArrays(); ++i) {
+      if (!group->GetArray(i) || !group->GetArrayName(i)) continue;   // string arrays carry no unit
+      const std::string name = group->GetArrayName(i);
+      if (std::find(names.begin(), names.end(), name) == names.end()) names.push_back(name);
+    }
+  }
+  std::vector<std::string> entries;
+  for (const std::string& name : names) entries.push_back(units::entry(name));
+  return entries;
+}
+
 void attach_fields(vtkDataSet* data, const Fields& fields, Eigen::Index num_points, Eigen::Index num_cells) {
   for (const Field& f : fields.point_data) data->GetPointData()->AddArray(make_array(f, num_points, "point-data"));
   for (const Field& f : fields.cell_data) data->GetCellData()->AddArray(make_array(f, num_cells, "cell-data"));
   for (const Field& f : fields.field_data) data->GetFieldData()->AddArray(make_array(f, 1, "field-data"));
+  for (const Labels& l : fields.labels) data->GetFieldData()->AddArray(make_strings(l.name, l.values));
+  if (vtkDataArray* normals = data->GetPointData()->GetArray("Normals"); normals && normals->GetNumberOfComponents() == 3)
+    data->GetPointData()->SetNormals(normals);
+}
+
+/// The `units` field data, after every numeric array is attached.
+void attach_units(vtkDataSet* data) {
+  const std::vector<std::string> entries = unit_entries(data);
+  if (!entries.empty()) data->GetFieldData()->AddArray(make_strings("units", entries));
+}
+
+vtkSmartPointer<vtkFloatArray> make_normals(const Eigen::Ref<const Points>& points, const Eigen::Ref<const Cells>& triangles) {
+  const Points n = vertex_normals(points, triangles);
+  auto array = vtkSmartPointer<vtkFloatArray>::New();
+  array->SetName("Normals");
+  array->SetNumberOfComponents(3);
+  array->SetNumberOfTuples(n.rows());
+  float* out = array->GetPointer(0);
+  for (Eigen::Index i = 0; i < n.size(); ++i) out[i] = static_cast<float>(n.data()[i]);
+  return array;
+}
+
+bool has_point_field(const Fields& fields, const char* name) {
+  return std::any_of(fields.point_data.begin(), fields.point_data.end(), [&](const Field& f) { return f.name == name; });
 }
 
 template <typename Writer>
@@ -140,6 +195,11 @@ void write_surface(const std::filesystem::path& path, const Eigen::Ref<const Poi
   poly->SetPoints(make_points(points));
   poly->SetPolys(make_cells(triangles, points.rows()));
   attach_fields(poly, fields, points.rows(), triangles.rows());
+  if (fields.normals && triangles.rows() > 0 && !has_point_field(fields, "Normals")) {
+    poly->GetPointData()->AddArray(make_normals(points, triangles));
+    poly->GetPointData()->SetNormals(poly->GetPointData()->GetArray("Normals"));
+  }
+  attach_units(poly);
   vtkNew<vtkXMLPolyDataWriter> writer;
   write_with(writer.Get(), poly, path, compression);
 }
@@ -152,6 +212,7 @@ void write_unstructured(const std::filesystem::path& path, const Eigen::Ref<cons
   grid->SetPoints(make_points(points));
   grid->SetCells(cells.cols() == 4 ? VTK_TETRA : VTK_TRIANGLE, make_cells(cells, points.rows()));
   attach_fields(grid, fields, points.rows(), cells.rows());
+  attach_units(grid);
   vtkNew<vtkXMLUnstructuredGridWriter> writer;
   write_with(writer.Get(), grid, path, compression);
 }
@@ -161,10 +222,29 @@ void PvdSeries::write() const {
   xml << "<?xml version=\"1.0\"?>\n"
       << "<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n  <Collection>\n";
   for (const Entry& e : entries_) {
-    xml << fmt::format("    <DataSet timestep=\"{:.9g}\" group=\"\" part=\"0\" file=\"{}\"/>\n", e.time, e.file);
+    xml << "    <DataSet";
+    if (e.timed) xml << fmt::format(" timestep=\"{:.9g}\"", e.time);
+    xml << fmt::format(" group=\"\" part=\"{}\"", e.part);
+    if (!e.name.empty()) xml << fmt::format(" name=\"{}\"", e.name);
+    xml << fmt::format(" file=\"{}\"/>\n", e.file);
   }
   xml << "  </Collection>\n</VTKFile>\n";
   write_text_atomically(path_, xml.str());
+}
+
+Points vertex_normals(const Eigen::Ref<const Points>& points, const Eigen::Ref<const Cells>& triangles) {
+  require(triangles.cols() == 3, "vertex normals: cells need 3 vertices, got {}", triangles.cols());
+  Points normals = Points::Zero(points.rows(), 3);
+  for (Eigen::Index f = 0; f < triangles.rows(); ++f) {
+    const Eigen::Vector3d a = points.row(triangles(f, 0)), b = points.row(triangles(f, 1)), c = points.row(triangles(f, 2));
+    const Eigen::RowVector3d n = (b - a).cross(c - a).transpose();   // length = 2 × area: area weighting
+    for (int k = 0; k < 3; ++k) normals.row(triangles(f, k)) += n;
+  }
+  for (Eigen::Index v = 0; v < normals.rows(); ++v) {
+    const double length = normals.row(v).norm();
+    if (length > 0.0) normals.row(v) /= length;
+  }
+  return normals;
 }
 
 Points read_points(const std::filesystem::path& path) {
@@ -193,6 +273,54 @@ Eigen::MatrixXd read_point_array(const std::filesystem::path& path, const std::s
   Eigen::MatrixXd out(array->GetNumberOfTuples(), array->GetNumberOfComponents());
   for (vtkIdType r = 0; r < array->GetNumberOfTuples(); ++r)
     for (int c = 0; c < array->GetNumberOfComponents(); ++c) out(r, c) = array->GetComponent(r, c);
+  return out;
+}
+
+std::vector<std::string> read_cell_array_names(const std::filesystem::path& path) {
+  auto data = read_any(path);
+  std::vector<std::string> names;
+  for (int i = 0; i < data->GetCellData()->GetNumberOfArrays(); ++i) names.emplace_back(data->GetCellData()->GetArrayName(i));
+  return names;
+}
+
+Eigen::MatrixXd read_cell_array(const std::filesystem::path& path, const std::string& name) {
+  auto data = read_any(path);
+  vtkDataArray* array = data->GetCellData()->GetArray(name.c_str());
+  require(array != nullptr, "{}: no cell-data array '{}'", path.string(), name);
+  Eigen::MatrixXd out(array->GetNumberOfTuples(), array->GetNumberOfComponents());
+  for (vtkIdType r = 0; r < array->GetNumberOfTuples(); ++r)
+    for (int c = 0; c < array->GetNumberOfComponents(); ++c) out(r, c) = array->GetComponent(r, c);
+  return out;
+}
+
+std::vector<std::string> read_field_array_names(const std::filesystem::path& path) {
+  auto data = read_any(path);
+  std::vector<std::string> names;
+  for (int i = 0; i < data->GetFieldData()->GetNumberOfArrays(); ++i)
+    if (const char* name = data->GetFieldData()->GetAbstractArray(i)->GetName()) names.emplace_back(name);
+  return names;
+}
+
+std::vector<std::string> read_field_strings(const std::filesystem::path& path, const std::string& name) {
+  auto data = read_any(path);
+  auto* array = vtkStringArray::SafeDownCast(data->GetFieldData()->GetAbstractArray(name.c_str()));
+  require(array != nullptr, "{}: no field-data string array '{}'", path.string(), name);
+  std::vector<std::string> out;
+  for (vtkIdType k = 0; k < array->GetNumberOfValues(); ++k) out.push_back(array->GetValue(k));
+  return out;
+}
+
+Cells read_cells(const std::filesystem::path& path) {
+  auto data = read_any(path);
+  const vtkIdType n = data->GetNumberOfCells();
+  vtkNew<vtkIdList> ids;
+  if (n > 0) data->GetCellPoints(0, ids);
+  Cells out(n, n > 0 ? ids->GetNumberOfIds() : 3);
+  for (vtkIdType c = 0; c < n; ++c) {
+    data->GetCellPoints(c, ids);
+    require(ids->GetNumberOfIds() == out.cols(), "{}: cells of different sizes", path.string());
+    for (vtkIdType k = 0; k < ids->GetNumberOfIds(); ++k) out(c, k) = static_cast<int>(ids->GetId(k));
+  }
   return out;
 }
 

@@ -1,4 +1,5 @@
 // XDMF 3 + HDF5 time series (xdmf_series.hpp), written with the HDF5 C library.
+#include <sflsh/core/array_units.hpp>
 #include <sflsh/core/atomic_file.hpp>
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/xdmf_series.hpp>
@@ -7,6 +8,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <mutex>
 #include <optional>
@@ -67,6 +69,21 @@ void create_groups(hid_t file, const std::string& path) {
   }
 }
 
+/// The string attribute `unit` of a dataset (h5py: `dataset.attrs["unit"]`).
+void set_unit(hid_t dataset, const std::string& unit) {
+  Handle type{H5Tcopy(H5T_C_S1), H5Tclose};
+  H5Tset_size(type.id, unit.size() + 1);
+  Handle space{H5Screate(H5S_SCALAR), H5Sclose};
+  Handle attribute{H5Acreate2(dataset, "unit", type.id, space.id, H5P_DEFAULT, H5P_DEFAULT), H5Aclose};
+  require(attribute.id >= 0 && H5Awrite(attribute.id, type.id, unit.c_str()) >= 0, "xdmf: cannot write the unit attribute");
+}
+
+std::string joined(const std::vector<std::string>& items) {
+  std::string out;
+  for (const std::string& item : items) out += (out.empty() ? "" : "; ") + item;
+  return out;
+}
+
 std::string attribute_type(hsize_t columns) {
   return columns == 1 ? "Scalar" : columns == 3 ? "Vector" : columns == 9 ? "Tensor" : "Matrix";
 }
@@ -83,9 +100,12 @@ struct Series::Impl {
   std::vector<Attribute> static_attributes;
   std::vector<Step> steps;
   std::optional<vtk::Points> last_points;
+  std::vector<std::string> unit_names;   ///< the attributes' names, each once, in the order written
+  std::vector<vtk::Labels> labels;       ///< names of label values (`part_names`, …)
   bool closed = false;
 
-  Item write_dataset(const std::string& path, const double* values, hsize_t rows, hsize_t columns, bool integer) {
+  Item write_dataset(const std::string& path, const double* values, hsize_t rows, hsize_t columns, bool integer,
+                     const std::string& unit) {
     create_groups(file, path);
     const hsize_t dims[2] = {rows, columns};
     Handle space{H5Screate_simple(columns == 1 ? 1 : 2, dims, nullptr), H5Sclose};
@@ -105,13 +125,26 @@ struct Series::Impl {
       status = H5Dwrite(set.id, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, values);
     }
     require(status >= 0, "{}: cannot write dataset {} (disk full?)", h5.string(), path);
+    set_unit(set.id, unit);
     return {path, rows, columns, integer};
   }
 
   /// Row-major copy of a field's values (Eigen matrices are column-major).
   Item write_field(const std::string& path, const vtk::Field& field) {
     const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> rows = field.values;
-    return write_dataset(path, rows.data(), static_cast<hsize_t>(rows.rows()), static_cast<hsize_t>(rows.cols()), field.integer);
+    if (std::find(unit_names.begin(), unit_names.end(), field.name) == unit_names.end()) unit_names.push_back(field.name);
+    const std::string_view unit = units::of(field.name);
+    return write_dataset(path, rows.data(), static_cast<hsize_t>(rows.rows()), static_cast<hsize_t>(rows.cols()), field.integer,
+                         unit.empty() ? "?" : std::string(unit));
+  }
+
+  /// The units of the attributes and the label names, as Information of the domain (readers skip it).
+  std::string information_xml() const {
+    std::vector<std::string> entries;
+    for (const std::string& name : unit_names) entries.push_back(units::entry(name));
+    std::string s = fmt::format("    <Information Name=\"units\" Value=\"{}\"/>\n", joined(entries));
+    for (const vtk::Labels& l : labels) s += fmt::format("    <Information Name=\"{}\" Value=\"{}\"/>\n", l.name, joined(l.values));
+    return s;
   }
 
   std::string data_item(const Item& item) const {
@@ -132,7 +165,9 @@ struct Series::Impl {
     std::string s = R"(<?xml version="1.0"?>
 <Xdmf Version="3.0" xmlns:xi="http://www.w3.org/2001/XInclude">
   <Domain>
-    <Grid Name="series" GridType="Collection" CollectionType="Temporal">
+)";
+    s += information_xml();
+    s += R"(    <Grid Name="series" GridType="Collection" CollectionType="Temporal">
 )";
     for (std::size_t k = 0; k < steps.size(); ++k) {
       const Step& step = steps[k];
@@ -162,7 +197,8 @@ Series::Series(fs::path xmf_path, const Eigen::Ref<const vtk::Cells>& cells, Pre
   m.file = H5Fcreate(m.h5.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
   require(m.file >= 0, "{}: cannot create the HDF5 file", m.h5.string());
   const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> topology = cells.cast<double>();
-  m.topology = m.write_dataset("/topology", topology.data(), static_cast<hsize_t>(cells.rows()), static_cast<hsize_t>(cells.cols()), true);
+  m.topology = m.write_dataset("/topology", topology.data(), static_cast<hsize_t>(cells.rows()), static_cast<hsize_t>(cells.cols()), true,
+                                  "index");
 }
 
 Series::~Series() {
@@ -178,6 +214,7 @@ void Series::set_static(const vtk::Fields& fields) {
   require(m.steps.empty(), "{}: static fields must be set before the first step", m.xmf.string());
   for (const vtk::Field& f : fields.point_data) m.static_attributes.push_back({f.name, false, m.write_field("/static/point/" + f.name, f)});
   for (const vtk::Field& f : fields.cell_data) m.static_attributes.push_back({f.name, true, m.write_field("/static/cell/" + f.name, f)});
+  m.labels.insert(m.labels.end(), fields.labels.begin(), fields.labels.end());
 }
 
 void Series::write(double time, const Eigen::Ref<const vtk::Points>& points, const vtk::Fields& fields) {
@@ -191,11 +228,13 @@ void Series::write(double time, const Eigen::Ref<const vtk::Points>& points, con
   if (m.last_points && m.last_points->rows() == points.rows() && *m.last_points == points) {
     s.geometry = m.steps.back().geometry;  // the nodes did not move: reuse the dataset
   } else {
-    s.geometry = m.write_dataset("/geometry/" + step, points.data(), static_cast<hsize_t>(points.rows()), 3, false);
+    s.geometry = m.write_dataset("/geometry/" + step, points.data(), static_cast<hsize_t>(points.rows()), 3, false, "m");
     m.last_points = points;
   }
   for (const vtk::Field& f : fields.point_data) s.attributes.push_back({f.name, false, m.write_field("/point/" + f.name + "/" + step, f)});
   for (const vtk::Field& f : fields.cell_data) s.attributes.push_back({f.name, true, m.write_field("/cell/" + f.name + "/" + step, f)});
+  for (const vtk::Labels& l : fields.labels)
+    if (std::none_of(m.labels.begin(), m.labels.end(), [&](const vtk::Labels& known) { return known.name == l.name; })) m.labels.push_back(l);
   m.steps.push_back(std::move(s));
 }
 

@@ -48,17 +48,7 @@ Eigen::VectorXd DynamicsAmplitude::sigma_tangent() const {
 }
 
 RowMatrixX3d vertex_normals(const RowMatrixX3d& vertices, const Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor>& faces) {
-  RowMatrixX3d normals = RowMatrixX3d::Zero(vertices.rows(), 3);
-  for (Eigen::Index f = 0; f < faces.rows(); ++f) {
-    const Eigen::Vector3d a = vertices.row(faces(f, 0)), b = vertices.row(faces(f, 1)), c = vertices.row(faces(f, 2));
-    const Eigen::Vector3d n = (b - a).cross(c - a);   // length = 2 × area: area weighting
-    for (int k = 0; k < 3; ++k) normals.row(faces(f, k)) += n.transpose();
-  }
-  for (Eigen::Index v = 0; v < normals.rows(); ++v) {
-    const double len = normals.row(v).norm();
-    if (len > 0.0) normals.row(v) /= len;
-  }
-  return normals;
+  return vtk::vertex_normals(vertices, faces);
 }
 
 namespace {
@@ -112,9 +102,14 @@ Eigen::MatrixXd scatter(const BodyLayer& layer, const Eigen::MatrixXd& region_va
   return out;
 }
 
-void add_kappa_fields(std::vector<vtk::Field>& fields, const Eigen::MatrixXd& kappa) {
-  for (int k = 0; k < material::kNumKappa; ++k)
-    fields.push_back({std::string(material::kKappaNames[static_cast<std::size_t>(k)]), kappa.col(k), false});
+/// The κ fields of `kappa`'s columns (h, Y_t, Y_n) that `wanted` accepts: thickness_fraction, the same values
+/// under their older name thickness, young_tangent, young_normal.
+template <typename Wanted>
+void add_kappa_fields(std::vector<vtk::Field>& fields, const Eigen::MatrixXd& kappa, const Wanted& wanted) {
+  static_assert(material::kNumKappa == 3);
+  const std::pair<const char*, int> columns[] = {{"thickness_fraction", 0}, {"thickness", 0}, {"young_tangent", 1}, {"young_normal", 2}};
+  for (const auto& [name, column] : columns)
+    if (wanted(name)) fields.push_back({name, kappa.col(column), false});
 }
 
 double median(Eigen::VectorXd v) {
@@ -127,9 +122,10 @@ double median(Eigen::VectorXd v) {
 }  // namespace
 
 const std::vector<std::string>& frame_field_names() {
-  static const std::vector<std::string> names = {"displacement", "velocity", "skin_weights_argmax", "soft_tissue_displacement",
-                                                 "elastic_displacement", "strain_energy_density", "thickness", "young_tangent",
-                                                 "young_normal", "contact_force", "penetration"};
+  static const std::vector<std::string> names = {"displacement",  "velocity",          "skin_weights_argmax", "soft_tissue_displacement",
+                                                 "elastic_displacement", "strain_energy_density", "thickness_fraction", "thickness",
+                                                 "young_tangent", "young_normal", "soft_region", "Normals",
+                                                 "contact_force", "penetration"};
   return names;
 }
 
@@ -165,6 +161,7 @@ SimulationWriter::SimulationWriter(const BodyLayer& layer, RunFolder* run, const
     dominant_joint_(v) = static_cast<double>(k);
   }
   vertex_kappa_ = scatter(layer, layer.fields.vertex);
+  soft_region_ = scatter(layer, Eigen::MatrixXd::Ones(static_cast<Eigen::Index>(layer.mesh->region_surface.vertices.size()), 1));
   check_output_format(options_.format, "simulation output");
   const std::string layer_prefix = options_.prefix == "body" ? "layer" : options_.prefix + "_layer";
   if (run_ && options_.format == "xdmf") {
@@ -173,21 +170,15 @@ SimulationWriter::SimulationWriter(const BodyLayer& layer, RunFolder* run, const
     body_xdmf_ = std::make_unique<xdmf::Series>(run_->stage(options_.prefix + ".xmf"), layer.model->faces, options_.precision);
     vtk::Fields fixed;
     if (wants("skin_weights_argmax")) fixed.point_data.push_back({"skin_weights_argmax", dominant_joint_, true});
-    for (int k = 0; k < material::kNumKappa; ++k) {
-      const std::string kappa(material::kKappaNames[static_cast<std::size_t>(k)]);
-      if (wants(kappa)) fixed.point_data.push_back({kappa, vertex_kappa_.col(k), false});
-    }
+    add_kappa_fields(fixed.point_data, vertex_kappa_, [this](const std::string& name) { return wants(name); });
+    if (wants("soft_region")) fixed.point_data.push_back({"soft_region", soft_region_, true});
     body_xdmf_->set_static(fixed);
     if (write_layer_) {
       run_->stage(layer_prefix + ".h5");
       layer_xdmf_ = std::make_unique<xdmf::Series>(run_->stage(layer_prefix + ".xmf"), layer.problem.tets, options_.precision);
       vtk::Fields layer_fixed;
-      for (int k = 0; k < material::kNumKappa; ++k) {
-        const std::string kappa(material::kKappaNames[static_cast<std::size_t>(k)]);
-        if (!wants(kappa)) continue;
-        layer_fixed.point_data.push_back({kappa, layer.fields.node.col(k), false});
-        layer_fixed.cell_data.push_back({kappa, layer.fields.tet.col(k), false});
-      }
+      add_kappa_fields(layer_fixed.point_data, layer.fields.node, [this](const std::string& name) { return wants(name); });
+      add_kappa_fields(layer_fixed.cell_data, layer.fields.tet, [this](const std::string& name) { return wants(name); });
       layer_xdmf_->set_static(layer_fixed);
     }
   } else if (run_) {
@@ -252,9 +243,9 @@ void SimulationWriter::add(int index, double t, const Eigen::VectorXd& x_state, 
   if (wants("elastic_displacement")) fields.point_data.push_back({"elastic_displacement", scatter(layer_, u), false});
   const bool energy = wants("strain_energy_density");
   if (energy) fields.point_data.push_back({"strain_energy_density", Eigen::MatrixXd(), false});   // filled by the job
-  for (int k = 0; k < material::kNumKappa; ++k) {
-    const std::string name(material::kKappaNames[static_cast<std::size_t>(k)]);
-    if (wants(name) && !xdmf) fields.point_data.push_back({name, vertex_kappa_.col(k), false});
+  if (!xdmf) {
+    add_kappa_fields(fields.point_data, vertex_kappa_, [this](const std::string& name) { return wants(name); });
+    if (wants("soft_region")) fields.point_data.push_back({"soft_region", soft_region_, true});
   }
   fields.field_data.push_back({"TimeValue", Eigen::MatrixXd::Constant(1, 1, t), false});
   const std::size_t own_fields = fields.point_data.size();   // the extra ones are in the world frame already
@@ -273,14 +264,16 @@ void SimulationWriter::add(int index, double t, const Eigen::VectorXd& x_state, 
       for (vtk::Field& f : fields.point_data)
         if (f.name == "strain_energy_density" && f.values.size() == 0) f.values = scatter(layer_, vertex_psi);
     }
-    const bool placed = !options_.rotation.isIdentity(0.0) || !options_.translation.isZero(0.0);
-    if (placed) {
+    if (placed()) {
       for (std::size_t k = 0; k < own_fields; ++k) {
         vtk::Field& f = fields.point_data[k];
         if (f.values.cols() == 3 && !f.integer) f.values = (f.values * options_.rotation.transpose()).eval();
       }
-      posed = ((posed * options_.rotation.transpose()).rowwise() + options_.translation.transpose()).eval();
+      posed = place(posed);
     }
+    // Normals of the placed posed surface: the vtk writer adds them (Float32), an xdmf series gets them here.
+    fields.normals = wants("Normals");
+    if (body_xdmf_ && fields.normals) fields.point_data.push_back({"Normals", vtk::vertex_normals(posed, layer_.model->faces), false});
     if (body_xdmf_) body_xdmf_->write(t, posed, fields);
     else vtk::write_surface(path, posed, layer_.model->faces, fields, options_.compression);
   });
@@ -302,19 +295,19 @@ void SimulationWriter::write_layer_frame(int index, double t, const State& state
     path = run_->stage(name);
   }
   run_job([this, &problem, path, t, nodes = std::move(nodes), x = Eigen::VectorXd(state.x), w = Eigen::VectorXd(state.w)]() mutable {
-    const bool placed = !options_.rotation.isIdentity(0.0) || !options_.translation.isZero(0.0);
-    if (placed) nodes = ((nodes * options_.rotation.transpose()).rowwise() + options_.translation.transpose()).eval();
     const Eigen::Map<const RowMatrixX3d> elastic(x.data(), problem.num_nodes(), 3);
     const Eigen::Map<const RowMatrixX3d> velocity(w.data(), problem.num_nodes(), 3);
     vtk::Fields fields;
     if (wants("displacement")) fields.point_data.push_back({"displacement", nodes - problem.rest, false});
     if (wants("elastic_displacement")) fields.point_data.push_back({"elastic_displacement", elastic - problem.rest, false});
     if (wants("velocity")) fields.point_data.push_back({"velocity", velocity, false});
-    for (int k = 0; k < material::kNumKappa && !layer_xdmf_; ++k) {   // an xdmf series holds them once
-      const std::string kappa(material::kKappaNames[static_cast<std::size_t>(k)]);
-      if (!wants(kappa)) continue;
-      fields.point_data.push_back({kappa, layer_.fields.node.col(k), false});
-      fields.cell_data.push_back({kappa, layer_.fields.tet.col(k), false});
+    if (placed()) {   // as the body frames: the vectors turn with the body, the positions move with it
+      for (vtk::Field& f : fields.point_data) f.values = (f.values * options_.rotation.transpose()).eval();
+      nodes = place(nodes);
+    }
+    if (!layer_xdmf_) {   // an xdmf series holds them once
+      add_kappa_fields(fields.point_data, layer_.fields.node, [this](const std::string& name) { return wants(name); });
+      add_kappa_fields(fields.cell_data, layer_.fields.tet, [this](const std::string& name) { return wants(name); });
     }
     if (wants("strain_energy_density")) fields.cell_data.push_back({"strain_energy_density", strain_energy_density(problem, x), false});
     fields.field_data.push_back({"TimeValue", Eigen::MatrixXd::Constant(1, 1, t), false});
@@ -333,9 +326,20 @@ void SimulationWriter::finish() {
   fields.point_data.push_back({"sigma", scatter(layer_, 1e3 * amplitude_.sigma()), false});
   fields.point_data.push_back({"sigma_normal", scatter(layer_, 1e3 * amplitude_.sigma_normal()), false});
   fields.point_data.push_back({"sigma_tangent", scatter(layer_, 1e3 * amplitude_.sigma_tangent()), false});
-  add_kappa_fields(fields.point_data, vertex_kappa_);
-  vtk::write_surface(run_->stage(options_.prefix == "body" ? "dynamics.vtp" : options_.prefix + "_dynamics.vtp"), layer_.shaped,
-                     layer_.model->faces, fields);
+  add_kappa_fields(fields.point_data, vertex_kappa_, [](const std::string&) { return true; });
+  fields.point_data.push_back({"soft_region", soft_region_, true});
+  // Where the body stands (a scene's placement), with the normals of the placed surface.
+  vtk::write_surface(run_->stage(dynamics_file()), placed() ? place(layer_.shaped) : layer_.shaped, layer_.model->faces, fields);
+}
+
+std::string SimulationWriter::dynamics_file() const {
+  return options_.prefix == "body" ? "dynamics.vtp" : options_.prefix + "_dynamics.vtp";
+}
+
+bool SimulationWriter::placed() const { return !options_.rotation.isIdentity(0.0) || !options_.translation.isZero(0.0); }
+
+RowMatrixX3d SimulationWriter::place(const RowMatrixX3d& points) const {
+  return (points * options_.rotation.transpose()).rowwise() + options_.translation.transpose();
 }
 
 nlohmann::json SimulationWriter::dynamics_summary() const {

@@ -186,7 +186,7 @@ class SceneReader : public TomlReader {
 
   void read_output(const toml::node& node, OutputSpec& output) const {
     const toml::table& t = table(node, "output");
-    check_keys(t, {"layer", "frames", "every", "fields", "compression"}, " in [output]");
+    check_keys(t, {"layer", "frames", "every", "fields", "compression", "format"}, " in [output]");
     if (const toml::node* n = t.get("layer")) output.layer = boolean(*n, "layer", " in [output]");
     if (const toml::node* n = t.get("frames")) output.frames = boolean(*n, "frames", " in [output]");
     if (const toml::node* n = t.get("every")) output.every = count(*n, "every", " in [output]", 1);
@@ -200,6 +200,7 @@ class SceneReader : public TomlReader {
     }
     if (const toml::node* n = t.get("compression"))
       output.compression = vtk::parse_compression(choice(*n, "compression", {"lz4", "zlib", "none"}, " in [output]"), "compression");
+    if (const toml::node* n = t.get("format")) output.format = choice(*n, "format", {"vtk", "xdmf"}, " in [output]");
   }
 
   std::vector<SceneKeyframe> keyframes(const toml::node& node, std::string_view key, std::string_view context, bool with_rotation) const {

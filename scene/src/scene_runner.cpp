@@ -6,6 +6,7 @@
 #include "scene_contact.hpp"
 #include "scene_internal.hpp"
 #include "scene_objects.hpp"
+#include "scene_output.hpp"
 
 #include <sflsh/body/body_io.hpp>
 #include <sflsh/core/background_jobs.hpp>
@@ -71,9 +72,8 @@ class SceneRun {
     std::optional<BackgroundJobs> jobs;
     // One writer thread: on 2 cores a second one only competed with the stepping threads (measured).
     if (folder && options_.background_writing) jobs.emplace(std::max<std::size_t>(8, 2 * bodies_.size() + 1));
-    jobs_ = jobs ? &*jobs : nullptr;
-    open_writers(folder);
-    write_frame(0, folder);
+    output_.emplace(scene_, bodies_, objects_, contact_, folder, jobs ? &*jobs : nullptr);
+    write_frame(0);
 
     const double h = 1.0 / (scene_.fps * scene_.substeps);
     std::optional<tbb::global_control> threads;
@@ -85,7 +85,7 @@ class SceneRun {
       for (int k = 0; k < scene_.substeps; ++k) step(((f - 1) * scene_.substeps + k) * h, h);
       step_seconds_ += seconds_since(t_step);
       const auto t_out = Clock::now();
-      write_frame(f, folder);
+      write_frame(f);
       output_seconds_ += seconds_since(t_out);
       progress.advance();
     }
@@ -94,13 +94,12 @@ class SceneRun {
     output_seconds_ += seconds_since(t_drain);
     progress.finish();
     const double loop_seconds = seconds_since(t_loop);
-    if (folder) finish_writers(*folder);
+    output_->finish();
     nlohmann::json summary = make_summary(setup_seconds, loop_seconds, seconds_since(t_start), h);
     if (jobs) {
       summary["timings"]["writer_seconds"] = jobs->busy_seconds();
       summary["timings"]["writer_wait_seconds"] = jobs->waited_seconds();
     }
-    jobs_ = nullptr;
     if (run) {
       write_json(run->stage("summary.json"), summary);
       run->commit();
@@ -319,29 +318,6 @@ class SceneRun {
   }
 
   // --- output --------------------------------------------------------------------------------------------
-  void open_writers(RunFolder* folder) {
-    for (auto& body : bodies_) {
-      if (!body->soft()) {
-        writers_.emplace_back();
-        continue;
-      }
-      model::SimulationWriterOptions o;
-      o.prefix = body->name();
-      o.write_layer = scene_.output.layer;
-      o.rotation = body->placement().R;
-      o.translation = body->placement().t;
-      o.fields = scene_.output.fields;
-      o.compression = scene_.output.compression;
-      o.jobs = jobs_;
-      writers_.push_back(std::make_unique<model::SimulationWriter>(body->layer(), folder, o));
-    }
-    if (folder) {
-      for (auto& body : bodies_)
-        if (!body->soft()) skinned_series_.emplace(body->name(), std::make_unique<vtk::PvdSeries>(folder->stage(body->name() + ".pvd")));
-      if (!objects_.empty()) objects_series_ = std::make_unique<vtk::PvdSeries>(folder->stage("objects.pvd"));
-    }
-  }
-
   // Independent check of the contact: the soft skin's deepest point inside any object or other body.
   void measure_penetration(double t) {
     std::vector<RowMatrixX3d> world(bodies_.size());
@@ -372,8 +348,8 @@ class SceneRun {
   }
 
   // Frame f: σ of every soft body; when f is an output frame (every N-th, the first and the last) also the
-  // independent penetration check and, with a run folder, the frame files (posed here, written by the jobs).
-  void write_frame(int f, RunFolder* folder) {
+  // independent penetration check and, with a run folder, the frame files (scene_output.hpp).
+  void write_frame(int f) {
     const double t = f / scene_.fps;
     const bool output = model::is_written_frame(f, frames_, every_);
     if (output && (scene_.effects.object_contact || scene_.effects.body_contact)) {
@@ -381,69 +357,7 @@ class SceneRun {
       measure_penetration(t);
       check_seconds_ += seconds_since(clock);
     }
-    const bool write = output && folder;
-    if (!write) {
-      // Only σ: each soft body's skin displacement, independent of the others (in parallel, like the steps).
-      tbb::parallel_for(std::size_t{0}, bodies_.size(), [&](std::size_t b) {
-        if (bodies_[b]->soft() && bodies_[b]->solver() != SolverKind::full) writers_[b]->add_positions(f, t, bodies_[b]->positions(), false);
-      });
-      for (std::size_t b = 0; b < bodies_.size(); ++b)
-        if (bodies_[b]->solver() == SolverKind::full) writers_[b]->add_frame(f, t, bodies_[b]->state(), false);
-      return;
-    }
-    for (std::size_t b = 0; b < bodies_.size(); ++b) {
-      SceneBody& body = *bodies_[b];
-      if (body.soft()) {
-        const std::vector<vtk::Field> extra = write ? contact_fields(contact_[b], *bodies_[b]) : std::vector<vtk::Field>{};
-        if (scene_.output.layer) writers_[b]->add_frame(f, t, body.state(), write, extra);   // layer frames need the full state
-        else writers_[b]->add_positions(f, t, body.positions(), write, extra);
-        continue;
-      }
-      if (!write) continue;
-      const auto t_skin = Clock::now();
-      const RowMatrixX3d posed = body.world_surface();
-      seconds_.skinning += seconds_since(t_skin);
-      vtk::Fields fields;
-      fields.field_data.push_back({"TimeValue", Eigen::MatrixXd::Constant(1, 1, t), false});
-      const std::string name = fmt::format("{}_{:06d}.vtp", body.name(), f);
-      skinned_series_.at(body.name())->add(t, name);
-      submit([path = folder->stage(name), posed, &faces = body.model().faces, fields = std::move(fields), this] {
-        vtk::write_surface(path, posed, faces, fields, scene_.output.compression);
-      });
-    }
-    if (write && objects_series_) {
-      Eigen::MatrixXd ids;
-      Surface surface = detail::merged_object_surfaces(objects_, ids);
-      vtk::Fields fields;
-      fields.cell_data.push_back({"object_id", ids, true});
-      fields.field_data.push_back({"TimeValue", Eigen::MatrixXd::Constant(1, 1, t), false});
-      const std::string name = fmt::format("objects_{:06d}.vtp", f);
-      objects_series_->add(t, name);
-      submit([path = folder->stage(name), surface = std::move(surface), fields = std::move(fields), this] {
-        vtk::write_surface(path, surface.vertices, surface.triangles, fields, scene_.output.compression);
-      });
-    }
-  }
-
-  void submit(std::function<void()> job) {
-    if (jobs_) jobs_->submit(std::move(job));
-    else job();
-  }
-
-  void finish_writers(RunFolder& folder) {
-    for (auto& w : writers_)
-      if (w) w->finish();
-    for (auto& [name, series] : skinned_series_) series->write();
-    if (objects_series_) objects_series_->write();
-    (void)folder;
-  }
-
-  /// Seconds spent posing the written frames' surfaces (soft bodies' writers and skinned bodies).
-  double posing_seconds() const {
-    double seconds = seconds_.skinning;
-    for (const auto& w : writers_)
-      if (w) seconds += w->posing_seconds();
-    return seconds;
+    output_->frame(f, t, output);
   }
 
   // --- summary -------------------------------------------------------------------------------------------
@@ -484,7 +398,7 @@ class SceneRun {
         j["failed_attempts"] = body.failed_attempts;
         j["contact_refinements"] = body.refinements;
         j["solve_seconds"] = body.solve_seconds;
-        j["dynamics"] = writers_[b]->dynamics_summary();
+        j["dynamics"] = output_->dynamics_summary(b);
       }
       nlohmann::json contact = nlohmann::json::object();
       for (const auto& [label, p] : {std::pair{"objects", c.objects.get()}, std::pair{"bodies", c.bodies.get()}}) {
@@ -523,7 +437,7 @@ class SceneRun {
       if (note && *note) j["note"] = note;
       ran.push_back(j);
     };
-    entry("skinning", seconds_.skinning, "posing the skinned bodies (soft bodies' skinning is inside their solves)");
+    entry("skinning", output_->skinning_seconds(), "posing the skinned bodies (soft bodies' skinning is inside their solves)");
     if (soft > 0 && solved_steps > 0) {
       entry("elasticity", seconds_.elasticity, "the soft layers' solves without their mass and contact terms");
       if (e.inertia) entry("inertia", seconds_.inertia, e.gravity ? "the mass terms, gravity included" : "the mass terms");
@@ -548,11 +462,12 @@ class SceneRun {
                     {"loop_seconds", loop_seconds},
                     {"step_seconds", step_seconds_},
                     {"output_seconds", output_seconds_},
-                    {"posing_seconds", posing_seconds()},
+                    {"posing_seconds", output_->posing_seconds()},
                     {"penetration_check_seconds", check_seconds_},
                     {"frames_per_second", loop_seconds > 0 ? (frames_ - 1) / loop_seconds : 0.0},
                     {"total_seconds", total_seconds}};
-    s["output"] = {{"every", every_}, {"compression", vtk::to_string(scene_.output.compression)}, {"frames", scene_.output.frames}};
+    s["output"] = {{"every", every_}, {"compression", vtk::to_string(scene_.output.compression)}, {"frames", scene_.output.frames},
+                   {"format", scene_.output.format}, {"collections", output_->collections()}};
     if (scene_.output.fields) s["output"]["fields"] = *scene_.output.fields;
     if (e.body_contact) s["body_groups_per_step"] = steps_ > 0 ? static_cast<double>(groups_) / static_cast<double>(steps_) : 0.0;
     if (!crowd_.bodies.empty()) s["crowd"] = {{"avatars", crowd_.bodies.size()}, {"shape_model", crowd_.shape_model}};
@@ -567,10 +482,7 @@ class SceneRun {
   std::vector<std::unique_ptr<SceneBody>> bodies_;
   std::vector<SceneObject> objects_;
   std::vector<BodyContact> contact_;
-  std::vector<std::unique_ptr<model::SimulationWriter>> writers_;
-  std::map<std::string, std::unique_ptr<vtk::PvdSeries>> skinned_series_;
-  std::unique_ptr<vtk::PvdSeries> objects_series_;
-  BackgroundJobs* jobs_ = nullptr;   ///< the frame writer of run() (null: write at once)
+  std::optional<detail::SceneOutput> output_;   ///< the files of run() (its jobs are run()'s)
   int every_ = 1;
   detail::EffectSeconds seconds_;
   double output_seconds_ = 0.0, step_seconds_ = 0.0, check_seconds_ = 0.0, deepest_time_ = 0.0;

@@ -2,6 +2,7 @@
 // and one-line errors with nothing written for every malformed input.
 #include "run_command.hpp"
 #include "scratch_dir.hpp"
+#include "self_described.hpp"
 #include "synthetic_body.hpp"
 
 #include <sflsh/body/body_io.hpp>
@@ -59,7 +60,8 @@ TEST_F(Cli, MotionExportWritesOneFramePerStepInVertexOrder) {
   const body::RowMatrixX3d expected = poser.pose(motion.poses[3], motion.trans[3]);
   EXPECT_LT((frame3 - expected).cwiseAbs().maxCoeff(), 1e-9);
   EXPECT_THAT(vtk::read_point_array_names(out / "body_000003.vtp"),
-              ::testing::IsSupersetOf({"displacement", "skin_weights_argmax"}));
+              ::testing::IsSupersetOf({"displacement", "skin_weights_argmax", "Normals"}));
+  sflsh::testing::expect_self_described(out / "body_000003.vtp");
 
   std::ifstream pvd(out / "body.pvd");
   const std::string xml((std::istreambuf_iterator<char>(pvd)), std::istreambuf_iterator<char>());

@@ -3,6 +3,7 @@
 #include "png_check.hpp"
 #include "run_command.hpp"
 #include "scratch_dir.hpp"
+#include "self_described.hpp"
 
 #include <sflsh/core/summary.hpp>
 #include <sflsh/core/vtk_io.hpp>
@@ -139,6 +140,8 @@ TEST(CliCompare, WritesTheTradeoffTableAndErrorMapsForEveryConfiguration) {
   const vtk::Points points = vtk::read_points(out / "compare.vtp");
   EXPECT_EQ(points.rows(), summary["mesh"]["body_vertices"].get<long>());
   const std::vector<std::string> names = vtk::read_point_array_names(out / "compare.vtp");
+  sflsh::testing::expect_self_described(out / "compare.vtp");
+  EXPECT_EQ(vtk::read_point_array(out / "compare.vtp", "soft_region"), vtk::read_point_array(out / "compare.vtp", "region"));
   std::vector<std::string> expected = {"sigma_full"};
   for (const auto& [h, k] : configs)
     for (const char* prefix : {"sigma_reduced_", "sigma_error_", "rms_error_"}) expected.push_back(fmt::format("{}h{}_k{}", prefix, h, k));

@@ -1,6 +1,7 @@
 // `sflsh material show`: the material-field files and their errors.
 #include "run_command.hpp"
 #include "scratch_dir.hpp"
+#include "self_described.hpp"
 
 #include <sflsh/core/summary.hpp>
 #include <sflsh/core/vtk_io.hpp>
@@ -31,6 +32,8 @@ TEST(CliMaterialShow, WritesFieldsControlPointsAndARoundTrippableMaterialFile) {
   for (const char* field : {"thickness", "young_tangent", "young_normal", "phi_00", "phi_11"})
     EXPECT_THAT(names, ::testing::Contains(std::string(field)));
   EXPECT_EQ(vtk::read_points(out / "control_points.vtp").rows(), 12);
+  for (const char* file : {"surface.vtp", "layer.vtu", "control_points.vtp"}) sflsh::testing::expect_self_described(out / file);
+  EXPECT_EQ(vtk::read_point_array(out / "surface.vtp", "thickness_fraction"), vtk::read_point_array(out / "surface.vtp", "thickness"));
   // The written material file is accepted back as --material.
   const auto again = dir / "again";
   result = run_sflsh(fmt::format("-q material show --subject OPEN_TEST_1 --material {} {} --out {}",

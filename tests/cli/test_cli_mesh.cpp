@@ -1,6 +1,7 @@
 // `sflsh mesh`: the layer-mesh contract (files, fields, summary) and its one-line errors.
 #include "run_command.hpp"
 #include "scratch_dir.hpp"
+#include "self_described.hpp"
 
 #include <sflsh/core/summary.hpp>
 #include <sflsh/core/vtk_io.hpp>
@@ -47,6 +48,14 @@ TEST(CliMesh, WritesTheLayerSurfacesAndSummary) {
   EXPECT_TRUE(summary["timings_s"].contains("retarget"));
   // The outer surface has one point per skin vertex of the region.
   EXPECT_EQ(vtk::read_points(out / "outer.vtp").rows(), summary["skin_vertices"].get<long>());
+  // Every array says its unit; part and node_kind come with the names of their values.
+  for (const char* file : {"layer.vtu", "outer.vtp", "inner.vtp"}) sflsh::testing::expect_self_described(out / file);
+  sflsh::testing::expect_labels_named(out / "layer.vtu", vtk::read_point_array(out / "layer.vtu", "part"), "part_names");
+  sflsh::testing::expect_labels_named(out / "layer.vtu", vtk::read_cell_array(out / "layer.vtu", "part"), "part_names");
+  sflsh::testing::expect_labels_named(out / "layer.vtu", vtk::read_point_array(out / "layer.vtu", "node_kind"), "node_kind_names");
+  sflsh::testing::expect_labels_named(out / "outer.vtp", vtk::read_point_array(out / "outer.vtp", "part"), "part_names");
+  EXPECT_EQ(vtk::read_field_strings(out / "layer.vtu", "part_names").size(), 5u);
+  EXPECT_THAT(vtk::read_field_strings(out / "layer.vtu", "node_kind_names"), ::testing::ElementsAre("interior", "outer", "inner", "side"));
 }
 
 TEST(CliMesh, BadInputGivesOneLineAndWritesNothing) {

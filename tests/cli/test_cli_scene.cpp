@@ -24,6 +24,13 @@ TEST(CliScene, SkinningOnlySceneWritesSeriesAndEffects) {
   EXPECT_TRUE(s["effects"][0].contains("seconds"));
   EXPECT_EQ(s["scene"]["frames"], 3);
   for (const char* f : {"dancer.pvd", "runner.pvd", "dancer_000002.vtp", "runner_000002.vtp"}) EXPECT_TRUE(std::filesystem::exists(dir / "out" / f)) << f;
+  // One collection opens the scene: both bodies at each of the 3 frames; no σ maps without a soft body.
+  std::ifstream pvd(dir / "out" / "scene.pvd");
+  const std::string xml((std::istreambuf_iterator<char>(pvd)), std::istreambuf_iterator<char>());
+  for (const char* f : {R"(part="0" name="dancer" file="dancer_000000.vtp")", R"(part="1" name="runner" file="runner_000002.vtp")"})
+    EXPECT_NE(xml.find(f), std::string::npos) << f;
+  EXPECT_FALSE(std::filesystem::exists(dir / "out" / "scene_dynamics.pvd"));
+  EXPECT_EQ(s["output"]["collections"], nlohmann::json::array({"scene.pvd"}));
 }
 
 TEST(CliScene, BadSceneIsOneLineAndWritesNothing) {

@@ -150,7 +150,7 @@ TEST(VtkOutput, SurfaceAndTetsReadBackWithVtkReaders) {
   fields.point_data.push_back({"label", (Eigen::MatrixXd(4, 1) << 0, 1, 2, 3).finished(), true});
   vtk::write_surface(dir / "s.vtp", points, triangles, fields);
   EXPECT_TRUE(vtk::read_points(dir / "s.vtp").isApprox(points));
-  EXPECT_THAT(vtk::read_point_array_names(dir / "s.vtp"), ::testing::ElementsAre("displacement", "label"));
+  EXPECT_THAT(vtk::read_point_array_names(dir / "s.vtp"), ::testing::ElementsAre("displacement", "label", "Normals"));
   EXPECT_EQ(vtk::read_point_array(dir / "s.vtp", "label")(3, 0), 3.0);
 
   vtk::Cells tet(1, 4);

@@ -6,12 +6,14 @@
 
 #include "run_command.hpp"
 #include "scratch_dir.hpp"
+#include "self_described.hpp"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <hdf5.h>
 
 #include <algorithm>
+#include <fstream>
 
 namespace sflsh::fullspace {
 namespace {
@@ -55,10 +57,12 @@ TEST_P(CliSimulate, SurfaceMatchesMotionExportLayoutAndCarriesTheSoftTissueField
   EXPECT_LT(((last_sim - last_exp) - soft).cwiseAbs().maxCoeff(), 1e-9);
   EXPECT_GT(soft.cwiseAbs().maxCoeff(), 0.0);   // the tissue moved
   const std::vector<std::string> names = vtk::read_point_array_names(dir / "sim" / "body_000003.vtp");
-  for (const char* field : {"displacement", "velocity", "skin_weights_argmax", "soft_tissue_displacement",
-                            "elastic_displacement", "strain_energy_density", "thickness", "young_tangent", "young_normal"}) {
+  for (const char* field : {"displacement", "velocity", "skin_weights_argmax", "soft_tissue_displacement", "elastic_displacement",
+                            "strain_energy_density", "thickness", "thickness_fraction", "young_tangent", "young_normal",
+                            "soft_region", "Normals"}) {
     EXPECT_NE(std::find(names.begin(), names.end(), field), names.end()) << field;
   }
+  for (const char* file : {"body_000003.vtp", "dynamics.vtp"}) sflsh::testing::expect_self_described(dir / "sim" / file);
   const nlohmann::json summary = read_json(dir / "sim" / "summary.json");
   ASSERT_EQ(summary["frames"].size(), 4u);
   EXPECT_GT(summary["solver"]["newton_iterations"].get<int>(), 0);
@@ -119,6 +123,11 @@ TEST_P(CliSimulate, XdmfSeriesHoldsTheSameFramesAsTheVtkSeries) {
   // Fixed fields once, not per frame.
   EXPECT_FALSE(read_h5(dir / "xdmf" / "body.h5", "/static/point/young_tangent").empty());
   EXPECT_TRUE(read_h5(dir / "xdmf" / "body.h5", "/point/young_tangent/000003").empty());
+  EXPECT_FALSE(read_h5(dir / "xdmf" / "body.h5", "/static/point/soft_region").empty());
+  EXPECT_FALSE(read_h5(dir / "xdmf" / "body.h5", "/point/Normals/000003").empty());
+  std::ifstream xmf(dir / "xdmf" / "body.xmf");
+  const std::string xml((std::istreambuf_iterator<char>(xmf)), std::istreambuf_iterator<char>());
+  EXPECT_NE(xml.find("<Information Name=\"units\" Value=\"skin_weights_argmax: index; thickness_fraction: 1; "), std::string::npos);
   const nlohmann::json summary = read_json(dir / "xdmf" / "summary.json");
   EXPECT_EQ(summary["output"]["format"], "xdmf");
   EXPECT_EQ(summary["output"]["series"], "body.xmf");

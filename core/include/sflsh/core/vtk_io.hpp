@@ -2,6 +2,8 @@
 // VTK XML output for ParaView: surfaces (.vtp), volume meshes (.vtu), and .pvd time series.
 // Every file is written atomically (temp file + rename). Binary appended data, zlib-compressed by default
 // (frame series may choose LZ4, about 8× faster to write and ~1.3× larger, or no compression).
+// Every file says the unit of each of its arrays: a string array `units` in its field data, one entry
+// "<name>: <unit>" per array name (core/array_units.hpp; docs/output.md). Surfaces carry unit point normals.
 #include <Eigen/Core>
 
 #include <filesystem>
@@ -20,11 +22,25 @@ struct Field {
   bool integer = false;     ///< store as Int32 instead of Float64 (e.g. labels)
 };
 
+/// A string array of field data: the names of the values of a label array (`part_names`, `node_kind_names`).
+struct Labels {
+  std::string name;
+  std::vector<std::string> values;   ///< values[k] names the label value k
+};
+
 struct Fields {
   std::vector<Field> point_data;
   std::vector<Field> cell_data;
   std::vector<Field> field_data;  ///< whole-dataset values (e.g. time), one row
+  std::vector<Labels> labels;     ///< whole-dataset string arrays
+  /// write_surface adds the point array `Normals` (unit, area-weighted, Float32) of the written triangles
+  /// when the fields hold none, and marks `Normals` as the surface's normals (ParaView shades with them).
+  bool normals = true;
 };
+
+/// Area-weighted unit vertex normals of a triangle surface (zero at vertices of no triangle); they point to
+/// the side from which the triangles' vertices run counter-clockwise.
+Points vertex_normals(const Eigen::Ref<const Points>& points, const Eigen::Ref<const Cells>& triangles);
 
 /// How the binary data blocks are compressed (every VTK/ParaView reader since VTK 8.1 reads all three).
 enum class Compression { zlib, lz4, none };
@@ -42,12 +58,17 @@ void write_unstructured(const std::filesystem::path& path, const Eigen::Ref<cons
                         const Eigen::Ref<const Cells>& cells, const Fields& fields = {},
                         Compression compression = Compression::zlib);
 
-/// A ParaView collection of time steps: write() lists every added file with its time.
+/// A ParaView collection (.pvd): write() lists every added file with its time, part and name. ParaView opens
+/// it as one multiblock per time step with a block per part (the block named after the entry's name).
 class PvdSeries {
  public:
   explicit PvdSeries(std::filesystem::path pvd_path) : path_(std::move(pvd_path)) {}
   /// Records `file` (relative to the .pvd's folder) at time `t` [s].
-  void add(double t, const std::string& file) { entries_.push_back({t, file}); }
+  void add(double t, const std::string& file) { entries_.push_back({t, true, file, 0, {}}); }
+  /// Records `file` at time `t` [s] as part `part` (0, 1, …) named `name` (e.g. a scene's bodies and objects).
+  void add(double t, const std::string& file, int part, const std::string& name) { entries_.push_back({t, true, file, part, name}); }
+  /// Records a file that holds at every time (no timestep), as part `part` named `name`.
+  void add_untimed(const std::string& file, int part, const std::string& name) { entries_.push_back({0.0, false, file, part, name}); }
   /// Writes the .pvd atomically (may be called repeatedly to keep a partial series readable).
   void write() const;
   std::size_t size() const { return entries_.size(); }
@@ -55,7 +76,10 @@ class PvdSeries {
  private:
   struct Entry {
     double time;
+    bool timed;
     std::string file;
+    int part;
+    std::string name;
   };
   std::filesystem::path path_;
   std::vector<Entry> entries_;
@@ -67,5 +91,15 @@ Points read_points(const std::filesystem::path& path);
 std::vector<std::string> read_point_array_names(const std::filesystem::path& path);
 /// Reads one point-data array (rows = points) with VTK's reader.
 Eigen::MatrixXd read_point_array(const std::filesystem::path& path, const std::string& name);
+/// Reads the names of the cell-data arrays.
+std::vector<std::string> read_cell_array_names(const std::filesystem::path& path);
+/// Reads one cell-data array (rows = cells).
+Eigen::MatrixXd read_cell_array(const std::filesystem::path& path, const std::string& name);
+/// Reads the names of the field-data arrays (numbers and strings).
+std::vector<std::string> read_field_array_names(const std::filesystem::path& path);
+/// Reads a string array of the field data (`units`, `part_names`, …); throws when there is none of that name.
+std::vector<std::string> read_field_strings(const std::filesystem::path& path, const std::string& name);
+/// Reads the cells (triangles or tetrahedra) of a .vtp or .vtu file, one row each.
+Cells read_cells(const std::filesystem::path& path);
 
 }  // namespace sflsh::vtk

@@ -8,6 +8,8 @@
 //   /geometry/<step>               nodes × 3  positions [m] (a step that does not move the nodes reuses the last)
 //   /point/<name>/<step>, /cell/<name>/<step>      rows × components
 //   /static/point/<name>, /static/cell/<name>      fields that do not change over time
+// Every dataset has a string attribute `unit` (core/array_units.hpp); the `.xmf`'s Domain holds
+// <Information Name="units" Value="<name>: <unit>; …"/> and one Information per label list (`part_names`, …).
 // The file format is documented for users in docs/output.md.
 #include <sflsh/core/vtk_io.hpp>
 

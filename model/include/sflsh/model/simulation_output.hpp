@@ -47,8 +47,9 @@ Eigen::VectorXd strain_energy_density(const Problem& problem, const Eigen::Vecto
 Eigen::VectorXd strain_energy_density(const Problem& problem, const Eigen::VectorXd& x, const std::vector<int>& tets);
 
 /// The point/cell arrays a body frame (and a layer frame) can carry: displacement, velocity,
-/// skin_weights_argmax, soft_tissue_displacement, elastic_displacement, strain_energy_density, thickness,
-/// young_tangent, young_normal, and in scenes with contact contact_force, penetration.
+/// skin_weights_argmax, soft_tissue_displacement, elastic_displacement, strain_energy_density,
+/// thickness_fraction (and its older name thickness), young_tangent, young_normal, soft_region, Normals, and
+/// in scenes with contact contact_force, penetration. Their units: core/array_units.hpp, docs/output.md.
 const std::vector<std::string>& frame_field_names();
 /// The frame output formats: "vtk", "xdmf"; throws sflsh::Error "<where>: …" for another name.
 void check_output_format(const std::string& format, const std::string& where);
@@ -85,13 +86,15 @@ struct SimulationWriterOptions {
 /// Writes a body simulation frame by frame into a run folder and accumulates σ.
 /// body.pvd / body_NNNNNN.vtp: the posed body surface (all vertices, model order) with point data
 ///   displacement (posed − shaped template, as `sflsh motion export`), velocity (finite difference of
-///   posed positions between written frames, as the export), skin_weights_argmax, and in the region
+///   posed positions between written frames, as the export), skin_weights_argmax, Normals (of the posed
+///   surface), soft_region (1 on the soft layer's skin, 0 elsewhere), and in the region
 ///   soft_tissue_displacement (posed − skinned, world frame), elastic_displacement (unposed frame),
-///   strain_energy_density (of the tet under the vertex) [J/m³] and the κ fields thickness,
-///   young_tangent, young_normal (zero outside the region).
+///   strain_energy_density (of the tet under the vertex) [J/m³] and the κ fields thickness_fraction (also
+///   as thickness), young_tangent, young_normal (zero outside the region).
 /// layer.pvd / layer_NNNNNN.vtu (on request): the posed tet layer with displacement (posed − rest),
 ///   elastic_displacement, velocity (ṗ of the state), κ per node and per tet, strain_energy_density per tet.
-/// dynamics.vtp (at finish): the shaped neutral surface with sigma, sigma_normal, sigma_tangent [mm].
+/// dynamics.vtp (at finish): the shaped neutral surface, placed like the frames, with sigma, sigma_normal,
+///   sigma_tangent [mm], the κ fields, soft_region and Normals.
 class SimulationWriter {
  public:
   /// `run` null: nothing is written (σ is still accumulated). The layer must outlive the writer.
@@ -119,6 +122,8 @@ class SimulationWriter {
   const RowMatrixX3d& last_posed() const { return previous_posed_; }
   /// Seconds spent posing the written frames' surfaces (caller's thread).
   double posing_seconds() const { return posing_seconds_; }
+  /// The σ map's file name: dynamics.vtp for prefix "body", <prefix>_dynamics.vtp otherwise.
+  std::string dynamics_file() const;
 
  private:
   void add(int index, double t, const Eigen::VectorXd& x, const State* state, bool write, const std::vector<vtk::Field>& extra);
@@ -130,6 +135,7 @@ class SimulationWriter {
   std::unique_ptr<xdmf::Series> body_xdmf_, layer_xdmf_;   ///< format "xdmf" instead of the .pvd series
   Eigen::MatrixXd dominant_joint_;      ///< per body vertex: argmax of the skinning weights
   Eigen::MatrixXd vertex_kappa_;        ///< per body vertex (h, Y_t, Y_n), zero outside the region
+  Eigen::MatrixXd soft_region_;         ///< per body vertex 1 in the region, 0 elsewhere
   DynamicsAmplitude amplitude_;
   RowMatrixX3d previous_posed_;
   double previous_t_ = 0.0;
@@ -137,6 +143,10 @@ class SimulationWriter {
   double posing_seconds_ = 0.0;
 
   void write_layer_frame(int index, double t, const State& state);
+  /// Whether the options place the body (a rotation or translation other than the identity).
+  bool placed() const;
+  /// The points placed in the world: rotation p + translation per row.
+  RowMatrixX3d place(const RowMatrixX3d& points) const;
   /// Runs the job on the background jobs, or at once without them.
   void run_job(std::function<void()> job);
 };

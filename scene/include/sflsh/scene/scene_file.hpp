@@ -130,6 +130,9 @@ struct OutputSpec {
   /// The arrays of the body (and layer) frames, names of model::frame_field_names(); nullopt: all.
   std::optional<std::vector<std::string>> fields;
   vtk::Compression compression = vtk::Compression::lz4;   ///< of the frame files: lz4 | zlib | none
+  /// "vtk": a .pvd of .vtp frames per body and object, and scene.pvd over all of them; "xdmf": <name>.xmf +
+  /// <name>.h5 per body and for the objects (docs/output.md), no collection.
+  std::string format = "vtk";
 };
 
 struct Scene {
