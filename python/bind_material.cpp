@@ -71,7 +71,7 @@ void bind_material(py::module_& m) {
                   py::arg("subject") = py::none(), py::arg("shape_model") = py::none(), py::arg("body") = py::none(),
                   "κ̂(β) of a shape model (default: data/shape_models/default.toml) for a subject or β")
       .def_static("from_arrays", &from_arrays, py::arg("vertices"), py::arg("kappa"), py::kw_only(),
-                  py::arg("body") = "open_body", py::arg("subject") = "", py::arg("poisson") = 0.2,
+                  py::arg("body") = "open_body", py::arg("subject") = "custom", py::arg("poisson") = 0.2,
                   py::arg("saturation") = 4.0, "Control points (body vertex indices) and their κ (N × 3, physical units)")
       .def_readonly("body", &Material::body)
       .def_readonly("subject", &Material::subject)
