@@ -54,6 +54,22 @@ def test_reduced_run_equals_the_cli(cli, cache, scratch):
     assert summary["reduced"]["coordinates"] == cli_summary["reduced"]["coordinates"]
 
 
+def test_full_space_run_equals_the_cli(cli, cache, scratch):
+    # The full-space solver in the module's process (PETSc and MPI started on first use, one process) against
+    # `sflsh simulate --solver full`: the same solves on the same inputs, so again equal to round-off (1e-9 m).
+    out = scratch / "run"
+    r = run_cli(cli, "simulate", "--solver", "full", "--mesh", "coarse", "--subject", "OPEN_TRAIN_2", "--motion",
+                "shake_hips", "--frames", "3", "--cache", cache, "--out", str(out))
+    assert r.returncode == 0, r.stderr
+    sim = sflsh.Simulation(subject="OPEN_TRAIN_2", motion="shake_hips", frames=3, solver="full", mesh="coarse", cache=cache)
+    result = sim.run()
+    for t in range(3):
+        points, _ = read_vtp(out / f"body_{t:06d}.vtp")
+        np.testing.assert_allclose(result["vertices"][t], points, rtol=0, atol=1e-9)
+    cli_summary = json.loads((out / "summary.json").read_text())
+    assert sim.summary()["solver"] == cli_summary["solver"]
+
+
 def test_step_by_step_equals_run(simulation, cache):
     other = sflsh.Simulation(**SETTINGS, cache=cache)
     assert simulation.frame == 0 and simulation.num_frames == FRAMES and not simulation.finished
