@@ -1,4 +1,4 @@
-"""sflsh.Simulation: a reduced run equal to `sflsh simulate` for the same inputs, arrays without copies, errors as
+"""sflsh.Simulation: reduced and full-space runs equal to `sflsh simulate` for the same inputs, arrays without copies, errors as
 exceptions, and Ctrl-C (KeyboardInterrupt) at a frame boundary leaving the simulation usable.
 
 The runs are short (coarse layer, a few frames) so the whole file stays within seconds once the reduced model is
