@@ -106,6 +106,20 @@ def test_errors_are_exceptions_with_the_clis_messages(cache):
         sflsh.Simulation(subject="OPEN_TRAIN_1", solver="reduced")
 
 
+@pytest.mark.parametrize("option, value, keyword", [("--density", "-1", "density"), ("--subject", "NOBODY", "subject"),
+                                                    ("--integrator", "euler", "integrator")])
+def test_error_message_is_the_clis_line(cli, cache, scratch, option, value, keyword):
+    # The CLI prints "sflsh: error: <message>"; the module raises sflsh.Error(<message>) for the same input.
+    args = {"--solver": "reduced", "--mesh": "coarse", "--subject": "OPEN_TRAIN_1", "--motion": "jiggle_on_toes",
+            "--frames": str(FRAMES), option: value}
+    r = run_cli(cli, "simulate", *[x for kv in args.items() for x in kv], "--cache", cache, "--out", str(scratch / "run"))
+    assert r.returncode == 1
+    line = [l for l in r.stderr.splitlines() if l.startswith("sflsh: error: ")][0]
+    with pytest.raises(sflsh.Error) as raised:
+        sflsh.Simulation(**{**SETTINGS, keyword: float(value) if keyword == "density" else value}, cache=cache)
+    assert str(raised.value) == line[len("sflsh: error: "):]
+
+
 def test_keyboard_interrupt_leaves_the_simulation_usable(cache):
     sim = sflsh.Simulation(**{**SETTINGS, "frames": 400}, cache=cache)
     sim.step()   # warm: the first frame factorizes
