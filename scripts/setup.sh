@@ -13,6 +13,7 @@ packages=(
   googletest libgtest-dev libgmock-dev
   xvfb xauth
   python3-meshio
+  python3-dev python3-numpy pybind11-dev python3-pybind11 pybind11-json-dev python3-pytest python3-matplotlib python3-h5py python3-vtk9
 )
 
 missing=()

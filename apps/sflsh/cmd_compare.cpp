@@ -356,7 +356,7 @@ void run_compare(const CompareOptions& opt, const Invocation& invocation, int ra
   }
 
   nlohmann::json summary = summary_header("compare", invocation.argc, invocation.argv);
-  summary["body"] = opt.subject.body_path.empty() ? "open_body" : opt.subject.body_path;
+  summary["body"] = body::body_label(opt.subject);
   summary["subject"] = subject_label;
   summary["beta"] = std::vector<double>(beta.data(), beta.data() + beta.size());
   summary["motion"] = {{"name", motion.name}, {"source", motion.source}, {"fps", motion.fps}, {"frames", motion.num_frames()}};

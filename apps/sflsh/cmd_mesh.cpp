@@ -107,7 +107,7 @@ void run_mesh(const MeshOptions& opt, const Invocation& invocation) {
   const double skin_error = (skin_points - geometry.skin).rowwise().norm().maxCoeff();
 
   nlohmann::json summary = summary_header("mesh", invocation.argc, invocation.argv);
-  summary["body"] = opt.subject.body_path.empty() ? "open_body" : opt.subject.body_path;
+  summary["body"] = body::body_label(opt.subject);
   summary["body_name"] = model.name;
   summary["subject"] = subject_label;
   summary["beta"] = std::vector<double>(beta.data(), beta.data() + beta.size());

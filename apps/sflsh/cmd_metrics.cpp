@@ -15,6 +15,7 @@
 #include <sflsh/validate/dynamics_metrics.hpp>
 #include <sflsh/validate/dynamics_report.hpp>
 #include <sflsh/validate/pose_fit.hpp>
+#include <sflsh/validate/registration_metrics.hpp>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -82,13 +83,12 @@ void run_metrics(const MetricsOptions& opt, const Invocation& invocation) {
   fit_options.progress = true;
   logger()->info("metrics: {} frames of '{}' ({} vertices, {} in the soft region), β {}", sequence.num_frames(), opt.sequence,
                  model.num_vertices(), soft.size(), given_beta ? "given" : "fitted");
-  validate::PoseFitResult fit = validate::fit_motion(model, sequence.frames, sequence.fps, given_beta, fit_options);
+  validate::RegistrationMetrics measured = validate::registration_metrics(model, sequence.frames, sequence.fps, given_beta, fit_options);
+  validate::PoseFitResult& fit = measured.fit;
   fit.motion.name = opt.sequence;
   fit.motion.source = opt.dyna;
-
-  const auto t_metrics = std::chrono::steady_clock::now();
-  const validate::DynamicsResult dynamics = validate::dynamics_metrics(model, fit.beta, fit.motion, sequence.frames, soft);
-  const double metrics_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_metrics).count();
+  const validate::DynamicsResult& dynamics = measured.dynamics;
+  const double metrics_seconds = measured.metrics_seconds;
 
   RunFolder run(opt.out);
   validate::write_dynamics_vtp(run.stage("metrics.vtp"), body::shaped_template(model, fit.beta), model.faces, dynamics);
@@ -98,7 +98,7 @@ void run_metrics(const MetricsOptions& opt, const Invocation& invocation) {
   nlohmann::json summary = summary_header("metrics", invocation.argc, invocation.argv);
   summary["dyna"] = {{"file", opt.dyna}, {"sequence", opt.sequence}, {"subject", validate::subject_of(opt.sequence)},
                      {"frames", sequence.num_frames()}, {"fps", sequence.fps}, {"vertices", file.num_vertices()}};
-  summary["body"] = opt.subject.body_path.empty() ? "open_body" : opt.subject.body_path;
+  summary["body"] = body::body_label(opt.subject);
   summary["beta"] = vector_json(fit.beta);
   summary["beta_fitted"] = fit.beta_fitted;
   nlohmann::json per_frame = nlohmann::json::array();

@@ -63,7 +63,7 @@ void run_export(const ExportOptions& opt, const Invocation& invocation) {
   series.write();
 
   nlohmann::json summary = summary_header("motion export", invocation.argc, invocation.argv);
-  summary["body"] = opt.subject.body_path.empty() ? "open_body" : opt.subject.body_path;
+  summary["body"] = body::body_label(opt.subject);
   summary["subject"] = subject_label;
   summary["beta"] = std::vector<double>(beta.data(), beta.data() + beta.size());
   summary["motion"] = {{"name", motion.name},

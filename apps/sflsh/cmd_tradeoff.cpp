@@ -426,7 +426,7 @@ void run_tradeoff(const TradeoffOptions& opt, const Invocation& invocation, int 
                         {"valid", r.valid}, {"pareto", r.pareto}});
   nlohmann::json summary = summary_header("tradeoff", invocation.argc, invocation.argv);
   summary["preset"] = opt.preset;
-  summary["body"] = opt.subject.body_path.empty() ? "open_body" : opt.subject.body_path;
+  summary["body"] = body::body_label(opt.subject);
   summary["subject"] = subject_label;
   summary["beta"] = std::vector<double>(beta.data(), beta.data() + beta.size());
   summary["motion"] = {{"name", motion.name}, {"source", motion.source}, {"fps", motion.fps}, {"frames", motion.num_frames()}};

@@ -2,6 +2,7 @@
 // The sflsh command-line interface: each command group registers its subcommands on the app.
 #include <sflsh/body/body_model.hpp>
 #include <sflsh/body/skinning.hpp>
+#include <sflsh/body/subject_selection.hpp>
 
 #include <CLI/CLI.hpp>
 
@@ -49,20 +50,14 @@ void register_render_commands(CLI::App& app, const Invocation& invocation);
 /// error on any rank is printed with the rank and stops every rank (MPI_Abort) instead of deadlocking.
 void with_petsc(const Invocation& invocation, const std::function<void(int rank, int size)>& body);
 
-/// Options that choose a body model and a subject: --body PATH, --subject NAME | --betas "…".
-struct SubjectOptions {
-  std::string body_path;   ///< empty: the open body
-  std::string subject;
-  std::string betas;
-};
+/// Options that choose a body model and a subject: --body PATH, --subject NAME | --betas "…" (one definition in
+/// the body library, shared with the Python module).
+using SubjectOptions = body::SubjectSelection;
+using body::load_selected_body;
+using body::selected_betas;
 void add_body_option(CLI::App& cmd, SubjectOptions& options);
 /// Adds --subject and --betas (mutually exclusive).
 void add_subject_options(CLI::App& cmd, SubjectOptions& options);
-
-body::BodyModel load_selected_body(const SubjectOptions& options);
-/// The β of --subject or --betas; `label` receives a name for summaries. When neither is given:
-/// an error naming `required_by` if it is not null, else β = 0.
-body::Betas selected_betas(const SubjectOptions& options, std::string& label, const char* required_by = nullptr);
 
 /// Index of each vertex's largest skinning weight (n×1), for the `skin_weights_argmax` field.
 Eigen::MatrixXd dominant_joint(const body::BodyModel& model);

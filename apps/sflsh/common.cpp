@@ -1,9 +1,5 @@
 #include "commands.hpp"
 
-#include <sflsh/body/body_io.hpp>
-#include <sflsh/body/subjects.hpp>
-#include <sflsh/core/error.hpp>
-#include <sflsh/core/input_file.hpp>
 #include <sflsh/core/log.hpp>
 #include <sflsh/fullspace/petsc_session.hpp>
 
@@ -41,33 +37,6 @@ void add_subject_options(CLI::App& cmd, SubjectOptions& options) {
   auto* betas = cmd.add_option("--betas", options.betas, "Shape β: up to 10 numbers, e.g. \"1.5 -0.3 0 …\"");
   subject->excludes(betas);
   betas->excludes(subject);
-}
-
-body::BodyModel load_selected_body(const SubjectOptions& options) {
-  const std::filesystem::path path = options.body_path.empty() ? body::default_body_path() : std::filesystem::path(options.body_path);
-  if (options.body_path.empty() && !std::filesystem::exists(path)) {
-    throw_error("{}: the open body is missing; regenerate it with `sflsh body generate`", path.string());
-  }
-  if (!options.body_path.empty()) require_input_file(path, "a body model .npz file");
-  body::BodyModel model = body::load_body(path);
-  logger()->debug("body {}: {} vertices, {} faces", path.string(), model.num_vertices(), model.num_faces());
-  return model;
-}
-
-body::Betas selected_betas(const SubjectOptions& options, std::string& label, const char* required_by) {
-  if (required_by && options.subject.empty() && options.betas.empty())
-    throw_error("{}: one of --subject NAME or --betas \"b1 … b10\" is required", required_by);
-  if (!options.subject.empty()) {
-    const auto subjects = body::default_subjects();
-    label = options.subject;
-    return body::find_subject(subjects, options.subject).beta;
-  }
-  if (!options.betas.empty()) {
-    label = "betas";
-    return body::parse_betas(options.betas);
-  }
-  label = "template";
-  return body::Betas::Zero();
 }
 
 Eigen::MatrixXd dominant_joint(const body::BodyModel& model) {

@@ -356,5 +356,7 @@ nlohmann::json SimulationWriter::dynamics_summary() const {
 }
 
 Eigen::VectorXd SimulationWriter::sigma_per_vertex() const { return scatter(layer_, amplitude_.sigma()); }
+Eigen::VectorXd SimulationWriter::sigma_normal_per_vertex() const { return scatter(layer_, amplitude_.sigma_normal()); }
+Eigen::VectorXd SimulationWriter::sigma_tangent_per_vertex() const { return scatter(layer_, amplitude_.sigma_tangent()); }
 
 }  // namespace sflsh::model

@@ -118,6 +118,9 @@ class SimulationWriter {
   nlohmann::json dynamics_summary() const;
   /// Per body vertex σ in metres (zero outside the region).
   Eigen::VectorXd sigma_per_vertex() const;
+  /// Per body vertex σ_n and σ_t in metres (zero outside the region), as dynamics.vtp holds them in mm.
+  Eigen::VectorXd sigma_normal_per_vertex() const;
+  Eigen::VectorXd sigma_tangent_per_vertex() const;
   /// The posed surface of the last frame written (n×3; empty before the first one or without a run folder).
   const RowMatrixX3d& last_posed() const { return previous_posed_; }
   /// Seconds spent posing the written frames' surfaces (caller's thread).

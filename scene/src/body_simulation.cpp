@@ -1,0 +1,162 @@
+// One body along a motion, frame by frame (body_simulation.hpp): the settings are checked and the work estimated
+// before anything large is built, then the layer, the solver (full space on PETSc or the reduced model) and the
+// writer; step() runs one output frame through the shared frame loop and records it.
+#include <sflsh/scene/body_simulation.hpp>
+
+#include <sflsh/core/error.hpp>
+#include <sflsh/core/log.hpp>
+#include <sflsh/core/work_limit.hpp>
+#include <sflsh/core/xdmf_series.hpp>
+#include <sflsh/fullspace/fullspace_solver.hpp>
+#include <sflsh/model/time_integrator.hpp>
+#include <sflsh/reduced/reduced_model.hpp>
+#include <sflsh/reduced/reduced_settings.hpp>
+#include <sflsh/reduced/reduced_solver.hpp>
+
+#include <algorithm>
+#include <cmath>
+
+namespace sflsh::scene {
+
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+/// One body's steps (frames × substeps), frames and per-frame records (motion sample, summary entry: ~1 kB).
+void check_body_run_work(const BodyRunSettings& opt, double frames) {
+  WorkEstimate e;
+  e.bodies = 1.0;
+  e.body_frames = frames;
+  e.steps = std::max(0.0, frames - 1.0) * opt.substeps;
+  e.bytes = 1024.0 * frames;
+  check_work(e, WorkLimits{}, opt.allow_long, "--frames × --substeps (or the motion's length)");
+}
+
+}  // namespace
+
+BodySimulation::BodySimulation(const BodyRunSettings& opt, RunFolder* frames_to, int rank, int size,
+                               const BodyRunReporting& reporting)
+    : settings_(opt), reporting_(reporting), rank_(rank), size_(size), t_start_(Clock::now()) {
+  require(opt.solver == "full" || opt.solver == "reduced", "--solver {}: expected full or reduced", opt.solver);
+  require(opt.handles >= 1, "--handles must be at least 1, got {}", opt.handles);
+  require(opt.cubature >= -1, "--cubature must be −1 (auto), 0 (every tet) or a tet count, got {}", opt.cubature);
+  require(opt.fps > 0.0, "--fps must be positive, got {}", opt.fps);
+  require(opt.substeps >= 1, "--substeps must be at least 1, got {}", opt.substeps);
+  require(opt.frames >= 0, "--frames must be non-negative, got {}", opt.frames);
+  model::check_layer_settings(opt.layer);
+  const model::Integrator integrator = model::parse_integrator(opt.integrator, "--integrator");
+
+  body_ = std::make_unique<body::BodyModel>(body::load_selected_body(opt.subject));
+  beta_ = body::selected_betas(opt.subject, subject_label_, "simulate");
+  // Before the motion is sampled (frames × 600 B) or anything is built: --frames and --substeps as given …
+  check_body_run_work(opt, opt.frames);
+  motion_ = body::load_motion(opt.motion, opt.fps, opt.frames);
+  motion_.validate();
+  check_body_run_work(opt, static_cast<double>(motion_.num_frames()));   // … and with the motion's own length
+
+  if (opt.material_data) material_file_ = *opt.material_data;
+  else material_file_ = model::load_layer_material(opt.layer);
+  const model::BodyLayerOptions layer_options = model::body_layer_options(opt.layer, opt.mesh);
+  const auto t_build = Clock::now();
+  layer_ = std::make_unique<model::BodyLayer>(model::build_body_layer(
+      *body_, beta_, motion_, material_file_ ? &*material_file_ : nullptr, opt.layer.control_points, layer_options));
+  build_seconds_ = seconds_since(t_build);
+  const model::Problem& problem = layer_->problem;
+  logger()->log(
+      reporting.log_details ? spdlog::level::info : spdlog::level::debug,
+      "simulate: {} nodes ({} free), {} tets, {} frames at {} fps, {} substep(s), {} + {} mass, {} process(es)",
+      problem.num_nodes(), problem.num_nodes() - static_cast<int>(problem.dirichlet.dof.size() / 3), problem.num_tets(),
+      motion_.num_frames(), motion_.fps, opt.substeps, model::to_string(integrator), model::to_string(problem.mass_kind),
+      size);
+
+  const bool use_reduced = opt.solver == "reduced";
+  require(!use_reduced || size == 1, "--solver reduced runs on one process (got {}); parallelize over bodies instead",
+          size);
+  const auto t_model = Clock::now();
+  if (use_reduced) {
+    reduced::ReducedSettings reduced_settings;
+    reduced_settings.cubature_weights = opt.cubature_weights;
+    reduced_settings.affine = opt.affine;
+    reduced_model_ = std::make_unique<reduced::ReducedModel>(reduced::build_reduced_model(
+        *layer_, reduced::reduced_model_options(reduced_settings, opt.handles, opt.cubature, opt.layer.cache)));
+    reduced::ReducedOptions solver_options;
+    solver_options.integrator = integrator;
+    require(opt.newton_tolerance > 0.0 && std::isfinite(opt.newton_tolerance),
+            "--newton-tolerance must be a positive length in metres, got {}", opt.newton_tolerance);
+    solver_options.step_tolerance = opt.newton_tolerance;
+    fast_ = std::make_unique<reduced::ReducedSolver>(problem, reduced_model_->subspace, reduced_model_->cubature,
+                                                     solver_options);
+    fast_->initialize(model::initial_state(problem, 0.0));
+    solver_ = fast_.get();
+  } else {
+    fullspace::FullSpaceOptions solver_options;
+    solver_options.integrator = integrator;
+    full_ = std::make_unique<fullspace::FullSpaceSolver>(problem, MPI_COMM_WORLD, solver_options);
+    full_->initialize(model::initial_state(problem, 0.0));
+    solver_ = full_.get();
+  }
+  model_seconds_ = seconds_since(t_model);
+  if (reporting.on_setup)
+    reporting.on_setup({{"tets", problem.num_tets()},
+                        {"coordinates", reduced_model_ ? reduced_model_->subspace.num_dofs() : 0},
+                        {"cubature", reduced_model_ ? reduced_model_->cubature.size() : 0}});
+
+  const bool write = rank == 0 && frames_to != nullptr;
+  if (write) jobs_.emplace(8);
+  writer_options_.write_layer = opt.write_layer;
+  writer_options_.jobs = jobs_ ? &*jobs_ : nullptr;
+  writer_options_.format = opt.format;
+  writer_options_.precision = xdmf::parse_precision(opt.precision, "--precision");
+  writer_ = std::make_unique<model::SimulationWriter>(*layer_, write ? frames_to : nullptr, writer_options_);
+  writer_->add_frame(0, 0.0, solver_->current_state(), true);
+  frames_.push_back({{"frame", 0}, {"t", 0.0}, {"newton_iterations", 0}, {"linear_iterations", 0}, {"seconds", 0.0}});
+}
+
+BodySimulation::~BodySimulation() = default;
+
+const model::StepStats& BodySimulation::step() {
+  require(!finished(), "simulate: the motion has {} frames; frame {} is its last", num_frames(), frame_);
+  require(!finished_output_, "simulate: the run was finished; no frame can follow");
+  const auto t_step = Clock::now();
+  model::FrameLoopOptions loop;
+  loop.frames = frame_ + 2;
+  loop.first_frame = frame_ + 1;
+  loop.fps = motion_.fps;
+  loop.substeps = settings_.substeps;
+  const model::Problem& problem = layer_->problem;
+  model::run_frames(*solver_, loop, [&](int frame, double, const model::StepStats& st) {
+    const auto f = static_cast<std::size_t>(frame);
+    const auto t_output = Clock::now();
+    const model::State state = solver_->current_state();
+    const model::Energies e = model::energies(problem, state);
+    writer_->add_frame(frame, motion_.time(f), state, model::is_written_frame(frame, num_frames(), settings_.every));
+    output_seconds_ += seconds_since(t_output);
+    frames_.push_back({{"frame", f},
+                       {"t", motion_.time(f)},
+                       {"newton_iterations", st.newton_iterations},
+                       {"linear_iterations", st.linear_iterations},
+                       {"failed_attempts", st.failed_attempts},
+                       {"seconds", st.seconds},
+                       {"energy", {{"kinetic", e.kinetic}, {"elastic", e.elastic}, {"gravity", e.gravity}}}});
+    model::accumulate(total_, st);
+    last_ = st;
+    frame_ = frame;
+  });
+  last_step_seconds_ = seconds_since(t_step);
+  return last_;
+}
+
+model::State BodySimulation::state() const { return solver_->current_state(); }
+
+model::RowMatrixX3d BodySimulation::posed_surface() const {
+  return layer_->posed_surface(solver_->current_state().x, time());
+}
+
+model::RowMatrixX3d BodySimulation::skinned_surface() const {
+  const int region = layer_->mesh->region_surface.num_vertices();
+  return layer_->posed_surface_from_displacement(model::RowMatrixX3d::Zero(region, 3), time());
+}
+
+}  // namespace sflsh::scene

@@ -1,0 +1,121 @@
+// summary.json's body entries of a BodySimulation, its end (drain the frame writes, close the series) and the
+// whole run of `sflsh simulate --solver full|reduced` and `sflsh sweep` (run_body_simulation).
+#include <sflsh/scene/body_simulation.hpp>
+
+#include <sflsh/core/error.hpp>
+#include <sflsh/core/progress.hpp>
+#include <sflsh/core/vtk_io.hpp>
+#include <sflsh/reduced/reduced_model.hpp>
+#include <sflsh/reduced/reduced_solver.hpp>
+#include <sflsh/model/time_integrator.hpp>
+
+namespace sflsh::scene {
+
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+
+nlohmann::json BodySimulation::summary() const {
+  const model::Integrator integrator = model::parse_integrator(settings_.integrator, "--integrator");
+  const double h = 1.0 / (motion_.fps * settings_.substeps);
+  nlohmann::json summary = nlohmann::json::object();
+  summary["compression"] = vtk::to_string(writer_options_.compression);
+  summary["integrator"] = model::to_string(integrator);
+  summary["mass"] = model::to_string(layer_->problem.mass_kind);
+  summary["solver"] = {{"name", settings_.solver},
+                       {"integrator", model::to_string(integrator)},
+                       {"startup_steps", total_.startup_steps},
+                       {"processes", size_},
+                       {"step", h},
+                       {"substeps", settings_.substeps},
+                       {"newton_iterations", total_.newton_iterations},
+                       {"linear_iterations", total_.linear_iterations},
+                       {"failed_attempts", total_.failed_attempts},
+                       {"projected_retries", total_.projected_retries},
+                       {"truncated_solves", total_.truncated_solves}};
+  summary["body"] = body::body_label(settings_.subject);
+  summary["subject"] = subject_label_;
+  summary["beta"] = std::vector<double>(beta_.data(), beta_.data() + beta_.size());
+  summary["motion"] = {
+      {"name", motion_.name}, {"source", motion_.source}, {"fps", motion_.fps}, {"frames", motion_.num_frames()}};
+  summary["mesh"] = {{"mesher", settings_.layer.mesher},
+                     {"size", settings_.mesh},
+                     {"nodes", layer_->problem.num_nodes()},
+                     {"tets", layer_->problem.num_tets()},
+                     {"constrained_dofs", layer_->problem.dirichlet.dof.size()}};
+  summary["material"] = model::material_summary(settings_.layer, material_file_);
+  if (reduced_model_) {
+    summary["reduced"] = {{"point_handles", reduced_model_->handles.point_nodes.size()},
+                          {"bone_handles", reduced_model_->handles.bone_joints().size()},
+                          {"affine", settings_.affine},
+                          {"coordinates", reduced_model_->subspace.num_dofs()},
+                          {"basis_nonzeros", reduced_model_->subspace.basis.nonZeros()},
+                          {"cubature", fast_->cubature().size()},
+                          {"cubature_model", reduced_model_->cubature.size()},
+                          {"cubature_added", fast_->cubature_added()},
+                          {"cubature_method", reduced_model_->cubature.method},
+                          {"stiffness_ratio_max", reduced_model_->cubature.stiffness_ratio_max},
+                          {"stiffness_ratio_min", reduced_model_->cubature.stiffness_ratio_min},
+                          {"guard", fast_->guard() ? nlohmann::json{{"exponent_limit", fast_->guard()->exponent_limit()},
+                                                                   {"guarded_tets", fast_->guard()->num_guarded()},
+                                                                   {"checks", fast_->guard()->checks()},
+                                                                   {"per_tet_passes", fast_->guard()->tet_passes()},
+                                                                   {"renewals", fast_->guard()->full_checks()}}
+                                                  : nlohmann::json(nullptr)},
+                          {"newton_tolerance_m", settings_.newton_tolerance},
+                          {"cache", reduced_model_->cache_outcome},
+                          {"factorizations", total_.factorizations},
+                          {"model_seconds", reduced_model_->build_seconds}};
+  }
+  summary["dynamics"] = writer_->dynamics_summary();
+  summary["frames"] = frames_;
+  const double steps = static_cast<double>(frame_);   // the frames solved (all of them after a whole run)
+  summary["timings"] = {{"build_seconds", build_seconds_},
+                        {"solve_seconds", total_.seconds},
+                        {"function_seconds", total_.function_seconds},
+                        {"jacobian_seconds", total_.jacobian_seconds},
+                        {"model_seconds", model_seconds_},
+                        {"elastic_seconds", total_.elastic_seconds},
+                        {"inertia_seconds", total_.inertia_seconds},
+                        {"potential_seconds", total_.potential_seconds},
+                        {"dense_solve_seconds", total_.solve_seconds},
+                        {"output_seconds", output_seconds_},
+                        {"posing_seconds", writer_->posing_seconds()},
+                        {"writer_seconds", jobs_ ? jobs_->busy_seconds() : 0.0},
+                        {"writer_wait_seconds", jobs_ ? jobs_->waited_seconds() : 0.0},
+                        {"frames_per_second", total_.seconds > 0 ? steps / total_.seconds : 0.0},
+                        {"seconds_per_frame", steps > 0 ? total_.seconds / steps : 0.0},
+                        {"total_seconds", seconds_since(t_start_)}};
+  return summary;
+}
+
+nlohmann::json BodySimulation::finish() {
+  require(!finished_output_, "simulate: finish() was called already");
+  const auto t_drain = Clock::now();
+  if (jobs_) jobs_->wait();
+  output_seconds_ += seconds_since(t_drain);
+  writer_->finish();
+  finished_output_ = true;
+  return summary();
+}
+
+nlohmann::json run_body_simulation(const BodyRunSettings& settings, RunFolder* frames_to, int rank, int size,
+                                   const BodyRunReporting& reporting) {
+  BodySimulation simulation(settings, frames_to, rank, size, reporting);
+  const int frames = simulation.num_frames();
+  Progress progress("frames", frames > 0 ? static_cast<std::size_t>(frames - 1) : 0, rank == 0 && reporting.progress);
+  while (!simulation.finished()) {
+    simulation.step();
+    progress.advance();
+    if (reporting.on_frame) reporting.on_frame(simulation.frame());
+  }
+  progress.finish();
+  if (rank != 0) return {};
+  return simulation.finish();
+}
+
+}  // namespace sflsh::scene
