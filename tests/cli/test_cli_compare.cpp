@@ -137,25 +137,25 @@ TEST(CliCompare, WritesTheTradeoffTableAndErrorMapsForEveryConfiguration) {
   }
 
   // The maps: one value per body vertex for every named field.
-  const vtk::Points points = vtk::read_points(out / "compare.vtp");
+  const sflsh::vtk::Points points = sflsh::vtk::read_points(out / "compare.vtp");
   EXPECT_EQ(points.rows(), summary["mesh"]["body_vertices"].get<long>());
-  const std::vector<std::string> names = vtk::read_point_array_names(out / "compare.vtp");
+  const std::vector<std::string> names = sflsh::vtk::read_point_array_names(out / "compare.vtp");
   sflsh::testing::expect_self_described(out / "compare.vtp");
-  EXPECT_EQ(vtk::read_point_array(out / "compare.vtp", "soft_region"), vtk::read_point_array(out / "compare.vtp", "region"));
+  EXPECT_EQ(sflsh::vtk::read_point_array(out / "compare.vtp", "soft_region"), sflsh::vtk::read_point_array(out / "compare.vtp", "region"));
   std::vector<std::string> expected = {"sigma_full"};
   for (const auto& [h, k] : configs)
     for (const char* prefix : {"sigma_reduced_", "sigma_error_", "rms_error_"}) expected.push_back(fmt::format("{}h{}_k{}", prefix, h, k));
   for (const std::string& name : expected) {
     ASSERT_THAT(names, ::testing::Contains(name));
-    const Eigen::MatrixXd values = vtk::read_point_array(out / "compare.vtp", name);
+    const Eigen::MatrixXd values = sflsh::vtk::read_point_array(out / "compare.vtp", name);
     EXPECT_EQ(values.rows(), points.rows()) << name;
     EXPECT_EQ(values.cols(), 1) << name;
     EXPECT_TRUE(values.allFinite()) << name;
   }
   // sigma_error is reduced − full, vertex by vertex.
-  const Eigen::MatrixXd full = vtk::read_point_array(out / "compare.vtp", "sigma_full");
-  const Eigen::MatrixXd red = vtk::read_point_array(out / "compare.vtp", "sigma_reduced_h30_k200");
-  const Eigen::MatrixXd err = vtk::read_point_array(out / "compare.vtp", "sigma_error_h30_k200");
+  const Eigen::MatrixXd full = sflsh::vtk::read_point_array(out / "compare.vtp", "sigma_full");
+  const Eigen::MatrixXd red = sflsh::vtk::read_point_array(out / "compare.vtp", "sigma_reduced_h30_k200");
+  const Eigen::MatrixXd err = sflsh::vtk::read_point_array(out / "compare.vtp", "sigma_error_h30_k200");
   EXPECT_LT((red - full - err).cwiseAbs().maxCoeff(), 1e-9);
   EXPECT_GT(full.maxCoeff(), 0.0);
 

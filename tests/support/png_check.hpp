@@ -3,6 +3,7 @@
 // CLI wrote is a real picture, decoded with VTK's PNG reader: the expected size, and enough distinct colours that
 // it is not a blank or single-colour image.
 #include <gtest/gtest.h>
+#include <vtkDataArray.h>
 #include <vtkImageData.h>
 #include <vtkNew.h>
 #include <vtkPNGReader.h>
