@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
 """Checks that every document the sources and docs cite is in the repository.
 
-Scans the tracked sources, scripts, data and docs for citations of Markdown documents (`name.md`, optionally
-with a section `§n` or `§n.m`) and fails when a cited document is not under docs/ (or the repository root),
+Scans the tracked sources, scripts, data and docs for citations of Markdown documents (a file name ending in
+.md, optionally with a section `§n` or `§n.m`) and fails when a cited document is not under docs/ (or the repository root),
 or when a cited section has no heading `## n.` / `### n.m` in it. Generated results (docs/results/) are
 checked like the rest. Prints one line per broken citation, `path:line: citation: what is wrong`, and exits 1
 when there is any.

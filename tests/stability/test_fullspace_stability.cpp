@@ -12,6 +12,7 @@
 #include <sflsh/material/layer_material.hpp>
 #include <sflsh/meshing/layer_cache.hpp>
 
+#include "long_test.hpp"
 #include "stability_support.hpp"
 
 #include <gtest/gtest.h>
@@ -60,6 +61,7 @@ Outcome run_case(const body::Betas& beta, const body::Motion& motion, const mate
 }
 
 TEST(FullspaceStability, ExtremeShapesBetaPlusMinusFour) {
+  SFLSH_LONG_TEST();  // tens of seconds on 2 cores: label long
   const body::Motion motion = body::make_procedural_motion("running_on_spot", 60.0, 24);
   for (int component : {0, 1}) {
     for (double value : {-4.0, 4.0}) {
@@ -98,6 +100,7 @@ TEST(FullspaceStability, ThickLayersSimulateOrAreRefusedBeforeTheSolve) {
 }
 
 TEST(FullspaceStability, LargeStepsOfOneTwentyFourthSecond) {
+  SFLSH_LONG_TEST();  // tens of seconds on 2 cores: label long
   const body::Motion motion = body::make_procedural_motion("one_leg_jump", 24.0, 30);   // through the first landing
   expect_bounded(run_case(body::Betas::Zero(), motion, nullptr));
 }
@@ -112,6 +115,7 @@ TEST(FullspaceStability, HundredfoldStiffnessContrastBetweenNeighbours) {
 }
 
 TEST(FullspaceStability, LandingOfAJump) {
+  SFLSH_LONG_TEST();  // tens of seconds on 2 cores: label long
   // First landing at t ≈ 0.88 s with a 5 g impact (procedural_jump.cpp); run through it at 60 fps.
   const body::Motion motion = body::make_procedural_motion("one_leg_jump", 60.0, 58);
   expect_bounded(run_case(beta_with(0, 2.0), motion, nullptr));
@@ -163,6 +167,7 @@ material::MaterialFile uniform_material(double young) {
 }
 
 TEST(FullspaceStability, SoftestMaterialShakeHipsWithoutRetries) {
+  SFLSH_LONG_TEST();  // tens of seconds on 2 cores: label long
   const body::Motion motion = body::make_procedural_motion("shake_hips", 60.0, kSoftFrames);
   const material::MaterialFile soft = uniform_material(500.0);
   const Outcome o = run_case(body::Betas::Zero(), motion, &soft);

@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include "long_test.hpp"
 #include "png_check.hpp"
 #include "run_command.hpp"
 #include "scratch_dir.hpp"
@@ -173,6 +174,7 @@ TEST(Experiments, DynaFilesAreTheGroundTruthWhenGiven) {
 // The fit shares its simulations among MPI ranks: two processes give exactly the table of one (every result
 // is computed by one rank and summed with zeros, so each rank takes the same trust-region steps).
 TEST(Experiments, TwoMpiProcessesGiveTheSameTable) {
+  SFLSH_LONG_TEST();  // tens of seconds on 2 cores: label long
   if (std::system("command -v mpiexec >/dev/null 2>&1") != 0) GTEST_SKIP() << "mpiexec not found";
   const std::filesystem::path dir = sflsh::testing::scratch_dir();
   const std::string args = " validate --train-subjects OPEN_TRAIN_1,OPEN_TRAIN_2 --test-subjects OPEN_TEST_1 --frames 10 "
