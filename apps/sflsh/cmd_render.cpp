@@ -7,7 +7,6 @@
 #include <sflsh/core/render.hpp>
 #include <sflsh/core/summary.hpp>
 #include <sflsh/core/vtk_io.hpp>
-#include <sflsh/core/vtk_surface_reader.hpp>
 
 
 #include <algorithm>
@@ -75,11 +74,13 @@ void run_render(const RenderRunOptions& opt) {
     index = static_cast<std::size_t>(asked);
   }
 
-  vtk::SurfaceFrame frame = vtk::read_surface_frame(frames[index]);
-  const double time = frame.time;
   render::Surface surface;
-  surface.points = std::move(frame.points);
-  surface.triangles = std::move(frame.triangles);
+  surface.points = vtk::read_points(frames[index]);
+  surface.triangles = vtk::read_cells(frames[index]);
+  require(surface.triangles.cols() == 3, "{}: expected a triangle surface", frames[index].string());
+  const std::vector<std::string> field_names = vtk::read_field_array_names(frames[index]);
+  const bool timed = std::find(field_names.begin(), field_names.end(), "TimeValue") != field_names.end();
+  const double time = timed ? vtk::read_field_array(frames[index], "TimeValue")(0, 0) : 0.0;
   std::string legend;
   if (opt.color == "sigma") {
     const fs::path dynamics = run / "dynamics.vtp";

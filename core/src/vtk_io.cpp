@@ -266,14 +266,22 @@ std::vector<std::string> read_point_array_names(const std::filesystem::path& pat
   return names;
 }
 
-Eigen::MatrixXd read_point_array(const std::filesystem::path& path, const std::string& name) {
-  auto data = read_any(path);
-  vtkDataArray* array = data->GetPointData()->GetArray(name.c_str());
-  require(array != nullptr, "{}: no point-data array '{}'", path.string(), name);
+namespace {
+
+/// The tuples of a numeric array as rows; `kind` names the attribute set in the error ("point-data", …).
+Eigen::MatrixXd array_matrix(vtkDataArray* array, const std::filesystem::path& path, const char* kind,
+                             const std::string& name) {
+  require(array != nullptr, "{}: no {} array '{}'", path.string(), kind, name);
   Eigen::MatrixXd out(array->GetNumberOfTuples(), array->GetNumberOfComponents());
   for (vtkIdType r = 0; r < array->GetNumberOfTuples(); ++r)
     for (int c = 0; c < array->GetNumberOfComponents(); ++c) out(r, c) = array->GetComponent(r, c);
   return out;
+}
+
+}  // namespace
+
+Eigen::MatrixXd read_point_array(const std::filesystem::path& path, const std::string& name) {
+  return array_matrix(read_any(path)->GetPointData()->GetArray(name.c_str()), path, "point-data", name);
 }
 
 std::vector<std::string> read_cell_array_names(const std::filesystem::path& path) {
@@ -284,13 +292,11 @@ std::vector<std::string> read_cell_array_names(const std::filesystem::path& path
 }
 
 Eigen::MatrixXd read_cell_array(const std::filesystem::path& path, const std::string& name) {
-  auto data = read_any(path);
-  vtkDataArray* array = data->GetCellData()->GetArray(name.c_str());
-  require(array != nullptr, "{}: no cell-data array '{}'", path.string(), name);
-  Eigen::MatrixXd out(array->GetNumberOfTuples(), array->GetNumberOfComponents());
-  for (vtkIdType r = 0; r < array->GetNumberOfTuples(); ++r)
-    for (int c = 0; c < array->GetNumberOfComponents(); ++c) out(r, c) = array->GetComponent(r, c);
-  return out;
+  return array_matrix(read_any(path)->GetCellData()->GetArray(name.c_str()), path, "cell-data", name);
+}
+
+Eigen::MatrixXd read_field_array(const std::filesystem::path& path, const std::string& name) {
+  return array_matrix(read_any(path)->GetFieldData()->GetArray(name.c_str()), path, "field-data", name);
 }
 
 std::vector<std::string> read_field_array_names(const std::filesystem::path& path) {

@@ -1,4 +1,5 @@
 #include <sflsh/model/simulation_output.hpp>
+#include <sflsh/model/layer_settings.hpp>  // region_normals
 
 #include <sflsh/core/error.hpp>
 
@@ -84,15 +85,6 @@ Eigen::VectorXd strain_energy_density(const Problem& problem, const Eigen::Vecto
 namespace sflsh::model {
 
 namespace {
-
-/// Unit normals of the shaped neutral body at the region's vertices (the σ_n / σ_t split of docs/physics.md §4).
-RowMatrixX3d region_normals(const BodyLayer& layer) {
-  const RowMatrixX3d all = vertex_normals(layer.shaped, layer.model->faces);
-  const std::vector<int>& region = layer.mesh->region_surface.vertices;
-  RowMatrixX3d out(static_cast<Eigen::Index>(region.size()), 3);
-  for (std::size_t r = 0; r < region.size(); ++r) out.row(static_cast<Eigen::Index>(r)) = all.row(region[r]);
-  return out;
-}
 
 /// Scatters region rows (R×k) into a body-sized array (n×k), zero elsewhere.
 Eigen::MatrixXd scatter(const BodyLayer& layer, const Eigen::MatrixXd& region_values) {

@@ -20,6 +20,7 @@ using ::testing::HasSubstr;
 namespace {
 
 namespace fs = std::filesystem;
+using sflsh::testing::text_of;
 
 constexpr const char* kHeader =
     "mesh,subject,motion,status,error,frames,sigma_mm,newton_per_frame,seconds,fps,sigma_max_mm,solve_seconds,"
@@ -52,13 +53,6 @@ std::vector<std::string> lines_of(const fs::path& path) {
   std::vector<std::string> lines;
   for (std::string line; std::getline(in, line);) lines.push_back(line);
   return lines;
-}
-
-std::string text_of(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
 }
 
 /// The report files and nothing else (no staging folder left behind).

@@ -19,13 +19,7 @@ namespace sflsh {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::string text_of(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using sflsh::testing::text_of;
 
 /// A closed octahedron around (1, 2, 3), triangles counter-clockwise seen from outside.
 void octahedron(vtk::Points& points, vtk::Cells& triangles) {

@@ -15,13 +15,7 @@ namespace sflsh::xdmf {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::string text_of(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using sflsh::testing::text_of;
 
 /// A dataset read back as doubles, with its shape.
 struct Read {

@@ -95,6 +95,8 @@ Eigen::MatrixXd read_point_array(const std::filesystem::path& path, const std::s
 std::vector<std::string> read_cell_array_names(const std::filesystem::path& path);
 /// Reads one cell-data array (rows = cells).
 Eigen::MatrixXd read_cell_array(const std::filesystem::path& path, const std::string& name);
+/// Reads one numeric field-data array (e.g. `TimeValue`, rows = tuples).
+Eigen::MatrixXd read_field_array(const std::filesystem::path& path, const std::string& name);
 /// Reads the names of the field-data arrays (numbers and strings).
 std::vector<std::string> read_field_array_names(const std::filesystem::path& path);
 /// Reads a string array of the field data (`units`, `part_names`, …); throws when there is none of that name.
