@@ -12,11 +12,11 @@
 #include <sflsh/scene/scene_runner.hpp>
 
 #include <fmt/format.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <iostream>
 #include <string>
-#include <unistd.h>
 
 int main(int argc, char** argv) {
   using namespace sflsh;
@@ -24,11 +24,16 @@ int main(int argc, char** argv) {
   int frames = 60, threads = 2, every = 1;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string key = argv[i];
-    if (key == "--scene") scene_path = argv[i + 1];
-    else if (key == "--frames") frames = std::stoi(argv[i + 1]);
-    else if (key == "--threads") threads = std::stoi(argv[i + 1]);
-    else if (key == "--every") every = std::stoi(argv[i + 1]);
-    else if (key == "--out") out = argv[i + 1];
+    if (key == "--scene")
+      scene_path = argv[i + 1];
+    else if (key == "--frames")
+      frames = std::stoi(argv[i + 1]);
+    else if (key == "--threads")
+      threads = std::stoi(argv[i + 1]);
+    else if (key == "--every")
+      every = std::stoi(argv[i + 1]);
+    else if (key == "--out")
+      out = argv[i + 1];
     else {
       std::cerr << "bench_crowd: unknown option " << key << "\n";
       return 2;
@@ -38,7 +43,8 @@ int main(int argc, char** argv) {
     std::cerr << "bench_crowd: --frames must be ≥ 2, --threads and --every ≥ 1\n";
     return 2;
   }
-  const std::filesystem::path scratch = std::filesystem::temp_directory_path() / fmt::format("bench_crowd_{}", getpid());
+  const std::filesystem::path scratch =
+      std::filesystem::temp_directory_path() / fmt::format("bench_crowd_{}", getpid());
   try {
     logger()->set_level(spdlog::level::warn);
     const scene::Scene scene = scene::load_scene(scene_path);
@@ -49,11 +55,11 @@ int main(int argc, char** argv) {
     std::vector<Run> runs = {{1, false}, {threads, false}, {threads, true}};
     if (threads == 1) runs.erase(runs.begin());
     nlohmann::json rows = nlohmann::json::array();
-    std::cout << fmt::format("crowd scene {}: {} frames at {} fps; writing: every {} frame(s), {} frame files\n\n", scene_path, frames,
-                             scene.fps, every, vtk::to_string(scene.output.compression));
-    std::cout << fmt::format("{:<8} {:<8} {:>8} {:>8} {:>10} | {:>9} {:>9} {:>9} {:>9} | {:>9} {:>11} {:>9} {:>9}\n", "threads", "writing",
-                             "avatars", "fps", "ms/frame", "step", "posing", "output", "overhead", "solve cpu", "writer busy",
-                             "setup [s]", "vs 1.2");
+    std::cout << fmt::format("crowd scene {}: {} frames at {} fps; writing: every {} frame(s), {} frame files\n\n",
+                             scene_path, frames, scene.fps, every, vtk::to_string(scene.output.compression));
+    std::cout << fmt::format("{:<8} {:<8} {:>8} {:>8} {:>10} | {:>9} {:>9} {:>9} {:>9} | {:>9} {:>11} {:>9} {:>9}\n",
+                             "threads", "writing", "avatars", "fps", "ms/frame", "step", "posing", "output", "overhead",
+                             "solve cpu", "writer busy", "setup [s]", "vs 1.2");
     for (const Run& r : runs) {
       scene::SceneRunOptions options;
       options.frames = frames;
@@ -69,25 +75,44 @@ int main(int argc, char** argv) {
       const double output = t["output_seconds"].get<double>() - posing;
       const double overhead = loop - step - t["output_seconds"].get<double>();
       const double writer = t.value("writer_seconds", 0.0);
-      double solve = 0.0;   // summed over the bodies (CPU seconds on all threads)
+      double solve = 0.0;  // summed over the bodies (CPU seconds on all threads)
       for (const auto& e : s["effects"])
         if (e["name"] != "skinning") solve += e["seconds"].get<double>();
       const auto avatars = s["bodies"].size();
       const double n = frames - 1;
       auto ms = [&](double seconds) { return 1e3 * seconds / n; };
-      std::cout << fmt::format("{:<8} {:<8} {:>8} {:>8.2f} {:>10.1f} | {:>9.1f} {:>9.1f} {:>9.1f} {:>9.1f} | {:>9.1f} {:>11.1f} {:>9.1f} {:>8.1f}×\n",
-                               r.threads, r.write ? "yes" : "no", avatars, fps, ms(loop), ms(step), ms(posing), ms(output), ms(overhead),
-                               ms(solve), ms(writer), t["setup_seconds"].get<double>(), fps / 1.2);
-      rows.push_back({{"threads", r.threads}, {"writing", r.write}, {"every", every}, {"avatars", avatars}, {"fps", fps},
-                      {"ms_per_frame", ms(loop)}, {"step_ms", ms(step)}, {"posing_ms", ms(posing)}, {"output_ms", ms(output)},
-                      {"overhead_ms", ms(overhead)}, {"solve_cpu_ms", ms(solve)}, {"writer_busy_ms", ms(writer)},
-                      {"writer_wait_ms", ms(t.value("writer_wait_seconds", 0.0))}, {"setup_seconds", t["setup_seconds"]},
-                      {"effects", s["effects"]}, {"paper_fps_single_thread", 1.2}});
+      std::cout << fmt::format(
+          "{:<8} {:<8} {:>8} {:>8.2f} {:>10.1f} | {:>9.1f} {:>9.1f} {:>9.1f} {:>9.1f} | {:>9.1f} {:>11.1f} {:>9.1f} "
+          "{:>8.1f}×\n",
+          r.threads, r.write ? "yes" : "no", avatars, fps, ms(loop), ms(step), ms(posing), ms(output), ms(overhead),
+          ms(solve), ms(writer), t["setup_seconds"].get<double>(), fps / 1.2);
+      rows.push_back({{"threads", r.threads},
+                      {"writing", r.write},
+                      {"every", every},
+                      {"avatars", avatars},
+                      {"fps", fps},
+                      {"ms_per_frame", ms(loop)},
+                      {"step_ms", ms(step)},
+                      {"posing_ms", ms(posing)},
+                      {"output_ms", ms(output)},
+                      {"overhead_ms", ms(overhead)},
+                      {"solve_cpu_ms", ms(solve)},
+                      {"writer_busy_ms", ms(writer)},
+                      {"writer_wait_ms", ms(t.value("writer_wait_seconds", 0.0))},
+                      {"setup_seconds", t["setup_seconds"]},
+                      {"effects", s["effects"]},
+                      {"paper_fps_single_thread", 1.2}});
     }
-    std::cout << "\n(ms per crowd frame, wall: step = stepping all bodies, posing = posing the written surfaces, output = the rest of "
-                 "the output on the stepping thread (σ, queueing, waiting for the writer); solve cpu = the bodies' solves summed over "
+    std::cout << "\n(ms per crowd frame, wall: step = stepping all bodies, posing = posing the written surfaces, "
+                 "output = the rest of "
+                 "the output on the stepping thread (σ, queueing, waiting for the writer); solve cpu = the bodies' "
+                 "solves summed over "
                  "threads; writer busy = the background writer's time, overlapping the others)\n";
-    write_json(out, {{"benchmark", "crowd"}, {"scene", scene_path}, {"frames", frames}, {"rows", rows}, {"goal_fps_without_writing", 60}});
+    write_json(out, {{"benchmark", "crowd"},
+                     {"scene", scene_path},
+                     {"frames", frames},
+                     {"rows", rows},
+                     {"goal_fps_without_writing", 60}});
     std::cout << "wrote " << out << "\n";
   } catch (const std::exception& e) {
     std::filesystem::remove_all(scratch);

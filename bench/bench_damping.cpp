@@ -13,9 +13,9 @@
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/summary.hpp>
 #include <sflsh/fullspace/fullspace_solver.hpp>
-#include <sflsh/model/body_layer.hpp>
 #include <sflsh/fullspace/petsc_session.hpp>
 #include <sflsh/fullspace/reference_integrator.hpp>
+#include <sflsh/model/body_layer.hpp>
 #include <sflsh/model/simulation_output.hpp>
 
 #include <fmt/format.h>
@@ -59,15 +59,24 @@ int main(int argc, char** argv) {
   double seconds = 1.0, rtol = 1e-6, atol = 1e-9;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string key = argv[i], value = argv[i + 1];
-    if (key == "--subject") subject = value;
-    else if (key == "--motion") motion_name = value;
-    else if (key == "--seconds") seconds = std::stod(value);
-    else if (key == "--fps") fps_list = value;
-    else if (key == "--mesh") mesh = value;
-    else if (key == "--rtol") rtol = std::stod(value);
-    else if (key == "--atol") atol = std::stod(value);
-    else if (key == "--cache") cache = value;
-    else if (key == "--out") out = value;
+    if (key == "--subject")
+      subject = value;
+    else if (key == "--motion")
+      motion_name = value;
+    else if (key == "--seconds")
+      seconds = std::stod(value);
+    else if (key == "--fps")
+      fps_list = value;
+    else if (key == "--mesh")
+      mesh = value;
+    else if (key == "--rtol")
+      rtol = std::stod(value);
+    else if (key == "--atol")
+      atol = std::stod(value);
+    else if (key == "--cache")
+      cache = value;
+    else if (key == "--out")
+      out = value;
     else {
       std::cerr << "bench_damping: unknown option " << key << "\n";
       return 2;
@@ -147,8 +156,9 @@ int main(int argc, char** argv) {
       }
       const double ratio = sigma.mean() / sigma_ref.mean();
       const double traj = ref2 > 0 ? std::sqrt(err2 / ref2) : 0.0;
-      std::cout << fmt::format("{:>6} {:>12.4f} {:>14.4f} {:>14.4f} {:>14.2f} {:>12.2f} {:>10.2f}\n", r, 1e3 * sigma.mean(),
-                               1e3 * sigma_ref.mean(), ratio, 100.0 * (1.0 - ratio), 100.0 * traj, wall / seconds);
+      std::cout << fmt::format("{:>6} {:>12.4f} {:>14.4f} {:>14.4f} {:>14.2f} {:>12.2f} {:>10.2f}\n", r,
+                               1e3 * sigma.mean(), 1e3 * sigma_ref.mean(), ratio, 100.0 * (1.0 - ratio), 100.0 * traj,
+                               wall / seconds);
       rows.push_back({{"fps", r},
                       {"sigma_mean_mm", 1e3 * sigma.mean()},
                       {"reference_sigma_mean_mm", 1e3 * sigma_ref.mean()},

@@ -21,10 +21,14 @@ int main(int argc, char** argv) {
   std::string out = "bench_element.json";
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string key = argv[i];
-    if (key == "--tets") count = std::stoi(argv[i + 1]);
-    else if (key == "--strain") strain = std::stod(argv[i + 1]);
-    else if (key == "--repeat") repeat = std::stoi(argv[i + 1]);
-    else if (key == "--out") out = argv[i + 1];
+    if (key == "--tets")
+      count = std::stoi(argv[i + 1]);
+    else if (key == "--strain")
+      strain = std::stod(argv[i + 1]);
+    else if (key == "--repeat")
+      repeat = std::stoi(argv[i + 1]);
+    else if (key == "--out")
+      out = argv[i + 1];
     else {
       std::cerr << "bench_element: unknown option " << key << "\n";
       return 2;
@@ -70,7 +74,8 @@ int main(int argc, char** argv) {
   rows.push_back(time_kernel("hessian projected element", [&](const TetNodes& x) {
     return tet_elastic_dq2(rest, x, material, HessianProjection::kElement)(0, 0);
   }));
-  sflsh::write_json(out, {{"benchmark", "element"}, {"tets", count}, {"strain", strain}, {"results", rows}, {"checksum", sink}});
+  sflsh::write_json(
+      out, {{"benchmark", "element"}, {"tets", count}, {"strain", strain}, {"results", rows}, {"checksum", sink}});
   std::cout << "wrote " << out << "\n";
   return 0;
 }

@@ -31,14 +31,22 @@ int main(int argc, char** argv) {
   std::string out = "bench_fit.json";
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string a = argv[i];
-    if (a == "--subjects") subjects = std::stoi(argv[i + 1]);
-    else if (a == "--controls") controls = std::stoi(argv[i + 1]);
-    else if (a == "--frames") frames = std::stoi(argv[i + 1]);
-    else if (a == "--handles") handles = std::stoi(argv[i + 1]);
-    else if (a == "--threads") threads = std::stoi(argv[i + 1]);
-    else if (a == "--fd-columns") fd_columns = std::stoi(argv[i + 1]);
-    else if (a == "--iterations") iterations = std::stoi(argv[i + 1]);
-    else if (a == "--out") out = argv[i + 1];
+    if (a == "--subjects")
+      subjects = std::stoi(argv[i + 1]);
+    else if (a == "--controls")
+      controls = std::stoi(argv[i + 1]);
+    else if (a == "--frames")
+      frames = std::stoi(argv[i + 1]);
+    else if (a == "--handles")
+      handles = std::stoi(argv[i + 1]);
+    else if (a == "--threads")
+      threads = std::stoi(argv[i + 1]);
+    else if (a == "--fd-columns")
+      fd_columns = std::stoi(argv[i + 1]);
+    else if (a == "--iterations")
+      iterations = std::stoi(argv[i + 1]);
+    else if (a == "--out")
+      out = argv[i + 1];
     else {
       std::cerr << "bench_fit: unknown option " << a << "\n";
       return 2;
@@ -49,13 +57,15 @@ int main(int argc, char** argv) {
     const body::BodyModel model = body::load_body(std::filesystem::path(SFLSH_DATA_DIR) / "open_body.npz");
     const std::vector<body::Subject> all = body::default_subjects();
     std::vector<body::Betas> betas;
-    for (int s = 1; s <= subjects; ++s) betas.push_back(body::find_subject(all, fmt::format("OPEN_TRAIN_{}", (s - 1) % 5 + 1)).beta);
+    for (int s = 1; s <= subjects; ++s)
+      betas.push_back(body::find_subject(all, fmt::format("OPEN_TRAIN_{}", (s - 1) % 5 + 1)).beta);
     model::BodyLayerOptions lo;
     lo.size = meshing::SizePreset::coarse;
     std::vector<std::unique_ptr<reduced::DynamicsCase>> cases;
     for (int s = 0; s < subjects; ++s)
       for (const std::string m : {"one_leg_jump", "running_on_spot", "shake_hips"})
-        cases.push_back(std::make_unique<reduced::DynamicsCase>(model, fmt::format("S{}", s), betas[static_cast<std::size_t>(s)],
+        cases.push_back(std::make_unique<reduced::DynamicsCase>(model, fmt::format("S{}", s),
+                                                                betas[static_cast<std::size_t>(s)],
                                                                 body::make_procedural_motion(m, 60.0, frames), lo));
     reduced::ParameterizationCache parameterizations(cases.front()->layer());
     reduced::ReducedModelOptions ro;
@@ -117,17 +127,20 @@ int main(int argc, char** argv) {
     for (int n : {1, 12, 24, 84}) {
       const double scale = static_cast<double>(n) / controls;
       fit_fd += iterations * (3.0 * n * column_seconds + 2.0 * residual_seconds);
-      fit_hybrid += iterations * (n * column_seconds + std::max(scale, 0.25) * sensitivity_seconds + 2.0 * residual_seconds);
+      fit_hybrid +=
+          iterations * (n * column_seconds + std::max(scale, 0.25) * sensitivity_seconds + 2.0 * residual_seconds);
     }
-    std::cout << fmt::format("bench_fit: {} subjects × 3 train motions = {} cases, N = {}, {} frames, {} handles ({} coordinates), "
-                             "{} cubature tets, {} threads; setup {:.1f} s\n\n",
-                             subjects, cases.size(), controls, frames, handles, rm.subspace.num_dofs(), rm.cubature.size(),
-                             pool.threads(), setup_seconds);
+    std::cout << fmt::format(
+        "bench_fit: {} subjects × 3 train motions = {} cases, N = {}, {} frames, {} handles ({} coordinates), "
+        "{} cubature tets, {} threads; setup {:.1f} s\n\n",
+        subjects, cases.size(), controls, frames, handles, rm.subspace.num_dofs(), rm.cubature.size(), pool.threads(),
+        setup_seconds);
     std::cout << fmt::format("{:<58} {:>12}\n", "quantity", "seconds");
     auto row = [](const std::string& name, double s) { std::cout << fmt::format("{:<58} {:>12.2f}\n", name, s); };
     row(fmt::format("one residual ({} simulations)", cases.size()), residual_seconds);
     row(fmt::format("one finite-difference column ({} simulations)", cases.size()), column_seconds);
-    row(fmt::format("Young columns by sensitivities ({} runs, {} columns each)", cases.size(), 2 * controls), sensitivity_seconds);
+    row(fmt::format("Young columns by sensitivities ({} runs, {} columns each)", cases.size(), 2 * controls),
+        sensitivity_seconds);
     row(fmt::format("Jacobian by finite differences ({} columns, projected)", 3 * controls), fd_jacobian);
     row(fmt::format("Jacobian by sensitivities + {} thickness columns (projected)", controls), hybrid_jacobian);
     row(fmt::format("whole fit N = 1/12/24/84 × {} iterations, finite differences (projected)", iterations), fit_fd);

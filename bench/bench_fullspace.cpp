@@ -9,7 +9,6 @@
 #include <sflsh/core/summary.hpp>
 
 #include <fmt/format.h>
-
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -84,16 +83,26 @@ int main(int argc, char** argv) {
   std::string integrators = "backward_euler", masses = "lumped";
   int frames = 20;
   for (int i = 1; i + 1 < argc; i += 2) {
-    if (std::strcmp(argv[i], "--sflsh") == 0) sflsh_path = argv[i + 1];
-    else if (std::strcmp(argv[i], "--out") == 0) out = argv[i + 1];
-    else if (std::strcmp(argv[i], "--sizes") == 0) sizes = argv[i + 1];
-    else if (std::strcmp(argv[i], "--procs") == 0) procs = argv[i + 1];
-    else if (std::strcmp(argv[i], "--frames") == 0) frames = std::stoi(argv[i + 1]);
-    else if (std::strcmp(argv[i], "--subject") == 0) subject = argv[i + 1];
-    else if (std::strcmp(argv[i], "--motion") == 0) motion = argv[i + 1];
-    else if (std::strcmp(argv[i], "--mesher") == 0) mesher = argv[i + 1];
-    else if (std::strcmp(argv[i], "--integrators") == 0) integrators = argv[i + 1];
-    else if (std::strcmp(argv[i], "--masses") == 0) masses = argv[i + 1];
+    if (std::strcmp(argv[i], "--sflsh") == 0)
+      sflsh_path = argv[i + 1];
+    else if (std::strcmp(argv[i], "--out") == 0)
+      out = argv[i + 1];
+    else if (std::strcmp(argv[i], "--sizes") == 0)
+      sizes = argv[i + 1];
+    else if (std::strcmp(argv[i], "--procs") == 0)
+      procs = argv[i + 1];
+    else if (std::strcmp(argv[i], "--frames") == 0)
+      frames = std::stoi(argv[i + 1]);
+    else if (std::strcmp(argv[i], "--subject") == 0)
+      subject = argv[i + 1];
+    else if (std::strcmp(argv[i], "--motion") == 0)
+      motion = argv[i + 1];
+    else if (std::strcmp(argv[i], "--mesher") == 0)
+      mesher = argv[i + 1];
+    else if (std::strcmp(argv[i], "--integrators") == 0)
+      integrators = argv[i + 1];
+    else if (std::strcmp(argv[i], "--masses") == 0)
+      masses = argv[i + 1];
     else {
       std::cerr << "bench_fullspace: unknown option " << argv[i] << "\n";
       return 2;
@@ -124,7 +133,8 @@ int main(int argc, char** argv) {
           sflsh_path, size, mesher, subject, motion, frames + 1, integrator, mass, dir.string());
       if (np > 1) {
         command = fmt::format(
-            "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 mpiexec -n {} {}",
+            "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 mpiexec -n "
+            "{} {}",
             np, command);
       }
       // Warm the layer cache outside the measurement (meshing is benchmarked by bench_meshing).
@@ -132,7 +142,10 @@ int main(int argc, char** argv) {
       if (code != 0) {
         std::cerr << "bench_fullspace: " << size << " with " << np << " processes, " << integrator << ", " << mass
                   << " mass failed (exit " << code << ")\n";
-        results.push_back({{"size", size}, {"procs", np}, {"integrator", integrator}, {"mass", mass},
+        results.push_back({{"size", size},
+                           {"procs", np},
+                           {"integrator", integrator},
+                           {"mass", mass},
                            {"error", fmt::format("exit code {}", code)}});
         continue;
       }
@@ -163,8 +176,8 @@ int main(int argc, char** argv) {
                           {"build_seconds", summary["timings"]["build_seconds"]},
                           {"peak_rss_mb", peak_mb}};
       std::cout << fmt::format(
-          "{:<8} {:>5} {:<14} {:<10} {:>8} {:>8} {:>8.3f} {:>8.3f} {:>7.2f} {:>8.1f} {:>7.0f} {:>7.1f} {:>7.0f}\n", size, np,
-          integrator, mass, tets, summary["mesh"]["nodes"].get<long>(), per_step, median, newton, ksp,
+          "{:<8} {:>5} {:<14} {:<10} {:>8} {:>8} {:>8.3f} {:>8.3f} {:>7.2f} {:>8.1f} {:>7.0f} {:>7.1f} {:>7.0f}\n",
+          size, np, integrator, mass, tets, summary["mesh"]["nodes"].get<long>(), per_step, median, newton, ksp,
           100.0 * r["assembly_fraction"].get<double>(), r["build_seconds"].get<double>(), peak_mb);
       const std::string key = fmt::format("{} process(es), {}, {} mass", np, integrator, mass);
       scaling[key].first.push_back(static_cast<double>(tets));

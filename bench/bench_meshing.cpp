@@ -10,7 +10,6 @@
 #include <sflsh/meshing/retarget.hpp>
 
 #include <fmt/format.h>
-
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -79,24 +78,32 @@ int main(int argc, char** argv) {
   std::string body_path, out = "bench_meshing.json", sizes = "coarse,default,fine", meshers = "cgal,gmsh";
   int threads = 2;
   for (int i = 1; i + 1 < argc; i += 2) {
-    if (std::strcmp(argv[i], "--body") == 0) body_path = argv[i + 1];
-    else if (std::strcmp(argv[i], "--out") == 0) out = argv[i + 1];
-    else if (std::strcmp(argv[i], "--sizes") == 0) sizes = argv[i + 1];
-    else if (std::strcmp(argv[i], "--meshers") == 0) meshers = argv[i + 1];
-    else if (std::strcmp(argv[i], "--threads") == 0) threads = std::stoi(argv[i + 1]);
+    if (std::strcmp(argv[i], "--body") == 0)
+      body_path = argv[i + 1];
+    else if (std::strcmp(argv[i], "--out") == 0)
+      out = argv[i + 1];
+    else if (std::strcmp(argv[i], "--sizes") == 0)
+      sizes = argv[i + 1];
+    else if (std::strcmp(argv[i], "--meshers") == 0)
+      meshers = argv[i + 1];
+    else if (std::strcmp(argv[i], "--threads") == 0)
+      threads = std::stoi(argv[i + 1]);
   }
   try {
     sflsh::logger()->set_level(spdlog::level::warn);
-    const body::BodyModel model = body::load_body(body_path.empty() ? body::default_body_path() : std::filesystem::path(body_path));
+    const body::BodyModel model =
+        body::load_body(body_path.empty() ? body::default_body_path() : std::filesystem::path(body_path));
     nlohmann::json results = nlohmann::json::array();
-    std::cout << fmt::format("{:<6} {:<8} {:>8} {:>8} {:>8} {:>9} {:>10} {:>9} {:>8} {:>8} {:>9}\n", "mesher", "size", "tets",
-                             "nodes", "mesh s", "factor s", "retarget s", "min dih°", "med dih°", "max r/e", "peak MB");
+    std::cout << fmt::format("{:<6} {:<8} {:>8} {:>8} {:>8} {:>9} {:>10} {:>9} {:>8} {:>8} {:>9}\n", "mesher", "size",
+                             "tets", "nodes", "mesh s", "factor s", "retarget s", "min dih°", "med dih°", "max r/e",
+                             "peak MB");
     for (const std::string& mesher_name : split(meshers))
       for (const std::string& size_name : split(sizes)) {
         const auto mesher = meshing::parse_mesher(mesher_name);
         const auto size = meshing::parse_size_preset(size_name);
-        const auto result_file = std::filesystem::temp_directory_path() / fmt::format("bench_meshing_{}.json", ::getpid());
-        std::cout.flush();   // the child inherits unflushed output otherwise
+        const auto result_file =
+            std::filesystem::temp_directory_path() / fmt::format("bench_meshing_{}.json", ::getpid());
+        std::cout.flush();  // the child inherits unflushed output otherwise
         const pid_t child = ::fork();
         if (child == 0) {
           int code = 0;
@@ -119,11 +126,11 @@ int main(int argc, char** argv) {
         nlohmann::json r = read_json(result_file);
         std::filesystem::remove(result_file);
         r["peak_rss_mb"] = static_cast<double>(usage.ru_maxrss) / 1024.0;
-        std::cout << fmt::format("{:<6} {:<8} {:>8} {:>8} {:>8.1f} {:>9.3f} {:>10.3f} {:>9.1f} {:>8.1f} {:>8.2f} {:>9.0f}\n",
-                                 mesher_name, size_name, r["tets"].get<long>(), r["nodes"].get<long>(), r["mesh_s"].get<double>(),
-                                 r["factorization_s"].get<double>(), r["retarget_mean_s"].get<double>(),
-                                 r["min_dihedral_deg"].get<double>(), r["median_dihedral_deg"].get<double>(),
-                                 r["max_radius_edge"].get<double>(), r["peak_rss_mb"].get<double>());
+        std::cout << fmt::format(
+            "{:<6} {:<8} {:>8} {:>8} {:>8.1f} {:>9.3f} {:>10.3f} {:>9.1f} {:>8.1f} {:>8.2f} {:>9.0f}\n", mesher_name,
+            size_name, r["tets"].get<long>(), r["nodes"].get<long>(), r["mesh_s"].get<double>(),
+            r["factorization_s"].get<double>(), r["retarget_mean_s"].get<double>(), r["min_dihedral_deg"].get<double>(),
+            r["median_dihedral_deg"].get<double>(), r["max_radius_edge"].get<double>(), r["peak_rss_mb"].get<double>());
         results.push_back(r);
       }
     write_json(out, {{"benchmark", "meshing"}, {"body", model.name}, {"threads", threads}, {"results", results}});

@@ -15,20 +15,25 @@
 int main(int argc, char** argv) {
   std::string body_path, out = "bench_posing.json";
   for (int i = 1; i + 1 < argc; i += 2) {
-    if (std::strcmp(argv[i], "--body") == 0) body_path = argv[i + 1];
-    else if (std::strcmp(argv[i], "--out") == 0) out = argv[i + 1];
+    if (std::strcmp(argv[i], "--body") == 0)
+      body_path = argv[i + 1];
+    else if (std::strcmp(argv[i], "--out") == 0)
+      out = argv[i + 1];
   }
   try {
     using namespace sflsh;
-    const body::BodyModel model = body::load_body(body_path.empty() ? body::default_body_path() : std::filesystem::path(body_path));
+    const body::BodyModel model =
+        body::load_body(body_path.empty() ? body::default_body_path() : std::filesystem::path(body_path));
     nlohmann::json results = nlohmann::json::array();
-    std::cout << fmt::format("{:<18} {:>8} {:>8} {:>12} {:>12}\n", "motion", "vertices", "frames", "ms/frame", "frames/s");
+    std::cout << fmt::format("{:<18} {:>8} {:>8} {:>12} {:>12}\n", "motion", "vertices", "frames", "ms/frame",
+                             "frames/s");
     for (const std::string& name : body::procedural_motion_names()) {
       const body::Motion motion = body::make_procedural_motion(name, 60.0, 600);
       const body::Poser poser(model, body::Betas::Constant(0.5));
       double checksum = 0.0;
       const auto t0 = std::chrono::steady_clock::now();
-      for (std::size_t t = 0; t < motion.num_frames(); ++t) checksum += poser.pose(motion.poses[t], motion.trans[t])(0, 1);
+      for (std::size_t t = 0; t < motion.num_frames(); ++t)
+        checksum += poser.pose(motion.poses[t], motion.trans[t])(0, 1);
       const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       const double per_frame = 1e3 * seconds / static_cast<double>(motion.num_frames());
       std::cout << fmt::format("{:<18} {:>8} {:>8} {:>12.3f} {:>12.0f}\n", name, model.num_vertices(),

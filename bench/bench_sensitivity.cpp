@@ -8,8 +8,8 @@
 #include <sflsh/body/motion.hpp>
 #include <sflsh/core/log.hpp>
 #include <sflsh/core/summary.hpp>
-#include <sflsh/model/body_layer.hpp>
 #include <sflsh/fullspace/reference_integrator.hpp>
+#include <sflsh/model/body_layer.hpp>
 #include <sflsh/reduced/reduced_model.hpp>
 #include <sflsh/reduced/reduced_sensitivity.hpp>
 #include <sflsh/reduced/young_map.hpp>
@@ -31,8 +31,8 @@ struct PlainRun {
   long newton = 0;
 };
 
-PlainRun plain_run(const model::Problem& problem, const reduced::ReducedModel& model, const reduced::ReducedOptions& options,
-                   int frames, double h) {
+PlainRun plain_run(const model::Problem& problem, const reduced::ReducedModel& model,
+                   const reduced::ReducedOptions& options, int frames, double h) {
   reduced::ReducedSolver integrator(problem, model.subspace, model.cubature, options);
   integrator.initialize(model::initial_state(problem, 0.0));
   PlainRun run;
@@ -48,13 +48,20 @@ int main(int argc, char** argv) {
   std::string mesh = "coarse", motion_name = "shake_hips", out = "bench_sensitivity.json";
   int handles = 86, cubature = -1, controls = 84, frames = 60;
   for (int i = 1; i + 1 < argc; i += 2) {
-    if (std::strcmp(argv[i], "--mesh") == 0) mesh = argv[i + 1];
-    else if (std::strcmp(argv[i], "--handles") == 0) handles = std::stoi(argv[i + 1]);
-    else if (std::strcmp(argv[i], "--cubature") == 0) cubature = std::stoi(argv[i + 1]);
-    else if (std::strcmp(argv[i], "--controls") == 0) controls = std::stoi(argv[i + 1]);
-    else if (std::strcmp(argv[i], "--frames") == 0) frames = std::stoi(argv[i + 1]);
-    else if (std::strcmp(argv[i], "--motion") == 0) motion_name = argv[i + 1];
-    else if (std::strcmp(argv[i], "--out") == 0) out = argv[i + 1];
+    if (std::strcmp(argv[i], "--mesh") == 0)
+      mesh = argv[i + 1];
+    else if (std::strcmp(argv[i], "--handles") == 0)
+      handles = std::stoi(argv[i + 1]);
+    else if (std::strcmp(argv[i], "--cubature") == 0)
+      cubature = std::stoi(argv[i + 1]);
+    else if (std::strcmp(argv[i], "--controls") == 0)
+      controls = std::stoi(argv[i + 1]);
+    else if (std::strcmp(argv[i], "--frames") == 0)
+      frames = std::stoi(argv[i + 1]);
+    else if (std::strcmp(argv[i], "--motion") == 0)
+      motion_name = argv[i + 1];
+    else if (std::strcmp(argv[i], "--out") == 0)
+      out = argv[i + 1];
     else {
       std::cerr << "bench_sensitivity: unknown option " << argv[i] << "\n";
       return 2;
@@ -67,7 +74,8 @@ int main(int argc, char** argv) {
     layer_options.size = meshing::parse_size_preset(mesh);
     const double h = 1.0 / 60.0;
     const body::Motion motion = body::make_procedural_motion(motion_name, 60.0, frames + 2);
-    const model::BodyLayer layer = model::build_body_layer(model, body::Betas::Zero(), motion, nullptr, controls, layer_options);
+    const model::BodyLayer layer =
+        model::build_body_layer(model, body::Betas::Zero(), motion, nullptr, controls, layer_options);
     reduced::ReducedModelOptions options;
     options.point_handles = handles;
     options.cubature = cubature;
@@ -114,13 +122,15 @@ int main(int argc, char** argv) {
     const double fd_seconds = columns * (plain.seconds + rebuild_seconds);
     const double fd_tight_seconds = columns * (tight.seconds + rebuild_seconds);
 
-    std::cout << fmt::format("Young-modulus Jacobian: {} mesh, {} point handles ({} coordinates), {} cubature tets, {} control points "
-                             "({} columns), {} frames of 1/60 s ({})\n\n",
-                             mesh, handles, reduced_model.subspace.num_dofs(), reduced_model.cubature.size(), map.num_controls(), columns,
-                             frames, motion_name);
+    std::cout << fmt::format(
+        "Young-modulus Jacobian: {} mesh, {} point handles ({} coordinates), {} cubature tets, {} control points "
+        "({} columns), {} frames of 1/60 s ({})\n\n",
+        mesh, handles, reduced_model.subspace.num_dofs(), reduced_model.cubature.size(), map.num_controls(), columns,
+        frames, motion_name);
     std::cout << fmt::format("{:<48} {:>10} {:>12} {:>10}\n", "case", "seconds", "ms/frame", "newton");
     const auto row = [&](const std::string& name, double seconds, double newton) {
-      std::cout << fmt::format("{:<48} {:>10.3f} {:>12.3f} {:>10.2f}\n", name, seconds, 1e3 * seconds / frames, newton / frames);
+      std::cout << fmt::format("{:<48} {:>10.3f} {:>12.3f} {:>10.2f}\n", name, seconds, 1e3 * seconds / frames,
+                               newton / frames);
     };
     row("plain simulation (default tolerance)", plain.seconds, static_cast<double>(plain.newton));
     row("plain simulation (sensitivity tolerance)", tight.seconds, static_cast<double>(tight.newton));
@@ -132,9 +142,10 @@ int main(int argc, char** argv) {
     row("    Cholesky + 2N-column solve", sens_factor, 0.0);
     row(fmt::format("finite differences: {} × (plain + rebuild)", columns), fd_seconds, 0.0);
     row(fmt::format("finite differences: {} × (tight + rebuild)", columns), fd_tight_seconds, 0.0);
-    std::cout << fmt::format("\nrebuild of the tet materials {:.4f} s; Young maps (once per subject) {:.3f} s; speed-up over finite "
-                             "differences {:.1f}× (default tolerance), {:.1f}× (same tolerance); max |dq/dY| {:.3e} m/Pa\n",
-                             rebuild_seconds, map_seconds, fd_seconds / sens_seconds, fd_tight_seconds / sens_seconds, largest);
+    std::cout << fmt::format(
+        "\nrebuild of the tet materials {:.4f} s; Young maps (once per subject) {:.3f} s; speed-up over finite "
+        "differences {:.1f}× (default tolerance), {:.1f}× (same tolerance); max |dq/dY| {:.3e} m/Pa\n",
+        rebuild_seconds, map_seconds, fd_seconds / sens_seconds, fd_tight_seconds / sens_seconds, largest);
     write_json(out, {{"benchmark", "sensitivity"},
                      {"mesh", mesh},
                      {"point_handles", handles},

@@ -33,20 +33,23 @@ struct Frames {
 
 Frames frames_from(const DoubleArray& poses, const py::object& trans) {
   Frames f;
-  require(poses.ndim() == 1 || poses.ndim() == 2, "poses: expected shape (72,) or (T, 72), got {} dimensions", poses.ndim());
+  require(poses.ndim() == 1 || poses.ndim() == 2, "poses: expected shape (72,) or (T, 72), got {} dimensions",
+          poses.ndim());
   f.batched = poses.ndim() == 2;
   const py::ssize_t frames = f.batched ? poses.shape(0) : 1;
   const py::ssize_t width = poses.shape(poses.ndim() - 1);
   require(width == 3 * body::kNumJoints, "poses: {} values per frame, expected {} (24 joints × axis-angle)", width,
           3 * body::kNumJoints);
   f.poses.resize(static_cast<std::size_t>(frames));
-  for (py::ssize_t t = 0; t < frames; ++t) f.poses[static_cast<std::size_t>(t)] = Eigen::Map<const body::Pose>(poses.data() + t * width);
+  for (py::ssize_t t = 0; t < frames; ++t)
+    f.poses[static_cast<std::size_t>(t)] = Eigen::Map<const body::Pose>(poses.data() + t * width);
   f.trans.assign(static_cast<std::size_t>(frames), Eigen::Vector3d::Zero());
   if (!trans.is_none()) {
     const DoubleArray tr = DoubleArray::ensure(trans);
     require(tr && tr.size() == 3 * frames && tr.shape(tr.ndim() - 1) == 3,
             "trans: expected shape {} to go with the poses", f.batched ? "(T, 3)" : "(3,)");
-    for (py::ssize_t t = 0; t < frames; ++t) f.trans[static_cast<std::size_t>(t)] = Eigen::Map<const Eigen::Vector3d>(tr.data() + 3 * t);
+    for (py::ssize_t t = 0; t < frames; ++t)
+      f.trans[static_cast<std::size_t>(t)] = Eigen::Map<const Eigen::Vector3d>(tr.data() + 3 * t);
   }
   return f;
 }
@@ -66,7 +69,8 @@ py::array pose_frames(const PyBody& b, const py::object& betas, const DoubleArra
   const Eigen::Matrix3d rotation = rotation_from(world_from_body);
   const py::ssize_t rows = joints ? body::kNumJoints : static_cast<py::ssize_t>(b.model.num_vertices());
   const auto frames = static_cast<py::ssize_t>(f.poses.size());
-  py::array_t<double> out = f.batched ? py::array_t<double>({frames, rows, py::ssize_t{3}}) : py::array_t<double>({rows, py::ssize_t{3}});
+  py::array_t<double> out =
+      f.batched ? py::array_t<double>({frames, rows, py::ssize_t{3}}) : py::array_t<double>({rows, py::ssize_t{3}});
   double* data = out.mutable_data();
   {
     py::gil_scoped_release release;
@@ -75,8 +79,10 @@ py::array pose_frames(const PyBody& b, const py::object& betas, const DoubleArra
       const auto k = static_cast<std::size_t>(t);
       Eigen::Map<body::RowMatrixX3d> target(data + t * rows * 3, rows, 3);
       // The same products as `sflsh motion export`: posed = poser.pose(θ, trans) · R_wbᵀ.
-      if (joints) target = (poser.pose_joints(f.poses[k], f.trans[k]) * rotation.transpose()).eval();
-      else target = (poser.pose(f.poses[k], f.trans[k]) * rotation.transpose()).eval();
+      if (joints)
+        target = (poser.pose_joints(f.poses[k], f.trans[k]) * rotation.transpose()).eval();
+      else
+        target = (poser.pose(f.poses[k], f.trans[k]) * rotation.transpose()).eval();
     }
   }
   return out;
@@ -96,7 +102,7 @@ void bind_body(py::module_& m) {
                                               "A body model in SMPL's layout: the open body (default) or an SMPL .npz")
       .def(py::init([](const py::object& path) {
              body::SubjectSelection selection;
-             if (!path.is_none()) selection.body_path = py::str(path).cast<std::string>();   // str or os.PathLike
+             if (!path.is_none()) selection.body_path = py::str(path).cast<std::string>();  // str or os.PathLike
              auto b = std::make_shared<PyBody>();
              b->path = selection.body_path;
              b->model = body::load_selected_body(selection);
@@ -104,33 +110,41 @@ void bind_body(py::module_& m) {
            }),
            py::arg("path") = py::none(), "Loads a body .npz (default: data/open_body.npz); errors as `--body PATH`")
       .def_property_readonly("name", [](const PyBody& b) { return b.model.name; })
-      .def_property_readonly("path", [](const PyBody& b) { return b.path.empty() ? body::default_body_path().string() : b.path; })
+      .def_property_readonly(
+          "path", [](const PyBody& b) { return b.path.empty() ? body::default_body_path().string() : b.path; })
       .def_property_readonly("_selection_path", [](const PyBody& b) { return b.path; })
       .def_property_readonly("num_vertices", [](const PyBody& b) { return b.model.num_vertices(); })
       .def_property_readonly("num_faces", [](const PyBody& b) { return b.model.num_faces(); })
-      .def_property_readonly("v_template", [](py::object self) { return view(self.cast<PyBody&>().model.v_template, self); },
-                             "n × 3 rest template [m] (read-only view)")
-      .def_property_readonly("faces", [](py::object self) { return view(self.cast<PyBody&>().model.faces, self); },
-                             "m × 3 vertex indices (int32, read-only view)")
-      .def_property_readonly("weights", [](py::object self) { return view(self.cast<PyBody&>().model.weights, self); },
-                             "n × 24 skinning weights (read-only view; column-major storage)")
+      .def_property_readonly(
+          "v_template", [](py::object self) { return view(self.cast<PyBody&>().model.v_template, self); },
+          "n × 3 rest template [m] (read-only view)")
+      .def_property_readonly(
+          "faces", [](py::object self) { return view(self.cast<PyBody&>().model.faces, self); },
+          "m × 3 vertex indices (int32, read-only view)")
+      .def_property_readonly(
+          "weights", [](py::object self) { return view(self.cast<PyBody&>().model.weights, self); },
+          "n × 24 skinning weights (read-only view; column-major storage)")
       .def_property_readonly(
           "shapedirs",
           [](py::object self) {
-            const Eigen::MatrixXd& d = self.cast<PyBody&>().model.shapedirs;   // (3n) × B, column-major, row 3v + c
+            const Eigen::MatrixXd& d = self.cast<PyBody&>().model.shapedirs;  // (3n) × B, column-major, row 3v + c
             const auto s = static_cast<py::ssize_t>(sizeof(double));
             return view(d.data(), {d.rows() / 3, py::ssize_t{3}, d.cols()}, {3 * s, s, s * d.rows()}, self);
           },
           "n × 3 × B shape directions (read-only view)")
-      .def_property_readonly("joint_regressor", [](const PyBody& b) { return own(Eigen::MatrixXd(b.model.joint_regressor)); },
-                             "24 × n joint regressor (a dense copy of the sparse matrix)")
-      .def_property_readonly("parents", [](const PyBody& b) { return std::vector<int>(b.model.parents.begin(), b.model.parents.end()); })
-      .def_property_readonly_static("joint_names", [](py::object) {
-        return std::vector<std::string>(body::kJointNames.begin(), body::kJointNames.end());
-      })
+      .def_property_readonly(
+          "joint_regressor", [](const PyBody& b) { return own(Eigen::MatrixXd(b.model.joint_regressor)); },
+          "24 × n joint regressor (a dense copy of the sparse matrix)")
+      .def_property_readonly(
+          "parents", [](const PyBody& b) { return std::vector<int>(b.model.parents.begin(), b.model.parents.end()); })
+      .def_property_readonly_static(
+          "joint_names",
+          [](py::object) { return std::vector<std::string>(body::kJointNames.begin(), body::kJointNames.end()); })
       .def(
           "shape",
-          [](const PyBody& b, const py::object& betas) { return own(body::shaped_template(b.model, betas_from(betas))); },
+          [](const PyBody& b, const py::object& betas) {
+            return own(body::shaped_template(b.model, betas_from(betas)));
+          },
           py::arg("betas") = py::none(), "T̄ + B_S(β): the shaped rest template (n × 3) [m]")
       .def(
           "joints",
@@ -141,17 +155,15 @@ void bind_body(py::module_& m) {
           py::arg("betas") = py::none(), "Rest joints regressed from the shaped template (24 × 3) [m]")
       .def(
           "pose",
-          [](const PyBody& b, const py::object& betas, const DoubleArray& poses, const py::object& trans, const py::object& r) {
-            return pose_frames(b, betas, poses, trans, r, false);
-          },
+          [](const PyBody& b, const py::object& betas, const DoubleArray& poses, const py::object& trans,
+             const py::object& r) { return pose_frames(b, betas, poses, trans, r, false); },
           py::arg("betas"), py::arg("poses"), py::arg("trans") = py::none(), py::arg("world_from_body") = py::none(),
           "Posed vertices: poses (72,) → (n, 3), poses (T, 72) → (T, n, 3) [m]; trans (3,) / (T, 3); world_from_body "
           "(a Motion's) rotates the result as `sflsh motion export` does")
       .def(
           "pose_joints",
-          [](const PyBody& b, const py::object& betas, const DoubleArray& poses, const py::object& trans, const py::object& r) {
-            return pose_frames(b, betas, poses, trans, r, true);
-          },
+          [](const PyBody& b, const py::object& betas, const DoubleArray& poses, const py::object& trans,
+             const py::object& r) { return pose_frames(b, betas, poses, trans, r, true); },
           py::arg("betas"), py::arg("poses"), py::arg("trans") = py::none(), py::arg("world_from_body") = py::none(),
           "Posed joints: (24, 3) or (T, 24, 3) [m]")
       .def("__repr__", [](const PyBody& b) {
@@ -168,7 +180,9 @@ void bind_body(py::module_& m) {
       "The shipped subjects (data/subjects.toml, data/open_body_subjects.toml): name → β (10,)");
   m.def(
       "subject",
-      [](const std::string& name) { return own(Eigen::VectorXd(body::find_subject(body::default_subjects(), name).beta)); },
+      [](const std::string& name) {
+        return own(Eigen::VectorXd(body::find_subject(body::default_subjects(), name).beta));
+      },
       py::arg("name"), "β (10,) of a named subject; an unknown name lists the known ones");
   m.def(
       "motions",
@@ -179,7 +193,8 @@ void bind_body(py::module_& m) {
       },
       "The procedural motions (`sflsh motion list`)");
 
-  py::class_<body::Motion, std::shared_ptr<body::Motion>>(m, "Motion", "A motion: poses θ (T × 72) and root translations (T × 3)")
+  py::class_<body::Motion, std::shared_ptr<body::Motion>>(m, "Motion",
+                                                          "A motion: poses θ (T × 72) and root translations (T × 3)")
       .def(py::init([](const std::string& name_or_path, double fps, int frames, double time_offset) {
              require(fps > 0.0, "--fps must be positive, got {}", fps);
              require(frames >= 0, "--frames must be non-negative, got {}", frames);
@@ -194,29 +209,31 @@ void bind_body(py::module_& m) {
       .def_readonly("source", &body::Motion::source)
       .def_readonly("fps", &body::Motion::fps)
       .def_property_readonly("num_frames", &body::Motion::num_frames)
-      .def_property_readonly("poses", [](py::object self) { return pose_array(self.cast<body::Motion&>().poses, self); },
-                             "T × 72 axis-angle poses (read-only view)")
+      .def_property_readonly(
+          "poses", [](py::object self) { return pose_array(self.cast<body::Motion&>().poses, self); },
+          "T × 72 axis-angle poses (read-only view)")
       .def_property_readonly(
           "trans",
           [](py::object self) {
-            const auto& trans = self.cast<body::Motion&>().trans;   // Vector3d per frame, contiguous
+            const auto& trans = self.cast<body::Motion&>().trans;  // Vector3d per frame, contiguous
             const auto s = static_cast<py::ssize_t>(sizeof(double));
-            return view(trans.empty() ? nullptr : trans.front().data(), {static_cast<py::ssize_t>(trans.size()), py::ssize_t{3}},
-                        {3 * s, s}, self);
+            return view(trans.empty() ? nullptr : trans.front().data(),
+                        {static_cast<py::ssize_t>(trans.size()), py::ssize_t{3}}, {3 * s, s}, self);
           },
           "T × 3 root translations [m] (read-only view)")
-      .def_property_readonly("world_from_body",
-                             [](const body::Motion& mo) {
-                               return own(Eigen::Matrix<double, 3, 3, Eigen::RowMajor>(mo.world_from_body));
-                             })
+      .def_property_readonly(
+          "world_from_body",
+          [](const body::Motion& mo) { return own(Eigen::Matrix<double, 3, 3, Eigen::RowMajor>(mo.world_from_body)); })
       .def_property_readonly("times",
                              [](const body::Motion& mo) {
                                Eigen::VectorXd t(static_cast<Eigen::Index>(mo.num_frames()));
-                               for (std::size_t i = 0; i < mo.num_frames(); ++i) t(static_cast<Eigen::Index>(i)) = mo.time(i);
+                               for (std::size_t i = 0; i < mo.num_frames(); ++i)
+                                 t(static_cast<Eigen::Index>(i)) = mo.time(i);
                                return own(std::move(t));
                              })
-      .def("save", [](const body::Motion& mo, const std::string& path) { body::save_amass(path, mo); }, py::arg("path"),
-           "Writes the motion as an AMASS .npz (atomically)")
+      .def(
+          "save", [](const body::Motion& mo, const std::string& path) { body::save_amass(path, mo); }, py::arg("path"),
+          "Writes the motion as an AMASS .npz (atomically)")
       .def("__repr__", [](const body::Motion& mo) {
         return "<sflsh.Motion '" + mo.name + "': " + std::to_string(mo.num_frames()) + " frames>";
       });

@@ -29,16 +29,21 @@ using IntArray = py::array_t<int, py::array::c_style | py::array::forcecast>;
 /// Row-major Eigen matrices map onto C-ordered NumPy arrays as they are; column vectors as 1-D arrays.
 template <class Matrix>
 std::vector<py::ssize_t> numpy_shape(const Matrix& m) {
-  if constexpr (Matrix::ColsAtCompileTime == 1) return {static_cast<py::ssize_t>(m.rows())};
-  else return {static_cast<py::ssize_t>(m.rows()), static_cast<py::ssize_t>(m.cols())};
+  if constexpr (Matrix::ColsAtCompileTime == 1)
+    return {static_cast<py::ssize_t>(m.rows())};
+  else
+    return {static_cast<py::ssize_t>(m.rows()), static_cast<py::ssize_t>(m.cols())};
 }
 template <class Matrix>
 std::vector<py::ssize_t> numpy_strides(const Matrix& m) {
   using Scalar = typename Matrix::Scalar;
   const auto s = static_cast<py::ssize_t>(sizeof(Scalar));
-  if constexpr (Matrix::ColsAtCompileTime == 1) return {s};
-  else if constexpr (Matrix::IsRowMajor) return {s * static_cast<py::ssize_t>(m.cols()), s};
-  else return {s, s * static_cast<py::ssize_t>(m.rows())};
+  if constexpr (Matrix::ColsAtCompileTime == 1)
+    return {s};
+  else if constexpr (Matrix::IsRowMajor)
+    return {s * static_cast<py::ssize_t>(m.cols()), s};
+  else
+    return {s, s * static_cast<py::ssize_t>(m.rows())};
 }
 
 /// The matrix, moved to the heap, as a NumPy array that owns it (no copy).

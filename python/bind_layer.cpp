@@ -38,8 +38,8 @@ Eigen::VectorXi as_ints(const std::vector<Enum>& values) {
 
 std::shared_ptr<PyLayer> make_layer(const std::optional<std::string>& subject, const py::object& betas,
                                     const py::object& body, double thickness, const std::string& mesher,
-                                    const std::string& mesh, const std::string& region, const std::optional<std::string>& cache,
-                                    bool rebuild_cache) {
+                                    const std::string& mesh, const std::string& region,
+                                    const std::optional<std::string>& cache, bool rebuild_cache) {
   require(thickness > 0.0 && thickness < 1.0, "--thickness {}: expected a fraction 0 < h < 1", thickness);
   require(!(subject && !betas.is_none()), "--subject and --betas exclude each other");
   body::SubjectSelection selection;
@@ -67,35 +67,48 @@ std::shared_ptr<PyLayer> make_layer(const std::optional<std::string>& subject, c
 }  // namespace
 
 void bind_layer(py::module_& m) {
-  py::class_<PyLayer, std::shared_ptr<PyLayer>>(m, "Layer",
-                                                "A subject's soft-tissue tet layer (torso, upper arms, thighs) as `sflsh mesh` builds it")
+  py::class_<PyLayer, std::shared_ptr<PyLayer>>(
+      m, "Layer", "A subject's soft-tissue tet layer (torso, upper arms, thighs) as `sflsh mesh` builds it")
       .def(py::init(&make_layer), py::kw_only(), py::arg("subject") = py::none(), py::arg("betas") = py::none(),
-           py::arg("body") = py::none(), py::arg("thickness") = 0.5, py::arg("mesher") = "cgal", py::arg("mesh") = "default",
-           py::arg("region") = "torso,upper_arms,thighs", py::arg("cache") = py::none(), py::arg("rebuild_cache") = false,
-           "Options as `sflsh mesh`: subject or betas (default β = 0), thickness fraction, mesher cgal | gmsh | layered, mesh "
+           py::arg("body") = py::none(), py::arg("thickness") = 0.5, py::arg("mesher") = "cgal",
+           py::arg("mesh") = "default", py::arg("region") = "torso,upper_arms,thighs", py::arg("cache") = py::none(),
+           py::arg("rebuild_cache") = false,
+           "Options as `sflsh mesh`: subject or betas (default β = 0), thickness fraction, mesher cgal | gmsh | "
+           "layered, mesh "
            "coarse | default | fine, region, cache folder")
       .def_readonly("subject", &PyLayer::subject)
       .def_readonly("thickness", &PyLayer::thickness)
       .def_readonly("cache_outcome", &PyLayer::cache_outcome)
       .def_property_readonly("beta", [](const PyLayer& l) { return own(Eigen::VectorXd(l.beta)); })
-      .def_property_readonly("mesher", [](const PyLayer& l) { return std::string(meshing::mesher_name(l.mesh.mesher)); })
-      .def_property_readonly("mesh", [](const PyLayer& l) { return std::string(meshing::size_preset_name(l.mesh.size)); })
-      .def_property_readonly("nodes", [](py::object self) { return view(self.cast<PyLayer&>().layer.nodes, self); },
-                             "N × 3 node positions for (β, h), unposed [m] (read-only view)")
-      .def_property_readonly("template_nodes", [](py::object self) { return view(self.cast<PyLayer&>().mesh.nodes, self); },
-                             "N × 3 template node positions (β = 0, h = 0.5) [m] (read-only view)")
-      .def_property_readonly("tets", [](py::object self) { return view(self.cast<PyLayer&>().mesh.tets, self); },
-                             "K × 4 node indices, positively oriented (int32, read-only view)")
-      .def_property_readonly("node_parts", [](const PyLayer& l) { return own(as_ints(l.mesh.node_part)); },
-                             "part per node: 0 torso, 1 left upper arm, 2 right upper arm, 3 left thigh, 4 right thigh")
-      .def_property_readonly("tet_parts", [](const PyLayer& l) { return own(as_ints(l.mesh.tet_part)); }, "part per tet")
-      .def_property_readonly("node_kinds", [](const PyLayer& l) { return own(as_ints(l.mesh.kind)); },
-                             "kind per node: 0 interior, 1 outer (skin), 2 inner (on the bones), 3 side wall")
+      .def_property_readonly("mesher",
+                             [](const PyLayer& l) { return std::string(meshing::mesher_name(l.mesh.mesher)); })
+      .def_property_readonly("mesh",
+                             [](const PyLayer& l) { return std::string(meshing::size_preset_name(l.mesh.size)); })
+      .def_property_readonly(
+          "nodes", [](py::object self) { return view(self.cast<PyLayer&>().layer.nodes, self); },
+          "N × 3 node positions for (β, h), unposed [m] (read-only view)")
+      .def_property_readonly(
+          "template_nodes", [](py::object self) { return view(self.cast<PyLayer&>().mesh.nodes, self); },
+          "N × 3 template node positions (β = 0, h = 0.5) [m] (read-only view)")
+      .def_property_readonly(
+          "tets", [](py::object self) { return view(self.cast<PyLayer&>().mesh.tets, self); },
+          "K × 4 node indices, positively oriented (int32, read-only view)")
+      .def_property_readonly(
+          "node_parts", [](const PyLayer& l) { return own(as_ints(l.mesh.node_part)); },
+          "part per node: 0 torso, 1 left upper arm, 2 right upper arm, 3 left thigh, 4 right thigh")
+      .def_property_readonly(
+          "tet_parts", [](const PyLayer& l) { return own(as_ints(l.mesh.tet_part)); }, "part per tet")
+      .def_property_readonly(
+          "node_kinds", [](const PyLayer& l) { return own(as_ints(l.mesh.kind)); },
+          "kind per node: 0 interior, 1 outer (skin), 2 inner (on the bones), 3 side wall")
       .def_property_readonly(
           "region_vertices",
-          [](const PyLayer& l) { return own(Eigen::Map<const Eigen::VectorXi>(l.mesh.region_surface.vertices.data(),
-                                                                              static_cast<Eigen::Index>(l.mesh.region_surface.vertices.size()))
-                                                    .eval()); },
+          [](const PyLayer& l) {
+            return own(
+                Eigen::Map<const Eigen::VectorXi>(l.mesh.region_surface.vertices.data(),
+                                                  static_cast<Eigen::Index>(l.mesh.region_surface.vertices.size()))
+                    .eval());
+          },
           "R body-vertex indices of the region's skin vertices (ascending)")
       .def_property_readonly(
           "skin_map",
@@ -125,18 +138,17 @@ void bind_layer(py::module_& m) {
             return own(l.mesh.skin_positions(rows3_from(DoubleArray::ensure(nodes), "nodes")));
           },
           py::arg("nodes") = py::none(), "Skin positions (R × 3) read from node positions through the skin map")
-      .def_property_readonly(
-          "quality",
-          [](const PyLayer& l) {
-            const meshing::QualityReport& q = l.layer.quality;
-            py::dict out;
-            out["nodes"] = l.mesh.num_nodes();
-            out["tets"] = l.mesh.num_tets();
-            out["min_dihedral_deg"] = q.min_dihedral_deg;
-            out["max_radius_edge"] = q.max_radius_edge;
-            out["inverted"] = q.inverted;
-            return out;
-          })
+      .def_property_readonly("quality",
+                             [](const PyLayer& l) {
+                               const meshing::QualityReport& q = l.layer.quality;
+                               py::dict out;
+                               out["nodes"] = l.mesh.num_nodes();
+                               out["tets"] = l.mesh.num_tets();
+                               out["min_dihedral_deg"] = q.min_dihedral_deg;
+                               out["max_radius_edge"] = q.max_radius_edge;
+                               out["inverted"] = q.inverted;
+                               return out;
+                             })
       .def("__repr__", [](const PyLayer& l) {
         return "<sflsh.Layer '" + l.subject + "': " + std::to_string(l.mesh.num_nodes()) + " nodes, " +
                std::to_string(l.mesh.num_tets()) + " tets>";

@@ -27,8 +27,9 @@ std::shared_ptr<Material> from_shape_model(const py::object& betas, const std::o
   selection.body_path = body_path_from(body);
   if (subject) selection.subject = *subject;
   if (!betas.is_none()) selection.beta_values = betas_from(betas);
-  const std::filesystem::path path =
-      shape_model.is_none() ? reduced::default_shape_model_path() : std::filesystem::path(py::str(shape_model).cast<std::string>());
+  const std::filesystem::path path = shape_model.is_none()
+                                         ? reduced::default_shape_model_path()
+                                         : std::filesystem::path(py::str(shape_model).cast<std::string>());
   const reduced::ShapeModelFile model = reduced::load_shape_model_file(path);
   const body::BodyModel body_model = body::load_selected_body(selection);
   std::string label;
@@ -38,9 +39,11 @@ std::shared_ptr<Material> from_shape_model(const py::object& betas, const std::o
 
 std::shared_ptr<Material> from_arrays(const IntArray& vertices, const DoubleArray& kappa, const std::string& body_name,
                                       const std::string& subject, double poisson, double saturation) {
-  require(vertices.ndim() == 1, "vertices: expected a vector of body vertex indices, got {} dimensions", vertices.ndim());
+  require(vertices.ndim() == 1, "vertices: expected a vector of body vertex indices, got {} dimensions",
+          vertices.ndim());
   require(kappa.ndim() == 2 && kappa.shape(1) == 3 && kappa.shape(0) == vertices.shape(0),
-          "kappa: expected shape ({}, 3) (thickness, young_tangent [Pa], young_normal [Pa] per control point)", vertices.shape(0));
+          "kappa: expected shape ({}, 3) (thickness, young_tangent [Pa], young_normal [Pa] per control point)",
+          vertices.shape(0));
   auto out = std::make_shared<Material>();
   out->body = body_name;
   out->subject = subject;
@@ -72,25 +75,36 @@ void bind_material(py::module_& m) {
                   "κ̂(β) of a shape model (default: data/shape_models/default.toml) for a subject or β")
       .def_static("from_arrays", &from_arrays, py::arg("vertices"), py::arg("kappa"), py::kw_only(),
                   py::arg("body") = "open_body", py::arg("subject") = "custom", py::arg("poisson") = 0.2,
-                  py::arg("saturation") = 4.0, "Control points (body vertex indices) and their κ (N × 3, physical units)")
+                  py::arg("saturation") = 4.0,
+                  "Control points (body vertex indices) and their κ (N × 3, physical units)")
       .def_readonly("body", &Material::body)
       .def_readonly("subject", &Material::subject)
       .def_readonly("poisson", &Material::poisson)
       .def_readonly("saturation", &Material::saturation)
       .def_readonly("source", &Material::source)
       .def_property_readonly("num_control_points", [](const Material& mat) { return mat.control_points.size(); })
-      .def_property_readonly("vertices", [](const Material& mat) {
-        const std::vector<int> v = mat.vertices();
-        return own(Eigen::Map<const Eigen::VectorXi>(v.data(), static_cast<Eigen::Index>(v.size())).eval());
-      }, "control points' body vertex indices")
-      .def_property_readonly("kappa", [](const Material& mat) {
-        return own(Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>(mat.kappa()));
-      }, "N × 3 κ per control point: thickness fraction, young_tangent [Pa], young_normal [Pa]")
-      .def("save", [](const Material& mat, const py::object& path) { material::save_material_file(py::str(path).cast<std::string>(), mat); },
-           py::arg("path"), "Writes the material file (atomically)")
+      .def_property_readonly(
+          "vertices",
+          [](const Material& mat) {
+            const std::vector<int> v = mat.vertices();
+            return own(Eigen::Map<const Eigen::VectorXi>(v.data(), static_cast<Eigen::Index>(v.size())).eval());
+          },
+          "control points' body vertex indices")
+      .def_property_readonly(
+          "kappa",
+          [](const Material& mat) {
+            return own(Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>(mat.kappa()));
+          },
+          "N × 3 κ per control point: thickness fraction, young_tangent [Pa], young_normal [Pa]")
+      .def(
+          "save",
+          [](const Material& mat, const py::object& path) {
+            material::save_material_file(py::str(path).cast<std::string>(), mat);
+          },
+          py::arg("path"), "Writes the material file (atomically)")
       .def("__repr__", [](const Material& mat) {
-        return "<sflsh.Material '" + mat.subject + "' on '" + mat.body + "': " + std::to_string(mat.control_points.size()) +
-               " control points>";
+        return "<sflsh.Material '" + mat.subject + "' on '" + mat.body +
+               "': " + std::to_string(mat.control_points.size()) + " control points>";
       });
   m.def(
       "material_for_beta",

@@ -18,7 +18,8 @@ namespace {
 
 /// T frames of V × 3 from a (T, V, 3) array.
 std::vector<body::RowMatrixX3d> frames_from(const DoubleArray& a, const char* what) {
-  require(a.ndim() == 3 && a.shape(2) == 3, "{}: expected an array of shape (T, V, 3), got {} dimensions", what, a.ndim());
+  require(a.ndim() == 3 && a.shape(2) == 3, "{}: expected an array of shape (T, V, 3), got {} dimensions", what,
+          a.ndim());
   std::vector<body::RowMatrixX3d> frames(static_cast<std::size_t>(a.shape(0)));
   const py::ssize_t v = a.shape(1);
   for (py::ssize_t t = 0; t < a.shape(0); ++t)
@@ -36,24 +37,25 @@ py::array frames_to(const std::vector<body::RowMatrixX3d>& frames) {
   return out;
 }
 
-py::dict metrics(const DoubleArray& vertices, const py::object& faces, const py::object& betas, double fps, const py::object& body,
-                 double soft_weight) {
+py::dict metrics(const DoubleArray& vertices, const py::object& faces, const py::object& betas, double fps,
+                 const py::object& body, double soft_weight) {
   require(soft_weight >= 0.0 && soft_weight <= 1.0, "metrics: --soft-weight must be in [0, 1], got {}", soft_weight);
-  require(fps >= validate::kMinDynaFps && fps <= validate::kMaxDynaFps, "metrics: fps: {} Hz is outside [{}, {}] Hz", fps,
-          validate::kMinDynaFps, validate::kMaxDynaFps);
+  require(fps >= validate::kMinDynaFps && fps <= validate::kMaxDynaFps, "metrics: fps: {} Hz is outside [{}, {}] Hz",
+          fps, validate::kMinDynaFps, validate::kMaxDynaFps);
   body::SubjectSelection selection;
   selection.body_path = body_path_from(body);
   const body::BodyModel model = body::load_selected_body(selection);
   const std::vector<body::RowMatrixX3d> frames = frames_from(vertices, "vertices");
-  require(vertices.shape(1) == model.num_vertices(), "vertices: {} vertices per frame, the body model '{}' has {}", vertices.shape(1),
-          model.name, model.num_vertices());
+  require(vertices.shape(1) == model.num_vertices(), "vertices: {} vertices per frame, the body model '{}' has {}",
+          vertices.shape(1), model.name, model.num_vertices());
   if (!faces.is_none()) {
     const IntArray f = IntArray::ensure(faces);
     require(f && f.ndim() == 2 && f.shape(1) == 3, "faces: expected an array of shape (F, 3)");
-    require(f.shape(0) == model.num_faces() &&
-                Eigen::Map<const body::RowMatrixX3i>(f.data(), f.shape(0), 3) == model.faces,
-            "faces: the registration's triangles are not the body model '{}''s ({} faces); registrations must be in the "
-            "body's topology", model.name, model.num_faces());
+    require(
+        f.shape(0) == model.num_faces() && Eigen::Map<const body::RowMatrixX3i>(f.data(), f.shape(0), 3) == model.faces,
+        "faces: the registration's triangles are not the body model '{}''s ({} faces); registrations must be in the "
+        "body's topology",
+        model.name, model.num_faces());
   }
   std::optional<body::Betas> beta;
   if (!betas.is_none()) beta = betas_from(betas);
@@ -73,7 +75,8 @@ py::dict metrics(const DoubleArray& vertices, const py::object& faces, const py:
   out["mean_sigma_soft"] = d.mean_sigma_soft();
   out["beta"] = own(Eigen::VectorXd(result.fit.beta));
   out["beta_fitted"] = result.fit.beta_fitted;
-  Eigen::Matrix<double, Eigen::Dynamic, 72, Eigen::RowMajor> poses(static_cast<Eigen::Index>(result.fit.motion.num_frames()), 72);
+  Eigen::Matrix<double, Eigen::Dynamic, 72, Eigen::RowMajor> poses(
+      static_cast<Eigen::Index>(result.fit.motion.num_frames()), 72);
   body::RowMatrixX3d trans(static_cast<Eigen::Index>(result.fit.motion.num_frames()), 3);
   for (std::size_t t = 0; t < result.fit.motion.num_frames(); ++t) {
     poses.row(static_cast<Eigen::Index>(t)) = result.fit.motion.poses[t].transpose();
@@ -125,11 +128,12 @@ void write_dyna(const py::object& path, const IntArray& faces, const py::dict& s
 }  // namespace
 
 void bind_metrics(py::module_& m) {
-  m.def("metrics", &metrics, py::arg("vertices"), py::arg("faces") = py::none(), py::arg("betas") = py::none(), py::kw_only(),
-        py::arg("fps") = validate::kDynaFps, py::arg("body") = py::none(), py::arg("soft_weight") = 0.05,
-        "The DYNA metric of registrations (T × n × 3, the body's vertex order) as `sflsh metrics`: fits pose (and β when "
-        "betas is None) per frame and returns a dict with sigma, sigma_normal, sigma_tangent per vertex [m], beta, "
-        "poses, trans and the fit's RMS");
+  m.def(
+      "metrics", &metrics, py::arg("vertices"), py::arg("faces") = py::none(), py::arg("betas") = py::none(),
+      py::kw_only(), py::arg("fps") = validate::kDynaFps, py::arg("body") = py::none(), py::arg("soft_weight") = 0.05,
+      "The DYNA metric of registrations (T × n × 3, the body's vertex order) as `sflsh metrics`: fits pose (and β when "
+      "betas is None) per frame and returns a dict with sigma, sigma_normal, sigma_tangent per vertex [m], beta, "
+      "poses, trans and the fit's RMS");
   m.def("read_dyna", &read_dyna, py::arg("path"), py::arg("key") = py::none(), py::arg("frames") = 0,
         "Reads a DYNA HDF5 file: {'faces': F × 3, 'sequences': {key: T × V × 3}, 'fps': {key: Hz}} (one key, or all; "
         "frames > 0 reads only the first frames)");

@@ -19,7 +19,8 @@ body::Betas betas_from(const py::object& values, const char* what) {
   if (values.is_none()) return beta;
   const DoubleArray a = DoubleArray::ensure(values);
   if (!a) throw Error(std::string("--") + what + ": expected up to 10 numbers");
-  require(a.ndim() <= 1, "--{}: expected a vector of up to 10 numbers, got an array with {} dimensions", what, a.ndim());
+  require(a.ndim() <= 1, "--{}: expected a vector of up to 10 numbers, got an array with {} dimensions", what,
+          a.ndim());
   const py::ssize_t n = a.size();
   require(n <= body::kNumBetas, "--{}: {} values, at most {} are used", what, n, body::kNumBetas);
   for (py::ssize_t i = 0; i < n; ++i) {
@@ -61,7 +62,9 @@ PYBIND11_MODULE(sflsh, m) {
         sflsh::logger()->set_level(l);
       },
       py::arg("level"), "Log level of the sflsh logger: trace | debug | info | warn (default) | error | off");
-  m.def("data_dir", [] { return sflsh::body::data_dir().string(); }, "The project's data folder ($SFLSH_DATA or the source tree's data/)");
+  m.def(
+      "data_dir", [] { return sflsh::body::data_dir().string(); },
+      "The project's data folder ($SFLSH_DATA or the source tree's data/)");
   bind_body(m);
   bind_layer(m);
   bind_material(m);

@@ -11,7 +11,7 @@ packages=(
   libcli11-dev nlohmann-json3-dev libtomlplusplus-dev libspdlog-dev libfmt-dev
   libzip-dev zlib1g-dev libtbb-dev libmuparser-dev
   googletest libgtest-dev libgmock-dev
-  xvfb xauth
+  xvfb xauth clang-format
   python3-meshio
   python3-dev python3-numpy pybind11-dev python3-pybind11 pybind11-json-dev python3-pytest python3-matplotlib python3-h5py python3-vtk9
 )

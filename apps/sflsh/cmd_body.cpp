@@ -252,8 +252,7 @@ void register_body_commands(CLI::App& app, const Invocation& invocation) {
   generate->add_option("--population", gen->generator.population, "Sampled bodies for the shape PCA")
       ->capture_default_str();
   generate->add_option("--seed", gen->generator.seed, "Population seed")->capture_default_str();
-  generate->add_option("--vertices", gen->generator.target_vertices, "Approximate vertex count")
-      ->capture_default_str();
+  generate->add_option("--vertices", gen->generator.target_vertices, "Approximate vertex count")->capture_default_str();
   generate->callback([gen] { run_generate(*gen); });
 
   auto exp_opt = std::make_shared<ExportOptions>();
@@ -264,8 +263,8 @@ void register_body_commands(CLI::App& app, const Invocation& invocation) {
   exp->callback([exp_opt, invocation] { run_export(*exp_opt, invocation); });
 
   auto ren = std::make_shared<RenderOptions>();
-  CLI::App* rend = body_cmd->add_subcommand(
-      "render", "Render bodies to PNG offscreen (needs an X display: run under xvfb-run -a)");
+  CLI::App* rend =
+      body_cmd->add_subcommand("render", "Render bodies to PNG offscreen (needs an X display: run under xvfb-run -a)");
   add_body_option(*rend, ren->subject);
   add_subject_options(*rend, ren->subject);
   rend->add_option("--subjects", ren->subjects, "Comma-separated subject names, or all | open | paper");

@@ -14,13 +14,13 @@
 #include <sflsh/core/summary.hpp>
 #include <sflsh/core/vtk_io.hpp>
 #include <sflsh/fullspace/fullspace_solver.hpp>
-#include <sflsh/model/body_layer.hpp>
 #include <sflsh/fullspace/reference_integrator.hpp>
-#include <sflsh/model/simulation_output.hpp>
 #include <sflsh/material/material_file.hpp>
 #include <sflsh/meshing/layer_cache.hpp>
-#include <sflsh/reduced/reduced_solver.hpp>
+#include <sflsh/model/body_layer.hpp>
+#include <sflsh/model/simulation_output.hpp>
 #include <sflsh/reduced/reduced_model.hpp>
+#include <sflsh/reduced/reduced_solver.hpp>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -61,7 +61,7 @@ std::vector<int> parse_sweep(const std::string& text, const char* option, int mi
     item = item.substr(first, last - first + 1);
     std::size_t used = 0;
     int v = 0;
-    if (minimum == 0 && item == "auto") {   // the cubature the reduced model picks itself (reduced_model.hpp)
+    if (minimum == 0 && item == "auto") {  // the cubature the reduced model picks itself (reduced_model.hpp)
       if (std::find(values.begin(), values.end(), -1) == values.end()) values.push_back(-1);
       continue;
     }
@@ -82,17 +82,17 @@ std::vector<int> parse_sweep(const std::string& text, const char* option, int mi
 /// One reduced configuration of the sweep and what its run measured.
 struct Configuration {
   int handles = 0;
-  int cubature_request = 0;                 ///< 0 = every tet
-  int cubature_tets = 0;                    ///< tets in use at the end (the model's, plus any the guard added)
+  int cubature_request = 0;  ///< 0 = every tet
+  int cubature_tets = 0;     ///< tets in use at the end (the model's, plus any the guard added)
   reduced::ReducedModel model;
   int frames = 0;
   double seconds = 0.0, elastic_seconds = 0.0, inertia_seconds = 0.0, solve_seconds = 0.0;
   long newton = 0, retries = 0;
-  Eigen::VectorXd sigma;                    ///< per region vertex [m]
-  Eigen::VectorXd error_sq;                 ///< Σ_t |u − u_full|² per region vertex [m²]
-  double trajectory_sq = 0.0;               ///< Σ over frames 1..F and region vertices of |p − p_full|² [m²]
-  double trajectory_max = 0.0;              ///< max over frames 1..F and region vertices of |p − p_full| [m]
-  std::string invalid;                      ///< when and why the full-space state left the material's range
+  Eigen::VectorXd sigma;        ///< per region vertex [m]
+  Eigen::VectorXd error_sq;     ///< Σ_t |u − u_full|² per region vertex [m²]
+  double trajectory_sq = 0.0;   ///< Σ over frames 1..F and region vertices of |p − p_full|² [m²]
+  double trajectory_max = 0.0;  ///< max over frames 1..F and region vertices of |p − p_full| [m]
+  std::string invalid;          ///< when and why the full-space state left the material's range
 };
 
 double per_frame(double total, int steps) { return steps > 0 ? total / steps : 0.0; }
@@ -123,8 +123,9 @@ void run_compare(const CompareOptions& opt, const Invocation& invocation, int ra
   require(motion.num_frames() >= 2, "compare: the motion has {} frame(s); at least 2 are needed", motion.num_frames());
   const std::optional<material::MaterialFile> material_file = load_layer_material(opt.layer);
   const auto t_build = Clock::now();
-  const model::BodyLayer layer = model::build_body_layer(model, beta, motion, material_file ? &*material_file : nullptr,
-                                                                 opt.layer.control_points, body_layer_options(opt.layer, opt.mesh));
+  const model::BodyLayer layer =
+      model::build_body_layer(model, beta, motion, material_file ? &*material_file : nullptr, opt.layer.control_points,
+                              body_layer_options(opt.layer, opt.mesh));
   const double build_seconds = seconds_since(t_build);
   const model::Problem& problem = layer.problem;
   const std::vector<int>& region = layer.mesh->region_surface.vertices;
@@ -136,7 +137,7 @@ void run_compare(const CompareOptions& opt, const Invocation& invocation, int ra
   // fails here, before the expensive reference run.
   std::vector<std::unique_ptr<Configuration>> configs;
   const auto t_models = Clock::now();
-  check_handle_counts(layer, handle_sweep);   // all counts checked before any model is built (one message, no output)
+  check_handle_counts(layer, handle_sweep);  // all counts checked before any model is built (one message, no output)
   if (rank == 0) {
     for (int handles : handle_sweep) {
       for (int k : cubature_sweep) {
@@ -149,10 +150,11 @@ void run_compare(const CompareOptions& opt, const Invocation& invocation, int ra
     }
   }
   const double models_seconds = seconds_since(t_models);
-  logger()->info("compare: {} nodes, {} tets, {} region vertices, {} frames at {} fps; reference on {} process(es), {} reduced "
-                 "configuration(s)",
-                 problem.num_nodes(), problem.num_tets(), R, motion.num_frames(), motion.fps, size,
-                 handle_sweep.size() * cubature_sweep.size());
+  logger()->info(
+      "compare: {} nodes, {} tets, {} region vertices, {} frames at {} fps; reference on {} process(es), {} reduced "
+      "configuration(s)",
+      problem.num_nodes(), problem.num_tets(), R, motion.num_frames(), motion.fps, size,
+      handle_sweep.size() * cubature_sweep.size());
 
   // The full-space reference: its skin displacement per frame is kept for the error maps, its posed region surface
   // for the trajectory error.
@@ -180,7 +182,8 @@ void run_compare(const CompareOptions& opt, const Invocation& invocation, int ra
     loop.substeps = opt.substeps;
     const model::StepStats total = model::run_frames(full, loop, [&](int f, double, const model::StepStats&) {
       const model::State& state = full.state();
-      require(state.x.allFinite(), "compare: the full-space state at t = {} is not finite", motion.time(static_cast<std::size_t>(f)));
+      require(state.x.allFinite(), "compare: the full-space state at t = {} is not finite",
+              motion.time(static_cast<std::size_t>(f)));
       u_full.push_back(layer.surface_displacement(state.x));
       progress.advance();
     });
@@ -196,7 +199,8 @@ void run_compare(const CompareOptions& opt, const Invocation& invocation, int ra
   for (const auto& u : u_full) full_sq += u.squaredNorm();
   const double samples = static_cast<double>(R) * static_cast<double>(u_full.size());
   const double full_rms = std::sqrt(full_sq / samples);
-  logger()->info("full space: {:.3f} s per frame, mean σ = {:.3f} mm", per_frame(full_seconds, steps), 1e3 * sigma_full.mean());
+  logger()->info("full space: {:.3f} s per frame, mean σ = {:.3f} mm", per_frame(full_seconds, steps),
+                 1e3 * sigma_full.mean());
   if (rank != 0) return;
 
   // The reduced sweep, frame by frame against the stored reference. The full-space elastic energy of each
@@ -210,7 +214,8 @@ void run_compare(const CompareOptions& opt, const Invocation& invocation, int ra
     model::DynamicsAmplitude amplitude(normals);
     c.error_sq = Eigen::VectorXd::Zero(R);
     // Named by the requested count (the per-function coverage may add a tet or two; every tet for exact cubature).
-    const std::string name = compare::config_suffix(c.handles, c.cubature_request > 0 ? c.cubature_request : c.model.cubature.size());
+    const std::string name =
+        compare::config_suffix(c.handles, c.cubature_request > 0 ? c.cubature_request : c.model.cubature.size());
     auto record = [&](std::size_t f) {
       const model::State state = fast.full_state();
       const model::RowMatrixX3d u = layer.surface_displacement(state.x);
@@ -269,7 +274,7 @@ void run_compare(const CompareOptions& opt, const Invocation& invocation, int ra
   vtk::Fields fields;
   fields.point_data.push_back({"sigma_full", scatter(1e3 * sigma_full), false});
   fields.point_data.push_back({"soft_region", scatter(Eigen::VectorXd::Ones(R)), true});
-  fields.point_data.push_back({"region", scatter(Eigen::VectorXd::Ones(R)), true});   // soft_region's older name
+  fields.point_data.push_back({"region", scatter(Eigen::VectorXd::Ones(R)), true});  // soft_region's older name
   std::vector<compare::ReducedTimings> timings;
   nlohmann::json reduced_json = nlohmann::json::array();
   for (const auto& cp : configs) {
@@ -295,62 +300,71 @@ void run_compare(const CompareOptions& opt, const Invocation& invocation, int ra
     fields.point_data.push_back({"sigma_reduced_" + suffix, scatter(1e3 * c.sigma), false});
     fields.point_data.push_back({"sigma_error_" + suffix, scatter(1e3 * (c.sigma - sigma_full)), false});
     fields.point_data.push_back({"rms_error_" + suffix, scatter(1e3 * rms_vertex), false});
-    compare::ReducedTimings t{row.handles, row.cubature, per_frame(c.elastic_seconds, c.frames), per_frame(c.inertia_seconds, c.frames),
-                              per_frame(c.solve_seconds, c.frames), per_frame(static_cast<double>(c.newton), c.frames)};
+    compare::ReducedTimings t{row.handles,
+                              row.cubature,
+                              per_frame(c.elastic_seconds, c.frames),
+                              per_frame(c.inertia_seconds, c.frames),
+                              per_frame(c.solve_seconds, c.frames),
+                              per_frame(static_cast<double>(c.newton), c.frames)};
     timings.push_back(t);
-    reduced_json.push_back({{"handles", row.handles},
-                            {"bone_handles", c.model.handles.bone_joints().size()},
-                            {"coordinates", row.coordinates},
-                            {"cubature", row.cubature},
-                            {"cubature_tets", c.cubature_tets},
-                            {"cubature_method", c.model.cubature.method},
-                            {"cache", c.model.cache_outcome},
-                            {"fields", {"sigma_reduced_" + suffix, "sigma_error_" + suffix, "rms_error_" + suffix}},
-                            {"seconds_per_frame", row.seconds_per_frame},
-                            {"frames_per_second", row.frames_per_second},
-                            {"elastic_seconds_per_frame", t.elastic_seconds_per_frame},
-                            {"inertia_seconds_per_frame", t.inertia_seconds_per_frame},
-                            {"solve_seconds_per_frame", t.solve_seconds_per_frame},
-                            {"newton_iterations", c.newton},
-                            {"failed_attempts", c.retries},
-                            {"speedup", row.seconds_per_frame > 0 ? full_row.seconds_per_frame / row.seconds_per_frame : 0.0},
-                            {"sigma_mean_mm", row.sigma_mean_mm},
-                            {"sigma_max_mm", 1e3 * c.sigma.maxCoeff()},
-                            {"recovered_fraction", row.recovered_fraction},
-                            {"rms_error_mm", row.rms_error_mm},
-                            {"max_vertex_rms_error_mm", 1e3 * rms_vertex.maxCoeff()},
-                            {"relative_rms_error", row.relative_rms_error},
-                            {"sigma_correlation", row.sigma_correlation},
-                            {"trajectory_rms_mm", row.trajectory_rms_mm},
-                            {"trajectory_max_mm", row.trajectory_max_mm},
-                            {"within_material_range", row.valid},
-                            {"out_of_range", c.invalid.empty() ? nlohmann::json(nullptr) : nlohmann::json(c.invalid)}});
-    logger()->info("reduced {} handles, {} cubature tets: {:.2f} ms per frame ({:.0f}× faster), {:.0f}% of the dynamics, relative "
-                   "RMS error {:.3f}",
-                   row.handles, row.cubature, 1e3 * row.seconds_per_frame,
-                   row.seconds_per_frame > 0 ? full_row.seconds_per_frame / row.seconds_per_frame : 0.0, 100.0 * row.recovered_fraction,
-                   row.relative_rms_error);
+    reduced_json.push_back(
+        {{"handles", row.handles},
+         {"bone_handles", c.model.handles.bone_joints().size()},
+         {"coordinates", row.coordinates},
+         {"cubature", row.cubature},
+         {"cubature_tets", c.cubature_tets},
+         {"cubature_method", c.model.cubature.method},
+         {"cache", c.model.cache_outcome},
+         {"fields", {"sigma_reduced_" + suffix, "sigma_error_" + suffix, "rms_error_" + suffix}},
+         {"seconds_per_frame", row.seconds_per_frame},
+         {"frames_per_second", row.frames_per_second},
+         {"elastic_seconds_per_frame", t.elastic_seconds_per_frame},
+         {"inertia_seconds_per_frame", t.inertia_seconds_per_frame},
+         {"solve_seconds_per_frame", t.solve_seconds_per_frame},
+         {"newton_iterations", c.newton},
+         {"failed_attempts", c.retries},
+         {"speedup", row.seconds_per_frame > 0 ? full_row.seconds_per_frame / row.seconds_per_frame : 0.0},
+         {"sigma_mean_mm", row.sigma_mean_mm},
+         {"sigma_max_mm", 1e3 * c.sigma.maxCoeff()},
+         {"recovered_fraction", row.recovered_fraction},
+         {"rms_error_mm", row.rms_error_mm},
+         {"max_vertex_rms_error_mm", 1e3 * rms_vertex.maxCoeff()},
+         {"relative_rms_error", row.relative_rms_error},
+         {"sigma_correlation", row.sigma_correlation},
+         {"trajectory_rms_mm", row.trajectory_rms_mm},
+         {"trajectory_max_mm", row.trajectory_max_mm},
+         {"within_material_range", row.valid},
+         {"out_of_range", c.invalid.empty() ? nlohmann::json(nullptr) : nlohmann::json(c.invalid)}});
+    logger()->info(
+        "reduced {} handles, {} cubature tets: {:.2f} ms per frame ({:.0f}× faster), {:.0f}% of the dynamics, relative "
+        "RMS error {:.3f}",
+        row.handles, row.cubature, 1e3 * row.seconds_per_frame,
+        row.seconds_per_frame > 0 ? full_row.seconds_per_frame / row.seconds_per_frame : 0.0,
+        100.0 * row.recovered_fraction, row.relative_rms_error);
   }
 
   // Everything is computed: the run folder appears at once.
   RunFolder run(opt.out);
   vtk::write_surface(run.stage("compare.vtp"), layer.shaped, model.faces, fields);
   compare::write_tradeoff_csv(run.stage("tradeoff.csv"), rows);
-  const std::string title = fmt::format("{} · {} · {} mesh · {} frames at {:g} fps", subject_label, motion.name, opt.mesh,
-                                        motion.num_frames(), motion.fps);
+  const std::string title = fmt::format("{} · {} · {} mesh · {} frames at {:g} fps", subject_label, motion.name,
+                                        opt.mesh, motion.num_frames(), motion.fps);
   compare::write_tradeoff_markdown(
       run.stage("tradeoff.md"), "Full space against reduced models: " + title,
-      {fmt::format("layer: {} nodes, {} tets, {} region vertices; step {:.4g} s", problem.num_nodes(), problem.num_tets(), R, h),
+      {fmt::format("layer: {} nodes, {} tets, {} region vertices; step {:.4g} s", problem.num_nodes(),
+                   problem.num_tets(), R, h),
        fmt::format("full space: {} Newton and {} linear iterations on {} process(es)", full_newton, full_linear, size),
-       "σ: dynamics amplitude per vertex (docs/physics.md §4), mean over the region; recovered = mean σ / mean σ of the full space",
+       "σ: dynamics amplitude per vertex (docs/physics.md §4), mean over the region; recovered = mean σ / mean σ of "
+       "the full space",
        "RMS error: of |u − u_full| over region vertices and frames; relative: divided by the RMS of u_full",
-       "σ correlation: Pearson correlation of σ and σ_full over the region's vertices; trajectory RMS / max: of |p − p_full| over "
+       "σ correlation: Pearson correlation of σ and σ_full over the region's vertices; trajectory RMS / max: of |p − "
+       "p_full| over "
        "region vertices and frames 1..F, p the posed body surface that `sflsh simulate` writes"},
       rows, timings);
   std::string png = "tradeoff.png";
   try {
     compare::write_tradeoff_png(run.stage("tradeoff.png"), "Error against time: " + title, rows);
-  } catch (const Error& e) {   // the picture is a convenience: the tables never depend on a display
+  } catch (const Error& e) {  // the picture is a convenience: the tables never depend on a display
     logger()->warn("skipped tradeoff.png: {}", e.what());
     png.clear();
   }
@@ -359,14 +373,21 @@ void run_compare(const CompareOptions& opt, const Invocation& invocation, int ra
   summary["body"] = body::body_label(opt.subject);
   summary["subject"] = subject_label;
   summary["beta"] = std::vector<double>(beta.data(), beta.data() + beta.size());
-  summary["motion"] = {{"name", motion.name}, {"source", motion.source}, {"fps", motion.fps}, {"frames", motion.num_frames()}};
-  summary["mesh"] = {{"mesher", opt.layer.mesher}, {"size", opt.mesh}, {"nodes", problem.num_nodes()}, {"tets", problem.num_tets()},
-                     {"constrained_dofs", problem.dirichlet.dof.size()}, {"region_vertices", R},
+  summary["motion"] = {
+      {"name", motion.name}, {"source", motion.source}, {"fps", motion.fps}, {"frames", motion.num_frames()}};
+  summary["mesh"] = {{"mesher", opt.layer.mesher},
+                     {"size", opt.mesh},
+                     {"nodes", problem.num_nodes()},
+                     {"tets", problem.num_tets()},
+                     {"constrained_dofs", problem.dirichlet.dof.size()},
+                     {"region_vertices", R},
                      {"body_vertices", model.num_vertices()}};
   summary["material"] = material_summary(opt.layer, material_file);
   summary["step"] = h;
   summary["substeps"] = opt.substeps;
-  summary["sweep"] = {{"handles", handle_sweep}, {"cubature", cubature_sweep}, {"cubature_weights", opt.reduced.cubature_weights},
+  summary["sweep"] = {{"handles", handle_sweep},
+                      {"cubature", cubature_sweep},
+                      {"cubature_weights", opt.reduced.cubature_weights},
                       {"affine", opt.reduced.affine}};
   summary["full"] = {{"processes", size},
                      {"free_dofs", problem.num_dofs() - static_cast<int>(problem.dirichlet.dof.size())},
@@ -379,13 +400,21 @@ void run_compare(const CompareOptions& opt, const Invocation& invocation, int ra
                      {"sigma_max_mm", 1e3 * sigma_full.maxCoeff()},
                      {"displacement_rms_mm", 1e3 * full_rms}};
   summary["reduced"] = reduced_json;
-  summary["timings"] = {{"build_seconds", build_seconds}, {"models_seconds", models_seconds}, {"total_seconds", seconds_since(t_start)}};
-  summary["output"] = {{"fields", "compare.vtp"}, {"table", "tradeoff.csv"}, {"markdown", "tradeoff.md"},
+  summary["timings"] = {
+      {"build_seconds", build_seconds}, {"models_seconds", models_seconds}, {"total_seconds", seconds_since(t_start)}};
+  summary["output"] = {{"fields", "compare.vtp"},
+                       {"table", "tradeoff.csv"},
+                       {"markdown", "tradeoff.md"},
                        {"plot", png.empty() ? nlohmann::json(nullptr) : nlohmann::json(png)}};
-  summary["units"] = {{"sigma", "mm"}, {"rms_error", "mm"}, {"trajectory_rms", "mm"}, {"trajectory_max", "mm"}, {"seconds_per_frame", "s"}};
+  summary["units"] = {{"sigma", "mm"},
+                      {"rms_error", "mm"},
+                      {"trajectory_rms", "mm"},
+                      {"trajectory_max", "mm"},
+                      {"seconds_per_frame", "s"}};
   write_json(run.stage("summary.json"), summary);
   run.commit();
-  logger()->info("compare: wrote {} ({} configurations, {:.1f} s)", run.dir().string(), configs.size(), seconds_since(t_start));
+  logger()->info("compare: wrote {} ({} configurations, {:.1f} s)", run.dir().string(), configs.size(),
+                 seconds_since(t_start));
 }
 
 }  // namespace
@@ -398,15 +427,20 @@ void register_compare_commands(CLI::App& app, const Invocation& invocation) {
       "write σ and error maps (compare.vtp) and the error–time trade-off (tradeoff.csv, .md, .png).");
   add_body_option(*cmd, opt->subject);
   add_subject_options(*cmd, opt->subject);
-  cmd->add_option("--motion", opt->motion, "Motion: a procedural name (sflsh motion list) or an AMASS .npz path")->required();
+  cmd->add_option("--motion", opt->motion, "Motion: a procedural name (sflsh motion list) or an AMASS .npz path")
+      ->required();
   cmd->add_option("--frames", opt->frames, "Number of frames (0: the motion's length)");
   cmd->add_option("--fps", opt->fps, "Frame rate (and motion sampling)")->capture_default_str();
   cmd->add_option("--substeps", opt->substeps, "Backward-Euler steps per frame for both solvers");
   cmd->add_option("--mesh", opt->mesh, "Layer resolution: coarse | default | fine")
       ->capture_default_str()
       ->check(CLI::IsMember({"coarse", "default", "fine"}));
-  cmd->add_option("--handles", opt->handles, "Sweep of point-handle counts, comma-separated (plus the bone handles)")->capture_default_str();
-  cmd->add_option("--cubature", opt->cubature, "Sweep of cubature tet counts K, comma-separated (0 = every tet; auto = the automatic count that covers the subspace)")->capture_default_str();
+  cmd->add_option("--handles", opt->handles, "Sweep of point-handle counts, comma-separated (plus the bone handles)")
+      ->capture_default_str();
+  cmd->add_option("--cubature", opt->cubature,
+                  "Sweep of cubature tet counts K, comma-separated (0 = every tet; auto = the automatic count that "
+                  "covers the subspace)")
+      ->capture_default_str();
   cmd->add_flag("--exact-cubature", opt->exact_cubature, "Also run every handle count with exact cubature (every tet)");
   add_reduced_options(*cmd, opt->reduced);
   add_layer_options(*cmd, opt->layer);

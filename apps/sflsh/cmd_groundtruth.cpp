@@ -8,7 +8,6 @@
 #include <sflsh/meshing/layer_mesh.hpp>
 #include <sflsh/validate/experiments.hpp>
 
-
 namespace sflsh::app {
 
 namespace {
@@ -31,15 +30,19 @@ void register_groundtruth_commands(CLI::App& app, const Invocation& invocation) 
       "Synthetic ground truth: full-space simulations of the open body's subjects with a hidden shape-dependent "
       "material (docs/fit.md), written as groundtruth.h5 in the DYNA layout (one (V, 3, T) dataset per "
       "<subject>_<motion>) with the true parameters in truth/. Cached per case in DIR/state (resumable).");
-  cmd->add_option("--preset", o->preset, "Subjects, motions and frames of `sflsh validate --preset` (default paper: "
-                                         "5 train + 5 test subjects, 5 motions, 60 frames)")
+  cmd->add_option("--preset", o->preset,
+                  "Subjects, motions and frames of `sflsh validate --preset` (default paper: "
+                  "5 train + 5 test subjects, 5 motions, 60 frames)")
       ->check(CLI::IsMember({"quick", "paper"}));
   cmd->add_option("--out", o->out, "Output folder")->required();
   cmd->add_option("--mesh", o->mesh, "Layer mesh size: coarse | default | fine (default coarse)");
-  cmd->add_option("--frames", o->frames, "Frames per motion (0 = the motions' default length)")->check(CLI::NonNegativeNumber);
-  cmd->add_option("--subjects", o->subjects, "Comma-separated subject names (replaces the preset's train and test subjects)")
+  cmd->add_option("--frames", o->frames, "Frames per motion (0 = the motions' default length)")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--subjects", o->subjects,
+                  "Comma-separated subject names (replaces the preset's train and test subjects)")
       ->delimiter(',');
-  cmd->add_option("--motions", o->motions, "Comma-separated motion names (replaces the preset's motions)")->delimiter(',');
+  cmd->add_option("--motions", o->motions, "Comma-separated motion names (replaces the preset's motions)")
+      ->delimiter(',');
   cmd->add_option("--threads", o->threads, "Threads per process (0 = all)")->check(CLI::NonNegativeNumber);
   cmd->callback([o, invocation] {
     with_petsc(invocation, [&](int, int) {

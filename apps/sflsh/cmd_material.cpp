@@ -43,9 +43,9 @@ nlohmann::json material_json(const material::SkinMaterial& skin, const std::stri
                       {"fung_scale", fung_scale},
                       {"normal", {0.0, 0.0, 1.0}}};
   // FEBio "Fung-ortho-compressible" parameters with the same small-strain response (docs/material.md).
-  j["febio_fung_ortho_compressible"] = {{"E1", k.E1},   {"E2", k.E2},   {"E3", k.E3},   {"G12", k.G12},
-                                        {"G23", k.G23}, {"G31", k.G31}, {"v12", k.nu12}, {"v23", k.nu23},
-                                        {"v31", k.nu31}};
+  j["febio_fung_ortho_compressible"] = {{"E1", k.E1},    {"E2", k.E2},    {"E3", k.E3},
+                                        {"G12", k.G12},  {"G23", k.G23},  {"G31", k.G31},
+                                        {"v12", k.nu12}, {"v23", k.nu23}, {"v31", k.nu31}};
   if (std::isfinite(k.c)) j["febio_fung_ortho_compressible"]["c"] = k.c;  // JSON has no ∞: absent when off
   return j;
 }
@@ -60,10 +60,10 @@ void run_curve(CurveOptions opt, const Invocation& invocation) {
   material::write_curves_csv(run.stage("curves.csv"), curves);
   std::string png = "curves.png";
   try {
-    material::plot_curves_png(run.stage("curves.png"), curves,
-                              fmt::format("Y_t = {:g} Pa, Y_n = {:g} Pa, nu = {:g}, saturation = {:g}",
-                                          opt.skin.young_tangent, opt.skin.young_normal, opt.skin.poisson,
-                                          opt.skin.saturation));
+    material::plot_curves_png(
+        run.stage("curves.png"), curves,
+        fmt::format("Y_t = {:g} Pa, Y_n = {:g} Pa, nu = {:g}, saturation = {:g}", opt.skin.young_tangent,
+                    opt.skin.young_normal, opt.skin.poisson, opt.skin.saturation));
   } catch (const Error& e) {  // the plot is a convenience: the CSV never depends on a display
     logger()->warn("skipped curves.png: {}", e.what());
     png.clear();
@@ -113,7 +113,8 @@ void add_curve_command(CLI::App& group, const Invocation& invocation) {
 }  // namespace
 
 void register_material_commands(CLI::App& app, const Invocation& invocation) {
-  CLI::App* material = app.add_subcommand("material", "The skin material: constitutive curves and heterogeneous fields");
+  CLI::App* material =
+      app.add_subcommand("material", "The skin material: constitutive curves and heterogeneous fields");
   material->require_subcommand(1);
   add_curve_command(*material, invocation);
   add_material_show_command(*material, invocation);

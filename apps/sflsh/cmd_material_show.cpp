@@ -18,8 +18,8 @@ namespace {
 
 struct ShowOptions {
   SubjectOptions subject;
-  std::string material;          ///< material file; empty: defaults at --control-points points
-  std::string shape_model;       ///< shape model file: the material of the subject's β (SFLSH eq. 1)
+  std::string material;     ///< material file; empty: defaults at --control-points points
+  std::string shape_model;  ///< shape model file: the material of the subject's β (SFLSH eq. 1)
   int control_points = 24;
   bool phi = false;
   std::string mesher = "cgal";
@@ -43,7 +43,7 @@ void run_show(const ShowOptions& opt, const Invocation& invocation) {
   const body::Betas beta = selected_betas(opt.subject, subject_label);
   if (subject_label.empty()) subject_label = "template";
 
-  material::MaterialFile file;   // read first: a bad file fails before any meshing
+  material::MaterialFile file;  // read first: a bad file fails before any meshing
   if (!opt.material.empty()) {
     file = material::load_material_file(opt.material);
     material::check_against_body(file, model);
@@ -59,19 +59,22 @@ void run_show(const ShowOptions& opt, const Invocation& invocation) {
   const meshing::LayerMesh mesh = meshing::cached_layer_mesh(
       model, mesh_options, opt.cache.empty() ? meshing::default_cache_dir() : std::filesystem::path(opt.cache));
 
-  if (opt.material.empty() && opt.shape_model.empty()) file = material::default_material(model, mesh, opt.control_points, subject_label);
+  if (opt.material.empty() && opt.shape_model.empty())
+    file = material::default_material(model, mesh, opt.control_points, subject_label);
   const material::BiharmonicBasis basis = material::layer_basis(model, mesh, file.vertices());
   const material::KappaMatrix kappa = file.kappa();
   const meshing::Retargeter retargeter(model, mesh);
   const Eigen::VectorXd thickness = material::evaluate_field(basis.phi, kappa).col(0);
   const meshing::RetargetedLayer layer = retargeter.retarget(beta, thickness);
-  const material::LayerMaterialFields fields = material::layer_material_fields(retargeter, basis.phi, kappa, layer.nodes);
+  const material::LayerMaterialFields fields =
+      material::layer_material_fields(retargeter, basis.phi, kappa, layer.nodes);
 
   RunFolder run(opt.out);
   vtk::Fields surface;
   add_kappa_fields(surface.point_data, fields.vertex);
   if (opt.phi)
-    for (int i = 0; i < basis.num_functions(); ++i) surface.point_data.push_back({fmt::format("phi_{:02d}", i), basis.phi.col(i), false});
+    for (int i = 0; i < basis.num_functions(); ++i)
+      surface.point_data.push_back({fmt::format("phi_{:02d}", i), basis.phi.col(i), false});
   vtk::write_surface(run.stage("surface.vtp"), layer.geometry.skin, mesh.region_surface.faces, surface);
 
   vtk::Fields volume;
@@ -84,7 +87,9 @@ void run_show(const ShowOptions& opt, const Invocation& invocation) {
   vtk::Points points(count, 3);
   Eigen::MatrixXd index(count, 1);
   for (int i = 0; i < count; ++i) {
-    points.row(i) = layer.geometry.skin.row(mesh.region_surface.local_of[static_cast<std::size_t>(file.control_points[static_cast<std::size_t>(i)].vertex)]);
+    points.row(i) = layer.geometry.skin.row(
+        mesh.region_surface
+            .local_of[static_cast<std::size_t>(file.control_points[static_cast<std::size_t>(i)].vertex)]);
     index(i) = i;
   }
   vtk::Fields control;
@@ -98,14 +103,17 @@ void run_show(const ShowOptions& opt, const Invocation& invocation) {
   summary["subject"] = subject_label;
   summary["beta"] = std::vector<double>(beta.data(), beta.data() + beta.size());
   summary["material"] = !opt.material.empty() ? opt.material : !opt.shape_model.empty() ? opt.shape_model : "defaults";
-  summary["material_source"] = !opt.material.empty() ? "material file" : !opt.shape_model.empty() ? "shape model" : "defaults";
+  summary["material_source"] = !opt.material.empty()      ? "material file"
+                               : !opt.shape_model.empty() ? "shape model"
+                                                          : "defaults";
   summary["control_points"] = count;
   summary["mesher"] = meshing::mesher_name(mesh.mesher);
   summary["tets"] = mesh.num_tets();
   summary["quality"] = layer.quality;
   nlohmann::json ranges;
   for (int k = 0; k < material::kNumKappa; ++k)
-    ranges[std::string(material::kKappaNames[static_cast<std::size_t>(k)])] = {fields.tet.col(k).minCoeff(), fields.tet.col(k).maxCoeff()};
+    ranges[std::string(material::kKappaNames[static_cast<std::size_t>(k)])] = {fields.tet.col(k).minCoeff(),
+                                                                               fields.tet.col(k).maxCoeff()};
   summary["tet_ranges"] = ranges;
   summary["basis_active_set_iterations"] = basis.total_iterations();
   summary["files"] = {"surface.vtp", "layer.vtu", "control_points.vtp", "material.toml"};
@@ -128,7 +136,8 @@ void add_material_show_command(CLI::App& material, const Invocation& invocation)
   cmd->add_option("--shape-model", opt->shape_model,
                   "Shape model file (TOML, e.g. data/shape_models/default.toml): the material of the subject's shape")
       ->excludes(material_option);
-  cmd->add_option("--control-points", opt->control_points, "Number of control points N when no --material is given (1, 12, 24, 84, …)")
+  cmd->add_option("--control-points", opt->control_points,
+                  "Number of control points N when no --material is given (1, 12, 24, 84, …)")
       ->capture_default_str();
   cmd->add_flag("--phi", opt->phi, "Also write the basis functions φ_i as point data of surface.vtp");
   cmd->add_option("--mesher", opt->mesher, "Layer mesher: cgal | gmsh | layered")

@@ -48,7 +48,8 @@ void run_mesh(const MeshOptions& opt, const Invocation& invocation) {
   options.mesher = meshing::parse_mesher(opt.mesher);
   options.size = meshing::parse_size_preset(opt.size);
   options.threads = opt.threads;
-  const std::filesystem::path cache_dir = opt.cache.empty() ? meshing::default_cache_dir() : std::filesystem::path(opt.cache);
+  const std::filesystem::path cache_dir =
+      opt.cache.empty() ? meshing::default_cache_dir() : std::filesystem::path(opt.cache);
   meshing::CacheOutcome outcome{};
   const auto t_mesh = std::chrono::steady_clock::now();
   const meshing::LayerMesh mesh = meshing::cached_layer_mesh(model, options, cache_dir, opt.rebuild_cache, &outcome);
@@ -97,12 +98,15 @@ void run_mesh(const MeshOptions& opt, const Invocation& invocation) {
   vtk::write_surface(run.stage("outer.vtp"), geometry.skin, mesh.region_surface.faces, surface);
   meshing::RowMatrixX3d inner = geometry.skin;
   for (int v = 0; v < inner.rows(); ++v)
-    inner.row(v) += geometry.thickness(v) * (geometry.skeleton.row(v) - geometry.skin.row(v));   // docs/physics.md §1.4
+    inner.row(v) += geometry.thickness(v) * (geometry.skeleton.row(v) - geometry.skin.row(v));  // docs/physics.md §1.4
   vtk::write_surface(run.stage("inner.vtp"), inner, mesh.region_surface.faces, surface);
 
   std::map<std::string, long> kinds;
   for (auto k : mesh.kind)
-    ++kinds[k == meshing::NodeKind::outer ? "outer" : k == meshing::NodeKind::inner ? "inner" : k == meshing::NodeKind::side ? "side" : "interior"];
+    ++kinds[k == meshing::NodeKind::outer   ? "outer"
+            : k == meshing::NodeKind::inner ? "inner"
+            : k == meshing::NodeKind::side  ? "side"
+                                            : "interior"];
   const meshing::RowMatrixX3d skin_points = mesh.skin_positions(layer.nodes);
   const double skin_error = (skin_points - geometry.skin).rowwise().norm().maxCoeff();
 
@@ -150,7 +154,9 @@ void register_mesh_commands(CLI::App& app, const Invocation& invocation) {
   cmd->add_option("--mesher", opt->mesher, "Tet mesher: cgal | gmsh | layered (extruded prisms, valid for any h)")
       ->check(CLI::IsMember({"cgal", "gmsh", "layered"}))
       ->capture_default_str();
-  cmd->add_option("--mesh,--size", opt->size, "Layer resolution preset: coarse (~10k tets) | default (~50k) | fine (~200k) (--size: older spelling)")
+  cmd->add_option(
+         "--mesh,--size", opt->size,
+         "Layer resolution preset: coarse (~10k tets) | default (~50k) | fine (~200k) (--size: older spelling)")
       ->check(CLI::IsMember({"coarse", "default", "fine"}))
       ->capture_default_str();
   cmd->add_option("--region", opt->region, "Comma-separated parts: torso, upper_arms, thighs, left_upper_arm, …")

@@ -40,8 +40,8 @@ struct MetricsOptions {
 };
 
 void list_file(const validate::DynaFile& file) {
-  std::cout << fmt::format("{}: {} sequences, {} vertices, {} faces\n", file.path().string(), file.keys().size(), file.num_vertices(),
-                           file.faces().rows());
+  std::cout << fmt::format("{}: {} sequences, {} vertices, {} faces\n", file.path().string(), file.keys().size(),
+                           file.num_vertices(), file.faces().rows());
   for (const std::string& subject : file.subjects()) {
     std::cout << subject << ":";
     for (const std::string& sequence : file.sequences(subject)) {
@@ -63,16 +63,19 @@ void run_metrics(const MetricsOptions& opt, const Invocation& invocation) {
     list_file(file);
     return;
   }
-  require(!opt.sequence.empty(), "metrics: --sequence KEY is required (see `sflsh metrics --dyna {} --list`)", opt.dyna);
+  require(!opt.sequence.empty(), "metrics: --sequence KEY is required (see `sflsh metrics --dyna {} --list`)",
+          opt.dyna);
   require(!opt.out.empty(), "metrics: --out DIR is required");
   require(opt.frames >= 0, "metrics: --frames must be non-negative, got {}", opt.frames);
-  require(opt.soft_weight >= 0.0 && opt.soft_weight <= 1.0, "metrics: --soft-weight must be in [0, 1], got {}", opt.soft_weight);
+  require(opt.soft_weight >= 0.0 && opt.soft_weight <= 1.0, "metrics: --soft-weight must be in [0, 1], got {}",
+          opt.soft_weight);
 
   file.info(opt.sequence);  // an unknown sequence is named (with the file's list) before the body is loaded
   const body::BodyModel model = load_selected_body(opt.subject);
   file.require_vertices(model);
   const validate::DynaSequence sequence = file.read(opt.sequence, opt.frames);  // reads only the first N frames
-  require(sequence.num_frames() >= 2, "metrics: sequence '{}' has {} frame(s), σ needs at least 2", opt.sequence, sequence.num_frames());
+  require(sequence.num_frames() >= 2, "metrics: sequence '{}' has {} frame(s), σ needs at least 2", opt.sequence,
+          sequence.num_frames());
   std::optional<body::Betas> given_beta;
   if (!opt.subject.betas.empty()) given_beta = body::parse_betas(opt.subject.betas);
 
@@ -81,9 +84,10 @@ void run_metrics(const MetricsOptions& opt, const Invocation& invocation) {
   fit_options.soft_vertices = soft;
   fit_options.soft_weight = opt.soft_weight;
   fit_options.progress = true;
-  logger()->info("metrics: {} frames of '{}' ({} vertices, {} in the soft region), β {}", sequence.num_frames(), opt.sequence,
-                 model.num_vertices(), soft.size(), given_beta ? "given" : "fitted");
-  validate::RegistrationMetrics measured = validate::registration_metrics(model, sequence.frames, sequence.fps, given_beta, fit_options);
+  logger()->info("metrics: {} frames of '{}' ({} vertices, {} in the soft region), β {}", sequence.num_frames(),
+                 opt.sequence, model.num_vertices(), soft.size(), given_beta ? "given" : "fitted");
+  validate::RegistrationMetrics measured =
+      validate::registration_metrics(model, sequence.frames, sequence.fps, given_beta, fit_options);
   validate::PoseFitResult& fit = measured.fit;
   fit.motion.name = opt.sequence;
   fit.motion.source = opt.dyna;
@@ -96,15 +100,23 @@ void run_metrics(const MetricsOptions& opt, const Invocation& invocation) {
   body::save_amass(run.stage("motion.npz"), fit.motion);
 
   nlohmann::json summary = summary_header("metrics", invocation.argc, invocation.argv);
-  summary["dyna"] = {{"file", opt.dyna}, {"sequence", opt.sequence}, {"subject", validate::subject_of(opt.sequence)},
-                     {"frames", sequence.num_frames()}, {"fps", sequence.fps}, {"vertices", file.num_vertices()}};
+  summary["dyna"] = {{"file", opt.dyna},
+                     {"sequence", opt.sequence},
+                     {"subject", validate::subject_of(opt.sequence)},
+                     {"frames", sequence.num_frames()},
+                     {"fps", sequence.fps},
+                     {"vertices", file.num_vertices()}};
   summary["body"] = body::body_label(opt.subject);
   summary["beta"] = vector_json(fit.beta);
   summary["beta_fitted"] = fit.beta_fitted;
   nlohmann::json per_frame = nlohmann::json::array();
   for (const validate::FrameFitReport& f : fit.frames)
-    per_frame.push_back({{"frame", f.frame}, {"rms_mm", 1e3 * f.rms}, {"rms_rigid_mm", 1e3 * f.rms_rigid},
-                         {"iterations", f.iterations}, {"evaluations", f.evaluations}, {"converged", f.converged},
+    per_frame.push_back({{"frame", f.frame},
+                         {"rms_mm", 1e3 * f.rms},
+                         {"rms_rigid_mm", 1e3 * f.rms_rigid},
+                         {"iterations", f.iterations},
+                         {"evaluations", f.evaluations},
+                         {"converged", f.converged},
                          {"status", f.status}});
   summary["fit"] = {{"solver", "Levenberg-Marquardt (Eigen, MINPACK lmder)"},
                     {"soft_weight", opt.soft_weight},
@@ -118,15 +130,20 @@ void run_metrics(const MetricsOptions& opt, const Invocation& invocation) {
                     {"frames", per_frame}};
   summary["dynamics"] = validate::dynamics_summary(dynamics);
   summary["output"] = {{"surface", "metrics.vtp"}, {"table", "metrics.csv"}, {"motion", "motion.npz"}};
-  summary["timings"] = {{"fit_seconds", fit.seconds}, {"metrics_seconds", metrics_seconds},
-                        {"total_seconds", std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count()}};
+  summary["timings"] = {
+      {"fit_seconds", fit.seconds},
+      {"metrics_seconds", metrics_seconds},
+      {"total_seconds", std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count()}};
   write_json(run.stage("summary.json"), summary);
   run.commit();
-  logger()->info("metrics: mean σ = {:.2f} mm over the soft region ({:.2f} mm over all vertices); fit RMS {:.2f} mm (max {:.2f}), {} s",
-                 1e3 * dynamics.mean_sigma_soft(), 1e3 * dynamics.mean_sigma_all(), 1e3 * fit.mean_rms, 1e3 * fit.max_rms,
-                 fit.seconds);
+  logger()->info(
+      "metrics: mean σ = {:.2f} mm over the soft region ({:.2f} mm over all vertices); fit RMS {:.2f} mm (max {:.2f}), "
+      "{} s",
+      1e3 * dynamics.mean_sigma_soft(), 1e3 * dynamics.mean_sigma_all(), 1e3 * fit.mean_rms, 1e3 * fit.max_rms,
+      fit.seconds);
   if (fit.unconverged_frames > 0)
-    logger()->warn("metrics: {} frame(s) of the pose fit did not converge (see summary.json fit.frames)", fit.unconverged_frames);
+    logger()->warn("metrics: {} frame(s) of the pose fit did not converge (see summary.json fit.frames)",
+                   fit.unconverged_frames);
 }
 
 }  // namespace
@@ -135,14 +152,17 @@ void register_metrics_commands(CLI::App& app, const Invocation& invocation) {
   auto opt = std::make_shared<MetricsOptions>();
   auto* cmd = app.add_subcommand(
       "metrics",
-      "Dynamics metric of DYNA registrations: fit pose (and β) per frame, pull back to the neutral pose, write σ, σ_n, σ_t [mm] "
+      "Dynamics metric of DYNA registrations: fit pose (and β) per frame, pull back to the neutral pose, write σ, σ_n, "
+      "σ_t [mm] "
       "per vertex (metrics.vtp, metrics.csv, summary.json). --list shows a file's subjects and sequences.");
-  cmd->add_option("--dyna", opt->dyna, "DYNA registration file (HDF5: faces + <subject>_<sequence> datasets of shape (V, 3, T))")
+  cmd->add_option("--dyna", opt->dyna,
+                  "DYNA registration file (HDF5: faces + <subject>_<sequence> datasets of shape (V, 3, T))")
       ->required();
   cmd->add_flag("--list", opt->list, "List the subjects and sequences of the file and exit");
   cmd->add_option("--sequence", opt->sequence, "Dataset key <subject>_<sequence>, e.g. 50004_jiggle_on_toes");
   add_body_option(*cmd, opt->subject);
-  cmd->add_option("--betas", opt->subject.betas, "Shape β (up to 10 numbers); fitted from the registrations when absent");
+  cmd->add_option("--betas", opt->subject.betas,
+                  "Shape β (up to 10 numbers); fitted from the registrations when absent");
   cmd->add_option("--frames", opt->frames, "Use only the first N frames (0: all)");
   cmd->add_option("--soft-weight", opt->soft_weight, "Weight of soft-region vertices in the pose fit (1 elsewhere)");
   cmd->add_option("--out", opt->out, "Output folder");

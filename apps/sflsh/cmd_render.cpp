@@ -8,7 +8,6 @@
 #include <sflsh/core/summary.hpp>
 #include <sflsh/core/vtk_io.hpp>
 
-
 #include <algorithm>
 #include <filesystem>
 #include <regex>
@@ -49,8 +48,8 @@ void run_render(const RenderRunOptions& opt) {
   const fs::path run = opt.run;
   require(fs::is_directory(run), "--run {}: not a folder, expected the --out folder of `sflsh simulate`", opt.run);
   const std::vector<fs::path> frames = body_frames(run);
-  require(!frames.empty(), "--run {}: no body_NNNNNN.vtp frames, expected a `sflsh simulate` run written with --format vtk",
-          opt.run);
+  require(!frames.empty(),
+          "--run {}: no body_NNNNNN.vtp frames, expected a `sflsh simulate` run written with --format vtk", opt.run);
   require(fs::path(opt.out).extension() == ".png", "--out {}: expected a .png file", opt.out);
 
   // The frame: the one with the largest soft-tissue displacement, or the one asked for.
@@ -108,8 +107,8 @@ void run_render(const RenderRunOptions& opt) {
   view.width = opt.width;
   view.height = opt.height;
   view.scalar_range = std::make_pair(0.0, std::max(surface.scalars->maxCoeff(), 1e-9));
-  view.title = fmt::format("{} {} t={:.2f}s  {} 0-{:.2f} mm (blue-red)", subject, motion,
-                           time, legend, view.scalar_range->second);
+  view.title = fmt::format("{} {} t={:.2f}s  {} 0-{:.2f} mm (blue-red)", subject, motion, time, legend,
+                           view.scalar_range->second);
   render::render_png(opt.out, {surface}, view);
   logger()->info("render: frame {} of {} coloured by {} → {}", index, frames.size(), opt.color, opt.out);
 }

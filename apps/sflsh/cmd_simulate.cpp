@@ -1,6 +1,6 @@
 // sflsh simulate --solver full|reduced: the full-space reference solver or the reduced model on a subject's
-// soft-tissue layer driven by a motion. Both write the posed body surface per frame exactly as `sflsh motion export` does (same points,
-// same order, same .pvd layout), so that subtracting the two gives the soft-tissue motion.
+// soft-tissue layer driven by a motion. Both write the posed body surface per frame exactly as `sflsh motion export`
+// does (same points, same order, same .pvd layout), so that subtracting the two gives the soft-tissue motion.
 #include "commands.hpp"
 #include "layer_setup.hpp"
 #include "simulate_run.hpp"
@@ -23,15 +23,15 @@ namespace sflsh::app {
 namespace {
 
 struct SimulateOptions {
-  BodyRunSettings body;                      ///< solver, subject, motion, frames, mesh, layer, integrator, reduced model
+  BodyRunSettings body;  ///< solver, subject, motion, frames, mesh, layer, integrator, reduced model
   bool no_output = false;
-  int every = 1;                             ///< write every N-th frame (the first and the last always)
+  int every = 1;  ///< write every N-th frame (the first and the last always)
   std::string out;
   // Scene files.
   std::string scene;
   int threads = 0;
-  bool every_given = false;                  ///< --every overrides the scene's [output] every
-  bool format_given = false;                 ///< --format overrides the scene's [output] format
+  bool every_given = false;   ///< --every overrides the scene's [output] every
+  bool format_given = false;  ///< --format overrides the scene's [output] format
 };
 
 // sflsh simulate --scene FILE: bodies, objects and the effects the scene calls for (scene_runner.hpp).
@@ -51,8 +51,9 @@ void run_scene_file(const SimulateOptions& opt, const Invocation& invocation, in
   const nlohmann::json summary = scene::run_scene(scene, options);
   if (rank != 0) return;
   std::string effects;
-  for (const auto& e : summary["effects"]) effects += fmt::format("{}{} {:.2f} s", effects.empty() ? "" : ", ", e["name"].get<std::string>(),
-                                                                  e["seconds"].get<double>());
+  for (const auto& e : summary["effects"])
+    effects += fmt::format("{}{} {:.2f} s", effects.empty() ? "" : ", ", e["name"].get<std::string>(),
+                           e["seconds"].get<double>());
   logger()->info("scene '{}': {} frames in {:.1f} s ({}); wrote {}", scene.name, summary["scene"]["frames"].get<int>(),
                  summary["timings"]["loop_seconds"].get<double>(), effects, opt.out);
 }
@@ -71,18 +72,20 @@ void run_simulate(const SimulateOptions& opt, const Invocation& invocation, int 
   if (rank != 0) return;
   summary.update(body);
   const bool xdmf = opt.body.format == "xdmf";
-  summary["output"] = opt.no_output ? nlohmann::json("summary.json only")
-                                    : nlohmann::json({{"format", opt.body.format},
-                                                      {"series", xdmf ? "body.xmf" : "body.pvd"},
-                                                      {"layer", opt.body.write_layer ? (xdmf ? "layer.xmf" : "layer.pvd") : ""},
-                                                      {"every", opt.every},
-                                                      {"compression", xdmf ? "none" : body.value("compression", std::string("lz4"))},
-                                                      {"precision", xdmf ? opt.body.precision : "float64"}});
+  summary["output"] =
+      opt.no_output ? nlohmann::json("summary.json only")
+                    : nlohmann::json({{"format", opt.body.format},
+                                      {"series", xdmf ? "body.xmf" : "body.pvd"},
+                                      {"layer", opt.body.write_layer ? (xdmf ? "layer.xmf" : "layer.pvd") : ""},
+                                      {"every", opt.every},
+                                      {"compression", xdmf ? "none" : body.value("compression", std::string("lz4"))},
+                                      {"precision", xdmf ? opt.body.precision : "float64"}});
   summary.erase("compression");
   write_json(run->stage("summary.json"), summary);
   run->commit();
-  logger()->info("simulated {} frames in {:.1f} s ({:.3f} s per frame); mean σ = {:.2f} mm", summary["motion"]["frames"].get<long>(),
-                 summary["timings"]["solve_seconds"].get<double>(), summary["timings"]["seconds_per_frame"].get<double>(),
+  logger()->info("simulated {} frames in {:.1f} s ({:.3f} s per frame); mean σ = {:.2f} mm",
+                 summary["motion"]["frames"].get<long>(), summary["timings"]["solve_seconds"].get<double>(),
+                 summary["timings"]["seconds_per_frame"].get<double>(),
                  summary["dynamics"].value("sigma_mean_mm", 0.0));
 }
 
@@ -94,16 +97,19 @@ void register_simulate_commands(CLI::App& app, const Invocation& invocation) {
       "simulate",
       "Simulate a subject's soft tissue along a motion and write the posed body surface per frame (as "
       "`sflsh motion export` does). PETSc options (-snes_*, -ksp_*, -pc_*) may follow; parallel with mpirun -n P.");
-  cmd->add_option("--solver", opt->body.solver, "Solver: full (the full-space reference) | reduced (handles + cubature)")
+  cmd->add_option("--solver", opt->body.solver,
+                  "Solver: full (the full-space reference) | reduced (handles + cubature)")
       ->check(CLI::IsMember({"full", "reduced"}));
   add_reduced_run_options(*cmd, opt->body);
   add_body_option(*cmd, opt->body.subject);
   add_subject_options(*cmd, opt->body.subject);
-  cmd->add_option("--scene", opt->scene,
-                  "Scene file (TOML, docs/scenes.md, data/scenes/): bodies, objects and effects; then only --frames, --every, "
-                  "--format, --out, --cache, --threads, --no-output and --allow-long apply");
+  cmd->add_option(
+      "--scene", opt->scene,
+      "Scene file (TOML, docs/scenes.md, data/scenes/): bodies, objects and effects; then only --frames, --every, "
+      "--format, --out, --cache, --threads, --no-output and --allow-long apply");
   cmd->add_option("--threads", opt->threads, "Scenes: threads for bodies that do not interact (0: all cores)");
-  cmd->add_option("--motion", opt->body.motion, "Motion: a procedural name (sflsh motion list) or an AMASS .npz path (required without --scene)");
+  cmd->add_option("--motion", opt->body.motion,
+                  "Motion: a procedural name (sflsh motion list) or an AMASS .npz path (required without --scene)");
   cmd->add_option("--frames", opt->body.frames, "Number of frames (0: the motion's length)");
   cmd->add_option("--fps", opt->body.fps, "Frame rate of the output (and of the motion sampling)");
   cmd->add_option("--substeps", opt->body.substeps, "Integrator steps per frame (step = 1 / (fps · substeps))");
@@ -113,10 +119,11 @@ void register_simulate_commands(CLI::App& app, const Invocation& invocation) {
   add_layer_options(*cmd, opt->body.layer);
   add_mass_option(*cmd, opt->body.layer);
   cmd->add_flag("--write-layer", opt->body.write_layer, "Also write the tet layer per frame (layer.pvd)");
-  cmd->add_option("--format", opt->body.format,
-                  "Time series: vtk (body.pvd of one .vtp per frame, layer.pvd of .vtu) | xdmf (body.xmf + body.h5: triangles "
-                  "and fixed fields once, one HDF5 dataset per field and frame; docs/output.md); with --scene it overrides "
-                  "[output] format")
+  cmd->add_option(
+         "--format", opt->body.format,
+         "Time series: vtk (body.pvd of one .vtp per frame, layer.pvd of .vtu) | xdmf (body.xmf + body.h5: triangles "
+         "and fixed fields once, one HDF5 dataset per field and frame; docs/output.md); with --scene it overrides "
+         "[output] format")
       ->check(CLI::IsMember({"vtk", "xdmf"}))
       ->capture_default_str()
       ->each([opt](const std::string&) { opt->format_given = true; });
@@ -124,9 +131,10 @@ void register_simulate_commands(CLI::App& app, const Invocation& invocation) {
       ->check(CLI::IsMember({"float64", "float32"}))
       ->capture_default_str();
   cmd->add_flag("--no-output", opt->no_output, "Write only summary.json");
-  cmd->add_option("--every", opt->every,
-                  "Write every N-th frame (frame 0 and the last frame always; σ and the summary still use every frame); "
-                  "with --scene it overrides [output] every")
+  cmd->add_option(
+         "--every", opt->every,
+         "Write every N-th frame (frame 0 and the last frame always; σ and the summary still use every frame); "
+         "with --scene it overrides [output] every")
       ->each([opt](const std::string&) { opt->every_given = true; });
   cmd->add_flag("--allow-long", opt->body.allow_long,
                 "Run even when the work estimate (solver steps, bodies, body-frames, memory) exceeds the limits of "

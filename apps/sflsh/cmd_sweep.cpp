@@ -2,7 +2,19 @@
 // `sflsh simulate --solver … --no-output` would (run_body_simulation), its error is caught and recorded, and the
 // report (sweep.csv, sweep.md, summary.json) is written whether or not cases failed; the exit code says whether
 // any did.
+#include "commands.hpp"
+#include "simulate_run.hpp"
+#include "sweep_report.hpp"
+
+#include <sflsh/body/motion.hpp>
+#include <sflsh/body/subjects.hpp>
+#include <sflsh/core/error.hpp>
+#include <sflsh/core/log.hpp>
+#include <sflsh/core/run_folder.hpp>
+#include <sflsh/core/summary.hpp>
+
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
@@ -10,19 +22,8 @@
 #include <atomic>
 #include <cmath>
 #include <memory>
-#include <nlohmann/json.hpp>
 #include <optional>
-#include <sflsh/body/motion.hpp>
-#include <sflsh/body/subjects.hpp>
-#include <sflsh/core/error.hpp>
-#include <sflsh/core/log.hpp>
-#include <sflsh/core/run_folder.hpp>
-#include <sflsh/core/summary.hpp>
 #include <sstream>
-
-#include "commands.hpp"
-#include "simulate_run.hpp"
-#include "sweep_report.hpp"
 
 namespace sflsh::app {
 

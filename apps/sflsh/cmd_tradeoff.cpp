@@ -43,11 +43,11 @@ struct TradeoffOptions {
   /// quick: Newmark with consistent masses at 1/960 s on the coarse mesh (second order and undamped: at that step
   /// its own time error is far below every row's; SUNDIALS at rtol 1e-6 costs ~93 s per 1/30 s frame there);
   /// full: the same on the default mesh at 1/480 s, checked against a finer step and a finer mesh.
-  std::string reference = "newmark";             ///< sundials | backward_euler | bdf2 | newmark
-  std::string reference_mass = "consistent";     ///< lumped | consistent
+  std::string reference = "newmark";          ///< sundials | backward_euler | bdf2 | newmark
+  std::string reference_mass = "consistent";  ///< lumped | consistent
   std::string reference_mesh = "coarse";
-  int reference_substeps = 32;                   ///< stepping references only
-  double rtol = 1e-6, atol = 1e-9;               ///< SUNDIALS reference
+  int reference_substeps = 32;      ///< stepping references only
+  double rtol = 1e-6, atol = 1e-9;  ///< SUNDIALS reference
   /// How converged the reference is: "time" reruns it at twice the substeps, "space" on the next finer mesh, over
   /// the first reference_check_frames frames; the RMS difference is reported (summary.json "reference_checks").
   std::vector<std::string> reference_checks;
@@ -87,15 +87,17 @@ void apply_preset(TradeoffOptions& o, const CLI::App& cmd) {
 void check_options(const TradeoffOptions& o) {
   require(o.fps > 0.0, "--fps must be positive, got {}", o.fps);
   require(o.frames >= 2, "--frames must be at least 2, got {}", o.frames);
-  require(o.reference == "sundials" || o.reference == "backward_euler" || o.reference == "bdf2" || o.reference == "newmark",
-          "--reference {}: expected sundials, backward_euler, bdf2 or newmark", o.reference);
+  require(
+      o.reference == "sundials" || o.reference == "backward_euler" || o.reference == "bdf2" || o.reference == "newmark",
+      "--reference {}: expected sundials, backward_euler, bdf2 or newmark", o.reference);
   for (const std::string& c : o.reference_checks)
     require(c == "time" || c == "space", "--reference-check {}: expected time and/or space", c);
-  require(o.reference_check_frames >= 2, "--reference-check-frames must be at least 2, got {}", o.reference_check_frames);
+  require(o.reference_check_frames >= 2, "--reference-check-frames must be at least 2, got {}",
+          o.reference_check_frames);
   require(!o.integrators.empty() && !o.masses.empty(), "--integrators and --masses need at least one entry each");
   require(o.rtol > 0.0 && o.atol > 0.0, "--rtol and --atol must be positive, got {} and {}", o.rtol, o.atol);
-  require(o.budget_mm >= 0.0 && o.budget_relative >= 0.0, "--budget-mm and --budget-relative must be positive, got {} and {}",
-          o.budget_mm, o.budget_relative);
+  require(o.budget_mm >= 0.0 && o.budget_relative >= 0.0,
+          "--budget-mm and --budget-relative must be positive, got {} and {}", o.budget_mm, o.budget_relative);
   for (const auto* list : {&o.substeps, &o.reduced_substeps})
     for (int s : *list) require(s >= 1, "--substeps and --reduced-substeps: {} is below 1", s);
   for (int h : o.handles) require(h >= 1, "--handles: {} is below 1", h);
@@ -105,7 +107,8 @@ void check_options(const TradeoffOptions& o) {
     for (int s : o.substeps) finest = std::max(finest, s);
     for (int s : o.reduced_substeps) finest = std::max(finest, s);
     require(o.reference_substeps > finest,
-            "--reference-substeps {}: the stepping reference must take a smaller step than every tested model (more than {} substeps)",
+            "--reference-substeps {}: the stepping reference must take a smaller step than every tested model (more "
+            "than {} substeps)",
             o.reference_substeps, finest);
   }
   check_layer_settings(o.layer);
@@ -120,26 +123,26 @@ RowMatrixX3d region_rows(const RowMatrixX3d& all, const std::vector<int>& region
 
 /// The reference's posed region surface per frame and the size of its soft-tissue motion.
 struct ReferenceTrack {
-  std::vector<RowMatrixX3d> posed;   ///< frames 0..F, R×3 [m]
-  double soft_rms = 0.0;             ///< RMS over region vertices and frames 1..F of posed − skinned [m]
-  double sigma_mean = 0.0;           ///< mean σ over the region [m]
+  std::vector<RowMatrixX3d> posed;  ///< frames 0..F, R×3 [m]
+  double soft_rms = 0.0;            ///< RMS over region vertices and frames 1..F of posed − skinned [m]
+  double sigma_mean = 0.0;          ///< mean σ over the region [m]
 };
 
 /// What one run measured.
 struct Measured {
   double solve_seconds = 0.0;
-  double error_sq = 0.0;             ///< Σ over frames 1..F and region vertices of |p − p_ref|² [m²]
-  double sigma_mean = 0.0;           ///< [m]
-  std::string invalid;               ///< why a reduced state left the material's range, or why the run failed
+  double error_sq = 0.0;    ///< Σ over frames 1..F and region vertices of |p − p_ref|² [m²]
+  double sigma_mean = 0.0;  ///< [m]
+  std::string invalid;      ///< why a reduced state left the material's range, or why the run failed
 };
 
 /// Runs one solver frame by frame. `advance(f, seconds)` integrates to frame f, adds its solve time to
 /// `seconds` and returns the state there. With `keep` the posed region surface is stored (the reference),
 /// with `ref` the error against it is summed. σ is that of simulate's summary: of the unposed skin
 /// displacement u (model::SimulationWriter), over frames 0..F.
-Measured track(const model::BodyLayer& layer, const body::Motion& motion, std::size_t frames, const model::State& initial,
-               const std::function<model::State(std::size_t, double&)>& advance, bool check_range, ReferenceTrack* keep,
-               const ReferenceTrack* ref) {
+Measured track(const model::BodyLayer& layer, const body::Motion& motion, std::size_t frames,
+               const model::State& initial, const std::function<model::State(std::size_t, double&)>& advance,
+               bool check_range, ReferenceTrack* keep, const ReferenceTrack* ref) {
   const std::vector<int>& region = layer.mesh->region_surface.vertices;
   model::DynamicsAmplitude amplitude(region_normals(layer));
   Measured m;
@@ -153,7 +156,8 @@ Measured track(const model::BodyLayer& layer, const body::Motion& motion, std::s
     const RowMatrixX3d posed = region_rows(layer.posed_surface_from_displacement(u, t), region);
     if (ref && f > 0) m.error_sq += (posed - ref->posed[f]).squaredNorm();
     if (keep) {
-      const RowMatrixX3d skinned = region_rows(layer.posed_surface_from_displacement(RowMatrixX3d::Zero(u.rows(), 3), t), region);
+      const RowMatrixX3d skinned =
+          region_rows(layer.posed_surface_from_displacement(RowMatrixX3d::Zero(u.rows(), 3), t), region);
       if (f > 0) soft_sq += (posed - skinned).squaredNorm();
       keep->posed.push_back(posed);
     }
@@ -196,30 +200,31 @@ void run_tradeoff(const TradeoffOptions& opt, const Invocation& invocation, int 
 
   // Every layer first, and every handle count checked on it, before any solve (one message, no output).
   std::map<std::string, BuiltLayer> layers;
-  auto layer_of = [&](const std::string& mesh) -> BuiltLayer& {   // std::map: references stay valid
+  auto layer_of = [&](const std::string& mesh) -> BuiltLayer& {  // std::map: references stay valid
     auto it = layers.find(mesh);
     if (it != layers.end()) return it->second;
     const auto t0 = Clock::now();
     model::BodyLayer l = model::build_body_layer(model, beta, motion, material_file ? &*material_file : nullptr,
-                                                         opt.layer.control_points, body_layer_options(opt.layer, mesh));
+                                                 opt.layer.control_points, body_layer_options(opt.layer, mesh));
     return layers.emplace(mesh, BuiltLayer{std::move(l), seconds_since(t0)}).first->second;
   };
   const BuiltLayer& ref_layer = layer_of(opt.reference_mesh);
   for (const std::string& c : opt.reference_checks)
-    if (c == "space" && opt.reference_mesh != "fine") (void)layer_of(opt.reference_mesh == "coarse" ? "default" : "fine");
+    if (c == "space" && opt.reference_mesh != "fine")
+      (void)layer_of(opt.reference_mesh == "coarse" ? "default" : "fine");
   for (const std::string& mesh : opt.meshes) (void)layer_of(mesh);
   for (const std::string& mesh : opt.reduced_meshes) check_handle_counts(layer_of(mesh).layer, opt.handles);
   const std::vector<int>& region = ref_layer.layer.mesh->region_surface.vertices;
   for (const auto& [mesh, built] : layers)
-    require(built.layer.mesh->region_surface.vertices == region, "tradeoff: the {} mesh has a different skin region than the {} mesh",
-            mesh, opt.reference_mesh);
-  logger()->info("tradeoff: {} frames at {:g} fps, {} region vertices; reference {} on the {} mesh", motion.num_frames(), motion.fps,
-                 region.size(), opt.reference, opt.reference_mesh);
+    require(built.layer.mesh->region_surface.vertices == region,
+            "tradeoff: the {} mesh has a different skin region than the {} mesh", mesh, opt.reference_mesh);
+  logger()->info("tradeoff: {} frames at {:g} fps, {} region vertices; reference {} on the {} mesh",
+                 motion.num_frames(), motion.fps, region.size(), opt.reference, opt.reference_mesh);
 
   // One stepping run of the full-space solver (an integrator, a mass, substeps per frame) over the first `frames`
   // frames; the problem's mass is set for the run (the solver is built afterwards).
-  auto run_full = [&](model::BodyLayer& layer, const std::string& integrator, const std::string& mass, int substeps, std::size_t frames,
-                      ReferenceTrack* keep, const ReferenceTrack* against, double& setup_seconds) {
+  auto run_full = [&](model::BodyLayer& layer, const std::string& integrator, const std::string& mass, int substeps,
+                      std::size_t frames, ReferenceTrack* keep, const ReferenceTrack* against, double& setup_seconds) {
     layer.problem.mass_kind = model::parse_mass_kind(mass, "--masses");
     fullspace::FullSpaceOptions options;
     options.integrator = model::parse_integrator(integrator, "--integrators");
@@ -229,10 +234,13 @@ void run_tradeoff(const TradeoffOptions& opt, const Invocation& invocation, int 
     solver.initialize(initial);
     setup_seconds = seconds_since(t0);
     const double step = 1.0 / (motion.fps * substeps);
-    return track(layer, motion, frames, initial, [&](std::size_t, double& seconds) {
-             for (int k = 0; k < substeps; ++k) seconds += solver.step(step).seconds;
-             return solver.state();
-           }, false, keep, against);
+    return track(
+        layer, motion, frames, initial,
+        [&](std::size_t, double& seconds) {
+          for (int k = 0; k < substeps; ++k) seconds += solver.step(step).seconds;
+          return solver.state();
+        },
+        false, keep, against);
   };
 
   // The reference.
@@ -254,16 +262,25 @@ void run_tradeoff(const TradeoffOptions& opt, const Invocation& invocation, int 
       fullspace::ReferenceIntegrator integrator(layer.problem, ro);
       integrator.initialize(initial);
       row.setup_seconds = ref_layer.seconds + seconds_since(t0);
-      m = track(layer, motion, motion.num_frames(), initial, [&](std::size_t f, double& seconds) {
+      m = track(
+          layer, motion, motion.num_frames(), initial,
+          [&](std::size_t f, double& seconds) {
             const double before = integrator.stats().seconds;
             model::State s = integrator.advance_to(motion.time(f));
             seconds += integrator.stats().seconds - before;
             return s;
-          }, false, &ref, nullptr);
+          },
+          false, &ref, nullptr);
       const fullspace::ReferenceStats& st = integrator.stats();
-      reference_json = {{"integrator", "sundials"}, {"method", "ARKODE ARKStep, adaptive implicit SDIRK, KLU"}, {"rtol", opt.rtol},
-                        {"atol", opt.atol}, {"order", ro.order}, {"internal_steps", st.steps}, {"error_test_fails", st.error_test_fails},
-                        {"newton_iterations", st.nonlin_iters}, {"mean_step", motion.duration() / std::max(1L, st.steps)}};
+      reference_json = {{"integrator", "sundials"},
+                        {"method", "ARKODE ARKStep, adaptive implicit SDIRK, KLU"},
+                        {"rtol", opt.rtol},
+                        {"atol", opt.atol},
+                        {"order", ro.order},
+                        {"internal_steps", st.steps},
+                        {"error_test_fails", st.error_test_fails},
+                        {"newton_iterations", st.nonlin_iters},
+                        {"mean_step", motion.duration() / std::max(1L, st.steps)}};
     } else {
       row.substeps = opt.reference_substeps;
       row.step = 1.0 / (motion.fps * opt.reference_substeps);
@@ -283,30 +300,43 @@ void run_tradeoff(const TradeoffOptions& opt, const Invocation& invocation, int 
     reference_json["seconds_per_frame"] = row.seconds_per_frame;
     reference_json["soft_tissue_rms_mm"] = 1e3 * ref.soft_rms;
     reference_json["sigma_mean_mm"] = 1e3 * ref.sigma_mean;
-    logger()->info("reference: {:.3f} s per frame, soft-tissue RMS {:.3f} mm, mean σ {:.3f} mm", row.seconds_per_frame, 1e3 * ref.soft_rms,
-                   1e3 * ref.sigma_mean);
+    logger()->info("reference: {:.3f} s per frame, soft-tissue RMS {:.3f} mm, mean σ {:.3f} mm", row.seconds_per_frame,
+                   1e3 * ref.soft_rms, 1e3 * ref.sigma_mean);
   }
-  require(ref.soft_rms > 0.0, "tradeoff: the reference does not move the soft tissue (motion {}, {} frames)", motion.name, motion.num_frames());
+  require(ref.soft_rms > 0.0, "tradeoff: the reference does not move the soft tissue (motion {}, {} frames)",
+          motion.name, motion.num_frames());
   const double samples = static_cast<double>(region.size()) * steps;
 
   // How converged the reference is: the same configuration at twice the substeps ("time") or on the next finer
   // mesh ("space"), over the first frames, against the reference itself.
   nlohmann::json checks = nlohmann::json::array();
   for (const std::string& check : opt.reference_checks) {
-    require(opt.reference != "sundials", "--reference-check applies to a stepping reference, not sundials (its error is controlled)");
-    const std::size_t frames = std::min<std::size_t>(motion.num_frames(), static_cast<std::size_t>(opt.reference_check_frames));
-    const std::string mesh = check == "space" ? (opt.reference_mesh == "coarse" ? "default" : "fine") : opt.reference_mesh;
-    require(check == "time" || opt.reference_mesh != "fine", "--reference-check space: there is no mesh finer than fine");
+    require(opt.reference != "sundials",
+            "--reference-check applies to a stepping reference, not sundials (its error is controlled)");
+    const std::size_t frames =
+        std::min<std::size_t>(motion.num_frames(), static_cast<std::size_t>(opt.reference_check_frames));
+    const std::string mesh =
+        check == "space" ? (opt.reference_mesh == "coarse" ? "default" : "fine") : opt.reference_mesh;
+    require(check == "time" || opt.reference_mesh != "fine",
+            "--reference-check space: there is no mesh finer than fine");
     BuiltLayer& built = layer_of(mesh);
-    require(built.layer.mesh->region_surface.vertices == region, "tradeoff: the {} mesh has a different skin region", mesh);
+    require(built.layer.mesh->region_surface.vertices == region, "tradeoff: the {} mesh has a different skin region",
+            mesh);
     const int substeps = check == "time" ? 2 * opt.reference_substeps : opt.reference_substeps;
     double setup = 0.0;
     const Measured m = run_full(built.layer, opt.reference, opt.reference_mass, substeps, frames, nullptr, &ref, setup);
     const double rms = std::sqrt(m.error_sq / (static_cast<double>(region.size()) * static_cast<double>(frames - 1)));
-    checks.push_back({{"check", check}, {"mesh", mesh}, {"substeps", substeps}, {"frames", frames}, {"rms_difference_mm", 1e3 * rms},
-                      {"relative_difference", rms / ref.soft_rms}, {"seconds", m.solve_seconds}});
-    logger()->info("reference check ({}): {} mesh, {} substeps, {} frames: RMS difference {:.4f} mm ({:.2f} % of the soft-tissue motion)",
-                   check, mesh, substeps, frames, 1e3 * rms, 100.0 * rms / ref.soft_rms);
+    checks.push_back({{"check", check},
+                      {"mesh", mesh},
+                      {"substeps", substeps},
+                      {"frames", frames},
+                      {"rms_difference_mm", 1e3 * rms},
+                      {"relative_difference", rms / ref.soft_rms},
+                      {"seconds", m.solve_seconds}});
+    logger()->info(
+        "reference check ({}): {} mesh, {} substeps, {} frames: RMS difference {:.4f} mm ({:.2f} % of the soft-tissue "
+        "motion)",
+        check, mesh, substeps, frames, 1e3 * rms, 100.0 * rms / ref.soft_rms);
   }
   reference_json["checks"] = checks;
 
@@ -318,8 +348,8 @@ void run_tradeoff(const TradeoffOptions& opt, const Invocation& invocation, int 
     row.sigma_ratio = ref.sigma_mean > 0 ? m.sigma_mean / ref.sigma_mean : std::nan("");
     row.valid = m.invalid.empty();
     if (!row.valid) logger()->warn("{}: {}", row.label(), m.invalid);
-    logger()->info("{}: {:.4f} s per frame, RMS error {:.4f} mm (relative {:.3f}), σ ratio {:.3f}", row.label(), row.seconds_per_frame,
-                   row.rms_error_mm, row.relative_error, row.sigma_ratio);
+    logger()->info("{}: {:.4f} s per frame, RMS error {:.4f} mm (relative {:.3f}), σ ratio {:.3f}", row.label(),
+                   row.seconds_per_frame, row.rms_error_mm, row.relative_error, row.sigma_ratio);
   };
   // A solver that gives up is a row that failed, not a failed command.
   auto guarded = [&](tradeoff::Row& row, const std::function<Measured()>& run) {
@@ -344,7 +374,8 @@ void run_tradeoff(const TradeoffOptions& opt, const Invocation& invocation, int 
           row.step = 1.0 / (motion.fps * substeps);
           guarded(row, [&] {
             double setup = 0.0;
-            const Measured m = run_full(built.layer, integrator, mass, substeps, motion.num_frames(), nullptr, &ref, setup);
+            const Measured m =
+                run_full(built.layer, integrator, mass, substeps, motion.num_frames(), nullptr, &ref, setup);
             row.setup_seconds = built.seconds + setup;
             return m;
           });
@@ -361,7 +392,12 @@ void run_tradeoff(const TradeoffOptions& opt, const Invocation& invocation, int 
         for (const std::string& integrator : opt.integrators)
           for (const std::string& mass : opt.masses)
             for (int substeps : opt.reduced_substeps) {
-              tradeoff::Row row{"reduced", integrator, mesh, handles, static_cast<int>(reduced_model.cubature.size()), substeps,
+              tradeoff::Row row{"reduced",
+                                integrator,
+                                mesh,
+                                handles,
+                                static_cast<int>(reduced_model.cubature.size()),
+                                substeps,
                                 1.0 / (motion.fps * substeps)};
               row.mass = mass;
               guarded(row, [&] {
@@ -370,13 +406,17 @@ void run_tradeoff(const TradeoffOptions& opt, const Invocation& invocation, int 
                 options.integrator = model::parse_integrator(integrator, "--integrators");
                 const auto t1 = Clock::now();
                 const model::State initial = model::initial_state(built.layer.problem, 0.0);
-                reduced::ReducedSolver solver(built.layer.problem, reduced_model.subspace, reduced_model.cubature, options);
+                reduced::ReducedSolver solver(built.layer.problem, reduced_model.subspace, reduced_model.cubature,
+                                              options);
                 solver.initialize(initial);
                 row.setup_seconds = built.seconds + model_seconds + seconds_since(t1);
-                return track(built.layer, motion, motion.num_frames(), initial, [&](std::size_t, double& seconds) {
-                         for (int s = 0; s < substeps; ++s) seconds += solver.step(row.step).seconds;
-                         return solver.full_state();
-                       }, true, nullptr, &ref);
+                return track(
+                    built.layer, motion, motion.num_frames(), initial,
+                    [&](std::size_t, double& seconds) {
+                      for (int s = 0; s < substeps; ++s) seconds += solver.step(row.step).seconds;
+                      return solver.full_state();
+                    },
+                    true, nullptr, &ref);
               });
             }
       }
@@ -389,20 +429,25 @@ void run_tradeoff(const TradeoffOptions& opt, const Invocation& invocation, int 
   // Everything is computed: the run folder appears at once.
   RunFolder run(opt.out);
   tradeoff::write_csv(run.stage("tradeoff.csv"), rows);
-  const std::string title = fmt::format("{} · {} · {} frames at {:g} fps", subject_label, motion.name, motion.num_frames(), motion.fps);
+  const std::string title =
+      fmt::format("{} · {} · {} frames at {:g} fps", subject_label, motion.name, motion.num_frames(), motion.fps);
   const std::string reference_text =
       opt.reference == "sundials"
-          ? fmt::format("SUNDIALS ARKODE (adaptive, rtol {:g}, atol {:g}) on the {} mesh", opt.rtol, opt.atol, opt.reference_mesh)
-          : fmt::format("{} with {} masses at {} substeps per frame on the {} mesh", opt.reference, opt.reference_mass, opt.reference_substeps,
-                        opt.reference_mesh);
+          ? fmt::format("SUNDIALS ARKODE (adaptive, rtol {:g}, atol {:g}) on the {} mesh", opt.rtol, opt.atol,
+                        opt.reference_mesh)
+          : fmt::format("{} with {} masses at {} substeps per frame on the {} mesh", opt.reference, opt.reference_mass,
+                        opt.reference_substeps, opt.reference_mesh);
   tradeoff::write_markdown(
       run.stage("tradeoff.md"), "What accuracy costs in time: " + title,
       {fmt::format("preset {}; reference: {}", opt.preset, reference_text),
-       fmt::format("error: RMS over the {} region vertices of the body surface and frames 1..{} of |p − p_ref|, p the posed body "
-                   "surface every model writes (model::BodyLayer::posed_surface); relative: divided by the RMS of the reference's "
+       fmt::format("error: RMS over the {} region vertices of the body surface and frames 1..{} of |p − p_ref|, p the "
+                   "posed body "
+                   "surface every model writes (model::BodyLayer::posed_surface); relative: divided by the RMS of the "
+                   "reference's "
                    "soft-tissue displacement p_ref − p_skinned ({:.3f} mm)",
                    region.size(), steps, 1e3 * ref.soft_rms),
-       fmt::format("σ ratio: mean σ / mean σ_ref over the region (model::DynamicsAmplitude of the unposed skin displacement, as "
+       fmt::format("σ ratio: mean σ / mean σ_ref over the region (model::DynamicsAmplitude of the unposed skin "
+                   "displacement, as "
                    "`sflsh simulate` reports it; σ_ref = {:.3f} mm)",
                    1e3 * ref.sigma_mean),
        "s/frame: solve time per output frame (steps only); setup: layer build + solver (+ reduced model) setup",
@@ -411,36 +456,51 @@ void run_tradeoff(const TradeoffOptions& opt, const Invocation& invocation, int 
   std::string png = "tradeoff.png";
   try {
     tradeoff::write_png(run.stage("tradeoff.png"), "Error against time: " + title, rows);
-  } catch (const Error& e) {   // the picture is a convenience: the tables never depend on a display
+  } catch (const Error& e) {  // the picture is a convenience: the tables never depend on a display
     logger()->warn("skipped tradeoff.png: {}", e.what());
     png.clear();
   }
   nlohmann::json row_json = nlohmann::json::array();
   for (const tradeoff::Row& r : rows)
-    row_json.push_back({{"label", r.label()}, {"model", r.model}, {"integrator", r.integrator}, {"mass", r.mass}, {"mesh", r.mesh}, {"handles", r.handles},
-                        {"cubature", r.cubature}, {"substeps", r.substeps}, {"step", r.step}, {"setup_seconds", r.setup_seconds},
-                        {"seconds_per_frame", r.seconds_per_frame},
-                        {"rms_error_mm", std::isfinite(r.rms_error_mm) ? nlohmann::json(r.rms_error_mm) : nlohmann::json(nullptr)},
-                        {"relative_error", std::isfinite(r.relative_error) ? nlohmann::json(r.relative_error) : nlohmann::json(nullptr)},
-                        {"sigma_ratio", std::isfinite(r.sigma_ratio) ? nlohmann::json(r.sigma_ratio) : nlohmann::json(nullptr)},
-                        {"valid", r.valid}, {"pareto", r.pareto}});
+    row_json.push_back(
+        {{"label", r.label()},
+         {"model", r.model},
+         {"integrator", r.integrator},
+         {"mass", r.mass},
+         {"mesh", r.mesh},
+         {"handles", r.handles},
+         {"cubature", r.cubature},
+         {"substeps", r.substeps},
+         {"step", r.step},
+         {"setup_seconds", r.setup_seconds},
+         {"seconds_per_frame", r.seconds_per_frame},
+         {"rms_error_mm", std::isfinite(r.rms_error_mm) ? nlohmann::json(r.rms_error_mm) : nlohmann::json(nullptr)},
+         {"relative_error",
+          std::isfinite(r.relative_error) ? nlohmann::json(r.relative_error) : nlohmann::json(nullptr)},
+         {"sigma_ratio", std::isfinite(r.sigma_ratio) ? nlohmann::json(r.sigma_ratio) : nlohmann::json(nullptr)},
+         {"valid", r.valid},
+         {"pareto", r.pareto}});
   nlohmann::json summary = summary_header("tradeoff", invocation.argc, invocation.argv);
   summary["preset"] = opt.preset;
   summary["body"] = body::body_label(opt.subject);
   summary["subject"] = subject_label;
   summary["beta"] = std::vector<double>(beta.data(), beta.data() + beta.size());
-  summary["motion"] = {{"name", motion.name}, {"source", motion.source}, {"fps", motion.fps}, {"frames", motion.num_frames()}};
+  summary["motion"] = {
+      {"name", motion.name}, {"source", motion.source}, {"fps", motion.fps}, {"frames", motion.num_frames()}};
   summary["material"] = material_summary(opt.layer, material_file);
   summary["region_vertices"] = region.size();
   summary["reference"] = reference_json;
   summary["reference"]["description"] = reference_text;
   summary["rows"] = row_json;
-  summary["budget"] = {{"rms_error_mm", budget.mm ? nlohmann::json(*budget.mm) : nlohmann::json(nullptr)},
-                       {"relative_error", budget.relative ? nlohmann::json(*budget.relative) : nlohmann::json(nullptr)}};
+  summary["budget"] = {
+      {"rms_error_mm", budget.mm ? nlohmann::json(*budget.mm) : nlohmann::json(nullptr)},
+      {"relative_error", budget.relative ? nlohmann::json(*budget.relative) : nlohmann::json(nullptr)}};
   summary["recommendation"] = {{"row", pick ? nlohmann::json(*pick) : nlohmann::json(nullptr)},
                                {"configuration", pick ? row_json[*pick] : nlohmann::json(nullptr)},
                                {"message", recommendation}};
-  summary["output"] = {{"table", "tradeoff.csv"}, {"markdown", "tradeoff.md"}, {"plot", png.empty() ? nlohmann::json(nullptr) : nlohmann::json(png)}};
+  summary["output"] = {{"table", "tradeoff.csv"},
+                       {"markdown", "tradeoff.md"},
+                       {"plot", png.empty() ? nlohmann::json(nullptr) : nlohmann::json(png)}};
   summary["units"] = {{"rms_error", "mm"}, {"seconds_per_frame", "s"}, {"setup_seconds", "s"}, {"step", "s"}};
   summary["timings"] = {{"total_seconds", seconds_since(t_start)}};
   write_json(run.stage("summary.json"), summary);
@@ -452,31 +512,38 @@ void run_tradeoff(const TradeoffOptions& opt, const Invocation& invocation, int 
 
 void register_tradeoff_commands(CLI::App& app, const Invocation& invocation) {
   auto opt = std::make_shared<TradeoffOptions>();
-  auto* cmd = app.add_subcommand(
-      "tradeoff",
-      "What accuracy costs in time: one case run by a reference, full-space backward Euler on several meshes and steps and reduced "
-      "models (handles × cubature × steps), scored against the reference; writes tradeoff.csv/.md/.png and summary.json with the "
-      "Pareto front and the cheapest configuration within --budget-mm / --budget-relative.");
+  auto* cmd = app.add_subcommand("tradeoff",
+                                 "What accuracy costs in time: one case run by a reference, full-space backward Euler "
+                                 "on several meshes and steps and reduced "
+                                 "models (handles × cubature × steps), scored against the reference; writes "
+                                 "tradeoff.csv/.md/.png and summary.json with the "
+                                 "Pareto front and the cheapest configuration within --budget-mm / --budget-relative.");
   cmd->add_option("--preset", opt->preset,
-                  "quick (minutes on 2 cores; reference: Newmark + consistent masses at 1/960 s on the coarse mesh) | full (reference: the same "
+                  "quick (minutes on 2 cores; reference: Newmark + consistent masses at 1/960 s on the coarse mesh) | "
+                  "full (reference: the same "
                   "at 1/480 s on the default mesh, checked against a finer step and the fine mesh)")
       ->check(CLI::IsMember({"quick", "full"}));
   add_body_option(*cmd, opt->subject);
   add_subject_options(*cmd, opt->subject);
-  cmd->add_option("--motion", opt->motion, "Motion: a procedural name (sflsh motion list) or an AMASS .npz path")->capture_default_str();
+  cmd->add_option("--motion", opt->motion, "Motion: a procedural name (sflsh motion list) or an AMASS .npz path")
+      ->capture_default_str();
   cmd->add_option("--frames", opt->frames, "Output frames (quick 8, full 60)");
-  cmd->add_option("--fps", opt->fps, "Output frame rate (and motion sampling); every step is 1 / (fps · substeps)")->capture_default_str();
+  cmd->add_option("--fps", opt->fps, "Output frame rate (and motion sampling); every step is 1 / (fps · substeps)")
+      ->capture_default_str();
   cmd->add_option("--reference", opt->reference,
-                  "newmark | bdf2 | backward_euler (the full-space solver at --reference-substeps) | sundials (adaptive, error-controlled)")
+                  "newmark | bdf2 | backward_euler (the full-space solver at --reference-substeps) | sundials "
+                  "(adaptive, error-controlled)")
       ->check(CLI::IsMember({"sundials", "backward_euler", "bdf2", "newmark"}));
   cmd->add_option("--reference-mass", opt->reference_mass, "Mass of the reference: lumped | consistent")
       ->check(CLI::IsMember({"lumped", "consistent"}))
       ->capture_default_str();
   cmd->add_option("--reference-check", opt->reference_checks,
-                  "How converged the reference is: time (twice the substeps) and/or space (the next finer mesh), comma-separated")
+                  "How converged the reference is: time (twice the substeps) and/or space (the next finer mesh), "
+                  "comma-separated")
       ->delimiter(',')
       ->check(CLI::IsMember({"time", "space"}));
-  cmd->add_option("--reference-check-frames", opt->reference_check_frames, "Frames the reference checks run")->capture_default_str();
+  cmd->add_option("--reference-check-frames", opt->reference_check_frames, "Frames the reference checks run")
+      ->capture_default_str();
   cmd->add_option("--integrators", opt->integrators, "Integrators of the full-space and reduced rows, comma-separated")
       ->delimiter(',')
       ->check(CLI::IsMember({"backward_euler", "bdf2", "newmark"}));
@@ -485,21 +552,30 @@ void register_tradeoff_commands(CLI::App& app, const Invocation& invocation) {
       ->check(CLI::IsMember({"lumped", "consistent"}));
   cmd->add_option("--reference-mesh", opt->reference_mesh, "Mesh of the reference (quick coarse, full fine)")
       ->check(CLI::IsMember({"coarse", "default", "fine"}));
-  cmd->add_option("--reference-substeps", opt->reference_substeps, "Substeps per frame of a stepping reference (quick 32, full 16)");
+  cmd->add_option("--reference-substeps", opt->reference_substeps,
+                  "Substeps per frame of a stepping reference (quick 32, full 16)");
   cmd->add_option("--rtol", opt->rtol, "SUNDIALS reference: relative tolerance")->capture_default_str();
   cmd->add_option("--atol", opt->atol, "SUNDIALS reference: absolute tolerance [m, m/s]")->capture_default_str();
-  cmd->add_option("--meshes,--mesh", opt->meshes, "Meshes of the full-space rows, comma-separated (--mesh: the spelling of the other commands)")
+  cmd->add_option("--meshes,--mesh", opt->meshes,
+                  "Meshes of the full-space rows, comma-separated (--mesh: the spelling of the other commands)")
       ->delimiter(',')
       ->check(CLI::IsMember({"coarse", "default", "fine"}));
-  cmd->add_option("--substeps", opt->substeps, "Substeps per frame of the full-space rows, comma-separated (1,2,4,8 at 30 fps: 1/30 to 1/240 s)")
+  cmd->add_option("--substeps", opt->substeps,
+                  "Substeps per frame of the full-space rows, comma-separated (1,2,4,8 at 30 fps: 1/30 to 1/240 s)")
       ->delimiter(',');
   cmd->add_option("--reduced-meshes", opt->reduced_meshes, "Meshes of the reduced rows, comma-separated (empty: none)")
       ->delimiter(',')
       ->check(CLI::IsMember({"coarse", "default", "fine"}));
-  cmd->add_option("--handles", opt->handles, "Point-handle counts of the reduced rows, comma-separated")->delimiter(',');
-  cmd->add_option("--cubature", opt->cubature, "Cubature tet counts K of the reduced rows, comma-separated (0 = every tet)")->delimiter(',');
-  cmd->add_option("--reduced-substeps", opt->reduced_substeps, "Substeps per frame of the reduced rows, comma-separated")->delimiter(',');
-  cmd->add_option("--budget-mm", opt->budget_mm, "Error budget: largest RMS error [mm] (the recommendation is the cheapest row within it)");
+  cmd->add_option("--handles", opt->handles, "Point-handle counts of the reduced rows, comma-separated")
+      ->delimiter(',');
+  cmd->add_option("--cubature", opt->cubature,
+                  "Cubature tet counts K of the reduced rows, comma-separated (0 = every tet)")
+      ->delimiter(',');
+  cmd->add_option("--reduced-substeps", opt->reduced_substeps,
+                  "Substeps per frame of the reduced rows, comma-separated")
+      ->delimiter(',');
+  cmd->add_option("--budget-mm", opt->budget_mm,
+                  "Error budget: largest RMS error [mm] (the recommendation is the cheapest row within it)");
   cmd->add_option("--budget-relative", opt->budget_relative, "Error budget: largest relative error");
   add_reduced_options(*cmd, opt->reduced);
   add_layer_options(*cmd, opt->layer);

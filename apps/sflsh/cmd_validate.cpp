@@ -11,7 +11,6 @@
 
 #include <fmt/format.h>
 
-
 namespace sflsh::app {
 
 namespace {
@@ -81,23 +80,31 @@ void register_validate_commands(CLI::App& app, const Invocation& invocation) {
   cmd->add_option("--out", o->out, "Output folder")->required();
   cmd->add_option("--mesh", o->mesh, "Layer mesh size: coarse | default | fine (preset: coarse)");
   cmd->add_option("--handles", o->handles, "Point handles of the reduced model")->check(CLI::PositiveNumber);
-  cmd->add_option("--cubature", o->cubature, "Cubature tets (0 = every tet, -1 = auto)")->check(CLI::Range(-1, 1 << 30));
-  cmd->add_option("--frames", o->frames, "Frames per clip (0 = the motions' default length)")->check(CLI::NonNegativeNumber);
-  cmd->add_option("--stages", o->stages, "Control-point counts, e.g. 1,12,24,84")->delimiter(',')->check(CLI::PositiveNumber);
+  cmd->add_option("--cubature", o->cubature, "Cubature tets (0 = every tet, -1 = auto)")
+      ->check(CLI::Range(-1, 1 << 30));
+  cmd->add_option("--frames", o->frames, "Frames per clip (0 = the motions' default length)")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--stages", o->stages, "Control-point counts, e.g. 1,12,24,84")
+      ->delimiter(',')
+      ->check(CLI::PositiveNumber);
   cmd->add_option("--iterations", o->iterations, "Trust-region iterations per stage")->check(CLI::PositiveNumber);
   cmd->add_option("--lambdas", o->lambdas, "λ values of the cross-validation sweep, e.g. 0.01,0.1,1")
       ->delimiter(',')
       ->check(CLI::PositiveNumber);
-  cmd->add_option("--train-subjects", o->train_subjects, "Comma-separated subject names (data/*subjects.toml)")->delimiter(',');
+  cmd->add_option("--train-subjects", o->train_subjects, "Comma-separated subject names (data/*subjects.toml)")
+      ->delimiter(',');
   cmd->add_option("--test-subjects", o->test_subjects, "Comma-separated subject names")->delimiter(',');
   cmd->add_option("--train-motions", o->train_motions, "Comma-separated motion names")->delimiter(',');
   cmd->add_option("--test-motions", o->test_motions, "Comma-separated motion names")->delimiter(',');
-  cmd->add_option("--dyna", o->dyna, "DYNA registration files (HDF5): their subjects become the train subjects and their "
-                                     "sequences the ground truth (poses and β fitted); test subjects come from --test-subjects")
+  cmd->add_option("--dyna", o->dyna,
+                  "DYNA registration files (HDF5): their subjects become the train subjects and their "
+                  "sequences the ground truth (poses and β fitted); test subjects come from --test-subjects")
       ->check(CLI::ExistingFile);
-  cmd->add_option("--body", o->body, "Body model .npz (default: the open body; SMPL for DYNA data)")->check(CLI::ExistingFile);
+  cmd->add_option("--body", o->body, "Body model .npz (default: the open body; SMPL for DYNA data)")
+      ->check(CLI::ExistingFile);
   cmd->add_option("--threads", o->threads, "Threads per process (0 = all)")->check(CLI::NonNegativeNumber);
-  cmd->add_flag("--no-cross-validation", o->no_cross_validation, "Skip the leave-one-out fits (λ = the first of --lambdas)");
+  cmd->add_flag("--no-cross-validation", o->no_cross_validation,
+                "Skip the leave-one-out fits (λ = the first of --lambdas)");
   cmd->add_flag("--quiet", o->quiet, "No progress lines");
   cmd->callback([o, invocation] { with_petsc(invocation, [&](int, int) { run_validate(*o, invocation); }); });
 }

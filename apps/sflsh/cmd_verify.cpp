@@ -72,7 +72,8 @@ void run_verify(const VerifyOptions& opt, const Invocation& invocation, int rank
   const bool reference = spec.integrator == fullspace::VerifyProblem::Integrator::reference;
   const bool dynamic = problem.dynamic();
   require(!reference || dynamic, "{}: integrator \"reference\" needs a dynamic problem (density > 0)", opt.problem);
-  require(!reference || size == 1, "{}: the SUNDIALS reference integrator runs on one process (got {})", opt.problem, size);
+  require(!reference || size == 1, "{}: the SUNDIALS reference integrator runs on one process (got {})", opt.problem,
+          size);
 
   const double step = spec.step;
   check_work(verify_work(spec, problem), WorkLimits{}, opt.allow_long,
@@ -85,10 +86,11 @@ void run_verify(const VerifyOptions& opt, const Invocation& invocation, int rank
   // What ran: the integrator of the problem file, or "static" without density (mass then means nothing).
   const std::string integrator_name = dynamic ? std::string(fullspace::to_string(spec.integrator)) : "static";
   const std::string mass_name = dynamic ? std::string(model::to_string(problem.mass_kind)) : "none";
-  logger()->info("verify {}: {} nodes, {} tets, {} {} steps of {:.6g} s ({} mass), recording {} nodes of '{}' every {} steps",
-                 spec.file.filename().string(), problem.num_nodes(), problem.num_tets(), steps,
-                 reference ? "reference (SUNDIALS)" : integrator_name, step, mass_name, record_nodes.size(),
-                 spec.record_group, spec.record_every);
+  logger()->info(
+      "verify {}: {} nodes, {} tets, {} {} steps of {:.6g} s ({} mass), recording {} nodes of '{}' every {} steps",
+      spec.file.filename().string(), problem.num_nodes(), problem.num_tets(), steps,
+      reference ? "reference (SUNDIALS)" : integrator_name, step, mass_name, record_nodes.size(), spec.record_group,
+      spec.record_every);
 
   std::vector<Record> records;
   nlohmann::json steps_json = nlohmann::json::array();
@@ -123,9 +125,15 @@ void run_verify(const VerifyOptions& opt, const Invocation& invocation, int rank
     fullspace::FullSpaceOptions options;
     options.quasi_static = !dynamic;
     switch (spec.integrator) {
-      case fullspace::VerifyProblem::Integrator::bdf2: options.integrator = model::Integrator::bdf2; break;
-      case fullspace::VerifyProblem::Integrator::newmark: options.integrator = model::Integrator::newmark; break;
-      default: options.integrator = model::Integrator::backward_euler; break;
+      case fullspace::VerifyProblem::Integrator::bdf2:
+        options.integrator = model::Integrator::bdf2;
+        break;
+      case fullspace::VerifyProblem::Integrator::newmark:
+        options.integrator = model::Integrator::newmark;
+        break;
+      default:
+        options.integrator = model::Integrator::backward_euler;
+        break;
     }
     fullspace::FullSpaceSolver integrator(problem, MPI_COMM_WORLD, options);
     if (!dynamic) {
@@ -176,9 +184,13 @@ void run_verify(const VerifyOptions& opt, const Invocation& invocation, int rank
   }
   nlohmann::json summary = summary_header("verify", invocation.argc, invocation.argv);
   summary["problem"] = std::filesystem::absolute(spec.file).string();
-  summary["mesh"] = {{"file", spec.mesh_path.string()}, {"nodes", problem.num_nodes()}, {"tets", problem.num_tets()},
+  summary["mesh"] = {{"file", spec.mesh_path.string()},
+                     {"nodes", problem.num_nodes()},
+                     {"tets", problem.num_tets()},
                      {"flipped_tets", spec.mesh.flipped_tets}};
-  summary["record"] = {{"group", spec.record_group}, {"nodes", record_nodes.size()}, {"every", spec.record_every},
+  summary["record"] = {{"group", spec.record_group},
+                       {"nodes", record_nodes.size()},
+                       {"every", spec.record_every},
                        {"samples", records.size()}};
   summary["integrator"] = integrator_name;
   summary["mass"] = mass_name;
@@ -202,8 +214,9 @@ void register_verify_commands(CLI::App& app, const Invocation& invocation) {
   cmd->add_option("problem", opt->problem, "Problem description (.toml)")->required();
   cmd->add_option("--out", opt->out, "Output folder (history.csv, summary.json, solution.pvd)")->required();
   cmd->add_flag("--no-vtk", opt->no_vtk, "Skip the .vtu series of the whole mesh");
-  cmd->add_flag("--allow-long", opt->allow_long,
-                "Run even when the work estimate (steps, recorded samples, memory) exceeds the limits of docs/fullspace.md");
+  cmd->add_flag(
+      "--allow-long", opt->allow_long,
+      "Run even when the work estimate (steps, recorded samples, memory) exceeds the limits of docs/fullspace.md");
   cmd->callback([opt, invocation] {
     with_petsc(invocation, [&](int rank, int size) { run_verify(*opt, invocation, rank, size); });
   });

@@ -17,7 +17,7 @@ namespace sflsh::app {
 struct Invocation {
   int argc = 0;
   const char* const* argv = nullptr;
-  std::vector<std::string> petsc_options;   ///< -snes_*, -ksp_*, -pc_*, … tokens (main.cpp splits them off)
+  std::vector<std::string> petsc_options;  ///< -snes_*, -ksp_*, -pc_*, … tokens (main.cpp splits them off)
 };
 
 void register_body_commands(CLI::App& app, const Invocation& invocation);
@@ -43,7 +43,8 @@ void register_groundtruth_commands(CLI::App& app, const Invocation& invocation);
 /// `sflsh metrics --dyna FILE.h5 --sequence KEY … --out DIR` and `--list` (cmd_metrics.cpp).
 void register_metrics_commands(CLI::App& app, const Invocation& invocation);
 
-/// `sflsh render --run DIR --out FILE.png`: a simulation's posed body coloured by its soft-tissue motion (cmd_render.cpp).
+/// `sflsh render --run DIR --out FILE.png`: a simulation's posed body coloured by its soft-tissue motion
+/// (cmd_render.cpp).
 void register_render_commands(CLI::App& app, const Invocation& invocation);
 
 /// Runs `body` with PETSc (and MPI) initialized from the invocation's PETSc options. Under mpirun, an

@@ -32,8 +32,8 @@ void add_body_option(CLI::App& cmd, SubjectOptions& options) {
 }
 
 void add_subject_options(CLI::App& cmd, SubjectOptions& options) {
-  auto* subject = cmd.add_option("--subject", options.subject,
-                                 "Named subject (data/subjects.toml, data/open_body_subjects.toml)");
+  auto* subject =
+      cmd.add_option("--subject", options.subject, "Named subject (data/subjects.toml, data/open_body_subjects.toml)");
   auto* betas = cmd.add_option("--betas", options.betas, "Shape β: up to 10 numbers, e.g. \"1.5 -0.3 0 …\"");
   subject->excludes(betas);
   betas->excludes(subject);

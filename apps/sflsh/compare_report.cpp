@@ -28,42 +28,51 @@ void write_tradeoff_csv(const std::filesystem::path& path, const std::vector<Tra
   std::string text = std::string(kTradeoffHeader) + "\n";
   for (const TradeoffRow& r : rows) {
     const std::string sizes = r.reduced ? fmt::format("{},{},{}", r.handles, r.cubature, r.coordinates) : ",,";
-    text += fmt::format("{},{},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g}\n", r.reduced ? "reduced" : "full", sizes,
-                        r.seconds_per_frame, r.frames_per_second, r.sigma_mean_mm, r.recovered_fraction, r.rms_error_mm,
-                        r.relative_rms_error, r.sigma_correlation, r.trajectory_rms_mm, r.trajectory_max_mm);
+    text += fmt::format("{},{},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g}\n",
+                        r.reduced ? "reduced" : "full", sizes, r.seconds_per_frame, r.frames_per_second,
+                        r.sigma_mean_mm, r.recovered_fraction, r.rms_error_mm, r.relative_rms_error,
+                        r.sigma_correlation, r.trajectory_rms_mm, r.trajectory_max_mm);
   }
   write_text_atomically(path, text);
 }
 
-void write_tradeoff_markdown(const std::filesystem::path& path, const std::string& title, const std::vector<std::string>& context,
-                             const std::vector<TradeoffRow>& rows, const std::vector<ReducedTimings>& timings) {
+void write_tradeoff_markdown(const std::filesystem::path& path, const std::string& title,
+                             const std::vector<std::string>& context, const std::vector<TradeoffRow>& rows,
+                             const std::vector<ReducedTimings>& timings) {
   std::string text = fmt::format("# {}\n\n", title);
   for (const std::string& line : context) text += fmt::format("- {}\n", line);
-  text += "\n| model | handles | cubature | coordinates | s/frame | frames/s | mean σ [mm] | recovered | RMS error [mm] | "
-          "relative RMS error | σ correlation | trajectory RMS [mm] | trajectory max [mm] |\n"
-          "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+  text +=
+      "\n| model | handles | cubature | coordinates | s/frame | frames/s | mean σ [mm] | recovered | RMS error [mm] | "
+      "relative RMS error | σ correlation | trajectory RMS [mm] | trajectory max [mm] |\n"
+      "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
   for (const TradeoffRow& r : rows) {
     const std::string sizes =
         r.reduced ? fmt::format("{} | {} | {}", r.handles, r.cubature, r.coordinates) : std::string("– | – | –");
-    text += fmt::format("| {} | {} | {:.4g} | {:.4g} | {:.3f} | {:.0f}% | {:.3f} | {:.3f}{} | {:.3f} | {:.3f} | {:.3f} |\n",
-                        r.reduced ? "reduced" : "full", sizes, r.seconds_per_frame, r.frames_per_second, r.sigma_mean_mm,
-                        100.0 * r.recovered_fraction, r.rms_error_mm, r.relative_rms_error, r.valid ? "" : " (*)", r.sigma_correlation,
-                        r.trajectory_rms_mm, r.trajectory_max_mm);
+    text +=
+        fmt::format("| {} | {} | {:.4g} | {:.4g} | {:.3f} | {:.0f}% | {:.3f} | {:.3f}{} | {:.3f} | {:.3f} | {:.3f} |\n",
+                    r.reduced ? "reduced" : "full", sizes, r.seconds_per_frame, r.frames_per_second, r.sigma_mean_mm,
+                    100.0 * r.recovered_fraction, r.rms_error_mm, r.relative_rms_error, r.valid ? "" : " (*)",
+                    r.sigma_correlation, r.trajectory_rms_mm, r.trajectory_max_mm);
   }
   if (std::any_of(rows.begin(), rows.end(), [](const TradeoffRow& r) { return !r.valid; }))
-    text += "\n(*) the reduced state left the material's range in tets outside the cubature (summary.json: out_of_range): "
-            "too few cubature tets for the subspace.\n";
+    text +=
+        "\n(*) the reduced state left the material's range in tets outside the cubature (summary.json: out_of_range): "
+        "too few cubature tets for the subspace.\n";
   if (!timings.empty()) {
-    text += "\nReduced model, per frame: cubature elastic terms, inertia terms, dense Cholesky solves, Newton iterations.\n\n"
-            "| handles | cubature | elastic [ms] | inertia [ms] | solve [ms] | Newton |\n|---:|---:|---:|---:|---:|---:|\n";
+    text +=
+        "\nReduced model, per frame: cubature elastic terms, inertia terms, dense Cholesky solves, Newton "
+        "iterations.\n\n"
+        "| handles | cubature | elastic [ms] | inertia [ms] | solve [ms] | Newton |\n|---:|---:|---:|---:|---:|---:|\n";
     for (const ReducedTimings& t : timings)
-      text += fmt::format("| {} | {} | {:.3f} | {:.3f} | {:.3f} | {:.2f} |\n", t.handles, t.cubature, 1e3 * t.elastic_seconds_per_frame,
-                          1e3 * t.inertia_seconds_per_frame, 1e3 * t.solve_seconds_per_frame, t.newton_per_frame);
+      text += fmt::format("| {} | {} | {:.3f} | {:.3f} | {:.3f} | {:.2f} |\n", t.handles, t.cubature,
+                          1e3 * t.elastic_seconds_per_frame, 1e3 * t.inertia_seconds_per_frame,
+                          1e3 * t.solve_seconds_per_frame, t.newton_per_frame);
   }
   write_text_atomically(path, text);
 }
 
-void write_tradeoff_png(const std::filesystem::path& path, const std::string& title, const std::vector<TradeoffRow>& rows) {
+void write_tradeoff_png(const std::filesystem::path& path, const std::string& title,
+                        const std::vector<TradeoffRow>& rows) {
   chart::Chart c;
   c.title = title;
   c.x_label = "seconds per frame";
@@ -78,13 +87,13 @@ void write_tradeoff_png(const std::filesystem::path& path, const std::string& ti
       cubatures.push_back(r.cubature);
     }
   // Colour by handle count, marker by cubature size: each configuration is its own legend entry.
-  const chart::Marker markers[] = {chart::Marker::circle, chart::Marker::square, chart::Marker::diamond, chart::Marker::cross,
-                                   chart::Marker::plus};
+  const chart::Marker markers[] = {chart::Marker::circle, chart::Marker::square, chart::Marker::diamond,
+                                   chart::Marker::cross, chart::Marker::plus};
   double y_lo = 0.0, y_hi = 0.0;
   for (const TradeoffRow& r : rows) {
     if (!r.reduced) continue;
-    require(r.seconds_per_frame > 0.0 && r.relative_rms_error > 0.0, "plot: configuration {} has no positive time and error",
-            config_suffix(r.handles, r.cubature));
+    require(r.seconds_per_frame > 0.0 && r.relative_rms_error > 0.0,
+            "plot: configuration {} has no positive time and error", config_suffix(r.handles, r.cubature));
     chart::Series s;
     s.label = fmt::format("{} handles, {} cubature tets{}", r.handles, r.cubature, r.valid ? "" : " (out of range)");
     s.x = {r.seconds_per_frame};
@@ -99,7 +108,7 @@ void write_tradeoff_png(const std::filesystem::path& path, const std::string& ti
   require(!c.series.empty(), "plot: no reduced configuration to draw");
   for (const TradeoffRow& r : rows) {
     if (r.reduced || r.seconds_per_frame <= 0.0) continue;
-    chart::Series s;   // the reference has no error: its cost is a vertical line
+    chart::Series s;  // the reference has no error: its cost is a vertical line
     s.label = fmt::format("full space (reference): {:.3g} s/frame", r.seconds_per_frame);
     s.x = {r.seconds_per_frame, r.seconds_per_frame};
     s.y = {0.7 * y_lo, 1.4 * y_hi};

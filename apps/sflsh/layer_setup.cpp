@@ -3,10 +3,12 @@
 namespace sflsh::app {
 
 void add_layer_options(CLI::App& cmd, LayerSettings& s) {
-  cmd.add_option("--mesher", s.mesher, "Layer mesher: layered | cgal | gmsh")->check(CLI::IsMember({"layered", "cgal", "gmsh"}));
+  cmd.add_option("--mesher", s.mesher, "Layer mesher: layered | cgal | gmsh")
+      ->check(CLI::IsMember({"layered", "cgal", "gmsh"}));
   cmd.add_option("--material", s.material, "Material file (TOML); default: the project defaults at --control-points");
   cmd.add_option("--control-points", s.control_points, "Control points N when no --material is given");
-  cmd.add_option("--cache", s.cache, "Cache folder for template meshes and reduced models (default $SFLSH_CACHE or ~/.cache/sflsh)");
+  cmd.add_option("--cache", s.cache,
+                 "Cache folder for template meshes and reduced models (default $SFLSH_CACHE or ~/.cache/sflsh)");
   cmd.add_option("--density", s.density, "Tissue density [kg/m³]");
   cmd.add_flag("--gravity", s.gravity, "Apply gravity");
   cmd.add_option("--stiffness-scale", s.stiffness_scale, "Multiply Y_t and Y_n by this factor");

@@ -3,9 +3,9 @@
 // compare, tradeoff): the layer options on the command line, the reduced-model options and a wall clock. The
 // settings themselves live in the libraries (model/layer_settings.hpp, reduced/reduced_settings.hpp), shared
 // with the Python module.
+#include <sflsh/material/material_file.hpp>
 #include <sflsh/model/body_layer.hpp>
 #include <sflsh/model/layer_settings.hpp>
-#include <sflsh/material/material_file.hpp>
 #include <sflsh/reduced/reduced_model.hpp>
 #include <sflsh/reduced/reduced_settings.hpp>
 
@@ -21,15 +21,15 @@ namespace sflsh::app {
 using Clock = std::chrono::steady_clock;
 inline double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
-using model::LayerSettings;
-using model::check_layer_settings;
-using model::load_layer_material;
 using model::body_layer_options;
+using model::check_layer_settings;
+using model::LayerSettings;
+using model::load_layer_material;
 using model::material_summary;
 using model::region_normals;
-using reduced::ReducedSettings;
-using reduced::reduced_model_options;
 using reduced::check_handle_counts;
+using reduced::reduced_model_options;
+using reduced::ReducedSettings;
 
 /// --mesher, --material, --control-points, --cache, --density, --gravity, --stiffness-scale.
 void add_layer_options(CLI::App& cmd, LayerSettings& settings);

@@ -4,7 +4,6 @@
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
 #include <sflsh/core/summary.hpp>
-
 #include <sflsh/fullspace/petsc_session.hpp>
 
 #include <mpi.h>
@@ -58,9 +57,8 @@ int main(int argc, char** argv) {
   sflsh::app::register_metrics_commands(app, invocation);
   sflsh::app::register_render_commands(app, invocation);
 
-  app.parse_complete_callback([&] {
-    sflsh::logger()->set_level(quiet ? spdlog::level::warn : spdlog::level::from_str(log_level));
-  });
+  app.parse_complete_callback(
+      [&] { sflsh::logger()->set_level(quiet ? spdlog::level::warn : spdlog::level::from_str(log_level)); });
 
   try {
     app.parse(own_argc, own_argv.data());

@@ -3,17 +3,19 @@
 // full|reduced` does, shared with `sflsh sweep` (which runs many such cases in-process, `--no-output` style). The
 // run itself is scene::BodySimulation (scene/body_simulation.hpp, shared with the Python module); this file adds
 // its command-line options.
-#include <CLI/CLI.hpp>
-#include <sflsh/scene/body_simulation.hpp>
-#include <string>
-
 #include "commands.hpp"
 #include "layer_setup.hpp"
 
+#include <sflsh/scene/body_simulation.hpp>
+
+#include <CLI/CLI.hpp>
+
+#include <string>
+
 namespace sflsh::app {
 
-using scene::BodyRunSettings;
 using scene::BodyRunReporting;
+using scene::BodyRunSettings;
 using scene::run_body_simulation;
 
 /// --handles, --cubature, --cubature-weights, --affine with simulate's help texts.

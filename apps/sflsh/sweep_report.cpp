@@ -1,9 +1,10 @@
 #include "sweep_report.hpp"
 
+#include <sflsh/core/atomic_file.hpp>
+
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <sflsh/core/atomic_file.hpp>
 
 namespace sflsh::app::sweep {
 

@@ -2,8 +2,9 @@
 // The outputs of `sflsh sweep` that do not depend on the solvers: one row per subject × motion × mesh run
 // (sweep.csv), the Markdown table with the failures and their one-line errors (sweep.md), and the counts per
 // mesh for summary.json.
-#include <filesystem>
 #include <nlohmann/json.hpp>
+
+#include <filesystem>
 #include <string>
 #include <vector>
 

@@ -20,17 +20,21 @@ bool is_reference(const Row& r) { return r.model == "reference"; }
 std::string step_text(const Row& r) {
   if (r.substeps == 0) return "adaptive";
   const double per_second = 1.0 / r.step;
-  return std::abs(per_second - std::round(per_second)) < 1e-6 ? fmt::format("1/{:.0f} s", per_second) : fmt::format("{:.4g} s", r.step);
+  return std::abs(per_second - std::round(per_second)) < 1e-6 ? fmt::format("1/{:.0f} s", per_second)
+                                                              : fmt::format("{:.4g} s", r.step);
 }
 
 }  // namespace
 
 std::string Row::label() const {
-  const std::string scheme = integrator == "backward_euler" && mass == "lumped" ? std::string() : fmt::format("{} {} ", integrator, mass);
+  const std::string scheme =
+      integrator == "backward_euler" && mass == "lumped" ? std::string() : fmt::format("{} {} ", integrator, mass);
   if (model == "reference")
-    return substeps ? fmt::format("reference {} {} {}{}", integrator, mesh, mass == "lumped" ? "" : mass + " ", step_text(*this))
+    return substeps ? fmt::format("reference {} {} {}{}", integrator, mesh, mass == "lumped" ? "" : mass + " ",
+                                  step_text(*this))
                     : fmt::format("reference {} {}{}", integrator, mesh, mass == "lumped" ? "" : " " + mass);
-  if (model == "reduced") return fmt::format("reduced {} h{} k{} {}{}", mesh, handles, cubature, scheme, step_text(*this));
+  if (model == "reduced")
+    return fmt::format("reduced {} h{} k{} {}{}", mesh, handles, cubature, scheme, step_text(*this));
   return fmt::format("full {} {}{}", mesh, scheme, step_text(*this));
 }
 
@@ -73,21 +77,25 @@ std::optional<std::size_t> recommend(const std::vector<Row>& rows, const Budget&
   return pick;
 }
 
-std::string recommendation_text(const std::vector<Row>& rows, const Budget& budget, const std::optional<std::size_t>& pick) {
+std::string recommendation_text(const std::vector<Row>& rows, const Budget& budget,
+                                const std::optional<std::size_t>& pick) {
   if (!budget.given()) return "No error budget given (--budget-mm X and/or --budget-relative R): no recommendation.";
   if (pick) {
     const Row& r = rows[*pick];
-    return fmt::format("Recommended for {}: {} — {:.4g} s per frame, RMS error {:.3g} mm (relative {:.3g}), σ ratio {:.3g}.",
-                       budget.text(), r.label(), r.seconds_per_frame, r.rms_error_mm, r.relative_error, r.sigma_ratio);
+    return fmt::format(
+        "Recommended for {}: {} — {:.4g} s per frame, RMS error {:.3g} mm (relative {:.3g}), σ ratio {:.3g}.",
+        budget.text(), r.label(), r.seconds_per_frame, r.rms_error_mm, r.relative_error, r.sigma_ratio);
   }
   std::optional<std::size_t> best;
   for (std::size_t i = 0; i < rows.size(); ++i)
     if (!is_reference(rows[i]) && rows[i].valid && std::isfinite(rows[i].rms_error_mm) &&
         (!best || rows[i].rms_error_mm < rows[*best].rms_error_mm))
       best = i;
-  if (!best) return fmt::format("No tested configuration meets {}: none ran within the material's range.", budget.text());
-  return fmt::format("No tested configuration meets {}; the most accurate is {} with RMS error {:.3g} mm (relative {:.3g}).",
-                     budget.text(), rows[*best].label(), rows[*best].rms_error_mm, rows[*best].relative_error);
+  if (!best)
+    return fmt::format("No tested configuration meets {}: none ran within the material's range.", budget.text());
+  return fmt::format(
+      "No tested configuration meets {}; the most accurate is {} with RMS error {:.3g} mm (relative {:.3g}).",
+      budget.text(), rows[*best].label(), rows[*best].rms_error_mm, rows[*best].relative_error);
 }
 
 void write_csv(const std::filesystem::path& path, const std::vector<Row>& rows) {
@@ -95,24 +103,29 @@ void write_csv(const std::filesystem::path& path, const std::vector<Row>& rows) 
   for (const Row& r : rows) {
     const std::string sizes = r.model == "reduced" ? fmt::format("{},{}", r.handles, r.cubature) : ",";
     const std::string step = r.substeps ? fmt::format("{},{:.6g}", r.substeps, r.step) : ",";
-    text += fmt::format("{},{},{},{},{},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{},{},{}\n", r.model, r.integrator, r.mesh, sizes, step,
-                        r.setup_seconds, r.seconds_per_frame, r.rms_error_mm, r.relative_error, r.sigma_ratio, r.valid ? "yes" : "no",
-                        r.pareto ? "yes" : "no", r.mass);
+    text += fmt::format("{},{},{},{},{},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{},{},{}\n", r.model, r.integrator, r.mesh,
+                        sizes, step, r.setup_seconds, r.seconds_per_frame, r.rms_error_mm, r.relative_error,
+                        r.sigma_ratio, r.valid ? "yes" : "no", r.pareto ? "yes" : "no", r.mass);
   }
   write_text_atomically(path, text);
 }
 
-void write_markdown(const std::filesystem::path& path, const std::string& title, const std::vector<std::string>& context,
-                    const std::vector<Row>& rows, const std::string& recommendation) {
+void write_markdown(const std::filesystem::path& path, const std::string& title,
+                    const std::vector<std::string>& context, const std::vector<Row>& rows,
+                    const std::string& recommendation) {
   std::string text = fmt::format("# {}\n\n", title);
   for (const std::string& line : context) text += fmt::format("- {}\n", line);
-  text += "\n| model | integrator | mass | mesh | handles | cubature | step | setup [s] | s/frame | RMS error [mm] | relative error | "
-          "σ ratio | Pareto |\n|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---|\n";
+  text +=
+      "\n| model | integrator | mass | mesh | handles | cubature | step | setup [s] | s/frame | RMS error [mm] | "
+      "relative error | "
+      "σ ratio | Pareto |\n|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---|\n";
   for (const Row& r : rows) {
-    const std::string sizes = r.model == "reduced" ? fmt::format("{} | {}", r.handles, r.cubature) : std::string("– | –");
-    text += fmt::format("| {} | {} | {} | {} | {} | {} | {:.3g} | {:.4g} | {:.4f} | {:.4f} | {:.3f} | {}{} |\n", r.model, r.integrator, r.mass, r.mesh,
-                        sizes, step_text(r), r.setup_seconds, r.seconds_per_frame, r.rms_error_mm, r.relative_error, r.sigma_ratio,
-                        r.pareto ? "yes" : "no", r.valid ? "" : " (out of range)");
+    const std::string sizes =
+        r.model == "reduced" ? fmt::format("{} | {}", r.handles, r.cubature) : std::string("– | –");
+    text += fmt::format("| {} | {} | {} | {} | {} | {} | {:.3g} | {:.4g} | {:.4f} | {:.4f} | {:.3f} | {}{} |\n",
+                        r.model, r.integrator, r.mass, r.mesh, sizes, step_text(r), r.setup_seconds,
+                        r.seconds_per_frame, r.rms_error_mm, r.relative_error, r.sigma_ratio, r.pareto ? "yes" : "no",
+                        r.valid ? "" : " (out of range)");
   }
   text += fmt::format("\n**{}**\n", recommendation);
   write_text_atomically(path, text);
@@ -126,13 +139,14 @@ void write_png(const std::filesystem::path& path, const std::string& title, cons
   c.log_x = c.log_y = true;
   c.width = 1100;
   c.height = 700;
-  const chart::Marker markers[] = {chart::Marker::circle, chart::Marker::square, chart::Marker::diamond};   // by mesh
+  const chart::Marker markers[] = {chart::Marker::circle, chart::Marker::square, chart::Marker::diamond};  // by mesh
   auto mesh_index = [](const std::string& mesh) { return mesh == "coarse" ? 0u : mesh == "default" ? 1u : 2u; };
   double y_lo = 0.0, y_hi = 0.0;
   std::vector<std::size_t> front;
   for (std::size_t i = 0; i < rows.size(); ++i) {
     const Row& r = rows[i];
-    if (is_reference(r) || !(r.seconds_per_frame > 0.0) || !(r.rms_error_mm > 0.0) || !std::isfinite(r.rms_error_mm)) continue;
+    if (is_reference(r) || !(r.seconds_per_frame > 0.0) || !(r.rms_error_mm > 0.0) || !std::isfinite(r.rms_error_mm))
+      continue;
     chart::Series s;
     s.label = r.label() + (r.valid ? "" : " (out of range)");
     s.x = {r.seconds_per_frame};
@@ -147,7 +161,8 @@ void write_png(const std::filesystem::path& path, const std::string& title, cons
   }
   require(!c.series.empty(), "plot: no tested configuration with a positive time and error");
   if (front.size() >= 2) {
-    std::sort(front.begin(), front.end(), [&](std::size_t a, std::size_t b) { return rows[a].seconds_per_frame < rows[b].seconds_per_frame; });
+    std::sort(front.begin(), front.end(),
+              [&](std::size_t a, std::size_t b) { return rows[a].seconds_per_frame < rows[b].seconds_per_frame; });
     chart::Series s;
     s.label = "Pareto front";
     for (std::size_t i : front) {
@@ -161,7 +176,7 @@ void write_png(const std::filesystem::path& path, const std::string& title, cons
   }
   for (const Row& r : rows) {
     if (!is_reference(r) || !(r.seconds_per_frame > 0.0)) continue;
-    chart::Series s;   // the reference has no error: its cost is a vertical line
+    chart::Series s;  // the reference has no error: its cost is a vertical line
     s.label = fmt::format("{}: {:.3g} s/frame", r.label(), r.seconds_per_frame);
     s.x = {r.seconds_per_frame, r.seconds_per_frame};
     s.y = {0.7 * y_lo, 1.4 * y_hi};

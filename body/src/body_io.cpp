@@ -29,8 +29,8 @@ const npz::Array& checked(const npz::Array& a, const std::string& file, const st
 }
 
 /// The doubles of a float member, each finite and within ±bound.
-std::vector<double> bounded_values(const npz::Array& a, const std::string& file, const std::string& key,
-                                   double bound, const char* meaning) {
+std::vector<double> bounded_values(const npz::Array& a, const std::string& file, const std::string& key, double bound,
+                                   const char* meaning) {
   std::vector<double> values = a.to_doubles();
   for (std::size_t i = 0; i < values.size(); ++i)
     require(std::isfinite(values[i]) && std::abs(values[i]) <= bound,
@@ -39,8 +39,10 @@ std::vector<double> bounded_values(const npz::Array& a, const std::string& file,
 }
 
 npz::Array read_key(const npz::Reader& reader, const std::string& key) {
-  require(reader.has(key), "{}: missing key '{}' (a SMPL-layout body model needs v_template, f, shapedirs, "
-          "J_regressor, weights, kintree_table)", reader.path().string(), key);
+  require(reader.has(key),
+          "{}: missing key '{}' (a SMPL-layout body model needs v_template, f, shapedirs, "
+          "J_regressor, weights, kintree_table)",
+          reader.path().string(), key);
   return reader.read(key);
 }
 
@@ -87,8 +89,8 @@ BodyModel load_body(const std::filesystem::path& path) {
 
   if (reader.has("posedirs")) {
     const npz::Array p = reader.read("posedirs");
-    checked(p, file, "posedirs", {v.shape[0], 3, static_cast<std::size_t>(kNumPoseFeatures)},
-            "(" + ns + ", 3, 207)", true);
+    checked(p, file, "posedirs", {v.shape[0], 3, static_cast<std::size_t>(kNumPoseFeatures)}, "(" + ns + ", 3, 207)",
+            true);
     const std::vector<double> pv = bounded_values(p, file, "posedirs", kMaxBodyMetres, "displacements [m]");
     model.posedirs = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
         pv.data(), 3 * n, kNumPoseFeatures);
@@ -111,8 +113,8 @@ BodyModel load_body(const std::filesystem::path& path) {
   const npz::Array w = read_key(reader, "weights");
   checked(w, file, "weights", {v.shape[0], static_cast<std::size_t>(kNumJoints)}, "(" + ns + ", 24)", true);
   const std::vector<double> wv = bounded_values(w, file, "weights", 1e3, "skinning weights");
-  model.weights = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
-      wv.data(), n, kNumJoints);
+  model.weights = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(wv.data(), n,
+                                                                                                           kNumJoints);
 
   const npz::Array k = read_key(reader, "kintree_table");
   checked(k, file, "kintree_table", {2, static_cast<std::size_t>(kNumJoints)}, "(2, 24)", false);

@@ -7,13 +7,13 @@
 namespace sflsh::body {
 
 const std::array<const char*, kNumJoints> kJointNames = {
-    "pelvis",         "left_hip",       "right_hip",   "spine1",      "left_knee",  "right_knee",
-    "spine2",         "left_ankle",     "right_ankle", "spine3",      "left_foot",  "right_foot",
-    "neck",           "left_collar",    "right_collar", "head",       "left_shoulder", "right_shoulder",
-    "left_elbow",     "right_elbow",    "left_wrist",  "right_wrist", "left_hand",  "right_hand"};
+    "pelvis",     "left_hip",    "right_hip",    "spine1",      "left_knee",     "right_knee",
+    "spine2",     "left_ankle",  "right_ankle",  "spine3",      "left_foot",     "right_foot",
+    "neck",       "left_collar", "right_collar", "head",        "left_shoulder", "right_shoulder",
+    "left_elbow", "right_elbow", "left_wrist",   "right_wrist", "left_hand",     "right_hand"};
 
-const std::array<int, kNumJoints> kJointParents = {-1, 0, 0, 0, 1, 2, 3, 4, 5, 6, 7, 8,
-                                                   9, 9, 9, 12, 13, 14, 16, 17, 18, 19, 20, 21};
+const std::array<int, kNumJoints> kJointParents = {-1, 0, 0, 0,  1,  2,  3,  4,  5,  6,  7,  8,
+                                                   9,  9, 9, 12, 13, 14, 16, 17, 18, 19, 20, 21};
 
 int joint_index(const std::string& name) {
   for (int k = 0; k < kNumJoints; ++k)
@@ -46,8 +46,9 @@ void BodyModel::validate(const std::string& who) const {
   for (int k = 0; k < kNumJoints; ++k) {
     double sum = 0.0;
     for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator it(joint_regressor, k); it; ++it) {
-      require(std::isfinite(it.value()), "{}: J_regressor: row {} ({}) holds a non-finite value, expected finite weights",
-              who, k, kJointNames[static_cast<std::size_t>(k)]);
+      require(std::isfinite(it.value()),
+              "{}: J_regressor: row {} ({}) holds a non-finite value, expected finite weights", who, k,
+              kJointNames[static_cast<std::size_t>(k)]);
       sum += it.value();
     }
     require(std::abs(sum - 1.0) < 1e-3, "{}: J_regressor: row {} ({}) sums to {:.6f}, expected 1", who, k,

@@ -55,8 +55,7 @@ Kinematics forward_kinematics(const BodyModel& model, const JointPositions& join
     local.linear() = rodrigues(theta.segment<3>(3 * k));
     const Eigen::Vector3d joint = joints.row(k).transpose();
     local.translation() = parent < 0 ? joint : Eigen::Vector3d(joint - joints.row(parent).transpose());
-    kin.global[static_cast<std::size_t>(k)] =
-        parent < 0 ? local : kin.global[static_cast<std::size_t>(parent)] * local;
+    kin.global[static_cast<std::size_t>(k)] = parent < 0 ? local : kin.global[static_cast<std::size_t>(parent)] * local;
   }
   for (int k = 0; k < kNumJoints; ++k) {
     const Eigen::Isometry3d& g = kin.global[static_cast<std::size_t>(k)];

@@ -1,6 +1,5 @@
-#include <sflsh/body/subject_selection.hpp>
-
 #include <sflsh/body/body_io.hpp>
+#include <sflsh/body/subject_selection.hpp>
 #include <sflsh/body/subjects.hpp>
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/input_file.hpp>

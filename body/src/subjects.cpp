@@ -39,8 +39,7 @@ std::vector<Subject> load_subjects(const std::filesystem::path& path) {
   }
   std::vector<Subject> subjects;
   for (const auto& [key, node] : root) {
-    require(key.str() == "subject", "{}: unknown key '{}' (expected [[subject]] tables)", where(path, node),
-            key.str());
+    require(key.str() == "subject", "{}: unknown key '{}' (expected [[subject]] tables)", where(path, node), key.str());
   }
   const toml::array* list = root["subject"].as_array();
   require(list != nullptr, "{}: no [[subject]] tables", path.string());

@@ -1,16 +1,13 @@
 // Topological and geometric checks of a triangle surface given as arrays (a soup: no manifoldness is
 // assumed, so broken meshes are reported rather than rejected).
 #include <sflsh/body/surface_checks.hpp>
-
 #include <sflsh/core/error.hpp>
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/box_intersection_d.h>
 #include <CGAL/intersections.h>
-
-#include <fmt/format.h>
-
 #include <Eigen/Geometry>
+#include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
@@ -89,7 +86,8 @@ int count_self_intersections(const RowMatrixX3d& vertices, const RowMatrixX3i& f
                              const std::vector<bool>& degenerate) {
   std::vector<Point> points;
   points.reserve(static_cast<std::size_t>(vertices.rows()));
-  for (Eigen::Index v = 0; v < vertices.rows(); ++v) points.emplace_back(vertices(v, 0), vertices(v, 1), vertices(v, 2));
+  for (Eigen::Index v = 0; v < vertices.rows(); ++v)
+    points.emplace_back(vertices(v, 0), vertices(v, 1), vertices(v, 2));
   std::vector<Box> boxes;
   for (Eigen::Index f = 0; f < faces.rows(); ++f) {
     if (degenerate[static_cast<std::size_t>(f)]) continue;
@@ -144,9 +142,9 @@ std::string SurfaceReport::summary() const {
       !consistently_oriented ? "NOT consistently oriented" : (outward ? "oriented outward" : "oriented INWARD"),
       connected_components, connected_components == 1 ? "" : "s", euler_characteristic, degenerate_faces,
       degenerate_faces == 1 ? "" : "s");
-  out += self_intersections < 0 ? "self-intersections not checked"
-                                : fmt::format("{} self-intersecting face pair{}", self_intersections,
-                                              self_intersections == 1 ? "" : "s");
+  out += self_intersections < 0
+             ? "self-intersections not checked"
+             : fmt::format("{} self-intersecting face pair{}", self_intersections, self_intersections == 1 ? "" : "s");
   out += fmt::format(", volume {:.5f} m³, area {:.4f} m², min angle {:.1f}°", volume, area, min_angle_deg);
   return out;
 }
@@ -155,7 +153,8 @@ SurfaceReport check_surface(const RowMatrixX3d& vertices, const RowMatrixX3i& fa
   const Eigen::Index n = vertices.rows();
   for (Eigen::Index f = 0; f < faces.rows(); ++f)
     for (int k = 0; k < 3; ++k)
-      require(faces(f, k) >= 0 && faces(f, k) < n, "check_surface: face {} references vertex {} of {}", f, faces(f, k), n);
+      require(faces(f, k) >= 0 && faces(f, k) < n, "check_surface: face {} references vertex {} of {}", f, faces(f, k),
+              n);
   SurfaceReport r;
 
   // Edges: closedness, manifoldness and orientation.

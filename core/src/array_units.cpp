@@ -1,6 +1,7 @@
 // The units of the output arrays (array_units.hpp). Every name here has a row in docs/output.md.
-#include <array>
 #include <sflsh/core/array_units.hpp>
+
+#include <array>
 #include <utility>
 
 namespace sflsh::units {

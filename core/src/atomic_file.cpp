@@ -14,8 +14,7 @@ namespace fs = std::filesystem;
 fs::path temporary_sibling(const fs::path& target) {
   static std::atomic<unsigned long> counter{0};
   return target.parent_path() /
-         fmt::format(".{}.tmp-{}-{}", target.filename().string(), static_cast<long>(::getpid()),
-                     counter.fetch_add(1));
+         fmt::format(".{}.tmp-{}-{}", target.filename().string(), static_cast<long>(::getpid()), counter.fetch_add(1));
 }
 
 void write_atomically(const fs::path& target, const std::function<void(const fs::path&)>& write) {

@@ -1,6 +1,5 @@
 // A worker thread with a bounded job queue (background_jobs.hpp).
 #include <sflsh/core/background_jobs.hpp>
-
 #include <sflsh/core/error.hpp>
 
 #include <chrono>
@@ -13,7 +12,8 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 }  // namespace
 
 BackgroundJobs::BackgroundJobs(std::size_t capacity, int workers) : capacity_(capacity) {
-  require(capacity >= 1 && workers >= 1, "background jobs: need a capacity and workers of at least 1 (got {}, {})", capacity, workers);
+  require(capacity >= 1 && workers >= 1, "background jobs: need a capacity and workers of at least 1 (got {}, {})",
+          capacity, workers);
   for (int k = 0; k < workers; ++k) workers_.emplace_back([this] { work(); });
 }
 
@@ -67,7 +67,7 @@ void BackgroundJobs::work() {
     queue_.pop_front();
     ++running_jobs_;
     lock.unlock();
-    changed_.notify_all();   // a slot is free
+    changed_.notify_all();  // a slot is free
     const auto t0 = Clock::now();
     std::exception_ptr error;
     try {

@@ -37,12 +37,18 @@ namespace {
 
 int marker_style(Marker m) {
   switch (m) {
-    case Marker::none: return vtkPlotPoints::NONE;
-    case Marker::cross: return vtkPlotPoints::CROSS;
-    case Marker::plus: return vtkPlotPoints::PLUS;
-    case Marker::square: return vtkPlotPoints::SQUARE;
-    case Marker::circle: return vtkPlotPoints::CIRCLE;
-    case Marker::diamond: return vtkPlotPoints::DIAMOND;
+    case Marker::none:
+      return vtkPlotPoints::NONE;
+    case Marker::cross:
+      return vtkPlotPoints::CROSS;
+    case Marker::plus:
+      return vtkPlotPoints::PLUS;
+    case Marker::square:
+      return vtkPlotPoints::SQUARE;
+    case Marker::circle:
+      return vtkPlotPoints::CIRCLE;
+    case Marker::diamond:
+      return vtkPlotPoints::DIAMOND;
   }
   return vtkPlotPoints::CIRCLE;
 }
@@ -95,7 +101,8 @@ void write_chart_png(const std::filesystem::path& path, const Chart& chart) {
   require(!chart.series.empty(), "plot: no series to draw");
   double x_lo = std::numeric_limits<double>::infinity(), x_hi = -x_lo, y_lo = x_lo, y_hi = -x_lo;
   for (const Series& s : chart.series) {
-    require(s.x.size() == s.y.size() && !s.x.empty(), "plot: series '{}' has {} x and {} y values", s.label, s.x.size(), s.y.size());
+    require(s.x.size() == s.y.size() && !s.x.empty(), "plot: series '{}' has {} x and {} y values", s.label, s.x.size(),
+            s.y.size());
     for (std::size_t i = 0; i < s.x.size(); ++i) {
       require(std::isfinite(s.x[i]) && std::isfinite(s.y[i]), "plot: series '{}' has a non-finite value", s.label);
       require(!chart.log_x || s.x[i] > 0.0, "plot: series '{}' has x = {} on a log axis", s.label, s.x[i]);

@@ -32,8 +32,8 @@ struct Slot {
   char path[kPathBytes] = {};
 };
 
-Slot g_slots[kSlots];                    // NOLINT: reachable from the signal handler (see the header comment)
-std::atomic<bool> g_installed{false};    // NOLINT
+Slot g_slots[kSlots];                  // NOLINT: reachable from the signal handler (see the header comment)
+std::atomic<bool> g_installed{false};  // NOLINT
 
 /// Removes every entry of the open directory `dir_fd` and, recursively, its subfolders; closes nothing.
 bool remove_entries(int dir_fd, int depth) {

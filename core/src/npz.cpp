@@ -37,10 +37,12 @@ double half_to_double(std::uint16_t h) {
   const int exponent = (h >> 10) & 0x1F;
   const int mantissa = h & 0x3FF;
   double magnitude = 0.0;
-  if (exponent == 0) magnitude = std::ldexp(static_cast<double>(mantissa), -24);  // zero and subnormals
-  else if (exponent == 31) magnitude = mantissa == 0 ? std::numeric_limits<double>::infinity()
-                                                     : std::numeric_limits<double>::quiet_NaN();
-  else magnitude = std::ldexp(static_cast<double>(mantissa | 0x400), exponent - 25);
+  if (exponent == 0)
+    magnitude = std::ldexp(static_cast<double>(mantissa), -24);  // zero and subnormals
+  else if (exponent == 31)
+    magnitude = mantissa == 0 ? std::numeric_limits<double>::infinity() : std::numeric_limits<double>::quiet_NaN();
+  else
+    magnitude = std::ldexp(static_cast<double>(mantissa | 0x400), exponent - 25);
   return negative ? -magnitude : magnitude;
 }
 
@@ -59,11 +61,15 @@ std::optional<std::size_t> parse_count(const std::string& text, std::size_t limi
 /// The item sizes NumPy uses for each kind we accept.
 bool supported_itemsize(char kind, std::size_t itemsize) {
   switch (kind) {
-    case 'f': return itemsize == 2 || itemsize == 4 || itemsize == 8;
+    case 'f':
+      return itemsize == 2 || itemsize == 4 || itemsize == 8;
     case 'i':
-    case 'u': return itemsize == 1 || itemsize == 2 || itemsize == 4 || itemsize == 8;
-    case 'b': return itemsize == 1;
-    default: return itemsize > 0;  // 'U', 'S': bounded by kMaxStringLength when parsed
+    case 'u':
+      return itemsize == 1 || itemsize == 2 || itemsize == 4 || itemsize == 8;
+    case 'b':
+      return itemsize == 1;
+    default:
+      return itemsize > 0;  // 'U', 'S': bounded by kMaxStringLength when parsed
   }
 }
 
@@ -103,21 +109,32 @@ std::vector<double> Array::to_doubles() const {
   for (std::size_t i = 0; i < n; ++i, p += itemsize) {
     switch (kind) {
       case 'f':
-        if (itemsize == 8) out[i] = load_le<double>(p);
-        else if (itemsize == 4) out[i] = static_cast<double>(load_le<float>(p));
-        else out[i] = half_to_double(load_le<std::uint16_t>(p));
+        if (itemsize == 8)
+          out[i] = load_le<double>(p);
+        else if (itemsize == 4)
+          out[i] = static_cast<double>(load_le<float>(p));
+        else
+          out[i] = half_to_double(load_le<std::uint16_t>(p));
         break;
       case 'i':
-        if (itemsize == 8) out[i] = static_cast<double>(load_le<std::int64_t>(p));
-        else if (itemsize == 4) out[i] = static_cast<double>(load_le<std::int32_t>(p));
-        else if (itemsize == 2) out[i] = static_cast<double>(load_le<std::int16_t>(p));
-        else out[i] = static_cast<double>(load_le<std::int8_t>(p));
+        if (itemsize == 8)
+          out[i] = static_cast<double>(load_le<std::int64_t>(p));
+        else if (itemsize == 4)
+          out[i] = static_cast<double>(load_le<std::int32_t>(p));
+        else if (itemsize == 2)
+          out[i] = static_cast<double>(load_le<std::int16_t>(p));
+        else
+          out[i] = static_cast<double>(load_le<std::int8_t>(p));
         break;
       case 'u':
-        if (itemsize == 8) out[i] = static_cast<double>(load_le<std::uint64_t>(p));
-        else if (itemsize == 4) out[i] = static_cast<double>(load_le<std::uint32_t>(p));
-        else if (itemsize == 2) out[i] = static_cast<double>(load_le<std::uint16_t>(p));
-        else out[i] = static_cast<double>(*p);
+        if (itemsize == 8)
+          out[i] = static_cast<double>(load_le<std::uint64_t>(p));
+        else if (itemsize == 4)
+          out[i] = static_cast<double>(load_le<std::uint32_t>(p));
+        else if (itemsize == 2)
+          out[i] = static_cast<double>(load_le<std::uint16_t>(p));
+        else
+          out[i] = static_cast<double>(*p);
         break;
       default:  // 'b'
         out[i] = *p ? 1.0 : 0.0;
@@ -278,7 +295,8 @@ Array parse_npy(const std::vector<std::uint8_t>& buffer, const std::string& what
   const char byteorder = descr[0];
   a.kind = descr[1];
   require(a.kind != 'O', "{}: dtype 'O' (pickled Python objects) is not supported; save plain arrays", what);
-  require(std::string("<|=>").find(byteorder) != std::string::npos && std::string("fiubUS").find(a.kind) != std::string::npos,
+  require(std::string("<|=>").find(byteorder) != std::string::npos &&
+              std::string("fiubUS").find(a.kind) != std::string::npos,
           "{}: dtype '{}' is not supported, {}", what, descr, kSupportedDtypes);
   const std::optional<std::size_t> count = parse_count(descr.substr(2), kMaxStringLength);
   require(count.has_value() && *count > 0, "{}: dtype '{}' is not supported, {}", what, descr, kSupportedDtypes);
@@ -315,8 +333,8 @@ Array parse_npy(const std::vector<std::uint8_t>& buffer, const std::string& what
   }
   const std::size_t data_offset = offset + header_len;
   const std::size_t available = buffer.size() - data_offset;
-  require(!overflow, "{}: shape {} of dtype {} needs more than 2^64 bytes, the member has {}", what,
-          a.shape_string(), a.dtype(), available);
+  require(!overflow, "{}: shape {} of dtype {} needs more than 2^64 bytes, the member has {}", what, a.shape_string(),
+          a.dtype(), available);
   require(available >= nbytes, "{}: data truncated: shape {} of dtype {} needs {} bytes, the member has {}", what,
           a.shape_string(), a.dtype(), nbytes, available);
   a.bytes.assign(buffer.begin() + static_cast<std::ptrdiff_t>(data_offset),
@@ -346,8 +364,8 @@ Array parse_npy(const std::vector<std::uint8_t>& buffer, const std::string& what
 }
 
 std::vector<std::uint8_t> serialize_npy(const Array& array) {
-  std::string header = fmt::format("{{'descr': '{}', 'fortran_order': False, 'shape': {}, }}", array.dtype(),
-                                   array.shape_string());
+  std::string header =
+      fmt::format("{{'descr': '{}', 'fortran_order': False, 'shape': {}, }}", array.dtype(), array.shape_string());
   const std::size_t total = 10 + header.size() + 1;
   header.append((64 - total % 64) % 64, ' ');
   header.push_back('\n');

@@ -41,9 +41,7 @@ Reader::~Reader() {
   if (impl_ && impl_->archive) zip_discard(impl_->archive);
 }
 
-bool Reader::has(const std::string& key) const {
-  return std::find(keys_.begin(), keys_.end(), key) != keys_.end();
-}
+bool Reader::has(const std::string& key) const { return std::find(keys_.begin(), keys_.end(), key) != keys_.end(); }
 
 Array Reader::read(const std::string& key) const {
   const std::string what = fmt::format("{}: {}", path_.string(), key);
@@ -69,8 +67,7 @@ Array Reader::read(const std::string& key) const {
               st.size, st.comp_size);
   }
   zip_file_t* file = zip_fopen(impl_->archive, member.c_str(), 0);
-  if (file == nullptr)
-    throw_error("{}: cannot open the zip member: {}", what, zip_strerror(impl_->archive));
+  if (file == nullptr) throw_error("{}: cannot open the zip member: {}", what, zip_strerror(impl_->archive));
   std::vector<std::uint8_t> buffer;
   try {
     buffer.resize(st.size);

@@ -1,7 +1,7 @@
 #include <sflsh/core/atomic_file.hpp>
 #include <sflsh/core/error.hpp>
-#include <sflsh/core/virtual_display.hpp>
 #include <sflsh/core/render.hpp>
+#include <sflsh/core/virtual_display.hpp>
 
 #include <vtkActor.h>
 #include <vtkCamera.h>
@@ -118,10 +118,14 @@ void render_png(const std::filesystem::path& path, const std::vector<Surface>& s
   vtkCamera* camera = renderer->GetActiveCamera();
   camera->SetFocalPoint(0, 0, 0);
   camera->SetViewUp(0, 1, 0);
-  if (view.name == "front") camera->SetPosition(0, 0, 10);
-  else if (view.name == "back") camera->SetPosition(0, 0, -10);
-  else if (view.name == "side") camera->SetPosition(10, 0, 0);
-  else if (view.name == "three_quarter") camera->SetPosition(6, 2, 8);
+  if (view.name == "front")
+    camera->SetPosition(0, 0, 10);
+  else if (view.name == "back")
+    camera->SetPosition(0, 0, -10);
+  else if (view.name == "side")
+    camera->SetPosition(10, 0, 0);
+  else if (view.name == "three_quarter")
+    camera->SetPosition(6, 2, 8);
   else if (view.name == "top") {
     camera->SetPosition(0, 10, 0);
     camera->SetViewUp(0, 0, -1);

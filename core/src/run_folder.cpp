@@ -20,9 +20,11 @@ fs::path normalized_folder(const fs::path& dir) {
   require(!dir.empty(), "--out: an output folder is required");
   fs::path p = dir.lexically_normal();
   if (p.filename().empty()) p = p.parent_path();  // "out/run/" → "out/run"
-  if (p.empty() || p.filename() == "." || p.filename() == "..") p = fs::absolute(p.empty() ? fs::path(".") : p).lexically_normal();
+  if (p.empty() || p.filename() == "." || p.filename() == "..")
+    p = fs::absolute(p.empty() ? fs::path(".") : p).lexically_normal();
   if (p.filename().empty()) p = p.parent_path();  // "/home/me/" → "/home/me"
-  require(!p.filename().empty() && p != p.root_path(), "{}: cannot be used as a run folder (expected a folder name)", dir.string());
+  require(!p.filename().empty() && p != p.root_path(), "{}: cannot be used as a run folder (expected a folder name)",
+          dir.string());
   return p;  // relative names stay relative ("run" lives in ".")
 }
 

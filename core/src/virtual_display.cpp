@@ -60,7 +60,8 @@ class VirtualDisplay {
         ::dup2(null, STDERR_FILENO);
       }
       ::dup2(fds[1], 3);  // the display number is written to fd 3 (dup2 clears close-on-exec)
-      ::execlp("Xvfb", "Xvfb", "-displayfd", "3", "-screen", "0", "1920x1080x24", "-nolisten", "tcp", "-noreset", static_cast<char*>(nullptr));
+      ::execlp("Xvfb", "Xvfb", "-displayfd", "3", "-screen", "0", "1920x1080x24", "-nolisten", "tcp", "-noreset",
+               static_cast<char*>(nullptr));
       std::_Exit(127);
     }
     ::close(fds[1]);
@@ -88,7 +89,8 @@ class VirtualDisplay {
       return;
     }
     ::setenv("DISPLAY", (":" + number).c_str(), 1);
-    logger()->debug("started a virtual display :{} (Xvfb pid {}) for offscreen rendering", number, static_cast<long>(pid_));
+    logger()->debug("started a virtual display :{} (Xvfb pid {}) for offscreen rendering", number,
+                    static_cast<long>(pid_));
   }
 
   pid_t pid_ = -1;

@@ -4,7 +4,6 @@
 #include <sflsh/core/vtk_io.hpp>
 
 #include <Eigen/Geometry>
-
 #include <vtkCellArray.h>
 #include <vtkCellData.h>
 #include <vtkDataArray.h>
@@ -50,8 +49,10 @@ vtkSmartPointer<vtkDataArray> make_array(const Field& field, Eigen::Index expect
           field.values.rows(), expected_rows);
   require(field.values.allFinite(), "{} array '{}' holds non-finite values", where, field.name);
   vtkSmartPointer<vtkDataArray> array;
-  if (field.integer) array = vtkSmartPointer<vtkIntArray>::New();
-  else array = vtkSmartPointer<vtkDoubleArray>::New();
+  if (field.integer)
+    array = vtkSmartPointer<vtkIntArray>::New();
+  else
+    array = vtkSmartPointer<vtkDoubleArray>::New();
   array->SetName(field.name.c_str());
   array->SetNumberOfComponents(static_cast<int>(field.values.cols()));
   array->SetNumberOfTuples(field.values.rows());
@@ -94,10 +95,10 @@ vtkSmartPointer<vtkStringArray> make_strings(const std::string& name, const std:
 /// The `units` entries of every numeric array of the dataset, one per distinct name, in the order written.
 std::vector<std::string> unit_entries(vtkDataSet* data) {
   std::vector<std::string> names;
-  for (vtkFieldData* group : {static_cast<vtkFieldData*>(data->GetPointData()), static_cast<vtkFieldData*>(data->GetCellData()),
-                              data->GetFieldData()}) {
+  for (vtkFieldData* group : {static_cast<vtkFieldData*>(data->GetPointData()),
+                              static_cast<vtkFieldData*>(data->GetCellData()), data->GetFieldData()}) {
     for (int i = 0; i < group->GetNumberOfArrays(); ++i) {
-      if (!group->GetArray(i) || !group->GetArrayName(i)) continue;   // string arrays carry no unit
+      if (!group->GetArray(i) || !group->GetArrayName(i)) continue;  // string arrays carry no unit
       const std::string name = group->GetArrayName(i);
       if (std::find(names.begin(), names.end(), name) == names.end()) names.push_back(name);
     }
@@ -112,7 +113,8 @@ void attach_fields(vtkDataSet* data, const Fields& fields, Eigen::Index num_poin
   for (const Field& f : fields.cell_data) data->GetCellData()->AddArray(make_array(f, num_cells, "cell-data"));
   for (const Field& f : fields.field_data) data->GetFieldData()->AddArray(make_array(f, 1, "field-data"));
   for (const Labels& l : fields.labels) data->GetFieldData()->AddArray(make_strings(l.name, l.values));
-  if (vtkDataArray* normals = data->GetPointData()->GetArray("Normals"); normals && normals->GetNumberOfComponents() == 3)
+  if (vtkDataArray* normals = data->GetPointData()->GetArray("Normals");
+      normals && normals->GetNumberOfComponents() == 3)
     data->GetPointData()->SetNormals(normals);
 }
 
@@ -122,7 +124,8 @@ void attach_units(vtkDataSet* data) {
   if (!entries.empty()) data->GetFieldData()->AddArray(make_strings("units", entries));
 }
 
-vtkSmartPointer<vtkFloatArray> make_normals(const Eigen::Ref<const Points>& points, const Eigen::Ref<const Cells>& triangles) {
+vtkSmartPointer<vtkFloatArray> make_normals(const Eigen::Ref<const Points>& points,
+                                            const Eigen::Ref<const Cells>& triangles) {
   const Points n = vertex_normals(points, triangles);
   auto array = vtkSmartPointer<vtkFloatArray>::New();
   array->SetName("Normals");
@@ -134,7 +137,8 @@ vtkSmartPointer<vtkFloatArray> make_normals(const Eigen::Ref<const Points>& poin
 }
 
 bool has_point_field(const Fields& fields, const char* name) {
-  return std::any_of(fields.point_data.begin(), fields.point_data.end(), [&](const Field& f) { return f.name == name; });
+  return std::any_of(fields.point_data.begin(), fields.point_data.end(),
+                     [&](const Field& f) { return f.name == name; });
 }
 
 template <typename Writer>
@@ -145,10 +149,14 @@ void write_with(Writer* writer, vtkDataObject* data, const std::filesystem::path
     writer->SetDataModeToAppended();
     writer->EncodeAppendedDataOff();
     vtkSmartPointer<vtkDataCompressor> compressor;
-    if (compression == Compression::zlib) compressor = vtkSmartPointer<vtkZLibDataCompressor>::New();
-    else if (compression == Compression::lz4) compressor = vtkSmartPointer<vtkLZ4DataCompressor>::New();
-    if (compressor) writer->SetCompressor(compressor);
-    else writer->SetCompressorTypeToNone();
+    if (compression == Compression::zlib)
+      compressor = vtkSmartPointer<vtkZLibDataCompressor>::New();
+    else if (compression == Compression::lz4)
+      compressor = vtkSmartPointer<vtkLZ4DataCompressor>::New();
+    if (compressor)
+      writer->SetCompressor(compressor);
+    else
+      writer->SetCompressorTypeToNone();
     require(writer->Write() == 1, "{}: VTK writer failed", path.string());
   });
 }
@@ -181,9 +189,12 @@ Compression parse_compression(const std::string& name, const std::string& what) 
 
 const char* to_string(Compression compression) {
   switch (compression) {
-    case Compression::zlib: return "zlib";
-    case Compression::lz4: return "lz4";
-    case Compression::none: return "none";
+    case Compression::zlib:
+      return "zlib";
+    case Compression::lz4:
+      return "lz4";
+    case Compression::none:
+      return "none";
   }
   return "?";
 }
@@ -236,8 +247,9 @@ Points vertex_normals(const Eigen::Ref<const Points>& points, const Eigen::Ref<c
   require(triangles.cols() == 3, "vertex normals: cells need 3 vertices, got {}", triangles.cols());
   Points normals = Points::Zero(points.rows(), 3);
   for (Eigen::Index f = 0; f < triangles.rows(); ++f) {
-    const Eigen::Vector3d a = points.row(triangles(f, 0)), b = points.row(triangles(f, 1)), c = points.row(triangles(f, 2));
-    const Eigen::RowVector3d n = (b - a).cross(c - a).transpose();   // length = 2 × area: area weighting
+    const Eigen::Vector3d a = points.row(triangles(f, 0)), b = points.row(triangles(f, 1)),
+                          c = points.row(triangles(f, 2));
+    const Eigen::RowVector3d n = (b - a).cross(c - a).transpose();  // length = 2 × area: area weighting
     for (int k = 0; k < 3; ++k) normals.row(triangles(f, k)) += n;
   }
   for (Eigen::Index v = 0; v < normals.rows(); ++v) {
@@ -287,7 +299,8 @@ Eigen::MatrixXd read_point_array(const std::filesystem::path& path, const std::s
 std::vector<std::string> read_cell_array_names(const std::filesystem::path& path) {
   auto data = read_any(path);
   std::vector<std::string> names;
-  for (int i = 0; i < data->GetCellData()->GetNumberOfArrays(); ++i) names.emplace_back(data->GetCellData()->GetArrayName(i));
+  for (int i = 0; i < data->GetCellData()->GetNumberOfArrays(); ++i)
+    names.emplace_back(data->GetCellData()->GetArrayName(i));
   return names;
 }
 

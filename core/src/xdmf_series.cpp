@@ -4,9 +4,8 @@
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/xdmf_series.hpp>
 
-#include <hdf5.h>
-
 #include <fmt/format.h>
+#include <hdf5.h>
 
 #include <algorithm>
 #include <cmath>
@@ -75,7 +74,8 @@ void set_unit(hid_t dataset, const std::string& unit) {
   H5Tset_size(type.id, unit.size() + 1);
   Handle space{H5Screate(H5S_SCALAR), H5Sclose};
   Handle attribute{H5Acreate2(dataset, "unit", type.id, space.id, H5P_DEFAULT, H5P_DEFAULT), H5Aclose};
-  require(attribute.id >= 0 && H5Awrite(attribute.id, type.id, unit.c_str()) >= 0, "xdmf: cannot write the unit attribute");
+  require(attribute.id >= 0 && H5Awrite(attribute.id, type.id, unit.c_str()) >= 0,
+          "xdmf: cannot write the unit attribute");
 }
 
 std::string joined(const std::vector<std::string>& items) {
@@ -100,8 +100,8 @@ struct Series::Impl {
   std::vector<Attribute> static_attributes;
   std::vector<Step> steps;
   std::optional<vtk::Points> last_points;
-  std::vector<std::string> unit_names;   ///< the attributes' names, each once, in the order written
-  std::vector<vtk::Labels> labels;       ///< names of label values (`part_names`, …)
+  std::vector<std::string> unit_names;  ///< the attributes' names, each once, in the order written
+  std::vector<vtk::Labels> labels;      ///< names of label values (`part_names`, …)
   bool closed = false;
 
   Item write_dataset(const std::string& path, const double* values, hsize_t rows, hsize_t columns, bool integer,
@@ -132,10 +132,11 @@ struct Series::Impl {
   /// Row-major copy of a field's values (Eigen matrices are column-major).
   Item write_field(const std::string& path, const vtk::Field& field) {
     const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> rows = field.values;
-    if (std::find(unit_names.begin(), unit_names.end(), field.name) == unit_names.end()) unit_names.push_back(field.name);
+    if (std::find(unit_names.begin(), unit_names.end(), field.name) == unit_names.end())
+      unit_names.push_back(field.name);
     const std::string_view unit = units::of(field.name);
-    return write_dataset(path, rows.data(), static_cast<hsize_t>(rows.rows()), static_cast<hsize_t>(rows.cols()), field.integer,
-                         unit.empty() ? "?" : std::string(unit));
+    return write_dataset(path, rows.data(), static_cast<hsize_t>(rows.rows()), static_cast<hsize_t>(rows.cols()),
+                         field.integer, unit.empty() ? "?" : std::string(unit));
   }
 
   /// The units of the attributes and the label names, as Information of the domain (readers skip it).
@@ -143,16 +144,18 @@ struct Series::Impl {
     std::vector<std::string> entries;
     for (const std::string& name : unit_names) entries.push_back(units::entry(name));
     std::string s = fmt::format("    <Information Name=\"units\" Value=\"{}\"/>\n", joined(entries));
-    for (const vtk::Labels& l : labels) s += fmt::format("    <Information Name=\"{}\" Value=\"{}\"/>\n", l.name, joined(l.values));
+    for (const vtk::Labels& l : labels)
+      s += fmt::format("    <Information Name=\"{}\" Value=\"{}\"/>\n", l.name, joined(l.values));
     return s;
   }
 
   std::string data_item(const Item& item) const {
-    const std::string dims = item.columns == 1 ? fmt::format("{}", item.rows) : fmt::format("{} {}", item.rows, item.columns);
+    const std::string dims =
+        item.columns == 1 ? fmt::format("{}", item.rows) : fmt::format("{} {}", item.rows, item.columns);
     const char* type = item.integer ? "Int" : "Float";
     const int bytes = item.integer ? 4 : precision == Precision::float32 ? 4 : 8;
-    return fmt::format(R"(<DataItem Dimensions="{}" NumberType="{}" Precision="{}" Format="HDF">{}:{}</DataItem>)", dims, type, bytes,
-                       h5.filename().string(), item.path);
+    return fmt::format(R"(<DataItem Dimensions="{}" NumberType="{}" Precision="{}" Format="HDF">{}:{}</DataItem>)",
+                       dims, type, bytes, h5.filename().string(), item.path);
   }
 
   std::string attribute_xml(const Attribute& a) const {
@@ -186,19 +189,21 @@ struct Series::Impl {
   }
 };
 
-Series::Series(fs::path xmf_path, const Eigen::Ref<const vtk::Cells>& cells, Precision precision) : impl_(std::make_unique<Impl>()) {
+Series::Series(fs::path xmf_path, const Eigen::Ref<const vtk::Cells>& cells, Precision precision)
+    : impl_(std::make_unique<Impl>()) {
   const std::lock_guard<std::mutex> lock(hdf5_mutex());
   Impl& m = *impl_;
   m.xmf = std::move(xmf_path);
   m.h5 = fs::path(m.xmf).replace_extension(".h5");
   m.precision = precision;
-  require(cells.cols() == 3 || cells.cols() == 4, "xdmf: cells need 3 (triangles) or 4 (tetrahedra) nodes, got {}", cells.cols());
+  require(cells.cols() == 3 || cells.cols() == 4, "xdmf: cells need 3 (triangles) or 4 (tetrahedra) nodes, got {}",
+          cells.cols());
   m.topology_type = cells.cols() == 3 ? "Triangle" : "Tetrahedron";
   m.file = H5Fcreate(m.h5.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
   require(m.file >= 0, "{}: cannot create the HDF5 file", m.h5.string());
   const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> topology = cells.cast<double>();
-  m.topology = m.write_dataset("/topology", topology.data(), static_cast<hsize_t>(cells.rows()), static_cast<hsize_t>(cells.cols()), true,
-                                  "index");
+  m.topology = m.write_dataset("/topology", topology.data(), static_cast<hsize_t>(cells.rows()),
+                               static_cast<hsize_t>(cells.cols()), true, "index");
 }
 
 Series::~Series() {
@@ -212,8 +217,10 @@ void Series::set_static(const vtk::Fields& fields) {
   const std::lock_guard<std::mutex> lock(hdf5_mutex());
   Impl& m = *impl_;
   require(m.steps.empty(), "{}: static fields must be set before the first step", m.xmf.string());
-  for (const vtk::Field& f : fields.point_data) m.static_attributes.push_back({f.name, false, m.write_field("/static/point/" + f.name, f)});
-  for (const vtk::Field& f : fields.cell_data) m.static_attributes.push_back({f.name, true, m.write_field("/static/cell/" + f.name, f)});
+  for (const vtk::Field& f : fields.point_data)
+    m.static_attributes.push_back({f.name, false, m.write_field("/static/point/" + f.name, f)});
+  for (const vtk::Field& f : fields.cell_data)
+    m.static_attributes.push_back({f.name, true, m.write_field("/static/cell/" + f.name, f)});
   m.labels.insert(m.labels.end(), fields.labels.begin(), fields.labels.end());
 }
 
@@ -228,13 +235,17 @@ void Series::write(double time, const Eigen::Ref<const vtk::Points>& points, con
   if (m.last_points && m.last_points->rows() == points.rows() && *m.last_points == points) {
     s.geometry = m.steps.back().geometry;  // the nodes did not move: reuse the dataset
   } else {
-    s.geometry = m.write_dataset("/geometry/" + step, points.data(), static_cast<hsize_t>(points.rows()), 3, false, "m");
+    s.geometry =
+        m.write_dataset("/geometry/" + step, points.data(), static_cast<hsize_t>(points.rows()), 3, false, "m");
     m.last_points = points;
   }
-  for (const vtk::Field& f : fields.point_data) s.attributes.push_back({f.name, false, m.write_field("/point/" + f.name + "/" + step, f)});
-  for (const vtk::Field& f : fields.cell_data) s.attributes.push_back({f.name, true, m.write_field("/cell/" + f.name + "/" + step, f)});
+  for (const vtk::Field& f : fields.point_data)
+    s.attributes.push_back({f.name, false, m.write_field("/point/" + f.name + "/" + step, f)});
+  for (const vtk::Field& f : fields.cell_data)
+    s.attributes.push_back({f.name, true, m.write_field("/cell/" + f.name + "/" + step, f)});
   for (const vtk::Labels& l : fields.labels)
-    if (std::none_of(m.labels.begin(), m.labels.end(), [&](const vtk::Labels& known) { return known.name == l.name; })) m.labels.push_back(l);
+    if (std::none_of(m.labels.begin(), m.labels.end(), [&](const vtk::Labels& known) { return known.name == l.name; }))
+      m.labels.push_back(l);
   m.steps.push_back(std::move(s));
 }
 

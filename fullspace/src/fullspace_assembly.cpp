@@ -22,7 +22,7 @@ class FullSpaceSolver::Impl::PetscSink final : public model::HessianSink {
     const PetscInt* offsets = solver_.refill.tet_offset.data() + 48 * k;
     for (int a = 0; a < 4; ++a) {
       for (int b = 0; b < 4; ++b, offsets += 3) {
-        if (offsets[0] == -1) continue;   // row of another rank
+        if (offsets[0] == -1) continue;  // row of another rank
         if (mask == 0) {
           add_rows(offsets, block.block<3, 3>(3 * a, 3 * b));
         } else {
@@ -125,7 +125,7 @@ void FullSpaceSolver::Impl::create_terms() {
   subset = std::make_shared<model::TermSubset>();
   subset->value_tets = my_tets;
   subset->row_tets = row_tets;
-  for (int k = begin; k < end; ++k) subset->nodes.push_back(node_of(k));   // solver order: rows nearly in order
+  for (int k = begin; k < end; ++k) subset->nodes.push_back(node_of(k));  // solver order: rows nearly in order
   elastic_term = std::make_unique<model::ElasticTerm>(problem, subset);
   inertia_term = std::make_unique<model::InertiaTerm>(problem, subset);
   gravity_term = std::make_unique<model::GravityTerm>(problem, subset);
@@ -156,7 +156,7 @@ double FullSpaceSolver::Impl::objective(const Eigen::VectorXd& x_in) {
   }
   const auto t_elastic = Clock::now();
   double elastic = 0.0;
-  arena->execute([&] { elastic = elastic_term->value(x); });   // +∞ where the Fung exponent overflows
+  arena->execute([&] { elastic = elastic_term->value(x); });  // +∞ where the Fung exponent overflows
   local += elastic;
   const auto t_inertia = Clock::now();
   if (stats) stats->elastic_seconds += std::chrono::duration<double>(t_inertia - t_elastic).count();
@@ -245,7 +245,7 @@ bool FullSpaceSolver::Impl::jacobian(const Eigen::VectorXd& x) {
   }
   sink.add_dirichlet_rows();
   if (stats) stats->inertia_seconds += seconds_since(t_inertia);
-  if (potential_term->active()) {   // one 3×3 block on the diagonal of each owned candidate (always in the pattern)
+  if (potential_term->active()) {  // one 3×3 block on the diagonal of each owned candidate (always in the pattern)
     const auto t_potential = Clock::now();
     ok = potential_term->add_hessian(x, sink) && ok;
     if (stats) stats->potential_seconds += seconds_since(t_potential);
@@ -274,7 +274,7 @@ bool FullSpaceSolver::Impl::jacobian(const Eigen::VectorXd& x) {
 }
 
 bool FullSpaceSolver::Impl::add_cached_inertia_hessian(const Eigen::VectorXd& x, PetscScalar* diag_values,
-                                                      PetscScalar* offdiag_values) {
+                                                       PetscScalar* offdiag_values) {
   InertiaHessianCache& cache = inertia_cache;
   bool ok = true;
   if (cache.substep != substep_serial) {
@@ -369,14 +369,16 @@ void FullSpaceSolver::Impl::build_refill() {
       const int I = index_of(problem.tets(e, a));
       for (int b = 0; b < 4; ++b, out += 3) {
         if (I < begin || I >= end) continue;
-        for (int r = 0; r < 3; ++r) out[r] = find(3 * (I - begin) + r, 3 * static_cast<PetscInt>(index_of(problem.tets(e, b))));
+        for (int r = 0; r < 3; ++r)
+          out[r] = find(3 * (I - begin) + r, 3 * static_cast<PetscInt>(index_of(problem.tets(e, b))));
       }
     }
   }
   refill.node_offset.resize(3 * static_cast<std::size_t>(end - begin));
   for (int i = begin; i < end; ++i) {
-    for (int r = 0; r < 3; ++r) refill.node_offset[3 * static_cast<std::size_t>(i - begin) + static_cast<std::size_t>(r)] =
-        find(3 * (i - begin) + r, 3 * static_cast<PetscInt>(i));
+    for (int r = 0; r < 3; ++r)
+      refill.node_offset[3 * static_cast<std::size_t>(i - begin) + static_cast<std::size_t>(r)] =
+          find(3 * (i - begin) + r, 3 * static_cast<PetscInt>(i));
   }
   refill.diag = diag;
   refill.offdiag = offdiag;

@@ -12,9 +12,12 @@ namespace {
 /// The integrator as error messages name it.
 std::string_view integrator_label(model::Integrator integrator) {
   switch (integrator) {
-    case model::Integrator::backward_euler: return "backward Euler";
-    case model::Integrator::bdf2: return "BDF2";
-    case model::Integrator::newmark: return "Newmark";
+    case model::Integrator::backward_euler:
+      return "backward Euler";
+    case model::Integrator::bdf2:
+      return "BDF2";
+    case model::Integrator::newmark:
+      return "Newmark";
   }
   return "backward Euler";
 }
@@ -54,7 +57,9 @@ void FullSpaceSolver::Impl::setup() {
   }
   // Tets in the order of their lowest solver index: the Hessian refill then walks the matrix rows nearly
   // in order instead of scattering over them (mesh order is layer by layer, the rows are not).
-  auto by_lowest = [&](int a, int b) { return lowest[static_cast<std::size_t>(a)] < lowest[static_cast<std::size_t>(b)]; };
+  auto by_lowest = [&](int a, int b) {
+    return lowest[static_cast<std::size_t>(a)] < lowest[static_cast<std::size_t>(b)];
+  };
   std::stable_sort(my_tets.begin(), my_tets.end(), by_lowest);
   std::stable_sort(row_tets.begin(), row_tets.end(), by_lowest);
   create_terms();
@@ -99,7 +104,7 @@ void FullSpaceSolver::Impl::setup() {
   SFLSH_PETSC(MatSetOption(J, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_TRUE));
   // Every rank assembles its rows completely from row_tets: assembly needs no stash exchange.
   SFLSH_PETSC(MatSetOption(J, MAT_NO_OFF_PROC_ENTRIES, PETSC_TRUE));
-  SFLSH_PETSC(MatSetOption(J, MAT_ROW_ORIENTED, PETSC_FALSE));   // Eigen's column-major blocks
+  SFLSH_PETSC(MatSetOption(J, MAT_ROW_ORIENTED, PETSC_FALSE));  // Eigen's column-major blocks
   SFLSH_PETSC(MatSetOption(J, MAT_SYMMETRIC, PETSC_TRUE));
   SFLSH_PETSC(MatSetOption(J, MAT_SYMMETRY_ETERNAL, PETSC_TRUE));
 
@@ -124,8 +129,9 @@ void FullSpaceSolver::Impl::setup() {
     double sum = 0.0, count = 0.0;
     for (int e : my_tets) {
       const auto se = static_cast<std::size_t>(e);
-      const material::Matrix12d K = material::tet_elastic_dq2(problem.tet_rest[se], problem_rest_nodes(problem, e),
-                                                              problem.tet_material[se], material::HessianProjection::kNone);
+      const material::Matrix12d K =
+          material::tet_elastic_dq2(problem.tet_rest[se], problem_rest_nodes(problem, e), problem.tet_material[se],
+                                    material::HessianProjection::kNone);
       if (K.allFinite()) {
         sum += K.diagonal().sum();
         count += 12.0;
@@ -177,7 +183,8 @@ void FullSpaceSolver::Impl::gather(Vec v, Eigen::VectorXd& out) {
   const PetscScalar* a = nullptr;
   SFLSH_PETSC(VecGetArrayRead(x_all, &a));
   out.resize(problem.num_dofs());
-  for (int k = 0; k < problem.num_nodes(); ++k) out.segment<3>(3 * node_of(k)) = Eigen::Map<const Eigen::Vector3d>(a + 3 * k);
+  for (int k = 0; k < problem.num_nodes(); ++k)
+    out.segment<3>(3 * node_of(k)) = Eigen::Map<const Eigen::Vector3d>(a + 3 * k);
   SFLSH_PETSC(VecRestoreArrayRead(x_all, &a));
 }
 
@@ -228,7 +235,7 @@ PetscErrorCode FullSpaceSolver::Impl::linesearch_cb(SNESLineSearch ls, void* ctx
   PetscCall(SNESLineSearchGetSNES(ls, &s));
   PetscReal fnorm = 0.0, slope = 0.0;
   PetscCall(VecNorm(Fv, NORM_2, &fnorm));
-  PetscCall(VecDot(Fv, Yv, &slope));   // the update is X − λY, so the directional derivative is −λ·slope
+  PetscCall(VecDot(Fv, Yv, &slope));  // the update is X − λY, so the directional derivative is −λ·slope
   double phi0 = kInfinity;
   try {
     self->gather(Xv, self->x_full);
@@ -276,7 +283,7 @@ PetscErrorCode FullSpaceSolver::Impl::linesearch_cb(SNESLineSearch ls, void* ctx
 // Φ minimized by SNES, then the history advanced from the posed minimizer (every node, constrained ones too).
 bool FullSpaceSolver::Impl::solve_substep(State& s, double t0, double dt) {
   const auto t_setup = Clock::now();
-  ++substep_serial;   // a new ĥ and new maps: the cached inertia Hessian is stale
+  ++substep_serial;  // a new ĥ and new maps: the cached inertia Hessian is stale
   t1 = t0 + dt;
   inertia = !options.quasi_static && problem.dynamic();
   NodeFrame previous;
@@ -329,7 +336,8 @@ bool FullSpaceSolver::Impl::solve_substep(State& s, double t0, double dt) {
     stats->potential_seconds += seconds_since(t_accept);
     if (accepted) break;
     if (refinement >= max_refinements) {
-      logger()->warn("t = {:.6g}: contact still over its tolerance after {} refinement(s); the substep is kept", t1, refinement);
+      logger()->warn("t = {:.6g}: contact still over its tolerance after {} refinement(s); the substep is kept", t1,
+                     refinement);
       break;
     }
     ++stats->potential_refinements;
@@ -351,7 +359,8 @@ bool FullSpaceSolver::Impl::solve_from(const Eigen::VectorXd& start, double dt) 
   {
     PetscScalar* a = nullptr;
     SFLSH_PETSC(VecGetArray(X, &a));
-    for (int k = begin; k < end; ++k) Eigen::Map<Eigen::Vector3d>(a + 3 * (k - begin)) = start.segment<3>(3 * node_of(k));
+    for (int k = begin; k < end; ++k)
+      Eigen::Map<Eigen::Vector3d>(a + 3 * (k - begin)) = start.segment<3>(3 * node_of(k));
     SFLSH_PETSC(VecRestoreArray(X, &a));
   }
 
@@ -365,7 +374,8 @@ bool FullSpaceSolver::Impl::solve_from(const Eigen::VectorXd& start, double dt) 
   SNESGetLinearSolveIterations(snes, &lits);
   stats->newton_iterations += static_cast<int>(its);
   stats->linear_iterations += static_cast<int>(lits);
-  stats->converged_reason = code != 0 ? fmt::format("PETSc error {}", static_cast<int>(code)) : SNESConvergedReasons[reason];
+  stats->converged_reason =
+      code != 0 ? fmt::format("PETSc error {}", static_cast<int>(code)) : SNESConvergedReasons[reason];
   linear_failure = code == 0 && reason == SNES_DIVERGED_LINEAR_SOLVE;
   if (truncated_newton) {
     PetscInt failures = 0;
@@ -381,7 +391,8 @@ bool FullSpaceSolver::Impl::solve_from(const Eigen::VectorXd& start, double dt) 
 
 FullSpaceSolver::FullSpaceSolver(const Problem& problem, MPI_Comm comm, const FullSpaceOptions& options)
     : impl_(std::make_unique<Impl>(problem, comm, options)) {
-  require(static_cast<int>(problem.tet_rest.size()) == problem.num_tets(), "FullSpaceSolver: the problem is not validated");
+  require(static_cast<int>(problem.tet_rest.size()) == problem.num_tets(),
+          "FullSpaceSolver: the problem is not validated");
   try {
     impl_->setup();
   } catch (...) {
@@ -433,7 +444,8 @@ class FullSpaceLadder final : public model::LadderSolver {
   bool attempt(double dt, material::HessianProjection hessian, StepStats& stats, std::string& reason) override {
     impl_.stats = &stats;
     impl_.projection_now = hessian;
-    impl_.set_truncated_newton(hessian == material::HessianProjection::kNone && impl_.options.truncate_on_negative_curvature);
+    impl_.set_truncated_newton(hessian == material::HessianProjection::kNone &&
+                               impl_.options.truncate_on_negative_curvature);
     State s = impl_.state;
     bool ok = impl_.solve_substep(s, s.t, dt);
     if (!ok && impl_.linear_failure && impl_.saved_pc_type.empty() && hessian != material::HessianProjection::kNone) {
@@ -461,7 +473,8 @@ StepStats FullSpaceSolver::step(double h) {
   // repeats the same step with the problem's projection before any halving.
   model::LadderOptions ladder_options;
   ladder_options.exact_hessian_first = impl_->options.exact_hessian_first && !impl_->options.quasi_static &&
-                                       impl_->problem.dynamic() && impl_->problem.projection != material::HessianProjection::kNone;
+                                       impl_->problem.dynamic() &&
+                                       impl_->problem.projection != material::HessianProjection::kNone;
   ladder_options.projection = impl_->problem.projection;
   ladder_options.max_halvings = impl_->options.max_halvings;
   FullSpaceLadder ladder(*impl_);

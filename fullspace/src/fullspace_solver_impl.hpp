@@ -3,11 +3,10 @@
 // fullspace_solver.cpp (setup, PETSc callbacks, the step with its integrator) and fullspace_assembly.cpp
 // (Φ, residual and Hessian as sums of model terms, the PETSc Hessian sink with the direct refill of the AIJ
 // arrays).
-#include <sflsh/fullspace/fullspace_solver.hpp>
-#include <sflsh/fullspace/node_partition.hpp>
-
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
+#include <sflsh/fullspace/fullspace_solver.hpp>
+#include <sflsh/fullspace/node_partition.hpp>
 #include <sflsh/model/terms.hpp>
 
 #include <Eigen/LU>
@@ -36,7 +35,6 @@ inline void check(PetscErrorCode code, const char* what) {
   if (code != 0) throw_error("PETSc call {} failed with error code {}", what, static_cast<int>(code));
 }
 #define SFLSH_PETSC(call) check((call), #call)
-
 
 inline constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
@@ -72,12 +70,12 @@ struct FullSpaceSolver::Impl {
   /// PETSc's numbering of the nodes (see node_partition.hpp): rows, vector entries and ownership ranges are
   /// in solver indices; the problem's vectors (x_full, prescribed, the Eigen state) stay in mesh order.
   NodePartition partition;
-  int begin = 0, end = 0;           ///< this rank's solver indices
-  std::vector<int> my_tets;         ///< tets whose lowest solver index is owned: each counted once in Φ
+  int begin = 0, end = 0;    ///< this rank's solver indices
+  std::vector<int> my_tets;  ///< tets whose lowest solver index is owned: each counted once in Φ
   /// Tets with at least one owned node: the gradient and Hessian rows of the owned nodes are complete from
   /// these alone, so no entry is sent to another rank (interface tets are evaluated on both sides).
   std::vector<int> row_tets;
-  std::vector<char> constrained;    ///< per dof (mesh order)
+  std::vector<char> constrained;  ///< per dof (mesh order)
   std::unique_ptr<tbb::task_arena> arena;
 
   Vec X = nullptr, F = nullptr, x_all = nullptr;
@@ -89,11 +87,11 @@ struct FullSpaceSolver::Impl {
 
   // The substep being solved.
   double t1 = 0.0;
-  bool inertia = true;              ///< Φ has the inertia term (dynamic problem, not quasi-static)
-  NodeFrame frame;                  ///< the maps at t1
-  model::InertiaTarget target;      ///< ĥ and p̃ of the substep (time_integrator.hpp)
+  bool inertia = true;          ///< Φ has the inertia term (dynamic problem, not quasi-static)
+  NodeFrame frame;              ///< the maps at t1
+  model::InertiaTarget target;  ///< ĥ and p̃ of the substep (time_integrator.hpp)
   Eigen::VectorXd x_full;
-  Eigen::VectorXd prescribed;       ///< x values at t1 (full), valid on constrained dofs
+  Eigen::VectorXd prescribed;  ///< x values at t1 (full), valid on constrained dofs
 
   // Φ as a sum of terms (model/terms.hpp) over this rank's share: values over my_tets and the owned nodes,
   // gradient and Hessian rows from row_tets (subset.row_tets = row_tets, so a sink's k indexes both).
@@ -107,8 +105,8 @@ struct FullSpaceSolver::Impl {
   std::vector<std::uint16_t> tet_constrained;
 
   StepStats* stats = nullptr;
-  bool linear_failure = false;      ///< the last substep failed in the linear solver
-  std::string saved_pc_type;        ///< the configured PC while the fallback is in use (empty otherwise)
+  bool linear_failure = false;  ///< the last substep failed in the linear solver
+  std::string saved_pc_type;    ///< the configured PC while the fallback is in use (empty otherwise)
 
   /// Switches the KSP to CG + Jacobi, which cannot break down on a positive definite system: AMG smoothers
   /// occasionally come out indefinite on stiff or strongly heterogeneous states.
@@ -156,21 +154,21 @@ struct FullSpaceSolver::Impl {
   /// SeqAIJ value array; MatSetValues' per-entry search is then skipped (it cost more than the kernels).
   struct Refill {
     bool ready = false;
-    Mat diag = nullptr, offdiag = nullptr;     ///< borrowed from J
+    Mat diag = nullptr, offdiag = nullptr;  ///< borrowed from J
     std::ptrdiff_t diag_nnz = 0, offdiag_nnz = 0;
     /// Per row tet, 16 blocks (a, b) × 3 rows: ≥ 0 offset into diag, < −1 offset −(o + 2) into offdiag,
     /// −1: the row belongs to another rank (which assembles it from its own row tets).
     std::vector<PetscInt> tet_offset;
-    std::vector<PetscInt> node_offset;         ///< per owned node, 3 rows: offsets of its diagonal block
+    std::vector<PetscInt> node_offset;  ///< per owned node, 3 rows: offsets of its diagonal block
   } refill;
 
   /// The consistent inertia's Hessian blocks depend only on the maps at t1 and ĥ: assembled once per substep
   /// into copies of the AIJ value arrays and added to each Jacobian of that substep.
   struct InertiaHessianCache {
-    long substep = -1;                          ///< the substep they belong to (−1: none)
-    std::vector<PetscScalar> diag, offdiag;     ///< same layout as refill.diag / refill.offdiag
+    long substep = -1;                       ///< the substep they belong to (−1: none)
+    std::vector<PetscScalar> diag, offdiag;  ///< same layout as refill.diag / refill.offdiag
   } inertia_cache;
-  long substep_serial = 0;                      ///< counts solve_substep calls
+  long substep_serial = 0;  ///< counts solve_substep calls
 
   Impl(const Problem& p, MPI_Comm c, const FullSpaceOptions& o) : problem(p), comm(c), options(o) {}
 

@@ -29,9 +29,9 @@ struct ElementType {
   int dim = -1;
 };
 ElementType element_type(long long type) {
-  constexpr ElementType kTypes[20] = {{},      {2, 1},  {3, 2},  {4, 2},  {4, 3},  {8, 3},  {6, 3},
-                                      {5, 3},  {3, 1},  {6, 2},  {9, 2},  {10, 3}, {27, 3}, {18, 3},
-                                      {14, 3}, {1, 0},  {8, 2},  {20, 3}, {15, 3}, {13, 3}};
+  constexpr ElementType kTypes[20] = {{},      {2, 1}, {3, 2}, {4, 2},  {4, 3},  {8, 3},  {6, 3},
+                                      {5, 3},  {3, 1}, {6, 2}, {9, 2},  {10, 3}, {27, 3}, {18, 3},
+                                      {14, 3}, {1, 0}, {8, 2}, {20, 3}, {15, 3}, {13, 3}};
   return type >= 1 && type < 20 ? kTypes[type] : ElementType{};
 }
 

@@ -1,6 +1,5 @@
-#include <sflsh/fullspace/node_partition.hpp>
-
 #include <sflsh/core/error.hpp>
+#include <sflsh/fullspace/node_partition.hpp>
 
 #include <algorithm>
 #include <numeric>
@@ -11,7 +10,7 @@ namespace {
 
 /// Node adjacency in compressed rows (no self loops, neighbours ascending).
 struct Graph {
-  std::vector<int> start;       ///< num_nodes + 1 offsets into `neighbour`
+  std::vector<int> start;  ///< num_nodes + 1 offsets into `neighbour`
   std::vector<int> neighbour;
   int degree(int v) const { return start[static_cast<std::size_t>(v) + 1] - start[static_cast<std::size_t>(v)]; }
 };
@@ -67,7 +66,7 @@ int pseudo_peripheral(const Graph& g, int root) {
     for (auto it = order.rbegin(); it != order.rend() && level[static_cast<std::size_t>(*it)] == new_depth; ++it) {
       if (g.degree(*it) < g.degree(best)) best = *it;
     }
-    for (int v : order) level[static_cast<std::size_t>(v)] = -1;   // reset only what was touched
+    for (int v : order) level[static_cast<std::size_t>(v)] = -1;  // reset only what was touched
     if (new_depth <= depth) break;
     depth = new_depth;
     root = best;

@@ -1,7 +1,6 @@
-#include <sflsh/fullspace/petsc_session.hpp>
-
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/interrupt_cleanup.hpp>
+#include <sflsh/fullspace/petsc_session.hpp>
 
 #include <petscsys.h>
 
@@ -24,8 +23,8 @@ bool is_number(std::string_view s) {
 bool is_petsc_option(std::string_view token) {
   if (token.size() < 3 || token[0] != '-' || token[1] == '-') return false;
   static constexpr std::array<std::string_view, 13> kFamilies = {
-      "snes_", "ksp_", "pc_", "mat_", "vec_", "log_", "sub_", "mg_", "options_file", "info", "malloc_", "on_error_",
-      "sflsh_"};
+      "snes_", "ksp_",         "pc_",  "mat_",    "vec_",      "log_",  "sub_",
+      "mg_",   "options_file", "info", "malloc_", "on_error_", "sflsh_"};
   const std::string_view name = token.substr(1);
   for (std::string_view family : kFamilies) {
     if (name.substr(0, family.size()) == family) return true;

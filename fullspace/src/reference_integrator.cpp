@@ -48,8 +48,8 @@ constexpr double kIdentityTolerance = 1e-10;
 
 void ReferenceIntegrator::Impl::check(int flag, const char* call) const {
   if (flag < 0) {
-    throw_error("reference integrator: {} failed with {}{}{}", call, flag_name(flag), last_arkode_error.empty() ? "" : ": ",
-                last_arkode_error);
+    throw_error("reference integrator: {} failed with {}{}{}", call, flag_name(flag),
+                last_arkode_error.empty() ? "" : ": ", last_arkode_error);
   }
 }
 
@@ -59,7 +59,8 @@ void ReferenceIntegrator::Impl::build_pattern() {
   const int m = problem.num_tets();
   for (int e = 0; e < m; ++e) {
     for (int a = 0; a < 4; ++a) {
-      for (int b = 0; b < 4; ++b) neighbours[static_cast<std::size_t>(problem.tets(e, a))].push_back(problem.tets(e, b));
+      for (int b = 0; b < 4; ++b)
+        neighbours[static_cast<std::size_t>(problem.tets(e, a))].push_back(problem.tets(e, b));
     }
   }
   for (auto& list : neighbours) {
@@ -94,7 +95,8 @@ void ReferenceIntegrator::Impl::build_pattern() {
       const auto& list = neighbours[static_cast<std::size_t>(problem.tets(e, a))];
       for (int b = 0; b < 4; ++b) {
         const auto it = std::lower_bound(list.begin(), list.end(), problem.tets(e, b));
-        tet_block[static_cast<std::size_t>(e)][static_cast<std::size_t>(4 * a + b)] = static_cast<int>(it - list.begin());
+        tet_block[static_cast<std::size_t>(e)][static_cast<std::size_t>(4 * a + b)] =
+            static_cast<int>(it - list.begin());
       }
     }
   }
@@ -108,7 +110,7 @@ int ReferenceIntegrator::Impl::prepare(double t_eval, const double* x) {
     problem.frame(t_eval, frame, &rate);
     x_eff = Eigen::Map<const Eigen::VectorXd>(x, nx);
     problem.apply_dirichlet(t_eval, x_eff);  // throws sflsh::Error on non-finite prescribed values
-    du = problem.dirichlet.rates(t_eval);     // likewise
+    du = problem.dirichlet.rates(t_eval);    // likewise
   } catch (const std::exception& error) {
     last_rhs_problem = error.what();
     return -1;
@@ -120,10 +122,12 @@ int ReferenceIntegrator::Impl::prepare(double t_eval, const double* x) {
   for (int i = 0; i < n; ++i) {
     const int count = constraint_count[static_cast<std::size_t>(i)];
     if (count > 0 && count < 3 &&
-        (frame.A[static_cast<std::size_t>(i)] - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() > kIdentityTolerance) {
+        (frame.A[static_cast<std::size_t>(i)] - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() >
+            kIdentityTolerance) {
       last_rhs_problem = fmt::format(
           "node {} has {} of 3 components prescribed but its map A is not the identity at t = {} "
-          "(component-wise constraints need A = I)", i, count, t_eval);
+          "(component-wise constraints need A = I)",
+          i, count, t_eval);
       return -1;
     }
   }
@@ -213,7 +217,8 @@ int ReferenceIntegrator::Impl::jacobian(double t_eval, const double* yv) {
           const int k = tet_block[se][static_cast<std::size_t>(4 * a + b)];
           for (int alpha = 0; alpha < 3; ++alpha) {
             const auto start = static_cast<std::size_t>(row_ptr[static_cast<std::size_t>(nx + 3 * i + alpha)]);
-            for (int beta = 0; beta < 3; ++beta) values[start + static_cast<std::size_t>(3 * k + beta)] += block(alpha, beta);
+            for (int beta = 0; beta < 3; ++beta)
+              values[start + static_cast<std::size_t>(3 * k + beta)] += block(alpha, beta);
           }
         }
       }
@@ -259,7 +264,8 @@ State ReferenceIntegrator::Impl::output_state(double t_out) const {
     xdot.segment<3>(3 * i) =
         f.A[si].inverse() * (s.w.segment<3>(3 * i) - r.A[si] * s.x.segment<3>(3 * i) - r.d.row(i).transpose());
   }
-  for (std::size_t k = 0; k < problem.dirichlet.dof.size(); ++k) xdot[problem.dirichlet.dof[k]] = du_out[static_cast<Eigen::Index>(k)];
+  for (std::size_t k = 0; k < problem.dirichlet.dof.size(); ++k)
+    xdot[problem.dirichlet.dof[k]] = du_out[static_cast<Eigen::Index>(k)];
   for (int dof : problem.dirichlet.dof) {
     const int i = dof / 3;
     const auto si = static_cast<std::size_t>(i);
@@ -301,12 +307,12 @@ ReferenceIntegrator::ReferenceIntegrator(const Problem& problem, const Reference
   require(std::isfinite(options.atol) && options.atol > 0.0, "reference integrator: atol must be positive, got {}",
           options.atol);
   require(options.max_steps > 0, "reference integrator: max_steps must be positive, got {}", options.max_steps);
-  require(options.order >= 2 && options.order <= 5, "reference integrator: order must be in 2..5 (ARKODE's DIRK tables), got {}",
-          options.order);
+  require(options.order >= 2 && options.order <= 5,
+          "reference integrator: order must be in 2..5 (ARKODE's DIRK tables), got {}", options.order);
   require(std::isfinite(options.initial_step) && options.initial_step >= 0.0,
           "reference integrator: initial_step must be ≥ 0, got {}", options.initial_step);
-  require(std::isfinite(options.max_step) && options.max_step >= 0.0, "reference integrator: max_step must be ≥ 0, got {}",
-          options.max_step);
+  require(std::isfinite(options.max_step) && options.max_step >= 0.0,
+          "reference integrator: max_step must be ≥ 0, got {}", options.max_step);
   require(std::isfinite(options.min_step) && options.min_step >= 0.0 &&
               (options.max_step == 0.0 || options.min_step <= options.max_step),
           "reference integrator: min_step must be in [0, max_step], got {}", options.min_step);
@@ -318,7 +324,8 @@ ReferenceIntegrator::ReferenceIntegrator(const Problem& problem, const Reference
   for (int i = 0; i < s.n; ++i) {
     const double m = problem.mass[i];
     require(m > 0.0 || s.constraint_count[static_cast<std::size_t>(i)] == 3,
-            "reference integrator: node {} is not fully prescribed but has mass {} (every moving node needs mass > 0)", i, m);
+            "reference integrator: node {} is not fully prescribed but has mass {} (every moving node needs mass > 0)",
+            i, m);
     s.inv_mass[static_cast<std::size_t>(i)] = m > 0.0 ? 1.0 / m : 0.0;
   }
   s.consistent = problem.mass_kind == model::MassKind::consistent;
@@ -326,7 +333,8 @@ ReferenceIntegrator::ReferenceIntegrator(const Problem& problem, const Reference
   s.build_pattern();
   if (s.consistent) s.build_mass();
 
-  require(SUNContext_Create(nullptr, &s.ctx) == 0 && s.ctx != nullptr, "reference integrator: SUNContext_Create failed");
+  require(SUNContext_Create(nullptr, &s.ctx) == 0 && s.ctx != nullptr,
+          "reference integrator: SUNContext_Create failed");
   s.y = N_VNew_Serial(2 * s.nx, s.ctx);
   require(s.y != nullptr, "reference integrator: N_VNew_Serial({}) failed", 2 * s.nx);
   N_VConst(0.0, s.y);
@@ -368,7 +376,8 @@ void ReferenceIntegrator::initialize(const State& initial) {
     s.check(ARKStepSetUserData(s.arkode, &s), "ARKStepSetUserData");
     s.check(ARKStepSStolerances(s.arkode, s.options.rtol, s.options.atol), "ARKStepSStolerances");
     s.check(ARKStepSetOrder(s.arkode, s.options.order), "ARKStepSetOrder");
-    if (s.options.initial_step > 0.0) s.check(ARKStepSetInitStep(s.arkode, s.options.initial_step), "ARKStepSetInitStep");
+    if (s.options.initial_step > 0.0)
+      s.check(ARKStepSetInitStep(s.arkode, s.options.initial_step), "ARKStepSetInitStep");
     if (s.options.max_step > 0.0) s.check(ARKStepSetMaxStep(s.arkode, s.options.max_step), "ARKStepSetMaxStep");
     if (s.options.min_step > 0.0) s.check(ARKStepSetMinStep(s.arkode, s.options.min_step), "ARKStepSetMinStep");
     s.check(ARKStepSetLinearSolver(s.arkode, s.solver, s.jac), "ARKStepSetLinearSolver");
@@ -395,7 +404,8 @@ void ReferenceIntegrator::initialize(const State& initial) {
 State ReferenceIntegrator::advance_to(double t_out) {
   Impl& s = *impl_;
   require(s.ready, "reference integrator: not initialized (or a previous advance_to failed; call initialize())");
-  require(std::isfinite(t_out) && t_out >= s.t, "reference integrator: cannot advance from t = {} to t = {}", s.t, t_out);
+  require(std::isfinite(t_out) && t_out >= s.t, "reference integrator: cannot advance from t = {} to t = {}", s.t,
+          t_out);
   if (t_out == s.t) return s.output_state(s.t);
   s.last_arkode_error.clear();
   s.last_rhs_problem.clear();
@@ -409,10 +419,11 @@ State ReferenceIntegrator::advance_to(double t_out) {
     s.ready = false;
     s.collect_stats();
     s.stats.seconds = seconds_before + seconds;
-    throw_error("reference integrator: ARKODE gave up at t = {} (last accepted step; failing at t = {}) on the way "
-                "to t = {} with {}{}{}{}{}", s.t, t_failed, t_out, flag, s.last_arkode_error.empty() ? "" : ": ",
-                s.last_arkode_error, s.last_rhs_problem.empty() ? "" : "; last refused right-hand side: ",
-                s.last_rhs_problem);
+    throw_error(
+        "reference integrator: ARKODE gave up at t = {} (last accepted step; failing at t = {}) on the way "
+        "to t = {} with {}{}{}{}{}",
+        s.t, t_failed, t_out, flag, s.last_arkode_error.empty() ? "" : ": ", s.last_arkode_error,
+        s.last_rhs_problem.empty() ? "" : "; last refused right-hand side: ", s.last_rhs_problem);
   };
   for (long steps = 0;; ++steps) {
     if (steps >= s.options.max_steps) {

@@ -3,11 +3,10 @@
 // reference_integrator.cpp (pattern, right side, Jacobian, the ARKODE driver) and reference_integrator_mass.cpp
 // (the consistent mass: M_y, its KLU solver, the Newton matrix M_y − γJ). Layout of y and of the Jacobian pattern:
 // reference_integrator.cpp.
-#include <sflsh/fullspace/reference_integrator.hpp>
-
 #include "reference_mass.hpp"
 
 #include <sflsh/core/error.hpp>
+#include <sflsh/fullspace/reference_integrator.hpp>
 
 #include <arkode/arkode_arkstep.h>
 #include <fmt/format.h>
@@ -26,24 +25,24 @@ namespace sflsh::fullspace {
 struct ReferenceIntegrator::Impl {
   const Problem& problem;
   ReferenceOptions options;
-  int n = 0;         // nodes
-  sunindextype nx = 0;  // 3N
-  std::vector<char> constrained;       // per x dof
-  std::vector<int> constraint_count;   // per node: how many of its components are prescribed
-  std::vector<double> inv_mass;        // per node; 0 for fully prescribed massless nodes
-  bool consistent = false;             // M_y ẏ = f with the consistent mass (reference_mass.hpp)
-  detail::ComponentMass component_mass;  // M_w and M_FC (consistent only)
+  int n = 0;                                             // nodes
+  sunindextype nx = 0;                                   // 3N
+  std::vector<char> constrained;                         // per x dof
+  std::vector<int> constraint_count;                     // per node: how many of its components are prescribed
+  std::vector<double> inv_mass;                          // per node; 0 for fully prescribed massless nodes
+  bool consistent = false;                               // M_y ẏ = f with the consistent mass (reference_mass.hpp)
+  detail::ComponentMass component_mass;                  // M_w and M_FC (consistent only)
   std::vector<sunindextype> mass_row_ptr, mass_col_idx;  // M_y = diag(I, M_w) in CSR (consistent only)
   std::vector<double> mass_values;
-  std::vector<double> mass_on_pattern;   // M_y on the pattern of J (consistent only)
-  std::vector<double> saved_values;      // J of the last Jacobian evaluation (consistent: ARKODE's jok reuse)
-  double t_start = 0.0;                  // of the run: the prescribed accelerations are not differenced before it
+  std::vector<double> mass_on_pattern;  // M_y on the pattern of J (consistent only)
+  std::vector<double> saved_values;     // J of the last Jacobian evaluation (consistent: ARKODE's jok reuse)
+  double t_start = 0.0;                 // of the run: the prescribed accelerations are not differenced before it
   double acceleration_time = std::numeric_limits<double>::quiet_NaN();
-  Eigen::VectorXd coupling_force;        // M_FC a_C(acceleration_time) [N]
+  Eigen::VectorXd coupling_force;  // M_FC a_C(acceleration_time) [N]
 
   // Jacobian pattern (CSR) and per-tet positions of the node-pair blocks in the w rows.
   std::vector<sunindextype> row_ptr, col_idx;
-  std::vector<std::vector<int>> neighbours;  // sorted, including the node itself
+  std::vector<std::vector<int>> neighbours;    // sorted, including the node itself
   std::vector<std::array<int, 16>> tet_block;  // (a, b) ↦ index of node b in neighbours[node a]
 
   // Scratch reused by the callbacks.
@@ -62,7 +61,7 @@ struct ReferenceIntegrator::Impl {
   void* arkode = nullptr;
 
   double t = 0.0;
-  bool ready = false;   // initialized and not failed
+  bool ready = false;  // initialized and not failed
   ReferenceStats stats;
   std::string last_arkode_error;  // from the error handler
   std::string last_rhs_problem;   // why the RHS or the Jacobian last refused
@@ -121,7 +120,8 @@ struct ReferenceIntegrator::Impl {
     return 0;
   }
   /// M_y into ARKODE's mass matrix (consistent mass; reference_integrator_mass.cpp).
-  static int mass_callback(sunrealtype t_eval, SUNMatrix M, void* user_data, N_Vector tmp1, N_Vector tmp2, N_Vector tmp3);
+  static int mass_callback(sunrealtype t_eval, SUNMatrix M, void* user_data, N_Vector tmp1, N_Vector tmp2,
+                           N_Vector tmp3);
   /// The Newton matrix M_y − γJ on J's pattern; J is re-evaluated unless ARKODE allows reuse (jok).
   static int linear_system_callback(sunrealtype t_eval, N_Vector yv, N_Vector fy, SUNMatrix A, SUNMatrix M,
                                     sunbooleantype jok, sunbooleantype* jcur, sunrealtype gamma, void* user_data,

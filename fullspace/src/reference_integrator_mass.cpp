@@ -11,8 +11,10 @@ namespace sflsh::fullspace {
 
 void ReferenceIntegrator::Impl::check_consistent_mass() const {
   const int m = problem.num_tets();
-  require(problem.tet_mass.size() == m, "reference integrator: consistent mass needs ρV per tet (Problem::tet_mass from a "
-          "density, filled by Problem::validate()), have {} for {} tets", problem.tet_mass.size(), m);
+  require(problem.tet_mass.size() == m,
+          "reference integrator: consistent mass needs ρV per tet (Problem::tet_mass from a "
+          "density, filled by Problem::validate()), have {} for {} tets",
+          problem.tet_mass.size(), m);
   require(problem.tet_mass.allFinite() && problem.tet_mass.minCoeff() >= 0.0,
           "reference integrator: the tet masses ρV must be finite and non-negative");
   // The lumped masses (gravity m_i g) must be the row sums of the consistent matrix, as validate() checks.
@@ -140,7 +142,8 @@ Eigen::SparseMatrix<double, Eigen::RowMajor> ReferenceIntegrator::mass_matrix() 
   std::vector<Eigen::Triplet<double>> triplets;
   triplets.reserve(s.mass_values.size());
   for (sunindextype r = 0; r < 2 * s.nx; ++r) {
-    for (auto q = s.mass_row_ptr[static_cast<std::size_t>(r)]; q < s.mass_row_ptr[static_cast<std::size_t>(r + 1)]; ++q) {
+    for (auto q = s.mass_row_ptr[static_cast<std::size_t>(r)]; q < s.mass_row_ptr[static_cast<std::size_t>(r + 1)];
+         ++q) {
       const auto sq = static_cast<std::size_t>(q);
       triplets.emplace_back(static_cast<int>(r), static_cast<int>(s.mass_col_idx[sq]), s.mass_values[sq]);
     }

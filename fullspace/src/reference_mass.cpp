@@ -14,8 +14,8 @@ ComponentMass component_mass(const Problem& problem, const std::vector<char>& co
   require(static_cast<Eigen::Index>(constrained.size()) == dofs, "consistent mass: {} mask entries for {} components",
           constrained.size(), dofs);
   const Eigen::SparseMatrix<double, Eigen::RowMajor> M = problem.mass_matrix();
-  require(M.rows() == n && M.cols() == n, "consistent mass: the mass matrix is {}×{}, expected {}×{}", M.rows(), M.cols(),
-          n, n);
+  require(M.rows() == n && M.cols() == n, "consistent mass: the mass matrix is {}×{}, expected {}×{}", M.rows(),
+          M.cols(), n, n);
   std::vector<Eigen::Triplet<double>> free_entries, coupling_entries;
   free_entries.reserve(static_cast<std::size_t>(3 * M.nonZeros()));
   for (int i = 0; i < n; ++i) {
@@ -36,8 +36,10 @@ ComponentMass component_mass(const Problem& problem, const std::vector<char>& co
           free_entries.emplace_back(row, col, it.value());
         }
       }
-      require(diagonal > 0.0, "consistent mass: node {} is not fully prescribed but its mass matrix diagonal is {} "
-              "(every moving node needs mass > 0)", i, diagonal);
+      require(diagonal > 0.0,
+              "consistent mass: node {} is not fully prescribed but its mass matrix diagonal is {} "
+              "(every moving node needs mass > 0)",
+              i, diagonal);
     }
   }
   ComponentMass out;

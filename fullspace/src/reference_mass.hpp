@@ -19,7 +19,7 @@ namespace sflsh::fullspace::detail {
 
 /// The mass blocks of the w rows (3N × 3N, node-major components 3i + α, rows with sorted columns).
 struct ComponentMass {
-  Eigen::SparseMatrix<double, Eigen::RowMajor> free;      ///< M_w: M_ij δ_αβ on free pairs, 1 on prescribed diagonals
+  Eigen::SparseMatrix<double, Eigen::RowMajor> free;  ///< M_w: M_ij δ_αβ on free pairs, 1 on prescribed diagonals
   Eigen::SparseMatrix<double, Eigen::RowMajor> coupling;  ///< M_FC: M_ic δ_αβ for free rows × prescribed columns
 };
 

@@ -132,7 +132,8 @@ class Reader {
   /// A number in [min, max] (both > 0 for a physical range) with its unit in the message.
   double in_range(const toml::node& node, const std::string& key, double min, double max, std::string_view unit) const {
     const double value = number(node, key);
-    if (!(value >= min && value <= max)) fail(node, key, "{:.6g}{} is outside [{:.6g}, {:.6g}]{}", value, unit, min, max, unit);
+    if (!(value >= min && value <= max))
+      fail(node, key, "{:.6g}{} is outside [{:.6g}, {:.6g}]{}", value, unit, min, max, unit);
     return value;
   }
 
@@ -235,12 +236,15 @@ class Reader {
       const auto known = std::find_if(kIntegrators.begin(), kIntegrators.end(),
                                       [&](VerifyProblem::Integrator i) { return to_string(i) == s; });
       if (known == kIntegrators.end()) {
-        fail(*n, "time.integrator", "expected one of \"backward_euler\", \"bdf2\", \"newmark\", \"reference\", got \"{}\"", s);
+        fail(*n, "time.integrator",
+             "expected one of \"backward_euler\", \"bdf2\", \"newmark\", \"reference\", got \"{}\"", s);
       }
       p.integrator = *known;
       if (p.density == 0.0 && p.integrator != VerifyProblem::Integrator::backward_euler) {
-        fail(*n, "time.integrator", "\"{}\" needs a dynamic problem (density > 0); a static problem takes "
-             "\"backward_euler\" (or no integrator)", s);
+        fail(*n, "time.integrator",
+             "\"{}\" needs a dynamic problem (density > 0); a static problem takes "
+             "\"backward_euler\" (or no integrator)",
+             s);
       }
     }
     // Tolerances of the reference integrator: tighter than these, CVODE's steps shrink towards round-off and
@@ -352,7 +356,8 @@ class Reader {
     } catch (const toml::parse_error& e) {
       throw_error("{}:{}: {}", path_.string(), e.source().begin.line, e.description());
     }
-    check_keys(root, {"mesh", "density", "gravity", "mass", "material", "fix", "drive", "time", "record", "solver"}, "");
+    check_keys(root, {"mesh", "density", "gravity", "mass", "material", "fix", "drive", "time", "record", "solver"},
+               "");
     VerifyProblem p;
     p.file = path_;
     const toml::node& mesh = required(root, "mesh", "");
@@ -456,10 +461,14 @@ Problem make_problem(const VerifyProblem& spec) {
 
 std::string_view to_string(VerifyProblem::Integrator integrator) {
   switch (integrator) {
-    case VerifyProblem::Integrator::backward_euler: return "backward_euler";
-    case VerifyProblem::Integrator::bdf2: return "bdf2";
-    case VerifyProblem::Integrator::newmark: return "newmark";
-    case VerifyProblem::Integrator::reference: return "reference";
+    case VerifyProblem::Integrator::backward_euler:
+      return "backward_euler";
+    case VerifyProblem::Integrator::bdf2:
+      return "bdf2";
+    case VerifyProblem::Integrator::newmark:
+      return "newmark";
+    case VerifyProblem::Integrator::reference:
+      return "reference";
   }
   return "backward_euler";
 }

@@ -17,9 +17,15 @@ struct Bone {
 
 // The bone segment that carries the flesh of each region joint (joint → designated child).
 constexpr Bone kBones[] = {
-    {"pelvis", "spine1"},           {"spine1", "spine2"},          {"spine2", "spine3"},
-    {"spine3", "neck"},             {"left_collar", "left_shoulder"}, {"right_collar", "right_shoulder"},
-    {"left_shoulder", "left_elbow"}, {"right_shoulder", "right_elbow"}, {"left_hip", "left_knee"},
+    {"pelvis", "spine1"},
+    {"spine1", "spine2"},
+    {"spine2", "spine3"},
+    {"spine3", "neck"},
+    {"left_collar", "left_shoulder"},
+    {"right_collar", "right_shoulder"},
+    {"left_shoulder", "left_elbow"},
+    {"right_shoulder", "right_elbow"},
+    {"left_hip", "left_knee"},
     {"right_hip", "right_knee"},
 };
 
@@ -33,11 +39,10 @@ double segment_parameter(const Eigen::Vector3d& p, const Eigen::Vector3d& a, con
 
 }  // namespace
 
-RowMatrixX3d SkeletonCorrespondence::points(const body::JointPositions& joints) const {
-  return joint_weights * joints;
-}
+RowMatrixX3d SkeletonCorrespondence::points(const body::JointPositions& joints) const { return joint_weights * joints; }
 
-SkeletonCorrespondence skeleton_correspondence(const body::BodyModel& model, const Region& region, int smoothing_sweeps) {
+SkeletonCorrespondence skeleton_correspondence(const body::BodyModel& model, const Region& region,
+                                               int smoothing_sweeps) {
   const int count = region.num_vertices();
   const body::JointPositions joints = body::regress_joints(model, model.v_template);
   Eigen::MatrixXd weights = Eigen::MatrixXd::Zero(count, body::kNumJoints);
@@ -64,7 +69,8 @@ SkeletonCorrespondence skeleton_correspondence(const body::BodyModel& model, con
       total += w;
     }
     if (total < 1e-3) {  // no region joint influences this vertex: use the closest bone alone
-      const int j = body::joint_index(kBones[closest_bone].joint), child = body::joint_index(kBones[closest_bone].child);
+      const int j = body::joint_index(kBones[closest_bone].joint),
+                child = body::joint_index(kBones[closest_bone].child);
       const double t = segment_parameter(s, joints.row(j).transpose(), joints.row(child).transpose());
       row.setZero();
       row(j) = 1.0 - t;

@@ -68,11 +68,13 @@ HarmonicInterpolator::HarmonicInterpolator(const RowMatrixX3d& nodes, const RowM
 }
 
 Eigen::MatrixXd HarmonicInterpolator::extend(const Eigen::MatrixXd& values) const {
-  require(values.rows() == num_nodes(), "harmonic interpolation: {} rows of values for {} nodes", values.rows(), num_nodes());
+  require(values.rows() == num_nodes(), "harmonic interpolation: {} rows of values for {} nodes", values.rows(),
+          num_nodes());
   Eigen::MatrixXd result = values;
   if (free_.empty()) return result;
   Eigen::MatrixXd boundary(static_cast<Eigen::Index>(fixed_list_.size()), values.cols());
-  for (std::size_t k = 0; k < fixed_list_.size(); ++k) boundary.row(static_cast<Eigen::Index>(k)) = values.row(fixed_list_[k]);
+  for (std::size_t k = 0; k < fixed_list_.size(); ++k)
+    boundary.row(static_cast<Eigen::Index>(k)) = values.row(fixed_list_[k]);
   const Eigen::MatrixXd interior = solver_->solve(-(coupling_ * boundary));
   require(interior.allFinite(), "harmonic interpolation: the solve produced non-finite values");
   for (std::size_t k = 0; k < free_.size(); ++k) result.row(free_[k]) = interior.row(static_cast<Eigen::Index>(k));

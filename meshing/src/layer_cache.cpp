@@ -68,8 +68,9 @@ class Loader {
   std::string text(const std::string& key) const { return reader_.read(key).to_string(); }
   std::vector<std::int64_t> ints(const std::string& key, std::size_t expected) const {
     auto values = get(key, 1).to_int64();
-    require(expected == 0 || values.size() == expected, "{}: corrupt layer mesh cache: array '{}' has {} entries, expected {}",
-            path_.string(), key, values.size(), expected);
+    require(expected == 0 || values.size() == expected,
+            "{}: corrupt layer mesh cache: array '{}' has {} entries, expected {}", path_.string(), key, values.size(),
+            expected);
     return values;
   }
   double scalar(const std::string& key) const {
@@ -86,8 +87,8 @@ class Loader {
 };
 
 void check_index(const Loader& loader, const char* what, std::int64_t value, std::int64_t bound) {
-  require(value >= 0 && value < bound, "{}: corrupt layer mesh cache: {} index {} outside [0, {})", loader.path().string(),
-          what, value, bound);
+  require(value >= 0 && value < bound, "{}: corrupt layer mesh cache: {} index {} outside [0, {})",
+          loader.path().string(), what, value, bound);
 }
 
 }  // namespace
@@ -104,8 +105,8 @@ std::string body_fingerprint(const body::BodyModel& model) {
 
 std::string layer_cache_key(const body::BodyModel& model, const LayerMeshOptions& options) {
   const auto names = options.region_names.empty() ? default_region_names() : options.region_names;
-  return fmt::format("body={} format={} region={} mesher={} size={} h={:.6f}", body_fingerprint(model), kLayerMeshFormat,
-                     region_key(names), mesher_name(options.mesher), size_preset_name(options.size),
+  return fmt::format("body={} format={} region={} mesher={} size={} h={:.6f}", body_fingerprint(model),
+                     kLayerMeshFormat, region_key(names), mesher_name(options.mesher), size_preset_name(options.size),
                      options.template_thickness);
 }
 
@@ -145,43 +146,46 @@ void save_layer_mesh(const std::filesystem::path& path, const LayerMesh& mesh, c
     anchor_weight.row(i) = a.weight.transpose();
     anchor_depth(i) = a.depth;
   }
-  for (int v = 0; v < region.num_vertices(); ++v) skin_bary.row(v) = mesh.skin.bary[static_cast<std::size_t>(v)].transpose();
+  for (int v = 0; v < region.num_vertices(); ++v)
+    skin_bary.row(v) = mesh.skin.bary[static_cast<std::size_t>(v)].transpose();
   std::vector<int> kind, node_part, tet_part, part;
   for (auto k : mesh.kind) kind.push_back(static_cast<int>(k));
   for (auto p : mesh.node_part) node_part.push_back(static_cast<int>(p));
   for (auto p : mesh.tet_part) tet_part.push_back(static_cast<int>(p));
   for (auto p : region.part) part.push_back(static_cast<int>(p));
 
-  npz::write(path, {
-      {"key", npz::make_string(key)},
-      {"body_name", npz::make_string(mesh.body_name)},
-      {"region", npz::make_string(mesh.region)},
-      {"region_names", npz::make_string(names)},
-      {"mesher", npz::make_string(mesher_name(mesh.mesher))},
-      {"size", npz::make_string(size_preset_name(mesh.size))},
-      {"template_thickness", npz::make_scalar(mesh.template_thickness)},
-      {"edge_length", npz::make_scalar(mesh.edge_length)},
-      {"meshing_seconds", npz::make_scalar(mesh.meshing_seconds)},
-      {"body_vertices", npz::make_scalar(static_cast<double>(region.local_of.size()))},
-      {"region_vertices", ints(region.vertices)},
-      {"region_faces", int_matrix(region.faces)},
-      {"region_body_faces", ints(region.body_faces)},
-      {"region_part", ints(part)},
-      {"loop_sizes", ints(loop_sizes)},
-      {"loop_vertices", ints(loop_vertices)},
-      {"correspondence", npz::make_f64(Eigen::MatrixXd(mesh.correspondence.joint_weights))},
-      {"nodes", npz::make_f64(Eigen::MatrixXd(mesh.nodes))},
-      {"tets", int_matrix(mesh.tets)},
-      {"kind", ints(kind)},
-      {"anchor_vertex", int_matrix(anchor_vertex)},
-      {"anchor_weight", npz::make_f64(anchor_weight)},
-      {"anchor_depth", npz::make_f64({static_cast<std::size_t>(n)}, std::vector<double>(anchor_depth.data(), anchor_depth.data() + n))},
-      {"node_part", ints(node_part)},
-      {"tet_part", ints(tet_part)},
-      {"skin_node", ints(mesh.skin.node)},
-      {"skin_tet", ints(mesh.skin.tet)},
-      {"skin_bary", npz::make_f64(skin_bary)},
-  });
+  npz::write(path,
+             {
+                 {"key", npz::make_string(key)},
+                 {"body_name", npz::make_string(mesh.body_name)},
+                 {"region", npz::make_string(mesh.region)},
+                 {"region_names", npz::make_string(names)},
+                 {"mesher", npz::make_string(mesher_name(mesh.mesher))},
+                 {"size", npz::make_string(size_preset_name(mesh.size))},
+                 {"template_thickness", npz::make_scalar(mesh.template_thickness)},
+                 {"edge_length", npz::make_scalar(mesh.edge_length)},
+                 {"meshing_seconds", npz::make_scalar(mesh.meshing_seconds)},
+                 {"body_vertices", npz::make_scalar(static_cast<double>(region.local_of.size()))},
+                 {"region_vertices", ints(region.vertices)},
+                 {"region_faces", int_matrix(region.faces)},
+                 {"region_body_faces", ints(region.body_faces)},
+                 {"region_part", ints(part)},
+                 {"loop_sizes", ints(loop_sizes)},
+                 {"loop_vertices", ints(loop_vertices)},
+                 {"correspondence", npz::make_f64(Eigen::MatrixXd(mesh.correspondence.joint_weights))},
+                 {"nodes", npz::make_f64(Eigen::MatrixXd(mesh.nodes))},
+                 {"tets", int_matrix(mesh.tets)},
+                 {"kind", ints(kind)},
+                 {"anchor_vertex", int_matrix(anchor_vertex)},
+                 {"anchor_weight", npz::make_f64(anchor_weight)},
+                 {"anchor_depth", npz::make_f64({static_cast<std::size_t>(n)},
+                                                std::vector<double>(anchor_depth.data(), anchor_depth.data() + n))},
+                 {"node_part", ints(node_part)},
+                 {"tet_part", ints(tet_part)},
+                 {"skin_node", ints(mesh.skin.node)},
+                 {"skin_tet", ints(mesh.skin.tet)},
+                 {"skin_bary", npz::make_f64(skin_bary)},
+             });
 }
 
 LayerMesh load_layer_mesh(const std::filesystem::path& path, std::string* key) {
@@ -205,7 +209,8 @@ LayerMesh load_layer_mesh(const std::filesystem::path& path, std::string* key) {
   }
   const auto count = static_cast<std::int64_t>(region.vertices.size());
   region.local_of.assign(static_cast<std::size_t>(body_vertices), -1);
-  for (std::size_t i = 0; i < region.vertices.size(); ++i) region.local_of[static_cast<std::size_t>(region.vertices[i])] = static_cast<int>(i);
+  for (std::size_t i = 0; i < region.vertices.size(); ++i)
+    region.local_of[static_cast<std::size_t>(region.vertices[i])] = static_cast<int>(i);
   const auto faces = in.get("region_faces", 2, 3);
   const auto face_values = faces.to_int64();
   region.faces.resize(static_cast<Eigen::Index>(faces.shape[0]), 3);
@@ -233,10 +238,12 @@ LayerMesh load_layer_mesh(const std::filesystem::path& path, std::string* key) {
 
   const auto correspondence = in.get("correspondence", 2, body::kNumJoints);
   require(static_cast<std::int64_t>(correspondence.shape[0]) == count,
-          "{}: corrupt layer mesh cache: 'correspondence' has {} rows, expected {}", path.string(), correspondence.shape[0], count);
+          "{}: corrupt layer mesh cache: 'correspondence' has {} rows, expected {}", path.string(),
+          correspondence.shape[0], count);
   const auto c = correspondence.to_doubles();
   mesh.correspondence.joint_weights =
-      Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(c.data(), count, body::kNumJoints)
+      Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(c.data(), count,
+                                                                                               body::kNumJoints)
           .sparseView(1e-12);
 
   const auto nodes = in.get("nodes", 2, 3);
@@ -291,7 +298,8 @@ LayerMesh load_layer_mesh(const std::filesystem::path& path, std::string* key) {
     mesh.skin.tet.push_back(static_cast<int>(t));
   }
   const auto bary = in.get("skin_bary", 2, 4).to_doubles();
-  require(bary.size() == static_cast<std::size_t>(4 * count), "{}: corrupt layer mesh cache: 'skin_bary' rows", path.string());
+  require(bary.size() == static_cast<std::size_t>(4 * count), "{}: corrupt layer mesh cache: 'skin_bary' rows",
+          path.string());
   for (std::int64_t v = 0; v < count; ++v)
     mesh.skin.bary.emplace_back(bary[static_cast<std::size_t>(4 * v)], bary[static_cast<std::size_t>(4 * v + 1)],
                                 bary[static_cast<std::size_t>(4 * v + 2)], bary[static_cast<std::size_t>(4 * v + 3)]);
@@ -300,10 +308,14 @@ LayerMesh load_layer_mesh(const std::filesystem::path& path, std::string* key) {
 
 const char* cache_outcome_name(CacheOutcome outcome) {
   switch (outcome) {
-    case CacheOutcome::hit: return "hit";
-    case CacheOutcome::built: return "built";
-    case CacheOutcome::rebuilt_stale: return "rebuilt_stale";
-    case CacheOutcome::rebuilt_forced: return "rebuilt_forced";
+    case CacheOutcome::hit:
+      return "hit";
+    case CacheOutcome::built:
+      return "built";
+    case CacheOutcome::rebuilt_stale:
+      return "rebuilt_stale";
+    case CacheOutcome::rebuilt_forced:
+      return "rebuilt_forced";
   }
   return "built";
 }
@@ -326,7 +338,8 @@ LayerMesh cached_layer_mesh(const body::BodyModel& model, const LayerMeshOptions
       logger()->info("layer mesh from cache {}", path.string());
       return mesh;
     }
-    logger()->warn("layer mesh cache {} is stale (stored key '{}', expected '{}'): rebuilding", path.string(), stored, key);
+    logger()->warn("layer mesh cache {} is stale (stored key '{}', expected '{}'): rebuilding", path.string(), stored,
+                   key);
     result = CacheOutcome::rebuilt_stale;
   }
   LayerMesh mesh = build_layer_mesh(model, options);

@@ -64,18 +64,24 @@ SizePreset parse_size_preset(const std::string& name) {
 
 const char* size_preset_name(SizePreset preset) {
   switch (preset) {
-    case SizePreset::coarse: return "coarse";
-    case SizePreset::medium: return "default";
-    case SizePreset::fine: return "fine";
+    case SizePreset::coarse:
+      return "coarse";
+    case SizePreset::medium:
+      return "default";
+    case SizePreset::fine:
+      return "fine";
   }
   return "default";
 }
 
 long target_tets(SizePreset preset) {
   switch (preset) {
-    case SizePreset::coarse: return 10'000;
-    case SizePreset::medium: return 50'000;
-    case SizePreset::fine: return 200'000;
+    case SizePreset::coarse:
+      return 10'000;
+    case SizePreset::medium:
+      return 50'000;
+    case SizePreset::fine:
+      return 200'000;
   }
   return 50'000;
 }
@@ -91,14 +97,15 @@ std::vector<int> LayerMesh::rim_nodes() const {
   std::vector<char> on_boundary(static_cast<std::size_t>(region_surface.num_vertices()), 0);
   for (const auto& loop : region_surface.boundary_loops)
     for (int v : loop) on_boundary[static_cast<std::size_t>(v)] = 1;
-  constexpr double kOffRim = 1e-6;   // anchor weight allowed on vertices off the boundary curves (round-off)
+  constexpr double kOffRim = 1e-6;  // anchor weight allowed on vertices off the boundary curves (round-off)
   std::vector<int> list;
   for (int i = 0; i < num_nodes(); ++i) {
     const auto k = static_cast<std::size_t>(i);
     if (kind[k] != NodeKind::outer) continue;
-    double off_rim = 0.0;   // Σ_k w_k over anchor vertices not on a boundary curve
+    double off_rim = 0.0;  // Σ_k w_k over anchor vertices not on a boundary curve
     for (int s = 0; s < 3; ++s)
-      if (!on_boundary[static_cast<std::size_t>(anchor[k].vertex[static_cast<std::size_t>(s)])]) off_rim += std::abs(anchor[k].weight(s));
+      if (!on_boundary[static_cast<std::size_t>(anchor[k].vertex[static_cast<std::size_t>(s)])])
+        off_rim += std::abs(anchor[k].weight(s));
     if (off_rim <= kOffRim) list.push_back(i);
   }
   return list;
@@ -161,11 +168,13 @@ LayerMesh build_layer_mesh(const body::BodyModel& model, const LayerMeshOptions&
     detail::build_layered(mesh, geometry, detail::layered_layers(options.size));
     mesh.node_part.resize(static_cast<std::size_t>(mesh.num_nodes()));
     for (int i = 0; i < mesh.num_nodes(); ++i)
-      mesh.node_part[static_cast<std::size_t>(i)] = region.part[static_cast<std::size_t>(mesh.anchor[static_cast<std::size_t>(i)].vertex[0])];
+      mesh.node_part[static_cast<std::size_t>(i)] =
+          region.part[static_cast<std::size_t>(mesh.anchor[static_cast<std::size_t>(i)].vertex[0])];
     mesh.tet_part.resize(static_cast<std::size_t>(mesh.num_tets()));
     for (int e = 0; e < mesh.num_tets(); ++e) {
       std::array<int, kNumParts> votes{};
-      for (int c = 0; c < 4; ++c) ++votes[static_cast<std::size_t>(mesh.node_part[static_cast<std::size_t>(mesh.tets(e, c))])];
+      for (int c = 0; c < 4; ++c)
+        ++votes[static_cast<std::size_t>(mesh.node_part[static_cast<std::size_t>(mesh.tets(e, c))])];
       mesh.tet_part[static_cast<std::size_t>(e)] =
           static_cast<Part>(std::max_element(votes.begin(), votes.end()) - votes.begin());
     }
@@ -173,14 +182,15 @@ LayerMesh build_layer_mesh(const body::BodyModel& model, const LayerMeshOptions&
     require(quality.valid(), "layer '{}' (layered): {} inverted and {} degenerate tets in the template", mesh.region,
             quality.inverted, quality.degenerate);
     mesh.meshing_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    logger()->info("layer '{}' (layered, {}): {} nodes, {} tets in {:.1f} s", mesh.region, size_preset_name(options.size),
-                   mesh.num_nodes(), mesh.num_tets(), mesh.meshing_seconds);
+    logger()->info("layer '{}' (layered, {}): {} nodes, {} tets in {:.1f} s", mesh.region,
+                   size_preset_name(options.size), mesh.num_nodes(), mesh.num_tets(), mesh.meshing_seconds);
     return mesh;
   }
 
   // Size: the target edge from the layer volume and the preset's tet count.
   const double volume = enclosed_volume(build_layer_surface(region, geometry, 1.0, 1).surface);
-  require(volume > 0.0, "layer '{}': enclosed volume {:.3e} m³ is not positive (inverted layer boundary)", mesh.region, volume);
+  require(volume > 0.0, "layer '{}': enclosed volume {:.3e} m³ is not positive (inverted layer boundary)", mesh.region,
+          volume);
   // The regular-tet estimate assumes the tets fill the volume freely; a thin layer needs more tets
   // (the thickness must be resolved), so the count is corrected by remeshing with a rescaled edge
   // (exponent between surface-bound 1/2 and volume-bound 1/3 scaling) until within ×1.4 of the target.
@@ -211,8 +221,8 @@ LayerMesh build_layer_mesh(const body::BodyModel& model, const LayerMeshOptions&
     size = next;
   }
   mesh.edge_length = size.edge_length;
-  logger()->info("layer '{}': {} skin vertices, {} boundary loops, volume {:.4f} m³", mesh.region, region.num_vertices(),
-                 region.boundary_loops.size(), volume);
+  logger()->info("layer '{}': {} skin vertices, {} boundary loops, volume {:.4f} m³", mesh.region,
+                 region.num_vertices(), region.boundary_loops.size(), volume);
 
   mesh.nodes = tet_mesh.nodes;
   mesh.tets = tet_mesh.tets;
@@ -224,7 +234,7 @@ LayerMesh build_layer_mesh(const body::BodyModel& model, const LayerMeshOptions&
   const BoundaryLocation location = locate_boundary_nodes(tet_mesh, layer.surface);
   mesh.kind.assign(static_cast<std::size_t>(n), NodeKind::interior);
   mesh.anchor.assign(static_cast<std::size_t>(n), SurfaceAnchor{});
-  constexpr double kRimTolerance = 1e-6;   // depth closer than this to 0 or 1 is on the rim
+  constexpr double kRimTolerance = 1e-6;  // depth closer than this to 0 or 1 is on the rim
   double largest_snap = 0.0;
   for (int i = 0; i < n; ++i) {
     const auto k = static_cast<std::size_t>(i);
@@ -258,7 +268,8 @@ LayerMesh build_layer_mesh(const body::BodyModel& model, const LayerMeshOptions&
     const auto& anchor = mesh.anchor[static_cast<std::size_t>(i)];
     if (!anchor.valid()) continue;
     fixed[static_cast<std::size_t>(i)] = 1;
-    for (int s = 0; s < 3; ++s) indicator(i, static_cast<int>(region.part[static_cast<std::size_t>(anchor.vertex[s])])) += anchor.weight(s);
+    for (int s = 0; s < 3; ++s)
+      indicator(i, static_cast<int>(region.part[static_cast<std::size_t>(anchor.vertex[s])])) += anchor.weight(s);
   }
   indicator = HarmonicInterpolator(mesh.nodes, mesh.tets, fixed).extend(indicator);
   mesh.node_part.resize(static_cast<std::size_t>(n));
@@ -287,7 +298,7 @@ LayerMesh build_layer_mesh(const body::BodyModel& model, const LayerMeshOptions&
   const detail::PointLocation skin_location = detail::locate_points(mesh.nodes, mesh.tets, geometry.skin);
   mesh.skin.tet = skin_location.tet;
   mesh.skin.bary = skin_location.bary;
-  std::vector<std::pair<int, int>> incident(static_cast<std::size_t>(n), {-1, -1});   // node → (tet, corner)
+  std::vector<std::pair<int, int>> incident(static_cast<std::size_t>(n), {-1, -1});  // node → (tet, corner)
   for (Eigen::Index e = 0; e < mesh.tets.rows(); ++e)
     for (int c = 0; c < 4; ++c) incident[static_cast<std::size_t>(mesh.tets(e, c))] = {static_cast<int>(e), c};
   for (int v = 0; v < count; ++v) {

@@ -23,11 +23,13 @@ LayerSurface build_layer_surface(const Region& region, const LayerGeometry& geom
   const int count = region.num_vertices();
   require(geometry.skin.rows() == count, "layer surface: geometry has {} skin points for {} region vertices",
           geometry.skin.rows(), count);
-  require(!region.boundary_loops.empty(), "layer surface: the region has no boundary curve (a closed region has no layer side)");
+  require(!region.boundary_loops.empty(),
+          "layer surface: the region has no boundary curve (a closed region has no layer side)");
   if (side_layers <= 0) {
     double longest = 0.0;
     for (const auto& loop : region.boundary_loops)
-      for (int v : loop) longest = std::max(longest, geometry.thickness(v) * (geometry.skeleton.row(v) - geometry.skin.row(v)).norm());
+      for (int v : loop)
+        longest = std::max(longest, geometry.thickness(v) * (geometry.skeleton.row(v) - geometry.skin.row(v)).norm());
     side_layers = std::max(1, static_cast<int>(std::ceil(longest / std::max(edge_length, 1e-6) - 0.25)));
   }
 
@@ -53,7 +55,8 @@ LayerSurface build_layer_surface(const Region& region, const LayerGeometry& geom
 
   auto& surface = layer.surface;
   surface.vertices.resize(static_cast<Eigen::Index>(anchors.size()), 3);
-  for (std::size_t i = 0; i < anchors.size(); ++i) surface.vertices.row(static_cast<Eigen::Index>(i)) = geometry.position(anchors[i]).transpose();
+  for (std::size_t i = 0; i < anchors.size(); ++i)
+    surface.vertices.row(static_cast<Eigen::Index>(i)) = geometry.position(anchors[i]).transpose();
 
   std::vector<Eigen::Vector3i> triangles;
   for (Eigen::Index f = 0; f < region.faces.rows(); ++f) {
@@ -86,7 +89,8 @@ LayerSurface build_layer_surface(const Region& region, const LayerGeometry& geom
     surface.features.push_back(std::move(inner_rim));
   }
   surface.triangles.resize(static_cast<Eigen::Index>(triangles.size()), 3);
-  for (std::size_t t = 0; t < triangles.size(); ++t) surface.triangles.row(static_cast<Eigen::Index>(t)) = triangles[t].transpose();
+  for (std::size_t t = 0; t < triangles.size(); ++t)
+    surface.triangles.row(static_cast<Eigen::Index>(t)) = triangles[t].transpose();
   return layer;
 }
 

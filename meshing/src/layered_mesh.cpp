@@ -20,9 +20,12 @@ constexpr int kRotation[6][6] = {{0, 1, 2, 3, 4, 5}, {1, 2, 0, 4, 5, 3}, {2, 0, 
 
 int layered_layers(SizePreset size) {
   switch (size) {
-    case SizePreset::coarse: return 1;
-    case SizePreset::medium: return 2;
-    case SizePreset::fine: return 8;
+    case SizePreset::coarse:
+      return 1;
+    case SizePreset::medium:
+      return 2;
+    case SizePreset::fine:
+      return 8;
   }
   return 2;
 }
@@ -46,10 +49,10 @@ void build_layered(LayerMesh& mesh, const LayerGeometry& geometry, int layers) {
       anchor.vertex = {v, v, v};
       anchor.weight = Eigen::Vector3d(1.0, 0.0, 0.0);
       anchor.depth = static_cast<double>(l) / layers;
-      mesh.kind[static_cast<std::size_t>(node)] = l == 0 ? NodeKind::outer
-                                                 : l == layers ? NodeKind::inner
-                                                 : on_loop[static_cast<std::size_t>(v)] ? NodeKind::side
-                                                                                        : NodeKind::interior;
+      mesh.kind[static_cast<std::size_t>(node)] = l == 0                                 ? NodeKind::outer
+                                                  : l == layers                          ? NodeKind::inner
+                                                  : on_loop[static_cast<std::size_t>(v)] ? NodeKind::side
+                                                                                         : NodeKind::interior;
       mesh.nodes.row(node) = geometry.position(anchor).transpose();
     }
 
@@ -64,7 +67,8 @@ void build_layered(LayerMesh& mesh, const LayerGeometry& geometry, int layers) {
       }
       const int smallest = static_cast<int>(std::min_element(prism.begin(), prism.end()) - prism.begin());
       std::array<int, 6> v{};
-      for (int k = 0; k < 6; ++k) v[static_cast<std::size_t>(k)] = prism[static_cast<std::size_t>(kRotation[smallest][k])];
+      for (int k = 0; k < 6; ++k)
+        v[static_cast<std::size_t>(k)] = prism[static_cast<std::size_t>(kRotation[smallest][k])];
       // Split the quad faces through the diagonal from their smallest vertex (conforming with neighbours).
       if (std::min(v[1], v[5]) < std::min(v[2], v[4])) {
         tets.emplace_back(v[0], v[1], v[2], v[5]);
@@ -81,7 +85,7 @@ void build_layered(LayerMesh& mesh, const LayerGeometry& geometry, int layers) {
     Eigen::Matrix3d dm;
     for (int k = 0; k < 3; ++k) dm.col(k) = (mesh.nodes.row(t(k + 1)) - mesh.nodes.row(t(0))).transpose();
     const double det = dm.determinant();
-    if (det < 0.0) std::swap(t(2), t(3));   // the split's own orientation depends on the rotation
+    if (det < 0.0) std::swap(t(2), t(3));  // the split's own orientation depends on the rotation
     require(det != 0.0, "layered mesh: tet {} of the template is flat", e);
     mesh.tets.row(static_cast<Eigen::Index>(e)) = t.transpose();
   }

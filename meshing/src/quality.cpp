@@ -22,7 +22,7 @@
 namespace sflsh::meshing {
 namespace {
 
-constexpr double kDegenerateVolume = 1e-12;   // relative to (mean edge)³
+constexpr double kDegenerateVolume = 1e-12;  // relative to (mean edge)³
 constexpr double kDegenerateDihedralDeg = 0.1;
 
 struct TetMeasures {
@@ -52,8 +52,10 @@ TetMeasures measure_tet(const RowMatrixX3d& nodes, const RowMatrixX4i& tets, Eig
   m.mean_edge = sum / 6.0;
 
   // Circumradius over shortest edge; infinite for flat tets or coincident nodes.
-  const Eigen::Vector3d numerator = a.squaredNorm() * b.cross(c) + b.squaredNorm() * c.cross(a) + c.squaredNorm() * a.cross(b);
-  const double radius = triple != 0.0 ? numerator.norm() / (2.0 * std::abs(triple)) : std::numeric_limits<double>::infinity();
+  const Eigen::Vector3d numerator =
+      a.squaredNorm() * b.cross(c) + b.squaredNorm() * c.cross(a) + c.squaredNorm() * a.cross(b);
+  const double radius =
+      triple != 0.0 ? numerator.norm() / (2.0 * std::abs(triple)) : std::numeric_limits<double>::infinity();
   m.radius_edge = shortest > 0.0 ? radius / shortest : std::numeric_limits<double>::infinity();
 
   // Area normals of the faces opposite each vertex, consistently oriented (outward for V > 0).

@@ -121,8 +121,8 @@ void drop_islands_fill_holes(std::vector<char>& selected, const std::vector<std:
     const long largest = *std::max_element(size.begin(), size.end());
     for (std::size_t f = 0; f < selected.size(); ++f) {
       if (label[f] < 0) continue;
-      const bool small = want ? size[label[f]] * 20 < largest
-                              : size[label[f]] * 100 < static_cast<long>(selected.size());
+      const bool small =
+          want ? size[label[f]] * 20 < largest : size[label[f]] * 100 < static_cast<long>(selected.size());
       if (small) selected[f] = want ? 0 : 1;
     }
   }
@@ -170,7 +170,7 @@ int fix_pinched_vertices(std::vector<char>& selected, const body::RowMatrixX3i& 
 }  // namespace
 
 const std::vector<std::string>& known_region_names() {
-  static const std::vector<std::string> names = {"torso",          "upper_arms",      "thighs",    "left_upper_arm",
+  static const std::vector<std::string> names = {"torso",           "upper_arms", "thighs",     "left_upper_arm",
                                                  "right_upper_arm", "left_thigh", "right_thigh"};
   return names;
 }
@@ -216,7 +216,8 @@ Region select_region(const body::BodyModel& model, const std::vector<std::string
   }
   Eigen::MatrixXd part_weight = Eigen::MatrixXd::Zero(n, kNumParts);
   for (const auto& entry : part_table())
-    for (const char* joint : entry.joints) part_weight.col(static_cast<int>(entry.part)) += model.weights.col(body::joint_index(joint));
+    for (const char* joint : entry.joints)
+      part_weight.col(static_cast<int>(entry.part)) += model.weights.col(body::joint_index(joint));
 
   // Score: summed weight of the wanted parts, smoothed by a few Jacobi sweeps of the uniform
   // Laplacian (removes the staircase of per-vertex weights before thresholding).
@@ -274,7 +275,8 @@ Region select_region(const body::BodyModel& model, const std::vector<std::string
   for (std::size_t i = 0; i < region.vertices.size(); ++i) {
     int best = -1;
     for (int p = 0; p < kNumParts; ++p)
-      if (wanted[p] && (best < 0 || part_weight(region.vertices[i], p) > part_weight(region.vertices[i], best))) best = p;
+      if (wanted[p] && (best < 0 || part_weight(region.vertices[i], p) > part_weight(region.vertices[i], best)))
+        best = p;
     region.part[i] = static_cast<Part>(best);
   }
 
@@ -304,8 +306,8 @@ Region select_region(const body::BodyModel& model, const std::vector<std::string
               region.vertices[v]);
       v = it->second;
     }
-    require(v == start && loop.size() >= 3, "region '{}': malformed boundary loop at body vertex {}",
-            region_key(names), region.vertices[start]);
+    require(v == start && loop.size() >= 3, "region '{}': malformed boundary loop at body vertex {}", region_key(names),
+            region.vertices[start]);
     region.boundary_loops.push_back(std::move(loop));
   }
   return region;

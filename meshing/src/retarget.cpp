@@ -89,7 +89,7 @@ Retargeter::Retargeter(const body::BodyModel& model, const LayerMesh& mesh, doub
   const Eigen::MatrixXd coordinates = interpolator_.extend(layer_coordinates(geometry));
   residual_ = mesh.nodes - coordinates.leftCols<3>() - coordinates.rightCols<3>().cwiseProduct(depth_.replicate(1, 3));
   for (int i = 0; i < mesh.num_nodes(); ++i)
-    if (mesh.anchor[static_cast<std::size_t>(i)].valid()) residual_.row(i).setZero();   // round-off only
+    if (mesh.anchor[static_cast<std::size_t>(i)].valid()) residual_.row(i).setZero();  // round-off only
 }
 
 Eigen::MatrixXd Retargeter::layer_coordinates(const LayerGeometry& geometry) const {
@@ -120,13 +120,15 @@ RetargetedLayer Retargeter::retarget(const body::Betas& beta, const Eigen::Vecto
   // Layer coordinates (S, C) from the anchors, carried inside harmonically; x = S + δ C + r.
   const int n = mesh_.num_nodes();
   const Eigen::MatrixXd coordinates = interpolator_.extend(layer_coordinates(result.geometry));
-  result.nodes = coordinates.leftCols<3>() + coordinates.rightCols<3>().cwiseProduct(depth_.replicate(1, 3)) + residual_;
-  for (int i = 0; i < n; ++i) {   // boundary nodes exactly on their anchors (the formula above is exact up to round-off)
+  result.nodes =
+      coordinates.leftCols<3>() + coordinates.rightCols<3>().cwiseProduct(depth_.replicate(1, 3)) + residual_;
+  for (int i = 0; i < n; ++i) {  // boundary nodes exactly on their anchors (the formula above is exact up to round-off)
     const auto& anchor = mesh_.anchor[static_cast<std::size_t>(i)];
     if (anchor.valid()) result.nodes.row(i) = result.geometry.position(anchor).transpose();
   }
-  bool inverted = false;   // a signed-volume pass: the full quality report below is needed once, not twice
-  for (Eigen::Index e = 0; e < mesh_.tets.rows() && !inverted; ++e) inverted = signed_volume(result.nodes, mesh_.tets, e) <= 0.0;
+  bool inverted = false;  // a signed-volume pass: the full quality report below is needed once, not twice
+  for (Eigen::Index e = 0; e < mesh_.tets.rows() && !inverted; ++e)
+    inverted = signed_volume(result.nodes, mesh_.tets, e) <= 0.0;
   if (inverted) result.untangled_nodes = untangle(result.nodes, mesh_.tets, mesh_.anchor, tets_of_, 20);
   result.quality = layer_quality(mesh_, result.nodes, result.geometry);
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -26,15 +26,15 @@ PointLocation locate_points(const RowMatrixX3d& nodes, const RowMatrixX4i& tets,
   const Eigen::Vector3d lo = nodes.colwise().minCoeff().transpose(), hi = nodes.colwise().maxCoeff().transpose();
   // Cell size: about two mean tet extents, so each tet touches a handful of cells.
   double extent = 0.0;
-  for (Eigen::Index e = 0; e < tets.rows(); ++e)
-    extent += (nodes.row(tets(e, 0)) - nodes.row(tets(e, 1))).norm();
+  for (Eigen::Index e = 0; e < tets.rows(); ++e) extent += (nodes.row(tets(e, 0)) - nodes.row(tets(e, 1))).norm();
   const double cell = std::max(2.0 * extent / static_cast<double>(tets.rows()), 1e-6);
   const auto key = [&](const Eigen::Vector3i& c) {
     return (static_cast<long long>(c(0)) * 73856093LL) ^ (static_cast<long long>(c(1)) * 19349663LL) ^
            (static_cast<long long>(c(2)) * 83492791LL);
   };
   const auto cell_of = [&](const Eigen::Vector3d& p) {
-    return Eigen::Vector3i(static_cast<int>(std::floor((p(0) - lo(0)) / cell)), static_cast<int>(std::floor((p(1) - lo(1)) / cell)),
+    return Eigen::Vector3i(static_cast<int>(std::floor((p(0) - lo(0)) / cell)),
+                           static_cast<int>(std::floor((p(1) - lo(1)) / cell)),
                            static_cast<int>(std::floor((p(2) - lo(2)) / cell)));
   };
   std::unordered_map<long long, std::vector<int>> grid;

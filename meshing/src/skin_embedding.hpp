@@ -10,7 +10,7 @@ namespace sflsh::meshing::detail {
 struct PointLocation {
   std::vector<int> tet;
   std::vector<Eigen::Vector4d> bary;
-  double worst_outside = 0.0;   ///< most negative barycentric coordinate over all queries (≤ 0)
+  double worst_outside = 0.0;  ///< most negative barycentric coordinate over all queries (≤ 0)
 };
 
 PointLocation locate_points(const RowMatrixX3d& nodes, const RowMatrixX4i& tets, const RowMatrixX3d& queries);

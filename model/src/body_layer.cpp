@@ -1,9 +1,8 @@
-#include <sflsh/model/body_layer.hpp>
-
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
 #include <sflsh/material/orthotropic_fung.hpp>
 #include <sflsh/meshing/layer_cache.hpp>
+#include <sflsh/model/body_layer.hpp>
 
 namespace sflsh::model {
 
@@ -34,7 +33,8 @@ Eigen::MatrixXd node_pose_directions(const body::BodyModel& model, const meshing
 }  // namespace
 
 BodyLayer build_body_layer(const body::BodyModel& model, const body::Betas& beta, const body::Motion& motion,
-                           const material::MaterialFile* material, int control_points, const BodyLayerOptions& options) {
+                           const material::MaterialFile* material, int control_points,
+                           const BodyLayerOptions& options) {
   require(options.density > 0.0 && std::isfinite(options.density), "body layer: density must be positive, got {}",
           options.density);
   require(options.stiffness_scale > 0.0 && std::isfinite(options.stiffness_scale),
@@ -86,7 +86,8 @@ BodyLayer build_body_layer(const body::BodyModel& model, const body::Betas& beta
     m.poisson = out.material.poisson;
     m.saturation = out.material.saturation;
     m.overflow = options.overflow;
-    p.tet_material[static_cast<std::size_t>(e)] = material::make_orthotropic_fung(m, out.fields.normal.row(e).transpose());
+    p.tet_material[static_cast<std::size_t>(e)] =
+        material::make_orthotropic_fung(m, out.fields.normal.row(e).transpose());
   }
   p.density = options.density;
   p.mass = lumped_masses(p.rest, p.tets, options.density);
@@ -103,12 +104,14 @@ BodyLayer build_body_layer(const body::BodyModel& model, const body::Betas& beta
   out.vertex_weights.resize(static_cast<std::size_t>(model.num_vertices()));
   for (Eigen::Index v = 0; v < model.num_vertices(); ++v)
     for (int k = 0; k < body::kNumJoints; ++k)
-      if (model.weights(v, k) != 0.0) out.vertex_weights[static_cast<std::size_t>(v)].emplace_back(k, model.weights(v, k));
+      if (model.weights(v, k) != 0.0)
+        out.vertex_weights[static_cast<std::size_t>(v)].emplace_back(k, model.weights(v, k));
   return out;
 }
 
 RowMatrixX3d BodyLayer::surface_displacement(const Eigen::VectorXd& x) const {
-  require(x.size() == problem.num_dofs(), "body layer: state has {} entries, expected {}", x.size(), problem.num_dofs());
+  require(x.size() == problem.num_dofs(), "body layer: state has {} entries, expected {}", x.size(),
+          problem.num_dofs());
   const Eigen::Map<const RowMatrixX3d> nodes(x.data(), problem.num_nodes(), 3);
   return mesh->skin_positions(nodes) - (rest_skin.rows() ? rest_skin : mesh->skin_positions(problem.rest));
 }
@@ -118,8 +121,8 @@ RowMatrixX3d BodyLayer::posed_surface(const Eigen::VectorXd& x, double t) const 
 }
 
 RowMatrixX3d BodyLayer::posed_surface_from_displacement(const RowMatrixX3d& u, double t) const {
-  require(u.rows() == mesh->region_surface.num_vertices(), "body layer: {} displacements for {} region vertices", u.rows(),
-          mesh->region_surface.num_vertices());
+  require(u.rows() == mesh->region_surface.num_vertices(), "body layer: {} displacements for {} region vertices",
+          u.rows(), mesh->region_surface.num_vertices());
   JointTransforms m;
   curve->transforms(t, m);
   RowMatrixX3d unposed = shaped;
@@ -136,7 +139,8 @@ RowMatrixX3d BodyLayer::posed_surface_from_displacement(const RowMatrixX3d& u, d
   for (Eigen::Index v = 0; v < unposed.rows(); ++v) {
     Matrix34d blend = Matrix34d::Zero();
     if (sparse) {
-      for (const auto& [k, w] : vertex_weights[static_cast<std::size_t>(v)]) blend += w * m[static_cast<std::size_t>(k)];
+      for (const auto& [k, w] : vertex_weights[static_cast<std::size_t>(v)])
+        blend += w * m[static_cast<std::size_t>(k)];
     } else {
       for (int k = 0; k < body::kNumJoints; ++k) {
         const double w = model->weights(v, k);

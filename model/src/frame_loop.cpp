@@ -1,6 +1,5 @@
-#include <sflsh/model/frame_loop.hpp>
-
 #include <sflsh/core/error.hpp>
+#include <sflsh/model/frame_loop.hpp>
 
 #include <cmath>
 

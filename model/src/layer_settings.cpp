@@ -1,7 +1,6 @@
-#include <sflsh/model/layer_settings.hpp>
-
 #include <sflsh/core/error.hpp>
 #include <sflsh/meshing/layer_cache.hpp>
+#include <sflsh/model/layer_settings.hpp>
 #include <sflsh/model/simulation_output.hpp>
 
 namespace sflsh::model {

@@ -1,6 +1,5 @@
-#include <sflsh/model/mass.hpp>
-
 #include <sflsh/core/error.hpp>
+#include <sflsh/model/mass.hpp>
 
 #include <Eigen/Geometry>
 
@@ -35,7 +34,8 @@ Eigen::SparseMatrix<double, Eigen::RowMajor> consistent_mass_matrix(const meshin
   entries.reserve(static_cast<std::size_t>(16 * tets.rows()));
   for (Eigen::Index e = 0; e < tets.rows(); ++e) {
     for (int a = 0; a < 4; ++a) {
-      for (int b = 0; b < 4; ++b) entries.emplace_back(tets(e, a), tets(e, b), tet_mass[e] * consistent_mass_factor(a, b));
+      for (int b = 0; b < 4; ++b)
+        entries.emplace_back(tets(e, a), tets(e, b), tet_mass[e] * consistent_mass_factor(a, b));
     }
   }
   Eigen::SparseMatrix<double, Eigen::RowMajor> M(num_nodes, num_nodes);

@@ -1,11 +1,8 @@
+#include <sflsh/core/error.hpp>
+#include <sflsh/model/kinematics.hpp>
 #include <sflsh/model/problem.hpp>
 
-#include <sflsh/model/kinematics.hpp>
-
-#include <sflsh/core/error.hpp>
-
 #include <Eigen/Geometry>
-
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_reduce.h>
 
@@ -52,8 +49,9 @@ void Dirichlet::finalize() {
   }
   for (int id : sorted_drive) {
     require(id >= -1 && id < static_cast<int>(drives.size()), "Dirichlet: drive index {} out of range", id);
-    if (id >= 0) require(static_cast<bool>(drives[id].value) && static_cast<bool>(drives[id].rate),
-                         "Dirichlet: drive {} has no value or rate function", id);
+    if (id >= 0)
+      require(static_cast<bool>(drives[id].value) && static_cast<bool>(drives[id].rate),
+              "Dirichlet: drive {} has no value or rate function", id);
   }
   dof = std::move(sorted_dof);
   drive = std::move(sorted_drive);
@@ -63,7 +61,8 @@ Eigen::VectorXd Dirichlet::values(double t) const {
   std::vector<double> drive_value(drives.size());
   for (std::size_t k = 0; k < drives.size(); ++k) drive_value[k] = drives[k].value(t);
   Eigen::VectorXd u(dof.size());
-  for (std::size_t k = 0; k < dof.size(); ++k) u[static_cast<Eigen::Index>(k)] = drive[k] < 0 ? 0.0 : drive_value[drive[k]];
+  for (std::size_t k = 0; k < dof.size(); ++k)
+    u[static_cast<Eigen::Index>(k)] = drive[k] < 0 ? 0.0 : drive_value[drive[k]];
   require(u.allFinite(), "Dirichlet: a prescribed displacement is not finite at t = {}", t);
   return u;
 }
@@ -72,7 +71,8 @@ Eigen::VectorXd Dirichlet::rates(double t) const {
   std::vector<double> drive_rate(drives.size());
   for (std::size_t k = 0; k < drives.size(); ++k) drive_rate[k] = drives[k].rate(t);
   Eigen::VectorXd r(dof.size());
-  for (std::size_t k = 0; k < dof.size(); ++k) r[static_cast<Eigen::Index>(k)] = drive[k] < 0 ? 0.0 : drive_rate[drive[k]];
+  for (std::size_t k = 0; k < dof.size(); ++k)
+    r[static_cast<Eigen::Index>(k)] = drive[k] < 0 ? 0.0 : drive_rate[drive[k]];
   require(r.allFinite(), "Dirichlet: a prescribed velocity is not finite at t = {}", t);
   return r;
 }
@@ -104,7 +104,8 @@ void Problem::validate() {
   require(static_cast<int>(tet_material.size()) == m, "problem: {} tet materials for {} tets", tet_material.size(), m);
   require(tet_energy_scale.empty() || static_cast<int>(tet_energy_scale.size()) == m,
           "problem: {} tet energy scales for {} tets", tet_energy_scale.size(), m);
-  for (double s : tet_energy_scale) require(std::isfinite(s) && s > 0.0, "problem: tet energy scale {} is not positive", s);
+  for (double s : tet_energy_scale)
+    require(std::isfinite(s) && s > 0.0, "problem: tet energy scale {} is not positive", s);
   if (tet_rest.empty()) {
     tet_rest.resize(static_cast<std::size_t>(m));
     for (int e = 0; e < m; ++e) {
@@ -123,7 +124,8 @@ void Problem::validate() {
   require(mass.allFinite() && mass.minCoeff() >= 0.0, "problem: masses must be finite and non-negative");
   if (tet_mass.size() == 0 && density > 0.0) tet_mass = tet_masses(rest, tets, density);
   if (mass_kind == MassKind::consistent && dynamic()) {
-    require(tet_mass.size() == m, "problem: consistent mass needs ρV per tet (a density), have {} for {} tets", tet_mass.size(), m);
+    require(tet_mass.size() == m, "problem: consistent mass needs ρV per tet (a density), have {} for {} tets",
+            tet_mass.size(), m);
     // The lumped masses must be the consistent matrix's row sums (gravity and the reports use them).
     Eigen::VectorXd row_sum = Eigen::VectorXd::Zero(n);
     for (int e = 0; e < m; ++e)
@@ -134,14 +136,16 @@ void Problem::validate() {
   require(gravity.allFinite(), "problem: gravity is not finite");
   dirichlet.finalize();
   for (int d : dirichlet.dof) require(d < num_dofs(), "problem: constrained dof {} out of range", d);
-  if (trajectory) require(trajectory->num_nodes() == n, "problem: trajectory has {} nodes, mesh {}", trajectory->num_nodes(), n);
+  if (trajectory)
+    require(trajectory->num_nodes() == n, "problem: trajectory has {} nodes, mesh {}", trajectory->num_nodes(), n);
   if (!dynamic()) {
     require(!dirichlet.dof.empty(), "problem: a static problem (no mass) needs prescribed components");
   }
 }
 
 Eigen::SparseMatrix<double, Eigen::RowMajor> Problem::mass_matrix() const {
-  if (mass_kind == MassKind::consistent && tet_mass.size() == num_tets()) return consistent_mass_matrix(tets, tet_mass, num_nodes());
+  if (mass_kind == MassKind::consistent && tet_mass.size() == num_tets())
+    return consistent_mass_matrix(tets, tet_mass, num_nodes());
   Eigen::SparseMatrix<double, Eigen::RowMajor> M(num_nodes(), num_nodes());
   std::vector<Eigen::Triplet<double>> entries;
   for (int i = 0; i < num_nodes(); ++i) entries.emplace_back(i, i, mass.size() ? mass[i] : 0.0);
@@ -194,7 +198,8 @@ material::TetNodes gather(const Problem& problem, const Eigen::VectorXd& x, int 
 }  // namespace
 
 ElasticEvaluation evaluate_elastic(const Problem& problem, const Eigen::VectorXd& x, bool with_gradient) {
-  require(x.size() == problem.num_dofs(), "evaluate_elastic: state has {} entries, expected {}", x.size(), problem.num_dofs());
+  require(x.size() == problem.num_dofs(), "evaluate_elastic: state has {} entries, expected {}", x.size(),
+          problem.num_dofs());
   struct Partial {
     double energy = 0.0;
     Eigen::VectorXd gradient;
@@ -213,7 +218,8 @@ ElasticEvaluation evaluate_elastic(const Problem& problem, const Eigen::VectorXd
             const material::TetElastic el =
                 material::tet_elastic(problem.tet_rest[se], nodes, problem.tet_material[se], false);
             acc.energy += scale * el.energy;
-            for (int a = 0; a < 4; ++a) acc.gradient.segment<3>(3 * problem.tets(e, a)) += scale * el.gradient.segment<3>(3 * a);
+            for (int a = 0; a < 4; ++a)
+              acc.gradient.segment<3>(3 * problem.tets(e, a)) += scale * el.gradient.segment<3>(3 * a);
           } else {
             acc.energy += scale * material::tet_elastic_energy(problem.tet_rest[se], nodes, problem.tet_material[se]);
           }

@@ -1,7 +1,6 @@
-#include <sflsh/model/simulation_output.hpp>
-#include <sflsh/model/layer_settings.hpp>  // region_normals
-
 #include <sflsh/core/error.hpp>
+#include <sflsh/model/layer_settings.hpp>  // region_normals
+#include <sflsh/model/simulation_output.hpp>
 
 #include <fmt/format.h>
 
@@ -19,7 +18,8 @@ DynamicsAmplitude::DynamicsAmplitude(RowMatrixX3d normals)
       sum_sq_n_(Eigen::VectorXd::Zero(normals_.rows())) {}
 
 void DynamicsAmplitude::add(const RowMatrixX3d& u) {
-  require(u.rows() == normals_.rows(), "dynamics amplitude: {} displacements for {} vertices", u.rows(), normals_.rows());
+  require(u.rows() == normals_.rows(), "dynamics amplitude: {} displacements for {} vertices", u.rows(),
+          normals_.rows());
   sum_ += u;
   sum_sq_ += u.rowwise().squaredNorm();
   const Eigen::VectorXd un = (u.array() * normals_.array()).rowwise().sum();
@@ -48,7 +48,8 @@ Eigen::VectorXd DynamicsAmplitude::sigma_tangent() const {
   return (s.array().square() - sn.array().square()).cwiseMax(0.0).sqrt().matrix();
 }
 
-RowMatrixX3d vertex_normals(const RowMatrixX3d& vertices, const Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor>& faces) {
+RowMatrixX3d vertex_normals(const RowMatrixX3d& vertices,
+                            const Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor>& faces) {
   return vtk::vertex_normals(vertices, faces);
 }
 
@@ -60,7 +61,8 @@ double tet_energy_density(const Problem& problem, const Eigen::VectorXd& x, int 
   const auto se = static_cast<std::size_t>(e);
   const double scale = problem.tet_energy_scale.empty() ? 1.0 : problem.tet_energy_scale[se];
   try {
-    return scale * material::tet_elastic_energy(problem.tet_rest[se], nodes, problem.tet_material[se]) / problem.tet_rest[se].volume;
+    return scale * material::tet_elastic_energy(problem.tet_rest[se], nodes, problem.tet_material[se]) /
+           problem.tet_rest[se].volume;
   } catch (const Error&) {
     return std::numeric_limits<double>::infinity();
   }
@@ -76,7 +78,8 @@ Eigen::VectorXd strain_energy_density(const Problem& problem, const Eigen::Vecto
 
 Eigen::VectorXd strain_energy_density(const Problem& problem, const Eigen::VectorXd& x, const std::vector<int>& tets) {
   Eigen::VectorXd psi(static_cast<Eigen::Index>(tets.size()));
-  for (std::size_t k = 0; k < tets.size(); ++k) psi[static_cast<Eigen::Index>(k)] = tet_energy_density(problem, x, tets[k]);
+  for (std::size_t k = 0; k < tets.size(); ++k)
+    psi[static_cast<Eigen::Index>(k)] = tet_energy_density(problem, x, tets[k]);
   return psi;
 }
 
@@ -99,7 +102,8 @@ Eigen::MatrixXd scatter(const BodyLayer& layer, const Eigen::MatrixXd& region_va
 template <typename Wanted>
 void add_kappa_fields(std::vector<vtk::Field>& fields, const Eigen::MatrixXd& kappa, const Wanted& wanted) {
   static_assert(material::kNumKappa == 3);
-  const std::pair<const char*, int> columns[] = {{"thickness_fraction", 0}, {"thickness", 0}, {"young_tangent", 1}, {"young_normal", 2}};
+  const std::pair<const char*, int> columns[] = {
+      {"thickness_fraction", 0}, {"thickness", 0}, {"young_tangent", 1}, {"young_normal", 2}};
   for (const auto& [name, column] : columns)
     if (wanted(name)) fields.push_back({name, kappa.col(column), false});
 }
@@ -114,14 +118,18 @@ double median(Eigen::VectorXd v) {
 }  // namespace
 
 const std::vector<std::string>& frame_field_names() {
-  static const std::vector<std::string> names = {"displacement",  "velocity",          "skin_weights_argmax", "soft_tissue_displacement",
-                                                 "elastic_displacement", "strain_energy_density", "thickness_fraction", "thickness",
-                                                 "young_tangent", "young_normal", "soft_region", "Normals",
-                                                 "contact_force", "penetration"};
+  static const std::vector<std::string> names = {"displacement",         "velocity",
+                                                 "skin_weights_argmax",  "soft_tissue_displacement",
+                                                 "elastic_displacement", "strain_energy_density",
+                                                 "thickness_fraction",   "thickness",
+                                                 "young_tangent",        "young_normal",
+                                                 "soft_region",          "Normals",
+                                                 "contact_force",        "penetration"};
   return names;
 }
 
-void check_frame_field_names(const std::vector<std::string>& names, const std::string& where, const std::string& context) {
+void check_frame_field_names(const std::vector<std::string>& names, const std::string& where,
+                             const std::string& context) {
   const std::vector<std::string>& known = frame_field_names();
   for (const std::string& name : names) {
     if (std::find(known.begin(), known.end(), name) != known.end()) continue;
@@ -143,7 +151,11 @@ SimulationWriter::SimulationWriter(const BodyLayer& layer, RunFolder* run, bool 
       }()) {}
 
 SimulationWriter::SimulationWriter(const BodyLayer& layer, RunFolder* run, const SimulationWriterOptions& options)
-    : layer_(layer), run_(run), options_(options), write_layer_(options.write_layer), amplitude_(region_normals(layer)) {
+    : layer_(layer),
+      run_(run),
+      options_(options),
+      write_layer_(options.write_layer),
+      amplitude_(region_normals(layer)) {
   if (options_.fields) check_frame_field_names(*options_.fields, "simulation output");
   const body::BodyModel& model = *layer.model;
   dominant_joint_.resize(model.num_vertices(), 1);
@@ -153,13 +165,15 @@ SimulationWriter::SimulationWriter(const BodyLayer& layer, RunFolder* run, const
     dominant_joint_(v) = static_cast<double>(k);
   }
   vertex_kappa_ = scatter(layer, layer.fields.vertex);
-  soft_region_ = scatter(layer, Eigen::MatrixXd::Ones(static_cast<Eigen::Index>(layer.mesh->region_surface.vertices.size()), 1));
+  soft_region_ =
+      scatter(layer, Eigen::MatrixXd::Ones(static_cast<Eigen::Index>(layer.mesh->region_surface.vertices.size()), 1));
   check_output_format(options_.format, "simulation output");
   const std::string layer_prefix = options_.prefix == "body" ? "layer" : options_.prefix + "_layer";
   if (run_ && options_.format == "xdmf") {
     // The fields that do not change go in once; every frame then holds positions and the moving fields.
     run_->stage(options_.prefix + ".h5");
-    body_xdmf_ = std::make_unique<xdmf::Series>(run_->stage(options_.prefix + ".xmf"), layer.model->faces, options_.precision);
+    body_xdmf_ =
+        std::make_unique<xdmf::Series>(run_->stage(options_.prefix + ".xmf"), layer.model->faces, options_.precision);
     vtk::Fields fixed;
     if (wants("skin_weights_argmax")) fixed.point_data.push_back({"skin_weights_argmax", dominant_joint_, true});
     add_kappa_fields(fixed.point_data, vertex_kappa_, [this](const std::string& name) { return wants(name); });
@@ -167,10 +181,13 @@ SimulationWriter::SimulationWriter(const BodyLayer& layer, RunFolder* run, const
     body_xdmf_->set_static(fixed);
     if (write_layer_) {
       run_->stage(layer_prefix + ".h5");
-      layer_xdmf_ = std::make_unique<xdmf::Series>(run_->stage(layer_prefix + ".xmf"), layer.problem.tets, options_.precision);
+      layer_xdmf_ =
+          std::make_unique<xdmf::Series>(run_->stage(layer_prefix + ".xmf"), layer.problem.tets, options_.precision);
       vtk::Fields layer_fixed;
-      add_kappa_fields(layer_fixed.point_data, layer.fields.node, [this](const std::string& name) { return wants(name); });
-      add_kappa_fields(layer_fixed.cell_data, layer.fields.tet, [this](const std::string& name) { return wants(name); });
+      add_kappa_fields(layer_fixed.point_data, layer.fields.node,
+                       [this](const std::string& name) { return wants(name); });
+      add_kappa_fields(layer_fixed.cell_data, layer.fields.tet,
+                       [this](const std::string& name) { return wants(name); });
       layer_xdmf_->set_static(layer_fixed);
     }
   } else if (run_) {
@@ -180,16 +197,20 @@ SimulationWriter::SimulationWriter(const BodyLayer& layer, RunFolder* run, const
 }
 
 void check_output_format(const std::string& format, const std::string& where) {
-  require(format == "vtk" || format == "xdmf", "{}: format '{}' is not an output format (expected vtk or xdmf)", where, format);
+  require(format == "vtk" || format == "xdmf", "{}: format '{}' is not an output format (expected vtk or xdmf)", where,
+          format);
 }
 
 bool SimulationWriter::wants(const std::string& field) const {
-  return !options_.fields || std::find(options_.fields->begin(), options_.fields->end(), field) != options_.fields->end();
+  return !options_.fields ||
+         std::find(options_.fields->begin(), options_.fields->end(), field) != options_.fields->end();
 }
 
 void SimulationWriter::run_job(std::function<void()> job) {
-  if (options_.jobs) options_.jobs->submit(std::move(job));
-  else job();
+  if (options_.jobs)
+    options_.jobs->submit(std::move(job));
+  else
+    job();
 }
 
 void SimulationWriter::add_frame(double t, const State& state, const std::vector<vtk::Field>& extra) {
@@ -198,12 +219,14 @@ void SimulationWriter::add_frame(double t, const State& state, const std::vector
 
 // The caller's thread does what needs the solver's objects (the skin displacement, posing along the motion);
 // the job gets copies and computes the strain energies, places the fields and writes the file.
-void SimulationWriter::add_frame(int index, double t, const State& state, bool write, const std::vector<vtk::Field>& extra) {
+void SimulationWriter::add_frame(int index, double t, const State& state, bool write,
+                                 const std::vector<vtk::Field>& extra) {
   require(state.w.allFinite(), "simulation output: the velocities at t = {} are not finite", t);
   add(index, t, state.x, &state, write, extra);
 }
 
-void SimulationWriter::add_positions(int index, double t, const Eigen::VectorXd& x, bool write, const std::vector<vtk::Field>& extra) {
+void SimulationWriter::add_positions(int index, double t, const Eigen::VectorXd& x, bool write,
+                                     const std::vector<vtk::Field>& extra) {
   require(!(write && write_layer_ && run_), "simulation output: layer frames need the full state (add_frame)");
   add(index, t, x, nullptr, write, extra);
 }
@@ -219,28 +242,32 @@ void SimulationWriter::add(int index, double t, const Eigen::VectorXd& x_state, 
   const auto clock = std::chrono::steady_clock::now();
   RowMatrixX3d posed = layer_.posed_surface_from_displacement(u, t);
   RowMatrixX3d skinned;
-  if (wants("soft_tissue_displacement")) skinned = layer_.posed_surface_from_displacement(RowMatrixX3d::Zero(u.rows(), 3), t);
+  if (wants("soft_tissue_displacement"))
+    skinned = layer_.posed_surface_from_displacement(RowMatrixX3d::Zero(u.rows(), 3), t);
   posing_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - clock).count();
 
   vtk::Fields fields;
   if (wants("displacement")) fields.point_data.push_back({"displacement", posed - layer_.shaped, false});
   if (wants("velocity")) {
     Eigen::MatrixXd velocity = Eigen::MatrixXd::Zero(posed.rows(), 3);
-    if (previous_posed_.rows() == posed.rows() && t > previous_t_) velocity = (posed - previous_posed_) / (t - previous_t_);
+    if (previous_posed_.rows() == posed.rows() && t > previous_t_)
+      velocity = (posed - previous_posed_) / (t - previous_t_);
     fields.point_data.push_back({"velocity", velocity, false});
   }
-  const bool xdmf = body_xdmf_ != nullptr;   // the fixed fields are in the series once
-  if (wants("skin_weights_argmax") && !xdmf) fields.point_data.push_back({"skin_weights_argmax", dominant_joint_, true});
-  if (wants("soft_tissue_displacement")) fields.point_data.push_back({"soft_tissue_displacement", posed - skinned, false});
+  const bool xdmf = body_xdmf_ != nullptr;  // the fixed fields are in the series once
+  if (wants("skin_weights_argmax") && !xdmf)
+    fields.point_data.push_back({"skin_weights_argmax", dominant_joint_, true});
+  if (wants("soft_tissue_displacement"))
+    fields.point_data.push_back({"soft_tissue_displacement", posed - skinned, false});
   if (wants("elastic_displacement")) fields.point_data.push_back({"elastic_displacement", scatter(layer_, u), false});
   const bool energy = wants("strain_energy_density");
-  if (energy) fields.point_data.push_back({"strain_energy_density", Eigen::MatrixXd(), false});   // filled by the job
+  if (energy) fields.point_data.push_back({"strain_energy_density", Eigen::MatrixXd(), false});  // filled by the job
   if (!xdmf) {
     add_kappa_fields(fields.point_data, vertex_kappa_, [this](const std::string& name) { return wants(name); });
     if (wants("soft_region")) fields.point_data.push_back({"soft_region", soft_region_, true});
   }
   fields.field_data.push_back({"TimeValue", Eigen::MatrixXd::Constant(1, 1, t), false});
-  const std::size_t own_fields = fields.point_data.size();   // the extra ones are in the world frame already
+  const std::size_t own_fields = fields.point_data.size();  // the extra ones are in the world frame already
   for (const vtk::Field& f : extra)
     if (wants(f.name)) fields.point_data.push_back(f);
   std::filesystem::path path;
@@ -249,7 +276,8 @@ void SimulationWriter::add(int index, double t, const Eigen::VectorXd& x_state, 
     body_series_->add(t, name);
     path = run_->stage(name);
   }
-  run_job([this, path, t, posed, own_fields, fields = std::move(fields), x = energy ? x_state : Eigen::VectorXd()]() mutable {
+  run_job([this, path, t, posed, own_fields, fields = std::move(fields),
+           x = energy ? x_state : Eigen::VectorXd()]() mutable {
     if (x.size() > 0) {
       // Only the tets under the skin's vertices (a sixth of the layer's on the coarse mesh).
       const Eigen::VectorXd vertex_psi = strain_energy_density(layer_.problem, x, layer_.mesh->skin.tet);
@@ -265,9 +293,12 @@ void SimulationWriter::add(int index, double t, const Eigen::VectorXd& x_state, 
     }
     // Normals of the placed posed surface: the vtk writer adds them (Float32), an xdmf series gets them here.
     fields.normals = wants("Normals");
-    if (body_xdmf_ && fields.normals) fields.point_data.push_back({"Normals", vtk::vertex_normals(posed, layer_.model->faces), false});
-    if (body_xdmf_) body_xdmf_->write(t, posed, fields);
-    else vtk::write_surface(path, posed, layer_.model->faces, fields, options_.compression);
+    if (body_xdmf_ && fields.normals)
+      fields.point_data.push_back({"Normals", vtk::vertex_normals(posed, layer_.model->faces), false});
+    if (body_xdmf_)
+      body_xdmf_->write(t, posed, fields);
+    else
+      vtk::write_surface(path, posed, layer_.model->faces, fields, options_.compression);
   });
   if (write_layer_ && state) write_layer_frame(index, t, *state);
   previous_posed_ = std::move(posed);
@@ -281,30 +312,35 @@ void SimulationWriter::write_layer_frame(int index, double t, const State& state
   RowMatrixX3d nodes = posed_positions(frame, state.x);
   std::filesystem::path path;
   if (!layer_xdmf_) {
-    const std::string name =
-        options_.prefix == "body" ? fmt::format("layer_{:06d}.vtu", index) : fmt::format("{}_layer_{:06d}.vtu", options_.prefix, index);
+    const std::string name = options_.prefix == "body" ? fmt::format("layer_{:06d}.vtu", index)
+                                                       : fmt::format("{}_layer_{:06d}.vtu", options_.prefix, index);
     layer_series_->add(t, name);
     path = run_->stage(name);
   }
-  run_job([this, &problem, path, t, nodes = std::move(nodes), x = Eigen::VectorXd(state.x), w = Eigen::VectorXd(state.w)]() mutable {
+  run_job([this, &problem, path, t, nodes = std::move(nodes), x = Eigen::VectorXd(state.x),
+           w = Eigen::VectorXd(state.w)]() mutable {
     const Eigen::Map<const RowMatrixX3d> elastic(x.data(), problem.num_nodes(), 3);
     const Eigen::Map<const RowMatrixX3d> velocity(w.data(), problem.num_nodes(), 3);
     vtk::Fields fields;
     if (wants("displacement")) fields.point_data.push_back({"displacement", nodes - problem.rest, false});
-    if (wants("elastic_displacement")) fields.point_data.push_back({"elastic_displacement", elastic - problem.rest, false});
+    if (wants("elastic_displacement"))
+      fields.point_data.push_back({"elastic_displacement", elastic - problem.rest, false});
     if (wants("velocity")) fields.point_data.push_back({"velocity", velocity, false});
-    if (placed()) {   // as the body frames: the vectors turn with the body, the positions move with it
+    if (placed()) {  // as the body frames: the vectors turn with the body, the positions move with it
       for (vtk::Field& f : fields.point_data) f.values = (f.values * options_.rotation.transpose()).eval();
       nodes = place(nodes);
     }
-    if (!layer_xdmf_) {   // an xdmf series holds them once
+    if (!layer_xdmf_) {  // an xdmf series holds them once
       add_kappa_fields(fields.point_data, layer_.fields.node, [this](const std::string& name) { return wants(name); });
       add_kappa_fields(fields.cell_data, layer_.fields.tet, [this](const std::string& name) { return wants(name); });
     }
-    if (wants("strain_energy_density")) fields.cell_data.push_back({"strain_energy_density", strain_energy_density(problem, x), false});
+    if (wants("strain_energy_density"))
+      fields.cell_data.push_back({"strain_energy_density", strain_energy_density(problem, x), false});
     fields.field_data.push_back({"TimeValue", Eigen::MatrixXd::Constant(1, 1, t), false});
-    if (layer_xdmf_) layer_xdmf_->write(t, nodes, fields);
-    else vtk::write_unstructured(path, nodes, problem.tets, fields, options_.compression);
+    if (layer_xdmf_)
+      layer_xdmf_->write(t, nodes, fields);
+    else
+      vtk::write_unstructured(path, nodes, problem.tets, fields, options_.compression);
   });
 }
 
@@ -321,14 +357,17 @@ void SimulationWriter::finish() {
   add_kappa_fields(fields.point_data, vertex_kappa_, [](const std::string&) { return true; });
   fields.point_data.push_back({"soft_region", soft_region_, true});
   // Where the body stands (a scene's placement), with the normals of the placed surface.
-  vtk::write_surface(run_->stage(dynamics_file()), placed() ? place(layer_.shaped) : layer_.shaped, layer_.model->faces, fields);
+  vtk::write_surface(run_->stage(dynamics_file()), placed() ? place(layer_.shaped) : layer_.shaped, layer_.model->faces,
+                     fields);
 }
 
 std::string SimulationWriter::dynamics_file() const {
   return options_.prefix == "body" ? "dynamics.vtp" : options_.prefix + "_dynamics.vtp";
 }
 
-bool SimulationWriter::placed() const { return !options_.rotation.isIdentity(0.0) || !options_.translation.isZero(0.0); }
+bool SimulationWriter::placed() const {
+  return !options_.rotation.isIdentity(0.0) || !options_.translation.isZero(0.0);
+}
 
 RowMatrixX3d SimulationWriter::place(const RowMatrixX3d& points) const {
   return (points * options_.rotation.transpose()).rowwise() + options_.translation.transpose();
@@ -349,6 +388,8 @@ nlohmann::json SimulationWriter::dynamics_summary() const {
 
 Eigen::VectorXd SimulationWriter::sigma_per_vertex() const { return scatter(layer_, amplitude_.sigma()); }
 Eigen::VectorXd SimulationWriter::sigma_normal_per_vertex() const { return scatter(layer_, amplitude_.sigma_normal()); }
-Eigen::VectorXd SimulationWriter::sigma_tangent_per_vertex() const { return scatter(layer_, amplitude_.sigma_tangent()); }
+Eigen::VectorXd SimulationWriter::sigma_tangent_per_vertex() const {
+  return scatter(layer_, amplitude_.sigma_tangent());
+}
 
 }  // namespace sflsh::model

@@ -1,6 +1,5 @@
-#include <sflsh/model/skinned_trajectory.hpp>
-
 #include <sflsh/core/error.hpp>
+#include <sflsh/model/skinned_trajectory.hpp>
 
 #include <cmath>
 
@@ -35,7 +34,7 @@ void hermite(const std::vector<T>& samples, std::size_t f, double u, double fps,
     if (rate) rate->setZero();
     return;
   }
-  auto tangent = [&](std::size_t k) -> T {   // dP/d(frame) at sample k
+  auto tangent = [&](std::size_t k) -> T {  // dP/d(frame) at sample k
     if (k == 0) return samples[1] - samples[0];
     if (k == n - 1) return samples[n - 1] - samples[n - 2];
     return 0.5 * (samples[k + 1] - samples[k - 1]);
@@ -56,8 +55,7 @@ MotionCurve::MotionCurve(const body::BodyModel& model, const body::Betas& beta, 
   for (auto& joint : transforms_) joint.resize(frames);
   if (model.has_pose_correctives()) features_.resize(frames);
   for (std::size_t f = 0; f < frames; ++f) {
-    const body::Kinematics kin =
-        body::forward_kinematics(model, poser.joints_rest(), motion.poses[f], motion.trans[f]);
+    const body::Kinematics kin = body::forward_kinematics(model, poser.joints_rest(), motion.poses[f], motion.trans[f]);
     for (int k = 0; k < body::kNumJoints; ++k) {
       const auto sk = static_cast<std::size_t>(k);
       transforms_[sk][f] = motion.world_from_body * kin.skinning[sk].matrix().topRows<3>();
@@ -70,7 +68,7 @@ void MotionCurve::locate(double t, std::size_t& f, double& u, bool& clamped) con
   const double s = t * fps_;
   const auto last = static_cast<double>(num_frames() - 1);
   clamped = false;
-  if (!(s > 0.0)) {   // also NaN: the start
+  if (!(s > 0.0)) {  // also NaN: the start
     f = 0;
     u = 0.0;
     clamped = s < 0.0 || num_frames() == 1;
@@ -84,14 +82,14 @@ void MotionCurve::locate(double t, std::size_t& f, double& u, bool& clamped) con
   }
   double whole = std::floor(s);
   u = s - whole;
-  if (u > 1.0 - 1e-9) {   // a frame time that rounding put just below its frame
+  if (u > 1.0 - 1e-9) {  // a frame time that rounding put just below its frame
     whole += 1.0;
     u = 0.0;
   } else if (u < 1e-9) {
     u = 0.0;
   }
   f = static_cast<std::size_t>(whole);
-  if (f >= num_frames() - 1) {   // the last frame itself: evaluate the last interval at u = 1
+  if (f >= num_frames() - 1) {  // the last frame itself: evaluate the last interval at u = 1
     f = num_frames() - 2;
     u = 1.0;
   }
@@ -126,13 +124,14 @@ void MotionCurve::features(double t, PoseFeatures& value, PoseFeatures* rate) co
 }
 
 SkinnedTrajectory::SkinnedTrajectory(std::shared_ptr<const MotionCurve> curve,
-                                     std::vector<std::vector<std::pair<int, double>>> weights, Eigen::MatrixXd pose_dirs)
+                                     std::vector<std::vector<std::pair<int, double>>> weights,
+                                     Eigen::MatrixXd pose_dirs)
     : curve_(std::move(curve)), weights_(std::move(weights)), pose_dirs_(std::move(pose_dirs)) {
   require(curve_ != nullptr, "skinned trajectory: no motion curve");
-  require(pose_dirs_.size() == 0 ||
-              (pose_dirs_.rows() == 3 * num_nodes() && pose_dirs_.cols() == body::kNumPoseFeatures),
-          "skinned trajectory: pose directions are {}×{}, expected {}×{}", pose_dirs_.rows(), pose_dirs_.cols(),
-          3 * num_nodes(), body::kNumPoseFeatures);
+  require(
+      pose_dirs_.size() == 0 || (pose_dirs_.rows() == 3 * num_nodes() && pose_dirs_.cols() == body::kNumPoseFeatures),
+      "skinned trajectory: pose directions are {}×{}, expected {}×{}", pose_dirs_.rows(), pose_dirs_.cols(),
+      3 * num_nodes(), body::kNumPoseFeatures);
 }
 
 // p_i = A_i (x_i + b_i) + c_i = A_i x_i + d_i with d_i = A_i b_i + c_i (docs/physics.md §5).
@@ -209,7 +208,7 @@ std::vector<std::vector<std::pair<int, double>>> sparse_blend_weights(const Eige
         sum += w;
       }
     }
-    if (row.empty()) {   // every weight tiny: keep the largest
+    if (row.empty()) {  // every weight tiny: keep the largest
       Eigen::Index best;
       const double w = dense.row(i).maxCoeff(&best);
       require(w > 0.0, "blend weights: node {} has no positive weight", i);

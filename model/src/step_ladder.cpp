@@ -1,7 +1,6 @@
-#include <sflsh/model/step_ladder.hpp>
-
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
+#include <sflsh/model/step_ladder.hpp>
 
 #include <chrono>
 #include <cmath>
@@ -28,7 +27,7 @@ StepStats step_with_ladder(LadderSolver& solver, double h, const LadderOptions& 
   std::string reason;
   for (std::size_t r = 0; r < rungs.size(); ++r) {
     const int substeps = 1 << rungs[r].halvings;
-    const int startup_before = stats.startup_steps;   // counted for the accepted rung only
+    const int startup_before = stats.startup_steps;  // counted for the accepted rung only
     bool ok = true;
     for (int k = 0; k < substeps && ok; ++k) {
       // Substep ends land exactly on t0 + h at the last one.
@@ -40,8 +39,8 @@ StepStats step_with_ladder(LadderSolver& solver, double h, const LadderOptions& 
       stats.converged_reason = reason;
       stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       if (stats.failed_attempts > 0)
-        logger()->debug("{}: t = {:.6g} s recovered with {} substep(s) after {} failed attempt(s)", name, t0 + h, substeps,
-                        stats.failed_attempts);
+        logger()->debug("{}: t = {:.6g} s recovered with {} substep(s) after {} failed attempt(s)", name, t0 + h,
+                        substeps, stats.failed_attempts);
       return stats;
     }
     solver.restore();
@@ -53,8 +52,9 @@ StepStats step_with_ladder(LadderSolver& solver, double h, const LadderOptions& 
     }
     logger()->debug("{}: step from t = {:.6g} s failed as {} substep(s): {}", name, t0, substeps, reason);
   }
-  throw_error("{} failed at t = {:.6g} s (the step from t = {:.6f} s): no convergence even with {} substeps of {:.3g} s ({})", name,
-              t0 + h, t0, 1 << options.max_halvings, h / (1 << options.max_halvings), reason);
+  throw_error(
+      "{} failed at t = {:.6g} s (the step from t = {:.6f} s): no convergence even with {} substeps of {:.3g} s ({})",
+      name, t0 + h, t0, 1 << options.max_halvings, h / (1 << options.max_halvings), reason);
 }
 
 }  // namespace sflsh::model

@@ -1,6 +1,5 @@
-#include <sflsh/model/terms.hpp>
-
 #include <sflsh/core/error.hpp>
+#include <sflsh/model/terms.hpp>
 
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
@@ -59,11 +58,11 @@ double ElasticTerm::value(const Eigen::VectorXd& x) const {
     for (std::size_t k = range.begin(); k < range.end(); ++k) {
       const int e = tets[k];
       try {
-        acc += energy_scale(problem_, e) * material::tet_elastic_energy(problem_.tet_rest[static_cast<std::size_t>(e)],
-                                                                        tet_nodes(problem_, x, e),
-                                                                        problem_.tet_material[static_cast<std::size_t>(e)]);
+        acc += energy_scale(problem_, e) *
+               material::tet_elastic_energy(problem_.tet_rest[static_cast<std::size_t>(e)], tet_nodes(problem_, x, e),
+                                            problem_.tet_material[static_cast<std::size_t>(e)]);
       } catch (const Error&) {
-        acc = kInfinity;   // the Fung exponent overflowed: this state is out of reach
+        acc = kInfinity;  // the Fung exponent overflowed: this state is out of reach
       }
     }
   });
@@ -83,7 +82,8 @@ bool ElasticTerm::add_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& g) con
       const auto se = static_cast<std::size_t>(e);
       try {
         const material::Vector12d ge =
-            energy_scale(problem_, e) * material::tet_elastic_dq(problem_.tet_rest[se], tet_nodes(problem_, x, e), problem_.tet_material[se]);
+            energy_scale(problem_, e) *
+            material::tet_elastic_dq(problem_.tet_rest[se], tet_nodes(problem_, x, e), problem_.tet_material[se]);
         for (int a = 0; a < 4; ++a) local.segment<3>(3 * problem_.tets(e, a)) += ge.segment<3>(3 * a);
       } catch (const Error&) {
         ++failed.local();
@@ -96,7 +96,7 @@ bool ElasticTerm::add_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& g) con
 
 bool ElasticTerm::add_hessian(const Eigen::VectorXd& x, HessianSink& sink) const {
   const std::vector<int>& tets = subset_->row_tets;
-  constexpr std::size_t kBatch = 8192;   // blocks computed in parallel, then handed over in order
+  constexpr std::size_t kBatch = 8192;  // blocks computed in parallel, then handed over in order
   std::vector<material::Matrix12d> blocks(std::min(kBatch, tets.size()));
   int failed_total = 0;
   for (std::size_t first = 0; first < tets.size(); first += kBatch) {
@@ -108,8 +108,8 @@ bool ElasticTerm::add_hessian(const Eigen::VectorXd& x, HessianSink& sink) const
         const auto se = static_cast<std::size_t>(e);
         material::Matrix12d& K = blocks[k];
         try {
-          K = energy_scale(problem_, e) *
-              material::tet_elastic_dq2(problem_.tet_rest[se], tet_nodes(problem_, x, e), problem_.tet_material[se], projection_);
+          K = energy_scale(problem_, e) * material::tet_elastic_dq2(problem_.tet_rest[se], tet_nodes(problem_, x, e),
+                                                                    problem_.tet_material[se], projection_);
         } catch (const Error&) {
           K.setZero();
           ++failed.local();
@@ -138,8 +138,8 @@ InertiaTerm::InertiaTerm(const Problem& problem, std::shared_ptr<const TermSubse
 
 void InertiaTerm::set_step(const NodeFrame& frame, const InertiaTarget& target) {
   require(static_cast<int>(frame.A.size()) == problem_.num_nodes() && target.p_tilde.size() == problem_.num_dofs(),
-          "inertia term: maps for {} nodes and p̃ of {} entries, expected {} nodes", frame.A.size(), target.p_tilde.size(),
-          problem_.num_nodes());
+          "inertia term: maps for {} nodes and p̃ of {} entries, expected {} nodes", frame.A.size(),
+          target.p_tilde.size(), problem_.num_nodes());
   require(target.h_eff > 0.0, "inertia term: ĥ must be positive");
   frame_ = &frame;
   target_ = &target;
@@ -172,7 +172,8 @@ bool InertiaTerm::add_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& g) con
   const double scale = 1.0 / (target_->h_eff * target_->h_eff);
   if (problem_.mass_kind == MassKind::lumped) {
     for (int i : subset_->nodes)
-      g.segment<3>(3 * i) += scale * problem_.mass[i] * (frame_->A[static_cast<std::size_t>(i)].transpose() * residual(x, i));
+      g.segment<3>(3 * i) +=
+          scale * problem_.mass[i] * (frame_->A[static_cast<std::size_t>(i)].transpose() * residual(x, i));
     return true;
   }
   // Only the rows of the subset's nodes are complete; the others are partial sums, as for elasticity.
@@ -182,7 +183,7 @@ bool InertiaTerm::add_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& g) con
     const Eigen::Vector3d sum = r.rowwise().sum();
     for (int a = 0; a < 4; ++a) {
       const int i = problem_.tets(e, a);
-      const Eigen::Vector3d force = problem_.tet_mass[e] * 0.05 * (sum + r.col(a));   // Σ_b M_e(a, b) r_b
+      const Eigen::Vector3d force = problem_.tet_mass[e] * 0.05 * (sum + r.col(a));  // Σ_b M_e(a, b) r_b
       g.segment<3>(3 * i) += scale * (frame_->A[static_cast<std::size_t>(i)].transpose() * force);
     }
   }
@@ -207,7 +208,8 @@ bool InertiaTerm::add_hessian(const Eigen::VectorXd&, HessianSink& sink) const {
       const Eigen::Matrix3d& Aa = frame_->A[static_cast<std::size_t>(problem_.tets(e, a))];
       for (int b = 0; b < 4; ++b) {
         const Eigen::Matrix3d& Ab = frame_->A[static_cast<std::size_t>(problem_.tets(e, b))];
-        block.block<3, 3>(3 * a, 3 * b) = (scale * problem_.tet_mass[e] * consistent_mass_factor(a, b)) * (Aa.transpose() * Ab);
+        block.block<3, 3>(3 * a, 3 * b) =
+            (scale * problem_.tet_mass[e] * consistent_mass_factor(a, b)) * (Aa.transpose() * Ab);
       }
     }
     sink.add_tet(k, e, block);
@@ -246,8 +248,8 @@ PotentialTerm::PotentialTerm(const Problem& problem) : problem_(problem) {}
 
 Eigen::Vector3d PotentialTerm::posed(const Eigen::VectorXd& x, int node) const { return posed_node(*frame_, x, node); }
 
-bool PotentialTerm::begin(const RowMatrixX3d& p_n, double t0, double dt, const NodeFrame& frame, const Eigen::VectorXd& x_prescribed,
-                          const std::function<bool(int)>& owns) {
+bool PotentialTerm::begin(const RowMatrixX3d& p_n, double t0, double dt, const NodeFrame& frame,
+                          const Eigen::VectorXd& x_prescribed, const std::function<bool(int)>& owns) {
   frame_ = &frame;
   active_.clear();
   for (const auto& potential : problem_.potentials) {
@@ -272,8 +274,9 @@ bool PotentialTerm::accept(const Eigen::VectorXd& x_new) const {
   bool accepted = true;
   for (const Active& term : active_) {
     RowMatrixX3d p_end(static_cast<Eigen::Index>(term.node.size()), 3);
-    for (std::size_t c = 0; c < term.node.size(); ++c) p_end.row(static_cast<Eigen::Index>(c)) = posed(x_new, term.node[c]).transpose();
-    accepted = term.potential->accept_substep(p_end) && accepted;   // every potential sees the result
+    for (std::size_t c = 0; c < term.node.size(); ++c)
+      p_end.row(static_cast<Eigen::Index>(c)) = posed(x_new, term.node[c]).transpose();
+    accepted = term.potential->accept_substep(p_end) && accepted;  // every potential sees the result
   }
   return accepted;
 }
@@ -287,7 +290,8 @@ int PotentialTerm::max_refinements() const {
 double PotentialTerm::value(const Eigen::VectorXd& x) const {
   double sum = 0.0;
   for (const Active& term : active_)
-    for (int c : term.owned) sum += term.potential->evaluate(c, posed(x, term.node[static_cast<std::size_t>(c)]), nullptr, nullptr);
+    for (int c : term.owned)
+      sum += term.potential->evaluate(c, posed(x, term.node[static_cast<std::size_t>(c)]), nullptr, nullptr);
   return std::isfinite(sum) ? sum : kInfinity;
 }
 
@@ -299,7 +303,7 @@ bool PotentialTerm::add_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& g) c
       Eigen::Vector3d gradient;
       term.potential->evaluate(c, posed(x, i), &gradient, nullptr);
       finite = finite && gradient.allFinite();
-      g.segment<3>(3 * i) += frame_->A[static_cast<std::size_t>(i)].transpose() * gradient;   // A_iᵀ ∇u
+      g.segment<3>(3 * i) += frame_->A[static_cast<std::size_t>(i)].transpose() * gradient;  // A_iᵀ ∇u
     }
   }
   return finite;
@@ -314,7 +318,7 @@ bool PotentialTerm::add_hessian(const Eigen::VectorXd& x, HessianSink& sink) con
       Eigen::Vector3d gradient;
       Eigen::Matrix3d hessian;
       term.potential->evaluate(c, posed(x, i), &gradient, &hessian);
-      const Eigen::Matrix3d block = A.transpose() * hessian * A;   // A_iᵀ ∇²u A_i
+      const Eigen::Matrix3d block = A.transpose() * hessian * A;  // A_iᵀ ∇²u A_i
       finite = finite && block.allFinite();
       sink.add_node(i, block);
     }

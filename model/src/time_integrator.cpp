@@ -1,7 +1,6 @@
-#include <sflsh/model/time_integrator.hpp>
-
 #include <sflsh/core/error.hpp>
 #include <sflsh/model/kinematics.hpp>
+#include <sflsh/model/time_integrator.hpp>
 
 #include <Eigen/LU>
 #include <Eigen/SparseCholesky>
@@ -27,32 +26,39 @@ Integrator parse_integrator(std::string_view text, std::string_view where) {
 
 std::string_view to_string(Integrator integrator) {
   switch (integrator) {
-    case Integrator::backward_euler: return "backward_euler";
-    case Integrator::bdf2: return "bdf2";
-    case Integrator::newmark: return "newmark";
+    case Integrator::backward_euler:
+      return "backward_euler";
+    case Integrator::bdf2:
+      return "bdf2";
+    case Integrator::newmark:
+      return "newmark";
   }
   return "backward_euler";
 }
 
 InertiaTarget inertia_target(Integrator integrator, const PosedHistory& history, double h) {
   require(std::isfinite(h) && h > 0.0, "integrator: step must be positive, got {}", h);
-  require(history.v.size() == history.p.size(), "integrator: {} velocities for {} positions", history.v.size(), history.p.size());
+  require(history.v.size() == history.p.size(), "integrator: {} velocities for {} positions", history.v.size(),
+          history.p.size());
   InertiaTarget target;
   target.h = h;
   if (integrator == Integrator::bdf2) {
     const double omega = history.h_previous > 0.0 ? h / history.h_previous : 0.0;
-    const bool has_previous = history.p_previous.size() == history.p.size() && history.v_previous.size() == history.p.size();
+    const bool has_previous =
+        history.p_previous.size() == history.p.size() && history.v_previous.size() == history.p.size();
     if (has_previous && omega > 0.0 && omega <= kMaxBdf2Ratio) {
       const double a0 = (1.0 + 2.0 * omega) / (1.0 + omega), a1 = -(1.0 + omega), a2 = omega * omega / (1.0 + omega);
       target.integrator = Integrator::bdf2;
       target.h_eff = h / a0;
-      target.p_tilde = -(a1 * history.p + a2 * history.p_previous) / a0 - target.h_eff * (a1 * history.v + a2 * history.v_previous) / a0;
+      target.p_tilde = -(a1 * history.p + a2 * history.p_previous) / a0 -
+                       target.h_eff * (a1 * history.v + a2 * history.v_previous) / a0;
       return target;
     }
-    integrator = Integrator::backward_euler;   // start-up (or restart) step
+    integrator = Integrator::backward_euler;  // start-up (or restart) step
   }
   if (integrator == Integrator::newmark) {
-    require(history.a.size() == history.p.size(), "Newmark: the accelerations at t_n are missing (initial_acceleration)");
+    require(history.a.size() == history.p.size(),
+            "Newmark: the accelerations at t_n are missing (initial_acceleration)");
     target.integrator = Integrator::newmark;
     target.h_eff = 0.5 * h;
     target.p_tilde = history.p + h * history.v + 0.25 * h * h * history.a;
@@ -65,7 +71,8 @@ InertiaTarget inertia_target(Integrator integrator, const PosedHistory& history,
 }
 
 void advance_history(const InertiaTarget& target, PosedHistory& history, const Eigen::VectorXd& p_new) {
-  require(p_new.size() == history.p.size(), "integrator: {} new positions for a history of {}", p_new.size(), history.p.size());
+  require(p_new.size() == history.p.size(), "integrator: {} new positions for a history of {}", p_new.size(),
+          history.p.size());
   const double h = target.h;
   Eigen::VectorXd v_new, a_new;
   switch (target.integrator) {
@@ -115,8 +122,8 @@ void store_history(const PosedHistory& history, State& state) {
 Eigen::VectorXd initial_acceleration(const Problem& problem, const State& state) {
   const int n = problem.num_nodes();
   const Eigen::Index dofs = problem.num_dofs();
-  require(state.x.size() == dofs && state.w.size() == dofs, "initial acceleration: state of {} / {} entries, expected {}",
-          state.x.size(), state.w.size(), dofs);
+  require(state.x.size() == dofs && state.w.size() == dofs,
+          "initial acceleration: state of {} / {} entries, expected {}", state.x.size(), state.w.size(), dofs);
   Eigen::VectorXd a = Eigen::VectorXd::Zero(dofs);
   if (!problem.dynamic()) return a;
 

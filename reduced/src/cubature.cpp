@@ -1,7 +1,6 @@
-#include <sflsh/reduced/cubature.hpp>
-
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
+#include <sflsh/reduced/cubature.hpp>
 #include <sflsh/reduced/cubature_coverage.hpp>
 #include <sflsh/reduced/cubature_elastic.hpp>
 #include <sflsh/reduced/nnls.hpp>
@@ -46,7 +45,8 @@ Cubature exact_cubature(int num_tets) {
 std::vector<int> farthest_point_tets(const model::Problem& problem, int count, const std::vector<double>& density) {
   const int m = problem.num_tets();
   require(count >= 1 && count <= m, "cubature: {} points requested for a mesh of {} tets", count, m);
-  require(density.empty() || static_cast<int>(density.size()) == m, "cubature: {} density values for {} tets", density.size(), m);
+  require(density.empty() || static_cast<int>(density.size()) == m, "cubature: {} density values for {} tets",
+          density.size(), m);
   const meshing::RowMatrixX3d c = tet_centroids(problem);
   Eigen::RowVector3d mean = Eigen::RowVector3d::Zero();
   double volume = 0.0;
@@ -66,7 +66,7 @@ std::vector<int> farthest_point_tets(const model::Problem& problem, int count, c
       distance[e] = std::min(distance[e], scale * (c.row(e) - last).norm());
     }
     Eigen::Index next = 0;
-    distance.maxCoeff(&next);   // ties: the smallest index
+    distance.maxCoeff(&next);  // ties: the smallest index
     chosen.push_back(static_cast<int>(next));
   }
   return chosen;
@@ -83,7 +83,8 @@ std::vector<double> voronoi_weights(const model::Problem& problem, const std::ve
     cell[static_cast<std::size_t>(nearest)] += problem.tet_rest[static_cast<std::size_t>(e)].volume;
   }
   std::vector<double> w(tets.size());
-  for (std::size_t k = 0; k < tets.size(); ++k) w[k] = cell[k] / problem.tet_rest[static_cast<std::size_t>(tets[k])].volume;
+  for (std::size_t k = 0; k < tets.size(); ++k)
+    w[k] = cell[k] / problem.tet_rest[static_cast<std::size_t>(tets[k])].volume;
   return w;
 }
 
@@ -149,11 +150,12 @@ Cubature fitted_cubature(const model::Problem& problem, const Subspace& subspace
   double volume = 0.0;
   Eigen::VectorXd v(K);
   for (int e = 0; e < problem.num_tets(); ++e) volume += problem.tet_rest[static_cast<std::size_t>(e)].volume;
-  for (int k = 0; k < K; ++k) v[k] = problem.tet_rest[static_cast<std::size_t>(out.tets[static_cast<std::size_t>(k)])].volume / volume;
+  for (int k = 0; k < K; ++k)
+    v[k] = problem.tet_rest[static_cast<std::size_t>(out.tets[static_cast<std::size_t>(k)])].volume / volume;
   G.noalias() += v * v.transpose();
   h += v;
-  logger()->debug("cubature: NNLS system over {} samples: h in [{:.3e}, {:.3e}], diag(G) in [{:.3e}, {:.3e}]", used, h.minCoeff(),
-                  h.maxCoeff(), G.diagonal().minCoeff(), G.diagonal().maxCoeff());
+  logger()->debug("cubature: NNLS system over {} samples: h in [{:.3e}, {:.3e}], diag(G) in [{:.3e}, {:.3e}]", used,
+                  h.minCoeff(), h.maxCoeff(), G.diagonal().minCoeff(), G.diagonal().maxCoeff());
   const NnlsResult fit = nnls_normal_equations(G, h);
   const double fitted_volume = v.dot(fit.x);
   if (!fit.converged || !(std::abs(fitted_volume - 1.0) <= 0.05)) {
@@ -164,8 +166,8 @@ Cubature fitted_cubature(const model::Problem& problem, const Subspace& subspace
   out.weights.assign(fit.x.data(), fit.x.data() + K);
   out.method = "nnls";
   const long nonzero = std::count_if(out.weights.begin(), out.weights.end(), [](double w) { return w > 0.0; });
-  logger()->debug("cubature: NNLS over {} samples: {} of {} points carry weight, volume ratio {:.4f}, {} iterations", used, nonzero,
-                  K, fitted_volume, fit.iterations);
+  logger()->debug("cubature: NNLS over {} samples: {} of {} points carry weight, volume ratio {:.4f}, {} iterations",
+                  used, nonzero, K, fitted_volume, fit.iterations);
   return out;
 }
 
@@ -191,25 +193,29 @@ CubatureCoverage cubature_coverage(const Eigen::MatrixXd& exact_stiffness, const
   // L⁻¹ K_x L⁻ᵀ has the generalized eigenvalues of (K_x, K_c = L Lᵀ).
   Eigen::MatrixXd A = factor.matrixL().solve(exact_stiffness);
   A = factor.matrixL().solve(Eigen::MatrixXd(A.transpose()));
-  const Eigen::VectorXd lambda = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(0.5 * (A + A.transpose()), Eigen::EigenvaluesOnly).eigenvalues();
+  const Eigen::VectorXd lambda =
+      Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(0.5 * (A + A.transpose()), Eigen::EigenvaluesOnly).eigenvalues();
   c.max_ratio = lambda.maxCoeff();
   c.min_ratio = lambda.minCoeff();
   return c;
 }
 
-Cubature select_covering_cubature(const model::Problem& problem, const Subspace& subspace, const CubatureOptions& options,
-                                  double max_ratio, double growth) {
-  require(max_ratio >= 1.0 && growth > 1.0, "cubature: coverage ratio {} must be ≥ 1 and growth {} > 1", max_ratio, growth);
+Cubature select_covering_cubature(const model::Problem& problem, const Subspace& subspace,
+                                  const CubatureOptions& options, double max_ratio, double growth) {
+  require(max_ratio >= 1.0 && growth > 1.0, "cubature: coverage ratio {} must be ≥ 1 and growth {} > 1", max_ratio,
+          growth);
   const Eigen::MatrixXd exact = rest_stiffness(problem, subspace, exact_cubature(problem.num_tets()));
   CubatureOptions o = options;
   for (;;) {
-    Cubature c = o.count >= problem.num_tets() ? exact_cubature(problem.num_tets()) : select_cubature(problem, subspace, o);
+    Cubature c =
+        o.count >= problem.num_tets() ? exact_cubature(problem.num_tets()) : select_cubature(problem, subspace, o);
     const CubatureCoverage coverage = cubature_coverage(exact, rest_stiffness(problem, subspace, c));
     c.stiffness_ratio_max = coverage.max_ratio;
     c.stiffness_ratio_min = coverage.min_ratio;
-    logger()->info("cubature: {} tets ({}): exact / cubature rest stiffness over the subspace's directions in [{:.3g}, {:.3g}]{}",
-                   c.size(), c.method, coverage.min_ratio, coverage.max_ratio,
-                   coverage.max_ratio <= max_ratio ? "" : fmt::format(" (above {:.3g}: more tets)", max_ratio));
+    logger()->info(
+        "cubature: {} tets ({}): exact / cubature rest stiffness over the subspace's directions in [{:.3g}, {:.3g}]{}",
+        c.size(), c.method, coverage.min_ratio, coverage.max_ratio,
+        coverage.max_ratio <= max_ratio ? "" : fmt::format(" (above {:.3g}: more tets)", max_ratio));
     if (coverage.max_ratio <= max_ratio || c.method == "exact") return c;
     o.count = std::min(problem.num_tets(), static_cast<int>(std::ceil(growth * o.count)));
   }

@@ -1,7 +1,6 @@
-#include <sflsh/reduced/cubature_coverage.hpp>
-
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
+#include <sflsh/reduced/cubature_coverage.hpp>
 
 #include <algorithm>
 #include <map>
@@ -29,16 +28,18 @@ std::map<int, double> tet_function_energies(const model::Problem& problem, const
 
 struct Energies {
   Eigen::VectorXd exact, cubature;
-  std::vector<int> richest_tet;   ///< per function: the tet with the largest V_e |∇b_s|²_e
-  std::vector<double> richest;    ///< that value
+  std::vector<int> richest_tet;  ///< per function: the tet with the largest V_e |∇b_s|²_e
+  std::vector<double> richest;   ///< that value
 };
 
 Energies function_energies(const model::Problem& problem, const Subspace& subspace, const Cubature& cubature) {
-  require(problem.tet_rest.size() == static_cast<std::size_t>(problem.num_tets()), "cubature coverage: the problem is not validated");
-  require(subspace.num_nodes() == problem.num_nodes(), "cubature coverage: basis has {} rows for {} nodes", subspace.num_nodes(),
-          problem.num_nodes());
+  require(problem.tet_rest.size() == static_cast<std::size_t>(problem.num_tets()),
+          "cubature coverage: the problem is not validated");
+  require(subspace.num_nodes() == problem.num_nodes(), "cubature coverage: basis has {} rows for {} nodes",
+          subspace.num_nodes(), problem.num_nodes());
   const int functions = subspace.num_functions();
-  Energies out{Eigen::VectorXd::Zero(functions), Eigen::VectorXd::Zero(functions), std::vector<int>(static_cast<std::size_t>(functions), -1),
+  Energies out{Eigen::VectorXd::Zero(functions), Eigen::VectorXd::Zero(functions),
+               std::vector<int>(static_cast<std::size_t>(functions), -1),
                std::vector<double>(static_cast<std::size_t>(functions), 0.0)};
   for (int e = 0; e < problem.num_tets(); ++e)
     for (const auto& [s, energy] : tet_function_energies(problem, subspace, e)) {
@@ -85,9 +86,10 @@ int cover_every_function(const model::Problem& problem, const Subspace& subspace
     ++raised;
   }
   if (raised > 0)
-    logger()->info("cubature: {} of {} basis functions had less than {:.0f}% of their elastic energy in the cubature; "
-                   "raised on their richest tet ({} tets now)",
-                   raised, subspace.num_functions(), 100.0 * fraction, cubature.size());
+    logger()->info(
+        "cubature: {} of {} basis functions had less than {:.0f}% of their elastic energy in the cubature; "
+        "raised on their richest tet ({} tets now)",
+        raised, subspace.num_functions(), 100.0 * fraction, cubature.size());
   return raised;
 }
 

@@ -1,8 +1,7 @@
-#include <sflsh/reduced/cubature_guard.hpp>
-
 #include <sflsh/core/error.hpp>
 #include <sflsh/material/fung_strain.hpp>
 #include <sflsh/material/orthotropic_fung.hpp>
+#include <sflsh/reduced/cubature_guard.hpp>
 
 #include <Eigen/Eigenvalues>
 
@@ -33,7 +32,8 @@ Cubature unguarded_tets(const model::Problem& problem, const Cubature& cubature)
 
 }  // namespace
 
-CubatureGuard::CubatureGuard(const model::Problem& problem, const Subspace& subspace, const Cubature& cubature, double exponent_limit)
+CubatureGuard::CubatureGuard(const model::Problem& problem, const Subspace& subspace, const Cubature& cubature,
+                             double exponent_limit)
     : problem_(problem), tets_(problem, subspace, unguarded_tets(problem, cubature)), limit_(exponent_limit) {
   require(exponent_limit > 0.0 && exponent_limit <= material::kFungExponentCap,
           "reduced: the guard's exponent limit {} must be in (0, {}]", exponent_limit, material::kFungExponentCap);
@@ -50,8 +50,10 @@ CubatureGuard::CubatureGuard(const model::Problem& problem, const Subspace& subs
     point_of_tet_[static_cast<std::size_t>(e)] = p;
     offset_.push_back(offset_.back() + static_cast<int>(tets_.point_functions(p).size()));
     const material::OrthotropicFung& m = problem.tet_material[static_cast<std::size_t>(e)];
-    const double p_norm =
-        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(m.scaling, Eigen::EigenvaluesOnly).eigenvalues().cwiseAbs().maxCoeff();
+    const double p_norm = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(m.scaling, Eigen::EigenvaluesOnly)
+                              .eigenvalues()
+                              .cwiseAbs()
+                              .maxCoeff();
     spectral_[k] = p_norm * p_norm;
     // x = 2Ψ₀/c ≤ (2/c)(μ₀ + 3/2 λ₀⁺)‖Ê‖² ≤ limit  ⇐  ‖Ê‖ ≤ √(limit c / (2(μ₀ + 3/2 λ₀⁺)))
     const double modulus = m.mu0 + 1.5 * std::max(m.lambda0, 0.0);
@@ -68,7 +70,8 @@ CubatureGuard::CubatureGuard(const model::Problem& problem, const Subspace& subs
   function_points_.resize(static_cast<std::size_t>(function_offset_.back()));
   std::vector<int> fill(function_offset_.begin(), function_offset_.end() - 1);
   for (int p = 0; p < n; ++p)
-    for (int f : tets_.point_functions(p)) function_points_[static_cast<std::size_t>(fill[static_cast<std::size_t>(f)]++)] = p;
+    for (int f : tets_.point_functions(p))
+      function_points_[static_cast<std::size_t>(fill[static_cast<std::size_t>(f)]++)] = p;
   visited_.assign(static_cast<std::size_t>(n), 0);
 }
 
@@ -78,7 +81,8 @@ void CubatureGuard::set_prescribed_state(const Eigen::VectorXd& x_prescribed) {
 }
 
 void CubatureGuard::release(int tet) {
-  require(tet >= 0 && tet < static_cast<int>(point_of_tet_.size()), "reduced: guard release of tet {} out of range", tet);
+  require(tet >= 0 && tet < static_cast<int>(point_of_tet_.size()), "reduced: guard release of tet {} out of range",
+          tet);
   const int p = point_of_tet_[static_cast<std::size_t>(tet)];
   if (p < 0 || !active_[static_cast<std::size_t>(p)]) return;
   active_[static_cast<std::size_t>(p)] = 0;
@@ -92,16 +96,17 @@ double CubatureGuard::exponent(int p, const Eigen::VectorXd& q, double* radius) 
   const material::OrthotropicFung& m = problem_.tet_material[static_cast<std::size_t>(tets_.point_tet(p))];
   material::FungStrain strain;
   try {
-    strain = material::fung_strain(F, m);   // x = 2Ψ₀/c and ‖Ê‖ (the material's own definitions)
+    strain = material::fung_strain(F, m);  // x = 2Ψ₀/c and ‖Ê‖ (the material's own definitions)
   } catch (const Error&) {
-    return kInfinity;   // the StVK energy overflows: far outside the range
+    return kInfinity;  // the StVK energy overflows: far outside the range
   }
   const double x = strain.exponent;
   if (radius) {
     // The radius r in F with ‖Ê_ref‖ + ‖P_Y‖²(‖F_ref‖₂ r + r²/2) ≤ allowed (‖F_refᵀΔ‖_F ≤ ‖F_ref‖₂‖Δ‖_F).
     const double e_hat = strain.scaled_strain;
     const double d = (allowed_[k] - e_hat) / spectral_[k];
-    const double f = std::sqrt(F.cwiseAbs().colwise().sum().maxCoeff() * F.cwiseAbs().rowwise().sum().maxCoeff());   // ‖F‖₂ ≤ √(‖F‖₁‖F‖∞)
+    const double f = std::sqrt(F.cwiseAbs().colwise().sum().maxCoeff() *
+                               F.cwiseAbs().rowwise().sum().maxCoeff());  // ‖F‖₂ ≤ √(‖F‖₁‖F‖∞)
     *radius = !std::isfinite(allowed_[k]) ? kInfinity : d > 0.0 ? -f + std::sqrt(f * f + 2.0 * d) : 0.0;
   }
   return std::isfinite(x) ? x : kInfinity;
@@ -116,26 +121,30 @@ std::vector<GuardViolation> CubatureGuard::check(const Eigen::VectorXd& q) {
   // suspects renew the reference.
   std::vector<int> beyond;
   for (std::size_t s = 0; s < moved_.size(); ++s) {
-    moved_[s] = (q.segment<3>(3 * static_cast<Eigen::Index>(s)) - q_reference_.segment<3>(3 * static_cast<Eigen::Index>(s))).norm();
+    moved_[s] =
+        (q.segment<3>(3 * static_cast<Eigen::Index>(s)) - q_reference_.segment<3>(3 * static_cast<Eigen::Index>(s)))
+            .norm();
     if (moved_[s] > budget_[s]) beyond.push_back(static_cast<int>(s));
   }
   if (beyond.empty()) return {};
   ++tet_passes_;
   const auto pass_start = std::chrono::steady_clock::now();
-  struct PassTimer {   // the pass alone: a renewal it ends in counts as a renewal
+  struct PassTimer {  // the pass alone: a renewal it ends in counts as a renewal
     std::chrono::steady_clock::time_point start;
     double* seconds;
     const double* renewals;
     double renewals_before;
     ~PassTimer() {
-      *seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() - (*renewals - renewals_before);
+      *seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() -
+                  (*renewals - renewals_before);
     }
   } pass_timer{pass_start, &pass_seconds_, &renew_seconds_, renew_seconds_};
   ++generation_;
   std::vector<int> suspects;
   const auto budget = static_cast<std::size_t>(renew_fraction_ * guarded_) + 1;
   for (int s : beyond) {
-    for (int k = function_offset_[static_cast<std::size_t>(s)]; k < function_offset_[static_cast<std::size_t>(s) + 1]; ++k) {
+    for (int k = function_offset_[static_cast<std::size_t>(s)]; k < function_offset_[static_cast<std::size_t>(s) + 1];
+         ++k) {
       const int p = function_points_[static_cast<std::size_t>(k)];
       const auto pk = static_cast<std::size_t>(p);
       if (visited_[pk] == generation_ || !active_[pk]) continue;
@@ -143,7 +152,8 @@ std::vector<GuardViolation> CubatureGuard::check(const Eigen::VectorXd& q) {
       const std::span<const int> functions = tets_.point_functions(p);
       const double* scaled = scaled_.data() + offset_[pk];
       double bound = 0.0;
-      for (std::size_t j = 0; j < functions.size(); ++j) bound += moved_[static_cast<std::size_t>(functions[j])] * scaled[j];
+      for (std::size_t j = 0; j < functions.size(); ++j)
+        bound += moved_[static_cast<std::size_t>(functions[j])] * scaled[j];
       if (bound > 1.0) {
         suspects.push_back(p);
         if (suspects.size() > budget) return renew(q);
@@ -183,9 +193,10 @@ std::vector<GuardViolation> CubatureGuard::renew(const Eigen::VectorXd& q) {
     if (!active_[k]) continue;
     const std::span<const int> functions = tets_.point_functions(p);
     const double* scaled = scaled_.data() + offset_[k];
-    double sum = 0.0;   // L_e / r_e
+    double sum = 0.0;  // L_e / r_e
     for (std::size_t j = 0; j < functions.size(); ++j) sum += scaled[j];
-    for (int s : functions) budget_[static_cast<std::size_t>(s)] = std::min(budget_[static_cast<std::size_t>(s)], 1.0 / sum);
+    for (int s : functions)
+      budget_[static_cast<std::size_t>(s)] = std::min(budget_[static_cast<std::size_t>(s)], 1.0 / sum);
   }
   q_reference_ = q;
   valid_ = true;

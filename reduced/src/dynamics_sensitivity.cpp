@@ -1,7 +1,6 @@
 // dσ/dp of the per-vertex dynamics amplitudes (dynamics_sensitivity.hpp has the formulas).
-#include <sflsh/reduced/dynamics_sensitivity.hpp>
-
 #include <sflsh/core/error.hpp>
+#include <sflsh/reduced/dynamics_sensitivity.hpp>
 
 namespace sflsh::reduced {
 
@@ -20,8 +19,8 @@ DynamicsAmplitudeSensitivity::DynamicsAmplitudeSensitivity(meshing::RowMatrixX3d
 void DynamicsAmplitudeSensitivity::add(const meshing::RowMatrixX3d& u, const Eigen::MatrixXd& du) {
   const Eigen::Index R = normals_.rows();
   require(u.rows() == R && du.rows() == 3 * R && du.cols() == sum_du_.cols(),
-          "dynamics sensitivity: frame has {} displacements and a {}×{} derivative, expected {} and {}×{}", u.rows(), du.rows(),
-          du.cols(), R, 3 * R, sum_du_.cols());
+          "dynamics sensitivity: frame has {} displacements and a {}×{} derivative, expected {} and {}×{}", u.rows(),
+          du.rows(), du.cols(), R, 3 * R, sum_du_.cols());
   sum_u_ += u;
   sum_du_ += du;
   for (Eigen::Index r = 0; r < R; ++r) {
@@ -61,7 +60,8 @@ Eigen::MatrixXd DynamicsAmplitudeSensitivity::sigma_normal_derivative() const {
     if (sn[r] == 0.0) continue;
     const Eigen::RowVector3d n = normals_.row(r);
     // mean[(n·d̃)(n·du)] = mean[(n·u)(n·du)] − (n·ū)(n·mean du)
-    const Eigen::RowVectorXd mixed = sum_un_dun_.row(r) * inv - (sum_un_[r] * inv) * (n * sum_du_.middleRows<3>(3 * r) * inv);
+    const Eigen::RowVectorXd mixed =
+        sum_un_dun_.row(r) * inv - (sum_un_[r] * inv) * (n * sum_du_.middleRows<3>(3 * r) * inv);
     out.row(r) = mixed / sn[r];
   }
   return out;
@@ -76,8 +76,9 @@ Eigen::MatrixXd DynamicsAmplitudeSensitivity::sigma_tangent_derivative() const {
     if (st[r] == 0.0) continue;
     const Eigen::RowVector3d n = normals_.row(r), mean_u = sum_u_.row(r) * inv;
     const Eigen::MatrixXd mean_du = sum_du_.middleRows<3>(3 * r) * inv;
-    const Eigen::RowVectorXd all = sum_u_du_.row(r) * inv - mean_u * mean_du;                              // mean[d̃·du]
-    const Eigen::RowVectorXd normal = sum_un_dun_.row(r) * inv - (sum_un_[r] * inv) * (n * mean_du);      // mean[(n·d̃)(n·du)]
+    const Eigen::RowVectorXd all = sum_u_du_.row(r) * inv - mean_u * mean_du;  // mean[d̃·du]
+    const Eigen::RowVectorXd normal =
+        sum_un_dun_.row(r) * inv - (sum_un_[r] * inv) * (n * mean_du);  // mean[(n·d̃)(n·du)]
     out.row(r) = (all - normal) / st[r];
   }
   return out;

@@ -1,13 +1,12 @@
-#include <sflsh/reduced/joint_pair_mass.hpp>
-
 #include <sflsh/core/error.hpp>
+#include <sflsh/reduced/joint_pair_mass.hpp>
 
 #include <map>
 
 namespace sflsh::reduced {
 
-JointPairMass JointPairMass::lumped(const model::SkinnedTrajectory& skinned, const Subspace& subspace, const std::vector<int>& active,
-                                    const std::vector<double>& mass) {
+JointPairMass JointPairMass::lumped(const model::SkinnedTrajectory& skinned, const Subspace& subspace,
+                                    const std::vector<int>& active, const std::vector<double>& mass) {
   require(mass.size() == active.size(), "joint-pair mass: {} masses for {} active nodes", mass.size(), active.size());
   // T_kl(s, r) for k ≤ l, accumulated densely per joint pair (S × S, upper triangle), then compressed.
   const int S = subspace.num_functions();
@@ -45,20 +44,23 @@ JointPairMass JointPairMass::lumped(const model::SkinnedTrajectory& skinned, con
   return out;
 }
 
-JointPairMass JointPairMass::consistent(const model::SkinnedTrajectory& skinned, const Subspace& subspace, const std::vector<int>& active,
+JointPairMass JointPairMass::consistent(const model::SkinnedTrajectory& skinned, const Subspace& subspace,
+                                        const std::vector<int>& active,
                                         const Eigen::SparseMatrix<double, Eigen::RowMajor>& mass) {
   const auto n = static_cast<Eigen::Index>(active.size());
-  require(mass.rows() == n && mass.cols() == n, "joint-pair mass: M is {}×{} for {} active nodes", mass.rows(), mass.cols(), n);
+  require(mass.rows() == n && mass.cols() == n, "joint-pair mass: M is {}×{} for {} active nodes", mass.rows(),
+          mass.cols(), n);
   const int S = subspace.num_functions();
   // W_k (active × S): entry (a, s) = w_ik b_is, i = active[a]; then T_kl = W_kᵀ M W_l.
   std::map<int, std::vector<Eigen::Triplet<double>>> entries;
   for (Eigen::Index a = 0; a < n; ++a) {
     const int i = active[static_cast<std::size_t>(a)];
     for (const auto& [k, wk] : skinned.node_weights(i))
-      for (SparseRowMatrix::InnerIterator it(subspace.basis, i); it; ++it) entries[k].emplace_back(a, it.col(), wk * it.value());
+      for (SparseRowMatrix::InnerIterator it(subspace.basis, i); it; ++it)
+        entries[k].emplace_back(a, it.col(), wk * it.value());
   }
   using Sparse = Eigen::SparseMatrix<double>;
-  std::map<int, Sparse> weighted, mass_weighted;   // W_k and M W_k per joint with weight on an active node
+  std::map<int, Sparse> weighted, mass_weighted;  // W_k and M W_k per joint with weight on an active node
   const Sparse M(mass);
   for (const auto& [k, list] : entries) {
     Sparse W(n, S);
@@ -66,7 +68,7 @@ JointPairMass JointPairMass::consistent(const model::SkinnedTrajectory& skinned,
     mass_weighted.emplace(k, Sparse(M * W));
     weighted.emplace(k, std::move(W));
   }
-  std::map<std::pair<int, int>, Eigen::MatrixXd> ordered;   // T_kl for every ordered pair that is not zero
+  std::map<std::pair<int, int>, Eigen::MatrixXd> ordered;  // T_kl for every ordered pair that is not zero
   for (const auto& [k, Wk] : weighted) {
     const Sparse Wk_t = Wk.transpose();
     for (const auto& [l, MWl] : mass_weighted) {
@@ -80,8 +82,9 @@ JointPairMass JointPairMass::consistent(const model::SkinnedTrajectory& skinned,
   for (const auto& [kl, T] : ordered) {
     const auto [k, l] = kl;
     if (l < k) {
-      if (ordered.count({l, k}) == 0) throw_error("joint-pair mass: T_{}{} without T_{}{} (M is not symmetric)", k, l, l, k);
-      continue;   // stored with (l, k)
+      if (ordered.count({l, k}) == 0)
+        throw_error("joint-pair mass: T_{}{} without T_{}{} (M is not symmetric)", k, l, l, k);
+      continue;  // stored with (l, k)
     }
     const auto swapped = ordered.find({l, k});
     const Eigen::MatrixXd& T_swapped = k == l ? T : (swapped == ordered.end() ? zero : swapped->second);
@@ -101,17 +104,19 @@ JointPairMass JointPairMass::consistent(const model::SkinnedTrajectory& skinned,
   return out;
 }
 
-void JointPairMass::add(const model::JointTransforms& at, const model::JointTransforms& other, double scale, Eigen::MatrixXd& M) const {
+void JointPairMass::add(const model::JointTransforms& at, const model::JointTransforms& other, double scale,
+                        Eigen::MatrixXd& M) const {
   for (const PairTerm& pair : pairs_) {
     const Eigen::Matrix3d Rk = at[static_cast<std::size_t>(pair.k)].leftCols<3>();
     const Eigen::Matrix3d Rl = at[static_cast<std::size_t>(pair.l)].leftCols<3>();
     const Eigen::Matrix3d Rk_other = other[static_cast<std::size_t>(pair.k)].leftCols<3>();
     const Eigen::Matrix3d Rl_other = other[static_cast<std::size_t>(pair.l)].leftCols<3>();
     if (pair.value_swapped.empty()) {
-      // Lumped (or k = l): T symmetric in (s, r), so the (s, r) and (r, s) blocks are equal (not transposed: b_is b_ir is
-      // symmetric, the 3×3 factor need not be).
-      const Eigen::Matrix3d G = scale * (pair.k == pair.l ? Eigen::Matrix3d(Rk.transpose() * Rk_other)
-                                                          : Eigen::Matrix3d(Rk.transpose() * Rl_other + Rl.transpose() * Rk_other));
+      // Lumped (or k = l): T symmetric in (s, r), so the (s, r) and (r, s) blocks are equal (not transposed: b_is b_ir
+      // is symmetric, the 3×3 factor need not be).
+      const Eigen::Matrix3d G =
+          scale * (pair.k == pair.l ? Eigen::Matrix3d(Rk.transpose() * Rk_other)
+                                    : Eigen::Matrix3d(Rk.transpose() * Rl_other + Rl.transpose() * Rk_other));
       for (std::size_t e = 0; e < pair.value.size(); ++e) {
         const int s = pair.s[e], r = pair.r[e];
         M.block<3, 3>(3 * s, 3 * r) += pair.value[e] * G;

@@ -1,6 +1,5 @@
-#include <sflsh/reduced/nnls.hpp>
-
 #include <sflsh/core/error.hpp>
+#include <sflsh/reduced/nnls.hpp>
 
 #include <Eigen/Cholesky>
 
@@ -19,7 +18,8 @@ Eigen::VectorXd passive_solve(const Eigen::MatrixXd& G, const Eigen::VectorXd& h
   Eigen::VectorXd hp(idx.size());
   for (std::size_t a = 0; a < idx.size(); ++a) {
     hp[static_cast<Eigen::Index>(a)] = h[idx[a]];
-    for (std::size_t b = 0; b < idx.size(); ++b) Gp(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b)) = G(idx[a], idx[b]);
+    for (std::size_t b = 0; b < idx.size(); ++b)
+      Gp(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b)) = G(idx[a], idx[b]);
   }
   // A tiny diagonal shift keeps the factorization defined when passive columns are nearly dependent.
   const double shift = 1e-14 * (Gp.size() ? Gp.diagonal().cwiseAbs().maxCoeff() : 0.0);
@@ -33,7 +33,8 @@ Eigen::VectorXd passive_solve(const Eigen::MatrixXd& G, const Eigen::VectorXd& h
 
 }  // namespace
 
-NnlsResult nnls_normal_equations(const Eigen::MatrixXd& G, const Eigen::VectorXd& h, double tolerance, int max_iterations) {
+NnlsResult nnls_normal_equations(const Eigen::MatrixXd& G, const Eigen::VectorXd& h, double tolerance,
+                                 int max_iterations) {
   const Eigen::Index n = h.size();
   require(G.rows() == n && G.cols() == n, "nnls: Gram matrix is {}×{}, expected {}×{}", G.rows(), G.cols(), n, n);
   require(G.allFinite() && h.allFinite(), "nnls: non-finite input");
@@ -83,7 +84,7 @@ NnlsResult nnls_normal_equations(const Eigen::MatrixXd& G, const Eigen::VectorXd
           x[k] = 0.0;
           dropped = true;
         }
-      if (!dropped) break;   // numerical safety: alpha hit 1 without a zero; accept
+      if (!dropped) break;  // numerical safety: alpha hit 1 without a zero; accept
     }
   }
   return result;

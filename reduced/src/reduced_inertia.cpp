@@ -1,6 +1,5 @@
-#include <sflsh/reduced/reduced_inertia.hpp>
-
 #include <sflsh/core/error.hpp>
+#include <sflsh/reduced/reduced_inertia.hpp>
 
 #include <algorithm>
 
@@ -8,16 +7,18 @@ namespace sflsh::reduced {
 
 ReducedInertia::ReducedInertia(const model::Problem& problem, const Subspace& subspace)
     : problem_(problem), subspace_(subspace), active_(subspace.active_nodes()) {
-  require(subspace.num_nodes() == problem.num_nodes(), "reduced inertia: subspace has {} nodes, problem {}", subspace.num_nodes(),
-          problem.num_nodes());
-  kind_ = problem.mass_kind == model::MassKind::consistent && problem.dynamic() ? model::MassKind::consistent : model::MassKind::lumped;
+  require(subspace.num_nodes() == problem.num_nodes(), "reduced inertia: subspace has {} nodes, problem {}",
+          subspace.num_nodes(), problem.num_nodes());
+  kind_ = problem.mass_kind == model::MassKind::consistent && problem.dynamic() ? model::MassKind::consistent
+                                                                                : model::MassKind::lumped;
   nodes_ = active_;
   if (kind_ == model::MassKind::consistent) build_consistent(problem);
   for (int i : nodes_) mass_.push_back(problem.mass.size() ? problem.mass[i] : 0.0);
   skinned_ = dynamic_cast<const model::SkinnedTrajectory*>(problem.trajectory.get());
   if (skinned_) {
     if (kind_ == model::MassKind::lumped) {
-      pairs_ = JointPairMass::lumped(*skinned_, subspace, active_, std::vector<double>(mass_.begin(), mass_.begin() + num_active()));
+      pairs_ = JointPairMass::lumped(*skinned_, subspace, active_,
+                                     std::vector<double>(mass_.begin(), mass_.begin() + num_active()));
     } else {
       // M restricted to the active nodes (the columns of the CSR rows below num_active()).
       std::vector<Eigen::Triplet<double>> entries;
@@ -35,7 +36,7 @@ ReducedInertia::ReducedInertia(const model::Problem& problem, const Subspace& su
 
 void ReducedInertia::build_consistent(const model::Problem& problem) {
   const Eigen::SparseMatrix<double, Eigen::RowMajor> M = problem.mass_matrix();
-  std::vector<int> index(static_cast<std::size_t>(problem.num_nodes()), -1);   // mesh node → inertia node
+  std::vector<int> index(static_cast<std::size_t>(problem.num_nodes()), -1);  // mesh node → inertia node
   for (std::size_t a = 0; a < active_.size(); ++a) index[static_cast<std::size_t>(active_[a])] = static_cast<int>(a);
   std::vector<int> neighbours;
   for (int i : active_)
@@ -59,8 +60,8 @@ void ReducedInertia::build_consistent(const model::Problem& problem) {
 }
 
 void ReducedInertia::set_time(double t, const Eigen::VectorXd& x_prescribed) {
-  require(x_prescribed.size() == problem_.num_dofs(), "reduced inertia: prescribed state has {} entries, expected {}", x_prescribed.size(),
-          problem_.num_dofs());
+  require(x_prescribed.size() == problem_.num_dofs(), "reduced inertia: prescribed state has {} entries, expected {}",
+          x_prescribed.size(), problem_.num_dofs());
   t_ = t;
   if (problem_.trajectory) {
     problem_.trajectory->evaluate_nodes(t, nodes_, frame_);
@@ -75,11 +76,11 @@ void ReducedInertia::set_time(double t, const Eigen::VectorXd& x_prescribed) {
 }
 
 Eigen::VectorXd ReducedInertia::pull_back_mass(const Eigen::VectorXd& v) const {
-  require(v.size() == 3 * static_cast<Eigen::Index>(nodes_.size()), "reduced inertia: posed field of {} entries for {} inertia nodes",
-          v.size(), nodes_.size());
+  require(v.size() == 3 * static_cast<Eigen::Index>(nodes_.size()),
+          "reduced inertia: posed field of {} entries for {} inertia nodes", v.size(), nodes_.size());
   Eigen::VectorXd c = Eigen::VectorXd::Zero(subspace_.num_dofs());
   for (std::size_t a = 0; a < active_.size(); ++a) {
-    Eigen::Vector3d y;   // [M v]_i
+    Eigen::Vector3d y;  // [M v]_i
     if (kind_ == model::MassKind::lumped) {
       if (mass_[a] == 0.0) continue;
       y = mass_[a] * v.segment<3>(3 * static_cast<Eigen::Index>(a));
@@ -89,14 +90,15 @@ Eigen::VectorXd ReducedInertia::pull_back_mass(const Eigen::VectorXd& v) const {
         y += row_value_[static_cast<std::size_t>(e)] * v.segment<3>(3 * row_column_[static_cast<std::size_t>(e)]);
     }
     const Eigen::Vector3d r = frame_.A[a].transpose() * y;
-    for (SparseRowMatrix::InnerIterator it(subspace_.basis, active_[a]); it; ++it) c.segment<3>(3 * it.col()) += it.value() * r;
+    for (SparseRowMatrix::InnerIterator it(subspace_.basis, active_[a]); it; ++it)
+      c.segment<3>(3 * it.col()) += it.value() * r;
   }
   return c;
 }
 
 Eigen::VectorXd ReducedInertia::inertia_linear_term(const Eigen::VectorXd& p_tilde, double h_eff) const {
-  require(p_tilde.size() == 3 * static_cast<Eigen::Index>(nodes_.size()), "reduced inertia: p̃ of {} entries for {} inertia nodes",
-          p_tilde.size(), nodes_.size());
+  require(p_tilde.size() == 3 * static_cast<Eigen::Index>(nodes_.size()),
+          "reduced inertia: p̃ of {} entries for {} inertia nodes", p_tilde.size(), nodes_.size());
   require(h_eff > 0.0, "reduced inertia: ĥ must be positive, got {}", h_eff);
   const double inv_h2 = 1.0 / (h_eff * h_eff);
   // c = Jᵀ M (z − p̃)/ĥ²
@@ -108,8 +110,9 @@ Eigen::VectorXd ReducedInertia::gravity_linear_term() const {
   if (problem_.gravity.isZero(0.0)) return c;
   for (std::size_t a = 0; a < active_.size(); ++a) {
     if (mass_[a] == 0.0) continue;
-    const Eigen::Vector3d r = -mass_[a] * (frame_.A[a].transpose() * problem_.gravity);   // −m_i A_iᵀ g
-    for (SparseRowMatrix::InnerIterator it(subspace_.basis, active_[a]); it; ++it) c.segment<3>(3 * it.col()) += it.value() * r;
+    const Eigen::Vector3d r = -mass_[a] * (frame_.A[a].transpose() * problem_.gravity);  // −m_i A_iᵀ g
+    for (SparseRowMatrix::InnerIterator it(subspace_.basis, active_[a]); it; ++it)
+      c.segment<3>(3 * it.col()) += it.value() * r;
   }
   return c;
 }
@@ -117,7 +120,7 @@ Eigen::VectorXd ReducedInertia::gravity_linear_term() const {
 Eigen::VectorXd ReducedInertia::linear_term(const meshing::RowMatrixX3d& p_tilde, double h, bool inertia) const {
   Eigen::VectorXd c = gravity_linear_term();
   if (inertia) {
-    const meshing::RowMatrixX3d rows = p_tilde;   // contiguous node-major copy
+    const meshing::RowMatrixX3d rows = p_tilde;  // contiguous node-major copy
     c += inertia_linear_term(Eigen::Map<const Eigen::VectorXd>(rows.data(), rows.size()), h);
   }
   return c;
@@ -142,9 +145,10 @@ void ReducedInertia::mass_hessian(double h_eff, Eigen::MatrixXd& H) const {
     }
     for (int e = row_offset_[a]; e < row_offset_[a + 1]; ++e) {
       const int b = row_column_[static_cast<std::size_t>(e)];
-      if (b >= num_active()) continue;   // no basis function there
+      if (b >= num_active()) continue;  // no basis function there
       const auto sb = static_cast<std::size_t>(b);
-      const Eigen::Matrix3d G = (inv_h2 * row_value_[static_cast<std::size_t>(e)]) * (frame_.A[a].transpose() * frame_.A[sb]);
+      const Eigen::Matrix3d G =
+          (inv_h2 * row_value_[static_cast<std::size_t>(e)]) * (frame_.A[a].transpose() * frame_.A[sb]);
       for (SparseRowMatrix::InnerIterator si(subspace_.basis, active_[a]); si; ++si)
         for (SparseRowMatrix::InnerIterator ri(subspace_.basis, active_[sb]); ri; ++ri)
           H.block<3, 3>(3 * si.col(), 3 * ri.col()) += (si.value() * ri.value()) * G;
@@ -192,7 +196,8 @@ void ReducedInertia::displacement(const Eigen::VectorXd& q, meshing::RowMatrixX3
   u.resize(static_cast<Eigen::Index>(active_.size()), 3);
   for (std::size_t a = 0; a < active_.size(); ++a) {
     Eigen::Vector3d v = Eigen::Vector3d::Zero();
-    for (SparseRowMatrix::InnerIterator it(subspace_.basis, active_[a]); it; ++it) v += it.value() * q.segment<3>(3 * it.col());
+    for (SparseRowMatrix::InnerIterator it(subspace_.basis, active_[a]); it; ++it)
+      v += it.value() * q.segment<3>(3 * it.col());
     u.row(static_cast<Eigen::Index>(a)) = v.transpose();
   }
 }
@@ -202,12 +207,13 @@ void ReducedInertia::posed_into(const Eigen::VectorXd& q, double* out) const {
     const auto row = static_cast<Eigen::Index>(a);
     Eigen::Map<Eigen::Vector3d> p(out + 3 * a);
     if (a >= active_.size()) {
-      p = z_.row(row).transpose();   // no basis function: the skinned prescribed state
+      p = z_.row(row).transpose();  // no basis function: the skinned prescribed state
       continue;
     }
     Eigen::Vector3d u = Eigen::Vector3d::Zero();
-    for (SparseRowMatrix::InnerIterator it(subspace_.basis, active_[a]); it; ++it) u += it.value() * q.segment<3>(3 * it.col());
-    p = frame_.A[a] * u + z_.row(row).transpose();   // p_i = z_i + A_i u_i
+    for (SparseRowMatrix::InnerIterator it(subspace_.basis, active_[a]); it; ++it)
+      u += it.value() * q.segment<3>(3 * it.col());
+    p = frame_.A[a] * u + z_.row(row).transpose();  // p_i = z_i + A_i u_i
   }
 }
 
@@ -225,7 +231,8 @@ Eigen::VectorXd ReducedInertia::posed_rate(const Eigen::VectorXd& v) const {
   meshing::RowMatrixX3d u;
   displacement(v, u);
   Eigen::VectorXd out = Eigen::VectorXd::Zero(3 * static_cast<Eigen::Index>(nodes_.size()));
-  for (std::size_t a = 0; a < active_.size(); ++a) out.segment<3>(3 * static_cast<Eigen::Index>(a)) = frame_.A[a] * u.row(static_cast<Eigen::Index>(a)).transpose();
+  for (std::size_t a = 0; a < active_.size(); ++a)
+    out.segment<3>(3 * static_cast<Eigen::Index>(a)) = frame_.A[a] * u.row(static_cast<Eigen::Index>(a)).transpose();
   return out;
 }
 

@@ -1,11 +1,10 @@
-#include <sflsh/reduced/reduced_model.hpp>
-
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
 #include <sflsh/core/npz.hpp>
 #include <sflsh/material/layer_material.hpp>
 #include <sflsh/material/orthotropic_fung.hpp>
 #include <sflsh/meshing/layer_cache.hpp>
+#include <sflsh/reduced/reduced_model.hpp>
 
 #include <fmt/format.h>
 
@@ -33,15 +32,16 @@ std::uint64_t fnv1a(std::uint64_t hash, const void* data, std::size_t bytes) {
 
 /// Hash of what the handles, basis and cubature are built from: template nodes and tets, the attached
 /// (Dirichlet) components — they make the bone handles and where every basis function vanishes — and the options.
-std::string cache_key(const meshing::LayerMesh& mesh, const model::Dirichlet& dirichlet, const ReducedModelOptions& options) {
+std::string cache_key(const meshing::LayerMesh& mesh, const model::Dirichlet& dirichlet,
+                      const ReducedModelOptions& options) {
   std::uint64_t h = 1469598103934665603ULL;
   h = fnv1a(h, mesh.nodes.data(), sizeof(double) * static_cast<std::size_t>(mesh.nodes.size()));
   h = fnv1a(h, mesh.tets.data(), sizeof(int) * static_cast<std::size_t>(mesh.tets.size()));
   const std::vector<char> attached = dirichlet.mask(mesh.num_nodes());
   h = fnv1a(h, attached.data(), attached.size());
   const std::string settings =
-      fmt::format("v{} P{} K{} cover{} w{} drop{} max{} affine{} len{}", kReducedFormat, options.point_handles, options.cubature,
-                  options.cubature_auto ? options.coverage_ratio : 0.0,
+      fmt::format("v{} P{} K{} cover{} w{} drop{} max{} affine{} len{}", kReducedFormat, options.point_handles,
+                  options.cubature, options.cubature_auto ? options.coverage_ratio : 0.0,
                   options.weighting == CubatureWeighting::nnls ? "nnls" : "voronoi", options.basis.drop_below,
                   options.basis.max_influences, options.basis.affine ? 1 : 0, options.basis.affine_length);
   h = fnv1a(h, settings.data(), settings.size());
@@ -68,17 +68,19 @@ void save_model(const std::filesystem::path& path, const ReducedModel& m) {
       cols.push_back(it.col());
       values.push_back(it.value());
     }
-  npz::write(path, {{"key", npz::make_string(m.cache_key)},
-                    {"shape", npz::make_i64({2}, {m.subspace.num_nodes(), m.subspace.num_functions()})},
-                    {"basis_rows", npz::make_i64({rows.size()}, rows)},
-                    {"basis_cols", npz::make_i64({cols.size()}, cols)},
-                    {"basis_values", npz::make_f64({values.size()}, values)},
-                    {"point_nodes", npz::make_i64({m.handles.point_nodes.size()}, to_i64(m.handles.point_nodes))},
-                    {"point_vertices", npz::make_i64({m.handles.point_vertices.size()}, to_i64(m.handles.point_vertices))},
-                    {"cubature_tets", npz::make_i64({m.cubature.tets.size()}, to_i64(m.cubature.tets))},
-                    {"cubature_weights", npz::make_f64({m.cubature.weights.size()}, m.cubature.weights)},
-                    {"cubature_method", npz::make_string(m.cubature.method)},
-                    {"cubature_coverage", npz::make_f64({2}, {m.cubature.stiffness_ratio_min, m.cubature.stiffness_ratio_max})}});
+  npz::write(
+      path,
+      {{"key", npz::make_string(m.cache_key)},
+       {"shape", npz::make_i64({2}, {m.subspace.num_nodes(), m.subspace.num_functions()})},
+       {"basis_rows", npz::make_i64({rows.size()}, rows)},
+       {"basis_cols", npz::make_i64({cols.size()}, cols)},
+       {"basis_values", npz::make_f64({values.size()}, values)},
+       {"point_nodes", npz::make_i64({m.handles.point_nodes.size()}, to_i64(m.handles.point_nodes))},
+       {"point_vertices", npz::make_i64({m.handles.point_vertices.size()}, to_i64(m.handles.point_vertices))},
+       {"cubature_tets", npz::make_i64({m.cubature.tets.size()}, to_i64(m.cubature.tets))},
+       {"cubature_weights", npz::make_f64({m.cubature.weights.size()}, m.cubature.weights)},
+       {"cubature_method", npz::make_string(m.cubature.method)},
+       {"cubature_coverage", npz::make_f64({2}, {m.cubature.stiffness_ratio_min, m.cubature.stiffness_ratio_max})}});
 }
 
 /// Reads a cache entry into `m` (handles' bone map is recomputed by the caller). False when stale.
@@ -89,10 +91,12 @@ bool load_model(const std::filesystem::path& path, const std::string& key, Reduc
   require(shape.size() == 2, "{}: key 'shape' must hold 2 numbers", path.string());
   const auto rows = reader.read("basis_rows").to_int64(), cols = reader.read("basis_cols").to_int64();
   const auto values = reader.read("basis_values").to_doubles();
-  require(rows.size() == cols.size() && rows.size() == values.size(), "{}: basis arrays differ in length", path.string());
+  require(rows.size() == cols.size() && rows.size() == values.size(), "{}: basis arrays differ in length",
+          path.string());
   std::vector<Eigen::Triplet<double>> entries;
   for (std::size_t k = 0; k < rows.size(); ++k) {
-    require(rows[k] >= 0 && rows[k] < shape[0] && cols[k] >= 0 && cols[k] < shape[1], "{}: basis entry {} out of range", path.string(), k);
+    require(rows[k] >= 0 && rows[k] < shape[0] && cols[k] >= 0 && cols[k] < shape[1], "{}: basis entry {} out of range",
+            path.string(), k);
     entries.emplace_back(static_cast<int>(rows[k]), static_cast<int>(cols[k]), values[k]);
   }
   m.subspace.basis.resize(shape[0], shape[1]);
@@ -153,10 +157,11 @@ BodyHandles place_body_handles(const model::BodyLayer& layer, int point_handles)
   h.bone_of_node.assign(static_cast<std::size_t>(n), -1);
   const std::vector<char> attached = layer.problem.dirichlet.mask(n);
   for (int i = 0; i < n; ++i)
-    if (attached[static_cast<std::size_t>(3 * i)]) h.bone_of_node[static_cast<std::size_t>(i)] = dominant_joint(layer.trajectory->node_weights(i));
+    if (attached[static_cast<std::size_t>(3 * i)])
+      h.bone_of_node[static_cast<std::size_t>(i)] = dominant_joint(layer.trajectory->node_weights(i));
   if (point_handles == 0) return h;
-  require(point_handles > 0 && point_handles <= max_point_handles(layer), "reduced: {} point handles requested; the layer allows 1 to {}",
-          point_handles, max_point_handles(layer));
+  require(point_handles > 0 && point_handles <= max_point_handles(layer),
+          "reduced: {} point handles requested; the layer allows 1 to {}", point_handles, max_point_handles(layer));
   // Sites: the material control-point placement (nested, symmetric, denser on the torso), then the free node
   // nearest below each site at mid-depth.
   const std::vector<int> sites = material::layer_control_points(*layer.model, mesh, point_handles);
@@ -185,7 +190,8 @@ BodyHandles place_body_handles(const model::BodyLayer& layer, int point_handles)
         if (attached[static_cast<std::size_t>(3 * i)] || taken[static_cast<std::size_t>(i)]) continue;
         if (pass < 2 && by_rim[static_cast<std::size_t>(i)]) continue;
         const double depth = layer.depth[i];
-        if (pass == 0 && (depth < 0.3 || depth > 0.7)) continue;   // mid-depth first, any free node, then next to the rim
+        if (pass == 0 && (depth < 0.3 || depth > 0.7))
+          continue;  // mid-depth first, any free node, then next to the rim
         const double d = (mesh.nodes.row(i) - s).squaredNorm();
         if (d < best_d) {
           best_d = d;
@@ -208,10 +214,11 @@ model::Problem template_problem(const model::BodyLayer& layer) {
   material::SkinMaterial m;
   const material::Kappa kappa = material::default_kappa();
   m.young_tangent = kappa.young_tangent;
-  m.young_normal = kappa.young_tangent;   // isotropic: the fit must not depend on per-subject normals
+  m.young_normal = kappa.young_tangent;  // isotropic: the fit must not depend on per-subject normals
   m.poisson = layer.material.poisson;
   m.saturation = layer.material.saturation;
-  p.tet_material.assign(static_cast<std::size_t>(p.num_tets()), material::make_orthotropic_fung(m, Eigen::Vector3d::UnitZ()));
+  p.tet_material.assign(static_cast<std::size_t>(p.num_tets()),
+                        material::make_orthotropic_fung(m, Eigen::Vector3d::UnitZ()));
   p.dirichlet = layer.problem.dirichlet;
   p.mass = model::lumped_masses(p.rest, p.tets, layer.problem.density > 0 ? layer.problem.density : 1000.0);
   p.validate();
@@ -230,17 +237,20 @@ ReducedModel build_reduced_model(const model::BodyLayer& layer, const ReducedMod
   const auto start = std::chrono::steady_clock::now();
   const meshing::LayerMesh& mesh = *layer.mesh;
   require(requested.point_handles > 0 && requested.point_handles <= max_point_handles(layer),
-          "reduced: {} point handles requested; the layer allows 1 to {}", requested.point_handles, max_point_handles(layer));
+          "reduced: {} point handles requested; the layer allows 1 to {}", requested.point_handles,
+          max_point_handles(layer));
   ReducedModelOptions options = requested;
   options.cubature = std::min(resolved_cubature_count(requested), mesh.num_tets());
   options.cubature_auto = requested.cubature == -1;
   const int coordinates = options.point_handles * (options.basis.affine ? 12 : 3);
   if (options.cubature > 0 && options.cubature < 0.75 * coordinates)
-    logger()->warn("reduced: {} cubature tets for {} coordinates: below ≈ 0.75 per coordinate unsampled tets can leave the "
-                   "material's range (docs/reduced.md)",
-                   options.cubature, coordinates);
+    logger()->warn(
+        "reduced: {} cubature tets for {} coordinates: below ≈ 0.75 per coordinate unsampled tets can leave the "
+        "material's range (docs/reduced.md)",
+        options.cubature, coordinates);
   require(requested.cubature >= -1 && requested.cubature <= mesh.num_tets(),
-          "reduced: --cubature {} must be between 0 (exact) and {} tets, or −1 (auto)", requested.cubature, mesh.num_tets());
+          "reduced: --cubature {} must be between 0 (exact) and {} tets, or −1 (auto)", requested.cubature,
+          mesh.num_tets());
   ReducedModel m;
   m.cache_key = cache_key(mesh, layer.problem.dirichlet, options);
   const std::filesystem::path dir = options.cache_dir.empty() ? meshing::default_cache_dir() : options.cache_dir;
@@ -255,9 +265,9 @@ ReducedModel build_reduced_model(const model::BodyLayer& layer, const ReducedMod
     }
   }
   if (loaded) {
-    require(m.subspace.num_nodes() == mesh.num_nodes(), "reduced: cache entry {} has {} nodes, the mesh {}", path.string(),
-            m.subspace.num_nodes(), mesh.num_nodes());
-    const BodyHandles placed = place_body_handles(layer, 0);   // bone map only (cheap)
+    require(m.subspace.num_nodes() == mesh.num_nodes(), "reduced: cache entry {} has {} nodes, the mesh {}",
+            path.string(), m.subspace.num_nodes(), mesh.num_nodes());
+    const BodyHandles placed = place_body_handles(layer, 0);  // bone map only (cheap)
     m.handles.bone_of_node = placed.bone_of_node;
     m.cache_outcome = "hit";
   } else {
@@ -266,7 +276,8 @@ ReducedModel build_reduced_model(const model::BodyLayer& layer, const ReducedMod
         handle_weights(mesh.nodes, mesh.tets, m.handles.sets(), static_cast<int>(m.handles.point_nodes.size()));
     const std::vector<char> mask = layer.problem.dirichlet.mask(mesh.num_nodes());
     std::vector<char> attached(static_cast<std::size_t>(mesh.num_nodes()));
-    for (int i = 0; i < mesh.num_nodes(); ++i) attached[static_cast<std::size_t>(i)] = mask[static_cast<std::size_t>(3 * i)];
+    for (int i = 0; i < mesh.num_nodes(); ++i)
+      attached[static_cast<std::size_t>(i)] = mask[static_cast<std::size_t>(3 * i)];
     m.subspace = point_handle_subspace(weights, attached, mesh.nodes, m.handles.point_nodes, options.basis);
     if (options.cubature == 0) {
       m.cubature = exact_cubature(mesh.num_tets());
@@ -277,14 +288,16 @@ ReducedModel build_reduced_model(const model::BodyLayer& layer, const ReducedMod
       co.weighting = options.weighting;
       co.density.resize(static_cast<std::size_t>(mesh.num_tets()));
       for (int e = 0; e < mesh.num_tets(); ++e)
-        co.density[static_cast<std::size_t>(e)] = mesh.tet_part[static_cast<std::size_t>(e)] == meshing::Part::torso ? material::kTorsoDensity : 1.0;
+        co.density[static_cast<std::size_t>(e)] =
+            mesh.tet_part[static_cast<std::size_t>(e)] == meshing::Part::torso ? material::kTorsoDensity : 1.0;
       const model::Problem problem = template_problem(layer);
       if (options.cubature_auto) {
         m.cubature = select_covering_cubature(problem, m.subspace, co, options.coverage_ratio);
       } else {
         m.cubature = select_cubature(problem, m.subspace, co);
-        const CubatureCoverage coverage = cubature_coverage(rest_stiffness(problem, m.subspace, exact_cubature(problem.num_tets())),
-                                                            rest_stiffness(problem, m.subspace, m.cubature));
+        const CubatureCoverage coverage =
+            cubature_coverage(rest_stiffness(problem, m.subspace, exact_cubature(problem.num_tets())),
+                              rest_stiffness(problem, m.subspace, m.cubature));
         m.cubature.stiffness_ratio_max = coverage.max_ratio;
         m.cubature.stiffness_ratio_min = coverage.min_ratio;
       }
@@ -300,14 +313,17 @@ ReducedModel build_reduced_model(const model::BodyLayer& layer, const ReducedMod
     }
   }
   m.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  logger()->info("reduced model: {} point handles ({} coordinates), {} bone handles, {} cubature tets ({}; exact / cubature rest "
-                 "stiffness in [{:.3g}, {:.3g}]), cache {}, {:.2f} s",
-                 m.handles.point_nodes.size(), m.subspace.num_dofs(), m.handles.bone_joints().size(), m.cubature.size(),
-                 m.cubature.method, m.cubature.stiffness_ratio_min, m.cubature.stiffness_ratio_max, m.cache_outcome, m.build_seconds);
+  logger()->info(
+      "reduced model: {} point handles ({} coordinates), {} bone handles, {} cubature tets ({}; exact / cubature rest "
+      "stiffness in [{:.3g}, {:.3g}]), cache {}, {:.2f} s",
+      m.handles.point_nodes.size(), m.subspace.num_dofs(), m.handles.bone_joints().size(), m.cubature.size(),
+      m.cubature.method, m.cubature.stiffness_ratio_min, m.cubature.stiffness_ratio_max, m.cache_outcome,
+      m.build_seconds);
   if (!options.cubature_auto && m.cubature.stiffness_ratio_max > options.coverage_ratio)
-    logger()->warn("reduced: with {} cubature tets a direction of the subspace is {:.3g}× stiffer than the cubature sees (auto "
-                   "cubature grows until ≤ {}); tets outside the set are guarded while solving (docs/reduced.md)",
-                   m.cubature.size(), m.cubature.stiffness_ratio_max, options.coverage_ratio);
+    logger()->warn(
+        "reduced: with {} cubature tets a direction of the subspace is {:.3g}× stiffer than the cubature sees (auto "
+        "cubature grows until ≤ {}); tets outside the set are guarded while solving (docs/reduced.md)",
+        m.cubature.size(), m.cubature.stiffness_ratio_max, options.coverage_ratio);
   return m;
 }
 

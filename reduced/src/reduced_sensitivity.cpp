@@ -1,8 +1,7 @@
 // Forward sensitivities of the reduced backward Euler with respect to the control points' Young moduli
 // (reduced_sensitivity.hpp has the derivation; docs/reduced.md, "Sensitivities").
-#include <sflsh/reduced/reduced_sensitivity.hpp>
-
 #include <sflsh/core/error.hpp>
+#include <sflsh/reduced/reduced_sensitivity.hpp>
 #include <sflsh/reduced/young_derivative.hpp>
 
 #include <Eigen/Cholesky>
@@ -31,28 +30,31 @@ ReducedOptions sensitivity_solver_options(ReducedOptions base) {
 }
 
 Eigen::MatrixXd solve_step_sensitivity(const Eigen::MatrixXd& hessian, const Eigen::MatrixXd& rhs, double t) {
-  require(hessian.rows() == hessian.cols() && hessian.rows() == rhs.rows(), "sensitivity: Hessian is {}×{}, right-hand side has {} rows",
-          hessian.rows(), hessian.cols(), rhs.rows());
+  require(hessian.rows() == hessian.cols() && hessian.rows() == rhs.rows(),
+          "sensitivity: Hessian is {}×{}, right-hand side has {} rows", hessian.rows(), hessian.cols(), rhs.rows());
   if (!hessian.allFinite()) throw_error("sensitivity: non-finite Hessian at t = {:.6f} s", t);
   if (!rhs.allFinite()) throw_error("sensitivity: non-finite right-hand side (∂∇Φ/∂Y or history) at t = {:.6f} s", t);
   const Eigen::LLT<Eigen::MatrixXd> factor(hessian);
   if (factor.info() != Eigen::Success)
-    throw_error("sensitivity: the exact Hessian of the step potential is not positive definite at the converged state at t = {:.6f} s: "
-                "dq/dY is not defined there",
-                t);
+    throw_error(
+        "sensitivity: the exact Hessian of the step potential is not positive definite at the converged state at t = "
+        "{:.6f} s: "
+        "dq/dY is not defined there",
+        t);
   Eigen::MatrixXd solution = factor.solve(rhs);
   if (!solution.allFinite()) throw_error("sensitivity: non-finite dq/dY at t = {:.6f} s", t);
   return solution;
 }
 
-SensitivityIntegrator::SensitivityIntegrator(const model::Problem& problem, const Subspace& subspace, const Cubature& cubature,
-                                             Eigen::MatrixXd young_map, const ReducedOptions& options)
+SensitivityIntegrator::SensitivityIntegrator(const model::Problem& problem, const Subspace& subspace,
+                                             const Cubature& cubature, Eigen::MatrixXd young_map,
+                                             const ReducedOptions& options)
     : problem_(problem),
       integrator_(problem, subspace, cubature,
                   [&] {
                     ReducedOptions o = options;
                     o.record_substeps = true;
-                    o.step_tolerance = std::min(o.step_tolerance, 1e-9);   // dq/dY at a converged state
+                    o.step_tolerance = std::min(o.step_tolerance, 1e-9);  // dq/dY at a converged state
                     return o;
                   }()),
       elastic_(problem, subspace, cubature),
@@ -61,8 +63,9 @@ SensitivityIntegrator::SensitivityIntegrator(const model::Problem& problem, cons
   require(options.integrator == model::Integrator::backward_euler,
           "sensitivity: forward sensitivities are derived for backward Euler only, not for integrator '{}'",
           model::to_string(options.integrator));
-  require(young_map_.rows() == cubature.size(), "sensitivity: the Young map has {} rows, expected one per cubature tet ({})",
-          young_map_.rows(), cubature.size());
+  require(young_map_.rows() == cubature.size(),
+          "sensitivity: the Young map has {} rows, expected one per cubature tet ({})", young_map_.rows(),
+          cubature.size());
   require(young_map_.cols() >= 1 && young_map_.allFinite(), "sensitivity: the Young map must have ≥ 1 finite column");
   inertia_on_ = !options.quasi_static && problem.dynamic();
   for (int id : problem.dirichlet.drive) has_drives_ = has_drives_ || id >= 0;
@@ -71,7 +74,7 @@ SensitivityIntegrator::SensitivityIntegrator(const model::Problem& problem, cons
 
 void SensitivityIntegrator::initialize(const model::State& state) {
   integrator_.initialize(state);
-  sensitivity_.setZero();   // the initial state does not depend on Y
+  sensitivity_.setZero();  // the initial state does not depend on Y
   previous_.resize(0, 0);
   has_previous_ = false;
   t_current_ = integrator_.time();
@@ -87,7 +90,7 @@ Eigen::MatrixXd SensitivityIntegrator::elastic_gradient_dyoung(const Eigen::Vect
     const material::OrthotropicFung& m = problem_.tet_material[static_cast<std::size_t>(elastic_.point_tet(p))];
     const YoungStressDerivative d = d2psi_ortho_fung_dF_dyoung(elastic_.point_deformation_gradient(p, q), m);
     for (Eigen::Index i = 0; i < N; ++i) {
-      const double w = young_map_(p, i);   // ∂Y_c/∂Y_i
+      const double w = young_map_(p, i);  // ∂Y_c/∂Y_i
       if (w == 0.0) continue;
       elastic_.add_point_stress(p, d.tangent, w, out.col(i));
       elastic_.add_point_stress(p, d.normal, w, out.col(N + i));
@@ -110,7 +113,7 @@ void SensitivityIntegrator::substep_sensitivity(const ReducedSubstep& substep, S
   clock = Clock::now();
   Eigen::MatrixXd hessian;
   if (inertia_on_) {
-    const double r = has_previous_ ? dt / (t_current_ - t_previous_) : 0.0;   // h / h_prev
+    const double r = has_previous_ ? dt / (t_current_ - t_previous_) : 0.0;  // h / h_prev
     Eigen::MatrixXd cross;
     inertia_.cross_mass(t_current_, cross);
     rhs.noalias() += ((1.0 + r) / (dt * dt)) * (cross * sensitivity_);
@@ -124,7 +127,7 @@ void SensitivityIntegrator::substep_sensitivity(const ReducedSubstep& substep, S
   } else {
     hessian.setZero(substep.q.size(), substep.q.size());
   }
-  elastic_.add_hessian(substep.q, hessian, material::HessianProjection::kNone);   // exact, at the converged q
+  elastic_.add_hessian(substep.q, hessian, material::HessianProjection::kNone);  // exact, at the converged q
   stats.hessian_seconds += seconds_since(clock);
   clock = Clock::now();
   Eigen::MatrixXd next = solve_step_sensitivity(hessian, rhs, t1);
@@ -139,11 +142,12 @@ void SensitivityIntegrator::substep_sensitivity(const ReducedSubstep& substep, S
 SensitivityStepStats SensitivityIntegrator::step(double h) {
   require(valid_, "sensitivity: the integrator is not initialized or an earlier step failed; call initialize()");
   SensitivityStepStats stats;
-  stats.step = integrator_.step(h);   // on failure the state (and S) are unchanged
+  stats.step = integrator_.step(h);  // on failure the state (and S) are unchanged
   if (integrator_.cubature_added() > 0)
-    throw_error("sensitivity: at t = {:.6f} s the guard added {} tet(s) to the cubature (tets outside it left the material's "
-                "range); dq/dY is defined on the model's cubature only: use a larger --cubature for this case",
-                integrator_.time(), integrator_.cubature_added());
+    throw_error(
+        "sensitivity: at t = {:.6f} s the guard added {} tet(s) to the cubature (tets outside it left the material's "
+        "range); dq/dY is defined on the model's cubature only: use a larger --cubature for this case",
+        integrator_.time(), integrator_.cubature_added());
   const auto start = Clock::now();
   valid_ = false;
   for (const ReducedSubstep& substep : integrator_.last_substeps()) {
@@ -155,8 +159,9 @@ SensitivityStepStats SensitivityIntegrator::step(double h) {
   return stats;
 }
 
-SensitivityResult simulate_with_sensitivities(const model::Problem& problem, const Subspace& subspace, const Cubature& cubature,
-                                              const Eigen::MatrixXd& young_map, const model::State& start, double h, int frames,
+SensitivityResult simulate_with_sensitivities(const model::Problem& problem, const Subspace& subspace,
+                                              const Cubature& cubature, const Eigen::MatrixXd& young_map,
+                                              const model::State& start, double h, int frames,
                                               const ReducedOptions& options) {
   require(frames >= 0, "sensitivity: frame count must be ≥ 0, got {}", frames);
   const auto t0 = Clock::now();

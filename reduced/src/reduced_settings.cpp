@@ -1,10 +1,10 @@
-#include <sflsh/reduced/reduced_settings.hpp>
-
 #include <sflsh/core/error.hpp>
+#include <sflsh/reduced/reduced_settings.hpp>
 
 namespace sflsh::reduced {
 
-ReducedModelOptions reduced_model_options(const ReducedSettings& s, int handles, int cubature, const std::string& cache) {
+ReducedModelOptions reduced_model_options(const ReducedSettings& s, int handles, int cubature,
+                                          const std::string& cache) {
   ReducedModelOptions o;
   o.point_handles = handles;
   o.cubature = cubature;

@@ -1,19 +1,17 @@
-#include <sflsh/reduced/reduced_solver.hpp>
-
-#include <sflsh/model/step_ladder.hpp>
-
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
+#include <sflsh/model/step_ladder.hpp>
 #include <sflsh/reduced/reduced_history.hpp>
+#include <sflsh/reduced/reduced_solver.hpp>
 
 #include <Eigen/Cholesky>
 #include <Eigen/SparseCholesky>
 
 #include <array>
-#include <span>
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <span>
 
 namespace sflsh::reduced {
 
@@ -29,11 +27,14 @@ struct TimedTerm {
   double* seconds = nullptr;
 };
 
-Eigen::VectorXd node_major(const meshing::RowMatrixX3d& rows) { return Eigen::Map<const Eigen::VectorXd>(rows.data(), rows.size()); }
+Eigen::VectorXd node_major(const meshing::RowMatrixX3d& rows) {
+  return Eigen::Map<const Eigen::VectorXd>(rows.data(), rows.size());
+}
 
 }  // namespace
 
-ReducedSolver::ReducedSolver(const model::Problem& problem, const Subspace& subspace, const Cubature& cubature, const ReducedOptions& options)
+ReducedSolver::ReducedSolver(const model::Problem& problem, const Subspace& subspace, const Cubature& cubature,
+                             const ReducedOptions& options)
     : problem_(problem),
       subspace_(subspace),
       cubature_(cubature),
@@ -52,7 +53,8 @@ ReducedSolver::ReducedSolver(const model::Problem& problem, const Subspace& subs
   for (int d : problem.dirichlet.dof) ++constrained_axes[static_cast<std::size_t>(d / 3)];
   for (int i = 0; i < problem.num_nodes(); ++i) {
     const int c = constrained_axes[static_cast<std::size_t>(i)];
-    require(c == 0 || c == 3, "reduced: node {} has {} of 3 components prescribed; the reduced model attaches whole nodes only", i, c);
+    require(c == 0 || c == 3,
+            "reduced: node {} has {} of 3 components prescribed; the reduced model attaches whole nodes only", i, c);
     if (c == 3) require(subspace.basis.row(i).nonZeros() == 0, "reduced: attached node {} has basis functions", i);
   }
   for (int id : problem.dirichlet.drive) has_drives_ = has_drives_ || id >= 0;
@@ -72,16 +74,18 @@ Eigen::VectorXd ReducedSolver::initial_acceleration() const {
   if (options_.quasi_static || !problem_.dynamic()) return Eigen::VectorXd::Zero(size);
   Eigen::VectorXd gradient = Eigen::VectorXd::Zero(subspace_.num_dofs());
   elastic_.add_gradient(q_, gradient);
-  const Eigen::VectorXd zeta = gather_nodes(prescribed_acceleration(problem_, subspace_, q_, t_), inertia_.inertia_nodes());
+  const Eigen::VectorXd zeta =
+      gather_nodes(prescribed_acceleration(problem_, subspace_, q_, t_), inertia_.inertia_nodes());
   return subspace_acceleration(inertia_, gradient, zeta);
 }
 
 void ReducedSolver::initialize(const model::State& state) {
   const Eigen::Index dofs = problem_.num_dofs();
-  require(state.x.size() == dofs && state.w.size() == dofs, "reduced: initial state has {} / {} entries, expected {}", state.x.size(),
-          state.w.size(), dofs);
+  require(state.x.size() == dofs && state.w.size() == dofs, "reduced: initial state has {} / {} entries, expected {}",
+          state.x.size(), state.w.size(), dofs);
   require(state.x.allFinite() && state.w.allFinite(), "reduced: initial state is not finite");
-  require(state.a.size() == 0 || state.a.size() == dofs, "reduced: initial state has {} accelerations, expected 0 or {}", state.a.size(), dofs);
+  require(state.a.size() == 0 || state.a.size() == dofs,
+          "reduced: initial state has {} accelerations, expected 0 or {}", state.a.size(), dofs);
   require(state.a.allFinite() && state.p_previous.allFinite() && state.w_previous.allFinite(),
           "reduced: the initial state's history (a, p_previous, w_previous) is not finite");
   t_ = state.t;
@@ -93,7 +97,8 @@ void ReducedSolver::initialize(const model::State& state) {
     // Least squares on the nodes: (BᵀB) t = Bᵀ u per axis.
     const Eigen::SparseMatrix<double> gram = Eigen::SparseMatrix<double>(subspace_.basis.transpose()) * subspace_.basis;
     Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(gram);
-    require(ldlt.info() == Eigen::Success, "reduced: the basis has a function without support; cannot project the initial state");
+    require(ldlt.info() == Eigen::Success,
+            "reduced: the basis has a function without support; cannot project the initial state");
     for (int axis = 0; axis < 3; ++axis) {
       Eigen::VectorXd ua(problem_.num_nodes());
       for (int i = 0; i < problem_.num_nodes(); ++i) ua[i] = u[3 * i + axis];
@@ -126,8 +131,8 @@ void ReducedSolver::initialize(const model::State& state) {
   }
 }
 
-bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProjection projection, model::StepStats& stats, std::string& reason,
-                                  int& startup) {
+bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProjection projection, model::StepStats& stats,
+                                  std::string& reason, int& startup) {
   const double t1 = t0 + dt;
   const bool inertia_on = !options_.quasi_static && problem_.dynamic();
   auto clock = Clock::now();
@@ -204,10 +209,10 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
     const bool same_h = std::abs(factor_h_ - target.h_eff) <= 1e-12 * target.h_eff;
     if (!factor_valid_ || !same_h || factor_projection_ != projection || !options_.reuse_factorization || contact)
       factor_valid_ = false;
-    bool fresh = false;          // the factor was computed at this step's current iterate
+    bool fresh = false;  // the factor was computed at this step's current iterate
     bool refresh = !factor_valid_;
     double g0 = 0.0, g_previous = kInfinity;
-    double previous_move = 0.0;   // ‖Δ‖∞ of the last full step [m]
+    double previous_move = 0.0;  // ‖Δ‖∞ of the last full step [m]
     bool converged = false;
     for (int it = 0; it < options_.max_newton && !converged; ++it) {
       gradient.setZero();
@@ -243,7 +248,7 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
             clock = Clock::now();
             try {
               if (k == 0) {
-                term.term->hessian(q, hessian);   // assigns (the inertia term copies its constant JᵀMJ/ĥ²)
+                term.term->hessian(q, hessian);  // assigns (the inertia term copies its constant JᵀMJ/ĥ²)
               } else {
                 term.term->add_hessian(q, hessian);
               }
@@ -283,7 +288,8 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
         for (int ls = 0; ls < 40; ++ls, alpha *= 0.5) {
           const Eigen::VectorXd trial = q + alpha * delta;
           const double phi_trial = potential(trial);
-          const bool roundoff = std::isfinite(phi_trial) && std::abs(phi_trial - phi) <= 1e-13 * std::max(1.0, std::abs(phi));
+          const bool roundoff =
+              std::isfinite(phi_trial) && std::abs(phi_trial - phi) <= 1e-13 * std::max(1.0, std::abs(phi));
           if (phi_trial <= phi + 1e-4 * alpha * slope ||
               (alpha == 1.0 && roundoff && std::abs(slope) <= 1e-10 * std::max(1.0, std::abs(phi)))) {
             q = trial;
@@ -293,7 +299,7 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
           }
         }
         if (!accepted) {
-          if (!fresh) {   // a stale factor may point badly: retry the iteration with a fresh Hessian
+          if (!fresh) {  // a stale factor may point badly: retry the iteration with a fresh Hessian
             refresh = true;
             continue;
           }
@@ -316,22 +322,24 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
     }
     if (!converged) {
       factor_valid_ = false;
-      reason = fmt::format("no convergence in {} Newton iterations (‖∇Φ‖ = {:.3e})", options_.max_newton, stats.final_gradient);
+      reason = fmt::format("no convergence in {} Newton iterations (‖∇Φ‖ = {:.3e})", options_.max_newton,
+                           stats.final_gradient);
       return false;
     }
     if (!q.allFinite()) {
       reason = "non-finite state";
       return false;
     }
-    if (guard_) {   // the tets outside the cubature: over the limit → into the cubature, and solve again
+    if (guard_) {  // the tets outside the cubature: over the limit → into the cubature, and solve again
       clock = Clock::now();
       const std::vector<GuardViolation> over = guard_->check(q);
       stats.elastic_seconds += seconds_since(clock);
       if (!over.empty()) {
         if (enlargements >= options_.max_enlargements) {
-          reason = fmt::format("tet {} outside the cubature still leaves the material's range (Fung exponent {:.3g} > {}) after {} "
-                               "enlargements of the cubature",
-                               over.front().tet, over.front().exponent, options_.guard_exponent, enlargements);
+          reason = fmt::format(
+              "tet {} outside the cubature still leaves the material's range (Fung exponent {:.3g} > {}) after {} "
+              "enlargements of the cubature",
+              over.front().tet, over.front().exponent, options_.guard_exponent, enlargements);
           factor_valid_ = false;
           return false;
         }
@@ -346,10 +354,12 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
     clock = Clock::now();
     const bool accepted = potentials_.accept(q, inertia_);
     stats.potential_seconds += seconds_since(clock);
-    factor_valid_ = false;   // the factor holds this substep's contact Hessian
+    factor_valid_ = false;  // the factor holds this substep's contact Hessian
     if (accepted) break;
     if (refinement >= potentials_.max_refinements()) {
-      logger()->warn("reduced: t = {:.6g}: contact still over its tolerance after {} refinement(s); the substep is kept", t1, refinement);
+      logger()->warn(
+          "reduced: t = {:.6g}: contact still over its tolerance after {} refinement(s); the substep is kept", t1,
+          refinement);
       break;
     }
     ++refinement;
@@ -359,7 +369,7 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
   Eigen::VectorXd p_new;
   inertia_.posed(q, p_new);
   model::advance_history(target, history_, p_new);
-  if (target.integrator != options_.integrator) ++startup;   // BDF2 started (or restarted) as backward Euler
+  if (target.integrator != options_.integrator) ++startup;  // BDF2 started (or restarted) as backward Euler
   q_rate_previous_ = q_rate_;
   q_rate_ = (q - q_) / dt;
   rate_dt_ = dt;
@@ -400,7 +410,7 @@ class ReducedSolver::Ladder final : public model::LadderSolver {
     solver_.substeps_.clear();
   }
   bool attempt(double dt, material::HessianProjection hessian, model::StepStats& stats, std::string& reason) override {
-    if (!history_saved_ && solver_.t_ == t_ && dt < 0.75 * h_) {   // the first substep of a split rung
+    if (!history_saved_ && solver_.t_ == t_ && dt < 0.75 * h_) {  // the first substep of a split rung
       history_ = solver_.history_;
       history_saved_ = true;
     }
@@ -427,8 +437,9 @@ model::StepStats ReducedSolver::step(double h) {
           "reduced: the solver has no state; call initialize() before step()");
   model::LadderOptions ladder_options;
   ladder_options.exact_hessian_first = options_.exact_hessian_first && !options_.quasi_static;
-  ladder_options.projection = problem_.projection == material::HessianProjection::kNone ? material::HessianProjection::kStressDerivative
-                                                                                         : problem_.projection;
+  ladder_options.projection = problem_.projection == material::HessianProjection::kNone
+                                  ? material::HessianProjection::kStressDerivative
+                                  : problem_.projection;
   ladder_options.max_halvings = options_.max_halvings;
   Ladder ladder(*this, h);
   return model::step_with_ladder(ladder, h, ladder_options, "reduced model");
@@ -440,10 +451,11 @@ model::State ReducedSolver::full_state() const {
   const std::vector<int>& nodes = inertia_.inertia_nodes();
   scatter_nodes(history_.v, nodes, s.w);
   if (options_.integrator == model::Integrator::newmark && history_.a.size() == history_.p.size()) {
-    s.a = prescribed_acceleration(problem_, subspace_, q_, t_);   // off the inertia nodes: the prescribed motion's
+    s.a = prescribed_acceleration(problem_, subspace_, q_, t_);  // off the inertia nodes: the prescribed motion's
     scatter_nodes(history_.a, nodes, s.a);
   }
-  if (options_.integrator == model::Integrator::bdf2 && history_.p_previous.size() == history_.p.size() && history_.h_previous > 0.0) {
+  if (options_.integrator == model::Integrator::bdf2 && history_.p_previous.size() == history_.p.size() &&
+      history_.h_previous > 0.0) {
     // Off the inertia nodes x = x_D (no basis function there): the prescribed motion one step back.
     const double t_previous = t_ - history_.h_previous;
     const model::State previous = model::initial_state(problem_, t_previous);

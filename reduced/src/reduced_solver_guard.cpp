@@ -2,10 +2,9 @@
 // caught leaving the material's range joins the cubature with ω = 1 (its own V Ψ), and the cubature point nearest to
 // it (by centroid) among those whose weight covers it gives up its volume, ω_p V_p −= V_e, so Σ ω V stays the
 // layer's volume.
-#include <sflsh/reduced/reduced_solver.hpp>
-
 #include <sflsh/core/log.hpp>
 #include <sflsh/material/orthotropic_fung.hpp>
+#include <sflsh/reduced/reduced_solver.hpp>
 
 #include <fmt/format.h>
 
@@ -35,7 +34,10 @@ void ReducedSolver::enlarge_cubature(const std::vector<GuardViolation>& over, do
     double best = std::numeric_limits<double>::infinity();
     for (int p = 0; p < cubature_.size(); ++p) {
       const int tet = cubature_.tets[static_cast<std::size_t>(p)];
-      if (tet == e || cubature_.weights[static_cast<std::size_t>(p)] * problem_.tet_rest[static_cast<std::size_t>(tet)].volume < volume) continue;
+      if (tet == e ||
+          cubature_.weights[static_cast<std::size_t>(p)] * problem_.tet_rest[static_cast<std::size_t>(tet)].volume <
+              volume)
+        continue;
       const double d = (centroid(problem_, tet) - at).squaredNorm();
       if (d < best) {
         best = d;
@@ -63,9 +65,11 @@ void ReducedSolver::enlarge_cubature(const std::vector<GuardViolation>& over, do
     ++added_;
     if (named.size() < 200) named += fmt::format("{}{} (x = {:.3g})", named.empty() ? "" : ", ", e, v.exponent);
   }
-  logger()->warn("reduced: t = {:.6g} s: tet(s) {} outside the cubature passed the guard's Fung exponent {} (the material's cap is "
-                 "{}); added to the cubature, now {} tets, and the substep solved again",
-                 t, named, options_.guard_exponent, material::kFungExponentCap, cubature_.size());
+  logger()->warn(
+      "reduced: t = {:.6g} s: tet(s) {} outside the cubature passed the guard's Fung exponent {} (the material's cap "
+      "is "
+      "{}); added to the cubature, now {} tets, and the substep solved again",
+      t, named, options_.guard_exponent, material::kFungExponentCap, cubature_.size());
 }
 
 }  // namespace sflsh::reduced

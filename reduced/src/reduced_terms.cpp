@@ -1,6 +1,5 @@
-#include <sflsh/reduced/reduced_terms.hpp>
-
 #include <sflsh/core/error.hpp>
+#include <sflsh/reduced/reduced_terms.hpp>
 
 #include <cmath>
 #include <limits>
@@ -18,11 +17,13 @@ double ReducedElasticTerm::value(const Eigen::VectorXd& q) const {
     const double energy = elastic_.energy(q);
     return std::isfinite(energy) ? energy : kInfinity;
   } catch (const Error&) {
-    return kInfinity;   // a non-finite F or a Fung exponent over its cap: this state is out of reach
+    return kInfinity;  // a non-finite F or a Fung exponent over its cap: this state is out of reach
   }
 }
 
-void ReducedElasticTerm::add_gradient(const Eigen::VectorXd& q, Eigen::VectorXd& gradient) const { elastic_.add_gradient(q, gradient); }
+void ReducedElasticTerm::add_gradient(const Eigen::VectorXd& q, Eigen::VectorXd& gradient) const {
+  elastic_.add_gradient(q, gradient);
+}
 
 void ReducedElasticTerm::add_hessian(const Eigen::VectorXd& q, Eigen::MatrixXd& hessian) const {
   elastic_.add_hessian(q, hessian, projection_);

@@ -1,6 +1,5 @@
-#include <sflsh/reduced/weights.hpp>
-
 #include <sflsh/core/error.hpp>
+#include <sflsh/reduced/weights.hpp>
 
 #include <Eigen/Geometry>
 #include <Eigen/LU>
@@ -22,7 +21,7 @@ void shape_gradients(const RowMatrixX3d& nodes, const RowMatrixX4i& tets, int e,
   const double det = dm.determinant();
   require(det > 0.0, "weights: tet {} is inverted or degenerate (det {:.3e})", e, det);
   volume = det / 6.0;
-  const Eigen::Matrix3d inv = dm.inverse();   // rows: ∇φ_1..3
+  const Eigen::Matrix3d inv = dm.inverse();  // rows: ∇φ_1..3
   grad.bottomRows<3>() = inv;
   grad.row(0) = -inv.colwise().sum();
 }
@@ -30,11 +29,11 @@ void shape_gradients(const RowMatrixX3d& nodes, const RowMatrixX4i& tets, int e,
 /// Boundary faces (each with the tet it belongs to and the local index of the opposite node).
 struct BoundaryFace {
   int tet;
-  int opposite;   ///< local node 0..3 not on the face
+  int opposite;  ///< local node 0..3 not on the face
 };
 
 std::vector<BoundaryFace> boundary_faces(const RowMatrixX4i& tets) {
-  std::map<std::array<int, 3>, std::pair<int, int>> count;   // sorted face → (tet, opposite) or tet = −1 when shared
+  std::map<std::array<int, 3>, std::pair<int, int>> count;  // sorted face → (tet, opposite) or tet = −1 when shared
   for (int e = 0; e < tets.rows(); ++e) {
     for (int o = 0; o < 4; ++o) {
       std::array<int, 3> f{};
@@ -132,7 +131,7 @@ SparseMatrixd linearly_precise_laplacian(const RowMatrixX3d& nodes, const RowMat
   double volume = 0.0;
   for (int e = 0; e < tets.rows(); ++e) {
     shape_gradients(nodes, tets, e, grad, volume);
-    const Eigen::Matrix4d local = volume * grad * grad.transpose();   // L_ab = V ∇φ_a·∇φ_b
+    const Eigen::Matrix4d local = volume * grad * grad.transpose();  // L_ab = V ∇φ_a·∇φ_b
     for (int a = 0; a < 4; ++a)
       for (int b = 0; b < 4; ++b) entries.emplace_back(tets(e, a), tets(e, b), local(a, b));
   }
@@ -145,11 +144,11 @@ SparseMatrixd linearly_precise_laplacian(const RowMatrixX3d& nodes, const RowMat
       if (a != face.opposite) f[static_cast<std::size_t>(k++)] = a;
     const Eigen::Vector3d p0 = nodes.row(tets(face.tet, f[0])), p1 = nodes.row(tets(face.tet, f[1])),
                           p2 = nodes.row(tets(face.tet, f[2]));
-    Eigen::Vector3d area_normal = 0.5 * (p1 - p0).cross(p2 - p0);   // |·| = A_f
+    Eigen::Vector3d area_normal = 0.5 * (p1 - p0).cross(p2 - p0);  // |·| = A_f
     const Eigen::Vector3d opposite = nodes.row(tets(face.tet, face.opposite));
-    if (area_normal.dot(p0 - opposite) < 0.0) area_normal = -area_normal;   // outward
+    if (area_normal.dot(p0 - opposite) < 0.0) area_normal = -area_normal;  // outward
     for (int b = 0; b < 4; ++b) {
-      const double flux = grad.row(b).dot(area_normal) / 3.0;   // (A_f/3) ∇φ_b·n
+      const double flux = grad.row(b).dot(area_normal) / 3.0;  // (A_f/3) ∇φ_b·n
       for (int a : f) entries.emplace_back(tets(face.tet, a), tets(face.tet, b), -flux);
     }
   }
@@ -168,7 +167,8 @@ SparseMatrixd linearly_precise_biharmonic(const RowMatrixX3d& nodes, const RowMa
   return 0.5 * (Q + Qt);
 }
 
-Eigen::MatrixXd handle_weights(const RowMatrixX3d& nodes, const RowMatrixX4i& tets, const HandleSets& handles, int columns) {
+Eigen::MatrixXd handle_weights(const RowMatrixX3d& nodes, const RowMatrixX4i& tets, const HandleSets& handles,
+                               int columns) {
   require(!handles.handle_nodes.empty(), "weights: no handles");
   std::vector<int> constrained;
   for (std::size_t k = 0; k < handles.handle_nodes.size(); ++k) {
@@ -188,8 +188,8 @@ Eigen::MatrixXd handle_weights(const RowMatrixX3d& nodes, const RowMatrixX4i& te
   return W;
 }
 
-Eigen::VectorXd biharmonic_interpolate(const RowMatrixX3d& nodes, const RowMatrixX4i& tets, const std::vector<int>& constrained,
-                                       const Eigen::VectorXd& values) {
+Eigen::VectorXd biharmonic_interpolate(const RowMatrixX3d& nodes, const RowMatrixX4i& tets,
+                                       const std::vector<int>& constrained, const Eigen::VectorXd& values) {
   require(values.size() == static_cast<Eigen::Index>(constrained.size()), "weights: {} values for {} constrained nodes",
           values.size(), constrained.size());
   const ConstrainedSolve solver(nodes, tets, constrained);
@@ -198,12 +198,14 @@ Eigen::VectorXd biharmonic_interpolate(const RowMatrixX3d& nodes, const RowMatri
   return solver.solve(full);
 }
 
-Subspace point_handle_subspace(const Eigen::MatrixXd& weights, const std::vector<char>& attached, const RowMatrixX3d& nodes,
-                               const std::vector<int>& handle_nodes, const BasisOptions& options) {
+Subspace point_handle_subspace(const Eigen::MatrixXd& weights, const std::vector<char>& attached,
+                               const RowMatrixX3d& nodes, const std::vector<int>& handle_nodes,
+                               const BasisOptions& options) {
   const Eigen::Index n = weights.rows(), p = weights.cols();
-  require(static_cast<Eigen::Index>(attached.size()) == n && nodes.rows() == n, "subspace: {} weight rows, {} attachment flags, {} nodes",
-          n, attached.size(), nodes.rows());
-  require(static_cast<Eigen::Index>(handle_nodes.size()) == p, "subspace: {} handle nodes for {} weight columns", handle_nodes.size(), p);
+  require(static_cast<Eigen::Index>(attached.size()) == n && nodes.rows() == n,
+          "subspace: {} weight rows, {} attachment flags, {} nodes", n, attached.size(), nodes.rows());
+  require(static_cast<Eigen::Index>(handle_nodes.size()) == p, "subspace: {} handle nodes for {} weight columns",
+          handle_nodes.size(), p);
   require(options.max_influences >= 1, "subspace: max_influences must be at least 1");
   require(options.affine_length > 0.0, "subspace: affine_length must be positive");
   const int per_handle = options.affine ? 4 : 1;
@@ -213,14 +215,17 @@ Subspace point_handle_subspace(const Eigen::MatrixXd& weights, const std::vector
     if (attached[static_cast<std::size_t>(i)]) continue;
     row.clear();
     for (Eigen::Index j = 0; j < p; ++j)
-      if (std::abs(weights(i, j)) >= options.drop_below) row.emplace_back(-std::abs(weights(i, j)), static_cast<int>(j));
+      if (std::abs(weights(i, j)) >= options.drop_below)
+        row.emplace_back(-std::abs(weights(i, j)), static_cast<int>(j));
     std::sort(row.begin(), row.end());
-    if (static_cast<int>(row.size()) > options.max_influences) row.resize(static_cast<std::size_t>(options.max_influences));
+    if (static_cast<int>(row.size()) > options.max_influences)
+      row.resize(static_cast<std::size_t>(options.max_influences));
     for (const auto& [negative, j] : row) {
       const double w = weights(i, j);
       entries.emplace_back(static_cast<int>(i), per_handle * j, w);
       if (options.affine) {
-        const Eigen::RowVector3d r = (nodes.row(i) - nodes.row(handle_nodes[static_cast<std::size_t>(j)])) / options.affine_length;
+        const Eigen::RowVector3d r =
+            (nodes.row(i) - nodes.row(handle_nodes[static_cast<std::size_t>(j)])) / options.affine_length;
         for (int c = 0; c < 3; ++c) entries.emplace_back(static_cast<int>(i), per_handle * j + 1 + c, w * r[c]);
       }
     }

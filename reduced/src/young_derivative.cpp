@@ -8,8 +8,8 @@
 namespace sflsh::reduced {
 
 Eigen::Vector2d young_moduli(const material::OrthotropicFung& m) {
-  const double b = m.normal.dot(m.scaling * m.normal);   // nᵀ P_Y n = Y_n^{1/4}
-  const double a = 0.5 * (m.scaling.trace() - b);         // tr P_Y = 2a + b
+  const double b = m.normal.dot(m.scaling * m.normal);  // nᵀ P_Y n = Y_n^{1/4}
+  const double a = 0.5 * (m.scaling.trace() - b);       // tr P_Y = 2a + b
   return {std::pow(a, 4.0), std::pow(b, 4.0)};
 }
 
@@ -22,7 +22,7 @@ YoungStressDerivative d2psi_ortho_fung_dF_dyoung(const Eigen::Matrix3d& F, const
   const double a = 0.5 * (m.scaling.trace() - b);
   const Eigen::Matrix3d& PY = m.scaling;
   const Eigen::Matrix3d E = material::green_strain(F);
-  const Eigen::Matrix3d E_hat = PY * E * PY;                                    // Ê = P_Y E P_Y
+  const Eigen::Matrix3d E_hat = PY * E * PY;                                      // Ê = P_Y E P_Y
   const Eigen::Matrix3d M = 2.0 * m.mu0 * E_hat + m.lambda0 * E_hat.trace() * I;  // ∂Ψ₀/∂Ê
   const double psi0 = m.mu0 * E_hat.squaredNorm() + 0.5 * m.lambda0 * E_hat.trace() * E_hat.trace();
   const Eigen::Matrix3d S0 = PY * M * PY;
@@ -43,11 +43,11 @@ YoungStressDerivative d2psi_ortho_fung_dF_dyoung(const Eigen::Matrix3d& F, const
   }
 
   const auto derivative = [&](const Eigen::Matrix3d& D, double dc_over_c) {
-    const Eigen::Matrix3d dE_hat = D * E * PY + PY * E * D;                     // ∂Ê
-    const double dpsi0 = (M.array() * dE_hat.array()).sum();                    // M : ∂Ê
-    const Eigen::Matrix3d dS0 = D * M * PY + PY * M * D +
-                                PY * (2.0 * m.mu0 * dE_hat + m.lambda0 * dE_hat.trace() * I) * PY;
-    const double dx = 2.0 * dpsi0 * m.inv_c - x * dc_over_c;                    // x = 2Ψ₀/c
+    const Eigen::Matrix3d dE_hat = D * E * PY + PY * E * D;   // ∂Ê
+    const double dpsi0 = (M.array() * dE_hat.array()).sum();  // M : ∂Ê
+    const Eigen::Matrix3d dS0 =
+        D * M * PY + PY * M * D + PY * (2.0 * m.mu0 * dE_hat + m.lambda0 * dE_hat.trace() * I) * PY;
+    const double dx = 2.0 * dpsi0 * m.inv_c - x * dc_over_c;  // x = 2Ψ₀/c
     return Eigen::Matrix3d(d2phi * dx * P0 + dphi * (F * dS0));
   };
   YoungStressDerivative out;

@@ -15,7 +15,7 @@ namespace sflsh::scene::detail {
 /// elastic displacement: the nodes' skinned end leaves the elastic part out).
 struct BodyReach {
   Aabb box;
-  double pad = 0.0;   ///< [m]
+  double pad = 0.0;  ///< [m]
 };
 
 /// Bodies i, j are linked when box_i and box_j are at most `reach` + pad_i + pad_j apart [m]; the groups are

@@ -1,8 +1,6 @@
 // One body along a motion, frame by frame (body_simulation.hpp): the settings are checked and the work estimated
 // before anything large is built, then the layer, the solver (full space on PETSc or the reduced model) and the
 // writer; step() runs one output frame through the shared frame loop and records it.
-#include <sflsh/scene/body_simulation.hpp>
-
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
 #include <sflsh/core/work_limit.hpp>
@@ -12,6 +10,7 @@
 #include <sflsh/reduced/reduced_model.hpp>
 #include <sflsh/reduced/reduced_settings.hpp>
 #include <sflsh/reduced/reduced_solver.hpp>
+#include <sflsh/scene/body_simulation.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -54,10 +53,12 @@ BodySimulation::BodySimulation(const BodyRunSettings& opt, RunFolder* frames_to,
   check_body_run_work(opt, opt.frames);
   motion_ = body::load_motion(opt.motion, opt.fps, opt.frames);
   motion_.validate();
-  check_body_run_work(opt, static_cast<double>(motion_.num_frames()));   // … and with the motion's own length
+  check_body_run_work(opt, static_cast<double>(motion_.num_frames()));  // … and with the motion's own length
 
-  if (opt.material_data) material_file_ = *opt.material_data;
-  else material_file_ = model::load_layer_material(opt.layer);
+  if (opt.material_data)
+    material_file_ = *opt.material_data;
+  else
+    material_file_ = model::load_layer_material(opt.layer);
   const model::BodyLayerOptions layer_options = model::body_layer_options(opt.layer, opt.mesh);
   const auto t_build = Clock::now();
   layer_ = std::make_unique<model::BodyLayer>(model::build_body_layer(
@@ -68,8 +69,8 @@ BodySimulation::BodySimulation(const BodyRunSettings& opt, RunFolder* frames_to,
       reporting.log_details ? spdlog::level::info : spdlog::level::debug,
       "simulate: {} nodes ({} free), {} tets, {} frames at {} fps, {} substep(s), {} + {} mass, {} process(es)",
       problem.num_nodes(), problem.num_nodes() - static_cast<int>(problem.dirichlet.dof.size() / 3), problem.num_tets(),
-      motion_.num_frames(), motion_.fps, opt.substeps, model::to_string(integrator), model::to_string(problem.mass_kind),
-      size);
+      motion_.num_frames(), motion_.fps, opt.substeps, model::to_string(integrator),
+      model::to_string(problem.mass_kind), size);
 
   const bool use_reduced = opt.solver == "reduced";
   require(!use_reduced || size == 1, "--solver reduced runs on one process (got {}); parallelize over bodies instead",

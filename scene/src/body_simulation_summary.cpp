@@ -1,13 +1,12 @@
 // summary.json's body entries of a BodySimulation, its end (drain the frame writes, close the series) and the
 // whole run of `sflsh simulate --solver full|reduced` and `sflsh sweep` (run_body_simulation).
-#include <sflsh/scene/body_simulation.hpp>
-
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/progress.hpp>
 #include <sflsh/core/vtk_io.hpp>
+#include <sflsh/model/time_integrator.hpp>
 #include <sflsh/reduced/reduced_model.hpp>
 #include <sflsh/reduced/reduced_solver.hpp>
-#include <sflsh/model/time_integrator.hpp>
+#include <sflsh/scene/body_simulation.hpp>
 
 namespace sflsh::scene {
 
@@ -49,31 +48,32 @@ nlohmann::json BodySimulation::summary() const {
                      {"constrained_dofs", layer_->problem.dirichlet.dof.size()}};
   summary["material"] = model::material_summary(settings_.layer, material_file_);
   if (reduced_model_) {
-    summary["reduced"] = {{"point_handles", reduced_model_->handles.point_nodes.size()},
-                          {"bone_handles", reduced_model_->handles.bone_joints().size()},
-                          {"affine", settings_.affine},
-                          {"coordinates", reduced_model_->subspace.num_dofs()},
-                          {"basis_nonzeros", reduced_model_->subspace.basis.nonZeros()},
-                          {"cubature", fast_->cubature().size()},
-                          {"cubature_model", reduced_model_->cubature.size()},
-                          {"cubature_added", fast_->cubature_added()},
-                          {"cubature_method", reduced_model_->cubature.method},
-                          {"stiffness_ratio_max", reduced_model_->cubature.stiffness_ratio_max},
-                          {"stiffness_ratio_min", reduced_model_->cubature.stiffness_ratio_min},
-                          {"guard", fast_->guard() ? nlohmann::json{{"exponent_limit", fast_->guard()->exponent_limit()},
-                                                                   {"guarded_tets", fast_->guard()->num_guarded()},
-                                                                   {"checks", fast_->guard()->checks()},
-                                                                   {"per_tet_passes", fast_->guard()->tet_passes()},
-                                                                   {"renewals", fast_->guard()->full_checks()}}
-                                                  : nlohmann::json(nullptr)},
-                          {"newton_tolerance_m", settings_.newton_tolerance},
-                          {"cache", reduced_model_->cache_outcome},
-                          {"factorizations", total_.factorizations},
-                          {"model_seconds", reduced_model_->build_seconds}};
+    summary["reduced"] = {
+        {"point_handles", reduced_model_->handles.point_nodes.size()},
+        {"bone_handles", reduced_model_->handles.bone_joints().size()},
+        {"affine", settings_.affine},
+        {"coordinates", reduced_model_->subspace.num_dofs()},
+        {"basis_nonzeros", reduced_model_->subspace.basis.nonZeros()},
+        {"cubature", fast_->cubature().size()},
+        {"cubature_model", reduced_model_->cubature.size()},
+        {"cubature_added", fast_->cubature_added()},
+        {"cubature_method", reduced_model_->cubature.method},
+        {"stiffness_ratio_max", reduced_model_->cubature.stiffness_ratio_max},
+        {"stiffness_ratio_min", reduced_model_->cubature.stiffness_ratio_min},
+        {"guard", fast_->guard() ? nlohmann::json{{"exponent_limit", fast_->guard()->exponent_limit()},
+                                                  {"guarded_tets", fast_->guard()->num_guarded()},
+                                                  {"checks", fast_->guard()->checks()},
+                                                  {"per_tet_passes", fast_->guard()->tet_passes()},
+                                                  {"renewals", fast_->guard()->full_checks()}}
+                                 : nlohmann::json(nullptr)},
+        {"newton_tolerance_m", settings_.newton_tolerance},
+        {"cache", reduced_model_->cache_outcome},
+        {"factorizations", total_.factorizations},
+        {"model_seconds", reduced_model_->build_seconds}};
   }
   summary["dynamics"] = writer_->dynamics_summary();
   summary["frames"] = frames_;
-  const double steps = static_cast<double>(frame_);   // the frames solved (all of them after a whole run)
+  const double steps = static_cast<double>(frame_);  // the frames solved (all of them after a whole run)
   summary["timings"] = {{"build_seconds", build_seconds_},
                         {"solve_seconds", total_.seconds},
                         {"function_seconds", total_.function_seconds},

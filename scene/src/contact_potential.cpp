@@ -12,13 +12,15 @@
 // matrix in the Frobenius norm) therefore keeps the exact Hessian wherever it is already PSD (concave
 // features, flat faces), and reduces to Gauss–Newton k g gᵀ at convex ones: the tangential softening of
 // a convex obstacle is what would make Newton's model non-convex.
+#include <sflsh/core/error.hpp>
+#include <sflsh/scene/contact_potential.hpp>
+
 #include <Eigen/Eigenvalues>
+
 #include <cassert>
 #include <chrono>
 #include <cmath>
 #include <limits>
-#include <sflsh/core/error.hpp>
-#include <sflsh/scene/contact_potential.hpp>
 
 namespace sflsh::scene {
 

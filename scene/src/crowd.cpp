@@ -13,11 +13,13 @@ namespace sflsh::scene::detail {
 Crowd expand_crowd(const CrowdSpec& spec, const body::BodyModel& model, const std::filesystem::path& data_dir) {
   Crowd crowd;
   std::filesystem::path file = spec.shape_model;
-  if (file.empty()) file = data_dir.empty() ? reduced::default_shape_model_path() : data_dir / "shape_models" / "default.toml";
+  if (file.empty())
+    file = data_dir.empty() ? reduced::default_shape_model_path() : data_dir / "shape_models" / "default.toml";
   crowd.shape_model = file.string();
   const reduced::ShapeModelFile shape_model = reduced::load_shape_model_file(file);
   // The crowd's layers cover the default region at the crowd's mesh preset: a model fitted elsewhere is refused.
-  reduced::check_layer_match(shape_model, meshing::region_key(meshing::default_region_names()), spec.mesh, "the [crowd]");
+  reduced::check_layer_match(shape_model, meshing::region_key(meshing::default_region_names()), spec.mesh,
+                             "the [crowd]");
   std::mt19937_64 random(spec.seed);
   std::normal_distribution<double> normal(0.0, 1.0);
   std::uniform_real_distribution<double> uniform(0.0, 1.0);

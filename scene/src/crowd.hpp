@@ -14,8 +14,8 @@ namespace sflsh::scene::detail {
 
 struct Crowd {
   std::vector<BodySpec> bodies;
-  std::vector<material::MaterialFile> materials;   ///< per body
-  std::string shape_model;                         ///< the file the materials came from
+  std::vector<material::MaterialFile> materials;  ///< per body
+  std::string shape_model;                        ///< the file the materials came from
 };
 
 /// Deterministic for a seed: β_k ~ N(0, σ²) clamped to ±3, offsets uniform in [0, max_offset).

@@ -74,8 +74,8 @@ ObjMesh read_obj(const std::filesystem::path& path) {
   for (const Face& f : faces)
     for (const long long i : f.index)
       if (i < 0 || i >= count)
-        throw_error("{}:{}: f: vertex index {} is outside the file's {} vertices", file, f.line, i >= 0 ? i + 1 : i - count,
-                    count);
+        throw_error("{}:{}: f: vertex index {} is outside the file's {} vertices", file, f.line,
+                    i >= 0 ? i + 1 : i - count, count);
 
   // Merge exactly coincident vertices (files that repeat a vertex per face), keep only used ones.
   std::map<std::array<double, 3>, int> merged;

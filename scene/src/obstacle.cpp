@@ -3,12 +3,14 @@
 // for φ = |q − c(q)| with c(q) the closest point of a convex feature, ∇φ = n = (q − c)/|q − c| and
 // ∇²φ = (∂c-free directions − n nᵀ)/|q − c|, i.e. (P − n nᵀ)/|q − c| with P the projector on the
 // directions in which c(q) does not move (all three at a point, the normal plane of a segment, …).
+#include <sflsh/core/error.hpp>
+#include <sflsh/scene/obstacle.hpp>
+
 #include <Eigen/Geometry>
+
 #include <algorithm>
 #include <cmath>
 #include <numbers>
-#include <sflsh/core/error.hpp>
-#include <sflsh/scene/obstacle.hpp>
 
 namespace sflsh::scene {
 

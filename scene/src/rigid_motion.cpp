@@ -1,7 +1,8 @@
-#include <algorithm>
-#include <cmath>
 #include <sflsh/core/error.hpp>
 #include <sflsh/scene/rigid_motion.hpp>
+
+#include <algorithm>
+#include <cmath>
 #include <utility>
 
 namespace sflsh::scene {

@@ -103,7 +103,8 @@ void SceneBody::start(bool inertia) {
     reduced::ReducedOptions options;
     options.quasi_static = quasi_static_;
     options.integrator = spec_.integrator;
-    fast_ = std::make_unique<reduced::ReducedSolver>(problem, reduced_model_->subspace, reduced_model_->cubature, options);
+    fast_ =
+        std::make_unique<reduced::ReducedSolver>(problem, reduced_model_->subspace, reduced_model_->cubature, options);
     fast_->initialize(model::initial_state(problem, 0.0));
   } else {
     fullspace::FullSpaceOptions options;
@@ -116,7 +117,7 @@ void SceneBody::start(bool inertia) {
 
 model::State SceneBody::state() const {
   require(soft(), "scene body '{}': a skinned body has no elastic state", name());
-  if (!fast_ && !full_) return model::initial_state(layer_->problem, t_);   // before start()
+  if (!fast_ && !full_) return model::initial_state(layer_->problem, t_);  // before start()
   return fast_ ? fast_->full_state() : full_->state();
 }
 
@@ -175,8 +176,10 @@ void SceneBody::step(double t0, double h, EffectSeconds& seconds) {
     if (at_rest_this_step(t0, h)) {
       ++idle_steps;
       const model::State rest = model::initial_state(layer_->problem, t0 + h);
-      if (fast_) fast_->initialize(rest);
-      else full_->initialize(rest);
+      if (fast_)
+        fast_->initialize(rest);
+      else
+        full_->initialize(rest);
     } else if (fast_) {
       const model::StepStats st = fast_->step(h);
       newton_iterations += st.newton_iterations;

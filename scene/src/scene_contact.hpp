@@ -2,12 +2,11 @@
 // Internal to the scene runner: a soft body's contact (its potentials against the objects and the other
 // bodies), the per-node skin areas that weight them, and the contact fields of its frames.
 #include "scene_internal.hpp"
+#include "scene_objects.hpp"
 
 #include <sflsh/core/vtk_io.hpp>
 #include <sflsh/scene/contact_potential.hpp>
 #include <sflsh/scene/obstacle.hpp>
-
-#include "scene_objects.hpp"
 
 #include <memory>
 #include <vector>
@@ -16,14 +15,14 @@ namespace sflsh::scene::detail {
 
 /// A soft body's contact: its potentials against the objects and against the other bodies.
 struct BodyContact {
-  std::shared_ptr<ContactPotential> objects;          ///< null without object contact
-  std::vector<std::shared_ptr<detail::PlacedMotion>> placed;   ///< per scene object (object potential)
-  std::shared_ptr<ContactPotential> bodies;           ///< null without body contact
-  std::vector<int> other;                             ///< per body obstacle: the other body's index
-  std::vector<std::shared_ptr<TriangleMesh>> surfaces;   ///< per body obstacle, in this body's frame
-  std::vector<int> entry_of_node;                     ///< per layer node: its entry in the potentials, or −1
-  double surface_seconds = 0.0;                       ///< updating the other bodies' surfaces
-  double max_penetration = 0.0;                       ///< measured at the written frames on the skin [m]
+  std::shared_ptr<ContactPotential> objects;                  ///< null without object contact
+  std::vector<std::shared_ptr<detail::PlacedMotion>> placed;  ///< per scene object (object potential)
+  std::shared_ptr<ContactPotential> bodies;                   ///< null without body contact
+  std::vector<int> other;                                     ///< per body obstacle: the other body's index
+  std::vector<std::shared_ptr<TriangleMesh>> surfaces;        ///< per body obstacle, in this body's frame
+  std::vector<int> entry_of_node;                             ///< per layer node: its entry in the potentials, or −1
+  double surface_seconds = 0.0;                               ///< updating the other bodies' surfaces
+  double max_penetration = 0.0;                               ///< measured at the written frames on the skin [m]
 };
 
 /// Lumped skin area per contact node: the region vertex's (lumped_vertex_areas) on the node it sits on;

@@ -1,9 +1,8 @@
 // Reading scene files (scene_file.hpp, docs/scenes.md), errors as "<file>:<line>: …".
-#include <sflsh/scene/scene_file.hpp>
-
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/toml_reader.hpp>
 #include <sflsh/model/simulation_output.hpp>
+#include <sflsh/scene/scene_file.hpp>
 
 #include <cmath>
 #include <set>
@@ -13,29 +12,40 @@ namespace sflsh::scene {
 
 const char* solver_name(SolverKind kind) {
   switch (kind) {
-    case SolverKind::full: return "full";
-    case SolverKind::reduced: return "reduced";
-    case SolverKind::skinned: return "skinned";
+    case SolverKind::full:
+      return "full";
+    case SolverKind::reduced:
+      return "reduced";
+    case SolverKind::skinned:
+      return "skinned";
   }
   return "?";
 }
 
 const char* shape_name(ShapeKind kind) {
   switch (kind) {
-    case ShapeKind::plane: return "plane";
-    case ShapeKind::sphere: return "sphere";
-    case ShapeKind::box: return "box";
-    case ShapeKind::capsule: return "capsule";
-    case ShapeKind::mesh: return "mesh";
+    case ShapeKind::plane:
+      return "plane";
+    case ShapeKind::sphere:
+      return "sphere";
+    case ShapeKind::box:
+      return "box";
+    case ShapeKind::capsule:
+      return "capsule";
+    case ShapeKind::mesh:
+      return "mesh";
   }
   return "?";
 }
 
 const char* object_motion_name(ObjectMotionKind kind) {
   switch (kind) {
-    case ObjectMotionKind::fixed: return "fixed";
-    case ObjectMotionKind::prescribed: return "prescribed";
-    case ObjectMotionKind::free: return "free";
+    case ObjectMotionKind::fixed:
+      return "fixed";
+    case ObjectMotionKind::prescribed:
+      return "prescribed";
+    case ObjectMotionKind::free:
+      return "free";
   }
   return "?";
 }
@@ -90,7 +100,8 @@ class SceneReader : public TomlReader {
     return p.is_absolute() ? file : (path().parent_path() / p).lexically_normal().string();
   }
 
-  /// A file named by `key`: "<scene>:<line>: <key><context>: <path>: is a directory, expected …" when it cannot be read.
+  /// A file named by `key`: "<scene>:<line>: <key><context>: <path>: is a directory, expected …" when it cannot be
+  /// read.
   void input_file(const toml::node& node, std::string_view key, std::string_view context, const std::string& file,
                   std::string_view what) const {
     try {
@@ -114,7 +125,8 @@ class SceneReader : public TomlReader {
 
   int count(const toml::node& node, std::string_view key, std::string_view context, int minimum) const {
     const std::int64_t v = integer(node, key, context);
-    require(v >= minimum && v <= 1'000'000, "{}: '{}'{} = {} must be an integer ≥ {}", at(node), key, context, v, minimum);
+    require(v >= minimum && v <= 1'000'000, "{}: '{}'{} = {} must be an integer ≥ {}", at(node), key, context, v,
+            minimum);
     return static_cast<int>(v);
   }
 
@@ -135,7 +147,8 @@ class SceneReader : public TomlReader {
   }
 
   model::Integrator integrator(const toml::node& node, std::string_view context) const {
-    return model::parse_integrator(choice(node, "integrator", {"backward_euler", "bdf2", "newmark"}, context), "integrator");
+    return model::parse_integrator(choice(node, "integrator", {"backward_euler", "bdf2", "newmark"}, context),
+                                   "integrator");
   }
   model::MassKind mass(const toml::node& node, std::string_view context) const {
     return model::parse_mass_kind(choice(node, "mass", {"lumped", "consistent"}, context), "mass");
@@ -165,8 +178,10 @@ class SceneReader : public TomlReader {
     check_keys(t, {"inertia", "gravity", "object_contact", "body_contact", "self_contact"}, " in [effects]");
     if (const toml::node* n = t.get("inertia")) effects.inertia = boolean(*n, "inertia", " in [effects]");
     if (const toml::node* n = t.get("gravity")) effects.gravity = boolean(*n, "gravity", " in [effects]");
-    if (const toml::node* n = t.get("object_contact")) effects.object_contact = boolean(*n, "object_contact", " in [effects]");
-    if (const toml::node* n = t.get("body_contact")) effects.body_contact = boolean(*n, "body_contact", " in [effects]");
+    if (const toml::node* n = t.get("object_contact"))
+      effects.object_contact = boolean(*n, "object_contact", " in [effects]");
+    if (const toml::node* n = t.get("body_contact"))
+      effects.body_contact = boolean(*n, "body_contact", " in [effects]");
     if (const toml::node* n = t.get("self_contact")) {
       require(!boolean(*n, "self_contact", " in [effects]"),
               "{}: 'self_contact' = true is not available: a body's layer against its own other parts is not simulated "
@@ -181,7 +196,8 @@ class SceneReader : public TomlReader {
     if (const toml::node* n = t.get("stiffness")) contact.stiffness = non_negative(*n, "stiffness", " in [contact]");
     if (const toml::node* n = t.get("tolerance")) contact.tolerance = positive(*n, "tolerance", " in [contact]");
     if (const toml::node* n = t.get("margin")) contact.margin = non_negative(*n, "margin", " in [contact]");
-    if (const toml::node* n = t.get("max_refinements")) contact.max_refinements = count(*n, "max_refinements", " in [contact]", 0);
+    if (const toml::node* n = t.get("max_refinements"))
+      contact.max_refinements = count(*n, "max_refinements", " in [contact]", 0);
   }
 
   void read_output(const toml::node& node, OutputSpec& output) const {
@@ -199,26 +215,32 @@ class SceneReader : public TomlReader {
       output.fields = names;
     }
     if (const toml::node* n = t.get("compression"))
-      output.compression = vtk::parse_compression(choice(*n, "compression", {"lz4", "zlib", "none"}, " in [output]"), "compression");
+      output.compression =
+          vtk::parse_compression(choice(*n, "compression", {"lz4", "zlib", "none"}, " in [output]"), "compression");
     if (const toml::node* n = t.get("format")) output.format = choice(*n, "format", {"vtk", "xdmf"}, " in [output]");
   }
 
-  std::vector<SceneKeyframe> keyframes(const toml::node& node, std::string_view key, std::string_view context, bool with_rotation) const {
+  std::vector<SceneKeyframe> keyframes(const toml::node& node, std::string_view key, std::string_view context,
+                                       bool with_rotation) const {
     const toml::array* list = node.as_array();
-    require(list != nullptr && list->size() >= 2, "{}: '{}'{} must be an array of at least two tables {{ t = …, position = [x, y, z] }}",
-            at(node), key, context);
+    require(list != nullptr && list->size() >= 2,
+            "{}: '{}'{} must be an array of at least two tables {{ t = …, position = [x, y, z] }}", at(node), key,
+            context);
     std::vector<SceneKeyframe> out;
     for (const toml::node& item : *list) {
       const toml::table* k = item.as_table();
-      require(k != nullptr, "{}: each entry of '{}'{} must be a table {{ t = …, position = […] }}", at(item), key, context);
-      if (with_rotation) check_keys(*k, {"t", "position", "rotation"}, fmt::format(" in '{}'{}", key, context));
-      else check_keys(*k, {"t", "position"}, fmt::format(" in '{}'{}", key, context));
+      require(k != nullptr, "{}: each entry of '{}'{} must be a table {{ t = …, position = […] }}", at(item), key,
+              context);
+      if (with_rotation)
+        check_keys(*k, {"t", "position", "rotation"}, fmt::format(" in '{}'{}", key, context));
+      else
+        check_keys(*k, {"t", "position"}, fmt::format(" in '{}'{}", key, context));
       SceneKeyframe f;
       f.t = non_negative(required(*k, "t", context), "t", context);
       f.position = vector3(required(*k, "position", context), "position", context);
       if (const toml::node* r = k->get("rotation")) f.rotation = vector3(*r, "rotation", context);
-      require(out.empty() || f.t > out.back().t, "{}: keyframe times in '{}'{} must increase ({} after {})", at(item), key, context,
-              f.t, out.empty() ? 0.0 : out.back().t);
+      require(out.empty() || f.t > out.back().t, "{}: keyframe times in '{}'{} must increase ({} after {})", at(item),
+              key, context, f.t, out.empty() ? 0.0 : out.back().t);
       out.push_back(f);
     }
     return out;
@@ -237,10 +259,11 @@ class SceneReader : public TomlReader {
     const toml::table* t = node.as_table();
     require(t != nullptr, "{}: 'body' must be an array of tables ([[body]])", at(node));
     const std::string context = fmt::format(" in body #{}", index);
-    check_keys(*t,
-               {"name", "body", "subject", "betas", "motion", "motion_offset", "approach", "placement", "solver", "mesh",
-                "material", "control_points", "handles", "cubature", "density", "stiffness_scale", "integrator", "mass"},
-               context);
+    check_keys(
+        *t,
+        {"name", "body", "subject", "betas", "motion", "motion_offset", "approach", "placement", "solver", "mesh",
+         "material", "control_points", "handles", "cubature", "density", "stiffness_scale", "integrator", "mass"},
+        context);
     BodySpec b;
     b.line = static_cast<int>(t->source().begin.line);
     b.name = t->get("name") ? string_value(*t->get("name"), "name") : fmt::format("body{}", index);
@@ -248,7 +271,8 @@ class SceneReader : public TomlReader {
     if (const toml::node* n = t->get("subject")) b.subject = string_value(*n, "subject");
     if (const toml::node* n = t->get("betas")) {
       const toml::array* a = n->as_array();
-      require(a != nullptr && !a->empty() && a->size() <= 10, "{}: 'betas'{} must be an array of 1 to 10 numbers", at(*n), context);
+      require(a != nullptr && !a->empty() && a->size() <= 10, "{}: 'betas'{} must be an array of 1 to 10 numbers",
+              at(*n), context);
       std::vector<double> beta;
       for (const toml::node& v : *a) beta.push_back(number(v, "betas", context));
       b.betas = beta;
@@ -269,12 +293,14 @@ class SceneReader : public TomlReader {
     if (const toml::node* n = t->get("handles")) b.handles = count(*n, "handles", context, 1);
     if (const toml::node* n = t->get("cubature")) b.cubature = count(*n, "cubature", context, -1);
     if (const toml::node* n = t->get("density")) b.density = number_in(*n, "density", context, 1.0, 1e5, "kg/m³");
-    if (const toml::node* n = t->get("stiffness_scale")) b.stiffness_scale = number_in(*n, "stiffness_scale", context, 1e-3, 1e3);
+    if (const toml::node* n = t->get("stiffness_scale"))
+      b.stiffness_scale = number_in(*n, "stiffness_scale", context, 1e-3, 1e3);
     if (const toml::node* n = t->get("integrator")) b.integrator = integrator(*n, context);
     if (const toml::node* n = t->get("mass")) b.mass = mass(*n, context);
     if (!b.body_path.empty()) input_file(*t->get("body"), "body", context, b.body_path, "a body model .npz file");
     if (!b.material.empty()) input_file(*t->get("material"), "material", context, b.material, "a material TOML file");
-    if (b.motion.ends_with(".npz")) input_file(*t->get("motion"), "motion", context, b.motion, "an AMASS motion .npz file");
+    if (b.motion.ends_with(".npz"))
+      input_file(*t->get("motion"), "motion", context, b.motion, "an AMASS motion .npz file");
     return b;
   }
 
@@ -283,16 +309,17 @@ class SceneReader : public TomlReader {
     require(t != nullptr, "{}: 'object' must be an array of tables ([[object]])", at(node));
     const std::string context = fmt::format(" in object #{}", index);
     check_keys(*t,
-               {"name", "shape", "radius", "length", "half_extents", "normal", "file", "scale", "position", "rotation", "motion",
-                "keyframes", "smooth", "mass", "velocity"},
+               {"name", "shape", "radius", "length", "half_extents", "normal", "file", "scale", "position", "rotation",
+                "motion", "keyframes", "smooth", "mass", "velocity"},
                context);
     ObjectSpec o;
     o.line = static_cast<int>(t->source().begin.line);
     o.name = t->get("name") ? string_value(*t->get("name"), "name") : fmt::format("object{}", index);
-    const std::string shape = choice(required(*t, "shape", context), "shape", {"plane", "sphere", "box", "capsule", "mesh"}, context);
-    o.shape = shape == "plane" ? ShapeKind::plane
-              : shape == "sphere" ? ShapeKind::sphere
-              : shape == "box" ? ShapeKind::box
+    const std::string shape =
+        choice(required(*t, "shape", context), "shape", {"plane", "sphere", "box", "capsule", "mesh"}, context);
+    o.shape = shape == "plane"     ? ShapeKind::plane
+              : shape == "sphere"  ? ShapeKind::sphere
+              : shape == "box"     ? ShapeKind::box
               : shape == "capsule" ? ShapeKind::capsule
                                    : ShapeKind::mesh;
     auto only_for = [&](std::string_view key, std::initializer_list<ShapeKind> kinds) {
@@ -303,7 +330,8 @@ class SceneReader : public TomlReader {
       require(ok, "{}: '{}'{} does not apply to a {}", at(*n), key, context, shape);
       return n;
     };
-    if (const toml::node* n = only_for("radius", {ShapeKind::sphere, ShapeKind::capsule})) o.radius = positive(*n, "radius", context);
+    if (const toml::node* n = only_for("radius", {ShapeKind::sphere, ShapeKind::capsule}))
+      o.radius = positive(*n, "radius", context);
     if (const toml::node* n = only_for("length", {ShapeKind::capsule})) o.length = positive(*n, "length", context);
     if (const toml::node* n = only_for("half_extents", {ShapeKind::box})) {
       o.half_extents = vector3(*n, "half_extents", context);
@@ -321,16 +349,21 @@ class SceneReader : public TomlReader {
     if (const toml::node* n = only_for("scale", {ShapeKind::mesh})) o.scale = positive(*n, "scale", context);
     require(o.shape != ShapeKind::mesh || !o.mesh_path.empty(), "{}: a mesh object needs 'file'{}", at(node), context);
     // The size of every shape is given, never a silent default (docs/scenes.md).
-    const std::pair<ShapeKind, const char*> needed[] = {{ShapeKind::sphere, "radius"}, {ShapeKind::capsule, "radius"},
-                                                        {ShapeKind::capsule, "length"}, {ShapeKind::box, "half_extents"},
+    const std::pair<ShapeKind, const char*> needed[] = {{ShapeKind::sphere, "radius"},
+                                                        {ShapeKind::capsule, "radius"},
+                                                        {ShapeKind::capsule, "length"},
+                                                        {ShapeKind::box, "half_extents"},
                                                         {ShapeKind::plane, "normal"}};
     for (const auto& [kind, key] : needed)
-      if (o.shape == kind && t->get(key) == nullptr) fail(node, fmt::format("{}{}", key, context), "missing (a {} needs it)", shape);
+      if (o.shape == kind && t->get(key) == nullptr)
+        fail(node, fmt::format("{}{}", key, context), "missing (a {} needs it)", shape);
     if (const toml::node* n = t->get("position")) o.position = vector3(*n, "position", context);
     if (const toml::node* n = t->get("rotation")) o.rotation = vector3(*n, "rotation", context);
     if (const toml::node* n = t->get("motion")) {
       const std::string m = choice(*n, "motion", {"fixed", "prescribed", "free"}, context);
-      o.motion = m == "fixed" ? ObjectMotionKind::fixed : m == "prescribed" ? ObjectMotionKind::prescribed : ObjectMotionKind::free;
+      o.motion = m == "fixed"        ? ObjectMotionKind::fixed
+                 : m == "prescribed" ? ObjectMotionKind::prescribed
+                                     : ObjectMotionKind::free;
     }
     const toml::node* keys = t->get("keyframes");
     if (o.motion == ObjectMotionKind::prescribed) {
@@ -342,11 +375,13 @@ class SceneReader : public TomlReader {
     if (const toml::node* n = t->get("smooth")) o.smooth = boolean(*n, "smooth", context);
     for (const char* key : {"mass", "velocity"}) {
       const toml::node* n = t->get(key);
-      require(n == nullptr || o.motion == ObjectMotionKind::free, "{}: '{}'{} needs motion = \"free\"", n ? at(*n) : at(node), key, context);
+      require(n == nullptr || o.motion == ObjectMotionKind::free, "{}: '{}'{} needs motion = \"free\"",
+              n ? at(*n) : at(node), key, context);
     }
     if (const toml::node* n = t->get("mass")) o.mass = positive(*n, "mass", context);
     if (const toml::node* n = t->get("velocity")) o.velocity = vector3(*n, "velocity", context);
-    require(o.motion != ObjectMotionKind::free || o.shape != ShapeKind::plane, "{}: a plane cannot be free{}", at(node), context);
+    require(o.motion != ObjectMotionKind::free || o.shape != ShapeKind::plane, "{}: a plane cannot be free{}", at(node),
+            context);
     return o;
   }
 
@@ -354,8 +389,8 @@ class SceneReader : public TomlReader {
     const toml::table& t = table(node, "crowd");
     const std::string_view context = " in [crowd]";
     check_keys(t,
-               {"count", "seed", "shape_sigma", "motion", "max_offset", "spacing", "columns", "shape_model", "solver", "mesh", "handles",
-                "cubature", "integrator", "mass"},
+               {"count", "seed", "shape_sigma", "motion", "max_offset", "spacing", "columns", "shape_model", "solver",
+                "mesh", "handles", "cubature", "integrator", "mass"},
                context);
     CrowdSpec c;
     c.line = static_cast<int>(t.source().begin.line);
@@ -369,7 +404,8 @@ class SceneReader : public TomlReader {
         input_file(*n, "motion", context, c.motion, "an AMASS motion .npz file");
       }
     }
-    if (const toml::node* n = t.get("max_offset")) c.max_offset = number_in(*n, "max_offset", context, 0.0, kMaxMotionOffset, "s");
+    if (const toml::node* n = t.get("max_offset"))
+      c.max_offset = number_in(*n, "max_offset", context, 0.0, kMaxMotionOffset, "s");
     if (const toml::node* n = t.get("spacing")) c.spacing = positive(*n, "spacing", context);
     if (const toml::node* n = t.get("columns")) c.columns = count(*n, "columns", context, 1);
     if (const toml::node* n = t.get("shape_model")) {
@@ -392,18 +428,20 @@ class SceneReader : public TomlReader {
     require(!scene.effects.object_contact || !scene.objects.empty(),
             "{}: 'object_contact' is on but the scene has no [[object]]", at(where));
     const std::size_t bodies = scene.bodies.size() + (scene.crowd ? static_cast<std::size_t>(scene.crowd->count) : 0);
-    require(!scene.effects.body_contact || bodies >= 2, "{}: 'body_contact' is on but the scene has fewer than two bodies", at(where));
+    require(!scene.effects.body_contact || bodies >= 2,
+            "{}: 'body_contact' is on but the scene has fewer than two bodies", at(where));
     if (scene.crowd) {
-      require(!scene.effects.body_contact && !scene.effects.object_contact,
-              "{}:{}: a [crowd] runs without contact (its avatars stand apart); switch object_contact and body_contact off",
-              path().string(), scene.crowd->line);
-      require(scene.crowd->solver != SolverKind::full, "{}:{}: a [crowd] runs the reduced solver or skinning, not 'full'", path().string(),
-              scene.crowd->line);
+      require(
+          !scene.effects.body_contact && !scene.effects.object_contact,
+          "{}:{}: a [crowd] runs without contact (its avatars stand apart); switch object_contact and body_contact off",
+          path().string(), scene.crowd->line);
+      require(scene.crowd->solver != SolverKind::full,
+              "{}:{}: a [crowd] runs the reduced solver or skinning, not 'full'", path().string(), scene.crowd->line);
     }
     for (const ObjectSpec& o : scene.objects) {
       require(o.motion != ObjectMotionKind::free || scene.effects.object_contact,
-              "{}:{}: object '{}' is free, which needs object_contact (nothing else acts on it but gravity)", path().string(), o.line,
-              o.name);
+              "{}:{}: object '{}' is free, which needs object_contact (nothing else acts on it but gravity)",
+              path().string(), o.line, o.name);
     }
   }
 };

@@ -5,11 +5,11 @@
 #include <sflsh/body/motion.hpp>
 #include <sflsh/body/skinning.hpp>
 #include <sflsh/fullspace/fullspace_solver.hpp>
+#include <sflsh/material/material_file.hpp>
 #include <sflsh/model/body_layer.hpp>
 #include <sflsh/model/simulation_output.hpp>
-#include <sflsh/material/material_file.hpp>
-#include <sflsh/reduced/reduced_solver.hpp>
 #include <sflsh/reduced/reduced_model.hpp>
+#include <sflsh/reduced/reduced_solver.hpp>
 #include <sflsh/scene/scene_file.hpp>
 
 #include <Eigen/Geometry>
@@ -36,13 +36,14 @@ Rigid placement_transform(const Placement& placement);
 
 /// The motion of a scene body (scene_motion.cpp): `frames` frames at `fps`, started `offset` s in ("rest":
 /// the rest pose held still), with the approach keyframes added to the root translation.
-body::Motion scene_motion(const std::string& name, double offset, const std::vector<SceneKeyframe>& approach, double fps, int frames);
+body::Motion scene_motion(const std::string& name, double offset, const std::vector<SceneKeyframe>& approach,
+                          double fps, int frames);
 
 /// Seconds spent per effect (summary.json "effects").
 struct EffectSeconds {
-  double skinning = 0.0;        ///< posing skinned bodies and the skinned part of soft ones
-  double elasticity = 0.0;      ///< the solves without their mass and contact terms
-  double inertia = 0.0;         ///< the mass terms (inertia, and gravity when inertia is off)
+  double skinning = 0.0;    ///< posing skinned bodies and the skinned part of soft ones
+  double elasticity = 0.0;  ///< the solves without their mass and contact terms
+  double inertia = 0.0;     ///< the mass terms (inertia, and gravity when inertia is off)
   double object_contact = 0.0;
   double body_contact = 0.0;
 };
@@ -50,7 +51,7 @@ struct EffectSeconds {
 struct BodySetup {
   const Scene* scene = nullptr;
   std::filesystem::path cache_dir;
-  const material::MaterialFile* material = nullptr;   ///< overrides the spec's file (crowds); may be null
+  const material::MaterialFile* material = nullptr;  ///< overrides the spec's file (crowds); may be null
 };
 
 /// One body: its spec, motion and placement, and either only its skinning (no layer is built) or its soft
@@ -61,7 +62,7 @@ class SceneBody {
 
   const BodySpec& spec() const { return spec_; }
   const std::string& name() const { return spec_.name; }
-  SolverKind solver() const { return solver_; }   ///< what runs: skinned when no elastic effect reaches it
+  SolverKind solver() const { return solver_; }  ///< what runs: skinned when no elastic effect reaches it
   bool soft() const { return solver_ != SolverKind::skinned; }
   const Rigid& placement() const { return placement_; }
   const body::BodyModel& model() const { return model_; }
@@ -97,7 +98,7 @@ class SceneBody {
   // Counters for summary.json.
   long steps = 0, idle_steps = 0, newton_iterations = 0, refinements = 0, failed_attempts = 0;
   double solve_seconds = 0.0, setup_seconds = 0.0;
-  std::string model_info;   ///< one line: nodes, tets, handles, cubature
+  std::string model_info;  ///< one line: nodes, tets, handles, cubature
 
  private:
   bool at_rest_this_step(double t0, double h) const;
@@ -110,8 +111,8 @@ class SceneBody {
   body::Betas beta_ = body::Betas::Zero();
   std::string subject_label_;
   body::Motion motion_;
-  std::unique_ptr<body::Poser> poser_;              ///< skinned bodies
-  std::unique_ptr<model::BodyLayer> layer_;     ///< soft bodies
+  std::unique_ptr<body::Poser> poser_;       ///< skinned bodies
+  std::unique_ptr<model::BodyLayer> layer_;  ///< soft bodies
   std::optional<reduced::ReducedModel> reduced_model_;
   std::unique_ptr<fullspace::FullSpaceSolver> full_;
   std::unique_ptr<reduced::ReducedSolver> fast_;

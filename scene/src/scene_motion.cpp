@@ -25,7 +25,8 @@ Eigen::Vector3d approach_at(const std::vector<SceneKeyframe>& keys, double t) {
 
 }  // namespace
 
-body::Motion scene_motion(const std::string& name, double offset, const std::vector<SceneKeyframe>& approach, double fps, int frames) {
+body::Motion scene_motion(const std::string& name, double offset, const std::vector<SceneKeyframe>& approach,
+                          double fps, int frames) {
   require(frames >= 1, "scene motion: at least one frame, got {}", frames);
   require(std::isfinite(offset) && offset >= 0.0 && offset <= kMaxMotionOffset,
           "motion '{}': motion_offset {} s is outside [0, {}] s", name, offset, kMaxMotionOffset);
@@ -44,8 +45,8 @@ body::Motion scene_motion(const std::string& name, double offset, const std::vec
   } else {
     motion = body::load_motion(name, fps, 0);
     if (std::abs(motion.fps - fps) > 1e-9 * fps) motion = body::resample(motion, fps);
-    require(static_cast<long long>(motion.num_frames()) > skip, "motion '{}': the offset {} s is beyond its {} frames", name, offset,
-            motion.num_frames());
+    require(static_cast<long long>(motion.num_frames()) > skip, "motion '{}': the offset {} s is beyond its {} frames",
+            name, offset, motion.num_frames());
     motion.poses.erase(motion.poses.begin(), motion.poses.begin() + skip);
     motion.trans.erase(motion.trans.begin(), motion.trans.begin() + skip);
     if (static_cast<int>(motion.num_frames()) > frames) {

@@ -15,10 +15,14 @@ Pose spec_pose(const Eigen::Vector3d& position, const Eigen::Vector3d& rotation_
 
 std::shared_ptr<Obstacle> make_shape(const ObjectSpec& spec) {
   switch (spec.shape) {
-    case ShapeKind::plane: return std::make_shared<HalfSpace>(spec.normal, 0.0, 2.0);
-    case ShapeKind::sphere: return std::make_shared<Sphere>(spec.radius);
-    case ShapeKind::box: return std::make_shared<Box>(spec.half_extents);
-    case ShapeKind::capsule: return std::make_shared<Capsule>(spec.radius, 0.5 * spec.length);
+    case ShapeKind::plane:
+      return std::make_shared<HalfSpace>(spec.normal, 0.0, 2.0);
+    case ShapeKind::sphere:
+      return std::make_shared<Sphere>(spec.radius);
+    case ShapeKind::box:
+      return std::make_shared<Box>(spec.half_extents);
+    case ShapeKind::capsule:
+      return std::make_shared<Capsule>(spec.radius, 0.5 * spec.length);
     case ShapeKind::mesh: {
       std::unique_ptr<TriangleMesh> mesh = TriangleMesh::load(spec.mesh_path, spec.scale);
       return std::shared_ptr<Obstacle>(std::move(mesh));
@@ -34,7 +38,9 @@ SceneObject make_object(const ObjectSpec& spec, const Eigen::Vector3d& gravity) 
   // A plane's normal is given in the world: its rotation would turn it.
   const Pose start = spec_pose(spec.position, spec.shape == ShapeKind::plane ? Eigen::Vector3d::Zero() : spec.rotation);
   switch (spec.motion) {
-    case ObjectMotionKind::fixed: object.motion = std::make_shared<FixedMotion>(start); break;
+    case ObjectMotionKind::fixed:
+      object.motion = std::make_shared<FixedMotion>(start);
+      break;
     case ObjectMotionKind::prescribed: {
       std::vector<Keyframe> keys;
       for (const SceneKeyframe& k : spec.keyframes) {
@@ -45,7 +51,9 @@ SceneObject make_object(const ObjectSpec& spec, const Eigen::Vector3d& gravity) 
           std::move(keys), spec.smooth ? KeyframeInterpolation::catmull_rom : KeyframeInterpolation::linear);
       break;
     }
-    case ObjectMotionKind::free: object.motion = std::make_shared<FreeMotion>(spec.mass, gravity, start, spec.velocity); break;
+    case ObjectMotionKind::free:
+      object.motion = std::make_shared<FreeMotion>(spec.mass, gravity, start, spec.velocity);
+      break;
   }
   object.world_shape->set_pose(object.motion->pose(0.0));
   return object;
@@ -66,7 +74,8 @@ Surface merged_object_surfaces(const std::vector<SceneObject>& objects, Eigen::M
   Eigen::Index v0 = 0, f0 = 0;
   for (std::size_t j = 0; j < surfaces.size(); ++j) {
     merged.vertices.middleRows(v0, surfaces[j].vertices.rows()) = surfaces[j].vertices;
-    merged.triangles.middleRows(f0, surfaces[j].triangles.rows()) = surfaces[j].triangles.array() + static_cast<int>(v0);
+    merged.triangles.middleRows(f0, surfaces[j].triangles.rows()) =
+        surfaces[j].triangles.array() + static_cast<int>(v0);
     ids.middleRows(f0, surfaces[j].triangles.rows()).setConstant(static_cast<double>(j));
     v0 += surfaces[j].vertices.rows();
     f0 += surfaces[j].triangles.rows();

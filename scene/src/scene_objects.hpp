@@ -15,7 +15,7 @@ namespace sflsh::scene::detail {
 /// A scene object: its spec, its world motion and a shape posed in the world (for output and checks).
 struct SceneObject {
   ObjectSpec spec;
-  std::shared_ptr<RigidMotion> motion;   ///< world frame
+  std::shared_ptr<RigidMotion> motion;  ///< world frame
   std::shared_ptr<Obstacle> world_shape;
 };
 
@@ -33,7 +33,8 @@ Pose spec_pose(const Eigen::Vector3d& position, const Eigen::Vector3d& rotation_
 /// step to the world motion: several bodies may touch one free object.
 class PlacedMotion final : public RigidMotion {
  public:
-  PlacedMotion(std::shared_ptr<RigidMotion> world, const Rigid& body_from_world) : world_(std::move(world)), body_from_world_(body_from_world) {}
+  PlacedMotion(std::shared_ptr<RigidMotion> world, const Rigid& body_from_world)
+      : world_(std::move(world)), body_from_world_(body_from_world) {}
   Pose pose(double t) const override {
     const Pose w = world_->pose(t);
     return {body_from_world_.R * w.rotation, body_from_world_.R * w.translation + body_from_world_.t};

@@ -1,12 +1,13 @@
 // What a scene writes (scene_output.hpp).
 #include "scene_output.hpp"
 
+#include <sflsh/core/error.hpp>
+
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <chrono>
-#include <sflsh/core/error.hpp>
 
 namespace sflsh::scene::detail {
 

@@ -1,6 +1,4 @@
 // Running a scene (scene_runner.hpp): bodies, objects, contact on demand, stepping, output and summary.
-#include <sflsh/scene/scene_runner.hpp>
-
 #include "body_groups.hpp"
 #include "crowd.hpp"
 #include "scene_contact.hpp"
@@ -16,6 +14,7 @@
 #include <sflsh/core/run_folder.hpp>
 #include <sflsh/core/summary.hpp>
 #include <sflsh/core/vtk_io.hpp>
+#include <sflsh/scene/scene_runner.hpp>
 
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
@@ -52,9 +51,10 @@ class SceneRun {
   nlohmann::json run() {
     const auto t_start = Clock::now();
     // Before anything is built or expanded: a mistyped duration or crowd count is refused with its estimate.
-    check_work(estimate_scene_work(scene_, options_), WorkLimits{}, options_.allow_long,
-               fmt::format("{}: [scene] duration × fps (or frames, --frames) × substeps × bodies{}", scene_.file.string(),
-                           scene_.crowd ? fmt::format(" ([crowd] count at line {})", scene_.crowd->line) : ""));
+    check_work(
+        estimate_scene_work(scene_, options_), WorkLimits{}, options_.allow_long,
+        fmt::format("{}: [scene] duration × fps (or frames, --frames) × substeps × bodies{}", scene_.file.string(),
+                    scene_.crowd ? fmt::format(" ([crowd] count at line {})", scene_.crowd->line) : ""));
     frames_ = options_.frames > 0 ? options_.frames : scene_.num_frames();
     Scene scene = scene_;
     scene.frames = frames_;
@@ -77,7 +77,8 @@ class SceneRun {
 
     const double h = 1.0 / (scene_.fps * scene_.substeps);
     std::optional<tbb::global_control> threads;
-    if (options_.threads > 0) threads.emplace(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(options_.threads));
+    if (options_.threads > 0)
+      threads.emplace(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(options_.threads));
     Progress progress("scene frames", frames_ - 1, options_.rank == 0);
     const auto t_loop = Clock::now();
     for (int f = 1; f < frames_; ++f) {
@@ -137,7 +138,8 @@ class SceneRun {
       } catch (const Error& e) {
         throw_error("{}:{}: body '{}': {}", scene.file.string(), specs[i].line, specs[i].name, e.what());
       }
-      logger()->info("scene: body '{}' ({}): {}", specs[i].name, solver_name(bodies_.back()->solver()), bodies_.back()->model_info);
+      logger()->info("scene: body '{}' ({}): {}", specs[i].name, solver_name(bodies_.back()->solver()),
+                     bodies_.back()->model_info);
     }
   }
 
@@ -163,7 +165,8 @@ class SceneRun {
       const std::vector<int> nodes = body.contact_nodes();
       const std::vector<double> areas = node_areas(body, nodes);
       c.entry_of_node.assign(static_cast<std::size_t>(body.layer().problem.num_nodes()), -1);
-      for (std::size_t k = 0; k < nodes.size(); ++k) c.entry_of_node[static_cast<std::size_t>(nodes[k])] = static_cast<int>(k);
+      for (std::size_t k = 0; k < nodes.size(); ++k)
+        c.entry_of_node[static_cast<std::size_t>(nodes[k])] = static_cast<int>(k);
       const Rigid body_from_world = body.placement().inverse();
       if (scene_.effects.object_contact) {
         std::vector<ContactObstacle> obstacles;
@@ -206,7 +209,7 @@ class SceneRun {
       predicted.resize(bodies_.size());
       std::vector<BodyReach> reach(bodies_.size());
       tbb::parallel_for(std::size_t{0}, bodies_.size(), [&](std::size_t b) {
-        if (bodies_[b]->solver() == SolverKind::full) return;   // PETSc objects: on the calling thread below
+        if (bodies_[b]->solver() == SolverKind::full) return;  // PETSc objects: on the calling thread below
         reach[b] = body_reach(b, t1, predicted[b]);
       });
       for (std::size_t b = 0; b < bodies_.size(); ++b)
@@ -271,8 +274,8 @@ class SceneRun {
   // One Gauss–Seidel sweep over a group: each body sees the group's bodies before it at the step's end and
   // the ones after it predicted (their current elastic displacement carried by the new pose); bodies of other
   // groups are out of reach and are seen predicted.
-  void step_group(const std::vector<std::size_t>& group, const std::vector<RowMatrixX3d>& predicted, double t0, double h,
-                  std::vector<detail::EffectSeconds>& seconds) {
+  void step_group(const std::vector<std::size_t>& group, const std::vector<RowMatrixX3d>& predicted, double t0,
+                  double h, std::vector<detail::EffectSeconds>& seconds) {
     const double t1 = t0 + h;
     for (std::size_t b : group) {
       BodyContact& c = contact_[b];
@@ -298,12 +301,13 @@ class SceneRun {
       SceneObject& o = objects_[j];
       if (o.motion->reacts()) {
         Eigen::Vector3d force = Eigen::Vector3d::Zero();
-        double stiffness = 0.0;   // of the nodes touching it (makes the object's update implicit)
+        double stiffness = 0.0;  // of the nodes touching it (makes the object's update implicit)
         for (BodyContact& c : contact_) {
           if (!c.objects) continue;
           force += c.placed[j]->take_force();
           for (Eigen::Index k = 0; k < c.objects->contact_force().rows(); ++k)
-            if (c.objects->contact_force().row(k).squaredNorm() > 0.0) stiffness += c.objects->node_stiffness(static_cast<int>(k));
+            if (c.objects->contact_force().row(k).squaredNorm() > 0.0)
+              stiffness += c.objects->node_stiffness(static_cast<int>(k));
         }
         if (auto* free = dynamic_cast<FreeMotion*>(o.motion.get())) free->set_contact_stiffness(stiffness);
         o.motion->commit(t1, force);
@@ -335,7 +339,9 @@ class SceneRun {
       if (c.bodies) {
         for (int o : c.other) {
           auto& mesh = meshes[static_cast<std::size_t>(o)];
-          if (!mesh) mesh = std::make_unique<TriangleMesh>(world[static_cast<std::size_t>(o)], bodies_[static_cast<std::size_t>(o)]->model().faces);
+          if (!mesh)
+            mesh = std::make_unique<TriangleMesh>(world[static_cast<std::size_t>(o)],
+                                                  bodies_[static_cast<std::size_t>(o)]->model().faces);
           shapes.push_back(mesh.get());
         }
       }
@@ -363,11 +369,18 @@ class SceneRun {
   // --- summary -------------------------------------------------------------------------------------------
   nlohmann::json make_summary(double setup_seconds, double loop_seconds, double total_seconds, double h) const {
     nlohmann::json s = options_.header.is_object() ? options_.header : nlohmann::json::object();
-    s["scene"] = {{"file", scene_.file.string()}, {"name", scene_.name}, {"fps", scene_.fps}, {"frames", frames_},
-                  {"substeps", scene_.substeps}, {"step", h}};
+    s["scene"] = {{"file", scene_.file.string()},
+                  {"name", scene_.name},
+                  {"fps", scene_.fps},
+                  {"frames", frames_},
+                  {"substeps", scene_.substeps},
+                  {"step", h}};
     const Effects& e = scene_.effects;
-    s["effects_requested"] = {{"inertia", e.inertia}, {"gravity", e.gravity}, {"object_contact", e.object_contact},
-                              {"body_contact", e.body_contact}, {"self_contact", false}};
+    s["effects_requested"] = {{"inertia", e.inertia},
+                              {"gravity", e.gravity},
+                              {"object_contact", e.object_contact},
+                              {"body_contact", e.body_contact},
+                              {"self_contact", false}};
     double object_seconds = 0.0, body_seconds = 0.0;
     long soft = 0, solved_steps = 0, potentials = 0;
     ContactStats total;
@@ -382,9 +395,11 @@ class SceneRun {
                           {"beta", std::vector<double>(body.beta().data(), body.beta().data() + body.beta().size())},
                           {"motion", body.motion().name},
                           {"motion_offset", body.spec().motion_offset},
-                          {"placement", {{"position", {body.spec().placement.position.x(), body.spec().placement.position.y(),
-                                                       body.spec().placement.position.z()}},
-                                         {"yaw_degrees", body.spec().placement.yaw_degrees}}},
+                          {"placement",
+                           {{"position",
+                             {body.spec().placement.position.x(), body.spec().placement.position.y(),
+                              body.spec().placement.position.z()}},
+                            {"yaw_degrees", body.spec().placement.yaw_degrees}}},
                           {"model", body.model_info},
                           {"setup_seconds", body.setup_seconds}};
       if (body.soft()) {
@@ -405,9 +420,12 @@ class SceneRun {
         if (!p) continue;
         ++potentials;
         const ContactStats st = p->stats();
-        contact[label] = {{"broad_phase_passes", st.broad_phase_passes}, {"candidates", st.candidates},
-                          {"narrow_phase_evaluations", st.narrow_phase_evaluations}, {"refinements", st.refinements},
-                          {"unresolved", st.unresolved}, {"max_penetration_mm", 1e3 * st.max_penetration},
+        contact[label] = {{"broad_phase_passes", st.broad_phase_passes},
+                          {"candidates", st.candidates},
+                          {"narrow_phase_evaluations", st.narrow_phase_evaluations},
+                          {"refinements", st.refinements},
+                          {"unresolved", st.unresolved},
+                          {"max_penetration_mm", 1e3 * st.max_penetration},
                           {"seconds", st.seconds}};
         (std::string(label) == "objects" ? object_seconds : body_seconds) += st.seconds;
         total.broad_phase_passes += st.broad_phase_passes;
@@ -425,7 +443,9 @@ class SceneRun {
     nlohmann::json objects = nlohmann::json::array();
     for (const SceneObject& o : objects_) {
       const Eigen::Vector3d p = o.world_shape->pose().translation;
-      objects.push_back({{"name", o.spec.name}, {"shape", shape_name(o.spec.shape)}, {"motion", object_motion_name(o.spec.motion)},
+      objects.push_back({{"name", o.spec.name},
+                         {"shape", shape_name(o.spec.shape)},
+                         {"motion", object_motion_name(o.spec.motion)},
                          {"final_position", {p.x(), p.y(), p.z()}}});
     }
     s["objects"] = objects;
@@ -433,19 +453,25 @@ class SceneRun {
     // The effects that ran, with their time and share of the stepping loop.
     nlohmann::json ran = nlohmann::json::array();
     auto entry = [&](const char* name, double seconds, const char* note) {
-      nlohmann::json j = {{"name", name}, {"seconds", seconds}, {"share", loop_seconds > 0 ? seconds / loop_seconds : 0.0}};
+      nlohmann::json j = {
+          {"name", name}, {"seconds", seconds}, {"share", loop_seconds > 0 ? seconds / loop_seconds : 0.0}};
       if (note && *note) j["note"] = note;
       ran.push_back(j);
     };
-    entry("skinning", output_->skinning_seconds(), "posing the skinned bodies (soft bodies' skinning is inside their solves)");
+    entry("skinning", output_->skinning_seconds(),
+          "posing the skinned bodies (soft bodies' skinning is inside their solves)");
     if (soft > 0 && solved_steps > 0) {
       entry("elasticity", seconds_.elasticity, "the soft layers' solves without their mass and contact terms");
-      if (e.inertia) entry("inertia", seconds_.inertia, e.gravity ? "the mass terms, gravity included" : "the mass terms");
-      else if (e.gravity) entry("gravity", seconds_.inertia, "the mass terms of gravity");
+      if (e.inertia)
+        entry("inertia", seconds_.inertia, e.gravity ? "the mass terms, gravity included" : "the mass terms");
+      else if (e.gravity)
+        entry("gravity", seconds_.inertia, "the mass terms of gravity");
       if (e.inertia && e.gravity) entry("gravity", 0.0, "inside the inertia terms");
     }
-    if (e.object_contact && potentials > 0) entry("object_contact", object_seconds, "broad phase, penalty terms, acceptance");
-    if (e.body_contact && potentials > 0) entry("body_contact", body_seconds, "other bodies' surfaces (trees), penalty terms");
+    if (e.object_contact && potentials > 0)
+      entry("object_contact", object_seconds, "broad phase, penalty terms, acceptance");
+    if (e.body_contact && potentials > 0)
+      entry("body_contact", body_seconds, "other bodies' surfaces (trees), penalty terms");
     s["effects"] = ran;
     s["built"] = {{"soft_layers", soft},
                   {"skinned_bodies", static_cast<long>(bodies_.size()) - soft},
@@ -455,8 +481,10 @@ class SceneRun {
     double measured = 0.0;
     for (const BodyContact& c : contact_) measured = std::max(measured, c.max_penetration);
     if (potentials > 0)
-      s["contact"] = {{"tolerance_mm", 1e3 * scene_.contact.tolerance}, {"max_penetration_mm", 1e3 * total.max_penetration},
-                      {"measured_max_penetration_mm", 1e3 * measured}, {"measured_at", deepest_time_},
+      s["contact"] = {{"tolerance_mm", 1e3 * scene_.contact.tolerance},
+                      {"max_penetration_mm", 1e3 * total.max_penetration},
+                      {"measured_max_penetration_mm", 1e3 * measured},
+                      {"measured_at", deepest_time_},
                       {"skeleton_response", false}};
     s["timings"] = {{"setup_seconds", setup_seconds},
                     {"loop_seconds", loop_seconds},
@@ -466,10 +494,14 @@ class SceneRun {
                     {"penetration_check_seconds", check_seconds_},
                     {"frames_per_second", loop_seconds > 0 ? (frames_ - 1) / loop_seconds : 0.0},
                     {"total_seconds", total_seconds}};
-    s["output"] = {{"every", every_}, {"compression", vtk::to_string(scene_.output.compression)}, {"frames", scene_.output.frames},
-                   {"format", scene_.output.format}, {"collections", output_->collections()}};
+    s["output"] = {{"every", every_},
+                   {"compression", vtk::to_string(scene_.output.compression)},
+                   {"frames", scene_.output.frames},
+                   {"format", scene_.output.format},
+                   {"collections", output_->collections()}};
     if (scene_.output.fields) s["output"]["fields"] = *scene_.output.fields;
-    if (e.body_contact) s["body_groups_per_step"] = steps_ > 0 ? static_cast<double>(groups_) / static_cast<double>(steps_) : 0.0;
+    if (e.body_contact)
+      s["body_groups_per_step"] = steps_ > 0 ? static_cast<double>(groups_) / static_cast<double>(steps_) : 0.0;
     if (!crowd_.bodies.empty()) s["crowd"] = {{"avatars", crowd_.bodies.size()}, {"shape_model", crowd_.shape_model}};
     return s;
   }
@@ -482,7 +514,7 @@ class SceneRun {
   std::vector<std::unique_ptr<SceneBody>> bodies_;
   std::vector<SceneObject> objects_;
   std::vector<BodyContact> contact_;
-  std::optional<detail::SceneOutput> output_;   ///< the files of run() (its jobs are run()'s)
+  std::optional<detail::SceneOutput> output_;  ///< the files of run() (its jobs are run()'s)
   int every_ = 1;
   detail::EffectSeconds seconds_;
   double output_seconds_ = 0.0, step_seconds_ = 0.0, check_seconds_ = 0.0, deepest_time_ = 0.0;

@@ -14,14 +14,16 @@ constexpr double kBytesPerBodyFrame = 1024.0;
 }  // namespace
 
 WorkEstimate estimate_scene_work(const Scene& scene, const SceneRunOptions& options) {
-  const double frames = options.frames > 0 ? static_cast<double>(options.frames) : static_cast<double>(scene.num_frames());
+  const double frames =
+      options.frames > 0 ? static_cast<double>(options.frames) : static_cast<double>(scene.num_frames());
   double bodies = static_cast<double>(scene.bodies.size());
-  double elastic = 0.0;   // bodies that are solved, not only skinned
+  double elastic = 0.0;  // bodies that are solved, not only skinned
   if (scene.effects.elastic())
     for (const BodySpec& b : scene.bodies) elastic += b.solver != SolverKind::skinned ? 1.0 : 0.0;
   if (scene.crowd) {
     bodies += static_cast<double>(scene.crowd->count);
-    if (scene.effects.elastic() && scene.crowd->solver != SolverKind::skinned) elastic += static_cast<double>(scene.crowd->count);
+    if (scene.effects.elastic() && scene.crowd->solver != SolverKind::skinned)
+      elastic += static_cast<double>(scene.crowd->count);
   }
   WorkEstimate e;
   e.bodies = bodies;

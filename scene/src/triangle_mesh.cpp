@@ -4,10 +4,16 @@
 // mesh, sign((q − c)·N) is the inside/outside sign when N is the face normal (face region), the sum of
 // the two face normals (edge region) or Σ_f α_f n_f with α_f the angle of face f at the vertex (vertex).
 // Files are read with VTK's readers (IOGeometry: .obj/.stl, IOPLY: .ply).
+#include "obj_file.hpp"
+
+#include <sflsh/core/error.hpp>
+#include <sflsh/scene/obstacle.hpp>
+
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
 #include <CGAL/AABB_triangle_primitive.h>
 #include <CGAL/Simple_cartesian.h>
+#include <Eigen/Geometry>
 #include <vtkCellArray.h>
 #include <vtkCleanPolyData.h>
 #include <vtkIdList.h>
@@ -19,13 +25,9 @@
 #include <vtkSmartPointer.h>
 #include <vtkTriangleFilter.h>
 
-#include <Eigen/Geometry>
 #include <algorithm>
 #include <cctype>
 #include <cmath>
-#include <sflsh/core/error.hpp>
-#include "obj_file.hpp"
-#include <sflsh/scene/obstacle.hpp>
 #include <unordered_map>
 
 namespace sflsh::scene {
@@ -267,7 +269,7 @@ std::unique_ptr<TriangleMesh> TriangleMesh::load(const std::filesystem::path& pa
   RowMatrixX3d vertices;
   RowMatrixX3i triangles;
   if (ext == ".obj") {
-    detail::ObjMesh obj = detail::read_obj(path);   // strict: bad indices and non-finite vertices are errors
+    detail::ObjMesh obj = detail::read_obj(path);  // strict: bad indices and non-finite vertices are errors
     vertices = scale * obj.vertices;
     triangles = std::move(obj.triangles);
   } else {

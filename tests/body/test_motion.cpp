@@ -9,12 +9,11 @@
 // White-box: the private curve and rig helpers of the procedural motions.
 #include "../../body/src/motion/curves.hpp"
 #include "../../body/src/motion/rig.hpp"
-
 #include "error_of.hpp"
 
-#include <gtest/gtest.h>
-
 #include <Eigen/Geometry>
+#include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -25,8 +24,6 @@
 #include <numeric>
 #include <string>
 #include <vector>
-
-#include <unistd.h>
 
 namespace sflsh::body {
 namespace {
@@ -44,17 +41,17 @@ constexpr double kDeg = 3.14159265358979323846 / 180.0;
 JointPositions synthetic_skeleton() {
   JointPositions j;
   const double hx = md::NominalLeg::hip_offset_x;
-  j << 0, 1.0, 0,                     // 0 pelvis
-      hx, 0.91, 0, -hx, 0.91, 0,      // 1, 2 hips
-      0, 1.11, -0.01,                 // 3 spine1
-      hx, 0.49, 0, -hx, 0.49, 0,      // 4, 5 knees
-      0, 1.24, 0,                     // 6 spine2
-      hx, 0.07, 0, -hx, 0.07, 0,      // 7, 8 ankles
-      0, 1.30, 0.01,                  // 9 spine3
-      hx, 0.0, 0.14, -hx, 0.0, 0.14,  // 10, 11 feet (balls of the feet)
-      0, 1.50, -0.01,                 // 12 neck
+  j << 0, 1.0, 0,                             // 0 pelvis
+      hx, 0.91, 0, -hx, 0.91, 0,              // 1, 2 hips
+      0, 1.11, -0.01,                         // 3 spine1
+      hx, 0.49, 0, -hx, 0.49, 0,              // 4, 5 knees
+      0, 1.24, 0,                             // 6 spine2
+      hx, 0.07, 0, -hx, 0.07, 0,              // 7, 8 ankles
+      0, 1.30, 0.01,                          // 9 spine3
+      hx, 0.0, 0.14, -hx, 0.0, 0.14,          // 10, 11 feet (balls of the feet)
+      0, 1.50, -0.01,                         // 12 neck
       0.07, 1.42, -0.01, -0.07, 1.42, -0.01,  // 13, 14 collars
-      0, 1.60, 0.03,                  // 15 head
+      0, 1.60, 0.03,                          // 15 head
       0.18, 1.40, -0.02, -0.18, 1.40, -0.02,  // 16, 17 shoulders
       0.44, 1.40, -0.03, -0.44, 1.40, -0.03,  // 18, 19 elbows
       0.69, 1.40, -0.02, -0.69, 1.40, -0.02,  // 20, 21 wrists
@@ -167,7 +164,8 @@ TEST(ProceduralMotion, NamesInDynaOrderWithDescriptions) {
 class ProceduralMotionTest : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(ProceduralMotionTest, FrameCountsAndValidity) {
-  for (const auto& [fps, frames] : std::vector<std::pair<double, std::size_t>>{{60, 240}, {30, 120}, {120, 480}, {100, 400}, {24, 96}}) {
+  for (const auto& [fps, frames] :
+       std::vector<std::pair<double, std::size_t>>{{60, 240}, {30, 120}, {120, 480}, {100, 400}, {24, 96}}) {
     const Motion m = make_procedural_motion(GetParam(), fps);
     EXPECT_EQ(m.num_frames(), frames) << "fps " << fps;
     EXPECT_EQ(m.trans.size(), frames);
@@ -209,8 +207,10 @@ TEST_P(ProceduralMotionTest, SmoothC2) {
   for (std::size_t c = 0; c < cc.size(); ++c) {
     const bool translation = c >= 3 * kNumJoints;
     const double acc = max_second_difference(cf[c], fine.fps);
-    if (translation) EXPECT_LT(acc, 5.0 * kG) << "trans component " << c - 3 * kNumJoints;
-    else EXPECT_LT(acc, 1500.0) << "pose component " << c << " [rad/s²]";
+    if (translation)
+      EXPECT_LT(acc, 5.0 * kG) << "trans component " << c - 3 * kNumJoints;
+    else
+      EXPECT_LT(acc, 1500.0) << "pose component " << c << " [rad/s²]";
     const double jerk_coarse = max_third_difference(cc[c], coarse.fps);
     const double jerk_fine = max_third_difference(cf[c], fine.fps);
     EXPECT_LT(jerk_fine, 1.3 * jerk_coarse + 1e-6) << "channel " << c << ": jerk estimate grows under refinement";
@@ -314,7 +314,7 @@ TEST(MotionConventions, LegInverseKinematicsReachesTarget) {
     const int knee = left ? md::kLeftKnee : md::kRightKnee;
     EXPECT_LT((p.row(ankle) - rest.row(ankle)).norm(), 1e-9);
     EXPECT_LT((p.row(ball) - rest.row(ball)).norm(), 1e-9);  // foot flat, pointing forward
-    EXPECT_GT(p(knee, 2), 0.02);                              // knee bends forward
+    EXPECT_GT(p(knee, 2), 0.02);                             // knee bends forward
     EXPECT_GT(ik.knee_flexion, 5 * kDeg);
   }
 }
@@ -378,7 +378,8 @@ TEST(ProceduralMotionFigures, JiggleOnToes) {
   EXPECT_GE(freq, 2.5);
   EXPECT_LE(freq, 3.0);
   // Heels rise with the body: cumulative foot pitch (hip + knee + ankle about X) in phase with y.
-  const auto pitch = series(m, [&](std::size_t f) { return m.poses[f](3 * 1) + m.poses[f](3 * 4) + m.poses[f](3 * 7); });
+  const auto pitch =
+      series(m, [&](std::size_t f) { return m.poses[f](3 * 1) + m.poses[f](3 * 4) + m.poses[f](3 * 7); });
   EXPECT_GT(correlation(pitch, y, s), 0.95);
   EXPECT_GT(min_in(pitch, s), 5 * kDeg);  // always on the toes
   // Knees flex slightly, more at the bottom.
@@ -486,13 +487,13 @@ TEST(ProceduralMotionFigures, OneLegJump) {
   EXPECT_GT(max_in(knee_l, s), 35 * kDeg);
   EXPECT_LT(max_in(knee_l, s), 60 * kDeg);
   EXPECT_GT(min_in(knee_l, s), 5 * kDeg);  // never locked straight
-  double free_leg = 0, stance_leg = 1e9;  // vertical hip-to-ankle extent [m]
+  double free_leg = 0, stance_leg = 1e9;   // vertical hip-to-ankle extent [m]
   for (std::size_t f = s; f < m.num_frames(); f += 4) {
     const JointPositions p = pose_joints(m, f);
     free_leg = std::max(free_leg, p(md::kRightHip, 1) - p(md::kRightAnkle, 1));
     stance_leg = std::min(stance_leg, p(md::kLeftHip, 1) - p(md::kLeftAnkle, 1));
   }
-  EXPECT_LT(free_leg, 0.7);    // of the 0.84 m leg: bent and lifted
+  EXPECT_LT(free_leg, 0.7);  // of the 0.84 m leg: bent and lifted
   EXPECT_GT(stance_leg, 0.75);
   // During stance the ball of the stance foot stays put on the ground (within the few mm that the
   // adduction and the leg tilt cost vertically); in flight it is above the ground.
@@ -534,7 +535,7 @@ TEST(ProceduralMotionFigures, ShakeHips) {
   RecordProperty("head_motion_cm", std::to_string(100 * head));
   RecordProperty("knee_range_deg", std::to_string(knee_min / kDeg) + ".." + std::to_string(knee_max / kDeg));
   EXPECT_LT(chest, 1e-9);
-  EXPECT_LT(head, 1e-9);  // the root sways so the chest stays put on the nominal spine (= synthetic)
+  EXPECT_LT(head, 1e-9);   // the root sways so the chest stays put on the nominal spine (= synthetic)
   EXPECT_LT(ankle, 1e-9);  // feet planted (IK on the nominal leg = the synthetic skeleton's leg)
   EXPECT_GT(knee_min, 5 * kDeg);
   EXPECT_LT(knee_max, 60 * kDeg);

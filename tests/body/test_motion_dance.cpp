@@ -1,11 +1,11 @@
 // The dance showcase motion (validity, periodicity, C¹ smoothness, joint ranges, planted feet) and
 // time-offset motions (offset_motion, make_procedural_motion / load_motion with a time offset).
+#include "../../body/src/motion/rig.hpp"
+
 #include <sflsh/body/body_model.hpp>
 #include <sflsh/body/motion.hpp>
 #include <sflsh/body/skinning.hpp>
 #include <sflsh/core/error.hpp>
-
-#include "../../body/src/motion/rig.hpp"
 
 #include <gtest/gtest.h>
 
@@ -55,7 +55,7 @@ JointPositions nominal_skeleton() {
 TEST(DanceMotion, ShowcaseBesideTheDynaMotions) {
   const std::vector<std::string> dyna = {"one_leg_jump", "running_on_spot", "shake_hips", "jiggle_on_toes",
                                          "shake_shoulders"};
-  EXPECT_EQ(procedural_motion_names(), dyna);   // presets and tests rely on this list and its order
+  EXPECT_EQ(procedural_motion_names(), dyna);  // presets and tests rely on this list and its order
   EXPECT_EQ(showcase_motion_names(), std::vector<std::string>{"dance"});
   EXPECT_FALSE(procedural_motion_description("dance").empty());
   EXPECT_DOUBLE_EQ(procedural_motion_period("dance"), 2.0);
@@ -68,11 +68,11 @@ TEST(DanceMotion, ShowcaseBesideTheDynaMotions) {
 
 TEST(DanceMotion, ValidPeriodicSmoothAndWithinJointRanges) {
   const double fps = 120.0;
-  const Motion m = make_procedural_motion("dance", fps, 600);   // 5 s: ease-in + 2 bars
+  const Motion m = make_procedural_motion("dance", fps, 600);  // 5 s: ease-in + 2 bars
   ASSERT_NO_THROW(m.validate());
-  EXPECT_EQ(m.poses[0].cwiseAbs().maxCoeff(), 0.0);             // starts at the rest pose
+  EXPECT_EQ(m.poses[0].cwiseAbs().maxCoeff(), 0.0);  // starts at the rest pose
   const auto period = static_cast<std::size_t>(std::lround(2.0 * fps));
-  const auto steady = static_cast<std::size_t>(std::lround(0.5 * fps));   // after the ease-in
+  const auto steady = static_cast<std::size_t>(std::lround(0.5 * fps));  // after the ease-in
   for (std::size_t f = steady; f + period < m.num_frames(); ++f)
     ASSERT_LT(max_abs_difference(m, f, m, f + period), 1e-12) << "frame " << f;
 
@@ -89,17 +89,18 @@ TEST(DanceMotion, ValidPeriodicSmoothAndWithinJointRanges) {
     return acc * x.fps * x.fps;
   };
   double step = 0.0;
-  for (std::size_t f = 1; f < m.num_frames(); ++f) step = std::max(step, (m.poses[f] - m.poses[f - 1]).cwiseAbs().maxCoeff());
+  for (std::size_t f = 1; f < m.num_frames(); ++f)
+    step = std::max(step, (m.poses[f] - m.poses[f - 1]).cwiseAbs().maxCoeff());
   const double acc = max_acceleration(m), acc_fine = max_acceleration(fine);
   RecordProperty("max_acceleration", std::to_string(acc));
   // < 3° per 1/120 s (≤ 6.3 rad/s; the arm swing peaks near 5 rad/s) on every channel; an axis-angle
   // flip would be of order π.
   EXPECT_LT(step, 3.0 * kDeg);
-  EXPECT_LT(acc, 60.0);          // [rad/s², m/s²]: a dance, not an impact
+  EXPECT_LT(acc, 60.0);  // [rad/s², m/s²]: a dance, not an impact
   EXPECT_LT(acc_fine, 1.05 * acc + 1e-6);
 
   // Plausible ranges: knees bent 15°–60°, pelvis within 12°, every joint within 90°; feet planted.
-  const BodyModel model;   // forward kinematics only needs the parents
+  const BodyModel model;  // forward kinematics only needs the parents
   const JointPositions rest = nominal_skeleton();
   double knee_min = 1e9, knee_max = 0.0, pelvis = 0.0, any = 0.0, foot = 0.0;
   for (std::size_t f = steady; f < m.num_frames(); f += 3) {
@@ -118,20 +119,20 @@ TEST(DanceMotion, ValidPeriodicSmoothAndWithinJointRanges) {
   EXPECT_LT(knee_max, 60.0 * kDeg);
   EXPECT_LT(pelvis, 12.0 * kDeg);
   EXPECT_LT(any, 90.0 * kDeg);
-  EXPECT_LT(foot, 1e-9);   // IK on the nominal leg, which this skeleton has exactly
+  EXPECT_LT(foot, 1e-9);  // IK on the nominal leg, which this skeleton has exactly
 }
 
 TEST(OffsetMotion, PeriodicMotionShiftsItsPhaseAndStartsAtRest) {
   const double fps = 60.0;
   const Motion m = make_procedural_motion("dance", fps, 300);
-  const std::size_t k = 25, steady = 30;   // offset of 25 frames; ease-in over the first 30
+  const std::size_t k = 25, steady = 30;  // offset of 25 frames; ease-in over the first 30
   const Motion shifted = offset_motion(m, static_cast<double>(k) / fps);
   ASSERT_EQ(shifted.num_frames(), m.num_frames());
-  EXPECT_EQ(shifted.poses[0].cwiseAbs().maxCoeff(), 0.0);   // every avatar leaves the rest pose
+  EXPECT_EQ(shifted.poses[0].cwiseAbs().maxCoeff(), 0.0);  // every avatar leaves the rest pose
   const Motion longer = make_procedural_motion("dance", fps, 300 + static_cast<int>(k));
   for (std::size_t f = steady; f < shifted.num_frames(); ++f)
     ASSERT_LT(max_abs_difference(shifted, f, longer, f + k), 1e-12) << "frame " << f;
-  const Motion bar = offset_motion(m, 2.0);   // one period: the same motion
+  const Motion bar = offset_motion(m, 2.0);  // one period: the same motion
   for (std::size_t f = 0; f < m.num_frames(); ++f) ASSERT_LT(max_abs_difference(bar, f, m, f), 1e-12) << f;
   // Offsets compose, and the load option is the same thing.
   const Motion twice = offset_motion(offset_motion(m, 0.3), 0.4), once = offset_motion(m, 0.7);
@@ -145,14 +146,16 @@ TEST(OffsetMotion, PeriodicMotionShiftsItsPhaseAndStartsAtRest) {
 TEST(OffsetMotion, OtherMotionsStartLaterAndDataClamps) {
   const double fps = 60.0;
   const Motion jiggle = make_procedural_motion("jiggle_on_toes", fps, 120);
-  const Motion later = offset_motion(jiggle, 0.25);   // a DYNA motion from t = 0.25 s on
+  const Motion later = offset_motion(jiggle, 0.25);  // a DYNA motion from t = 0.25 s on
   const Motion longer = make_procedural_motion("jiggle_on_toes", fps, 135);
-  for (std::size_t f = 0; f < later.num_frames(); ++f) ASSERT_LT(max_abs_difference(later, f, longer, f + 15), 1e-12) << f;
+  for (std::size_t f = 0; f < later.num_frames(); ++f)
+    ASSERT_LT(max_abs_difference(later, f, longer, f + 15), 1e-12) << f;
 
-  Motion data = jiggle;   // the same frames as a data motion: resampled from its frames, clamped at the end
+  Motion data = jiggle;  // the same frames as a data motion: resampled from its frames, clamped at the end
   data.source = "clip.npz";
   const Motion whole = offset_motion(data, 10.0 / fps);
-  for (std::size_t f = 0; f + 10 < data.num_frames(); ++f) ASSERT_EQ(max_abs_difference(whole, f, data, f + 10), 0.0) << f;
+  for (std::size_t f = 0; f + 10 < data.num_frames(); ++f)
+    ASSERT_EQ(max_abs_difference(whole, f, data, f + 10), 0.0) << f;
   for (std::size_t f = data.num_frames() - 10; f < data.num_frames(); ++f)
     ASSERT_EQ(max_abs_difference(whole, f, data, data.num_frames() - 1), 0.0) << f;
   const Motion half = offset_motion(data, 2.5 / fps);
@@ -160,7 +163,7 @@ TEST(OffsetMotion, OtherMotionsStartLaterAndDataClamps) {
     EXPECT_LT((half.poses[f] - slerp_pose(data.poses[f + 2], data.poses[f + 3], 0.5)).cwiseAbs().maxCoeff(), 1e-12);
     EXPECT_LT((half.trans[f] - 0.5 * (data.trans[f + 2] + data.trans[f + 3])).cwiseAbs().maxCoeff(), 1e-12);
   }
-  const Motion earlier = offset_motion(data, -5.0 / fps);   // before the first frame: held at frame 0
+  const Motion earlier = offset_motion(data, -5.0 / fps);  // before the first frame: held at frame 0
   for (std::size_t f = 0; f <= 5; ++f) ASSERT_EQ(max_abs_difference(earlier, f, data, 0), 0.0) << f;
   ASSERT_EQ(max_abs_difference(earlier, 20, data, 15), 0.0);
   EXPECT_THROW(offset_motion(data, std::nan("")), Error);

@@ -10,12 +10,11 @@
 // White-box: the private curve and rig helpers of the procedural motions.
 #include "../../body/src/motion/curves.hpp"
 #include "../../body/src/motion/rig.hpp"
-
 #include "error_of.hpp"
 
-#include <gtest/gtest.h>
-
 #include <Eigen/Geometry>
+#include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -27,8 +26,6 @@
 #include <numeric>
 #include <string>
 #include <vector>
-
-#include <unistd.h>
 
 namespace sflsh::body {
 namespace {
@@ -47,9 +44,8 @@ class TempDirCleanup : public ::testing::Environment {
  public:
   void TearDown() override {
     std::error_code ec;
-    std::filesystem::remove_all(std::filesystem::temp_directory_path() /
-                                    ("sflsh_test_motion_io_" + std::to_string(::getpid())),
-                                ec);
+    std::filesystem::remove_all(
+        std::filesystem::temp_directory_path() / ("sflsh_test_motion_io_" + std::to_string(::getpid())), ec);
   }
 };
 [[maybe_unused]] ::testing::Environment* const kTempDirCleanup =
@@ -99,7 +95,8 @@ TEST(MotionLoad, ByNameOrPath) {
 /// Deterministic pseudo-random poses: rows × width, angles up to ±1.2 rad per component.
 std::vector<double> test_poses(std::size_t rows, std::size_t width) {
   std::vector<double> v(rows * width);
-  for (std::size_t i = 0; i < v.size(); ++i) v[i] = 1.2 * std::sin(0.37 * static_cast<double>(i) + 0.1 * static_cast<double>(i % 7));
+  for (std::size_t i = 0; i < v.size(); ++i)
+    v[i] = 1.2 * std::sin(0.37 * static_cast<double>(i) + 0.1 * static_cast<double>(i % 7));
   return v;
 }
 
@@ -205,23 +202,31 @@ TEST(AmassMotion, MalformedFilesNameFileAndKey) {
   const std::vector<Case> cases = {
       {"no_poses.npz", "missing key 'poses'", [](Members& m) { m.erase(m.begin()); }},
       {"wide.npz", "poses: shape (10, 100), expected (T, 156) or (T, 72)",
-       [](Members& m) { m[0].second = npz::make_f64({10, 100}, std::vector<double>(1000, 0.0)); }},
+       [](Members& m) {
+         m[0].second = npz::make_f64({10, 100}, std::vector<double>(1000, 0.0));
+       }},
       {"flat.npz", "poses: shape (156,)",
        [](Members& m) { m[0].second = npz::make_f64({156}, std::vector<double>(156, 0.0)); }},
       {"empty.npz", "poses: shape (0, 156), expected at least 1 frame",
-       [](Members& m) { m[0].second = npz::make_f64({0, 156}, {}); }},
+       [](Members& m) {
+         m[0].second = npz::make_f64({0, 156}, {});
+       }},
       {"rows.npz", "trans: 9 rows but 'poses' has 10",
-       [](Members& m) { m[1].second = npz::make_f64({9, 3}, std::vector<double>(27, 0.0)); }},
+       [](Members& m) {
+         m[1].second = npz::make_f64({9, 3}, std::vector<double>(27, 0.0));
+       }},
       {"trans_shape.npz", "trans: shape (10, 2), expected (T, 3)",
-       [](Members& m) { m[1].second = npz::make_f64({10, 2}, std::vector<double>(20, 0.0)); }},
+       [](Members& m) {
+         m[1].second = npz::make_f64({10, 2}, std::vector<double>(20, 0.0));
+       }},
       {"no_trans.npz", "missing key 'trans'", [](Members& m) { m.erase(m.begin() + 1); }},
       {"rate0.npz", "mocap_framerate: 0 Hz is outside [1, 10000] Hz",
        [](Members& m) { m[2].second = npz::make_scalar(0.0); }},
-      {"rate_neg.npz", "mocap_framerate: -30 Hz is outside [1, 10000] Hz", [](Members& m) { m[2].second = npz::make_scalar(-30.0); }},
+      {"rate_neg.npz", "mocap_framerate: -30 Hz is outside [1, 10000] Hz",
+       [](Members& m) { m[2].second = npz::make_scalar(-30.0); }},
       {"no_rate.npz", "missing key 'mocap_framerate' (or 'mocap_frame_rate')",
        [](Members& m) { m.erase(m.begin() + 2); }},
-      {"rate_text.npz", "mocap_framerate: dtype <U2",
-       [](Members& m) { m[2].second = npz::make_string("60"); }},
+      {"rate_text.npz", "mocap_framerate: dtype <U2", [](Members& m) { m[2].second = npz::make_string("60"); }},
       {"nan.npz", "poses: non-finite value (nan) at frame 3, column 5",
        [](Members& m) {
          auto v = test_poses(10, 156);
@@ -281,7 +286,9 @@ TEST(AmassMotion, AbsurdRatesTypesAndValuesAreRefusedBeforeAllocating) {
       {"rate_inf.npz", "mocap_framerate: inf Hz is outside [1, 10000] Hz",
        [](Members& m) { m[2].second = npz::make_scalar(std::numeric_limits<double>::infinity()); }},
       {"poses_bool.npz", "poses: dtype |b1 (bool), expected float axis-angle poses [rad]",
-       [](Members& m) { m[0].second = raw_array('b', 1, {10, 156}, std::vector<std::uint8_t>(1560, 1)); }},
+       [](Members& m) {
+         m[0].second = raw_array('b', 1, {10, 156}, std::vector<std::uint8_t>(1560, 1));
+       }},
       {"poses_huge.npz", "poses: 1e+300 rad at frame 0, column 4 is beyond ±1000 rad, not a joint angle",
        [](Members& m) {
          auto v = test_poses(10, 156);
@@ -295,10 +302,9 @@ TEST(AmassMotion, AbsurdRatesTypesAndValuesAreRefusedBeforeAllocating) {
          m[1].second = npz::make_f64({10, 3}, v);
        }},
       {"too_long.npz", "poses: 3602 frames at 1 Hz last 3601 s, above the limit of 3600 s",
-       [](Members& m) {
-         m = amass_members(3602, 72, 1.0);
-       }},
-      {"too_many_resampled.npz", "poses: 2999 s resampled to 10000 fps is 2.999e+07 frames, above the limit of 1000000 frames",
+       [](Members& m) { m = amass_members(3602, 72, 1.0); }},
+      {"too_many_resampled.npz",
+       "poses: 2999 s resampled to 10000 fps is 2.999e+07 frames, above the limit of 1000000 frames",
        [](Members& m) { m = amass_members(3000, 72, 1.0); }, 10000.0},
       {"fps_request.npz", "requested fps 0.5 is outside [1, 10000] Hz", [](Members&) {}, 0.5},
   };

@@ -9,9 +9,8 @@
 #include <sflsh/body/surface_checks.hpp>
 #include <sflsh/core/error.hpp>
 
-#include <gtest/gtest.h>
-
 #include <Eigen/Geometry>
+#include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>

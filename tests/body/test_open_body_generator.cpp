@@ -23,7 +23,8 @@ TEST(OpenBodyGenerator, ReproducesTheShippedDataAndExplainsThePopulation) {
   EXPECT_LT((g.v_template - shipped.v_template).cwiseAbs().maxCoeff(), 1e-9);
   EXPECT_LT((g.shapedirs - shipped.shapedirs).cwiseAbs().maxCoeff(), 1e-9);
   EXPECT_LT((g.weights - shipped.weights).cwiseAbs().maxCoeff(), 1e-9);
-  EXPECT_LT((Eigen::MatrixXd(g.joint_regressor) - Eigen::MatrixXd(shipped.joint_regressor)).cwiseAbs().maxCoeff(), 1e-9);
+  EXPECT_LT((Eigen::MatrixXd(g.joint_regressor) - Eigen::MatrixXd(shipped.joint_regressor)).cwiseAbs().maxCoeff(),
+            1e-9);
 
   const auto subjects = load_subjects(std::filesystem::path(SFLSH_DATA_DIR) / "open_body_subjects.toml");
   ASSERT_EQ(subjects.size(), generated.subjects.size());

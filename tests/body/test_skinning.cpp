@@ -100,13 +100,16 @@ TEST(Skinning, ForwardKinematicsChainsParentTransforms) {
   const Kinematics kin = forward_kinematics(model, joints, theta, Eigen::Vector3d::Zero());
   for (int k = 1; k < kNumJoints; ++k) {
     const int p = model.parents[static_cast<std::size_t>(k)];
-    const Eigen::Vector3d expected = kin.joints_posed.row(p).transpose() +
-                                     kin.global[static_cast<std::size_t>(p)].linear() *
-                                         (joints.row(k) - joints.row(p)).transpose();
-    EXPECT_LT((kin.joints_posed.row(k).transpose() - expected).norm(), 1e-12) << kJointNames[static_cast<std::size_t>(k)];
+    const Eigen::Vector3d expected =
+        kin.joints_posed.row(p).transpose() +
+        kin.global[static_cast<std::size_t>(p)].linear() * (joints.row(k) - joints.row(p)).transpose();
+    EXPECT_LT((kin.joints_posed.row(k).transpose() - expected).norm(), 1e-12)
+        << kJointNames[static_cast<std::size_t>(k)];
     // Each G'_k maps the rest joint onto the posed joint.
-    EXPECT_LT((kin.skinning[static_cast<std::size_t>(k)] * joints.row(k).transpose() -
-               kin.joints_posed.row(k).transpose()).norm(), 1e-12);
+    EXPECT_LT(
+        (kin.skinning[static_cast<std::size_t>(k)] * joints.row(k).transpose() - kin.joints_posed.row(k).transpose())
+            .norm(),
+        1e-12);
   }
 }
 
@@ -132,7 +135,8 @@ TEST(Skinning, PoseCorrectivesEnterBeforeSkinning) {
   const Pose theta = random_pose(8);
   const PosedBody out = evaluate(model, Betas::Zero(), theta, Eigen::Vector3d::Zero());
   const Eigen::VectorXd offsets = model.posedirs * pose_features(theta);
-  const RowMatrixX3d expected = model.v_template + Eigen::Map<const RowMatrixX3d>(offsets.data(), model.num_vertices(), 3);
+  const RowMatrixX3d expected =
+      model.v_template + Eigen::Map<const RowMatrixX3d>(offsets.data(), model.num_vertices(), 3);
   EXPECT_LT((out.unposed - expected).cwiseAbs().maxCoeff(), 1e-12);
   // Poser gives the same posed vertices as the one-shot evaluation.
   const Poser poser(model, Betas::Zero());

@@ -36,22 +36,29 @@ TEST(Subjects, ErrorsNameFileLineAndField) {
   const auto dir = sflsh::testing::scratch_dir();
   auto expect_error = [&](const std::string& text, const std::string& message) {
     std::ofstream(dir / "s.toml") << text;
-    EXPECT_THAT([&] { body::load_subjects(dir / "s.toml"); }, ::testing::ThrowsMessage<Error>(HasSubstr(message))) << text;
+    EXPECT_THAT([&] { body::load_subjects(dir / "s.toml"); }, ::testing::ThrowsMessage<Error>(HasSubstr(message)))
+        << text;
   };
-  expect_error("[[subject]]\nname = \"A\"\nsplit = \"train\"\nbeta = [1, 2]\n", "s.toml:4: subject 'A' has 2 beta values, expected 10");
-  expect_error("[[subject]]\nname = \"A\"\nsplit = \"val\"\nbeta = [0,0,0,0,0,0,0,0,0,0]\n", "split 'val', expected train or test");
-  expect_error("[[subject]]\nname = \"A\"\nsplit = \"train\"\nheight = 3\nbeta = [0,0,0,0,0,0,0,0,0,0]\n", "s.toml:4: unknown field 'height'");
+  expect_error("[[subject]]\nname = \"A\"\nsplit = \"train\"\nbeta = [1, 2]\n",
+               "s.toml:4: subject 'A' has 2 beta values, expected 10");
+  expect_error("[[subject]]\nname = \"A\"\nsplit = \"val\"\nbeta = [0,0,0,0,0,0,0,0,0,0]\n",
+               "split 'val', expected train or test");
+  expect_error("[[subject]]\nname = \"A\"\nsplit = \"train\"\nheight = 3\nbeta = [0,0,0,0,0,0,0,0,0,0]\n",
+               "s.toml:4: unknown field 'height'");
   expect_error("[[subject]]\nsplit = \"train\"\nbeta = [0,0,0,0,0,0,0,0,0,0]\n", "missing field 'name'");
-  expect_error("[[subject]]\nname = \"A\"\nsplit = \"train\"\nbeta = [0,0,\"x\",0,0,0,0,0,0,0]\n", "beta[2] is not a finite number");
+  expect_error("[[subject]]\nname = \"A\"\nsplit = \"train\"\nbeta = [0,0,\"x\",0,0,0,0,0,0,0]\n",
+               "beta[2] is not a finite number");
   expect_error("[[subject]\n", "s.toml:1:");
-  EXPECT_THAT([&] { body::load_subjects(dir / "none.toml"); }, ::testing::ThrowsMessage<Error>(HasSubstr("none.toml: subjects file not found")));
+  EXPECT_THAT([&] { body::load_subjects(dir / "none.toml"); },
+              ::testing::ThrowsMessage<Error>(HasSubstr("none.toml: subjects file not found")));
 }
 
 TEST(Subjects, ParseBetas) {
   EXPECT_TRUE(body::parse_betas("1 2 3").isApprox((body::Betas() << 1, 2, 3, 0, 0, 0, 0, 0, 0, 0).finished()));
   EXPECT_TRUE(body::parse_betas("[1.5, -2e-1]").head<2>().isApprox(Eigen::Vector2d(1.5, -0.2)));
   EXPECT_THAT([] { body::parse_betas("1 2 x"); }, ::testing::ThrowsMessage<Error>(HasSubstr("'x' is not a number")));
-  EXPECT_THAT([] { body::parse_betas("1 2 3 4 5 6 7 8 9 10 11"); }, ::testing::ThrowsMessage<Error>(HasSubstr("more than 10")));
+  EXPECT_THAT([] { body::parse_betas("1 2 3 4 5 6 7 8 9 10 11"); },
+              ::testing::ThrowsMessage<Error>(HasSubstr("more than 10")));
   EXPECT_THAT([] { body::parse_betas("nan"); }, ::testing::ThrowsMessage<Error>(HasSubstr("not a number")));
   EXPECT_THROW(body::parse_betas(""), Error);
 }

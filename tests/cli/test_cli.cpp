@@ -44,8 +44,9 @@ class Cli : public ::testing::Test {
 
 TEST_F(Cli, MotionExportWritesOneFramePerStepInVertexOrder) {
   const auto out = dir_ / "run";
-  const auto r = run_sflsh("--quiet motion export " + body_arg() + " --motion shake_hips --betas \"0.5 -1\" --frames 6 --out " +
-                               out.string(), dir_);
+  const auto r = run_sflsh("--quiet motion export " + body_arg() +
+                               " --motion shake_hips --betas \"0.5 -1\" --frames 6 --out " + out.string(),
+                           dir_);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_TRUE(std::filesystem::exists(out / "body.pvd"));
   EXPECT_TRUE(std::filesystem::exists(out / "summary.json"));
@@ -84,7 +85,8 @@ TEST_F(Cli, AmassAtTheOutputRateIsUsedFrameForFrame) {
   body::save_amass(dir_ / "clip.npz", m);
   const auto out = dir_ / "run";
   const auto r = run_sflsh("-q motion export " + body_arg() + " --motion " + (dir_ / "clip.npz").string() +
-                               " --betas 0 --out " + out.string(), dir_);
+                               " --betas 0 --out " + out.string(),
+                           dir_);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(read_json(out / "summary.json")["motion"]["frames"], 9);
   const body::BodyModel model = body::load_body(dir_ / "synthetic.npz");
@@ -103,7 +105,8 @@ TEST_F(Cli, HelpOnEverySubcommand) {
   }
   const auto list = run_sflsh("motion list", dir_);
   EXPECT_EQ(list.exit_code, 0);
-  for (const char* name : {"one_leg_jump", "running_on_spot", "shake_hips", "jiggle_on_toes", "shake_shoulders", "dance"})
+  for (const char* name :
+       {"one_leg_jump", "running_on_spot", "shake_hips", "jiggle_on_toes", "shake_shoulders", "dance"})
     EXPECT_THAT(list.out, HasSubstr(name));
 }
 

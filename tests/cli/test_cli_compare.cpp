@@ -27,12 +27,14 @@ namespace {
 namespace fs = std::filesystem;
 
 constexpr const char* kHeader =
-    "model,handles,cubature,coordinates,seconds_per_frame,frames_per_second,sigma_mean_mm,recovered_fraction,rms_error_mm,"
+    "model,handles,cubature,coordinates,seconds_per_frame,frames_per_second,sigma_mean_mm,recovered_fraction,rms_error_"
+    "mm,"
     "relative_rms_error,sigma_correlation,trajectory_rms_mm,trajectory_max_mm";
 
 /// A short clip on the coarse layer (template mesh and reduced models cached in the build tree).
 std::string clip_args() {
-  return fmt::format("--subject OPEN_TRAIN_1 --motion jiggle_on_toes --mesh coarse --frames 12 --cache {}", SFLSH_TEST_CACHE);
+  return fmt::format("--subject OPEN_TRAIN_1 --motion jiggle_on_toes --mesh coarse --frames 12 --cache {}",
+                     SFLSH_TEST_CACHE);
 }
 
 std::vector<std::string> split(const std::string& line, char sep) {
@@ -56,7 +58,8 @@ std::vector<std::string> lines_of(const fs::path& path) {
 TEST(CliCompare, WritesTheTradeoffTableAndErrorMapsForEveryConfiguration) {
   const fs::path dir = sflsh::testing::scratch_dir();
   const fs::path out = dir / "cmp";
-  const std::string args = "-q compare " + clip_args() + " --handles 30,86 --cubature 200 --exact-cubature --out " + out.string();
+  const std::string args =
+      "-q compare " + clip_args() + " --handles 30,86 --cubature 200 --exact-cubature --out " + out.string();
   // Headless, as on a cluster node: sflsh starts its own virtual display for the chart.
   const sflsh::testing::NoDisplay no_display;
   const sflsh::testing::CommandResult result = run_sflsh(args, dir);
@@ -64,7 +67,7 @@ TEST(CliCompare, WritesTheTradeoffTableAndErrorMapsForEveryConfiguration) {
   for (const char* file : {"compare.vtp", "tradeoff.csv", "tradeoff.md", "summary.json"})
     EXPECT_TRUE(fs::exists(out / file)) << file;
   const nlohmann::json summary = read_json(out / "summary.json");
-  sflsh::testing::expect_drawn_png(out / "tradeoff.png", 400, 300);   // a drawn chart, not an empty image
+  sflsh::testing::expect_drawn_png(out / "tradeoff.png", 400, 300);  // a drawn chart, not an empty image
   EXPECT_EQ(summary["output"]["plot"], "tradeoff.png");
 
   // The table: the exact header, the reference, then one row per configuration in sweep order.
@@ -75,7 +78,8 @@ TEST(CliCompare, WritesTheTradeoffTableAndErrorMapsForEveryConfiguration) {
   // K = 200 cubature tets for both: with 86 handles (258 coordinates) K = 100 under-samples the subspace and the
   // tets outside the cubature leave the material's range (compare reports it as out_of_range). Exact cubature
   // integrates every tet.
-  const std::vector<std::pair<int, int>> configs = {{30, 200}, {30, static_cast<int>(tets)}, {86, 200}, {86, static_cast<int>(tets)}};
+  const std::vector<std::pair<int, int>> configs = {
+      {30, 200}, {30, static_cast<int>(tets)}, {86, 200}, {86, static_cast<int>(tets)}};
   const int frames = 12;
   for (std::size_t i = 1; i < lines.size(); ++i) {
     const std::vector<std::string> cells = split(lines[i], ',');
@@ -86,15 +90,15 @@ TEST(CliCompare, WritesTheTradeoffTableAndErrorMapsForEveryConfiguration) {
     } else {
       EXPECT_EQ(std::stoi(cells[1]), configs[i - 2].first);
       EXPECT_EQ(std::stoi(cells[2]), configs[i - 2].second);
-      EXPECT_GT(std::stoi(cells[3]), 3 * configs[i - 2].first - 1);   // 3 coordinates per translational handle
+      EXPECT_GT(std::stoi(cells[3]), 3 * configs[i - 2].first - 1);  // 3 coordinates per translational handle
     }
     for (std::size_t k = 4; k < cells.size(); ++k) {
       const double v = std::stod(cells[k]);
       EXPECT_TRUE(std::isfinite(v)) << lines[i];
       EXPECT_GE(v, 0.0) << lines[i];
     }
-    EXPECT_GT(std::stod(cells[4]), 0.0) << lines[i];   // seconds per frame
-    EXPECT_GT(std::stod(cells[6]), 0.0) << lines[i];   // the clip moves the tissue
+    EXPECT_GT(std::stod(cells[4]), 0.0) << lines[i];  // seconds per frame
+    EXPECT_GT(std::stod(cells[6]), 0.0) << lines[i];  // the clip moves the tissue
     if (i > 1) {
       // Tolerances. Measured on this clip: recovered 0.81 (30 handles) and 0.99 (86), relative error 0.62 and
       // 0.55. The reduced model is stiffer than the full space (the paper's recovers 51% of the ground truth),
@@ -129,7 +133,7 @@ TEST(CliCompare, WritesTheTradeoffTableAndErrorMapsForEveryConfiguration) {
         EXPECT_LT(trajectory_max, 10.0) << lines[i];
       }
     } else {
-      EXPECT_EQ(std::stod(cells[7]), 1.0);    // the reference recovers all of itself
+      EXPECT_EQ(std::stod(cells[7]), 1.0);  // the reference recovers all of itself
       EXPECT_EQ(std::stod(cells[10]), 1.0);
       EXPECT_EQ(std::stod(cells[11]), 0.0);
       EXPECT_EQ(std::stod(cells[12]), 0.0);
@@ -141,10 +145,12 @@ TEST(CliCompare, WritesTheTradeoffTableAndErrorMapsForEveryConfiguration) {
   EXPECT_EQ(points.rows(), summary["mesh"]["body_vertices"].get<long>());
   const std::vector<std::string> names = sflsh::vtk::read_point_array_names(out / "compare.vtp");
   sflsh::testing::expect_self_described(out / "compare.vtp");
-  EXPECT_EQ(sflsh::vtk::read_point_array(out / "compare.vtp", "soft_region"), sflsh::vtk::read_point_array(out / "compare.vtp", "region"));
+  EXPECT_EQ(sflsh::vtk::read_point_array(out / "compare.vtp", "soft_region"),
+            sflsh::vtk::read_point_array(out / "compare.vtp", "region"));
   std::vector<std::string> expected = {"sigma_full"};
   for (const auto& [h, k] : configs)
-    for (const char* prefix : {"sigma_reduced_", "sigma_error_", "rms_error_"}) expected.push_back(fmt::format("{}h{}_k{}", prefix, h, k));
+    for (const char* prefix : {"sigma_reduced_", "sigma_error_", "rms_error_"})
+      expected.push_back(fmt::format("{}h{}_k{}", prefix, h, k));
   for (const std::string& name : expected) {
     ASSERT_THAT(names, ::testing::Contains(name));
     const Eigen::MatrixXd values = sflsh::vtk::read_point_array(out / "compare.vtp", name);
@@ -168,8 +174,11 @@ TEST(CliCompare, WritesTheTradeoffTableAndErrorMapsForEveryConfiguration) {
   }
   EXPECT_GT(summary["full"]["seconds_per_frame"].get<double>(), 0.0);
   const std::vector<std::string> md = lines_of(out / "tradeoff.md");
-  EXPECT_GE(std::count_if(md.begin(), md.end(), [](const std::string& l) { return l.rfind("| reduced |", 0) == 0; }), 4);
-  EXPECT_TRUE(std::any_of(md.begin(), md.end(), [](const std::string& l) { return l.find("| σ correlation | trajectory RMS [mm] |") != std::string::npos; }));
+  EXPECT_GE(std::count_if(md.begin(), md.end(), [](const std::string& l) { return l.rfind("| reduced |", 0) == 0; }),
+            4);
+  EXPECT_TRUE(std::any_of(md.begin(), md.end(), [](const std::string& l) {
+    return l.find("| σ correlation | trajectory RMS [mm] |") != std::string::npos;
+  }));
 }
 
 TEST(CliCompare, BadInputGivesOneLineAndWritesNothing) {

@@ -1,12 +1,11 @@
 // The CLI on bad text input and runaway requests (issue 23): every refusal is one line naming the file and
 // field, exits 1 and writes nothing; runs above the work limits need --allow-long.
-#include <gmock/gmock.h>
-#include <gtest/gtest.h>
-
 #include "run_command.hpp"
 #include "scratch_dir.hpp"
 
 #include <fmt/format.h>
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
 
 #include <algorithm>
 #include <fstream>
@@ -28,24 +27,33 @@ fs::path write(const fs::path& path, const std::string& text) {
 std::string tet_msh(const std::string& node_count = "4") {
   return "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n"
          "$PhysicalNames\n3\n0 1 \"base\"\n0 2 \"tip\"\n3 3 \"volume\"\n$EndPhysicalNames\n"
-         "$Nodes\n" + node_count + "\n1 0 0 0\n2 0.1 0 0\n3 0 0.1 0\n4 0 0 0.1\n$EndNodes\n"
+         "$Nodes\n" +
+         node_count +
+         "\n1 0 0 0\n2 0.1 0 0\n3 0 0.1 0\n4 0 0 0.1\n$EndNodes\n"
          "$Elements\n5\n1 15 2 1 1 1\n2 15 2 1 2 2\n3 15 2 1 3 3\n4 15 2 2 4 4\n5 4 2 3 1 1 2 3 4\n$EndElements\n";
 }
 
-std::string tet_problem(const std::string& young = "5000.0", const std::string& duration = "0.1", const std::string& step = "0.01") {
-  return "mesh = \"tet.msh\"\n"                 // 1
-         "density = 1000.0\n"                   // 2
-         "[material]\n"                         // 3
-         "young_tangent = " + young + "\n"      // 4
-         "young_normal = 2000.0\n"              // 5
-         "[[fix]]\n"                            // 6
-         "group = \"base\"\n"                   // 7
-         "components = \"xyz\"\n"               // 8
-         "[time]\n"                             // 9
-         "duration = " + duration + "\n"        // 10
-         "step = " + step + "\n"                // 11
-         "[record]\n"                           // 12
-         "group = \"tip\"\n";                   // 13
+std::string tet_problem(const std::string& young = "5000.0", const std::string& duration = "0.1",
+                        const std::string& step = "0.01") {
+  return "mesh = \"tet.msh\"\n"  // 1
+         "density = 1000.0\n"    // 2
+         "[material]\n"          // 3
+         "young_tangent = " +
+         young +
+         "\n"                       // 4
+         "young_normal = 2000.0\n"  // 5
+         "[[fix]]\n"                // 6
+         "group = \"base\"\n"       // 7
+         "components = \"xyz\"\n"   // 8
+         "[time]\n"                 // 9
+         "duration = " +
+         duration +
+         "\n"  // 10
+         "step = " +
+         step +
+         "\n"                  // 11
+         "[record]\n"          // 12
+         "group = \"tip\"\n";  // 13
 }
 
 struct Refusal {
@@ -74,7 +82,7 @@ TEST(CliLimits, VerifyRefusesRunawayStepsBadMaterialAndLyingMeshHeaders) {
         "pass --allow-long to run it anyway"}},
       {tet_problem("5000.0", "1.0", "1e-12"), {"1e+12 solver steps exceed the limit", "--allow-long"}},
       {tet_problem("1e30"), {"p.toml:4: material.young_tangent: 1e+30 Pa is outside [1, 1e+09] Pa"}},
-      {tet_problem() + "[solver]\nhessian = \"exact\"\n", {}},   // valid: runs (checked below)
+      {tet_problem() + "[solver]\nhessian = \"exact\"\n", {}},  // valid: runs (checked below)
   };
   for (const auto& [text, expected] : cases) {
     write(problem, text);
@@ -89,11 +97,14 @@ TEST(CliLimits, VerifyRefusesRunawayStepsBadMaterialAndLyingMeshHeaders) {
   // A header announcing two billion nodes: refused at once, no allocation for them.
   write(problem, tet_problem());
   write(dir / "tet.msh", tet_msh("2000000000"));
-  expect_refused({"verify " + problem, {"p.toml:1: mesh: ", "tet.msh:11: $Nodes: number of nodes = 2000000000 is more than the rest of the file"}},
-                 dir, out);
+  expect_refused(
+      {"verify " + problem,
+       {"p.toml:1: mesh: ", "tet.msh:11: $Nodes: number of nodes = 2000000000 is more than the rest of the file"}},
+      dir, out);
   fs::create_directories(dir / "tet_dir.msh");
   write(problem, std::regex_replace(tet_problem(), std::regex("tet.msh"), "tet_dir.msh"));
-  expect_refused({"verify " + problem, {"p.toml:1: mesh: ", "tet_dir.msh: is a directory, expected a gmsh .msh file"}}, dir, out);
+  expect_refused({"verify " + problem, {"p.toml:1: mesh: ", "tet_dir.msh: is a directory, expected a gmsh .msh file"}},
+                 dir, out);
 }
 
 TEST(CliLimits, FileOptionsThatAreDirectoriesSaySo) {
@@ -106,7 +117,8 @@ TEST(CliLimits, FileOptionsThatAreDirectoriesSaySo) {
            {body + " --material " + d, {d + ": is a directory, expected a material TOML file"}},
            {"simulate --scene " + d, {d + ": is a directory, expected a scene TOML file"}},
            {body + " --body " + d, {d + ": is a directory, expected a body model .npz file"}},
-           {"simulate --solver reduced --subject OPEN_TRAIN_1 --frames 2 --motion " + d, {d + ": is a directory, expected an AMASS motion .npz file"}},
+           {"simulate --solver reduced --subject OPEN_TRAIN_1 --frames 2 --motion " + d,
+            {d + ": is a directory, expected an AMASS motion .npz file"}},
            {"verify " + d, {d + ": is a directory, expected a verify problem TOML file"}},
            {"material show --material " + d, {d + ": is a directory, expected a material TOML file"}},
        })
@@ -117,24 +129,29 @@ TEST(CliLimits, SimulateRefusesRunawayFramesAndCrowdsUnlessAllowed) {
   const auto dir = testing::scratch_dir();
   const auto out = dir / "out";
   expect_refused({"simulate --solver reduced --subject OPEN_TRAIN_1 --motion dance --frames 100000000 --mesh coarse",
-                  {"--frames × --substeps (or the motion's length): 1e+08 solver steps exceed the limit of 1e+06", "--allow-long"}},
+                  {"--frames × --substeps (or the motion's length): 1e+08 solver steps exceed the limit of 1e+06",
+                   "--allow-long"}},
                  dir, out);
-  const auto crowd = write(dir / "crowd.toml", "[scene]\nfps = 30\nduration = 2.0\n[effects]\ninertia = true\n[crowd]\ncount = 100000\n");
-  expect_refused({"simulate --scene " + crowd.string(), {"crowd.toml: [scene] duration", "1e+05 bodies exceed the limit of 100", "--allow-long"}},
+  const auto crowd = write(dir / "crowd.toml",
+                           "[scene]\nfps = 30\nduration = 2.0\n[effects]\ninertia = true\n[crowd]\ncount = 100000\n");
+  expect_refused({"simulate --scene " + crowd.string(),
+                  {"crowd.toml: [scene] duration", "1e+05 bodies exceed the limit of 100", "--allow-long"}},
                  dir, out);
 }
 
 TEST(CliLimits, SkinnedBodyFarIntoItsMotionRunsInConstantMemoryAndBeyondTheBoundIsRefused) {
   const auto dir = testing::scratch_dir();
   const auto out = dir / "out";
-  const std::string scene = "[scene]\nfps = 30\nframes = 2\n[[body]]\nmotion = \"dance\"\nsolver = \"skinned\"\nmotion_offset = ";
+  const std::string scene =
+      "[scene]\nfps = 30\nframes = 2\n[[body]]\nmotion = \"dance\"\nsolver = \"skinned\"\nmotion_offset = ";
   const auto far = write(dir / "far.toml", scene + "3600.0\n");
   const auto r = run_sflsh("-q simulate --scene " + far.string() + " --no-output --out " + out.string(), dir);
   EXPECT_EQ(r.exit_code, 0) << r.err;
   fs::remove_all(out);
   const auto beyond = write(dir / "beyond.toml", scene + "1e9\n");
-  expect_refused({"simulate --scene " + beyond.string(), {"beyond.toml:7: motion_offset in body #0: 1e+09 s is outside [0, 3600] s"}}, dir,
-                 out);
+  expect_refused({"simulate --scene " + beyond.string(),
+                  {"beyond.toml:7: motion_offset in body #0: 1e+09 s is outside [0, 3600] s"}},
+                 dir, out);
 }
 
 TEST(CliLimits, MaterialForAnotherBodyIsRefusedBeforeMeshing) {
@@ -142,7 +159,8 @@ TEST(CliLimits, MaterialForAnotherBodyIsRefusedBeforeMeshing) {
   const auto m = write(dir / "m.toml",
                        "body = 'smpl'\nsubject = 'x'\npoisson = 0.2\nsaturation = 4.0\n[[control_point]]\nvertex = 7\n"
                        "thickness = 0.5\nyoung_tangent = 5000.0\nyoung_normal = 2000.0\n");
-  expect_refused({fmt::format("material show --material {} --mesher layered --size coarse --cache {}", m.string(), SFLSH_TEST_CACHE),
+  expect_refused({fmt::format("material show --material {} --mesher layered --size coarse --cache {}", m.string(),
+                              SFLSH_TEST_CACHE),
                   {m.string() + ": body: the material is for body 'smpl', but the run uses body 'open_body'"}},
                  dir, dir / "out");
 }

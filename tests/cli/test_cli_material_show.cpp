@@ -23,8 +23,9 @@ std::string common_args() { return fmt::format("--mesher layered --mesh coarse -
 TEST(CliMaterialShow, WritesFieldsControlPointsAndARoundTrippableMaterialFile) {
   const auto dir = sflsh::testing::scratch_dir();
   const auto out = dir / "show";
-  auto result = run_sflsh(
-      fmt::format("-q material show --subject OPEN_TEST_1 --control-points 12 --phi {} --out {}", common_args(), out.string()), dir);
+  auto result = run_sflsh(fmt::format("-q material show --subject OPEN_TEST_1 --control-points 12 --phi {} --out {}",
+                                      common_args(), out.string()),
+                          dir);
   ASSERT_EQ(result.exit_code, 0) << result.err;
   for (const char* file : {"surface.vtp", "layer.vtu", "control_points.vtp", "material.toml", "summary.json"})
     EXPECT_TRUE(std::filesystem::exists(out / file)) << file;
@@ -32,8 +33,10 @@ TEST(CliMaterialShow, WritesFieldsControlPointsAndARoundTrippableMaterialFile) {
   for (const char* field : {"thickness", "young_tangent", "young_normal", "phi_00", "phi_11"})
     EXPECT_THAT(names, ::testing::Contains(std::string(field)));
   EXPECT_EQ(vtk::read_points(out / "control_points.vtp").rows(), 12);
-  for (const char* file : {"surface.vtp", "layer.vtu", "control_points.vtp"}) sflsh::testing::expect_self_described(out / file);
-  EXPECT_EQ(vtk::read_point_array(out / "surface.vtp", "thickness_fraction"), vtk::read_point_array(out / "surface.vtp", "thickness"));
+  for (const char* file : {"surface.vtp", "layer.vtu", "control_points.vtp"})
+    sflsh::testing::expect_self_described(out / file);
+  EXPECT_EQ(vtk::read_point_array(out / "surface.vtp", "thickness_fraction"),
+            vtk::read_point_array(out / "surface.vtp", "thickness"));
   // The written material file is accepted back as --material.
   const auto again = dir / "again";
   result = run_sflsh(fmt::format("-q material show --subject OPEN_TEST_1 --material {} {} --out {}",
@@ -48,7 +51,8 @@ TEST(CliMaterialShow, BadMaterialFileGivesOneLineAndWritesNothing) {
   const auto bad = dir / "bad.toml";
   { std::ofstream(bad) << "body = 'open_body'\nsubject = 'x'\n[[control_point]]\nvertex = 'seven'\n"; }
   const auto out = dir / "show";
-  const auto result = run_sflsh(fmt::format("material show --material {} {} --out {}", bad.string(), common_args(), out.string()), dir);
+  const auto result =
+      run_sflsh(fmt::format("material show --material {} {} --out {}", bad.string(), common_args(), out.string()), dir);
   EXPECT_NE(result.exit_code, 0);
   EXPECT_THAT(result.err, HasSubstr(bad.string()));
   EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
@@ -84,9 +88,9 @@ TEST(CliMaterialShow, ShapeModelGivesAShapeDependentMaterial) {
   EXPECT_GT(std::abs(mean_young(0) - mean_young(1)), 1e-3 * mean_young(0));
   // --material and --shape-model exclude each other: one line, nothing written.
   const auto out = dir / "both";
-  const auto both = run_sflsh(fmt::format("material show --material x.toml --shape-model {} {} --out {}", model,
-                                          common_args(), out.string()),
-                              dir);
+  const auto both = run_sflsh(
+      fmt::format("material show --material x.toml --shape-model {} {} --out {}", model, common_args(), out.string()),
+      dir);
   EXPECT_EQ(both.exit_code, 2);
   EXPECT_THAT(both.err, HasSubstr("--shape-model"));
   EXPECT_EQ(count_entries(out), 0u);

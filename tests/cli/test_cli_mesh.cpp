@@ -26,8 +26,8 @@ std::string common_args() { return fmt::format("--mesher gmsh --mesh coarse --ca
 TEST(CliMesh, WritesTheLayerSurfacesAndSummary) {
   const auto dir = sflsh::testing::scratch_dir();
   const auto out = dir / "layer";
-  const auto result =
-      run_sflsh(fmt::format("-q mesh --subject OPEN_TRAIN_2 --thickness 0.4 {} --out {}", common_args(), out.string()), dir);
+  const auto result = run_sflsh(
+      fmt::format("-q mesh --subject OPEN_TRAIN_2 --thickness 0.4 {} --out {}", common_args(), out.string()), dir);
   ASSERT_EQ(result.exit_code, 0) << result.err;
   for (const char* file : {"layer.vtu", "outer.vtp", "inner.vtp", "summary.json"})
     EXPECT_TRUE(std::filesystem::exists(out / file)) << file;
@@ -50,12 +50,16 @@ TEST(CliMesh, WritesTheLayerSurfacesAndSummary) {
   EXPECT_EQ(vtk::read_points(out / "outer.vtp").rows(), summary["skin_vertices"].get<long>());
   // Every array says its unit; part and node_kind come with the names of their values.
   for (const char* file : {"layer.vtu", "outer.vtp", "inner.vtp"}) sflsh::testing::expect_self_described(out / file);
-  sflsh::testing::expect_labels_named(out / "layer.vtu", vtk::read_point_array(out / "layer.vtu", "part"), "part_names");
+  sflsh::testing::expect_labels_named(out / "layer.vtu", vtk::read_point_array(out / "layer.vtu", "part"),
+                                      "part_names");
   sflsh::testing::expect_labels_named(out / "layer.vtu", vtk::read_cell_array(out / "layer.vtu", "part"), "part_names");
-  sflsh::testing::expect_labels_named(out / "layer.vtu", vtk::read_point_array(out / "layer.vtu", "node_kind"), "node_kind_names");
-  sflsh::testing::expect_labels_named(out / "outer.vtp", vtk::read_point_array(out / "outer.vtp", "part"), "part_names");
+  sflsh::testing::expect_labels_named(out / "layer.vtu", vtk::read_point_array(out / "layer.vtu", "node_kind"),
+                                      "node_kind_names");
+  sflsh::testing::expect_labels_named(out / "outer.vtp", vtk::read_point_array(out / "outer.vtp", "part"),
+                                      "part_names");
   EXPECT_EQ(vtk::read_field_strings(out / "layer.vtu", "part_names").size(), 5u);
-  EXPECT_THAT(vtk::read_field_strings(out / "layer.vtu", "node_kind_names"), ::testing::ElementsAre("interior", "outer", "inner", "side"));
+  EXPECT_THAT(vtk::read_field_strings(out / "layer.vtu", "node_kind_names"),
+              ::testing::ElementsAre("interior", "outer", "inner", "side"));
 }
 
 TEST(CliMesh, BadInputGivesOneLineAndWritesNothing) {
@@ -92,14 +96,15 @@ TEST(CliMesh, CorruptCacheIsReportedWithTheFile) {
   ASSERT_EQ(result.exit_code, 0) << result.err;
   const std::string path = read_json(dir / "a" / "summary.json")["cache"]["path"];
   { std::ofstream(path) << "garbage"; }
-  result = run_sflsh(fmt::format("mesh --region left_thigh --mesher layered --size coarse --cache {} --out {}", cache.string(),
-                                 (dir / "b").string()),
+  result = run_sflsh(fmt::format("mesh --region left_thigh --mesher layered --size coarse --cache {} --out {}",
+                                 cache.string(), (dir / "b").string()),
                      dir);
   EXPECT_NE(result.exit_code, 0);
   EXPECT_THAT(result.err, HasSubstr(path));
   EXPECT_THAT(result.err, HasSubstr("--rebuild-cache"));
-  result = run_sflsh(fmt::format("-q mesh --region left_thigh --mesher layered --size coarse --cache {} --rebuild-cache --out {}",
-                                 cache.string(), (dir / "c").string()),
-                     dir);
+  result = run_sflsh(
+      fmt::format("-q mesh --region left_thigh --mesher layered --size coarse --cache {} --rebuild-cache --out {}",
+                  cache.string(), (dir / "c").string()),
+      dir);
   EXPECT_EQ(result.exit_code, 0) << result.err;
 }

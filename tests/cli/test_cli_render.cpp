@@ -14,8 +14,8 @@ TEST(CliRender, DrawsTheRunsPosedBodyColouredBySigmaWithoutADisplay) {
   const auto dir = sflsh::testing::scratch_dir();
   const auto run = dir / "run";
   auto result = run_sflsh(fmt::format("-q simulate --solver reduced --mesh coarse --subject OPEN_TRAIN_1 --motion "
-                                       "jiggle_on_toes --frames 13 --cache {} --out {}",
-                                       SFLSH_TEST_CACHE, run.string()),
+                                      "jiggle_on_toes --frames 13 --cache {} --out {}",
+                                      SFLSH_TEST_CACHE, run.string()),
                           dir);
   ASSERT_EQ(result.exit_code, 0) << result.err;
 
@@ -26,10 +26,11 @@ TEST(CliRender, DrawsTheRunsPosedBodyColouredBySigmaWithoutADisplay) {
   // under a rainbow map hundreds.
   sflsh::testing::expect_drawn_png(dir / "sigma.png", 900, 1000, 200);
 
-  result = run_sflsh(fmt::format("-q render --run {} --color displacement --frame 6 --view front --width 400 --height 500 "
-                                 "--out {}",
-                                 run.string(), (dir / "frame6.png").string()),
-                     dir);
+  result =
+      run_sflsh(fmt::format("-q render --run {} --color displacement --frame 6 --view front --width 400 --height 500 "
+                            "--out {}",
+                            run.string(), (dir / "frame6.png").string()),
+                dir);
   ASSERT_EQ(result.exit_code, 0) << result.err;
   sflsh::testing::expect_drawn_png(dir / "frame6.png", 400, 500, 50);
 }

@@ -1,9 +1,8 @@
 // sflsh simulate --scene: the contract (summary.json with "effects") and bad input (one line, nothing written).
-#include <gtest/gtest.h>
-
 #include "run_command.hpp"
 #include "scratch_dir.hpp"
 
+#include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
 #include <fstream>
@@ -23,11 +22,13 @@ TEST(CliScene, SkinningOnlySceneWritesSeriesAndEffects) {
   EXPECT_EQ(s["effects"][0]["name"], "skinning");
   EXPECT_TRUE(s["effects"][0].contains("seconds"));
   EXPECT_EQ(s["scene"]["frames"], 3);
-  for (const char* f : {"dancer.pvd", "runner.pvd", "dancer_000002.vtp", "runner_000002.vtp"}) EXPECT_TRUE(std::filesystem::exists(dir / "out" / f)) << f;
+  for (const char* f : {"dancer.pvd", "runner.pvd", "dancer_000002.vtp", "runner_000002.vtp"})
+    EXPECT_TRUE(std::filesystem::exists(dir / "out" / f)) << f;
   // One collection opens the scene: both bodies at each of the 3 frames; no σ maps without a soft body.
   std::ifstream pvd(dir / "out" / "scene.pvd");
   const std::string xml((std::istreambuf_iterator<char>(pvd)), std::istreambuf_iterator<char>());
-  for (const char* f : {R"(part="0" name="dancer" file="dancer_000000.vtp")", R"(part="1" name="runner" file="runner_000002.vtp")"})
+  for (const char* f :
+       {R"(part="0" name="dancer" file="dancer_000000.vtp")", R"(part="1" name="runner" file="runner_000002.vtp")"})
     EXPECT_NE(xml.find(f), std::string::npos) << f;
   EXPECT_FALSE(std::filesystem::exists(dir / "out" / "scene_dynamics.pvd"));
   EXPECT_EQ(s["output"]["collections"], nlohmann::json::array({"scene.pvd"}));
@@ -36,7 +37,8 @@ TEST(CliScene, SkinningOnlySceneWritesSeriesAndEffects) {
 TEST(CliScene, BadSceneIsOneLineAndWritesNothing) {
   const auto dir = testing::scratch_dir();
   std::ofstream(dir / "bad.toml") << "[scene]\nfps = 30\n[[body]]\nmotion = \"rest\"\nhandels = 30\n";
-  const auto r = testing::run_sflsh("simulate --scene " + (dir / "bad.toml").string() + " --out " + (dir / "out").string(), dir);
+  const auto r =
+      testing::run_sflsh("simulate --scene " + (dir / "bad.toml").string() + " --out " + (dir / "out").string(), dir);
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find("bad.toml:5: unknown key 'handels' in body #0"), std::string::npos) << r.err;
   EXPECT_FALSE(std::filesystem::exists(dir / "out"));
@@ -48,7 +50,8 @@ TEST(CliScene, BadSceneIsOneLineAndWritesNothing) {
 TEST(CliScene, EveryWritesTheChosenFramesAndBadValuesWriteNothing) {
   const auto dir = testing::scratch_dir();
   const std::string scene = std::string(SFLSH_DATA_DIR) + "/scenes/skinning_only.toml";
-  const auto r = testing::run_sflsh("simulate --scene " + scene + " --frames 6 --every 4 --out " + (dir / "out").string(), dir);
+  const auto r =
+      testing::run_sflsh("simulate --scene " + scene + " --frames 6 --every 4 --out " + (dir / "out").string(), dir);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   for (int f = 0; f < 6; ++f) {
     const bool written = f == 0 || f == 4 || f == 5;
@@ -57,12 +60,14 @@ TEST(CliScene, EveryWritesTheChosenFramesAndBadValuesWriteNothing) {
   std::ifstream in(dir / "out" / "summary.json");
   EXPECT_EQ(nlohmann::json::parse(in)["output"]["every"], 4);
 
-  const auto zero = testing::run_sflsh("simulate --scene " + scene + " --every 0 --out " + (dir / "zero").string(), dir);
+  const auto zero =
+      testing::run_sflsh("simulate --scene " + scene + " --every 0 --out " + (dir / "zero").string(), dir);
   EXPECT_NE(zero.exit_code, 0);
   EXPECT_NE(zero.err.find("--every must be at least 1, got 0"), std::string::npos) << zero.err;
   EXPECT_FALSE(std::filesystem::exists(dir / "zero"));
   std::ofstream(dir / "bad.toml") << "[scene]\nfps = 30\n[output]\nevery = -2\n[[body]]\nmotion = \"rest\"\n";
-  const auto bad = testing::run_sflsh("simulate --scene " + (dir / "bad.toml").string() + " --out " + (dir / "bad").string(), dir);
+  const auto bad =
+      testing::run_sflsh("simulate --scene " + (dir / "bad.toml").string() + " --out " + (dir / "bad").string(), dir);
   EXPECT_NE(bad.exit_code, 0);
   EXPECT_NE(bad.err.find("bad.toml:4: 'every' in [output] = -2 must be an integer ≥ 1"), std::string::npos) << bad.err;
   EXPECT_FALSE(std::filesystem::exists(dir / "bad"));

@@ -1,16 +1,17 @@
 // `sflsh sweep`: a representative slice (2 subjects × 2 motions × 40 frames on the coarse layer) runs without a
 // failure and writes the report with its exact columns; a failing case is reported in the table and the exit code
 // while the report is still written; bad lists fail at once with one line and write nothing.
+#include "run_command.hpp"
+#include "scratch_dir.hpp"
+
+#include <sflsh/core/summary.hpp>
+
 #include <fmt/format.h>
 #include <gmock/gmock.h>
 
 #include <cmath>
 #include <fstream>
-#include <sflsh/core/summary.hpp>
 #include <sstream>
-
-#include "run_command.hpp"
-#include "scratch_dir.hpp"
 
 using sflsh::read_json;
 using sflsh::testing::count_entries;

@@ -11,8 +11,8 @@
 #include <gmock/gmock.h>
 
 #include <cmath>
-#include <map>
 #include <fstream>
+#include <map>
 #include <sstream>
 
 using sflsh::read_json;
@@ -25,16 +25,19 @@ namespace {
 namespace fs = std::filesystem;
 
 constexpr const char* kHeader =
-    "model,integrator,mesh,handles,cubature,substeps,step_s,setup_seconds,seconds_per_frame,rms_error_mm,relative_error,"
+    "model,integrator,mesh,handles,cubature,substeps,step_s,setup_seconds,seconds_per_frame,rms_error_mm,relative_"
+    "error,"
     "sigma_ratio,valid,pareto,mass";
 
 /// A 3-frame clip on the coarse layer, scored against backward Euler at 1/120 s (4 substeps at 30 fps); one
 /// reduced model (30 handles, 200 cubature tets, 1/30 s).
 std::string tiny_case(int frames = 3, int reference_substeps = 4) {
-  return fmt::format("--subject OPEN_TRAIN_1 --motion jiggle_on_toes --frames {} --fps 30 --reference backward_euler "
-                     "--reference-mesh coarse --reference-substeps {} --meshes coarse --reduced-meshes coarse --handles 30 --cubature 200 "
-                     "--reduced-substeps 1 --reference-mass lumped --integrators backward_euler --masses lumped --cache {}",
-                     frames, reference_substeps, SFLSH_TEST_CACHE);
+  return fmt::format(
+      "--subject OPEN_TRAIN_1 --motion jiggle_on_toes --frames {} --fps 30 --reference backward_euler "
+      "--reference-mesh coarse --reference-substeps {} --meshes coarse --reduced-meshes coarse --handles 30 --cubature "
+      "200 "
+      "--reduced-substeps 1 --reference-mass lumped --integrators backward_euler --masses lumped --cache {}",
+      frames, reference_substeps, SFLSH_TEST_CACHE);
 }
 
 struct Table {
@@ -65,16 +68,15 @@ TEST(CliTradeoff, ScoresEveryModelAgainstTheReferenceAndRecommendsTheCheapestWit
   // handles 0.11 mm at 1 ms per frame: the cheapest row overall is outside the budget, so a recommendation
   // that ignored it would fail the check below.
   const sflsh::testing::NoDisplay no_display;  // headless: sflsh starts its own virtual display for the chart
-  const auto result = run_sflsh(fmt::format("-q tradeoff {} --substeps 1,2 --budget-mm 0.05 --out {}",
-                                            tiny_case(), out.string()),
-                                dir);
+  const auto result =
+      run_sflsh(fmt::format("-q tradeoff {} --substeps 1,2 --budget-mm 0.05 --out {}", tiny_case(), out.string()), dir);
   ASSERT_EQ(result.exit_code, 0) << result.err;
   for (const char* file : {"tradeoff.csv", "tradeoff.md", "summary.json"}) EXPECT_TRUE(fs::exists(out / file)) << file;
   sflsh::testing::expect_drawn_png(out / "tradeoff.png", 900, 600);  // the error–time chart, drawn
 
   const Table t = read_table(out / "tradeoff.csv");
   EXPECT_EQ(t.header, kHeader);
-  ASSERT_EQ(t.rows.size(), 4u);   // reference, full 1/30, full 1/60, reduced
+  ASSERT_EQ(t.rows.size(), 4u);  // reference, full 1/30, full 1/60, reduced
   for (const auto& r : t.rows) ASSERT_EQ(r.size(), 15u);
   // The reference scores itself: exactly zero error, σ ratio 1, and it is on the front.
   EXPECT_EQ(t.rows[0][0], "reference");
@@ -89,15 +91,15 @@ TEST(CliTradeoff, ScoresEveryModelAgainstTheReferenceAndRecommendsTheCheapestWit
   EXPECT_EQ(t.rows[2][5], "2");
   const double e1 = std::stod(t.rows[1][9]), e2 = std::stod(t.rows[2][9]);
   EXPECT_GT(e1, 0.0);
-  EXPECT_LT(e2, 0.8 * e1);   // first order would halve it; 0.8 leaves room for the reference's own error
+  EXPECT_LT(e2, 0.8 * e1);  // first order would halve it; 0.8 leaves room for the reference's own error
   EXPECT_EQ(t.rows[3][0], "reduced");
   EXPECT_EQ(t.rows[3][3], "30");
   for (std::size_t i = 1; i < t.rows.size(); ++i) {
-    EXPECT_GT(std::stod(t.rows[i][8]), 0.0) << i;   // seconds per frame
-    EXPECT_GT(std::stod(t.rows[i][7]), 0.0) << i;   // setup seconds
+    EXPECT_GT(std::stod(t.rows[i][8]), 0.0) << i;  // seconds per frame
+    EXPECT_GT(std::stod(t.rows[i][7]), 0.0) << i;  // setup seconds
     const double rel = std::stod(t.rows[i][10]);
     EXPECT_GT(rel, 0.0) << i;
-    EXPECT_LT(rel, 1.0) << i;   // closer to the reference than no soft tissue at all (which scores 1)
+    EXPECT_LT(rel, 1.0) << i;  // closer to the reference than no soft tissue at all (which scores 1)
   }
 
   // The recommendation: the cheapest tested row within the budget, read back from the table.
@@ -127,15 +129,18 @@ TEST(CliTradeoff, SweepsIntegratorsAndMassesAndChecksTheReference) {
   const fs::path dir = sflsh::testing::scratch_dir();
   const fs::path out = dir / "tr";
   const auto result = run_sflsh(
-      fmt::format("-q tradeoff --subject OPEN_TRAIN_1 --motion jiggle_on_toes --frames 4 --fps 30 --reference newmark --reference-mass "
-                  "consistent --reference-mesh coarse --reference-substeps 8 --reference-check time --reference-check-frames 3 "
-                  "--meshes coarse --substeps 1 --integrators backward_euler,newmark --masses lumped,consistent --reduced-meshes coarse "
-                  "--handles 30 --cubature 200 --reduced-substeps 1 --cache {} --out {}",
-                  SFLSH_TEST_CACHE, out.string()),
+      fmt::format(
+          "-q tradeoff --subject OPEN_TRAIN_1 --motion jiggle_on_toes --frames 4 --fps 30 --reference newmark "
+          "--reference-mass "
+          "consistent --reference-mesh coarse --reference-substeps 8 --reference-check time --reference-check-frames 3 "
+          "--meshes coarse --substeps 1 --integrators backward_euler,newmark --masses lumped,consistent "
+          "--reduced-meshes coarse "
+          "--handles 30 --cubature 200 --reduced-substeps 1 --cache {} --out {}",
+          SFLSH_TEST_CACHE, out.string()),
       dir);
   ASSERT_EQ(result.exit_code, 0) << result.err;
   const nlohmann::json summary = read_json(out / "summary.json");
-  ASSERT_EQ(summary["rows"].size(), 9u);   // the reference, 4 full-space rows, 4 reduced rows
+  ASSERT_EQ(summary["rows"].size(), 9u);  // the reference, 4 full-space rows, 4 reduced rows
   EXPECT_EQ(summary["reference"]["integrator"], "newmark");
   EXPECT_EQ(summary["reference"]["mass"], "consistent");
   std::map<std::string, double> sigma_ratio, error;
@@ -150,22 +155,24 @@ TEST(CliTradeoff, SweepsIntegratorsAndMassesAndChecksTheReference) {
   EXPECT_GT(sigma_ratio["newmark/lumped"], sigma_ratio["backward_euler/lumped"]);
   ASSERT_EQ(summary["reference"]["checks"].size(), 1u);
   const double check_mm = summary["reference"]["checks"][0]["rms_difference_mm"].get<double>();
-  EXPECT_LT(check_mm, 0.25 * error["newmark/consistent"]) << "the reference is not converged in time against the rows it scores";
+  EXPECT_LT(check_mm, 0.25 * error["newmark/consistent"])
+      << "the reference is not converged in time against the rows it scores";
   const Table t = read_table(out / "tradeoff.csv");
   EXPECT_EQ(t.header, kHeader);
-  for (std::size_t i = 0; i < t.rows.size(); ++i) EXPECT_THAT(t.rows[i].back(), ::testing::AnyOf("lumped", "consistent")) << i;
+  for (std::size_t i = 0; i < t.rows.size(); ++i)
+    EXPECT_THAT(t.rows[i].back(), ::testing::AnyOf("lumped", "consistent")) << i;
 }
 
 TEST(CliTradeoff, SaysSoWhenNoConfigurationMeetsTheBudget) {
   const fs::path dir = sflsh::testing::scratch_dir();
   const fs::path out = dir / "tr";
   const auto result = run_sflsh(
-      fmt::format("-q tradeoff {} --substeps 1 --budget-mm 1e-9 --out {}", tiny_case(3, 2), out.string()),
-      dir);
+      fmt::format("-q tradeoff {} --substeps 1 --budget-mm 1e-9 --out {}", tiny_case(3, 2), out.string()), dir);
   ASSERT_EQ(result.exit_code, 0) << result.err;
   const nlohmann::json summary = read_json(out / "summary.json");
   EXPECT_TRUE(summary["recommendation"]["row"].is_null());
-  EXPECT_THAT(summary["recommendation"]["message"].get<std::string>(), HasSubstr("No tested configuration meets RMS error ≤ 1e-09 mm"));
+  EXPECT_THAT(summary["recommendation"]["message"].get<std::string>(),
+              HasSubstr("No tested configuration meets RMS error ≤ 1e-09 mm"));
   EXPECT_EQ(summary["rows"].size(), 3u);
 }
 

@@ -67,15 +67,19 @@ TEST(Npz, FloatAndNarrowIntegerDtypes) {
 
 TEST(Npz, MalformedInputsGiveNamedErrors) {
   const auto dir = sflsh::testing::scratch_dir();
-  EXPECT_THAT([&] { npz::Reader r(dir / "missing.npz"); }, ::testing::ThrowsMessage<Error>(HasSubstr("missing.npz: file not found")));
-  {
-    std::ofstream(dir / "text.npz") << "this is not a zip archive";
-  }
-  EXPECT_THAT([&] { npz::Reader r(dir / "text.npz"); }, ::testing::ThrowsMessage<Error>(HasSubstr("not a readable .npz")));
+  EXPECT_THAT([&] { npz::Reader r(dir / "missing.npz"); },
+              ::testing::ThrowsMessage<Error>(HasSubstr("missing.npz: file not found")));
+  { std::ofstream(dir / "text.npz") << "this is not a zip archive"; }
+  EXPECT_THAT([&] { npz::Reader r(dir / "text.npz"); },
+              ::testing::ThrowsMessage<Error>(HasSubstr("not a readable .npz")));
   npz::write(dir / "ok.npz", {{"x", npz::make_scalar(1.0)}});
   const npz::Reader reader(dir / "ok.npz");
   EXPECT_THAT([&] { reader.read("y"); }, ::testing::ThrowsMessage<Error>(HasSubstr("missing key 'y'")));
-  EXPECT_THAT([&] { npz::parse_npy({1, 2, 3}, "blob"); }, ::testing::ThrowsMessage<Error>(HasSubstr("blob: not a .npy")));
+  EXPECT_THAT(
+      [&] {
+        npz::parse_npy({1, 2, 3}, "blob");
+      },
+      ::testing::ThrowsMessage<Error>(HasSubstr("blob: not a .npy")));
   std::vector<std::uint8_t> truncated = npz::serialize_npy(npz::make_f64({4}, {1, 2, 3, 4}));
   truncated.resize(truncated.size() - 8);
   EXPECT_THAT([&] { npz::parse_npy(truncated, "t"); }, ::testing::ThrowsMessage<Error>(HasSubstr("data truncated")));
@@ -111,19 +115,24 @@ std::string parse_error(const std::vector<std::uint8_t>& buffer) {
 
 TEST(Npz, OverflowingShapesAreRefusedBeforeAllocating) {
   // Elements × itemsize wrap around 2^64 to a small number: once this passed the truncation check.
-  EXPECT_THAT(parse_error(npy_with_header("{'descr': '<f8', 'fortran_order': False, 'shape': (2305843009213693952,), }")),
-              HasSubstr("m.npz: x: shape (2305843009213693952,) of dtype <f8 needs more than 2^64 bytes"));
-  EXPECT_THAT(parse_error(npy_with_header("{'descr': '<f8', 'fortran_order': False, 'shape': (4294967296, 4294967296, 8), }")),
-              HasSubstr("needs more than 2^64 bytes"));
-  EXPECT_THAT(parse_error(npy_with_header("{'descr': '<f8', 'fortran_order': False, 'shape': (99999999999999999999,), }")),
-              HasSubstr("m.npz: x: shape (99999999999999999999,) has '99999999999999999999', expected non-negative whole numbers"));
+  EXPECT_THAT(
+      parse_error(npy_with_header("{'descr': '<f8', 'fortran_order': False, 'shape': (2305843009213693952,), }")),
+      HasSubstr("m.npz: x: shape (2305843009213693952,) of dtype <f8 needs more than 2^64 bytes"));
+  EXPECT_THAT(
+      parse_error(npy_with_header("{'descr': '<f8', 'fortran_order': False, 'shape': (4294967296, 4294967296, 8), }")),
+      HasSubstr("needs more than 2^64 bytes"));
+  EXPECT_THAT(
+      parse_error(npy_with_header("{'descr': '<f8', 'fortran_order': False, 'shape': (99999999999999999999,), }")),
+      HasSubstr(
+          "m.npz: x: shape (99999999999999999999,) has '99999999999999999999', expected non-negative whole numbers"));
   EXPECT_THAT(parse_error(npy_with_header("{'descr': '<f8', 'fortran_order': False, 'shape': (-1, 3), }")),
               HasSubstr("m.npz: x: shape (-1, 3) has '-1', expected non-negative whole numbers"));
-  EXPECT_THAT(parse_error(npy_with_header("{'descr': '<f8', 'fortran_order': False, 'shape': (1000000, 3), }", "abc")),
-              HasSubstr("m.npz: x: data truncated: shape (1000000, 3) of dtype <f8 needs 24000000 bytes, the member has 3"));
+  EXPECT_THAT(
+      parse_error(npy_with_header("{'descr': '<f8', 'fortran_order': False, 'shape': (1000000, 3), }", "abc")),
+      HasSubstr("m.npz: x: data truncated: shape (1000000, 3) of dtype <f8 needs 24000000 bytes, the member has 3"));
   // A zero extent empties the array whatever the others are.
-  const npz::Array empty =
-      npz::parse_npy(npy_with_header("{'descr': '<f8', 'fortran_order': False, 'shape': (0, 4294967296, 4294967296), }"), "e");
+  const npz::Array empty = npz::parse_npy(
+      npy_with_header("{'descr': '<f8', 'fortran_order': False, 'shape': (0, 4294967296, 4294967296), }"), "e");
   EXPECT_EQ(empty.size(), 0u);
 
   // The same through an archive: the message names the file and the key.
@@ -133,34 +142,42 @@ TEST(Npz, OverflowingShapesAreRefusedBeforeAllocating) {
   npz::write(dir / "huge.npz", {{"poses", huge}});
   const npz::Reader reader(dir / "huge.npz");
   EXPECT_THAT([&] { reader.read("poses"); },
-              ::testing::ThrowsMessage<Error>(HasSubstr((dir / "huge.npz").string() + ": poses: shape (2305843009213693952, 8)")));
+              ::testing::ThrowsMessage<Error>(
+                  HasSubstr((dir / "huge.npz").string() + ": poses: shape (2305843009213693952, 8)")));
 }
 
 TEST(Npz, UnsupportedDtypesAreRefusedByName) {
   for (const std::string descr : {"<c16", "<f16", "<M8", "|V8", "<b2", "<i3", "<U0", "<fx"})
-    EXPECT_THAT(parse_error(npy_with_header("{'descr': '" + descr + "', 'fortran_order': False, 'shape': (1,), }", std::string(16, '\0'))),
+    EXPECT_THAT(parse_error(npy_with_header("{'descr': '" + descr + "', 'fortran_order': False, 'shape': (1,), }",
+                                            std::string(16, '\0'))),
                 HasSubstr("m.npz: x: dtype '" + descr + "' is not supported, expected float16/32/64"))
         << descr;
-  EXPECT_THAT(parse_error(npy_with_header("{'descr': '>f8', 'fortran_order': False, 'shape': (1,), }", std::string(8, '\0'))),
-              HasSubstr("m.npz: x: big-endian dtype '>f8' is not supported, expected little-endian ('<f8')"));
+  EXPECT_THAT(
+      parse_error(npy_with_header("{'descr': '>f8', 'fortran_order': False, 'shape': (1,), }", std::string(8, '\0'))),
+      HasSubstr("m.npz: x: big-endian dtype '>f8' is not supported, expected little-endian ('<f8')"));
   EXPECT_THAT(parse_error(npy_with_header("{'descr': [('a', '<f8')], 'fortran_order': False, 'shape': (1,), }")),
               HasSubstr("m.npz: x: .npy header has no plain 'descr'"));
   // Conversions name the array they were read from.
   const npz::Array text = npz::parse_npy(npz::serialize_npy(npz::make_string("female")), "m.npz: gender");
-  EXPECT_THAT([&] { text.to_doubles(); }, ::testing::ThrowsMessage<Error>(HasSubstr("m.npz: gender: dtype <U6 is not numeric")));
+  EXPECT_THAT([&] { text.to_doubles(); },
+              ::testing::ThrowsMessage<Error>(HasSubstr("m.npz: gender: dtype <U6 is not numeric")));
   const npz::Array fraction = npz::parse_npy(npz::serialize_npy(npz::make_f64({2}, {1.0, 2.5})), "m.npz: f");
-  EXPECT_THAT([&] { fraction.to_int64(); },
-              ::testing::ThrowsMessage<Error>(HasSubstr("m.npz: f: element 1 is 2.5 (dtype <f8), expected an integer")));
+  EXPECT_THAT(
+      [&] { fraction.to_int64(); },
+      ::testing::ThrowsMessage<Error>(HasSubstr("m.npz: f: element 1 is 2.5 (dtype <f8), expected an integer")));
 }
 
 TEST(Npz, Float16IsConvertedExactly) {
   // 1, -2, 65504 (largest), 2^-14 (smallest normal), 2^-24 (smallest subnormal), 1023·2^-24 (largest
   // subnormal), 0.333251953125, -0, +inf, -inf, NaN.
-  const std::vector<std::uint16_t> halves = {0x3C00, 0xC000, 0x7BFF, 0x0400, 0x0001, 0x03FF, 0x3555, 0x8000, 0x7C00, 0xFC00, 0x7E00};
+  const std::vector<std::uint16_t> halves = {0x3C00, 0xC000, 0x7BFF, 0x0400, 0x0001, 0x03FF,
+                                             0x3555, 0x8000, 0x7C00, 0xFC00, 0x7E00};
   std::string data(2 * halves.size(), '\0');
   std::memcpy(data.data(), halves.data(), data.size());
   const npz::Array a = npz::parse_npy(
-      npy_with_header("{'descr': '<f2', 'fortran_order': False, 'shape': (" + std::to_string(halves.size()) + ",), }", data), "h");
+      npy_with_header("{'descr': '<f2', 'fortran_order': False, 'shape': (" + std::to_string(halves.size()) + ",), }",
+                      data),
+      "h");
   EXPECT_EQ(a.dtype(), "<f2");
   const std::vector<double> v = a.to_doubles();
   ASSERT_EQ(v.size(), halves.size());

@@ -8,7 +8,6 @@
 #include <sflsh/core/vtk_io.hpp>
 
 #include <gmock/gmock.h>
-
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -53,9 +52,9 @@ TEST(RunFolder, NothingAppearsUntilCommit) {
   }
   EXPECT_TRUE(std::filesystem::exists(dir / "x.txt"));
   EXPECT_TRUE(std::filesystem::exists(dir / "sub/y.txt"));
-  EXPECT_EQ(sflsh::testing::count_entries(dir), 3u);  // x.txt, sub, sub/y.txt
+  EXPECT_EQ(sflsh::testing::count_entries(dir), 3u);      // x.txt, sub, sub/y.txt
   EXPECT_EQ(sflsh::testing::count_entries(scratch), 4u);  // and no staging folder beside it
-  {  // into an existing folder: files replaced one by one, others kept
+  {                           // into an existing folder: files replaced one by one, others kept
     RunFolder run(dir / "");  // a trailing separator names the same folder
     write_text_atomically(run.stage("x.txt"), "x2");
     run.commit();
@@ -101,7 +100,8 @@ TEST(RunFolder, FailedRunRemovesTheParentsItCreated) {
 TEST(RunFolder, RefusesAFileAsFolder) {
   const auto scratch = sflsh::testing::scratch_dir();
   write_text_atomically(scratch / "file", "x");
-  EXPECT_THAT([&] { RunFolder run(scratch / "file"); }, ::testing::ThrowsMessage<Error>(::testing::HasSubstr("is not a folder")));
+  EXPECT_THAT([&] { RunFolder run(scratch / "file"); },
+              ::testing::ThrowsMessage<Error>(::testing::HasSubstr("is not a folder")));
 }
 
 /// A pid that belonged to a process which has ended.
@@ -133,7 +133,8 @@ TEST(InterruptCleanup, RemovesATreeWithSignalSafeCalls) {
   const auto scratch = sflsh::testing::scratch_dir();
   const auto tree = scratch / "tree";
   for (int i = 0; i < 7; ++i) std::filesystem::create_directories(tree / fmt::format("d{}", i) / "deeper");
-  for (int i = 0; i < 300; ++i) write_text_atomically(tree / fmt::format("d{}", i % 7) / fmt::format("f{}.txt", i), "x");
+  for (int i = 0; i < 300; ++i)
+    write_text_atomically(tree / fmt::format("d{}", i % 7) / fmt::format("f{}.txt", i), "x");
   EXPECT_TRUE(remove_tree_signal_safe(tree.c_str()));
   EXPECT_FALSE(std::filesystem::exists(tree));
   EXPECT_TRUE(remove_tree_signal_safe((scratch / "missing").c_str()));
@@ -194,5 +195,6 @@ TEST(Summary, JsonRoundTripAndParseErrors) {
   EXPECT_EQ(read_json(dir / "summary.json")["frames"], 12);
   EXPECT_EQ(read_json(dir / "summary.json")["command"], "motion export");
   std::ofstream(dir / "bad.json") << "{\"a\": ";
-  EXPECT_THAT([&] { read_json(dir / "bad.json"); }, ::testing::ThrowsMessage<Error>(::testing::HasSubstr("bad.json: invalid JSON")));
+  EXPECT_THAT([&] { read_json(dir / "bad.json"); },
+              ::testing::ThrowsMessage<Error>(::testing::HasSubstr("bad.json: invalid JSON")));
 }

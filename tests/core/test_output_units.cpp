@@ -1,19 +1,20 @@
 // Self-describing output: the `units` field data names every array's unit, label names travel as string field
 // data, surfaces carry unit outward normals, a .pvd lists parts with names, an xdmf series says its units,
 // and every name of the units table (core/array_units.cpp) has its row in docs/output.md.
+#include "scratch_dir.hpp"
+#include "self_described.hpp"
+
+#include <sflsh/core/array_units.hpp>
+#include <sflsh/core/vtk_io.hpp>
+#include <sflsh/core/xdmf_series.hpp>
+
 #include <fmt/format.h>
 #include <gmock/gmock.h>
 #include <hdf5.h>
 
 #include <cmath>
 #include <fstream>
-#include <sflsh/core/array_units.hpp>
-#include <sflsh/core/vtk_io.hpp>
-#include <sflsh/core/xdmf_series.hpp>
 #include <sstream>
-
-#include "scratch_dir.hpp"
-#include "self_described.hpp"
 
 namespace sflsh {
 namespace {

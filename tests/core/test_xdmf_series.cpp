@@ -50,7 +50,8 @@ bool has_link(const fs::path& h5, const std::string& path) {
   const hid_t file = H5Fopen(h5.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
   bool found = true;
   std::size_t at = 0;
-  while (found && (at = path.find('/', at + 1)) != std::string::npos) found = H5Lexists(file, path.substr(0, at).c_str(), H5P_DEFAULT) > 0;
+  while (found && (at = path.find('/', at + 1)) != std::string::npos)
+    found = H5Lexists(file, path.substr(0, at).c_str(), H5P_DEFAULT) > 0;
   found = found && H5Lexists(file, path.c_str(), H5P_DEFAULT) > 0;
   H5Fclose(file);
   return found;
@@ -101,7 +102,8 @@ TEST(XdmfSeries, StoresTopologyAndStaticFieldsOnceAndEachStepsFields) {
   EXPECT_EQ(std::count(xml.begin(), xml.end(), '\n') > 10, true);
   const std::regex reference("body\\.h5:(/[A-Za-z0-9_/]+)");
   int references = 0;
-  for (auto it = std::sregex_iterator(xml.begin(), xml.end(), reference); it != std::sregex_iterator(); ++it, ++references)
+  for (auto it = std::sregex_iterator(xml.begin(), xml.end(), reference); it != std::sregex_iterator();
+       ++it, ++references)
     EXPECT_TRUE(has_link(h5, (*it)[1].str())) << (*it)[1].str();
   EXPECT_EQ(references, 3 * 5);  // per step: topology, geometry, part, sigma_mm, displacement_m
   EXPECT_THAT(xml, ::testing::HasSubstr(R"(<Time Value="0.20000000000000001"/>)"));
@@ -119,16 +121,20 @@ TEST(XdmfSeries, Float32OnRequest) {
 }
 
 TEST(XdmfSeries, MeshioReadsTheSeries) {
-  if (std::system("/usr/bin/python3 -c 'import meshio' >/dev/null 2>&1") != 0) GTEST_SKIP() << "python3-meshio is not installed";
+  if (std::system("/usr/bin/python3 -c 'import meshio' >/dev/null 2>&1") != 0)
+    GTEST_SKIP() << "python3-meshio is not installed";
   const fs::path dir = sflsh::testing::scratch_dir();
   write_three_steps(dir / "body.xmf", Precision::float64);
   const fs::path script = dir / "read.py";
-  std::ofstream(script) << "import meshio\n"
-                           "with meshio.xdmf.TimeSeriesReader('" << (dir / "body.xmf").string() << "') as r:\n"
-                           "    points, cells = r.read_points_cells()\n"
-                           "    t, point_data, cell_data = r.read_data(2)\n"
-                           "    print(r.num_steps, len(points), cells[0].type, len(cells[0].data), t, point_data['displacement_m'][4][1],"
-                           " cell_data['part'][0][1])\n";
+  std::ofstream(script)
+      << "import meshio\n"
+         "with meshio.xdmf.TimeSeriesReader('"
+      << (dir / "body.xmf").string()
+      << "') as r:\n"
+         "    points, cells = r.read_points_cells()\n"
+         "    t, point_data, cell_data = r.read_data(2)\n"
+         "    print(r.num_steps, len(points), cells[0].type, len(cells[0].data), t, point_data['displacement_m'][4][1],"
+         " cell_data['part'][0][1])\n";
   const std::string command = "/usr/bin/python3 " + script.string() + " > " + (dir / "out.txt").string() + " 2>&1";
   ASSERT_EQ(std::system(command.c_str()), 0) << text_of(dir / "out.txt");
   EXPECT_EQ(text_of(dir / "out.txt"), "3 5 tetra 2 0.2 0.5 3\n");

@@ -17,9 +17,14 @@ class TermsStepper {
  public:
   /// `problem` validated, outliving the stepper; the exact elastic Hessian.
   TermsStepper(const model::Problem& problem, model::Integrator integrator, const model::State& initial)
-      : problem_(problem), integrator_(integrator), subset_(model::TermSubset::whole(problem)),
-        elastic_(problem, subset_), inertia_(problem, subset_), gravity_(problem, subset_),
-        fixed_(problem.dirichlet.mask(problem.num_nodes())), state_(initial) {
+      : problem_(problem),
+        integrator_(integrator),
+        subset_(model::TermSubset::whole(problem)),
+        elastic_(problem, subset_),
+        inertia_(problem, subset_),
+        gravity_(problem, subset_),
+        fixed_(problem.dirichlet.mask(problem.num_nodes())),
+        state_(initial) {
     elastic_.set_projection(material::HessianProjection::kNone);
     free_index_.assign(fixed_.size(), -1);
     for (std::size_t d = 0; d < fixed_.size(); ++d)
@@ -48,7 +53,8 @@ class TermsStepper {
       require(elastic_.add_gradient(x, g) && inertia_.add_gradient(x, g) && gravity_.add_gradient(x, g),
               "terms stepper: gradient failed at t = {}", t);
       Sink sink(problem_, free_index_);
-      require(elastic_.add_hessian(x, sink) && inertia_.add_hessian(x, sink), "terms stepper: Hessian failed at t = {}", t);
+      require(elastic_.add_hessian(x, sink) && inertia_.add_hessian(x, sink), "terms stepper: Hessian failed at t = {}",
+              t);
       Eigen::VectorXd rhs(num_free_);
       for (std::size_t d = 0; d < fixed_.size(); ++d)
         if (free_index_[d] >= 0) rhs[free_index_[d]] = -g[static_cast<Eigen::Index>(d)];
@@ -59,7 +65,7 @@ class TermsStepper {
       const Eigen::VectorXd dx = solver.solve(rhs);
       for (std::size_t d = 0; d < fixed_.size(); ++d)
         if (free_index_[d] >= 0) x[static_cast<Eigen::Index>(d)] += dx[free_index_[d]];
-      if (dx.lpNorm<Eigen::Infinity>() < 1e-13) break;   // [m]: quadratic convergence, the next one is round-off
+      if (dx.lpNorm<Eigen::Infinity>() < 1e-13) break;  // [m]: quadratic convergence, the next one is round-off
     }
     model::advance_history(target, history_, flat(model::posed_positions(frame, x)));
     state_.t = t;
@@ -92,7 +98,7 @@ class TermsStepper {
   };
 
   static Eigen::VectorXd flat(const model::RowMatrixX3d& p) {
-    return Eigen::Map<const Eigen::VectorXd>(p.data(), p.size());   // row-major N×3 → node-major 3N
+    return Eigen::Map<const Eigen::VectorXd>(p.data(), p.size());  // row-major N×3 → node-major 3N
   }
 
   const model::Problem& problem_;

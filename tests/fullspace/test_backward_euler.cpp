@@ -6,10 +6,9 @@
 #include <sflsh/fullspace/reference_integrator.hpp>
 #include <sflsh/material/skin_material.hpp>
 
+#include <Eigen/Geometry>
 #include <gtest/gtest.h>
 #include <petscsys.h>
-
-#include <Eigen/Geometry>
 
 #include <cmath>
 

@@ -4,8 +4,8 @@
 #include <sflsh/body/motion.hpp>
 #include <sflsh/body/skinning.hpp>
 #include <sflsh/fullspace/fullspace_solver.hpp>
-#include <sflsh/model/body_layer.hpp>
 #include <sflsh/fullspace/reference_integrator.hpp>
+#include <sflsh/model/body_layer.hpp>
 #include <sflsh/model/simulation_output.hpp>
 #include <sflsh/model/skinned_trajectory.hpp>
 
@@ -57,11 +57,12 @@ TEST(BodyLayer, InnerSideAndRimNodesAreAttachedAndSkinNodesFollowTheBody) {
   const BodyLayer layer = build_body_layer(open_body(), some_beta(), motion, nullptr, 6, coarse());
   const Problem& p = layer.problem;
   const std::vector<char> mask = p.dirichlet.mask(p.num_nodes());
-  std::vector<char> on_rim(static_cast<std::size_t>(p.num_nodes()), 0);   // the skin's rim is attached too (issue 18)
+  std::vector<char> on_rim(static_cast<std::size_t>(p.num_nodes()), 0);  // the skin's rim is attached too (issue 18)
   for (int v : layer.mesh->rim_nodes()) on_rim[static_cast<std::size_t>(v)] = 1;
   for (int v = 0; v < p.num_nodes(); ++v) {
     const meshing::NodeKind kind = layer.mesh->kind[static_cast<std::size_t>(v)];
-    const bool attached = kind == meshing::NodeKind::inner || kind == meshing::NodeKind::side || on_rim[static_cast<std::size_t>(v)];
+    const bool attached =
+        kind == meshing::NodeKind::inner || kind == meshing::NodeKind::side || on_rim[static_cast<std::size_t>(v)];
     for (int c = 0; c < 3; ++c) {
       EXPECT_EQ(mask[static_cast<std::size_t>(3 * v + c)] != 0, attached) << "node " << v;
     }

@@ -1,12 +1,12 @@
 // The `sflsh simulate --solver full|reduced` contract, the same for both solvers: the posed surface per frame
 // in `sflsh motion export`'s layout (same points, same order, same .pvd), the extra fields, summary.json,
 // --no-output, and clear errors.
-#include <sflsh/core/summary.hpp>
-#include <sflsh/core/vtk_io.hpp>
-
 #include "run_command.hpp"
 #include "scratch_dir.hpp"
 #include "self_described.hpp"
+
+#include <sflsh/core/summary.hpp>
+#include <sflsh/core/vtk_io.hpp>
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
@@ -33,13 +33,11 @@ class CliSimulate : public ::testing::TestWithParam<const char*> {
 
 TEST_P(CliSimulate, SurfaceMatchesMotionExportLayoutAndCarriesTheSoftTissueFields) {
   const fs::path dir = scratch_dir();
-  const auto sim = run_sflsh(solver() + "--mesh coarse " + common() + " --write-layer --out " +
-                                 (dir / "sim").string(),
-                             dir);
+  const auto sim =
+      run_sflsh(solver() + "--mesh coarse " + common() + " --write-layer --out " + (dir / "sim").string(), dir);
   ASSERT_EQ(sim.exit_code, 0) << sim.err;
-  const auto exp = run_sflsh("motion export --subject OPEN_TRAIN_2 --motion shake_hips --frames 4 -q --out " +
-                                 (dir / "exp").string(),
-                             dir);
+  const auto exp = run_sflsh(
+      "motion export --subject OPEN_TRAIN_2 --motion shake_hips --frames 4 -q --out " + (dir / "exp").string(), dir);
   ASSERT_EQ(exp.exit_code, 0) << exp.err;
   for (const char* file : {"body.pvd", "body_000000.vtp", "body_000003.vtp", "layer.pvd", "layer_000003.vtu",
                            "dynamics.vtp", "summary.json"}) {
@@ -55,14 +53,15 @@ TEST_P(CliSimulate, SurfaceMatchesMotionExportLayoutAndCarriesTheSoftTissueField
   const vtk::Points last_exp = vtk::read_points(dir / "exp" / "body_000003.vtp");
   const Eigen::MatrixXd soft = vtk::read_point_array(dir / "sim" / "body_000003.vtp", "soft_tissue_displacement");
   EXPECT_LT(((last_sim - last_exp) - soft).cwiseAbs().maxCoeff(), 1e-9);
-  EXPECT_GT(soft.cwiseAbs().maxCoeff(), 0.0);   // the tissue moved
+  EXPECT_GT(soft.cwiseAbs().maxCoeff(), 0.0);  // the tissue moved
   const std::vector<std::string> names = vtk::read_point_array_names(dir / "sim" / "body_000003.vtp");
-  for (const char* field : {"displacement", "velocity", "skin_weights_argmax", "soft_tissue_displacement", "elastic_displacement",
-                            "strain_energy_density", "thickness", "thickness_fraction", "young_tangent", "young_normal",
-                            "soft_region", "Normals"}) {
+  for (const char* field : {"displacement", "velocity", "skin_weights_argmax", "soft_tissue_displacement",
+                            "elastic_displacement", "strain_energy_density", "thickness", "thickness_fraction",
+                            "young_tangent", "young_normal", "soft_region", "Normals"}) {
     EXPECT_NE(std::find(names.begin(), names.end(), field), names.end()) << field;
   }
-  for (const char* file : {"body_000003.vtp", "dynamics.vtp"}) sflsh::testing::expect_self_described(dir / "sim" / file);
+  for (const char* file : {"body_000003.vtp", "dynamics.vtp"})
+    sflsh::testing::expect_self_described(dir / "sim" / file);
   const nlohmann::json summary = read_json(dir / "sim" / "summary.json");
   ASSERT_EQ(summary["frames"].size(), 4u);
   EXPECT_GT(summary["solver"]["newton_iterations"].get<int>(), 0);
@@ -71,7 +70,7 @@ TEST_P(CliSimulate, SurfaceMatchesMotionExportLayoutAndCarriesTheSoftTissueField
   EXPECT_TRUE(summary["timings"].contains("seconds_per_frame"));
   EXPECT_GE(summary["dynamics"]["sigma_mean_mm"].get<double>(), 0.0);
   EXPECT_EQ(summary["solver"]["name"].get<std::string>(), GetParam());
-  EXPECT_EQ(summary["integrator"].get<std::string>(), "backward_euler");   // the defaults (the paper's configuration)
+  EXPECT_EQ(summary["integrator"].get<std::string>(), "backward_euler");  // the defaults (the paper's configuration)
   EXPECT_EQ(summary["mass"].get<std::string>(), "lumped");
   if (std::string(GetParam()) == "reduced") {
     EXPECT_EQ(summary["reduced"]["point_handles"].get<int>(), 86);
@@ -102,7 +101,8 @@ TEST_P(CliSimulate, XdmfSeriesHoldsTheSameFramesAsTheVtkSeries) {
   const fs::path dir = scratch_dir();
   const auto vtk_run = run_sflsh(solver() + "--mesh coarse " + common() + " --out " + (dir / "vtk").string(), dir);
   ASSERT_EQ(vtk_run.exit_code, 0) << vtk_run.err;
-  const auto xdmf_run = run_sflsh(solver() + "--mesh coarse " + common() + " --format xdmf --write-layer --out " + (dir / "xdmf").string(), dir);
+  const auto xdmf_run = run_sflsh(
+      solver() + "--mesh coarse " + common() + " --format xdmf --write-layer --out " + (dir / "xdmf").string(), dir);
   ASSERT_EQ(xdmf_run.exit_code, 0) << xdmf_run.err;
   for (const char* file : {"body.xmf", "body.h5", "layer.xmf", "layer.h5", "dynamics.vtp", "summary.json"})
     EXPECT_TRUE(fs::exists(dir / "xdmf" / file)) << file;
@@ -119,7 +119,8 @@ TEST_P(CliSimulate, XdmfSeriesHoldsTheSameFramesAsTheVtkSeries) {
   const std::vector<double> soft_h5 = read_h5(dir / "xdmf" / "body.h5", "/point/soft_tissue_displacement/000003");
   ASSERT_EQ(soft_h5.size(), static_cast<std::size_t>(soft.size()));
   EXPECT_GT(soft.cwiseAbs().maxCoeff(), 1e-5);
-  EXPECT_LT((Eigen::Map<const vtk::Points>(soft_h5.data(), soft.rows(), 3) - vtk::Points(soft)).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_LT((Eigen::Map<const vtk::Points>(soft_h5.data(), soft.rows(), 3) - vtk::Points(soft)).cwiseAbs().maxCoeff(),
+            1e-12);
   // Fixed fields once, not per frame.
   EXPECT_FALSE(read_h5(dir / "xdmf" / "body.h5", "/static/point/young_tangent").empty());
   EXPECT_TRUE(read_h5(dir / "xdmf" / "body.h5", "/point/young_tangent/000003").empty());
@@ -127,7 +128,8 @@ TEST_P(CliSimulate, XdmfSeriesHoldsTheSameFramesAsTheVtkSeries) {
   EXPECT_FALSE(read_h5(dir / "xdmf" / "body.h5", "/point/Normals/000003").empty());
   std::ifstream xmf(dir / "xdmf" / "body.xmf");
   const std::string xml((std::istreambuf_iterator<char>(xmf)), std::istreambuf_iterator<char>());
-  EXPECT_NE(xml.find("<Information Name=\"units\" Value=\"skin_weights_argmax: index; thickness_fraction: 1; "), std::string::npos);
+  EXPECT_NE(xml.find("<Information Name=\"units\" Value=\"skin_weights_argmax: index; thickness_fraction: 1; "),
+            std::string::npos);
   const nlohmann::json summary = read_json(dir / "xdmf" / "summary.json");
   EXPECT_EQ(summary["output"]["format"], "xdmf");
   EXPECT_EQ(summary["output"]["series"], "body.xmf");
@@ -144,9 +146,8 @@ TEST_P(CliSimulate, NoOutputWritesOnlyTheSummary) {
 
 TEST_P(CliSimulate, BadArgumentsGiveOneLineErrorsAndNoOutput) {
   const fs::path dir = scratch_dir();
-  const auto motion = run_sflsh(solver() + "--subject OPEN_TRAIN_2 --motion no_such_motion --out " +
-                                    (dir / "a").string(),
-                                dir);
+  const auto motion =
+      run_sflsh(solver() + "--subject OPEN_TRAIN_2 --motion no_such_motion --out " + (dir / "a").string(), dir);
   EXPECT_NE(motion.exit_code, 0);
   EXPECT_NE(motion.err.find("no_such_motion"), std::string::npos) << motion.err;
   EXPECT_FALSE(fs::exists(dir / "a" / "summary.json"));
@@ -154,7 +155,8 @@ TEST_P(CliSimulate, BadArgumentsGiveOneLineErrorsAndNoOutput) {
   EXPECT_NE(density.exit_code, 0);
   EXPECT_NE(density.err.find("--density"), std::string::npos) << density.err;
   if (std::string(GetParam()) == "reduced") {
-    const auto handles = run_sflsh(solver() + "--mesh coarse " + common() + " --handles 100000 --out " + (dir / "c").string(), dir);
+    const auto handles =
+        run_sflsh(solver() + "--mesh coarse " + common() + " --handles 100000 --out " + (dir / "c").string(), dir);
     EXPECT_NE(handles.exit_code, 0);
     EXPECT_NE(handles.err.find("point handles"), std::string::npos) << handles.err;
     EXPECT_FALSE(fs::exists(dir / "c" / "summary.json"));

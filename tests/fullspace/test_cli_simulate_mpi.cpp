@@ -1,13 +1,13 @@
 // `sflsh simulate --solver full` on two MPI processes gives the one-process result for every integrator and
 // both mass kinds: the history carried in the state, the consistent mass's tet blocks and the node split
 // must not change the solution beyond the solvers' tolerance.
+#include "run_command.hpp"
+#include "scratch_dir.hpp"
+
 #include <sflsh/core/summary.hpp>
 #include <sflsh/core/vtk_io.hpp>
 #include <sflsh/model/mass.hpp>
 #include <sflsh/model/time_integrator.hpp>
-
-#include "run_command.hpp"
-#include "scratch_dir.hpp"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
@@ -50,7 +50,7 @@ TEST_P(CliSimulateMpi, TwoProcessesMatchOne) {
   const vtk::Points two = vtk::read_points(dir / "two" / "body_000002.vtp");
   const Eigen::MatrixXd soft = vtk::read_point_array(dir / "one" / "body_000002.vtp", "soft_tissue_displacement");
   ASSERT_EQ(one.rows(), two.rows());
-  EXPECT_GT(soft.cwiseAbs().maxCoeff(), 1e-5);   // the tissue moved (tens of micrometres to millimetres)
+  EXPECT_GT(soft.cwiseAbs().maxCoeff(), 1e-5);  // the tissue moved (tens of micrometres to millimetres)
   EXPECT_EQ(read_json(dir / "two" / "summary.json")["solver"]["processes"].get<int>(), 2);
   // Both solve each step to ‖∇Φ‖ ≤ 1e-12 relative with inner solves to 1e-13; the preconditioners (ICC on one
   // process, block Jacobi on two) and the parallel sums differ, so the solutions differ by about that fraction
@@ -59,13 +59,14 @@ TEST_P(CliSimulateMpi, TwoProcessesMatchOne) {
   EXPECT_LT((one - two).cwiseAbs().maxCoeff(), 1e-12);
 }
 
-INSTANTIATE_TEST_SUITE_P(
-    EveryIntegratorAndMass, CliSimulateMpi,
-    ::testing::Combine(::testing::Values(Integrator::backward_euler, Integrator::bdf2, Integrator::newmark),
-                       ::testing::Values(MassKind::lumped, MassKind::consistent)),
-    [](const auto& test) {
-      return fmt::format("{}_{}", model::to_string(std::get<0>(test.param)), model::to_string(std::get<1>(test.param)));
-    });
+INSTANTIATE_TEST_SUITE_P(EveryIntegratorAndMass, CliSimulateMpi,
+                         ::testing::Combine(::testing::Values(Integrator::backward_euler, Integrator::bdf2,
+                                                              Integrator::newmark),
+                                            ::testing::Values(MassKind::lumped, MassKind::consistent)),
+                         [](const auto& test) {
+                           return fmt::format("{}_{}", model::to_string(std::get<0>(test.param)),
+                                              model::to_string(std::get<1>(test.param)));
+                         });
 
 }  // namespace
 }  // namespace sflsh::fullspace

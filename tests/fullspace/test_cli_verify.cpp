@@ -1,10 +1,10 @@
 // `sflsh verify` end to end: the history.csv contract, serial vs 2 MPI processes, PETSc's Jacobian
 // check, backward Euler vs the SUNDIALS reference on a free oscillation, and bad input.
-#include <sflsh/core/summary.hpp>
-#include <sflsh/fullspace/msh_reader.hpp>
-
 #include "run_command.hpp"
 #include "scratch_dir.hpp"
+
+#include <sflsh/core/summary.hpp>
+#include <sflsh/fullspace/msh_reader.hpp>
 
 #include <gtest/gtest.h>
 
@@ -39,7 +39,8 @@ void write_text(const fs::path& path, const std::string& text) {
 std::string bar_problem(const std::string& extra_time = "", const std::string& extra = "") {
   return R"toml(mesh = "bar.msh"
 density = 1000.0
-)toml" + extra + R"toml(
+)toml" + extra +
+         R"toml(
 [material]
 young_tangent = 5000.0
 young_normal = 2000.0
@@ -62,7 +63,8 @@ step = 0.0083333333333333333
 integrator = "backward_euler"
 rtol = 1e-6
 atol = 1e-9
-)toml" + extra_time + R"toml(
+)toml" + extra_time +
+         R"toml(
 [record]
 group = "xmax"
 every = 3
@@ -99,13 +101,14 @@ TEST(CliVerify, WritesHistoryWithTheContractHeaderAndDrivenValues) {
   const fs::path dir = scratch_dir();
   write_bar(dir);
   write_text(dir / "problem.toml", bar_problem());
-  const auto r = run_sflsh("verify " + (dir / "problem.toml").string() + " --out " + (dir / "out").string() + " -q", dir);
+  const auto r =
+      run_sflsh("verify " + (dir / "problem.toml").string() + " --out " + (dir / "out").string() + " -q", dir);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const History h = read_history(dir / "out" / "history.csv");
   // 30 steps recorded every 3: t = 0 plus 10 samples, 4 nodes on the x = 0.1 face.
   ASSERT_EQ(h.t.size(), 11u * 4u);
   for (std::size_t k = 0; k < h.t.size(); ++k) {
-    EXPECT_NEAR(h.u[k].y(), 0.01 * std::sin(2 * M_PI * 2 * h.t[k]), 1e-12);   // the drive itself
+    EXPECT_NEAR(h.u[k].y(), 0.01 * std::sin(2 * M_PI * 2 * h.t[k]), 1e-12);  // the drive itself
   }
   EXPECT_TRUE(fs::exists(dir / "out" / "summary.json"));
   EXPECT_TRUE(fs::exists(dir / "out" / "solution.pvd"));
@@ -120,16 +123,16 @@ TEST(CliVerify, TwoMpiProcessesMatchOneWithinSolverTolerance) {
   // Recording the free middle of the bar: the nodes that actually move by dynamics.
   write_text(dir / "problem.toml", bar_problem());
   const std::string tight = " -snes_rtol 1e-12 -snes_atol 1e-14 -ksp_rtol 1e-12";
-  const auto serial = run_sflsh("verify " + (dir / "problem.toml").string() + " --out " + (dir / "one").string() +
-                                    " --no-vtk -q" + tight,
-                                dir);
+  const auto serial = run_sflsh(
+      "verify " + (dir / "problem.toml").string() + " --out " + (dir / "one").string() + " --no-vtk -q" + tight, dir);
   ASSERT_EQ(serial.exit_code, 0) << serial.err;
   // This test process is itself an MPI singleton (PETSc is initialized): its OMPI_*/PMIX_* variables must not
   // leak into the nested mpiexec, which would otherwise try to join the singleton's session.
-  const std::string mpi = "for v in $(env | sed -n 's/^\\(OMPI_[^=]*\\|PMIX_[^=]*\\)=.*/\\1/p'); do unset $v; done; "
-                          "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 mpiexec -n 2 " +
-                          std::string(SFLSH_CLI) + " verify " + (dir / "problem.toml").string() + " --out " +
-                          (dir / "two").string() + " --no-vtk -q" + tight + " >" + (dir / "mpi.log").string() + " 2>&1";
+  const std::string mpi =
+      "for v in $(env | sed -n 's/^\\(OMPI_[^=]*\\|PMIX_[^=]*\\)=.*/\\1/p'); do unset $v; done; "
+      "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 mpiexec -n 2 " +
+      std::string(SFLSH_CLI) + " verify " + (dir / "problem.toml").string() + " --out " + (dir / "two").string() +
+      " --no-vtk -q" + tight + " >" + (dir / "mpi.log").string() + " 2>&1";
   ASSERT_EQ(std::system(mpi.c_str()), 0) << "mpiexec -n 2 failed; see " << (dir / "mpi.log");
   const History a = read_history(dir / "one" / "history.csv");
   const History b = read_history(dir / "two" / "history.csv");
@@ -177,7 +180,8 @@ TEST(CliVerify, FreeOscillationDecaysUnderBackwardEulerAndIsKeptByTheReference) 
     text = std::regex_replace(text, std::regex("components = \"xyz\""), "components = \"xz\"");
     text = std::regex_replace(text, std::regex("0.01\\*sin\\(2\\*pi\\*2\\*t\\)"), drive);
     text = std::regex_replace(text, std::regex("duration = 0.25"), "duration = 1.0");
-    text = std::regex_replace(text, std::regex("integrator = \"backward_euler\""), "integrator = \"" + integrator + "\"");
+    text =
+        std::regex_replace(text, std::regex("integrator = \"backward_euler\""), "integrator = \"" + integrator + "\"");
     text = std::regex_replace(text, std::regex("every = 3"), "every = 1");
     // Ten times stiffer: the first bending mode at a few Hz, several periods in one second.
     text = std::regex_replace(text, std::regex("young_tangent = 5000.0"), "young_tangent = 50000.0");
@@ -186,8 +190,11 @@ TEST(CliVerify, FreeOscillationDecaysUnderBackwardEulerAndIsKeptByTheReference) 
   };
   write_text(dir / "be.toml", problem("backward_euler"));
   write_text(dir / "ref.toml", problem("reference"));
-  ASSERT_EQ(run_sflsh("verify " + (dir / "be.toml").string() + " --out " + (dir / "be").string() + " --no-vtk -q", dir).exit_code, 0);
-  const auto ref = run_sflsh("verify " + (dir / "ref.toml").string() + " --out " + (dir / "ref").string() + " --no-vtk -q", dir);
+  ASSERT_EQ(run_sflsh("verify " + (dir / "be.toml").string() + " --out " + (dir / "be").string() + " --no-vtk -q", dir)
+                .exit_code,
+            0);
+  const auto ref =
+      run_sflsh("verify " + (dir / "ref.toml").string() + " --out " + (dir / "ref").string() + " --no-vtk -q", dir);
   ASSERT_EQ(ref.exit_code, 0) << ref.err;
   // RMS of u_y at one node of the free end over a window of several periods: insensitive to the phase of the
   // modes (a windowed maximum is not: beating between the bending modes moves it by ±30%).
@@ -218,10 +225,11 @@ TEST(CliVerify, SummaryRecordsTheIntegratorAndTheMass) {
   const fs::path dir = scratch_dir();
   write_bar(dir);
   std::string consistent = bar_problem("", "mass = \"consistent\"\n");
-  consistent = std::regex_replace(consistent, std::regex("integrator = \"backward_euler\""), "integrator = \"reference\"");
+  consistent =
+      std::regex_replace(consistent, std::regex("integrator = \"backward_euler\""), "integrator = \"reference\"");
   write_text(dir / "consistent.toml", consistent);
-  const auto r = run_sflsh("verify " + (dir / "consistent.toml").string() + " --out " + (dir / "ref").string() +
-                               " --no-vtk -q", dir);
+  const auto r = run_sflsh(
+      "verify " + (dir / "consistent.toml").string() + " --out " + (dir / "ref").string() + " --no-vtk -q", dir);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const nlohmann::json ref = read_json(dir / "ref" / "summary.json");
   EXPECT_EQ(ref["integrator"], "reference");
@@ -232,8 +240,8 @@ TEST(CliVerify, SummaryRecordsTheIntegratorAndTheMass) {
 
   std::string defaults = std::regex_replace(bar_problem(), std::regex("integrator = \"backward_euler\"\n"), "");
   write_text(dir / "defaults.toml", defaults);
-  const auto d = run_sflsh("verify " + (dir / "defaults.toml").string() + " --out " + (dir / "be").string() +
-                               " --no-vtk -q", dir);
+  const auto d =
+      run_sflsh("verify " + (dir / "defaults.toml").string() + " --out " + (dir / "be").string() + " --no-vtk -q", dir);
   ASSERT_EQ(d.exit_code, 0) << d.err;
   const nlohmann::json be = read_json(dir / "be" / "summary.json");
   EXPECT_EQ(be["integrator"], "backward_euler");
@@ -255,7 +263,8 @@ TEST(CliVerify, BadFilesGiveOneLineErrorsAndNoOutput) {
   write_text(dir / "mass.toml", bar_problem("", "mass = \"diagonal\"\n"));
   const auto mass = run_sflsh("verify " + (dir / "mass.toml").string() + " --out " + (dir / "out").string(), dir);
   EXPECT_NE(mass.exit_code, 0);
-  EXPECT_NE(mass.err.find("mass.toml:3: mass: expected one of \"lumped\", \"consistent\""), std::string::npos) << mass.err;
+  EXPECT_NE(mass.err.find("mass.toml:3: mass: expected one of \"lumped\", \"consistent\""), std::string::npos)
+      << mass.err;
   EXPECT_FALSE(fs::exists(dir / "out"));
 }
 

@@ -8,31 +8,31 @@
 //   - Newmark + consistent mass in the full-space solver (PETSc), once it honours options.integrator and
 //     problem.mass_kind (skipped before: a probe finds it still running backward Euler with lumped masses).
 // Differences are the largest over the top face's nodes and the samples, relative to the largest top-face motion.
+#include "scratch_dir.hpp"
+#include "terms_stepper.hpp"
+
 #include <sflsh/fullspace/fullspace_solver.hpp>
 #include <sflsh/fullspace/msh_reader.hpp>
 #include <sflsh/fullspace/reference_integrator.hpp>
 #include <sflsh/fullspace/verify_problem.hpp>
 
-#include "scratch_dir.hpp"
-#include "terms_stepper.hpp"
-
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <functional>
-#include <algorithm>
 
 namespace sflsh::fullspace {
 namespace {
 
 namespace fs = std::filesystem;
 
-constexpr double kDuration = 0.4;   // [s]: the bump (0.1 s) and ~2 periods of the slab's first shear mode
-constexpr double kSample = 0.005;   // [s] between compared samples
-constexpr int kSamples = 80;        // kDuration / kSample
+constexpr double kDuration = 0.4;  // [s]: the bump (0.1 s) and ~2 periods of the slab's first shear mode
+constexpr double kSample = 0.005;  // [s] between compared samples
+constexpr int kSamples = 80;       // kDuration / kSample
 
 /// The block's mesh and problem file in a scratch folder; returns the TOML path.
 fs::path write_block(const std::string& mass, const std::string& integrator) {
@@ -55,7 +55,8 @@ expression = "0.002*(t<0.1)*sin(pi*t/0.1)^2"
 [time]
 duration = 0.4
 step = 0.0005
-integrator = ")" << integrator << R"("
+integrator = ")" << integrator
+                      << R"("
 rtol = 1e-9
 atol = 1e-12
 [record]
@@ -67,10 +68,10 @@ group = "zmax"
 /// Displacements of the top face's nodes at the samples t = k·kSample, k = 0 … kSamples (3 per node).
 struct Trajectory {
   std::vector<Eigen::VectorXd> u;
-  double seconds = 0.0;   ///< wall time of the run [s]
+  double seconds = 0.0;  ///< wall time of the run [s]
 };
 
-using Advance = std::function<Eigen::VectorXd(double)>;   // x at the given (increasing) time
+using Advance = std::function<Eigen::VectorXd(double)>;  // x at the given (increasing) time
 
 Trajectory sample(const Problem& problem, const std::vector<int>& top, const Advance& advance) {
   const auto start = std::chrono::steady_clock::now();
@@ -99,7 +100,8 @@ double largest(const Trajectory& a, const Trajectory& b, std::size_t first, std:
 /// max_k max_n |u_a − u_b| over samples [first, last) / max_k max_n |u_reference| over the whole run.
 double relative_difference(const Trajectory& a, const Trajectory& b, const Trajectory& reference, std::size_t first = 0,
                            std::size_t last = kSamples + 1) {
-  const Trajectory rest{std::vector<Eigen::VectorXd>(reference.u.size(), Eigen::VectorXd::Zero(reference.u[0].size())), 0.0};
+  const Trajectory rest{std::vector<Eigen::VectorXd>(reference.u.size(), Eigen::VectorXd::Zero(reference.u[0].size())),
+                        0.0};
   return largest(a, b, first, last) / largest(reference, rest, 0, reference.u.size());
 }
 
@@ -153,18 +155,19 @@ TEST(DrivenLayer, LumpedMassesDriftInPhaseFromTheConsistentReference) {
   ASSERT_EQ(consistent_block().problem.mass_kind, model::MassKind::consistent);
   const Trajectory& consistent = consistent_reference();
   const Trajectory lumped = run_reference(lumped_block);
-  const double during_drive = relative_difference(consistent, lumped, consistent, 0, 21);   // t ≤ 0.1 s
-  const double last_period = relative_difference(consistent, lumped, consistent, 60);        // t ≥ 0.3 s
+  const double during_drive = relative_difference(consistent, lumped, consistent, 0, 21);  // t ≤ 0.1 s
+  const double last_period = relative_difference(consistent, lumped, consistent, 60);      // t ≥ 0.3 s
   const double overall = relative_difference(consistent, lumped, consistent);
-  std::printf("[ measured ] reference consistent %.2f s, lumped %.2f s; lumped vs consistent: %.3e (t ≤ 0.1 s), "
-              "%.3e (t ≥ 0.3 s), %.3e (whole run) of the largest motion\n", consistent.seconds, lumped.seconds,
-              during_drive, last_period, overall);
+  std::printf(
+      "[ measured ] reference consistent %.2f s, lumped %.2f s; lumped vs consistent: %.3e (t ≤ 0.1 s), "
+      "%.3e (t ≥ 0.3 s), %.3e (whole run) of the largest motion\n",
+      consistent.seconds, lumped.seconds, during_drive, last_period, overall);
   // Two tets through the thickness: lumping lowers the shear mode's frequency by several per cent, and after
   // ~2 periods of free ringing the phase drift is a sizeable part of the amplitude, larger than while driven.
   // Measured: 15 % of the largest motion while driven (t ≤ 0.1 s; there the consistent mass also pushes the
   // free nodes next to the driven face back, −M_FC a_C), 127 % for t ≥ 0.3 s: the two ring out of phase.
   EXPECT_GT(overall, 0.05);
-  EXPECT_GT(last_period, 1.5 * during_drive);   // the gap grows with time: a phase drift, not an offset
+  EXPECT_GT(last_period, 1.5 * during_drive);  // the gap grows with time: a phase drift, not an offset
 }
 
 TEST(DrivenLayer, NewmarkWithConsistentMassMatchesTheReference) {
@@ -172,14 +175,16 @@ TEST(DrivenLayer, NewmarkWithConsistentMassMatchesTheReference) {
   const Trajectory& reference = consistent_reference();
   State initial = initial_state(b.problem, 0.0);
   sflsh::testing::TermsStepper stepper(b.problem, model::Integrator::newmark, initial);
-  const double h = b.spec.step;   // 0.5 ms
+  const double h = b.spec.step;  // 0.5 ms
   const Trajectory newmark = run_stepper(b, h, [&](double dt) {
     stepper.step(dt);
     return stepper.state().x;
   });
   const double difference = relative_difference(newmark, reference, reference);
-  std::printf("[ measured ] Newmark (model terms, h = %.2f ms) %.2f s; vs the consistent reference: %.3e of the "
-              "largest motion\n", 1e3 * h, newmark.seconds, difference);
+  std::printf(
+      "[ measured ] Newmark (model terms, h = %.2f ms) %.2f s; vs the consistent reference: %.3e of the "
+      "largest motion\n",
+      1e3 * h, newmark.seconds, difference);
   // Measured: 3.3e-3 at h = 0.5 ms and 8.2e-4 at h = 0.25 ms: Newmark's second-order time error (period error
   // (ωh)²/12 on the slab's ~10 Hz shear mode and the higher modes the drive excites) converging onto the
   // reference (rtol 1e-9, far tighter), so the two integrate the same equations — M_FC a_C of the driven face
@@ -223,9 +228,11 @@ TEST(DrivenLayer, FullSpaceNewmarkWithConsistentMassMatchesTheReference) {
   });
   const Trajectory& reference = consistent_reference();
   const double difference = relative_difference(full, reference, reference);
-  std::printf("[ measured ] full-space Newmark (h = %.2f ms) %.2f s; vs the consistent reference: %.3e of the "
-              "largest motion\n", 1e3 * h, full.seconds, difference);
-  EXPECT_LT(difference, 5e-3);   // as for the model-terms Newmark above: the same step definition and h
+  std::printf(
+      "[ measured ] full-space Newmark (h = %.2f ms) %.2f s; vs the consistent reference: %.3e of the "
+      "largest motion\n",
+      1e3 * h, full.seconds, difference);
+  EXPECT_LT(difference, 5e-3);  // as for the model-terms Newmark above: the same step definition and h
 }
 
 }  // namespace

@@ -2,15 +2,15 @@
 // blocks: Newmark keeps the energy of an undamped oscillation, BDF2 and backward Euler converge at their
 // orders, and consistent mass stays finite and close to lumped for every integrator.
 #include "dense_hessian.hpp"
+
 #include <sflsh/fullspace/fullspace_solver.hpp>
 #include <sflsh/fullspace/msh_reader.hpp>
 #include <sflsh/material/skin_material.hpp>
 #include <sflsh/model/terms.hpp>
 
+#include <Eigen/Eigenvalues>
 #include <gtest/gtest.h>
 #include <petscsys.h>
-
-#include <Eigen/Eigenvalues>
 
 #include <cmath>
 #include <numbers>
@@ -21,7 +21,7 @@ namespace {
 using model::Integrator;
 using model::MassKind;
 
-const Eigen::Vector3d kSize(0.01, 0.01, 0.04);   // [m]: a 1 × 1 × 4 cm bar, clamped at z = 0
+const Eigen::Vector3d kSize(0.01, 0.01, 0.04);  // [m]: a 1 × 1 × 4 cm bar, clamped at z = 0
 const std::array<int, 3> kCells{1, 1, 4};
 
 /// The bar with a homogeneous skin material (Y = 5 kPa both ways), ρ = 1000 kg/m³, the z = 0 face fixed.
@@ -168,7 +168,7 @@ TEST(Integrators, Bdf2IsSecondOrderAndBackwardEulerFirstOrder) {
   const State bdf2_fine = run(p, start, Integrator::bdf2, duration, 32).first;
   const State be_coarse = run(p, start, Integrator::backward_euler, duration, 16).first;
   const State be_fine = run(p, start, Integrator::backward_euler, duration, 32).first;
-  EXPECT_EQ(bdf2_startup, 1);   // only the first step has no previous one
+  EXPECT_EQ(bdf2_startup, 1);  // only the first step has no previous one
   const double bdf2_order =
       std::log2(node_distance(bdf2_coarse.x, reference.x) / node_distance(bdf2_fine.x, reference.x));
   const double be_order = std::log2(node_distance(be_coarse.x, reference.x) / node_distance(be_fine.x, reference.x));
@@ -195,7 +195,7 @@ Problem driven_bar(MassKind mass) {
   p.mass = lumped_masses(p.rest, p.tets, p.density);
   p.mass_kind = mass;
   // u = A S(t/T) with the quintic smoothstep S(s) = 10s³ − 15s⁴ + 6s⁵: no jump in velocity or acceleration.
-  constexpr double kAmplitude = 0.01, kRamp = 0.5;   // [m], [s]
+  constexpr double kAmplitude = 0.01, kRamp = 0.5;  // [m], [s]
   auto smoothstep = [](double s) {
     return s <= 0.0 ? 0.0 : s >= 1.0 ? 1.0 : s * s * s * (10.0 - 15.0 * s + 6.0 * s * s);
   };
@@ -229,7 +229,7 @@ TEST_P(ConsistentMass, StaysFiniteAndCloseToLumpedOnADrivenBar) {
     return d;
   };
   double largest_deformation = 0.0, largest_difference = 0.0;
-  for (int k = 0; k < 30; ++k) {   // half a second at 60 Hz: half a period of the drive, 1.6 of the bar's
+  for (int k = 0; k < 30; ++k) {  // half a second at 60 Hz: half a period of the drive, 1.6 of the bar's
     a.step(1.0 / 60.0);
     b.step(1.0 / 60.0);
     ASSERT_TRUE(b.state().x.allFinite() && b.state().w.allFinite()) << "step " << k;
@@ -238,7 +238,7 @@ TEST_P(ConsistentMass, StaysFiniteAndCloseToLumpedOnADrivenBar) {
     largest_deformation = std::max(largest_deformation, node_distance(deformation(a.state()), zero));
     largest_difference = std::max(largest_difference, node_distance(a.state().x, b.state().x));
   }
-  EXPECT_GT(largest_deformation, 1e-4);   // the base's acceleration bends the bar by a fraction of a millimetre
+  EXPECT_GT(largest_deformation, 1e-4);  // the base's acceleration bends the bar by a fraction of a millimetre
   // The lumped masses are the consistent matrix's row sums, so the base's acceleration loads the bar alike in
   // both; they differ in how a tet's mass is spread over its nodes, which raises the bar's frequencies by 2.6 %
   // (first mode, 3.24 → 3.32 Hz) to 20 % (fourth) on this coarse mesh. The ramp (0.5 s, 1.6 periods of the

@@ -1,14 +1,13 @@
 // gmsh .msh reading and writing: hand-written 2.2 and 4.1 files (sparse node tags, physical names,
 // a flipped tet), exact round trips, the structured box mesh, and one-line errors for malformed files.
-#include <sflsh/core/error.hpp>
-#include <sflsh/fullspace/msh_reader.hpp>
-
 #include "error_of.hpp"
 #include "scratch_dir.hpp"
 
-#include <gtest/gtest.h>
+#include <sflsh/core/error.hpp>
+#include <sflsh/fullspace/msh_reader.hpp>
 
 #include <Eigen/Geometry>
+#include <gtest/gtest.h>
 
 #include <algorithm>
 #include <fstream>

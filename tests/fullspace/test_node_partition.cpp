@@ -39,7 +39,7 @@ TEST(NodePartition, ReverseCuthillMcKeeIsAPermutationWithANarrowBand) {
   // several columns of 41 wide, and RCM must find the one across the bar (a few cross-sections).
   const MshMesh mesh = box_tet_mesh({0.1, 0.1, 2.0}, {2, 2, 40});
   const int n = static_cast<int>(mesh.nodes.rows());
-  std::vector<int> transposed(static_cast<std::size_t>(n));   // node (i, j, k) → k + 41 (i + 3 j): z fastest
+  std::vector<int> transposed(static_cast<std::size_t>(n));  // node (i, j, k) → k + 41 (i + 3 j): z fastest
   for (int v = 0; v < n; ++v) {
     const int i = v % 3, j = (v / 3) % 3, k = v / 9;
     transposed[static_cast<std::size_t>(v)] = k + 41 * (i + 3 * j);
@@ -55,12 +55,12 @@ TEST(NodePartition, ReverseCuthillMcKeeIsAPermutationWithANarrowBand) {
   ASSERT_TRUE(is_permutation_of_nodes(order, n));
   std::vector<int> index_of(static_cast<std::size_t>(n));
   for (int k = 0; k < n; ++k) index_of[static_cast<std::size_t>(order[static_cast<std::size_t>(k)])] = k;
-  EXPECT_LE(bandwidth(tets, index_of), 2 * 9);   // two cross-section planes of 3 × 3 nodes
+  EXPECT_LE(bandwidth(tets, index_of), 2 * 9);  // two cross-section planes of 3 × 3 nodes
 }
 
 TEST(NodePartition, HandlesComponentsAndNodesInNoTet) {
   meshing::RowMatrixX4i tets(2, 4);
-  tets << 0, 1, 2, 3, 5, 6, 7, 8;   // two separate tets; node 4 and 9 belong to none
+  tets << 0, 1, 2, 3, 5, 6, 7, 8;  // two separate tets; node 4 and 9 belong to none
   const std::vector<int> order = reverse_cuthill_mckee(10, tets);
   ASSERT_TRUE(is_permutation_of_nodes(order, 10));
   EXPECT_TRUE((order[8] == 4 && order[9] == 9) || (order[8] == 9 && order[9] == 4));
@@ -70,7 +70,8 @@ TEST(NodePartition, HandlesComponentsAndNodesInNoTet) {
   EXPECT_EQ(p.range.front(), 0);
   EXPECT_EQ(p.range.back(), 10);
   EXPECT_TRUE(std::is_sorted(p.range.begin(), p.range.end()));
-  for (int v = 0; v < 10; ++v) EXPECT_EQ(p.node_of[static_cast<std::size_t>(p.index_of[static_cast<std::size_t>(v)])], v);
+  for (int v = 0; v < 10; ++v)
+    EXPECT_EQ(p.node_of[static_cast<std::size_t>(p.index_of[static_cast<std::size_t>(v)])], v);
 }
 
 TEST(NodePartition, ThinLayerNumberedByLayersIsCutAcrossItsThickness) {
@@ -95,7 +96,8 @@ TEST(NodePartition, ThinLayerNumberedByLayersIsCutAcrossItsThickness) {
   // (all of them here). Across the thickness only a strip of a few cells' width does.
   const auto tets = static_cast<double>(mesh.tets.rows());
   EXPECT_LT(straddling, 0.08 * tets) << straddling << " of " << tets << " tets straddle the cut";
-  const double imbalance = std::abs(static_cast<double>(incident[0] - incident[1])) / static_cast<double>(incident[0] + incident[1]);
+  const double imbalance =
+      std::abs(static_cast<double>(incident[0] - incident[1])) / static_cast<double>(incident[0] + incident[1]);
   EXPECT_LT(imbalance, 0.02);
 }
 

@@ -1,13 +1,13 @@
 // The SUNDIALS reference with the consistent mass (M_y ẏ = f, reference_integrator.hpp): its Jacobian and mass
 // matrix against the equations of motion, agreement with the lumped path where the two coincide (rigid motion,
 // mesh refinement), energy conservation of a free oscillation, and one-line errors for bad configurations.
+#include "error_of.hpp"
+
 #include <sflsh/core/error.hpp>
 #include <sflsh/fullspace/msh_reader.hpp>
 #include <sflsh/fullspace/reference_integrator.hpp>
 #include <sflsh/material/skin_material.hpp>
 #include <sflsh/model/mass.hpp>
-
-#include "error_of.hpp"
 
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
@@ -34,7 +34,8 @@ Problem box_problem(const Eigen::Vector3d& size, std::array<int, 3> cells, model
   material::SkinMaterial skin;
   skin.young_tangent = 5000.0 * young_scale;
   skin.young_normal = 2000.0 * young_scale;
-  p.tet_material.assign(static_cast<std::size_t>(p.num_tets()), material::make_orthotropic_fung(skin, Eigen::Vector3d::UnitZ()));
+  p.tet_material.assign(static_cast<std::size_t>(p.num_tets()),
+                        material::make_orthotropic_fung(skin, Eigen::Vector3d::UnitZ()));
   p.mass = lumped_masses(p.rest, p.tets, kDensity);
   p.density = kDensity;
   p.mass_kind = kind;
@@ -77,7 +78,7 @@ double total_energy(const Problem& p, const State& s) {
   return e.kinetic + e.elastic + e.gravity;
 }
 
-const Eigen::Vector3d kBar(0.1, 0.02, 0.02);   // [m]
+const Eigen::Vector3d kBar(0.1, 0.02, 0.02);  // [m]
 constexpr std::array<int, 3> kBarCells{4, 1, 1};
 
 TEST(ReferenceConsistentMass, JacobianMatchesFiniteDifferencesAndMassIsTheConsistentMatrix) {
@@ -234,7 +235,7 @@ TEST(ReferenceConsistentMass, LumpedAndConsistentConvergeTogetherUnderRefinement
     }
     std::printf("[ measured ] %2d cells: lumped vs consistent %.3e of the amplitude %.3e m\n", cells, gap / amplitude,
                 amplitude);
-    EXPECT_GT(amplitude, 1e-4);   // it really rang
+    EXPECT_GT(amplitude, 1e-4);  // it really rang
     EXPECT_LT(gap, 0.5 * previous) << cells << " cells";
     previous = gap;
   }

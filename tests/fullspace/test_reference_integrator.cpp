@@ -41,7 +41,8 @@ Problem bar_problem(int cells, double h, double density, double young_tangent = 
         ++corner[static_cast<std::size_t>(perm[k])];
         tet[static_cast<std::size_t>(k + 1)] = node(ix + corner[0], corner[1], corner[2]);
       }
-      const Eigen::Vector3d a = p.rest.row(tet[0]), b = p.rest.row(tet[1]), c = p.rest.row(tet[2]), d = p.rest.row(tet[3]);
+      const Eigen::Vector3d a = p.rest.row(tet[0]), b = p.rest.row(tet[1]), c = p.rest.row(tet[2]),
+                            d = p.rest.row(tet[3]);
       if ((b - a).dot((c - a).cross(d - a)) < 0.0) std::swap(tet[2], tet[3]);
       p.tets.row(e++) << tet[0], tet[1], tet[2], tet[3];
     }
@@ -49,7 +50,8 @@ Problem bar_problem(int cells, double h, double density, double young_tangent = 
   material::SkinMaterial skin;
   skin.young_tangent = young_tangent;
   skin.young_normal = young_normal;
-  p.tet_material.assign(static_cast<std::size_t>(p.num_tets()), material::make_orthotropic_fung(skin, Eigen::Vector3d::UnitZ()));
+  p.tet_material.assign(static_cast<std::size_t>(p.num_tets()),
+                        material::make_orthotropic_fung(skin, Eigen::Vector3d::UnitZ()));
   p.mass = lumped_masses(p.rest, p.tets, density);
   p.density = density;
   return p;
@@ -65,7 +67,12 @@ class TestTrajectory : public NodeTrajectory {
  public:
   TestTrajectory(int num_nodes, const Eigen::Matrix3d& rotation, double spin, const Eigen::Vector3d& velocity,
                  const Eigen::Vector3d& acceleration, double t_nan = std::numeric_limits<double>::infinity())
-      : n_(num_nodes), rotation_(rotation), spin_(spin), velocity_(velocity), acceleration_(acceleration), t_nan_(t_nan) {}
+      : n_(num_nodes),
+        rotation_(rotation),
+        spin_(spin),
+        velocity_(velocity),
+        acceleration_(acceleration),
+        t_nan_(t_nan) {}
 
   int num_nodes() const override { return n_; }
 
@@ -73,7 +80,8 @@ class TestTrajectory : public NodeTrajectory {
     const double nan = t >= t_nan_ ? std::numeric_limits<double>::quiet_NaN() : 0.0;
     const Eigen::Matrix3d spin = Eigen::AngleAxisd(spin_ * t, Eigen::Vector3d::UnitZ()).toRotationMatrix();
     Eigen::Matrix3d spin_rate;
-    spin_rate << -std::sin(spin_ * t), -std::cos(spin_ * t), 0.0, std::cos(spin_ * t), -std::sin(spin_ * t), 0.0, 0.0, 0.0, 0.0;
+    spin_rate << -std::sin(spin_ * t), -std::cos(spin_ * t), 0.0, std::cos(spin_ * t), -std::sin(spin_ * t), 0.0, 0.0,
+        0.0, 0.0;
     const Eigen::Vector3d d = velocity_ * t + 0.5 * t * t * acceleration_ + Eigen::Vector3d::Constant(nan);
     frame.A.assign(static_cast<std::size_t>(n_), rotation_ * spin);
     frame.d = d.transpose().replicate(n_, 1);
@@ -179,8 +187,8 @@ TEST(ReferenceIntegrator, ErrorDecreasesWithTolerance) {
   Problem p = bar_problem(3, 0.025, 1000.0);
   clamp_left_end(p);
   p.gravity = Eigen::Vector3d(0.0, 0.0, -9.81);
-  p.trajectory = std::make_shared<TestTrajectory>(p.num_nodes(), Eigen::Matrix3d::Identity(), 2.0, Eigen::Vector3d::Zero(),
-                                                  Eigen::Vector3d(0.0, 1.0, 0.0));
+  p.trajectory = std::make_shared<TestTrajectory>(p.num_nodes(), Eigen::Matrix3d::Identity(), 2.0,
+                                                  Eigen::Vector3d::Zero(), Eigen::Vector3d(0.0, 1.0, 0.0));
   p.validate();
   auto run = [&](double rtol, int order) {
     ReferenceOptions options;
@@ -263,8 +271,8 @@ TEST(ReferenceIntegrator, NonFiniteForcingThrowsQuietly) {
   // one sflsh::Error naming ARKODE's flag, the time reached and the reason, and nothing on stderr.
   Problem p = bar_problem(2, 0.02, 1000.0);
   clamp_left_end(p);
-  p.trajectory = std::make_shared<TestTrajectory>(p.num_nodes(), Eigen::Matrix3d::Identity(), 0.0, Eigen::Vector3d::Zero(),
-                                                  Eigen::Vector3d(0.0, 0.0, 1.0), 0.05);
+  p.trajectory = std::make_shared<TestTrajectory>(p.num_nodes(), Eigen::Matrix3d::Identity(), 0.0,
+                                                  Eigen::Vector3d::Zero(), Eigen::Vector3d(0.0, 0.0, 1.0), 0.05);
   p.validate();
   ReferenceIntegrator integrator(p);
   integrator.initialize(initial_state(p, 0.0));
@@ -314,8 +322,8 @@ TEST(ReferenceIntegrator, RejectsBadInput) {
   // Component-wise constraints under a map A ≠ I.
   Problem rotated = bar_problem(1, 0.02, 1000.0);
   rotated.dirichlet.add(0, 1u);
-  rotated.trajectory = std::make_shared<TestTrajectory>(rotated.num_nodes(), some_rotation(), 0.0, Eigen::Vector3d::Zero(),
-                                                        Eigen::Vector3d::Zero());
+  rotated.trajectory = std::make_shared<TestTrajectory>(rotated.num_nodes(), some_rotation(), 0.0,
+                                                        Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());
   rotated.validate();
   ReferenceIntegrator integrator(rotated);
   integrator.initialize(initial_state(rotated, 0.0));

@@ -1,12 +1,12 @@
 // Verification problem files (`sflsh verify`): the full TOML contract, one-line errors for typos, bad
 // expressions, unknown groups and conflicting constraints, muparser drives against their closed forms,
 // and the Problem they build.
+#include "error_of.hpp"
+#include "scratch_dir.hpp"
+
 #include <sflsh/core/error.hpp>
 #include <sflsh/fullspace/msh_reader.hpp>
 #include <sflsh/fullspace/verify_problem.hpp>
-
-#include "error_of.hpp"
-#include "scratch_dir.hpp"
 
 #include <gtest/gtest.h>
 
@@ -208,8 +208,7 @@ TEST(VerifyProblem, MassAndIntegratorSpellings) {
   write_bar(dir);
   for (const std::string integrator : {"backward_euler", "bdf2", "newmark", "reference"}) {
     for (const std::string mass : {"lumped", "consistent"}) {
-      const std::string text =
-          edited("density = 1000.0\n", "density = 1000.0\nmass = \"" + mass + "\"\n");
+      const std::string text = edited("density = 1000.0\n", "density = 1000.0\nmass = \"" + mass + "\"\n");
       const std::size_t at = text.find("integrator = \"reference\"");
       ASSERT_NE(at, std::string::npos);
       const VerifyProblem p = load_verify_problem(
@@ -232,11 +231,13 @@ TEST(VerifyProblem, MassAndIntegratorSpellings) {
 TEST(VerifyProblem, BadMassOrIntegratorIsAOneLineErrorListingTheChoices) {
   const std::string mass = load_error(edited("density = 1000.0\n", "density = 1000.0\nmass = \"diagonal\"\n"));
   EXPECT_NE(mass.find("problem.toml:3: mass: expected one of \"lumped\", \"consistent\", got \"diagonal\""),
-            std::string::npos) << mass;
+            std::string::npos)
+      << mass;
   const std::string integrator = load_error(edited("integrator = \"reference\"", "integrator = \"rk4\""));
   EXPECT_NE(integrator.find("problem.toml:20: time.integrator: expected one of \"backward_euler\", \"bdf2\", "
                             "\"newmark\", \"reference\", got \"rk4\""),
-            std::string::npos) << integrator;
+            std::string::npos)
+      << integrator;
   const std::string number = load_error(edited("density = 1000.0\n", "density = 1000.0\nmass = 1\n"));
   EXPECT_NE(number.find(":3: mass: must be a string"), std::string::npos) << number;
   // A static problem (no density) has no inertia: consistent mass and the dynamic integrators are refused.

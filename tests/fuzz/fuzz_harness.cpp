@@ -2,7 +2,6 @@
 #include "fuzz_harness.hpp"
 
 #include <fmt/format.h>
-
 #include <sys/wait.h>
 
 #include <algorithm>
@@ -18,12 +17,18 @@ namespace fs = std::filesystem;
 
 const char* verdict_name(Verdict v) {
   switch (v) {
-    case Verdict::crash: return "crash";
-    case Verdict::hang: return "hang";
-    case Verdict::leftover: return "leftover";
-    case Verdict::unclear: return "unclear message";
-    case Verdict::refused: return "refused";
-    case Verdict::accepted: return "accepted";
+    case Verdict::crash:
+      return "crash";
+    case Verdict::hang:
+      return "hang";
+    case Verdict::leftover:
+      return "leftover";
+    case Verdict::unclear:
+      return "unclear message";
+    case Verdict::refused:
+      return "refused";
+    case Verdict::accepted:
+      return "accepted";
   }
   return "?";
 }
@@ -57,7 +62,8 @@ std::vector<fs::path> leftovers_in(const fs::path& dir) {
   if (!fs::is_directory(dir, ec)) return found;
   for (fs::recursive_directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
     const std::string name = it->path().filename().string();
-    if (name.find(".staging-") != std::string::npos || name.find(".tmp-") != std::string::npos) found.push_back(it->path());
+    if (name.find(".staging-") != std::string::npos || name.find(".tmp-") != std::string::npos)
+      found.push_back(it->path());
   }
   return found;
 }
@@ -68,8 +74,8 @@ Outcome run_case(const Case& c, const fs::path& workdir) {
   const fs::path out_file = workdir / "fuzz.stdout";
   const fs::path err_file = workdir / "fuzz.stderr";
   // `timeout` sends SIGTERM first: the run's own cleanup must then remove its staging folder.
-  const std::string command = fmt::format("cd '{}' && timeout -k 5 {} {} {} >'{}' 2>'{}'", workdir.string(), kHangSeconds, SFLSH_CLI,
-                                          c.arguments, out_file.string(), err_file.string());
+  const std::string command = fmt::format("cd '{}' && timeout -k 5 {} {} {} >'{}' 2>'{}'", workdir.string(),
+                                          kHangSeconds, SFLSH_CLI, c.arguments, out_file.string(), err_file.string());
   const auto start = std::chrono::steady_clock::now();
   const int status = std::system(command.c_str());
   o.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -134,7 +140,8 @@ std::vector<Outcome> Tally::failures() const {
 std::string Tally::cases() const {
   std::string s;
   for (const Outcome& o : outcomes)
-    s += fmt::format("  {:<15} {:6.1f} s  {}  →  {}\n", verdict_name(o.verdict), o.seconds, o.c.mutation, o.detail.substr(0, 160));
+    s += fmt::format("  {:<15} {:6.1f} s  {}  →  {}\n", verdict_name(o.verdict), o.seconds, o.c.mutation,
+                     o.detail.substr(0, 160));
   return s;
 }
 
@@ -149,19 +156,33 @@ std::string Tally::table() const {
     ++r.runs;
     r.seconds += o.seconds;
     switch (o.verdict) {
-      case Verdict::crash: ++r.crash; break;
-      case Verdict::hang: ++r.hang; break;
-      case Verdict::leftover: ++r.leftover; break;
-      case Verdict::unclear: ++r.unclear; break;
-      case Verdict::refused: ++r.refused; break;
-      case Verdict::accepted: ++r.accepted; break;
+      case Verdict::crash:
+        ++r.crash;
+        break;
+      case Verdict::hang:
+        ++r.hang;
+        break;
+      case Verdict::leftover:
+        ++r.leftover;
+        break;
+      case Verdict::unclear:
+        ++r.unclear;
+        break;
+      case Verdict::refused:
+        ++r.refused;
+        break;
+      case Verdict::accepted:
+        ++r.accepted;
+        break;
     }
   }
-  std::string s = "| input kind | runs | crashes | hangs | leftovers | unclear messages | refused (one clear line) | accepted | seconds |\n"
-                  "|---|---|---|---|---|---|---|---|---|\n";
+  std::string s =
+      "| input kind | runs | crashes | hangs | leftovers | unclear messages | refused (one clear line) | accepted | "
+      "seconds |\n"
+      "|---|---|---|---|---|---|---|---|---|\n";
   for (const auto& [kind, r] : rows)
-    s += fmt::format("| {} | {} | {} | {} | {} | {} | {} | {} | {:.1f} |\n", kind, r.runs, r.crash, r.hang, r.leftover, r.unclear, r.refused,
-                     r.accepted, r.seconds);
+    s += fmt::format("| {} | {} | {} | {} | {} | {} | {} | {} | {:.1f} |\n", kind, r.runs, r.crash, r.hang, r.leftover,
+                     r.unclear, r.refused, r.accepted, r.seconds);
   return s;
 }
 

@@ -16,11 +16,11 @@ enum class Verdict { crash, hang, leftover, unclear, refused, accepted };
 const char* verdict_name(Verdict v);
 
 struct Case {
-  std::string kind;        ///< input kind, e.g. "scene TOML"
-  std::string mutation;    ///< what the mutator did, e.g. "line 7: value → nan"
-  std::filesystem::path input;   ///< the mutated file the message must name
-  std::string arguments;   ///< sflsh arguments (without the executable)
-  std::filesystem::path out;     ///< the run's --out folder (must not exist after a refusal); empty if none
+  std::string kind;             ///< input kind, e.g. "scene TOML"
+  std::string mutation;         ///< what the mutator did, e.g. "line 7: value → nan"
+  std::filesystem::path input;  ///< the mutated file the message must name
+  std::string arguments;        ///< sflsh arguments (without the executable)
+  std::filesystem::path out;    ///< the run's --out folder (must not exist after a refusal); empty if none
 };
 
 struct Outcome {
@@ -28,7 +28,7 @@ struct Outcome {
   Verdict verdict = Verdict::accepted;
   int exit_code = 0;
   double seconds = 0.0;
-  std::string detail;      ///< the error line, or why the verdict is what it is
+  std::string detail;  ///< the error line, or why the verdict is what it is
 };
 
 /// Random cases per input kind: $SFLSH_FUZZ_CASES, default 10 (fuzz.many_cases sets 80).

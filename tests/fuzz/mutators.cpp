@@ -33,9 +33,27 @@ void write_text(const fs::path& path, const std::string& text) {
 }
 
 const std::vector<std::string>& hostile_values() {
-  static const std::vector<std::string> values{
-      "nan", "inf", "-inf", "-1", "0", "1e308", "-1e308", "5e-324", "1e9", "1e-12", "100000", "2147483648",
-      "\"\"", "\"x\"", "\"../missing.file\"", "[]", "[1e308, 0.0, 0.0]", "[nan, 0.0, 0.0]", "true", "{ a = 1 }", "1979-05-27"};
+  static const std::vector<std::string> values{"nan",
+                                               "inf",
+                                               "-inf",
+                                               "-1",
+                                               "0",
+                                               "1e308",
+                                               "-1e308",
+                                               "5e-324",
+                                               "1e9",
+                                               "1e-12",
+                                               "100000",
+                                               "2147483648",
+                                               "\"\"",
+                                               "\"x\"",
+                                               "\"../missing.file\"",
+                                               "[]",
+                                               "[1e308, 0.0, 0.0]",
+                                               "[nan, 0.0, 0.0]",
+                                               "true",
+                                               "{ a = 1 }",
+                                               "1979-05-27"};
   return values;
 }
 
@@ -130,7 +148,8 @@ std::string mutate_toml(const std::string& text, Random& random, std::string& wh
 }
 
 std::string mutate_tokens(const std::string& text, Random& random, std::string& what) {
-  static const std::vector<std::string> tokens{"nan", "inf", "-1", "0", "1e308", "99999999", "4294967297", "-2147483649", "x", "1.5", ""};
+  static const std::vector<std::string> tokens{"nan",        "inf",         "-1", "0",   "1e308", "99999999",
+                                               "4294967297", "-2147483649", "x",  "1.5", ""};
   std::vector<std::string> lines = split_lines(text);
   if (lines.empty()) {
     what = "empty file";

@@ -30,7 +30,7 @@ namespace fs = std::filesystem;
 /// One input kind: how to write the mutated file, and the command that reads it.
 struct Kind {
   std::string name;
-  std::string file_name;                                              ///< the input's name in the work folder
+  std::string file_name;  ///< the input's name in the work folder
   std::function<std::string(const fs::path& input, const fs::path& out)> arguments;
   std::function<std::string(Random&, const fs::path& input)> mutate;  ///< writes the mutated input, returns what it did
   std::function<void(const fs::path& workdir)> prepare;               ///< files the command needs beside the input
@@ -57,8 +57,8 @@ void fuzz_kind(const Kind& kind, int cases, std::uint64_t seed, const fs::path& 
 void expect_no_failures(const Tally& tally) {
   std::cout << tally.cases() << tally.table();
   for (const Outcome& o : tally.failures())
-    ADD_FAILURE() << verdict_name(o.verdict) << " [" << o.c.kind << "] " << o.c.mutation << "\n  sflsh " << o.c.arguments << "\n  "
-                  << o.detail;
+    ADD_FAILURE() << verdict_name(o.verdict) << " [" << o.c.kind << "] " << o.c.mutation << "\n  sflsh "
+                  << o.c.arguments << "\n  " << o.detail;
 }
 
 // ---- Binary inputs: byte mutations and array mutations through the npz writer --------------------------------
@@ -78,8 +78,10 @@ npz::Array to_float16(const npz::Array& a) {
     const std::uint32_t sign = (bits >> 16) & 0x8000u;
     const int exponent = static_cast<int>((bits >> 23) & 0xff) - 127 + 15;
     std::uint16_t half = static_cast<std::uint16_t>(sign);
-    if (exponent >= 31) half = static_cast<std::uint16_t>(sign | 0x7c00u);
-    else if (exponent > 0) half = static_cast<std::uint16_t>(sign | (static_cast<unsigned>(exponent) << 10) | ((bits >> 13) & 0x3ffu));
+    if (exponent >= 31)
+      half = static_cast<std::uint16_t>(sign | 0x7c00u);
+    else if (exponent > 0)
+      half = static_cast<std::uint16_t>(sign | (static_cast<unsigned>(exponent) << 10) | ((bits >> 13) & 0x3ffu));
     std::memcpy(&h.bytes[2 * i], &half, 2);
   }
   return h;
@@ -172,7 +174,8 @@ fs::path write_amass_base(const fs::path& dir) {
 
 TEST(Fuzz, BodyNpz) {
   const fs::path base = fs::path(SFLSH_DATA_DIR) / "open_body.npz";
-  Kind kind{"body .npz", "body.npz", [](const fs::path& in, const fs::path&) { return fmt::format("-q body info --body '{}'", in.string()); },
+  Kind kind{"body .npz", "body.npz",
+            [](const fs::path& in, const fs::path&) { return fmt::format("-q body info --body '{}'", in.string()); },
             [&](Random& r, const fs::path& in) { return mutate_npz(base, in, r); }, nullptr};
   Tally tally;
   fuzz_kind(kind, cases_per_kind(), 11, scratch_dir(), tally);
@@ -184,7 +187,8 @@ TEST(Fuzz, AmassNpz) {
   const fs::path base = write_amass_base(root);
   Kind kind{"AMASS .npz", "motion.npz",
             [](const fs::path& in, const fs::path& out) {
-              return fmt::format("-q motion export --subject OPEN_TRAIN_1 --motion '{}' --out '{}'", in.string(), out.string());
+              return fmt::format("-q motion export --subject OPEN_TRAIN_1 --motion '{}' --out '{}'", in.string(),
+                                 out.string());
             },
             [&](Random& r, const fs::path& in) { return mutate_npz(base, in, r); }, nullptr};
   Tally tally;
@@ -237,7 +241,8 @@ TEST(Fuzz, DynaH5) {
   };
   Kind kind{"DYNA .h5", "dyna.h5",
             [](const fs::path& in, const fs::path& out) {
-              return fmt::format("-q metrics --dyna '{}' --sequence 50004_jiggle --betas 0 --frames 2 --out '{}'", in.string(), out.string());
+              return fmt::format("-q metrics --dyna '{}' --sequence 50004_jiggle --betas 0 --frames 2 --out '{}'",
+                                 in.string(), out.string());
             },
             mutate, nullptr};
   Tally tally;

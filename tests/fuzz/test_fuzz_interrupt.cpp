@@ -6,7 +6,6 @@
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
-
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -48,7 +47,8 @@ bool wait_for_staging(const fs::path& parent, pid_t pid) {
     std::error_code ec;
     for (fs::directory_iterator it(parent, ec), end; !ec && it != end; it.increment(ec)) {
       const std::string name = it->path().filename().string();
-      if (name.size() > suffix.size() && name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0) return true;
+      if (name.size() > suffix.size() && name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0)
+        return true;
     }
     int status = 0;
     if (::waitpid(pid, &status, WNOHANG) == pid) return false;
@@ -59,8 +59,8 @@ bool wait_for_staging(const fs::path& parent, pid_t pid) {
 
 /// A run long enough to be caught in the middle: the reduced model along 20 s of a motion.
 std::vector<std::string> long_run(const fs::path& out) {
-  return {"-q", "simulate", "--solver", "reduced", "--mesh", "coarse", "--subject", "OPEN_TRAIN_1", "--motion", "dance", "--frames", "1200",
-          "--cache", SFLSH_TEST_CACHE, "--out", out.string()};
+  return {"-q",       "simulate", "--solver", "reduced", "--mesh",  "coarse",         "--subject", "OPEN_TRAIN_1",
+          "--motion", "dance",    "--frames", "1200",    "--cache", SFLSH_TEST_CACHE, "--out",     out.string()};
 }
 
 void interrupt_and_check(int signal_number) {
@@ -73,7 +73,8 @@ void interrupt_and_check(int signal_number) {
   ::kill(pid, signal_number);
   int status = 0;
   ASSERT_EQ(::waitpid(pid, &status, 0), pid);
-  EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == signal_number) << "the process should die of the signal it got";
+  EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == signal_number)
+      << "the process should die of the signal it got";
   EXPECT_TRUE(leftovers_in(parent).empty()) << leftovers_in(parent).front();
   EXPECT_FALSE(fs::exists(out)) << "an interrupted run created its output folder";
 }
@@ -91,8 +92,9 @@ TEST(FuzzInterrupt, StagingOfAKilledRunIsRemovedByTheNextRun) {
   int status = 0;
   ASSERT_EQ(::waitpid(pid, &status, 0), pid);
   ASSERT_FALSE(leftovers_in(parent).empty()) << "SIGKILL cannot be caught: its staging folder should still be there";
-  const std::string next = fmt::format("{} -q motion export --subject OPEN_TRAIN_1 --motion dance --frames 2 --out '{}' >/dev/null 2>&1", SFLSH_CLI,
-                                       (parent / "next").string());
+  const std::string next =
+      fmt::format("{} -q motion export --subject OPEN_TRAIN_1 --motion dance --frames 2 --out '{}' >/dev/null 2>&1",
+                  SFLSH_CLI, (parent / "next").string());
   ASSERT_EQ(std::system(next.c_str()), 0);
   EXPECT_TRUE(leftovers_in(parent).empty()) << leftovers_in(parent).front();
   EXPECT_TRUE(fs::exists(parent / "next" / "summary.json"));

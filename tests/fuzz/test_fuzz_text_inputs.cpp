@@ -114,7 +114,8 @@ every = 3
 void write_scene_inputs(const fs::path& dir) {
   write_text(dir / "scene.toml", kScene);
   write_text(dir / "obstacle.obj", kObstacle);
-  fs::copy_file(fs::path(SFLSH_DATA_DIR) / "shape_models" / "default.toml", dir / "shape_model.toml", fs::copy_options::overwrite_existing);
+  fs::copy_file(fs::path(SFLSH_DATA_DIR) / "shape_models" / "default.toml", dir / "shape_model.toml",
+                fs::copy_options::overwrite_existing);
 }
 
 void write_verify_inputs(const fs::path& dir) {
@@ -127,11 +128,11 @@ void write_verify_inputs(const fs::path& dir) {
 struct TextKind {
   std::string name;
   std::string file_name;
-  std::function<std::string(const fs::path& workdir)> base;      ///< the valid text of the input
-  std::function<void(const fs::path& workdir)> prepare;          ///< the other files of the run
+  std::function<std::string(const fs::path& workdir)> base;  ///< the valid text of the input
+  std::function<void(const fs::path& workdir)> prepare;      ///< the other files of the run
   std::function<std::string(const fs::path& input, const fs::path& out)> arguments;
-  bool toml = true;                                              ///< TOML mutations, else token mutations
-  std::vector<std::pair<std::string, std::string>> targeted;     ///< key → value (value "<delete>" deletes the line)
+  bool toml = true;                                           ///< TOML mutations, else token mutations
+  std::vector<std::pair<std::string, std::string>> targeted;  ///< key → value (value "<delete>" deletes the line)
 };
 
 std::string without_line_of(const std::string& text, const std::string& key) {
@@ -180,8 +181,8 @@ void fuzz_text_kind(const TextKind& kind, std::uint64_t seed) {
   }
   std::cout << tally.cases() << tally.table();
   for (const Outcome& o : tally.failures())
-    ADD_FAILURE() << verdict_name(o.verdict) << " [" << o.c.kind << "] " << o.c.mutation << "\n  sflsh " << o.c.arguments << "\n  "
-                  << o.detail;
+    ADD_FAILURE() << verdict_name(o.verdict) << " [" << o.c.kind << "] " << o.c.mutation << "\n  sflsh "
+                  << o.c.arguments << "\n  " << o.detail;
 }
 
 std::string scene_command(const fs::path& scene, const fs::path& out) {
@@ -189,46 +190,80 @@ std::string scene_command(const fs::path& scene, const fs::path& out) {
 }
 
 TEST(Fuzz, SceneToml) {
-  fuzz_text_kind({"scene TOML", "scene.toml", [](const fs::path&) { return kScene; }, write_scene_inputs, scene_command, true,
-                  {{"motion_offset", "1e9"}, {"motion_offset", "1e6"}, {"count", "100000"}, {"duration", "1e9"}, {"fps", "1e9"},
-                   {"half_extents", "<delete>"}, {"length", "<delete>"}, {"max_offset", "1e300"}, {"spacing", "1e300"}}},
+  fuzz_text_kind({"scene TOML",
+                  "scene.toml",
+                  [](const fs::path&) { return kScene; },
+                  write_scene_inputs,
+                  scene_command,
+                  true,
+                  {{"motion_offset", "1e9"},
+                   {"motion_offset", "1e6"},
+                   {"count", "100000"},
+                   {"duration", "1e9"},
+                   {"fps", "1e9"},
+                   {"half_extents", "<delete>"},
+                   {"length", "<delete>"},
+                   {"max_offset", "1e300"},
+                   {"spacing", "1e300"}}},
                  21);
 }
 
 TEST(Fuzz, ObjObstacle) {
-  fuzz_text_kind({"OBJ obstacle", "obstacle.obj", [](const fs::path&) { return kObstacle; }, write_scene_inputs,
-                  [](const fs::path& in, const fs::path& out) { return scene_command(in.parent_path() / "scene.toml", out); }, false, {}},
-                 22);
+  fuzz_text_kind(
+      {"OBJ obstacle",
+       "obstacle.obj",
+       [](const fs::path&) { return kObstacle; },
+       write_scene_inputs,
+       [](const fs::path& in, const fs::path& out) { return scene_command(in.parent_path() / "scene.toml", out); },
+       false,
+       {}},
+      22);
 }
 
 TEST(Fuzz, ShapeModelToml) {
   const std::string base = read_text(fs::path(SFLSH_DATA_DIR) / "shape_models" / "default.toml");
-  fuzz_text_kind({"shape model", "shape_model.toml", [&](const fs::path&) { return base; }, write_scene_inputs,
-                  [](const fs::path& in, const fs::path& out) { return scene_command(in.parent_path() / "scene.toml", out); }, true,
-                  {{"mesh", "'ultra'"}, {"region", "'torso'"}, {"poisson", "0.5"}, {"saturation", "1e308"}, {"version", "99"}}},
-                 23);
+  fuzz_text_kind(
+      {"shape model",
+       "shape_model.toml",
+       [&](const fs::path&) { return base; },
+       write_scene_inputs,
+       [](const fs::path& in, const fs::path& out) { return scene_command(in.parent_path() / "scene.toml", out); },
+       true,
+       {{"mesh", "'ultra'"}, {"region", "'torso'"}, {"poisson", "0.5"}, {"saturation", "1e308"}, {"version", "99"}}},
+      23);
 }
 
 TEST(Fuzz, VerifyToml) {
-  fuzz_text_kind({"verify TOML", "problem.toml", [](const fs::path&) { return kVerify; }, write_verify_inputs,
+  fuzz_text_kind({"verify TOML",
+                  "problem.toml",
+                  [](const fs::path&) { return kVerify; },
+                  write_verify_inputs,
                   [](const fs::path& in, const fs::path& out) {
                     return fmt::format("-q verify '{}' --no-vtk --out '{}'", in.string(), out.string());
                   },
-                  true, {{"duration", "1e9"}, {"step", "1e-12"}, {"young_tangent", "1e30"}, {"saturation", "1e308"}, {"density", "1e-30"}}},
+                  true,
+                  {{"duration", "1e9"},
+                   {"step", "1e-12"},
+                   {"young_tangent", "1e30"},
+                   {"saturation", "1e308"},
+                   {"density", "1e-30"}}},
                  24);
 }
 
 TEST(Fuzz, GmshMsh) {
-  fuzz_text_kind({"gmsh .msh", "bar.msh",
+  fuzz_text_kind({"gmsh .msh",
+                  "bar.msh",
                   [](const fs::path& dir) {
                     write_verify_inputs(dir);
                     return read_text(dir / "bar.msh");
                   },
                   write_verify_inputs,
                   [](const fs::path& in, const fs::path& out) {
-                    return fmt::format("-q verify '{}' --no-vtk --out '{}'", (in.parent_path() / "problem.toml").string(), out.string());
+                    return fmt::format("-q verify '{}' --no-vtk --out '{}'",
+                                       (in.parent_path() / "problem.toml").string(), out.string());
                   },
-                  false, {}},
+                  false,
+                  {}},
                  25);
 }
 
@@ -242,8 +277,9 @@ namespace {
 std::string material_base() {
   static const std::string text = [] {
     const fs::path dir = scratch_dir() / "material_base";
-    const std::string command = fmt::format("{} -q material show --subject OPEN_TRAIN_1 --mesh coarse --control-points 4 --cache '{}' --out '{}'",
-                                            SFLSH_CLI, SFLSH_TEST_CACHE, dir.string());
+    const std::string command = fmt::format(
+        "{} -q material show --subject OPEN_TRAIN_1 --mesh coarse --control-points 4 --cache '{}' --out '{}'",
+        SFLSH_CLI, SFLSH_TEST_CACHE, dir.string());
     if (std::system(command.c_str()) != 0) return std::string();
     return read_text(dir / "material.toml");
   }();
@@ -252,14 +288,23 @@ std::string material_base() {
 
 TEST(Fuzz, MaterialToml) {
   ASSERT_FALSE(material_base().empty()) << "sflsh material show did not write material.toml";
-  fuzz_text_kind({"material TOML", "material.toml", [](const fs::path&) { return material_base(); }, nullptr,
+  fuzz_text_kind({"material TOML",
+                  "material.toml",
+                  [](const fs::path&) { return material_base(); },
+                  nullptr,
                   [](const fs::path& in, const fs::path& out) {
-                    return fmt::format("-q material show --subject OPEN_TRAIN_1 --mesh coarse --material '{}' --cache '{}' --out '{}'",
-                                       in.string(), SFLSH_TEST_CACHE, out.string());
+                    return fmt::format(
+                        "-q material show --subject OPEN_TRAIN_1 --mesh coarse --material '{}' --cache '{}' --out '{}'",
+                        in.string(), SFLSH_TEST_CACHE, out.string());
                   },
                   true,
-                  {{"young_tangent", "1e30"}, {"young_normal", "0.001"}, {"saturation", "1e308"}, {"poisson", "0.5"}, {"body", "'smpl'"},
-                   {"vertex", "99999999"}, {"thickness", "nan"}}},
+                  {{"young_tangent", "1e30"},
+                   {"young_normal", "0.001"},
+                   {"saturation", "1e308"},
+                   {"poisson", "0.5"},
+                   {"body", "'smpl'"},
+                   {"vertex", "99999999"},
+                   {"thickness", "nan"}}},
                  26);
 }
 

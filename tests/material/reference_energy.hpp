@@ -44,9 +44,15 @@ inline ReferenceMaterial reference_material(const material::SkinMaterial& m, con
   const Eigen::Vector3d t1 = (helper - helper.dot(n) * n).normalized();
   r.frame << t1, n.cross(t1), n;
   switch (m.fung_scale) {
-    case material::FungScale::kTangentOverSaturation: r.c = m.young_tangent / m.saturation; break;
-    case material::FungScale::kTangentTimesSaturation: r.c = m.young_tangent * m.saturation; break;
-    case material::FungScale::kNone: r.c = std::numeric_limits<double>::infinity(); break;
+    case material::FungScale::kTangentOverSaturation:
+      r.c = m.young_tangent / m.saturation;
+      break;
+    case material::FungScale::kTangentTimesSaturation:
+      r.c = m.young_tangent * m.saturation;
+      break;
+    case material::FungScale::kNone:
+      r.c = std::numeric_limits<double>::infinity();
+      break;
   }
   return r;
 }

@@ -29,11 +29,16 @@ enum class Regime { kStretch, kCompression, kShear, kNearInversion, kInverted };
 
 std::string regime_name(Regime r) {
   switch (r) {
-    case Regime::kStretch: return "stretch";
-    case Regime::kCompression: return "compression";
-    case Regime::kShear: return "shear";
-    case Regime::kNearInversion: return "near_inversion";
-    case Regime::kInverted: return "inverted";
+    case Regime::kStretch:
+      return "stretch";
+    case Regime::kCompression:
+      return "compression";
+    case Regime::kShear:
+      return "shear";
+    case Regime::kNearInversion:
+      return "near_inversion";
+    case Regime::kInverted:
+      return "inverted";
   }
   return "?";
 }
@@ -44,10 +49,18 @@ Eigen::Matrix3d random_F(Regime regime, std::mt19937& rng) {
   const Eigen::Matrix3d U = random_rotation(rng), V = random_rotation(rng);
   Eigen::Vector3d s;
   switch (regime) {
-    case Regime::kStretch: s << 1.05 + 0.3 * u(rng), 1.0 + 0.2 * u(rng), 0.95 + 0.2 * u(rng); break;
-    case Regime::kCompression: s << 0.6 + 0.35 * u(rng), 0.7 + 0.25 * u(rng), 0.8 + 0.2 * u(rng); break;
-    case Regime::kNearInversion: s << 0.9 + 0.2 * u(rng), 0.9 + 0.2 * u(rng), 0.05 + 0.1 * u(rng); break;
-    case Regime::kInverted: s << 0.9 + 0.2 * u(rng), 0.9 + 0.2 * u(rng), -(0.1 + 0.2 * u(rng)); break;
+    case Regime::kStretch:
+      s << 1.05 + 0.3 * u(rng), 1.0 + 0.2 * u(rng), 0.95 + 0.2 * u(rng);
+      break;
+    case Regime::kCompression:
+      s << 0.6 + 0.35 * u(rng), 0.7 + 0.25 * u(rng), 0.8 + 0.2 * u(rng);
+      break;
+    case Regime::kNearInversion:
+      s << 0.9 + 0.2 * u(rng), 0.9 + 0.2 * u(rng), 0.05 + 0.1 * u(rng);
+      break;
+    case Regime::kInverted:
+      s << 0.9 + 0.2 * u(rng), 0.9 + 0.2 * u(rng), -(0.1 + 0.2 * u(rng));
+      break;
     case Regime::kShear: {
       Eigen::Matrix3d F = Eigen::Matrix3d::Identity();
       F(0, 1) = 0.8 * u(rng) - 0.4;
@@ -217,7 +230,7 @@ TEST(OrthotropicFung, SmallStrainLimitIsTheLinearOrthotropicMaterial) {
     EXPECT_NEAR(1.0 / S(0, 0), yt, tol * yt);
     EXPECT_NEAR(1.0 / S(1, 1), yt, tol * yt);
     EXPECT_NEAR(1.0 / S(2, 2), yn, tol * yn);
-    EXPECT_NEAR(-S(0, 1) / S(0, 0), nu, tol);                     // ν₁₂ = ν
+    EXPECT_NEAR(-S(0, 1) / S(0, 0), nu, tol);                       // ν₁₂ = ν
     EXPECT_NEAR(-S(1, 2) / S(1, 1), nu * std::sqrt(yt / yn), tol);  // ν₂₃ = ν √(E₂/E₃)
     EXPECT_NEAR(-S(2, 0) / S(2, 2), nu * std::sqrt(yn / yt), tol);  // ν₃₁ = ν √(E₃/E₁)
     auto shear = [&](int a, int b) { return H(ax[a] + 3 * ax[b], ax[a] + 3 * ax[b]); };
@@ -240,7 +253,8 @@ TEST(OrthotropicFung, SmallStrainLimitIsTheLinearOrthotropicMaterial) {
 // so Ψ = (c/2)(e^{kE²} − 1) with k = C₁₁/c: S = C₁₁ E e^{kE²} and dS/dE = C₁₁ e^{kE²}(1 + 2kE²). Read
 // dS/dE from dP/dF: d²Ψ/dλ² = Ψ''(E) λ² + Ψ'(E). Closed form vs double evaluation: 1e-12 relative.
 TEST(OrthotropicFung, FungFactorStiffensAsTheClosedForm) {
-  for (const FungScale scale : {FungScale::kTangentOverSaturation, FungScale::kTangentTimesSaturation, FungScale::kNone}) {
+  for (const FungScale scale :
+       {FungScale::kTangentOverSaturation, FungScale::kTangentTimesSaturation, FungScale::kNone}) {
     SkinMaterial sm = skin(5000.0, 2000.0);
     sm.fung_scale = scale;
     const OrthotropicFung m = make_orthotropic_fung(sm, Eigen::Vector3d::UnitZ());
@@ -279,8 +293,8 @@ TEST(OrthotropicFung, FebioParametersReproduceTheEnergy) {
   const OrthotropicConstants k = small_strain_constants(sm);
   const double mu[3] = {k.G12 + k.G31 - k.G23, k.G12 - k.G31 + k.G23, -k.G12 + k.G31 + k.G23};
   Eigen::Matrix3d compliance;
-  compliance << 1.0 / k.E1, -k.nu12 / k.E1, -k.nu31 / k.E3, -k.nu12 / k.E1, 1.0 / k.E2, -k.nu23 / k.E2,
-      -k.nu31 / k.E3, -k.nu23 / k.E2, 1.0 / k.E3;
+  compliance << 1.0 / k.E1, -k.nu12 / k.E1, -k.nu31 / k.E3, -k.nu12 / k.E1, 1.0 / k.E2, -k.nu23 / k.E2, -k.nu31 / k.E3,
+      -k.nu23 / k.E2, 1.0 / k.E3;
   Eigen::Matrix3d lam = compliance.inverse();
   for (int a = 0; a < 3; ++a) lam(a, a) -= 2.0 * mu[a];
   const Eigen::Vector3d a3 = n, a1 = n.unitOrthogonal(), a2 = a3.cross(a1);
@@ -336,7 +350,9 @@ TEST(SkinMaterial, ValidationNamesTheBadField) {
   EXPECT_THAT(error_of([] { validate(skin(5000.0, 2000.0, 0.5)); }), HasSubstr("poisson"));
   EXPECT_THAT(error_of([] { validate(skin(5000.0, 2000.0, -1.0)); }), HasSubstr("poisson"));
   EXPECT_THAT(error_of([] { validate(skin(5000.0, 2000.0, 0.2, 0.0)); }), HasSubstr("saturation"));
-  EXPECT_THAT(error_of([] { validate(skin(5000.0, 2000.0, 0.2, -4.0), {"a", "b", "c", "--saturation"}); }),
+  EXPECT_THAT(error_of([] {
+                validate(skin(5000.0, 2000.0, 0.2, -4.0), {"a", "b", "c", "--saturation"});
+              }),
               HasSubstr("--saturation"));
   EXPECT_NO_THROW(validate(skin(5000.0, 2000.0, -0.99, 1e-3)));
   EXPECT_THAT(error_of([] { make_orthotropic_fung(skin(5000.0, 2000.0), Eigen::Vector3d(0, 0, 2)); }),

@@ -174,7 +174,12 @@ TEST(Curves, CsvHasTheDocumentedLayout) {
     std::getline(ss, test, ',');
     std::getline(ss, strain, ',');
     std::getline(ss, stress, ',');
-    const CurvePoint& p = curves[rows < 81 ? 0 : rows < 162 ? 1 : 2].points[rows < 81 ? rows : rows < 162 ? rows - 81 : rows - 162];
+    const CurvePoint& p = curves[rows < 81    ? 0
+                                 : rows < 162 ? 1
+                                              : 2]
+                              .points[rows < 81    ? rows
+                                      : rows < 162 ? rows - 81
+                                                   : rows - 162];
     EXPECT_EQ(std::stod(strain), p.strain);  // shortest round-trip decimals: exact
     EXPECT_EQ(std::stod(stress), p.stress);
     ++per_test[test];

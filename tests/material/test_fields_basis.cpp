@@ -10,9 +10,8 @@
 #include <sflsh/material/control_points.hpp>
 #include <sflsh/material/surface_operators.hpp>
 
-#include <gmock/gmock.h>
-
 #include <Eigen/Dense>
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <random>
@@ -163,8 +162,8 @@ TEST(BiharmonicBasis, InterpolatesIsBoundedAndSumsToOne) {
 }
 
 TEST(BiharmonicBasis, BoundedWeightsSatisfyTheKktConditions) {
-  for (const auto& [name, mesh] : {std::pair{"patch", sflsh::testing::grid_patch()},
-                                   std::pair{"blob", sflsh::testing::icosphere(3, true)}}) {
+  for (const auto& [name, mesh] :
+       {std::pair{"patch", sflsh::testing::grid_patch()}, std::pair{"blob", sflsh::testing::icosphere(3, true)}}) {
     SCOPED_TRACE(name);
     const std::vector<int> s = controls(mesh, 12);
     BiharmonicOptions raw;
@@ -269,15 +268,23 @@ TEST(BiharmonicBasis, SpecialCasesAndDeterminism) {
 TEST(BiharmonicBasis, BadControlPointsGiveClearErrors) {
   const FieldMesh mesh = sflsh::testing::grid_patch(8, 4);
   EXPECT_THAT(error_of([&] { biharmonic_basis(mesh.V, mesh.F, {}); }), HasSubstr("no control vertices"));
-  EXPECT_THAT(error_of([&] { biharmonic_basis(mesh.V, mesh.F, {3, 400}); }), HasSubstr("control vertex 400 (#1) outside"));
-  EXPECT_THAT(error_of([&] { biharmonic_basis(mesh.V, mesh.F, {3, 5, 3}); }), HasSubstr("control vertex 3 is repeated"));
+  EXPECT_THAT(error_of([&] {
+                biharmonic_basis(mesh.V, mesh.F, {3, 400});
+              }),
+              HasSubstr("control vertex 400 (#1) outside"));
+  EXPECT_THAT(error_of([&] {
+                biharmonic_basis(mesh.V, mesh.F, {3, 5, 3});
+              }),
+              HasSubstr("control vertex 3 is repeated"));
   // Two disjoint copies of the patch; control points only on the first.
   FieldMesh two;
   two.V.resize(2 * mesh.V.rows(), 3);
   two.V << mesh.V, mesh.V.rowwise() + Eigen::RowVector3d(0, 0, 1);
   two.F.resize(2 * mesh.F.rows(), 3);
   two.F << mesh.F, mesh.F.array() + static_cast<int>(mesh.V.rows());
-  EXPECT_THAT(error_of([&] { biharmonic_basis(two.V, two.F, {3, 5}); }),
+  EXPECT_THAT(error_of([&] {
+                biharmonic_basis(two.V, two.F, {3, 5});
+              }),
               HasSubstr("component 1 (containing vertex 45) has no control vertex"));
 }
 

@@ -31,7 +31,8 @@ ControlPointOptions body_options(const FieldMesh& m) {
 // Are the first `count` points closed under the mirror map?
 bool mirror_closed(const std::vector<int>& points, const std::vector<int>& mirror) {
   const std::set<int> set(points.begin(), points.end());
-  return std::all_of(points.begin(), points.end(), [&](int v) { return set.count(mirror[static_cast<std::size_t>(v)]) > 0; });
+  return std::all_of(points.begin(), points.end(),
+                     [&](int v) { return set.count(mirror[static_cast<std::size_t>(v)]) > 0; });
 }
 
 // Points of the set whose mirror is not in it and lies farther than `near` from them.
@@ -79,17 +80,19 @@ TEST(ControlPoints, AreMirrorSymmetricOnMirroredMeshes) {
   // Exact mirror maps: points come in groups (a mirror pair, or a single vertex on or next to the
   // symmetry plane, whose mirror is too close to be a separate point). Any prefix splits at most one pair:
   // apart from near-plane singles (mirror within two mean edges), at most one point lacks its mirror.
-  for (const auto& [name, mesh] : {std::pair{"patch", sflsh::testing::grid_patch()},
-                                   std::pair{"blob", sflsh::testing::icosphere(4, true)}}) {
+  for (const auto& [name, mesh] :
+       {std::pair{"patch", sflsh::testing::grid_patch()}, std::pair{"blob", sflsh::testing::icosphere(4, true)}}) {
     SCOPED_TRACE(name);
     ControlPointOptions options;
     options.mirror = mesh.mirror;
     const std::vector<int> points = place_control_points(mesh.V, mesh.F, 84, options);
     EXPECT_EQ(mesh.mirror[static_cast<std::size_t>(points[0])], points[0]);
     double edge = 0.0;
-    for (Eigen::Index f = 0; f < mesh.F.rows(); ++f) edge += (mesh.V.row(mesh.F(f, 0)) - mesh.V.row(mesh.F(f, 1))).norm();
+    for (Eigen::Index f = 0; f < mesh.F.rows(); ++f)
+      edge += (mesh.V.row(mesh.F(f, 0)) - mesh.V.row(mesh.F(f, 1))).norm();
     edge /= static_cast<double>(mesh.F.rows());
-    for (int n = 1; n <= 84; ++n) EXPECT_LE(unpaired({points.begin(), points.begin() + n}, mesh, 2.0 * edge), 1) << "N = " << n;
+    for (int n = 1; n <= 84; ++n)
+      EXPECT_LE(unpaired({points.begin(), points.begin() + n}, mesh, 2.0 * edge), 1) << "N = " << n;
     // Without the mirror map farthest-point sampling alone is not symmetric here (ties and the centroid
     // seed break it), so the check above can fail.
     const std::vector<int> plain = place_control_points(mesh.V, mesh.F, 24);
@@ -154,14 +157,16 @@ TEST(ControlPoints, AreDenserWhereTheDensityIsHigher) {
   const Eigen::VectorXd mass = lumped_mass(body.V, body.F);
   const auto torso_share = [&](const ControlPointOptions& o) {
     int torso = 0;
-    for (const int v : place_control_points(body.V, body.F, 84, o)) torso += body.part[static_cast<std::size_t>(v)] == 0;
+    for (const int v : place_control_points(body.V, body.F, 84, o))
+      torso += body.part[static_cast<std::size_t>(v)] == 0;
     return torso;
   };
   ControlPointOptions flat = body_options(body);
   flat.density.setOnes();
   EXPECT_GT(torso_share(body_options(body)), torso_share(flat) + 5);
   double torso_area = 0.0;
-  for (Eigen::Index v = 0; v < body.V.rows(); ++v) torso_area += body.part[static_cast<std::size_t>(v)] == 0 ? mass(v) : 0.0;
+  for (Eigen::Index v = 0; v < body.V.rows(); ++v)
+    torso_area += body.part[static_cast<std::size_t>(v)] == 0 ? mass(v) : 0.0;
   const double torso_fraction = torso_area / mass.sum();
   EXPECT_GT(torso_share(body_options(body)) / 84.0, torso_fraction) << "more than its share of the area";
 }
@@ -192,7 +197,8 @@ TEST(ControlPoints, BadInputGivesClearErrors) {
   options = {};
   options.mirror = patch.mirror;
   options.mirror[9] = 45;
-  EXPECT_THAT(error_of([&] { place_control_points(patch.V, patch.F, 4, options); }), HasSubstr("mirror of vertex 9 is 45"));
+  EXPECT_THAT(error_of([&] { place_control_points(patch.V, patch.F, 4, options); }),
+              HasSubstr("mirror of vertex 9 is 45"));
   options = {};
   options.part.assign(45, 0);
   options.part[2] = -1;

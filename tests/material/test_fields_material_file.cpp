@@ -22,24 +22,24 @@ namespace {
 
 // Line numbers of the base file matter: the error cases below name them.
 const std::string kBase =
-    "version = 1\n"                       // 1
-    "body = \"sflsh-open-body\"\n"        // 2
-    "subject = \"OPEN_TRAIN_1\"\n"        // 3
-    "poisson = 0.2\n"                     // 4
-    "saturation = 4.0\n"                  // 5
-    "\n"                                  // 6
-    "[[control_point]]\n"                 // 7
-    "vertex = 10\n"                       // 8
-    "thickness = 0.5\n"                   // 9
-    "young_tangent = 5000.0\n"            // 10
-    "young_normal = 2000.0\n"             // 11
-    "\n"                                  // 12
-    "[[control_point]]\n"                 // 13
-    "vertex = 20\n"                       // 14
-    "position = [0.0, 1.0, 2.0]\n"        // 15
-    "thickness = 0.3\n"                   // 16
-    "young_tangent = 800.0\n"             // 17
-    "young_normal = 30000.0\n";           // 18
+    "version = 1\n"                 // 1
+    "body = \"sflsh-open-body\"\n"  // 2
+    "subject = \"OPEN_TRAIN_1\"\n"  // 3
+    "poisson = 0.2\n"               // 4
+    "saturation = 4.0\n"            // 5
+    "\n"                            // 6
+    "[[control_point]]\n"           // 7
+    "vertex = 10\n"                 // 8
+    "thickness = 0.5\n"             // 9
+    "young_tangent = 5000.0\n"      // 10
+    "young_normal = 2000.0\n"       // 11
+    "\n"                            // 12
+    "[[control_point]]\n"           // 13
+    "vertex = 20\n"                 // 14
+    "position = [0.0, 1.0, 2.0]\n"  // 15
+    "thickness = 0.3\n"             // 16
+    "young_tangent = 800.0\n"       // 17
+    "young_normal = 30000.0\n";     // 18
 
 std::string replaced(std::string text, const std::string& from, const std::string& to) {
   const auto at = text.find(from);
@@ -147,7 +147,8 @@ TEST(MaterialFile, BadFilesGiveOneLineErrorsWithFileLineAndField) {
       {replaced(kBase, "saturation = 4.0\n", "saturation = 4.0\n[bounds]\nthickness = [0.2, 0.4]\n"),
        ":11: 'thickness' in control_point #0 = 0.5 is outside the bounds [0.2, 0.4]"},  // bounds apply to points
       {kBase.substr(0, kBase.find("[[control_point]]")), "no [[control_point]] tables"},
-      {replaced(kBase.substr(0, kBase.find("[[control_point]]")), "saturation = 4.0", "saturation = 4.0\ncontrol_point = 3"),
+      {replaced(kBase.substr(0, kBase.find("[[control_point]]")), "saturation = 4.0",
+                "saturation = 4.0\ncontrol_point = 3"),
        ":6: 'control_point' must be a non-empty array of tables"},
   };
   for (std::size_t k = 0; k < cases.size(); ++k) {
@@ -157,7 +158,8 @@ TEST(MaterialFile, BadFilesGiveOneLineErrorsWithFileLineAndField) {
     EXPECT_THAT(message, HasSubstr(path.string())) << "case " << k;
     EXPECT_EQ(message.find('\n'), std::string::npos) << "one line, case " << k;
   }
-  EXPECT_THAT(error_of([&] { load_material_file(dir / "absent.toml"); }), HasSubstr("absent.toml: not found, expected a material TOML file"));
+  EXPECT_THAT(error_of([&] { load_material_file(dir / "absent.toml"); }),
+              HasSubstr("absent.toml: not found, expected a material TOML file"));
 }
 
 TEST(MaterialFile, RefusesToWriteAnInvalidFile) {

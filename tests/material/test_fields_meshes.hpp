@@ -54,8 +54,8 @@ inline FieldMesh grid_patch(int K = 40, int L = 20) {
 /// Icosphere with 10·4^level + 2 vertices. `blob` deforms it by a map that commutes with x → −x.
 inline FieldMesh icosphere(int level, bool blob = false) {
   const double t = (1.0 + std::sqrt(5.0)) / 2.0;
-  std::vector<Eigen::Vector3d> v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-                                    {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+  std::vector<Eigen::Vector3d> v = {{-1, t, 0},  {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
+                                    {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
   for (auto& p : v) p.normalize();
   std::vector<std::array<int, 3>> f = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
                                        {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
@@ -120,12 +120,23 @@ inline FieldMesh body_region() {
   const body::BodyModel& model = open_body();
   const auto part_of_joint = [](int joint) {
     switch (joint) {
-      case 0: case 3: case 6: case 9: case 13: case 14: return 0;  // pelvis, spine1–3, collars: torso
-      case 16: return 1;                                           // left_shoulder: left upper arm
-      case 17: return 2;                                           // right_shoulder: right upper arm
-      case 1: return 3;                                            // left_hip: left thigh
-      case 2: return 4;                                            // right_hip: right thigh
-      default: return -1;
+      case 0:
+      case 3:
+      case 6:
+      case 9:
+      case 13:
+      case 14:
+        return 0;  // pelvis, spine1–3, collars: torso
+      case 16:
+        return 1;  // left_shoulder: left upper arm
+      case 17:
+        return 2;  // right_shoulder: right upper arm
+      case 1:
+        return 3;  // left_hip: left thigh
+      case 2:
+        return 4;  // right_hip: right thigh
+      default:
+        return -1;
     }
   };
   const Eigen::Index n = model.num_vertices();
@@ -137,7 +148,8 @@ inline FieldMesh body_region() {
   }
   std::vector<Eigen::Index> faces;
   for (Eigen::Index f = 0; f < model.num_faces(); ++f)
-    if (part[static_cast<std::size_t>(model.faces(f, 0))] >= 0 && part[static_cast<std::size_t>(model.faces(f, 1))] >= 0 &&
+    if (part[static_cast<std::size_t>(model.faces(f, 0))] >= 0 &&
+        part[static_cast<std::size_t>(model.faces(f, 1))] >= 0 &&
         part[static_cast<std::size_t>(model.faces(f, 2))] >= 0)
       faces.push_back(f);
   // Largest component of the selected faces (over body vertex indices).
@@ -147,7 +159,8 @@ inline FieldMesh body_region() {
       material::connected_components(material::vertex_adjacency(selected, static_cast<int>(n)));
   std::map<int, int> size;
   for (Eigen::Index k = 0; k < selected.size(); ++k) ++size[component[static_cast<std::size_t>(selected.data()[k])]];
-  const int largest = std::max_element(size.begin(), size.end(), [](auto& a, auto& b) { return a.second < b.second; })->first;
+  const int largest =
+      std::max_element(size.begin(), size.end(), [](auto& a, auto& b) { return a.second < b.second; })->first;
   std::vector<int> local(static_cast<std::size_t>(n), -1), global;
   FieldMesh m;
   std::vector<std::array<int, 3>> kept;
@@ -162,7 +175,8 @@ inline FieldMesh body_region() {
     kept.push_back(tri);
   }
   m.F.resize(static_cast<Eigen::Index>(kept.size()), 3);
-  for (std::size_t k = 0; k < kept.size(); ++k) m.F.row(static_cast<Eigen::Index>(k)) << kept[k][0], kept[k][1], kept[k][2];
+  for (std::size_t k = 0; k < kept.size(); ++k)
+    m.F.row(static_cast<Eigen::Index>(k)) << kept[k][0], kept[k][1], kept[k][2];
   m.V.resize(static_cast<Eigen::Index>(global.size()), 3);
   for (std::size_t i = 0; i < global.size(); ++i) {
     m.V.row(static_cast<Eigen::Index>(i)) = model.v_template.row(global[i]);

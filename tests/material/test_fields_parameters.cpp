@@ -40,9 +40,13 @@ TEST(FieldParameters, DefaultBoundsAndNormalization) {
 
 TEST(FieldParameters, ValidationNamesTheField) {
   const ParameterBounds bounds;
-  EXPECT_THAT(error_of([&] { validate(Kappa{0.05, 1000.0, 1000.0}, bounds, "point 3"); }),
+  EXPECT_THAT(error_of([&] {
+                validate(Kappa{0.05, 1000.0, 1000.0}, bounds, "point 3");
+              }),
               HasSubstr("point 3: thickness = 0.05 is outside [0.1, 0.9]"));
-  EXPECT_THAT(error_of([&] { validate(Kappa{0.5, 1000.0, 6e4}, bounds, "p"); }),
+  EXPECT_THAT(error_of([&] {
+                validate(Kappa{0.5, 1000.0, 6e4}, bounds, "p");
+              }),
               HasSubstr("young_normal = 60000 is outside [500, 50000] Pa"));
   EXPECT_THAT(error_of([&] { validate(Kappa{0.5, std::nan(""), 1000.0}, bounds, "p"); }), HasSubstr("young_tangent"));
   KappaMatrix rows(2, 3);
@@ -82,7 +86,8 @@ TEST(FieldParameters, FieldStaysWithinTheBoundsAndInterpolates) {
       EXPECT_GE(field.col(c).minCoeff(), b[c].min * (1.0 - 1e-12)) << kKappaNames[static_cast<std::size_t>(c)];
       EXPECT_LE(field.col(c).maxCoeff(), b[c].max * (1.0 + 1e-12)) << kKappaNames[static_cast<std::size_t>(c)];
     }
-    for (int i = 0; i < 24; ++i) EXPECT_EQ(field.row(s[static_cast<std::size_t>(i)]), values.row(i));  // φ_j(s_i) = δ_ij
+    for (int i = 0; i < 24; ++i)
+      EXPECT_EQ(field.row(s[static_cast<std::size_t>(i)]), values.row(i));  // φ_j(s_i) = δ_ij
   }
   // And the field varies: it is not a constant mean (the test could not fail on a constant).
   const KappaMatrix field = evaluate_field(basis.phi, kappa);

@@ -21,7 +21,7 @@ struct Layer {
   meshing::LayerMesh mesh;
   Layer() {
     meshing::LayerMeshOptions options;
-    options.mesher = meshing::Mesher::layered;   // extruded: built in a fraction of a second
+    options.mesher = meshing::Mesher::layered;  // extruded: built in a fraction of a second
     options.size = meshing::SizePreset::medium;
     mesh = meshing::build_layer_mesh(model, options);
   }
@@ -39,7 +39,7 @@ TEST(LayerMaterial, ControlPointsAreOnTheRegionNestedAndDenserOnTheTorso) {
   const auto twelve = material::layer_control_points(l.model, l.mesh, 12);
   const auto eightyfour = material::layer_control_points(l.model, l.mesh, 84);
   ASSERT_EQ(eightyfour.size(), 84u);
-  EXPECT_TRUE(std::equal(twelve.begin(), twelve.end(), eightyfour.begin()));   // nested: a fit can grow N
+  EXPECT_TRUE(std::equal(twelve.begin(), twelve.end(), eightyfour.begin()));  // nested: a fit can grow N
   int torso = 0;
   for (int v : eightyfour) {
     const int local = l.mesh.region_surface.local_of[static_cast<std::size_t>(v)];
@@ -48,7 +48,7 @@ TEST(LayerMaterial, ControlPointsAreOnTheRegionNestedAndDenserOnTheTorso) {
   }
   // The torso holds about half the region's skin; with 1.5× density it gets clearly more than half the points.
   EXPECT_GT(torso, 84 / 2);
-  Eigen::Index top = 0;   // the top of the head is not part of the layer
+  Eigen::Index top = 0;  // the top of the head is not part of the layer
   l.model.v_template.col(1).maxCoeff(&top);
   EXPECT_THAT(error_of([&] { material::layer_basis(l.model, l.mesh, {static_cast<int>(top)}); }),
               HasSubstr("not on the layer's region"));
@@ -69,7 +69,8 @@ TEST(LayerMaterial, FieldsInterpolateControlValuesAndStayInTheirRange) {
   // φ_i(s_j) = δ_ij: the field equals κ_i at control vertex i (1e-9: the bounded solve's tolerance).
   for (int i = 0; i < 12; ++i) {
     const int local = l.mesh.region_surface.local_of[static_cast<std::size_t>(vertices[static_cast<std::size_t>(i)])];
-    EXPECT_LT((fields.vertex.row(local) - kappa.row(i)).cwiseAbs().maxCoeff(), 1e-9 * kappa.row(i).cwiseAbs().maxCoeff());
+    EXPECT_LT((fields.vertex.row(local) - kappa.row(i)).cwiseAbs().maxCoeff(),
+              1e-9 * kappa.row(i).cwiseAbs().maxCoeff());
   }
   // Convex combinations and harmonic extension: every node and tet stays within the control range.
   for (int k = 0; k < 3; ++k) {
@@ -88,8 +89,8 @@ TEST(LayerMaterial, NormalsAreUnitAndPointFromTheBoneToTheSkin) {
   EXPECT_LT((normals.rowwise().norm().array() - 1.0).abs().maxCoeff(), 1e-12);
   // The normal follows the layer's columns: it points along skin − skeleton of the tet's skin vertices.
   // 95% of tets within 45° (the columns are oblique to the skin where bones meet, e.g. the shoulders).
-  const auto geometry = meshing::layer_geometry(l.model, l.mesh.region_surface, l.mesh.correspondence, body::Betas::Zero(),
-                                                l.mesh.template_thickness_field());
+  const auto geometry = meshing::layer_geometry(l.model, l.mesh.region_surface, l.mesh.correspondence,
+                                                body::Betas::Zero(), l.mesh.template_thickness_field());
   int aligned = 0;
   for (int e = 0; e < l.mesh.num_tets(); ++e) {
     Eigen::RowVector3d column = Eigen::RowVector3d::Zero();

@@ -18,7 +18,7 @@ using sflsh::testing::relative_error;
 namespace {
 
 TetNodes rest_nodes() {
-  TetNodes X;  // an irregular, positively oriented tet of ~2 cm edges [m]
+  TetNodes X;                      // an irregular, positively oriented tet of ~2 cm edges [m]
   X << 0.00, 0.021, 0.004, 0.003,  //
       0.00, 0.002, 0.018, 0.005,   //
       0.00, 0.001, 0.003, 0.016;
@@ -77,7 +77,7 @@ TEST(TetElement, ForcesAndStiffnessMatchFiniteDifferences) {
   const OrthotropicFung m = skin_fung();
   std::mt19937 rng(21);
   for (const Eigen::Vector3d& sv : {Eigen::Vector3d(1.3, 1.1, 0.95), Eigen::Vector3d(0.7, 0.8, 0.6),
-                                   Eigen::Vector3d(1.0, 1.05, 0.08), Eigen::Vector3d(1.0, 0.9, -0.2)}) {
+                                    Eigen::Vector3d(1.0, 1.05, 0.08), Eigen::Vector3d(1.0, 0.9, -0.2)}) {
     const TetNodes x = deformed(X, sv, rng);
     const auto energy = [&](const Vector12d& q) { return tet_elastic_energy(rest, nodes(q), m); };
     const auto gradient = [&](const Vector12d& q) -> Vector12d { return tet_elastic_dq(rest, nodes(q), m); };

@@ -26,7 +26,8 @@ inline const meshing::LayerMesh& coarse_layer(meshing::Mesher mesher) {
   static std::map<meshing::Mesher, meshing::LayerMesh> meshes;
   auto it = meshes.find(mesher);
   if (it == meshes.end())
-    it = meshes.emplace(mesher, meshing::cached_layer_mesh(open_body(), coarse_options(mesher), SFLSH_TEST_CACHE)).first;
+    it =
+        meshes.emplace(mesher, meshing::cached_layer_mesh(open_body(), coarse_options(mesher), SFLSH_TEST_CACHE)).first;
   return it->second;
 }
 

@@ -17,7 +17,7 @@ namespace sflsh::testing {
 
 struct Shell {
   meshing::ClosedSurface surface;
-  double volume = 0.0;   ///< analytic volume of the smooth shell [m³]
+  double volume = 0.0;  ///< analytic volume of the smooth shell [m³]
   double thickness = 0.0;
   int outer_vertices = 0;
 };
@@ -29,7 +29,7 @@ inline Shell spherical_shell(double outer_radius, double inner_radius, double su
   using meshing::NodeKind;
   const double step = surface_edge / outer_radius;
   const int rings = std::max(2, static_cast<int>(std::lround(max_polar / step)));
-  std::vector<Eigen::Vector3d> unit{Eigen::Vector3d::UnitZ()};   // directions; the pole first
+  std::vector<Eigen::Vector3d> unit{Eigen::Vector3d::UnitZ()};  // directions; the pole first
   std::vector<std::vector<int>> ring{{0}};
   for (int i = 1; i <= rings; ++i) {
     const double polar = max_polar * i / rings;
@@ -69,7 +69,7 @@ inline Shell spherical_shell(double outer_radius, double inner_radius, double su
       }
     }
   }
-  for (auto& t : outer) {   // outward: the normal points away from the centre
+  for (auto& t : outer) {  // outward: the normal points away from the centre
     const Eigen::Vector3d normal = (unit[t[1]] - unit[t[0]]).cross(unit[t[2]] - unit[t[0]]);
     if (normal.dot(unit[t[0]] + unit[t[1]] + unit[t[2]]) < 0.0) std::swap(t[1], t[2]);
   }
@@ -95,7 +95,7 @@ inline Shell spherical_shell(double outer_radius, double inner_radius, double su
   std::vector<Eigen::Vector3d> vertices;
   for (const auto& u : unit) vertices.push_back(outer_radius * u);
   for (const auto& u : unit) vertices.push_back(inner_radius * u);
-  std::map<std::pair<int, int>, int> side_vertex;   // (rim vertex, layer) → index, 0 < layer < L
+  std::map<std::pair<int, int>, int> side_vertex;  // (rim vertex, layer) → index, 0 < layer < L
   for (int v : rim)
     for (int l = 1; l < side_layers; ++l) {
       side_vertex[{v, l}] = static_cast<int>(vertices.size());
@@ -123,9 +123,11 @@ inline Shell spherical_shell(double outer_radius, double inner_radius, double su
   }
   auto& surface = shell.surface;
   surface.vertices.resize(static_cast<Eigen::Index>(vertices.size()), 3);
-  for (std::size_t i = 0; i < vertices.size(); ++i) surface.vertices.row(static_cast<Eigen::Index>(i)) = vertices[i].transpose();
+  for (std::size_t i = 0; i < vertices.size(); ++i)
+    surface.vertices.row(static_cast<Eigen::Index>(i)) = vertices[i].transpose();
   surface.triangles.resize(static_cast<Eigen::Index>(triangles.size()), 3);
-  for (std::size_t i = 0; i < triangles.size(); ++i) surface.triangles.row(static_cast<Eigen::Index>(i)) = triangles[i].transpose();
+  for (std::size_t i = 0; i < triangles.size(); ++i)
+    surface.triangles.row(static_cast<Eigen::Index>(i)) = triangles[i].transpose();
   for (double radius : {outer_radius, inner_radius}) {
     auto& feature = surface.features.emplace_back();
     for (int v : rim) feature.push_back(radius * unit[static_cast<std::size_t>(v)]);

@@ -45,7 +45,8 @@ meshing::SizeControl test_size() {
 const meshing::TetMesh& shell_mesh(Mesher mesher) {
   static std::map<Mesher, meshing::TetMesh> meshes;
   auto it = meshes.find(mesher);
-  if (it == meshes.end()) it = meshes.emplace(mesher, meshing::tetrahedralize(test_shell().surface, mesher, test_size())).first;
+  if (it == meshes.end())
+    it = meshes.emplace(mesher, meshing::tetrahedralize(test_shell().surface, mesher, test_size())).first;
   return it->second;
 }
 
@@ -106,7 +107,9 @@ TEST(ShellFixture, IsAClosedLayerWithTheAnalyticVolume) {
   double volume = 0.0;
   const auto& s = shell.surface;
   for (Eigen::Index t = 0; t < s.triangles.rows(); ++t)
-    volume += s.vertices.row(s.triangles(t, 0)).dot(s.vertices.row(s.triangles(t, 1)).cross(s.vertices.row(s.triangles(t, 2)))) / 6.0;
+    volume += s.vertices.row(s.triangles(t, 0))
+                  .dot(s.vertices.row(s.triangles(t, 1)).cross(s.vertices.row(s.triangles(t, 2)))) /
+              6.0;
   EXPECT_LT(volume, shell.volume);
   EXPECT_GT(volume, 0.98 * shell.volume);
   EXPECT_EQ(s.features.size(), 2u);
@@ -248,7 +251,8 @@ TEST(GmshBackend, DISABLED_SubdividesACoarseInputAndStillKeepsItsVertices) {
   EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), s.vertices.rows());
   // Boundary nodes: 16× the input triangles after two subdivisions ⇒ about 16× the input vertices.
   const meshing::BoundaryLocation location = meshing::locate_boundary_nodes(mesh, s);
-  const auto boundary_nodes = std::count_if(location.triangle.begin(), location.triangle.end(), [](int t) { return t >= 0; });
+  const auto boundary_nodes =
+      std::count_if(location.triangle.begin(), location.triangle.end(), [](int t) { return t >= 0; });
   EXPECT_GT(boundary_nodes, 10 * s.vertices.rows());
   EXPECT_LE(location.max_distance, 1e-9);
   const meshing::QualityReport q = meshing::quality_report(mesh.nodes, mesh.tets);
@@ -264,7 +268,7 @@ TEST_P(Backend, RejectsAnEmptySurface) {
 
 TEST_P(Backend, RejectsAnOpenSurface) {
   meshing::ClosedSurface open = test_shell().surface;
-  open.triangles.conservativeResize(open.triangles.rows() - 1, 3);   // drop the last side triangle
+  open.triangles.conservativeResize(open.triangles.rows() - 1, 3);  // drop the last side triangle
   open.patch.pop_back();
   const std::string message = error_of([&] { meshing::tetrahedralize(open, GetParam(), test_size()); });
   EXPECT_THAT(message, HasSubstr(meshing::mesher_name(GetParam())));
@@ -288,16 +292,20 @@ TEST(SizeCalibration, DISABLED_PresetsOnLayerLikeShells) {
   const Shape shapes[] = {{"R0.30 t4cm e2.5cm", 0.30, 0.26, 0.025}, {"R0.15 t5cm e2cm", 0.15, 0.10, 0.02}};
   std::printf("%-20s %-5s %8s %7s %8s %8s %7s %6s %6s %6s %7s %7s %6s\n", "shape", "mesh", "target", "edge mm", "tets",
               "nodes", "time s", "min°", "med°", "max°", "max r/e", "vol err", "calib");
-  const char* only = std::getenv("SWEEP");   // TEMP: "shape,mesher,target" filter while calibrating
+  const char* only = std::getenv("SWEEP");  // TEMP: "shape,mesher,target" filter while calibrating
   for (const Shape& shape : shapes)
     for (Mesher mesher : {Mesher::cgal, Mesher::gmsh})
       for (long target : {10'000L, 50'000L, 200'000L}) {
-        if (only && std::string(only).find(std::string(shape.name).substr(0, 5) + "," + meshing::mesher_name(mesher) + "," + std::to_string(target)) == std::string::npos) continue;
+        if (only && std::string(only).find(std::string(shape.name).substr(0, 5) + "," + meshing::mesher_name(mesher) +
+                                           "," + std::to_string(target)) == std::string::npos)
+          continue;
         Shell shell = spherical_shell(shape.outer, shape.inner, shape.surface_edge);
         double volume = 0.0;
         const auto& s0 = shell.surface;
         for (Eigen::Index t = 0; t < s0.triangles.rows(); ++t)
-          volume += s0.vertices.row(s0.triangles(t, 0)).dot(s0.vertices.row(s0.triangles(t, 1)).cross(s0.vertices.row(s0.triangles(t, 2)))) / 6.0;
+          volume += s0.vertices.row(s0.triangles(t, 0))
+                        .dot(s0.vertices.row(s0.triangles(t, 1)).cross(s0.vertices.row(s0.triangles(t, 2)))) /
+                    6.0;
         const meshing::SizeControl size = meshing::size_for_target_tets(volume, target, mesher, 2);
         // Side rows as build_layer_surface chooses them: side edges about the target edge.
         const int side_layers = std::max(1, static_cast<int>(std::ceil(shell.thickness / size.edge_length - 0.25)));
@@ -316,7 +324,8 @@ TEST(SizeCalibration, DISABLED_PresetsOnLayerLikeShells) {
         double edge_sum = 0.0;
         for (Eigen::Index e = 0; e < mesh.tets.rows(); ++e)
           for (int i = 0; i < 4; ++i)
-            for (int j = i + 1; j < 4; ++j) edge_sum += (mesh.nodes.row(mesh.tets(e, i)) - mesh.nodes.row(mesh.tets(e, j))).norm();
+            for (int j = i + 1; j < 4; ++j)
+              edge_sum += (mesh.nodes.row(mesh.tets(e, i)) - mesh.nodes.row(mesh.tets(e, j))).norm();
         {  // TEMP diagnostic: boundary nodes of the worst tets
           const auto per = meshing::tet_quality(mesh.nodes, mesh.tets);
           const auto loc = meshing::locate_boundary_nodes(mesh, shell.surface);
@@ -332,7 +341,8 @@ TEST(SizeCalibration, DISABLED_PresetsOnLayerLikeShells) {
         std::printf("  mean tet edge / a = %.3f\n", edge_sum / (6.0 * static_cast<double>(mesh.tets.rows())) / a);
         std::printf("%-20s %-5s %8ld %7.1f %8ld %8ld %7.2f %6.2f %6.1f %6.1f %7.2f %6.2f%% %6.3f\n", shape.name,
                     meshing::mesher_name(mesher), target, 1e3 * a, q.tets, q.nodes, seconds, q.min_dihedral_deg,
-                    q.median_dihedral_deg, q.max_dihedral_deg, q.max_radius_edge, 100.0 * (q.total_volume / volume - 1.0),
+                    q.median_dihedral_deg, q.max_dihedral_deg, q.max_radius_edge,
+                    100.0 * (q.total_volume / volume - 1.0),
                     static_cast<double>(q.tets) * a * a * a / (6.0 * std::numbers::sqrt2 * volume));
         std::fflush(stdout);
       }

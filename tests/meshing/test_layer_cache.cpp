@@ -18,7 +18,7 @@ namespace {
 
 meshing::LayerMeshOptions thigh_options() {
   meshing::LayerMeshOptions options;
-  options.region_names = {"left_thigh"};   // a small region and the extruded mesh keep these tests quick
+  options.region_names = {"left_thigh"};  // a small region and the extruded mesh keep these tests quick
   options.mesher = meshing::Mesher::layered;
   options.size = meshing::SizePreset::coarse;
   return options;
@@ -50,7 +50,7 @@ TEST(LayerCache, BuildsOnceThenHitsWithIdenticalArrays) {
 TEST(LayerCache, ChangedBodyModelMakesTheEntryStale) {
   const auto dir = sflsh::testing::scratch_dir();
   meshing::cached_layer_mesh(open_body(), thigh_options(), dir);
-  body::BodyModel changed = open_body();   // same name, same file name in the cache, new content
+  body::BodyModel changed = open_body();  // same name, same file name in the cache, new content
   changed.v_template *= 1.01;
   EXPECT_NE(meshing::body_fingerprint(changed), meshing::body_fingerprint(open_body()));
   meshing::CacheOutcome outcome{};

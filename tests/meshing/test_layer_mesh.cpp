@@ -19,7 +19,7 @@ class LayerMeshTest : public ::testing::TestWithParam<meshing::Mesher> {};
 // Boundary faces of a tet mesh (faces used by one tet), oriented outward.
 meshing::RowMatrixX3i boundary_faces(const meshing::RowMatrixX4i& tets) {
   std::map<std::array<int, 3>, std::pair<int, std::array<int, 3>>> faces;
-  static constexpr int kFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};   // outward for positive tets
+  static constexpr int kFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};  // outward for positive tets
   for (Eigen::Index e = 0; e < tets.rows(); ++e)
     for (const auto& f : kFace) {
       std::array<int, 3> tri{tets(e, f[0]), tets(e, f[1]), tets(e, f[2])};
@@ -33,13 +33,15 @@ meshing::RowMatrixX3i boundary_faces(const meshing::RowMatrixX4i& tets) {
   for (const auto& [key, entry] : faces)
     if (entry.first == 1) list.push_back(entry.second);
   meshing::RowMatrixX3i out(static_cast<Eigen::Index>(list.size()), 3);
-  for (std::size_t i = 0; i < list.size(); ++i) out.row(static_cast<Eigen::Index>(i)) << list[i][0], list[i][1], list[i][2];
+  for (std::size_t i = 0; i < list.size(); ++i)
+    out.row(static_cast<Eigen::Index>(i)) << list[i][0], list[i][1], list[i][2];
   return out;
 }
 
 // Distance from p to triangle abc (Ericson, Real-Time Collision Detection §5.1.5), written here
 // independently of the meshing code.
-double point_triangle_distance(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+double point_triangle_distance(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                               const Eigen::Vector3d& c) {
   const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
   const double d1 = ab.dot(ap), d2 = ac.dot(ap);
   if (d1 <= 0 && d2 <= 0) return ap.norm();
@@ -54,7 +56,8 @@ double point_triangle_distance(const Eigen::Vector3d& p, const Eigen::Vector3d& 
   const double vb = d5 * d2 - d1 * d6;
   if (vb <= 0 && d2 >= 0 && d6 <= 0) return (p - (a + d2 / (d2 - d6) * ac)).norm();
   const double va = d3 * d6 - d5 * d4;
-  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) return (p - (b + (d4 - d3) / ((d4 - d3) + (d5 - d6)) * (c - b))).norm();
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)
+    return (p - (b + (d4 - d3) / ((d4 - d3) + (d5 - d6)) * (c - b))).norm();
   const double denom = 1.0 / (va + vb + vc);
   return (p - (a + ab * vb * denom + ac * vc * denom)).norm();
 }
@@ -83,11 +86,12 @@ TEST_P(LayerMeshTest, CoarseTemplateIsValidAndWatertight) {
   // radius–edge ratio below 10 (a 2° sliver already has ratio ≈ 8).
   EXPECT_GT(q.min_dihedral_deg, 2.0);
   EXPECT_LT(q.max_radius_edge, 10.0);
-  EXPECT_GT(q.median_dihedral_deg, 50.0);   // a well-shaped mesh has its median near the regular 70.5°
+  EXPECT_GT(q.median_dihedral_deg, 50.0);  // a well-shaped mesh has its median near the regular 70.5°
 
   const meshing::RowMatrixX3i boundary = boundary_faces(mesh.tets);
   const body::SurfaceReport report = body::check_surface(mesh.nodes, boundary, false);
-  EXPECT_TRUE(report.closed && report.edge_manifold && report.consistently_oriented && report.outward) << report.summary();
+  EXPECT_TRUE(report.closed && report.edge_manifold && report.consistently_oriented && report.outward)
+      << report.summary();
   EXPECT_EQ(report.connected_components, 1);
   // The volume of the tets equals the volume the boundary encloses (no missing or doubled tets).
   EXPECT_NEAR(q.total_volume, report.volume, 1e-9 * q.total_volume + 1e-12);
@@ -97,14 +101,14 @@ TEST_P(LayerMeshTest, OuterBoundaryIsTheSkinAndInnerBoundaryIsAtTheFraction) {
   const meshing::LayerMesh& mesh = coarse_layer(GetParam());
   const auto& model = open_body();
   const meshing::Region& region = mesh.region_surface;
-  const meshing::LayerGeometry geometry = meshing::layer_geometry(model, region, mesh.correspondence, body::Betas::Zero(),
-                                                                  mesh.template_thickness_field());
+  const meshing::LayerGeometry geometry =
+      meshing::layer_geometry(model, region, mesh.correspondence, body::Betas::Zero(), mesh.template_thickness_field());
   meshing::RowMatrixX3d inner = geometry.skin;
   for (int v = 0; v < inner.rows(); ++v) inner.row(v) += 0.5 * (geometry.skeleton.row(v) - geometry.skin.row(v));
   // Every outer node lies on the region's skin and every inner node on s + h(c − s): 1e-9 m is
   // round-off (boundary nodes are placed on the layer surface exactly).
   int outer = 0, inner_count = 0;
-  for (int i = 0; i < mesh.num_nodes(); i += 7) {   // every 7th node keeps the brute-force check fast
+  for (int i = 0; i < mesh.num_nodes(); i += 7) {  // every 7th node keeps the brute-force check fast
     const Eigen::Vector3d p = mesh.nodes.row(i).transpose();
     if (mesh.kind[static_cast<std::size_t>(i)] == meshing::NodeKind::outer) {
       EXPECT_LT(distance_to_surface(p, geometry.skin, region.faces), 1e-9) << "outer node " << i;
@@ -134,7 +138,7 @@ TEST_P(LayerMeshTest, NodeKindsAnchorsAndParts) {
     const auto& a = mesh.anchor[k];
     if (mesh.kind[k] == meshing::NodeKind::interior) {
       if (GetParam() == meshing::Mesher::layered) {
-        EXPECT_TRUE(a.valid() && a.depth > 0.0 && a.depth < 1.0);   // layered: every node sits on its column
+        EXPECT_TRUE(a.valid() && a.depth > 0.0 && a.depth < 1.0);  // layered: every node sits on its column
       } else {
         EXPECT_FALSE(a.valid());
       }
@@ -155,7 +159,7 @@ TEST_P(LayerMeshTest, NodeKindsAnchorsAndParts) {
   // Both surfaces carry hundreds of nodes (CGAL resamples the smaller inner surface more coarsely).
   EXPECT_GT(count[meshing::NodeKind::outer], 500);
   EXPECT_GT(count[meshing::NodeKind::inner], 500);
-  if (GetParam() != meshing::Mesher::layered) {   // coarse layered: one layer, no interior nodes
+  if (GetParam() != meshing::Mesher::layered) {  // coarse layered: one layer, no interior nodes
     EXPECT_GT(count[meshing::NodeKind::interior], 0);
   }
   if (GetParam() == meshing::Mesher::cgal) {

@@ -25,12 +25,10 @@ RowMatrixX4i one_tet(int a, int b, int c, int d) {
 }
 
 // Alternate corners of the cube [−1, 1]³: a regular tet of edge 2√2, volume 8/3, positively ordered.
-RowMatrixX3d regular_nodes() {
-  return points({{1, 1, 1}, {-1, -1, 1}, {-1, 1, -1}, {1, -1, -1}});
-}
+RowMatrixX3d regular_nodes() { return points({{1, 1, 1}, {-1, -1, 1}, {-1, 1, -1}, {1, -1, -1}}); }
 
-const double kRegularDihedral = std::acos(1.0 / 3.0) * 180.0 / std::numbers::pi;   // 70.5288°
-const double kRegularRadiusEdge = std::sqrt(6.0) / 4.0;                             // 0.6124
+const double kRegularDihedral = std::acos(1.0 / 3.0) * 180.0 / std::numbers::pi;  // 70.5288°
+const double kRegularRadiusEdge = std::sqrt(6.0) / 4.0;                           // 0.6124
 
 }  // namespace
 
@@ -68,7 +66,7 @@ TEST(TetQuality, InvertedTetIsCountedInvertedButNotDegenerate) {
   EXPECT_NEAR(q.min_volume, -8.0 / 3.0, 1e-12);
   EXPECT_EQ(q.inverted, 1);
   EXPECT_EQ(q.degenerate, 0);
-  EXPECT_NEAR(q.min_dihedral_deg, kRegularDihedral, 1e-9);   // angles do not depend on the orientation
+  EXPECT_NEAR(q.min_dihedral_deg, kRegularDihedral, 1e-9);  // angles do not depend on the orientation
   EXPECT_FALSE(q.valid());
 }
 
@@ -76,7 +74,7 @@ TEST(TetQuality, FlatTetIsDegenerateAndInverted) {
   const RowMatrixX3d nodes = points({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}});
   const QualityReport q = quality_report(nodes, one_tet(0, 1, 2, 3));
   EXPECT_EQ(q.min_volume, 0.0);
-  EXPECT_EQ(q.inverted, 1);   // volume ≤ 0
+  EXPECT_EQ(q.inverted, 1);  // volume ≤ 0
   EXPECT_EQ(q.degenerate, 1);
   EXPECT_TRUE(std::isinf(q.max_radius_edge));
   EXPECT_FALSE(q.valid());

@@ -8,8 +8,8 @@
 
 #include <gmock/gmock.h>
 
-#include <map>
 #include <cmath>
+#include <map>
 #include <set>
 
 using namespace sflsh;
@@ -30,7 +30,8 @@ std::map<std::pair<int, int>, int> edge_use(const meshing::RowMatrixX3i& faces) 
   return use;
 }
 
-Eigen::Vector3d loop_centroid(const meshing::Region& region, const body::BodyModel& model, const std::vector<int>& loop) {
+Eigen::Vector3d loop_centroid(const meshing::Region& region, const body::BodyModel& model,
+                              const std::vector<int>& loop) {
   Eigen::Vector3d c = Eigen::Vector3d::Zero();
   for (int v : loop) c += model.v_template.row(region.vertices[v]).transpose();
   return c / static_cast<double>(loop.size());
@@ -98,7 +99,8 @@ TEST(Region, BoundaryCurvesAreSmooth) {
     const std::size_t n = loop.size();
     std::vector<Eigen::Vector3d> points, averaged;
     for (int v : loop) points.push_back(model.v_template.row(region.vertices[v]).transpose());
-    for (std::size_t k = 0; k < n; ++k) averaged.push_back((points[(k + n - 1) % n] + points[k] + points[(k + 1) % n]) / 3.0);
+    for (std::size_t k = 0; k < n; ++k)
+      averaged.push_back((points[(k + n - 1) % n] + points[k] + points[(k + 1) % n]) / 3.0);
     EXPECT_LT(turning_number(averaged), 1.35) << "loop of " << n << " vertices";
   }
 }
@@ -111,9 +113,12 @@ TEST(Region, PartsAndSymmetry) {
   ASSERT_EQ(count.size(), 5u);
   EXPECT_GT(count[meshing::Part::torso], count[meshing::Part::left_thigh]);
   // The open body is left/right symmetric, so the parts are within 5% of each other.
-  EXPECT_NEAR(count[meshing::Part::left_upper_arm], count[meshing::Part::right_upper_arm], 0.05 * count[meshing::Part::left_upper_arm]);
-  EXPECT_NEAR(count[meshing::Part::left_thigh], count[meshing::Part::right_thigh], 0.05 * count[meshing::Part::left_thigh]);
-  for (std::size_t i = 0; i < region.vertices.size(); ++i) EXPECT_EQ(region.local_of[region.vertices[i]], static_cast<int>(i));
+  EXPECT_NEAR(count[meshing::Part::left_upper_arm], count[meshing::Part::right_upper_arm],
+              0.05 * count[meshing::Part::left_upper_arm]);
+  EXPECT_NEAR(count[meshing::Part::left_thigh], count[meshing::Part::right_thigh],
+              0.05 * count[meshing::Part::left_thigh]);
+  for (std::size_t i = 0; i < region.vertices.size(); ++i)
+    EXPECT_EQ(region.local_of[region.vertices[i]], static_cast<int>(i));
 }
 
 TEST(Region, SeparatePartsKeepTheirOwnPieces) {
@@ -143,8 +148,8 @@ TEST(Correspondence, AffineInJointsSmoothAndInsideTheBody) {
   joints.rowwise() += Eigen::RowVector3d(0.1, -0.2, 0.3);
   EXPECT_LT(((corr.points(joints) - c0).rowwise() - Eigen::RowVector3d(0.1, -0.2, 0.3)).cwiseAbs().maxCoeff(), 1e-12);
 
-  const meshing::LayerGeometry geometry = meshing::layer_geometry(model, region, corr, body::Betas::Zero(),
-                                                                  Eigen::VectorXd::Constant(region.num_vertices(), 0.5));
+  const meshing::LayerGeometry geometry = meshing::layer_geometry(
+      model, region, corr, body::Betas::Zero(), Eigen::VectorXd::Constant(region.num_vertices(), 0.5));
   const Eigen::VectorXd max_thickness = geometry.max_thickness();
   // Arms and thighs: skin-to-bone distance of an adult limb, 2–15 cm (the hip flesh over the femur head is the
   // thickest); torso up to ~25 cm (belly to spine).
@@ -156,7 +161,9 @@ TEST(Correspondence, AffineInJointsSmoothAndInsideTheBody) {
   double worst = 0.0;
   for (Eigen::Index f = 0; f < region.faces.rows(); ++f)
     for (int e = 0; e < 3; ++e)
-      worst = std::max(worst, (geometry.skeleton.row(region.faces(f, e)) - geometry.skeleton.row(region.faces(f, (e + 1) % 3))).norm());
+      worst = std::max(
+          worst,
+          (geometry.skeleton.row(region.faces(f, e)) - geometry.skeleton.row(region.faces(f, (e + 1) % 3))).norm());
   EXPECT_LT(worst, 0.06);
 }
 
@@ -169,7 +176,9 @@ TEST(Correspondence, ThicknessFieldIsValidated) {
   EXPECT_THAT(error_of([&] { meshing::layer_geometry(model, region, corr, body::Betas::Zero(), h); }),
               HasSubstr("h = 1 at region vertex 3; expected 0 < h < 1"));
   h(3) = std::nan("");
-  EXPECT_THAT(error_of([&] { meshing::layer_geometry(model, region, corr, body::Betas::Zero(), h); }), HasSubstr("region vertex 3"));
-  EXPECT_THAT(error_of([&] { meshing::layer_geometry(model, region, corr, body::Betas::Zero(), Eigen::VectorXd::Ones(2)); }),
-              HasSubstr("expected one per region vertex"));
+  EXPECT_THAT(error_of([&] { meshing::layer_geometry(model, region, corr, body::Betas::Zero(), h); }),
+              HasSubstr("region vertex 3"));
+  EXPECT_THAT(
+      error_of([&] { meshing::layer_geometry(model, region, corr, body::Betas::Zero(), Eigen::VectorXd::Ones(2)); }),
+      HasSubstr("expected one per region vertex"));
 }

@@ -43,7 +43,8 @@ TEST_P(RetargetTest, BoundaryIsExactForAShape) {
     const auto& a = mesh.anchor[static_cast<std::size_t>(i)];
     if (mesh.kind[static_cast<std::size_t>(i)] != meshing::NodeKind::outer) continue;
     Eigen::Vector3d expected = Eigen::Vector3d::Zero();
-    for (int k = 0; k < 3; ++k) expected += a.weight(k) * shaped.row(mesh.region_surface.vertices[a.vertex[k]]).transpose();
+    for (int k = 0; k < 3; ++k)
+      expected += a.weight(k) * shaped.row(mesh.region_surface.vertices[a.vertex[k]]).transpose();
     EXPECT_LT((layer.nodes.row(i).transpose() - expected).norm(), 1e-12) << "outer node " << i;
   }
   const meshing::RowMatrixX3d skin = mesh.skin_positions(layer.nodes);
@@ -63,16 +64,17 @@ TEST_P(RetargetTest, EverySubjectKeepsTetsPositiveOverTheSupportedThicknessRange
   const auto& mesh = coarse_layer(GetParam());
   const meshing::Retargeter retargeter(model, mesh);
   const auto subjects = body::default_subjects();
-  ASSERT_EQ(subjects.size(), 20u);   // Table 1 (10) and the open body's train/test subjects (10)
+  ASSERT_EQ(subjects.size(), 20u);  // Table 1 (10) and the open body's train/test subjects (10)
   double worst_dihedral = 180.0;
   // The range of uniform h that every coarse template (meshed at h = 0.5) takes for every subject
   // (measured, docs/meshing.md §6): below it, thin layers over concave skin get thinner than the
   // curvature sagitta of ~3 cm tets; above it, the inner surface shrinks around the bones faster than
   // one-element-deep tets can follow. Outside it a retarget is valid or fails loudly (next test).
   for (const auto& subject : subjects)
-    for (double h : GetParam() == meshing::Mesher::gmsh ? std::vector<double>{0.5, 0.6} : std::vector<double>{0.4, 0.5, 0.6}) {
+    for (double h :
+         GetParam() == meshing::Mesher::gmsh ? std::vector<double>{0.5, 0.6} : std::vector<double>{0.4, 0.5, 0.6}) {
       SCOPED_TRACE(subject.name + " h=" + std::to_string(h));
-      const auto layer = retargeter.retarget(subject.beta, h);   // throws on any inverted tet
+      const auto layer = retargeter.retarget(subject.beta, h);  // throws on any inverted tet
       EXPECT_EQ(layer.quality.inverted, 0);
       EXPECT_EQ(layer.quality.degenerate, 0);
       worst_dihedral = std::min(worst_dihedral, layer.quality.min_dihedral_deg);
@@ -89,7 +91,7 @@ TEST_P(RetargetTest, ExtremeThicknessesAreValidOrFailLoudly) {
     SCOPED_TRACE("h=" + std::to_string(h));
     try {
       const auto layer = retargeter.retarget(body::Betas::Zero(), h);
-      EXPECT_EQ(layer.quality.inverted, 0);   // a returned mesh is always valid
+      EXPECT_EQ(layer.quality.inverted, 0);  // a returned mesh is always valid
     } catch (const Error& e) {
       EXPECT_THAT(e.what(), HasSubstr("inverts"));
       EXPECT_THAT(e.what(), ::testing::ContainsRegex("(torso|upper_arm|thigh): [0-9]+"));
@@ -142,10 +144,10 @@ TEST(RetargetLayered, FinePresetTakesEverySubjectAndEveryThicknessFromTenToNinet
   for (const auto& subject : subjects)
     for (double h : {0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9}) {
       SCOPED_TRACE(subject.name + " h=" + std::to_string(h));
-      const auto layer = retargeter.retarget(subject.beta, h);   // throws on any inverted tet
+      const auto layer = retargeter.retarget(subject.beta, h);  // throws on any inverted tet
       EXPECT_EQ(layer.quality.inverted, 0);
       EXPECT_EQ(layer.quality.degenerate, 0);
-      EXPECT_EQ(layer.untangled_nodes, 0);   // every node is on its column: nothing to untangle
+      EXPECT_EQ(layer.untangled_nodes, 0);  // every node is on its column: nothing to untangle
       worst_dihedral = std::min(worst_dihedral, layer.quality.min_dihedral_deg);
     }
   EXPECT_GT(worst_dihedral, 0.1);

@@ -2,6 +2,7 @@
 // Small problems for the model tests: a box of Kuhn-split cubes (six positively oriented tets per cell) with
 // a homogeneous material, and random node maps (invertible, near rotations).
 #include "dense_hessian.hpp"
+
 #include <sflsh/material/orthotropic_fung.hpp>
 #include <sflsh/model/problem.hpp>
 #include <sflsh/model/terms.hpp>
@@ -14,7 +15,8 @@
 namespace sflsh::testing {
 
 /// A box [0, size] split into cells, six tets per cell, nodes in x-fastest order.
-inline void kuhn_box(const Eigen::Vector3d& size, std::array<int, 3> cells, model::RowMatrixX3d& nodes, model::RowMatrixX4i& tets) {
+inline void kuhn_box(const Eigen::Vector3d& size, std::array<int, 3> cells, model::RowMatrixX3d& nodes,
+                     model::RowMatrixX4i& tets) {
   const int nx = cells[0] + 1, ny = cells[1] + 1, nz = cells[2] + 1;
   nodes.resize(nx * ny * nz, 3);
   auto id = [&](int i, int j, int k) { return i + nx * (j + ny * k); };
@@ -36,7 +38,8 @@ inline void kuhn_box(const Eigen::Vector3d& size, std::array<int, 3> cells, mode
             ++c[static_cast<std::size_t>(order[static_cast<std::size_t>(s)])];
             tet[static_cast<std::size_t>(s) + 1] = id(c[0], c[1], c[2]);
           }
-          const Eigen::Vector3d a = nodes.row(tet[0]), b = nodes.row(tet[1]), cc = nodes.row(tet[2]), d = nodes.row(tet[3]);
+          const Eigen::Vector3d a = nodes.row(tet[0]), b = nodes.row(tet[1]), cc = nodes.row(tet[2]),
+                                d = nodes.row(tet[3]);
           if ((b - a).dot((cc - a).cross(d - a)) < 0.0) std::swap(tet[2], tet[3]);
           list.push_back(tet);
         }
@@ -56,8 +59,8 @@ inline material::OrthotropicFung box_material(double young_tangent, double young
 
 /// A validated box problem: density ρ, the material on every tet, no attachment (add Dirichlet before validate
 /// for a dynamic problem that must not drift).
-inline model::Problem box_problem(const Eigen::Vector3d& size, std::array<int, 3> cells, double density, model::MassKind mass,
-                                  const material::OrthotropicFung& material) {
+inline model::Problem box_problem(const Eigen::Vector3d& size, std::array<int, 3> cells, double density,
+                                  model::MassKind mass, const material::OrthotropicFung& material) {
   model::Problem p;
   kuhn_box(size, cells, p.rest, p.tets);
   p.tet_material.assign(static_cast<std::size_t>(p.tets.rows()), material);

@@ -73,7 +73,8 @@ void check_derivatives(const Term& term, const Problem& problem, const Eigen::Ve
 
 struct TermsFixture : ::testing::Test {
   std::mt19937 rng{1234};
-  Problem problem = testing::box_problem({0.1, 0.06, 0.04}, {2, 2, 1}, 1000.0, MassKind::lumped, testing::box_material(5e3, 2e3));
+  Problem problem =
+      testing::box_problem({0.1, 0.06, 0.04}, {2, 2, 1}, 1000.0, MassKind::lumped, testing::box_material(5e3, 2e3));
   void SetUp() override { problem.validate(); }
 
   Eigen::VectorXd rest() const { return Eigen::Map<const Eigen::VectorXd>(problem.rest.data(), problem.num_dofs()); }
@@ -131,7 +132,8 @@ TEST_F(TermsFixture, InertiaLumpedAndConsistentMatchFiniteDifferences) {
 }
 
 TEST_F(TermsFixture, InertiaOfATranslationIsTheTotalMassForBothKinds) {
-  // A rigid offset r of every node from p̃: ½ Σ_ij M_ij r·r / ĥ² = ½ m_total |r|² / ĥ² (the row sums are the lumped masses).
+  // A rigid offset r of every node from p̃: ½ Σ_ij M_ij r·r / ĥ² = ½ m_total |r|² / ĥ² (the row sums are the lumped
+  // masses).
   NodeFrame identity;
   identity.A.assign(static_cast<std::size_t>(problem.num_nodes()), Eigen::Matrix3d::Identity());
   identity.d = RowMatrixX3d::Zero(problem.num_nodes(), 3);
@@ -145,7 +147,8 @@ TEST_F(TermsFixture, InertiaOfATranslationIsTheTotalMassForBothKinds) {
     problem.mass_kind = kind;
     InertiaTerm term(problem, TermSubset::whole(problem));
     term.set_step(identity, target);
-    EXPECT_NEAR(term.value(rest()), 0.5 * total * r.squaredNorm() / (target.h_eff * target.h_eff), 1e-10) << to_string(kind);
+    EXPECT_NEAR(term.value(rest()), 0.5 * total * r.squaredNorm() / (target.h_eff * target.h_eff), 1e-10)
+        << to_string(kind);
   }
 }
 
@@ -159,7 +162,8 @@ TEST_F(TermsFixture, GravityMatchesFiniteDifferences) {
 
 TEST_F(TermsFixture, NodePotentialMatchesFiniteDifferences) {
   const NodeFrame frame = testing::random_frame(problem.num_nodes(), rng);
-  problem.potentials.push_back(std::make_shared<CubicFloor>(problem.num_nodes(), 1.0, 1e6));   // every node below y = 1 m
+  problem.potentials.push_back(
+      std::make_shared<CubicFloor>(problem.num_nodes(), 1.0, 1e6));  // every node below y = 1 m
   PotentialTerm term(problem);
   const RowMatrixX3d p_n = posed_positions(frame, rest());
   ASSERT_TRUE(term.begin(p_n, 0.0, 0.01, frame, rest(), nullptr));
@@ -169,7 +173,7 @@ TEST_F(TermsFixture, NodePotentialMatchesFiniteDifferences) {
 TEST_F(TermsFixture, OutOfRangeStatesAreInfiniteNotNaN) {
   ElasticTerm term(problem, TermSubset::whole(problem));
   Eigen::VectorXd x = rest();
-  x *= 3.0;   // 200 % stretch: the Fung exponent exceeds its cap
+  x *= 3.0;  // 200 % stretch: the Fung exponent exceeds its cap
   EXPECT_EQ(term.value(x), std::numeric_limits<double>::infinity());
   Eigen::VectorXd g = Eigen::VectorXd::Zero(x.size());
   EXPECT_FALSE(term.add_gradient(x, g));

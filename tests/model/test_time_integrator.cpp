@@ -18,9 +18,9 @@ const double kPeriod = 2.0 * std::numbers::pi / kOmega;
 
 PosedHistory start() {
   PosedHistory history;
-  history.p = Eigen::Vector3d(0.01, -0.02, 0.0);   // [m]
-  history.v = Eigen::Vector3d(0.0, 0.05, 0.1);     // [m/s]
-  history.a = -kStiffness / kMass * history.p;      // the equation of motion at t = 0
+  history.p = Eigen::Vector3d(0.01, -0.02, 0.0);  // [m]
+  history.v = Eigen::Vector3d(0.0, 0.05, 0.1);    // [m/s]
+  history.a = -kStiffness / kMass * history.p;    // the equation of motion at t = 0
   return history;
 }
 
@@ -30,7 +30,9 @@ void step(Integrator integrator, PosedHistory& history, double h) {
   advance_history(target, history, Eigen::VectorXd(w * target.p_tilde / (w + kStiffness)));
 }
 
-double energy(const PosedHistory& history) { return 0.5 * kMass * history.v.squaredNorm() + 0.5 * kStiffness * history.p.squaredNorm(); }
+double energy(const PosedHistory& history) {
+  return 0.5 * kMass * history.v.squaredNorm() + 0.5 * kStiffness * history.p.squaredNorm();
+}
 
 Eigen::Vector3d exact(double t) {
   const PosedHistory s = start();
@@ -69,8 +71,8 @@ TEST(TimeIntegrator, BackwardEulerAndBdf2DampNewmarkDoesNot) {
   };
   const double be = energy_after(Integrator::backward_euler), bdf2 = energy_after(Integrator::bdf2),
                newmark = energy_after(Integrator::newmark);
-  EXPECT_LT(be, bdf2);          // first-order damping removes most of the energy in 5 periods
-  EXPECT_LT(bdf2, 1.0);         // BDF2 damps mildly
+  EXPECT_LT(be, bdf2);   // first-order damping removes most of the energy in 5 periods
+  EXPECT_LT(bdf2, 1.0);  // BDF2 damps mildly
   EXPECT_GT(bdf2, 0.5);
   EXPECT_NEAR(newmark, 1.0, 1e-10);
 }
@@ -80,7 +82,8 @@ TEST(TimeIntegrator, ObservedOrdersOfConvergence) {
   // for backward Euler starts only near ωh ≈ 0.01 (its amplitude decays as exp(−ω²ht/2): 63 % in two periods at
   // 40 steps per period), for the second-order schemes already at 40 steps per period.
   auto order = [](Integrator integrator, int steps_per_period) {
-    return std::log2(error_after(integrator, 2.0, steps_per_period) / error_after(integrator, 2.0, 2 * steps_per_period));
+    return std::log2(error_after(integrator, 2.0, steps_per_period) /
+                     error_after(integrator, 2.0, 2 * steps_per_period));
   };
   EXPECT_NEAR(order(Integrator::backward_euler, 800), 1.0, 0.1);
   EXPECT_NEAR(order(Integrator::bdf2, 40), 2.0, 0.1);
@@ -108,7 +111,7 @@ TEST(TimeIntegrator, Bdf2StartsAndRestartsAsBackwardEuler) {
   EXPECT_EQ(inertia_target(Integrator::bdf2, history, 0.01).integrator, Integrator::backward_euler);
   step(Integrator::bdf2, history, 0.01);
   EXPECT_EQ(inertia_target(Integrator::bdf2, history, 0.01).integrator, Integrator::bdf2);
-  EXPECT_EQ(inertia_target(Integrator::bdf2, history, 0.05).integrator, Integrator::backward_euler);   // ω = 5
+  EXPECT_EQ(inertia_target(Integrator::bdf2, history, 0.05).integrator, Integrator::backward_euler);  // ω = 5
 }
 
 TEST(TimeIntegrator, NewmarkNeedsAccelerationsAndNamesParse) {

@@ -4,6 +4,7 @@
 // (model/terms.hpp, checked by finite differences in tests/model) and integrators (model/time_integrator.hpp),
 // independent of the reduced code and of PETSc.
 #include "dense_hessian.hpp"
+
 #include <sflsh/core/error.hpp>
 #include <sflsh/model/problem.hpp>
 #include <sflsh/model/terms.hpp>
@@ -22,15 +23,20 @@ namespace sflsh::reduced::testing {
 /// translation δ(t) = δ₀ sin(ω₂t) (every node the same map).
 class SwingTrajectory final : public model::NodeTrajectory {
  public:
-  SwingTrajectory(int nodes, Eigen::Vector3d pivot, Eigen::Vector3d axis, double angle, double frequency, Eigen::Vector3d shift,
-                  double shift_frequency)
-      : nodes_(nodes), pivot_(pivot), axis_(axis.normalized()), angle_(angle), omega_(2.0 * M_PI * frequency), shift_(shift),
+  SwingTrajectory(int nodes, Eigen::Vector3d pivot, Eigen::Vector3d axis, double angle, double frequency,
+                  Eigen::Vector3d shift, double shift_frequency)
+      : nodes_(nodes),
+        pivot_(pivot),
+        axis_(axis.normalized()),
+        angle_(angle),
+        omega_(2.0 * M_PI * frequency),
+        shift_(shift),
         shift_omega_(2.0 * M_PI * shift_frequency) {}
   int num_nodes() const override { return nodes_; }
   void evaluate(double t, model::NodeFrame& frame, model::NodeFrame* rate) const override {
     const double theta = angle_ * std::sin(omega_ * t), theta_rate = angle_ * omega_ * std::cos(omega_ * t);
     const Eigen::Matrix3d R = Eigen::AngleAxisd(theta, axis_).toRotationMatrix();
-    Eigen::Matrix3d K;   // [n]×
+    Eigen::Matrix3d K;  // [n]×
     K << 0.0, -axis_.z(), axis_.y(), axis_.z(), 0.0, -axis_.x(), -axis_.y(), axis_.x(), 0.0;
     const Eigen::Matrix3d R_rate = theta_rate * K * R;
     const Eigen::Vector3d d = pivot_ - R * pivot_ + shift_ * std::sin(shift_omega_ * t);
@@ -57,8 +63,12 @@ class SwingTrajectory final : public model::NodeTrajectory {
 class DenseReference {
  public:
   DenseReference(const model::Problem& problem, model::Integrator integrator)
-      : problem_(problem), integrator_(integrator), whole_(model::TermSubset::whole(problem)), elastic_(problem, whole_),
-        inertia_(problem, whole_), gravity_(problem, whole_) {
+      : problem_(problem),
+        integrator_(integrator),
+        whole_(model::TermSubset::whole(problem)),
+        elastic_(problem, whole_),
+        inertia_(problem, whole_),
+        gravity_(problem, whole_) {
     const std::vector<char> fixed = problem.dirichlet.mask(problem.num_nodes());
     for (int d = 0; d < problem.num_dofs(); ++d)
       if (!fixed[static_cast<std::size_t>(d)]) free_.push_back(d);
@@ -67,7 +77,8 @@ class DenseReference {
   /// Newmark without accelerations takes model::initial_acceleration.
   void initialize(const model::State& start) {
     state_ = start;
-    if (integrator_ == model::Integrator::newmark && state_.a.size() == 0) state_.a = model::initial_acceleration(problem_, state_);
+    if (integrator_ == model::Integrator::newmark && state_.a.size() == 0)
+      state_.a = model::initial_acceleration(problem_, state_);
     model::NodeFrame frame;
     problem_.frame(state_.t, frame);
     history_ = model::history_of(state_, posed(frame, state_.x));
@@ -82,17 +93,21 @@ class DenseReference {
     const model::InertiaTarget target = model::inertia_target(integrator_, history_, h);
     inertia_.set_step(frame, target);
     gravity_.set_frame(frame);
-    const auto phi = [&](const Eigen::VectorXd& y) { return elastic_.value(y) + inertia_.value(y) + gravity_.value(y); };
+    const auto phi = [&](const Eigen::VectorXd& y) {
+      return elastic_.value(y) + inertia_.value(y) + gravity_.value(y);
+    };
     double g0 = 0.0;
     for (int it = 0; it < 200; ++it) {
       Eigen::VectorXd g = Eigen::VectorXd::Zero(x.size());
-      require(elastic_.add_gradient(x, g) && inertia_.add_gradient(x, g) && gravity_.add_gradient(x, g), "dense reference: gradient failed");
+      require(elastic_.add_gradient(x, g) && inertia_.add_gradient(x, g) && gravity_.add_gradient(x, g),
+              "dense reference: gradient failed");
       const Eigen::VectorXd g_free = g(free_);
       if (it == 0) g0 = g_free.norm();
       if (g_free.norm() <= 1e-13 * g0 || g_free.norm() == 0.0) break;
       // The exact Hessian, or with dP/dF projected to PSD where the exact one is indefinite (same minimizer).
       Eigen::LLT<Eigen::MatrixXd> llt;
-      for (material::HessianProjection projection : {material::HessianProjection::kNone, material::HessianProjection::kStressDerivative}) {
+      for (material::HessianProjection projection :
+           {material::HessianProjection::kNone, material::HessianProjection::kStressDerivative}) {
         elastic_.set_projection(projection);
         sflsh::testing::DenseHessian sink(problem_);
         require(elastic_.add_hessian(x, sink) && inertia_.add_hessian(x, sink) && gravity_.add_hessian(x, sink),

@@ -2,8 +2,8 @@
 // Small problems for the reduced-model tests: a structured box with a homogeneous material, its bottom face
 // attached (every component), and a handful of interior point handles.
 #include <sflsh/fullspace/msh_reader.hpp>
-#include <sflsh/model/problem.hpp>
 #include <sflsh/material/skin_material.hpp>
+#include <sflsh/model/problem.hpp>
 #include <sflsh/reduced/subspace.hpp>
 #include <sflsh/reduced/weights.hpp>
 
@@ -36,7 +36,8 @@ inline BoxCase box_case(std::array<int, 3> cells = {4, 4, 3}, double density = 1
   model::Problem& p = c.problem;
   p.rest = c.mesh.nodes;
   p.tets = c.mesh.tets;
-  p.tet_material.assign(static_cast<std::size_t>(p.num_tets()), material::make_orthotropic_fung(skin(), Eigen::Vector3d::UnitZ()));
+  p.tet_material.assign(static_cast<std::size_t>(p.num_tets()),
+                        material::make_orthotropic_fung(skin(), Eigen::Vector3d::UnitZ()));
   p.mass = model::lumped_masses(p.rest, p.tets, density);
   p.density = density;
   c.attached = c.mesh.node_groups.at("zmin");
@@ -52,12 +53,13 @@ inline BoxCase box_case(std::array<int, 3> cells = {4, 4, 3}, double density = 1
   p.validate();
   const std::vector<char> fixed = p.dirichlet.mask(p.num_nodes());
   const std::vector<Eigen::Vector3d> sites{{0.03, 0.025, 0.04}, {0.09, 0.025, 0.04}, {0.03, 0.075, 0.04},
-                                           {0.09, 0.075, 0.04}, {0.06, 0.05, 0.06}, {0.06, 0.05, 0.02}};
+                                           {0.09, 0.075, 0.04}, {0.06, 0.05, 0.06},  {0.06, 0.05, 0.02}};
   for (const Eigen::Vector3d& s : sites) {
     int best = -1;
     double best_d = 1e30;
     for (int i = 0; i < p.num_nodes(); ++i) {
-      if (fixed[static_cast<std::size_t>(3 * i)] || std::find(c.point_handles.begin(), c.point_handles.end(), i) != c.point_handles.end())
+      if (fixed[static_cast<std::size_t>(3 * i)] ||
+          std::find(c.point_handles.begin(), c.point_handles.end(), i) != c.point_handles.end())
         continue;
       const double d = (p.rest.row(i).transpose() - s).norm();
       if (d < best_d) {
@@ -86,7 +88,8 @@ inline std::vector<char> attached_flags(const BoxCase& c) {
 
 /// The handle subspace of the box (translational point handles, no truncation).
 inline Subspace box_subspace(const BoxCase& c, bool affine = false) {
-  const Eigen::MatrixXd W = handle_weights(c.problem.rest, c.problem.tets, box_handle_sets(c), static_cast<int>(c.point_handles.size()));
+  const Eigen::MatrixXd W =
+      handle_weights(c.problem.rest, c.problem.tets, box_handle_sets(c), static_cast<int>(c.point_handles.size()));
   BasisOptions options;
   options.drop_below = 0.0;
   options.max_influences = 1000;

@@ -76,7 +76,8 @@ TEST(Cubature, VoronoiWeightsIntegrateTheVolume) {
   const std::vector<double> w = voronoi_weights(c.problem, tets);
   double volume = 0.0, cubature = 0.0;
   for (const auto& r : c.problem.tet_rest) volume += r.volume;
-  for (std::size_t k = 0; k < tets.size(); ++k) cubature += w[k] * c.problem.tet_rest[static_cast<std::size_t>(tets[k])].volume;
+  for (std::size_t k = 0; k < tets.size(); ++k)
+    cubature += w[k] * c.problem.tet_rest[static_cast<std::size_t>(tets[k])].volume;
   EXPECT_NEAR(cubature, volume, 1e-12 * volume);
 }
 

@@ -54,7 +54,7 @@ TEST(CubatureGuard, TheBoundNeverMissesATetOverTheLimit) {
   const auto c = testing::box_case({5, 4, 3});
   const Subspace s = testing::box_subspace(c);
   const Cubature cubature = sparse_cubature(c.problem, 4);
-  constexpr double kLimit = 5.0;   // low, so that the walk crosses it on many tets
+  constexpr double kLimit = 5.0;  // low, so that the walk crosses it on many tets
   CubatureGuard guard(c.problem, s, cubature, kLimit);
   std::set<int> weighted(cubature.tets.begin(), cubature.tets.end());
   // A random walk from rest with growing steps: the bound must pass every tet under the limit only when it is.
@@ -110,7 +110,8 @@ TEST(CubatureGuard, TheSolverRepairsAStateThatLeavesTheMaterialOutsideTheCubatur
   cubature.tets = {farthest_point_tets(c.problem, 1, {}).front()};
   cubature.weights = voronoi_weights(c.problem, cubature.tets);
   cubature.method = "voronoi";
-  constexpr double kSpeed = 3.0;   // [m/s] against a 6 cm tall box: strains far beyond the material's range unless resisted
+  constexpr double kSpeed =
+      3.0;  // [m/s] against a 6 cm tall box: strains far beyond the material's range unless resisted
   constexpr double kStep = 1.0 / 60.0;
 
   ReducedOptions unguarded;
@@ -141,8 +142,10 @@ TEST(CubatureGuard, TheSolverRepairsAStateThatLeavesTheMaterialOutsideTheCubatur
     const std::vector<double> x = exponents(c.problem, solver.full_state().x);
     // Tets outside the cubature stay under the guard's limit; those inside under the material's cap.
     for (int e = 0; e < c.problem.num_tets(); ++e) {
-      const bool in_cubature = std::find(solver.cubature().tets.begin(), solver.cubature().tets.end(), e) != solver.cubature().tets.end();
-      EXPECT_LE(x[static_cast<std::size_t>(e)], in_cubature ? material::kFungExponentCap : guarded.guard_exponent) << "tet " << e << ", step " << k;
+      const bool in_cubature =
+          std::find(solver.cubature().tets.begin(), solver.cubature().tets.end(), e) != solver.cubature().tets.end();
+      EXPECT_LE(x[static_cast<std::size_t>(e)], in_cubature ? material::kFungExponentCap : guarded.guard_exponent)
+          << "tet " << e << ", step " << k;
     }
   }
   EXPECT_GT(added, 0);
@@ -152,8 +155,9 @@ TEST(CubatureGuard, TheSolverRepairsAStateThatLeavesTheMaterialOutsideTheCubatur
   double volume = 0.0, integrated = 0.0;
   for (int e = 0; e < c.problem.num_tets(); ++e) volume += c.problem.tet_rest[static_cast<std::size_t>(e)].volume;
   for (int k = 0; k < solver.cubature().size(); ++k)
-    integrated += solver.cubature().weights[static_cast<std::size_t>(k)] *
-                  c.problem.tet_rest[static_cast<std::size_t>(solver.cubature().tets[static_cast<std::size_t>(k)])].volume;
+    integrated +=
+        solver.cubature().weights[static_cast<std::size_t>(k)] *
+        c.problem.tet_rest[static_cast<std::size_t>(solver.cubature().tets[static_cast<std::size_t>(k)])].volume;
   EXPECT_NEAR(integrated, volume, 1e-9 * volume);
 }
 

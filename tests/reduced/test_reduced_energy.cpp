@@ -4,16 +4,15 @@
 #include "reduced_fixtures.hpp"
 
 #include <sflsh/body/body_io.hpp>
-#include <sflsh/core/error.hpp>
 #include <sflsh/body/motion.hpp>
+#include <sflsh/core/error.hpp>
 #include <sflsh/model/body_layer.hpp>
 #include <sflsh/reduced/cubature_elastic.hpp>
 #include <sflsh/reduced/reduced_inertia.hpp>
 #include <sflsh/reduced/reduced_model.hpp>
 
-#include <gtest/gtest.h>
-
 #include <Eigen/Eigenvalues>
+#include <gtest/gtest.h>
 
 #include <random>
 #include <set>
@@ -30,7 +29,8 @@ TEST_P(ReducedElasticFd, GradientAndHessianMatchCentralDifferences) {
   const auto c = testing::box_case({3, 3, 2});
   const Subspace s = testing::box_subspace(c);
   Cubature cub = exact_cubature(c.problem.num_tets());
-  for (std::size_t k = 0; k < cub.weights.size(); ++k) cub.weights[k] = 0.5 + 0.1 * static_cast<double>(k % 7);   // any ω ≥ 0
+  for (std::size_t k = 0; k < cub.weights.size(); ++k)
+    cub.weights[k] = 0.5 + 0.1 * static_cast<double>(k % 7);  // any ω ≥ 0
   const CubatureElastic elastic(c.problem, s, cub);
   const Eigen::VectorXd q = random_q(s.num_dofs(), GetParam(), 11);
   Eigen::VectorXd g = Eigen::VectorXd::Zero(s.num_dofs());
@@ -83,7 +83,7 @@ TEST(ReducedInertia, ClosedFormMatchesTheNodeByNodePotential) {
   const ReducedModel model = build_reduced_model(layer, ro);
   const model::Problem& p = layer.problem;
   ReducedInertia inertia(p, model.subspace);
-  const double t = 0.37, h = 1.0 / 60.0;   // between frames: the interpolated node maps, hips rotated
+  const double t = 0.37, h = 1.0 / 60.0;  // between frames: the interpolated node maps, hips rotated
   const Eigen::VectorXd x_d = Eigen::Map<const Eigen::VectorXd>(p.rest.data(), p.num_dofs());
   inertia.set_time(t, x_d);
   const std::vector<int>& active = inertia.active_nodes();
@@ -94,8 +94,10 @@ TEST(ReducedInertia, ClosedFormMatchesTheNodeByNodePotential) {
   std::normal_distribution<double> normal(0.0, 0.01);
   for (std::size_t a = 0; a < active.size(); ++a) {
     const int i = active[a];
-    const Eigen::Vector3d skinned = frame.A[static_cast<std::size_t>(i)] * x_d.segment<3>(3 * i) + frame.d.row(i).transpose();
-    p_tilde.row(static_cast<Eigen::Index>(a)) = (skinned + Eigen::Vector3d(normal(rng), normal(rng), normal(rng))).transpose();
+    const Eigen::Vector3d skinned =
+        frame.A[static_cast<std::size_t>(i)] * x_d.segment<3>(3 * i) + frame.d.row(i).transpose();
+    p_tilde.row(static_cast<Eigen::Index>(a)) =
+        (skinned + Eigen::Vector3d(normal(rng), normal(rng), normal(rng))).transpose();
   }
   const Eigen::VectorXd c = inertia.linear_term(p_tilde, h, true);
   Eigen::MatrixXd H;
@@ -107,7 +109,8 @@ TEST(ReducedInertia, ClosedFormMatchesTheNodeByNodePotential) {
     double value = 0.0;
     for (std::size_t a = 0; a < active.size(); ++a) {
       const int i = active[a];
-      const Eigen::Vector3d pi = frame.A[static_cast<std::size_t>(i)] * x.segment<3>(3 * i) + frame.d.row(i).transpose();
+      const Eigen::Vector3d pi =
+          frame.A[static_cast<std::size_t>(i)] * x.segment<3>(3 * i) + frame.d.row(i).transpose();
       value += 0.5 * p.mass[i] / (h * h) * (pi - p_tilde.row(static_cast<Eigen::Index>(a)).transpose()).squaredNorm();
     }
     return value;
@@ -150,7 +153,7 @@ TEST(BodyHandles, PlacedInsideTheLayerNestedAndDistinct) {
     }
     if (layer.mesh->node_part[static_cast<std::size_t>(v)] == meshing::Part::torso) ++torso;
   }
-  EXPECT_GT(torso, 86 / 2);   // denser on the torso (paper Fig. 2)
+  EXPECT_GT(torso, 86 / 2);  // denser on the torso (paper Fig. 2)
   // Every attached node belongs to a bone handle; the bones are skeleton joints.
   for (int i = 0; i < layer.problem.num_nodes(); ++i)
     EXPECT_EQ(fixed[static_cast<std::size_t>(3 * i)] != 0, h86.bone_of_node[static_cast<std::size_t>(i)] >= 0);

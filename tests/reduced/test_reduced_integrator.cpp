@@ -7,10 +7,10 @@
 #include <sflsh/body/motion.hpp>
 #include <sflsh/core/error.hpp>
 #include <sflsh/fullspace/fullspace_solver.hpp>
-#include <sflsh/model/body_layer.hpp>
 #include <sflsh/fullspace/reference_integrator.hpp>
-#include <sflsh/reduced/reduced_solver.hpp>
+#include <sflsh/model/body_layer.hpp>
 #include <sflsh/reduced/reduced_model.hpp>
+#include <sflsh/reduced/reduced_solver.hpp>
 
 #include <gtest/gtest.h>
 #include <petscsys.h>
@@ -23,7 +23,8 @@ namespace {
 
 model::ScalarDrive shake(double amplitude, double frequency) {
   const double w = 2.0 * M_PI * frequency;
-  return {[=](double t) { return amplitude * std::sin(w * t); }, [=](double t) { return amplitude * w * std::cos(w * t); }};
+  return {[=](double t) { return amplitude * std::sin(w * t); },
+          [=](double t) { return amplitude * w * std::cos(w * t); }};
 }
 
 TEST(ReducedIntegrator, FullBasisAndExactCubatureReproduceTheFullSpaceSolver) {
@@ -68,10 +69,10 @@ TEST(ReducedIntegrator, FreeOscillationInTheHandleSubspaceDecays) {
   ReducedSolver reduced(c.problem, s, all);
   model::State start = model::initial_state(c.problem, 0.0);
   Eigen::VectorXd q0 = Eigen::VectorXd::Zero(s.num_dofs());
-  for (int j = 0; j < s.num_functions(); ++j) q0[3 * j] = 0.004;   // every handle pulled 4 mm along x
+  for (int j = 0; j < s.num_functions(); ++j) q0[3 * j] = 0.004;  // every handle pulled 4 mm along x
   s.add_displacement(q0, start.x);
   reduced.initialize(start);
-  EXPECT_LT((reduced.q() - q0).cwiseAbs().maxCoeff(), 1e-12);   // the initial state lies in the subspace
+  EXPECT_LT((reduced.q() - q0).cwiseAbs().maxCoeff(), 1e-12);  // the initial state lies in the subspace
   const auto total = [&]() {
     const model::State st = reduced.full_state();
     return model::energies(c.problem, st).kinetic + model::energies(c.problem, st).elastic;
@@ -115,7 +116,7 @@ TEST(ReducedIntegrator, AnImpossibleStepFailsLoudlyAndLeavesTheStateUnchanged) {
     FAIL() << "the step should have failed";
   } catch (const Error& e) {
     const std::string message = e.what();
-    EXPECT_NE(message.find("t = 0.01 s"), std::string::npos) << message;   // the robustness ladder names the step's end
+    EXPECT_NE(message.find("t = 0.01 s"), std::string::npos) << message;  // the robustness ladder names the step's end
     EXPECT_NE(message.find("4 substeps"), std::string::npos) << message;
     EXPECT_EQ(message.find('\n'), std::string::npos) << message;
   }
@@ -159,7 +160,9 @@ TEST(ReducedModel, CachedModelEqualsTheBuiltOneAndACorruptEntryIsRebuilt) {
   EXPECT_EQ(hit.handles.point_nodes, built.handles.point_nodes);
   EXPECT_EQ(hit.cubature.tets, built.cubature.tets);
   EXPECT_EQ(hit.cubature.weights, built.cubature.weights);
-  EXPECT_EQ((Eigen::SparseMatrix<double>(hit.subspace.basis) - Eigen::SparseMatrix<double>(built.subspace.basis)).norm(), 0.0);
+  EXPECT_EQ(
+      (Eigen::SparseMatrix<double>(hit.subspace.basis) - Eigen::SparseMatrix<double>(built.subspace.basis)).norm(),
+      0.0);
   EXPECT_EQ(hit.handles.bone_of_node, built.handles.bone_of_node);
   for (const auto& entry : std::filesystem::directory_iterator(dir)) std::ofstream(entry.path()) << "not a zip archive";
   const ReducedModel rebuilt = build_reduced_model(layer, ro);

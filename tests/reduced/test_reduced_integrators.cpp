@@ -26,7 +26,8 @@ namespace {
 
 model::ScalarDrive shake(double amplitude, double frequency) {
   const double w = 2.0 * M_PI * frequency;
-  return {[=](double t) { return amplitude * std::sin(w * t); }, [=](double t) { return amplitude * w * std::cos(w * t); }};
+  return {[=](double t) { return amplitude * std::sin(w * t); },
+          [=](double t) { return amplitude * w * std::cos(w * t); }};
 }
 
 enum class Motion { drive, swing };
@@ -38,8 +39,8 @@ struct Combination {
 };
 
 std::string combination_name(const ::testing::TestParamInfo<Combination>& info) {
-  return std::string(model::to_string(info.param.integrator)) + "_" + std::string(model::to_string(info.param.mass)) + "_" +
-         (info.param.motion == Motion::drive ? "drive" : "swing");
+  return std::string(model::to_string(info.param.integrator)) + "_" + std::string(model::to_string(info.param.mass)) +
+         "_" + (info.param.motion == Motion::drive ? "drive" : "swing");
 }
 
 /// The 3 × 3 × 2 box (bottom face attached) under gravity, its bottom face shaken in z (drive) or the whole box swung
@@ -47,11 +48,13 @@ std::string combination_name(const ::testing::TestParamInfo<Combination>& info) 
 testing::BoxCase moving_box(const Combination& c, const model::ScalarDrive& drive) {
   auto box = testing::box_case({3, 3, 2}, 1000.0, c.motion == Motion::drive ? &drive : nullptr);
   model::Problem& p = box.problem;
-  p.gravity = Eigen::Vector3d(0.2, -0.3, -1.0);   // a tenth of g, tilted: the 2 kPa box would sag by its own height under g
+  p.gravity =
+      Eigen::Vector3d(0.2, -0.3, -1.0);  // a tenth of g, tilted: the 2 kPa box would sag by its own height under g
   p.mass_kind = c.mass;
   if (c.motion == Motion::swing)
-    p.trajectory = std::make_shared<testing::SwingTrajectory>(p.num_nodes(), Eigen::Vector3d(0.06, 0.05, 0.0), Eigen::Vector3d(1.0, 0.3, 0.2),
-                                                              0.1, 2.0, Eigen::Vector3d(0.005, -0.01, 0.008), 1.0);
+    p.trajectory = std::make_shared<testing::SwingTrajectory>(p.num_nodes(), Eigen::Vector3d(0.06, 0.05, 0.0),
+                                                              Eigen::Vector3d(1.0, 0.3, 0.2), 0.1, 2.0,
+                                                              Eigen::Vector3d(0.005, -0.01, 0.008), 1.0);
   p.validate();
   return box;
 }
@@ -103,10 +106,11 @@ TEST_P(FullBasis, ReproducesTheDenseFullSpaceReference) {
   ReducedSolver reduced(p, s, all, tight_options(combination.integrator));
   testing::DenseReference reference(p, combination.integrator);
   const model::State start = model::initial_state(p, 0.0);
-  reduced.initialize(start);   // Newmark: p̈ in the subspace …
+  reduced.initialize(start);    // Newmark: p̈ in the subspace …
   reference.initialize(start);  // … and from model::initial_acceleration
   if (combination.integrator == model::Integrator::newmark) {
-    // With the full basis the subspace solve (JᵀMJ) q̈ = −∇E + JᵀM(g − ζ) is the full-space one: M_FF a_F = r_F − M_FC a_C.
+    // With the full basis the subspace solve (JᵀMJ) q̈ = −∇E + JᵀM(g − ζ) is the full-space one: M_FF a_F = r_F − M_FC
+    // a_C.
     const Eigen::VectorXd a = reduced.full_state().a;
     ASSERT_EQ(a.size(), p.num_dofs());
     EXPECT_LT((a - reference.state().a).cwiseAbs().maxCoeff(), 1e-9 * reference.state().a.cwiseAbs().maxCoeff());
@@ -234,9 +238,12 @@ TEST_P(NewmarkEnergy, SmallUndampedOscillationKeepsItsEnergyOverFiftyPeriods) {
   EXPECT_LT(std::abs(total() - e0) / e0, 5e-3);
 }
 
-std::string mass_name(const ::testing::TestParamInfo<model::MassKind>& info) { return std::string(model::to_string(info.param)); }
+std::string mass_name(const ::testing::TestParamInfo<model::MassKind>& info) {
+  return std::string(model::to_string(info.param));
+}
 
-INSTANTIATE_TEST_SUITE_P(Masses, NewmarkEnergy, ::testing::Values(model::MassKind::lumped, model::MassKind::consistent), mass_name);
+INSTANTIATE_TEST_SUITE_P(Masses, NewmarkEnergy, ::testing::Values(model::MassKind::lumped, model::MassKind::consistent),
+                         mass_name);
 
 // ---------------------------------------------------------------------------------------------------------
 // History bookkeeping.
@@ -254,10 +261,10 @@ TEST(ReducedIntegrators, Bdf2CountsItsStartUpSteps) {
   s.add_displacement(q0, start.x);
   reduced.initialize(start);
   const double h = 1.0 / 120.0;
-  EXPECT_EQ(reduced.step(h).startup_steps, 1);         // no previous step: backward Euler
+  EXPECT_EQ(reduced.step(h).startup_steps, 1);  // no previous step: backward Euler
   EXPECT_EQ(reduced.step(h).startup_steps, 0);
-  EXPECT_EQ(reduced.step(2.0 * h).startup_steps, 0);   // ω = 2: still zero-stable
-  EXPECT_EQ(reduced.step(6.0 * h).startup_steps, 1);   // ω = 3: restarts as backward Euler
+  EXPECT_EQ(reduced.step(2.0 * h).startup_steps, 0);  // ω = 2: still zero-stable
+  EXPECT_EQ(reduced.step(6.0 * h).startup_steps, 1);  // ω = 3: restarts as backward Euler
   EXPECT_EQ(reduced.step(6.0 * h).startup_steps, 0);
 }
 
@@ -274,7 +281,8 @@ TEST(ReducedIntegrators, AFailedStepLeavesTheHistoryUntouched) {
     p.validate();
     std::vector<char> attached = testing::attached_flags(c);
     for (int v : c.mesh.node_groups.at("zmax")) attached[static_cast<std::size_t>(v)] = 1;
-    const Eigen::MatrixXd W = handle_weights(p.rest, p.tets, testing::box_handle_sets(c), static_cast<int>(c.point_handles.size()));
+    const Eigen::MatrixXd W =
+        handle_weights(p.rest, p.tets, testing::box_handle_sets(c), static_cast<int>(c.point_handles.size()));
     const Subspace s = point_handle_subspace(W, attached, p.rest, c.point_handles, BasisOptions{});
     const Cubature all = exact_cubature(p.num_tets());
     ReducedOptions ro;
@@ -345,12 +353,14 @@ TEST_P(FullStateHandOver, ASecondSolverStartedFromTheFullStateContinuesTheFirst)
   // The accelerations and previous positions of nodes without basis functions are the prescribed motion's.
   if (integrator == model::Integrator::bdf2) {
     const model::State previous = model::initial_state(p, handed.t - h);
-    for (int v : c.attached) EXPECT_LT((handed.p_previous.segment<3>(3 * v) - previous.x.segment<3>(3 * v)).norm(), 1e-15);
+    for (int v : c.attached)
+      EXPECT_LT((handed.p_previous.segment<3>(3 * v) - previous.x.segment<3>(3 * v)).norm(), 1e-15);
   }
 }
 
 std::string hand_over_name(const ::testing::TestParamInfo<std::tuple<model::Integrator, model::MassKind>>& info) {
-  return std::string(model::to_string(std::get<0>(info.param))) + "_" + std::string(model::to_string(std::get<1>(info.param)));
+  return std::string(model::to_string(std::get<0>(info.param))) + "_" +
+         std::string(model::to_string(std::get<1>(info.param)));
 }
 
 INSTANTIATE_TEST_SUITE_P(IntegratorsAndMasses, FullStateHandOver,
@@ -364,21 +374,22 @@ TEST(ReducedIntegrators, AQuasiStaticRunIsTheSameForEveryIntegrator) {
   const Subspace s = testing::box_subspace(c);
   const Cubature all = exact_cubature(c.problem.num_tets());
   Eigen::VectorXd last_q;
-  for (model::Integrator integrator : {model::Integrator::backward_euler, model::Integrator::bdf2, model::Integrator::newmark}) {
+  for (model::Integrator integrator :
+       {model::Integrator::backward_euler, model::Integrator::bdf2, model::Integrator::newmark}) {
     ReducedOptions ro;
     ro.integrator = integrator;
     ro.quasi_static = true;
-    ro.step_tolerance = 1e-12;   // compared to 1e-9 below: solve far below the default 10 µm stopping distance
+    ro.step_tolerance = 1e-12;  // compared to 1e-9 below: solve far below the default 10 µm stopping distance
     ReducedSolver reduced(c.problem, s, all, ro);
     reduced.initialize(model::initial_state(c.problem, 0.0));
     for (int k = 0; k < 3; ++k) reduced.step(0.01);
     ASSERT_TRUE(reduced.q().allFinite());
     if (last_q.size()) {
-      EXPECT_LT((reduced.q() - last_q).cwiseAbs().maxCoeff(), 1e-9);   // the same equilibria under gravity
+      EXPECT_LT((reduced.q() - last_q).cwiseAbs().maxCoeff(), 1e-9);  // the same equilibria under gravity
     }
     last_q = reduced.q();
   }
-  EXPECT_GT(last_q.cwiseAbs().maxCoeff(), 1e-6);   // it sagged
+  EXPECT_GT(last_q.cwiseAbs().maxCoeff(), 1e-6);  // it sagged
 }
 
 TEST(ReducedIntegrators, BadInputIsRefusedWithOneLine) {
@@ -388,12 +399,12 @@ TEST(ReducedIntegrators, BadInputIsRefusedWithOneLine) {
   ReducedOptions ro;
   ro.integrator = model::Integrator::newmark;
   ReducedSolver reduced(c.problem, s, all, ro);
-  EXPECT_THROW(reduced.step(0.01), Error);   // no state yet
+  EXPECT_THROW(reduced.step(0.01), Error);  // no state yet
   model::State start = model::initial_state(c.problem, 0.0);
   start.a = Eigen::VectorXd::Zero(7);
-  EXPECT_THROW(reduced.initialize(start), Error);   // accelerations of the wrong size
+  EXPECT_THROW(reduced.initialize(start), Error);  // accelerations of the wrong size
   start.a = Eigen::VectorXd::Constant(c.problem.num_dofs(), std::numeric_limits<double>::quiet_NaN());
-  EXPECT_THROW(reduced.initialize(start), Error);   // not finite
+  EXPECT_THROW(reduced.initialize(start), Error);  // not finite
 }
 
 TEST(ReducedIntegrators, SensitivitiesRefuseBdf2AndNewmark) {

@@ -52,17 +52,21 @@ void check_derivatives(const ReducedTerm& term, const Eigen::VectorXd& q, bool e
     const double H_scale = std::max(H_fd.cwiseAbs().maxCoeff(), 1e-12);
     EXPECT_LE((H - H_fd).cwiseAbs().maxCoeff() / H_scale, kTolerance) << term.name() << ": Hessian";
   }
-  EXPECT_LE((H - H.transpose()).cwiseAbs().maxCoeff(), 1e-12 * std::max(1.0, H.cwiseAbs().maxCoeff())) << term.name() << ": Hessian not symmetric";
+  EXPECT_LE((H - H.transpose()).cwiseAbs().maxCoeff(), 1e-12 * std::max(1.0, H.cwiseAbs().maxCoeff()))
+      << term.name() << ": Hessian not symmetric";
 }
 
 /// A smooth penalty below the plane z = level on every listed node: u = k/3 (level − p_z)³ where p_z < level.
 class CubicFloor final : public model::NodePotential {
  public:
-  CubicFloor(std::vector<int> nodes, double level, double stiffness) : nodes_(std::move(nodes)), level_(level), k_(stiffness) {
+  CubicFloor(std::vector<int> nodes, double level, double stiffness)
+      : nodes_(std::move(nodes)), level_(level), k_(stiffness) {
     for (std::size_t c = 0; c < nodes_.size(); ++c) candidates_.push_back(static_cast<int>(c));
   }
   const std::vector<int>& nodes() const override { return nodes_; }
-  bool begin_substep(double, double, const meshing::RowMatrixX3d&, const meshing::RowMatrixX3d&) override { return true; }
+  bool begin_substep(double, double, const meshing::RowMatrixX3d&, const meshing::RowMatrixX3d&) override {
+    return true;
+  }
   const std::vector<int>& candidates() const override { return candidates_; }
   double evaluate(int, const Eigen::Vector3d& p, Eigen::Vector3d* gradient, Eigen::Matrix3d* hessian) const override {
     const double depth = std::max(0.0, level_ - p.z());
@@ -90,10 +94,11 @@ struct ReducedTermsFixture : ::testing::Test {
   void SetUp() override {
     model::Problem& p = box.problem;
     p.gravity = Eigen::Vector3d(0.3, -1.0, -9.81);
-    p.trajectory = std::make_shared<testing::SwingTrajectory>(p.num_nodes(), Eigen::Vector3d(0.06, 0.05, 0.0), Eigen::Vector3d(1.0, 0.3, 0.2),
-                                                              0.5, 2.0, Eigen::Vector3d(0.01, -0.02, 0.015), 5.0);
+    p.trajectory = std::make_shared<testing::SwingTrajectory>(p.num_nodes(), Eigen::Vector3d(0.06, 0.05, 0.0),
+                                                              Eigen::Vector3d(1.0, 0.3, 0.2), 0.5, 2.0,
+                                                              Eigen::Vector3d(0.01, -0.02, 0.015), 5.0);
     p.validate();
-    subspace = testing::box_subspace(box, true);   // affine handles: signed basis entries
+    subspace = testing::box_subspace(box, true);  // affine handles: signed basis entries
     // Every third tet with uneven weights (the cubature's ω enters as a factor per point).
     for (int e = 0; e < p.num_tets(); e += 3) {
       cubature.tets.push_back(e);
@@ -102,7 +107,9 @@ struct ReducedTermsFixture : ::testing::Test {
     cubature.method = "test";
     x_prescribed = Eigen::Map<const Eigen::VectorXd>(p.rest.data(), p.num_dofs());
   }
-  Eigen::VectorXd q(double amplitude, unsigned seed) const { return testing::random_q(subspace.num_dofs(), amplitude, seed); }
+  Eigen::VectorXd q(double amplitude, unsigned seed) const {
+    return testing::random_q(subspace.num_dofs(), amplitude, seed);
+  }
 };
 
 TEST_F(ReducedTermsFixture, ElasticExactHessianMatchesFiniteDifferences) {
@@ -130,7 +137,7 @@ TEST_F(ReducedTermsFixture, ElasticProjectedHessianIsPositiveSemiDefinite) {
 TEST_F(ReducedTermsFixture, ElasticValueIsInfiniteOutOfRange) {
   const CubatureElastic elastic(box.problem, subspace, cubature);
   ReducedElasticTerm term(elastic);
-  EXPECT_EQ(term.value(q(1.0, 5)), std::numeric_limits<double>::infinity());   // metre-sized handle moves on a 0.1 m box
+  EXPECT_EQ(term.value(q(1.0, 5)), std::numeric_limits<double>::infinity());  // metre-sized handle moves on a 0.1 m box
   Eigen::VectorXd g = Eigen::VectorXd::Zero(subspace.num_dofs());
   EXPECT_THROW(term.add_gradient(q(1.0, 5), g), Error);
 }
@@ -149,7 +156,8 @@ TEST_F(ReducedTermsFixture, InertiaLumpedAndConsistentMatchFiniteDifferencesAndT
     model::NodeFrame frame;
     p.frame(t, frame);
     const model::RowMatrixX3d skinned = model::posed_positions(frame, x_prescribed);
-    const Eigen::VectorXd p_tilde_all = Eigen::Map<const Eigen::VectorXd>(skinned.data(), skinned.size()) + testing::random_q(p.num_dofs(), 0.02, 7);
+    const Eigen::VectorXd p_tilde_all =
+        Eigen::Map<const Eigen::VectorXd>(skinned.data(), skinned.size()) + testing::random_q(p.num_dofs(), 0.02, 7);
     const double h_eff = 1.0 / 240.0;
     ReducedInertiaTerm term(inertia);
     term.set_step(gather_nodes(p_tilde_all, inertia.inertia_nodes()), h_eff);
@@ -181,7 +189,7 @@ TEST_F(ReducedTermsFixture, GravityMatchesFiniteDifferencesAndTheDefinition) {
   for (double amplitude : kAmplitudes) check_derivatives(term, q(amplitude, seed++));
   model::NodeFrame frame;
   p.frame(t, frame);
-  const auto definition = [&](const Eigen::VectorXd& coordinates) {   // −Σ_i m_i gᵀp_i
+  const auto definition = [&](const Eigen::VectorXd& coordinates) {  // −Σ_i m_i gᵀp_i
     Eigen::VectorXd x = x_prescribed;
     subspace.add_displacement(coordinates, x);
     const model::RowMatrixX3d posed = model::posed_positions(frame, x);
@@ -196,7 +204,7 @@ TEST_F(ReducedTermsFixture, GravityMatchesFiniteDifferencesAndTheDefinition) {
 TEST_F(ReducedTermsFixture, NodePotentialMatchesFiniteDifferences) {
   model::Problem& p = box.problem;
   const std::vector<int> active = subspace.active_nodes();
-  p.potentials.push_back(std::make_shared<CubicFloor>(active, 0.5, 1e6));   // every moving node below z = 0.5 m
+  p.potentials.push_back(std::make_shared<CubicFloor>(active, 0.5, 1e6));  // every moving node below z = 0.5 m
   ReducedInertia inertia(p, subspace);
   ReducedPotentials potentials(p, subspace, inertia.active_nodes());
   inertia.set_time(t, x_prescribed);
@@ -232,8 +240,8 @@ TEST(ReducedInertiaConsistent, JointPairsMatchTheNodeByNodeSumsOfASkinnedLayer) 
   p.validate();
   ReducedInertia inertia(p, model.subspace);
   ASSERT_EQ(inertia.mass_kind(), model::MassKind::consistent);
-  EXPECT_GT(inertia.inertia_nodes().size(), inertia.active_nodes().size());   // attached neighbours of the moving nodes
-  const double t1 = 0.37, t0 = 0.32, h = 1.0 / 60.0;   // between frames, hips rotating
+  EXPECT_GT(inertia.inertia_nodes().size(), inertia.active_nodes().size());  // attached neighbours of the moving nodes
+  const double t1 = 0.37, t0 = 0.32, h = 1.0 / 60.0;                         // between frames, hips rotating
   const Eigen::VectorXd x_d = Eigen::Map<const Eigen::VectorXd>(p.rest.data(), p.num_dofs());
   inertia.set_time(t1, x_d);
   Eigen::MatrixXd H, cross;
@@ -250,8 +258,10 @@ TEST(ReducedInertiaConsistent, JointPairsMatchTheNodeByNodeSumsOfASkinnedLayer) 
     if (model.subspace.basis.row(i).nonZeros() == 0) continue;
     for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator mi(M, i); mi; ++mi) {
       const auto j = static_cast<int>(mi.col());
-      const Eigen::Matrix3d G1 = mi.value() * f1.A[static_cast<std::size_t>(i)].transpose() * f1.A[static_cast<std::size_t>(j)];
-      const Eigen::Matrix3d G0 = mi.value() * f1.A[static_cast<std::size_t>(i)].transpose() * f0.A[static_cast<std::size_t>(j)];
+      const Eigen::Matrix3d G1 =
+          mi.value() * f1.A[static_cast<std::size_t>(i)].transpose() * f1.A[static_cast<std::size_t>(j)];
+      const Eigen::Matrix3d G0 =
+          mi.value() * f1.A[static_cast<std::size_t>(i)].transpose() * f0.A[static_cast<std::size_t>(j)];
       for (SparseRowMatrix::InnerIterator si(model.subspace.basis, i); si; ++si)
         for (SparseRowMatrix::InnerIterator rj(model.subspace.basis, j); rj; ++rj) {
           direct_h.block<3, 3>(3 * si.col(), 3 * rj.col()) += si.value() * rj.value() / (h * h) * G1;

@@ -33,7 +33,7 @@ model::BodyLayer coarse_layer(const body::Motion& motion) {
 /// Body-mesh edges (a < b) watched: those touching a rim vertex, and those within two rings of the skin
 /// vertex over each point handle.
 struct WatchedEdges {
-  std::vector<int> rim_vertices;                    ///< body vertex indices on the region's boundary curves
+  std::vector<int> rim_vertices;  ///< body vertex indices on the region's boundary curves
   std::vector<std::pair<int, int>> rim, handles;
 };
 
@@ -70,8 +70,10 @@ WatchedEdges watched_edges(const model::BodyLayer& layer, const BodyHandles& han
     for (int w : neighbours[static_cast<std::size_t>(v)]) near_handle[static_cast<std::size_t>(w)] = 1;
   }
   for (const auto& edge : all) {
-    if (on_rim[static_cast<std::size_t>(edge.first)] || on_rim[static_cast<std::size_t>(edge.second)]) out.rim.push_back(edge);
-    if (near_handle[static_cast<std::size_t>(edge.first)] || near_handle[static_cast<std::size_t>(edge.second)]) out.handles.push_back(edge);
+    if (on_rim[static_cast<std::size_t>(edge.first)] || on_rim[static_cast<std::size_t>(edge.second)])
+      out.rim.push_back(edge);
+    if (near_handle[static_cast<std::size_t>(edge.first)] || near_handle[static_cast<std::size_t>(edge.second)])
+      out.handles.push_back(edge);
   }
   return out;
 }
@@ -84,11 +86,13 @@ struct Worst {
 
   void add(const model::BodyLayer& layer, const WatchedEdges& edges, const Eigen::VectorXd& x, double t) {
     const model::RowMatrixX3d simulated = layer.posed_surface(x, t);
-    const model::RowMatrixX3d plain =
-        layer.posed_surface_from_displacement(model::RowMatrixX3d::Zero(layer.mesh->region_surface.num_vertices(), 3), t);
-    for (int v : edges.rim_vertices) rim_displacement = std::max(rim_displacement, (simulated.row(v) - plain.row(v)).norm());
+    const model::RowMatrixX3d plain = layer.posed_surface_from_displacement(
+        model::RowMatrixX3d::Zero(layer.mesh->region_surface.num_vertices(), 3), t);
+    for (int v : edges.rim_vertices)
+      rim_displacement = std::max(rim_displacement, (simulated.row(v) - plain.row(v)).norm());
     const auto stretch = [&](const std::pair<int, int>& e) {
-      return (simulated.row(e.first) - simulated.row(e.second)).norm() / (plain.row(e.first) - plain.row(e.second)).norm();
+      return (simulated.row(e.first) - simulated.row(e.second)).norm() /
+             (plain.row(e.first) - plain.row(e.second)).norm();
     };
     for (const auto& e : edges.rim) {
       rim_low = std::min(rim_low, stretch(e));
@@ -174,8 +178,8 @@ TEST(RimContinuity, ReducedModelHasNoKinkAtTheRimOrAtAnyHandle) {
   EXPECT_LT(worst.rim_high, 1.35);
   EXPECT_GT(worst.handle_low, 0.65);
   EXPECT_LT(worst.handle_high, 1.35);
-  std::printf("reduced: rim %.2e m, rim stretch [%.3f, %.3f], handle stretch [%.3f, %.3f]\n", worst.rim_displacement, worst.rim_low,
-              worst.rim_high, worst.handle_low, worst.handle_high);
+  std::printf("reduced: rim %.2e m, rim stretch [%.3f, %.3f], handle stretch [%.3f, %.3f]\n", worst.rim_displacement,
+              worst.rim_low, worst.rim_high, worst.handle_low, worst.handle_high);
 }
 
 TEST(RimContinuity, FullSpaceHasNoCollarAtTheRim) {
@@ -194,8 +198,8 @@ TEST(RimContinuity, FullSpaceHasNoCollarAtTheRim) {
   EXPECT_LT(worst.rim_high, 1.10);
   EXPECT_GT(worst.handle_low, 0.90);
   EXPECT_LT(worst.handle_high, 1.10);
-  std::printf("full space: rim %.2e m, rim stretch [%.3f, %.3f], handle stretch [%.3f, %.3f]\n", worst.rim_displacement, worst.rim_low,
-              worst.rim_high, worst.handle_low, worst.handle_high);
+  std::printf("full space: rim %.2e m, rim stretch [%.3f, %.3f], handle stretch [%.3f, %.3f]\n", worst.rim_displacement,
+              worst.rim_low, worst.rim_high, worst.handle_low, worst.handle_high);
 }
 
 }  // namespace

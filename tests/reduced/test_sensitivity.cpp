@@ -7,10 +7,10 @@
 
 #include <sflsh/body/body_io.hpp>
 #include <sflsh/body/motion.hpp>
-#include <sflsh/model/body_layer.hpp>
 #include <sflsh/fullspace/reference_integrator.hpp>
-#include <sflsh/model/simulation_output.hpp>
 #include <sflsh/material/layer_material.hpp>
+#include <sflsh/model/body_layer.hpp>
+#include <sflsh/model/simulation_output.hpp>
 #include <sflsh/reduced/dynamics_sensitivity.hpp>
 #include <sflsh/reduced/reduced_model.hpp>
 #include <sflsh/reduced/reduced_sensitivity.hpp>
@@ -30,7 +30,8 @@ namespace {
 // ---------------------------------------------------------------------------------------------------------
 // The stress derivative at one point.
 
-material::OrthotropicFung fung(double young_tangent, double young_normal, material::FungScale scale, const Eigen::Vector3d& n) {
+material::OrthotropicFung fung(double young_tangent, double young_normal, material::FungScale scale,
+                               const Eigen::Vector3d& n) {
   material::SkinMaterial m = testing::skin(young_tangent, young_normal);
   m.fung_scale = scale;
   return material::make_orthotropic_fung(m, n);
@@ -38,8 +39,8 @@ material::OrthotropicFung fung(double young_tangent, double young_normal, materi
 
 struct Regime {
   const char* name;
-  double stretch;   ///< scale of the diagonal of F
-  double shear;     ///< random off-diagonal amplitude
+  double stretch;  ///< scale of the diagonal of F
+  double shear;    ///< random off-diagonal amplitude
 };
 
 class YoungStressFd : public ::testing::TestWithParam<std::tuple<Regime, material::FungScale>> {};
@@ -55,7 +56,7 @@ TEST_P(YoungStressFd, AnalyticMatchesCentralDifferences) {
       for (int j = 0; j < 3; ++j) F(i, j) += regime.shear * u(rng);
     const double yt = 5000.0 * (1.0 + 0.5 * u(rng)), yn = 2000.0 * (1.0 + 0.5 * u(rng));
     const material::OrthotropicFung m = fung(yt, yn, scale, n);
-    EXPECT_NEAR(young_moduli(m)[0], yt, 1e-11 * yt);   // P_Y^4 round trip: a few ulps
+    EXPECT_NEAR(young_moduli(m)[0], yt, 1e-11 * yt);  // P_Y^4 round trip: a few ulps
     EXPECT_NEAR(young_moduli(m)[1], yn, 1e-11 * yn);
     const YoungStressDerivative d = d2psi_ortho_fung_dF_dyoung(F, m);
     // Central differences with a relative step of 1e-5: truncation (δ²/6)·∂³P/∂Y³ is ~1e-11 relative for
@@ -75,18 +76,19 @@ TEST_P(YoungStressFd, AnalyticMatchesCentralDifferences) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Regimes, YoungStressFd,
-                         ::testing::Combine(::testing::Values(Regime{"stretch", 1.2, 0.1}, Regime{"compression", 0.8, 0.1},
-                                                              Regime{"near_inversion", 0.2, 0.05}, Regime{"large_shear", 1.0, 0.4}),
-                                            ::testing::Values(material::FungScale::kTangentOverSaturation,
-                                                              material::FungScale::kTangentTimesSaturation, material::FungScale::kNone)),
-                         [](const ::testing::TestParamInfo<YoungStressFd::ParamType>& param) {
-                           const material::FungScale scale = std::get<1>(param.param);
-                           return std::string(std::get<0>(param.param).name) +
-                                  (scale == material::FungScale::kNone                   ? "_no_fung"
-                                   : scale == material::FungScale::kTangentTimesSaturation ? "_c_times_s"
-                                                                                           : "_c_over_s");
-                         });
+INSTANTIATE_TEST_SUITE_P(
+    Regimes, YoungStressFd,
+    ::testing::Combine(::testing::Values(Regime{"stretch", 1.2, 0.1}, Regime{"compression", 0.8, 0.1},
+                                         Regime{"near_inversion", 0.2, 0.05}, Regime{"large_shear", 1.0, 0.4}),
+                       ::testing::Values(material::FungScale::kTangentOverSaturation,
+                                         material::FungScale::kTangentTimesSaturation, material::FungScale::kNone)),
+    [](const ::testing::TestParamInfo<YoungStressFd::ParamType>& param) {
+      const material::FungScale scale = std::get<1>(param.param);
+      return std::string(std::get<0>(param.param).name) + (scale == material::FungScale::kNone ? "_no_fung"
+                                                           : scale == material::FungScale::kTangentTimesSaturation
+                                                               ? "_c_times_s"
+                                                               : "_c_over_s");
+    });
 
 // ---------------------------------------------------------------------------------------------------------
 // A box with a two-control material: Y of tet e = (1 − ξ_e) Y_0 + ξ_e Y_1, ξ_e its centroid's x / length.
@@ -126,7 +128,8 @@ Eigen::MatrixX2d box_control_young() {
 
 model::ScalarDrive shake(double amplitude, double frequency) {
   const double w = 2.0 * M_PI * frequency;
-  return {[=](double t) { return amplitude * std::sin(w * t); }, [=](double t) { return amplitude * w * std::cos(w * t); }};
+  return {[=](double t) { return amplitude * std::sin(w * t); },
+          [=](double t) { return amplitude * w * std::cos(w * t); }};
 }
 
 TEST(YoungSensitivity, ElementForceDerivativeMatchesCentralDifferences) {
@@ -137,7 +140,7 @@ TEST(YoungSensitivity, ElementForceDerivativeMatchesCentralDifferences) {
   co.count = 40;
   const Cubature cub = select_cubature(c.problem, s, co);
   SensitivityIntegrator integrator(c.problem, s, cub, box_young_map(c.problem, cub.tets));
-  CubatureElastic elastic(c.problem, s, cub);   // reads the problem's materials at every evaluation
+  CubatureElastic elastic(c.problem, s, cub);  // reads the problem's materials at every evaluation
   for (double amplitude : {1e-3, 1e-2}) {
     const Eigen::VectorXd q = testing::random_q(s.num_dofs(), amplitude, 11);
     const Eigen::MatrixXd analytic = integrator.elastic_gradient_dyoung(q);
@@ -158,7 +161,8 @@ TEST(YoungSensitivity, ElementForceDerivativeMatchesCentralDifferences) {
       // Same budget as the point test (relative step 1e-5: truncation and round-off ~1e-11 relative); the
       // sum over cubature points is linear, so it adds nothing but the round-off of the sum.
       ASSERT_GT(fd.norm(), 0.0);
-      EXPECT_LE((analytic.col(column) - fd).norm(), 1e-6 * fd.norm()) << "column " << column << ", amplitude " << amplitude;
+      EXPECT_LE((analytic.col(column) - fd).norm(), 1e-6 * fd.norm())
+          << "column " << column << ", amplitude " << amplitude;
     }
   }
 }
@@ -180,7 +184,8 @@ model::BodyLayerOptions coarse_layer_options() {
 
 TEST(YoungSensitivity, CrossMassMatchesTheNodeByNodeSum) {
   const body::Motion motion = body::make_procedural_motion("shake_hips", 60.0, 30);
-  const model::BodyLayer layer = model::build_body_layer(open_body(), body::Betas::Zero(), motion, nullptr, 6, coarse_layer_options());
+  const model::BodyLayer layer =
+      model::build_body_layer(open_body(), body::Betas::Zero(), motion, nullptr, 6, coarse_layer_options());
   ReducedModelOptions ro;
   ro.point_handles = 12;
   ro.cache_dir = SFLSH_TEST_CACHE;
@@ -218,7 +223,8 @@ TEST(YoungSensitivity, CrossMassMatchesTheNodeByNodeSum) {
 
 TEST(YoungMap, MatchesTheLayerMaterialFieldsOnRandomKappa) {
   const body::Motion motion = body::make_procedural_motion("shake_hips", 60.0, 4);
-  const model::BodyLayer layer = model::build_body_layer(open_body(), body::Betas::Zero(), motion, nullptr, 6, coarse_layer_options());
+  const model::BodyLayer layer =
+      model::build_body_layer(open_body(), body::Betas::Zero(), motion, nullptr, 6, coarse_layer_options());
   const LayerYoungMap map(layer);
   ASSERT_EQ(map.num_controls(), 6);
   const std::vector<int> tets = all_tets(layer.problem);
@@ -242,7 +248,8 @@ TEST(YoungMap, MatchesTheLayerMaterialFieldsOnRandomKappa) {
       young(i, 0) = kappa(i, material::kYoungTangent) = std::exp(log_young(rng));
       young(i, 1) = kappa(i, material::kYoungNormal) = std::exp(log_young(rng));
     }
-    const material::LayerMaterialFields fields = material::layer_material_fields(map.retargeter(), map.basis(), kappa, layer.layer.nodes);
+    const material::LayerMaterialFields fields =
+        material::layer_material_fields(map.retargeter(), map.basis(), kappa, layer.layer.nodes);
     const Eigen::MatrixX2d mapped = W * young;
     for (int k = 0; k < 2; ++k) {
       const Eigen::VectorXd reference = fields.tet.col(1 + k);
@@ -251,14 +258,16 @@ TEST(YoungMap, MatchesTheLayerMaterialFieldsOnRandomKappa) {
   }
   // The stiffness scale multiplies W.
   const LayerYoungMap scaled(layer, 2.5);
-  EXPECT_LE((scaled.tet_map({0, 7, 19}) - 2.5 * map.tet_map({0, 7, 19})).cwiseAbs().maxCoeff(), 1e-15 * W.cwiseAbs().maxCoeff() * 2.5);
+  EXPECT_LE((scaled.tet_map({0, 7, 19}) - 2.5 * map.tet_map({0, 7, 19})).cwiseAbs().maxCoeff(),
+            1e-15 * W.cwiseAbs().maxCoeff() * 2.5);
 }
 
 // ---------------------------------------------------------------------------------------------------------
 // Whole trajectories against finite differences of complete simulations.
 
 /// The relative disagreement over a trajectory: max_f ‖a_f − b_f‖ / max_f ‖b_f‖ for one column.
-double trajectory_error(const std::vector<Eigen::MatrixXd>& analytic, int column, const std::vector<Eigen::VectorXd>& fd) {
+double trajectory_error(const std::vector<Eigen::MatrixXd>& analytic, int column,
+                        const std::vector<Eigen::VectorXd>& fd) {
   double error = 0.0, scale = 0.0;
   for (std::size_t f = 0; f < fd.size(); ++f) {
     error = std::max(error, (analytic[f].col(column) - fd[f]).norm());
@@ -267,8 +276,8 @@ double trajectory_error(const std::vector<Eigen::MatrixXd>& analytic, int column
   return scale > 0.0 ? error / scale : std::numeric_limits<double>::infinity();
 }
 
-std::vector<Eigen::VectorXd> plain_run(const model::Problem& p, const Subspace& s, const Cubature& cub, const model::State& start,
-                                       double h, int frames) {
+std::vector<Eigen::VectorXd> plain_run(const model::Problem& p, const Subspace& s, const Cubature& cub,
+                                       const model::State& start, double h, int frames) {
   ReducedSolver integrator(p, s, cub, sensitivity_solver_options());
   integrator.initialize(start);
   std::vector<Eigen::VectorXd> q{integrator.q()};
@@ -279,8 +288,8 @@ std::vector<Eigen::VectorXd> plain_run(const model::Problem& p, const Subspace& 
   return q;
 }
 
-std::vector<Eigen::VectorXd> central_difference(const std::vector<Eigen::VectorXd>& plus, const std::vector<Eigen::VectorXd>& minus,
-                                                double delta) {
+std::vector<Eigen::VectorXd> central_difference(const std::vector<Eigen::VectorXd>& plus,
+                                                const std::vector<Eigen::VectorXd>& minus, double delta) {
   std::vector<Eigen::VectorXd> out;
   for (std::size_t f = 0; f < plus.size(); ++f) out.push_back((plus[f] - minus[f]) / (2 * delta));
   return out;
@@ -306,9 +315,10 @@ TEST(YoungSensitivity, BoxTrajectoryMatchesFiniteDifferencesOfCompleteSimulation
   const model::State start = model::initial_state(c.problem, 0.0);
   const double h = 1.0 / 60.0;
   const int frames = 20;
-  const SensitivityResult result = simulate_with_sensitivities(c.problem, s, cub, box_young_map(c.problem, cub.tets), start, h, frames);
+  const SensitivityResult result =
+      simulate_with_sensitivities(c.problem, s, cub, box_young_map(c.problem, cub.tets), start, h, frames);
   ASSERT_EQ(result.dq_dyoung.size(), static_cast<std::size_t>(frames + 1));
-  EXPECT_EQ(result.dq_dyoung[0].cwiseAbs().maxCoeff(), 0.0);   // the initial state does not depend on Y
+  EXPECT_EQ(result.dq_dyoung[0].cwiseAbs().maxCoeff(), 0.0);  // the initial state does not depend on Y
   for (int column = 0; column < 4; ++column) {
     const int control = column % 2, modulus = column / 2;
     const double delta = 1e-4 * base(control, modulus);
@@ -340,7 +350,8 @@ TEST(YoungSensitivity, ConsistentMassTrajectoryMatchesFiniteDifferences) {
   const model::State start = model::initial_state(c.problem, 0.0);
   const double h = 1.0 / 60.0;
   const int frames = 20;
-  const SensitivityResult result = simulate_with_sensitivities(c.problem, s, cub, box_young_map(c.problem, cub.tets), start, h, frames);
+  const SensitivityResult result =
+      simulate_with_sensitivities(c.problem, s, cub, box_young_map(c.problem, cub.tets), start, h, frames);
   for (int column : {0, 3}) {
     const int control = column % 2, modulus = column / 2;
     const double delta = 1e-4 * base(control, modulus);
@@ -368,7 +379,8 @@ TEST(YoungSensitivity, VariableStepTrajectoryMatchesFiniteDifferences) {
   const Subspace s = testing::box_subspace(c);
   const Cubature cub = exact_cubature(c.problem.num_tets());
   const model::State start = model::initial_state(c.problem, 0.0);
-  const std::vector<double> steps{1.0 / 60, 1.0 / 120, 1.0 / 120, 1.0 / 40, 1.0 / 90, 1.0 / 60, 1.0 / 30, 1.0 / 240, 1.0 / 60, 1.0 / 60};
+  const std::vector<double> steps{1.0 / 60, 1.0 / 120, 1.0 / 120, 1.0 / 40, 1.0 / 90,
+                                  1.0 / 60, 1.0 / 30,  1.0 / 240, 1.0 / 60, 1.0 / 60};
   SensitivityIntegrator integrator(c.problem, s, cub, box_young_map(c.problem, cub.tets));
   integrator.initialize(start);
   std::vector<Eigen::MatrixXd> analytic{integrator.dq_dyoung()};
@@ -395,22 +407,23 @@ TEST(YoungSensitivity, VariableStepTrajectoryMatchesFiniteDifferences) {
     plus(control, modulus) += delta;
     minus(control, modulus) -= delta;
     const auto fd = central_difference(run(plus), run(minus), delta);
-    EXPECT_LE(trajectory_error(analytic, column, fd), kTrajectoryTolerance) << "column " << column;   // budget as above
+    EXPECT_LE(trajectory_error(analytic, column, fd), kTrajectoryTolerance) << "column " << column;  // budget as above
   }
 }
 
 TEST(YoungSensitivity, BodyLayerTrajectoryMatchesFiniteDifferencesOfCompleteSimulations) {
   const int frames = 20;
   const body::Motion motion = body::make_procedural_motion("jiggle_on_toes", 60.0, frames + 2);
-  const model::BodyLayer layer = model::build_body_layer(open_body(), body::Betas::Zero(), motion, nullptr, 6, coarse_layer_options());
+  const model::BodyLayer layer =
+      model::build_body_layer(open_body(), body::Betas::Zero(), motion, nullptr, 6, coarse_layer_options());
   ReducedModelOptions ro;
   ro.cache_dir = SFLSH_TEST_CACHE;
   const ReducedModel model = build_reduced_model(layer, ro);
   const LayerYoungMap map(layer);
   const model::State start = model::initial_state(layer.problem, 0.0);
   const double h = 1.0 / 60.0;
-  const SensitivityResult result =
-      simulate_with_sensitivities(layer.problem, model.subspace, model.cubature, map.tet_map(model.cubature.tets), start, h, frames);
+  const SensitivityResult result = simulate_with_sensitivities(layer.problem, model.subspace, model.cubature,
+                                                               map.tet_map(model.cubature.tets), start, h, frames);
   const int N = map.num_controls();
   const Eigen::MatrixX2d base = map.control_young();
   model::Problem perturbed = layer.problem;
@@ -418,7 +431,8 @@ TEST(YoungSensitivity, BodyLayerTrajectoryMatchesFiniteDifferencesOfCompleteSimu
   const SkinDisplacementMap skin(layer, model.subspace);
   const meshing::RowMatrixX3d all_normals = model::vertex_normals(layer.shaped, open_body().faces);
   meshing::RowMatrixX3d normals(layer.mesh->region_surface.num_vertices(), 3);
-  for (Eigen::Index r = 0; r < normals.rows(); ++r) normals.row(r) = all_normals.row(layer.mesh->region_surface.vertices[static_cast<std::size_t>(r)]);
+  for (Eigen::Index r = 0; r < normals.rows(); ++r)
+    normals.row(r) = all_normals.row(layer.mesh->region_surface.vertices[static_cast<std::size_t>(r)]);
   DynamicsAmplitudeSensitivity dynamics(normals, 2 * N);
   for (std::size_t f = 0; f < result.q.size(); ++f)
     dynamics.add(skin.displacement(result.q[f], result.t[f]), skin.derivative(result.dq_dyoung[f]));
@@ -432,7 +446,7 @@ TEST(YoungSensitivity, BodyLayerTrajectoryMatchesFiniteDifferencesOfCompleteSimu
   {
     model::DynamicsAmplitude amplitude(normals);
     for (std::size_t f = 0; f < result.q.size(); ++f) amplitude.add(skin.displacement(result.q[f], result.t[f]));
-    EXPECT_LE((amplitude.sigma_normal() - dynamics.sigma_normal()).cwiseAbs().maxCoeff(), 1e-12);   // same sums [m]
+    EXPECT_LE((amplitude.sigma_normal() - dynamics.sigma_normal()).cwiseAbs().maxCoeff(), 1e-12);  // same sums [m]
     EXPECT_LE((amplitude.sigma_tangent() - dynamics.sigma_tangent()).cwiseAbs().maxCoeff(), 1e-12);
   }
   Eigen::MatrixXd dsigma(2 * normals.rows(), 2 * N);
@@ -459,7 +473,7 @@ TEST(YoungSensitivity, BodyLayerTrajectoryMatchesFiniteDifferencesOfCompleteSimu
   }
   // The skin map: du/dY = (K B ⊗ I₃) dq/dY, and u itself is BodyLayer::surface_displacement.
   const Eigen::MatrixXd du = skin.derivative(result.dq_dyoung.back());
-  const double eps = 1e-3;   // u is linear in q: any step gives the exact derivative up to round-off
+  const double eps = 1e-3;  // u is linear in q: any step gives the exact derivative up to round-off
   const Eigen::VectorXd dq = result.dq_dyoung.back().col(0);
   const meshing::RowMatrixX3d u0 = skin.displacement(result.q.back(), result.t.back());
   const meshing::RowMatrixX3d u1 = skin.displacement(result.q.back() + eps * dq / dq.norm(), result.t.back());
@@ -475,13 +489,16 @@ TEST(YoungSensitivity, AnIndefiniteOrNonFiniteSystemIsReportedNotSolved) {
   Eigen::MatrixXd H = Eigen::MatrixXd::Identity(3, 3);
   H(2, 2) = -1.0;
   const Eigen::MatrixXd rhs = Eigen::MatrixXd::Ones(3, 2);
-  EXPECT_NE(sflsh::testing::error_of([&] { solve_step_sensitivity(H, rhs, 0.5); }).find("not positive definite"), std::string::npos);
-  H(2, 2) = 0.0;   // singular: no strict minimum either
-  EXPECT_NE(sflsh::testing::error_of([&] { solve_step_sensitivity(H, rhs, 0.5); }).find("not positive definite"), std::string::npos);
+  EXPECT_NE(sflsh::testing::error_of([&] { solve_step_sensitivity(H, rhs, 0.5); }).find("not positive definite"),
+            std::string::npos);
+  H(2, 2) = 0.0;  // singular: no strict minimum either
+  EXPECT_NE(sflsh::testing::error_of([&] { solve_step_sensitivity(H, rhs, 0.5); }).find("not positive definite"),
+            std::string::npos);
   H(2, 2) = 1.0;
   Eigen::MatrixXd bad = rhs;
   bad(1, 1) = std::numeric_limits<double>::quiet_NaN();
-  EXPECT_NE(sflsh::testing::error_of([&] { solve_step_sensitivity(H, bad, 0.5); }).find("non-finite"), std::string::npos);
+  EXPECT_NE(sflsh::testing::error_of([&] { solve_step_sensitivity(H, bad, 0.5); }).find("non-finite"),
+            std::string::npos);
   EXPECT_EQ(solve_step_sensitivity(H, rhs, 0.5), rhs);
 }
 
@@ -491,10 +508,12 @@ TEST(YoungSensitivity, ABadMapOrAMissingInitializationIsRefused) {
   const Subspace s = testing::box_subspace(c);
   const Cubature cub = exact_cubature(c.problem.num_tets());
   const Eigen::MatrixXd W = box_young_map(c.problem, cub.tets);
-  EXPECT_NE(sflsh::testing::error_of([&] { SensitivityIntegrator(c.problem, s, cub, W.topRows(3)); }).find("rows"), std::string::npos);
+  EXPECT_NE(sflsh::testing::error_of([&] { SensitivityIntegrator(c.problem, s, cub, W.topRows(3)); }).find("rows"),
+            std::string::npos);
   Eigen::MatrixXd nan_map = W;
   nan_map(0, 0) = std::numeric_limits<double>::quiet_NaN();
-  EXPECT_NE(sflsh::testing::error_of([&] { SensitivityIntegrator(c.problem, s, cub, nan_map); }).find("finite"), std::string::npos);
+  EXPECT_NE(sflsh::testing::error_of([&] { SensitivityIntegrator(c.problem, s, cub, nan_map); }).find("finite"),
+            std::string::npos);
   SensitivityIntegrator integrator(c.problem, s, cub, W);
   EXPECT_NE(sflsh::testing::error_of([&] { integrator.step(1.0 / 60.0); }).find("initialize"), std::string::npos);
   integrator.initialize(model::initial_state(c.problem, 0.0));

@@ -2,15 +2,14 @@
 // metric Q_i and the regularizer matrix L.
 #include <sflsh/body/body_io.hpp>
 #include <sflsh/core/error.hpp>
-#include <sflsh/model/body_layer.hpp>
 #include <sflsh/material/layer_material.hpp>
 #include <sflsh/material/surface_operators.hpp>
+#include <sflsh/model/body_layer.hpp>
 #include <sflsh/reduced/layer_parameterization.hpp>
 #include <sflsh/reduced/shape_elasticity.hpp>
 
-#include <gtest/gtest.h>
-
 #include <Eigen/Eigenvalues>
+#include <gtest/gtest.h>
 
 #include <random>
 
@@ -39,8 +38,8 @@ const model::BodyLayer& coarse_layer() {
     model::BodyLayerOptions options;
     options.size = meshing::SizePreset::coarse;
     options.cache_dir = SFLSH_TEST_CACHE;
-    return model::build_body_layer(open_body(), body::Betas::Zero(), body::make_procedural_motion("shake_hips", 60.0, 3),
-                                       nullptr, 1, options);
+    return model::build_body_layer(open_body(), body::Betas::Zero(),
+                                   body::make_procedural_motion("shake_hips", 60.0, 3), nullptr, 1, options);
   }();
   return layer;
 }
@@ -70,7 +69,7 @@ TEST(ShapeElasticity, PackUnpackAndLinearModel) {
 TEST(ShapeElasticity, L2RegularizerIsTheFrobeniusNorm) {
   const int N = 4;
   const ShapeElasticity s = random_model(N, 2);
-  const Eigen::SparseMatrix<double> L = regularizer_matrix({}, N);   // Q = I
+  const Eigen::SparseMatrix<double> L = regularizer_matrix({}, N);  // Q = I
   double expected = 0.0;
   for (const ShapeMatrix& a : s.A) expected += (a.transpose() * a).trace();
   EXPECT_NEAR((L * s.pack()).squaredNorm(), expected / N, 1e-14);
@@ -84,7 +83,8 @@ TEST(ShapeElasticity, LocalMetricIsSymmetricPositiveDefiniteAndGivesTheTrace) {
   const model::BodyLayer& layer = coarse_layer();
   const LayerParameterization param(layer, 12);
   const meshing::LayerMesh& mesh = *layer.mesh;
-  const Eigen::VectorXd area = material::lumped_mass(material::region_positions(open_body(), mesh), mesh.region_surface.faces);
+  const Eigen::VectorXd area =
+      material::lumped_mass(material::region_positions(open_body(), mesh), mesh.region_surface.faces);
   const std::vector<ShapeMetric> Q = local_shape_metric(open_body(), mesh.region_surface.vertices, area, param.phi());
   ASSERT_EQ(Q.size(), 12u);
   double trace_sum = 0.0;
@@ -94,12 +94,14 @@ TEST(ShapeElasticity, LocalMetricIsSymmetricPositiveDefiniteAndGivesTheTrace) {
     EXPECT_GT(eig.eigenvalues().minCoeff(), 0.0);
     trace_sum += q.trace();
   }
-  EXPECT_NEAR(trace_sum / (10.0 * 12.0), 1.0, 1e-12);   // the common scale (shape_elasticity.hpp)
+  EXPECT_NEAR(trace_sum / (10.0 * 12.0), 1.0, 1e-12);  // the common scale (shape_elasticity.hpp)
   // ‖L p‖² = (1/N) Σ tr(A_iᵀ Q_i A_i) (eq. 7).
   const ShapeElasticity s = random_model(12, 3);
   double expected = 0.0;
   for (int i = 0; i < 12; ++i)
-    expected += (s.A[static_cast<std::size_t>(i)].transpose() * Q[static_cast<std::size_t>(i)] * s.A[static_cast<std::size_t>(i)]).trace();
+    expected += (s.A[static_cast<std::size_t>(i)].transpose() * Q[static_cast<std::size_t>(i)] *
+                 s.A[static_cast<std::size_t>(i)])
+                    .trace();
   EXPECT_NEAR((regularizer_matrix(Q, 12) * s.pack()).squaredNorm(), expected / 12.0, 1e-10 * expected);
   // Directions of β that barely change the local shape cost more than the ones that change it a lot:
   // the metrics differ between control points (they are local), unlike L².
@@ -112,7 +114,9 @@ TEST(ShapeElasticity, ControlValuesTransferBetweenNestedSets) {
   const model::BodyLayer& layer = coarse_layer();
   const LayerParameterization small(layer, 4), large(layer, 12);
   // Nested: the first 4 of the 12 are the 4, and a field given on the 4 is kept at those points.
-  for (int i = 0; i < 4; ++i) EXPECT_EQ(small.control_vertices()[static_cast<std::size_t>(i)], large.control_vertices()[static_cast<std::size_t>(i)]);
+  for (int i = 0; i < 4; ++i)
+    EXPECT_EQ(small.control_vertices()[static_cast<std::size_t>(i)],
+              large.control_vertices()[static_cast<std::size_t>(i)]);
   Eigen::MatrixXd values(4, 2);
   values << 1, 10, 2, 20, 3, 30, 4, 40;
   const Eigen::MatrixXd t = transfer_control_values(small, large, values);

@@ -1,15 +1,15 @@
 // Shape-model files (save → load round trip, file:line errors) and the material of a subject of shape β
 // (material_for_beta): constant models, clamping, the checks of material files, and build_body_layer.
+#include "error_of.hpp"
+#include "scratch_dir.hpp"
+#include "synthetic_body.hpp"
+
 #include <sflsh/body/body_io.hpp>
 #include <sflsh/body/motion.hpp>
 #include <sflsh/model/body_layer.hpp>
 #include <sflsh/reduced/shape_model_file.hpp>
 
 #include <gtest/gtest.h>
-
-#include "error_of.hpp"
-#include "scratch_dir.hpp"
-#include "synthetic_body.hpp"
 
 #include <fstream>
 #include <random>
@@ -63,7 +63,8 @@ TEST(ShapeModelFile, RoundTripGivesIdenticalKappaOfEveryBeta) {
   EXPECT_EQ(loaded.fit->subjects, (std::vector<std::string>{"A", "B"}));
   EXPECT_EQ(loaded.fit->motions, std::vector<std::string>{"shake_hips"});
   EXPECT_EQ(loaded.vertices(), model.vertices());
-  for (int i = 0; i < model.num_controls(); ++i) EXPECT_EQ(*loaded.control_points[i].position, *model.control_points[i].position);
+  for (int i = 0; i < model.num_controls(); ++i)
+    EXPECT_EQ(*loaded.control_points[i].position, *model.control_points[i].position);
   // Shortest round-trip decimals: bit-identical coefficients, hence bit-identical κ̂(β).
   for (unsigned seed = 0; seed < 5; ++seed) {
     const body::Betas beta = random_beta(seed);
@@ -143,7 +144,7 @@ TEST(MaterialForBeta, ConstantModelGivesTheConstantMaterial) {
 TEST(MaterialForBeta, ClampsIntoTheBoundsAndPassesTheMaterialChecks) {
   const body::BodyModel body = sflsh::testing::synthetic_body();
   ShapeModelFile model = random_model(body);
-  for (ShapeModelControlPoint& p : model.control_points) p.A *= 10.0;   // |A| up to 0.5: far outside for β ~ 3
+  for (ShapeModelControlPoint& p : model.control_points) p.A *= 10.0;  // |A| up to 0.5: far outside for β ~ 3
   const material::MaterialFile m = material_for_beta(model, body, 3.0 * random_beta(2));
   EXPECT_EQ(m.subject, "beta");
   EXPECT_EQ(m.poisson, 0.25);
@@ -151,12 +152,13 @@ TEST(MaterialForBeta, ClampsIntoTheBoundsAndPassesTheMaterialChecks) {
   EXPECT_NO_THROW(material::check_against_body(m, body.v_template));
   const material::KappaMatrix k = m.kappa();
   EXPECT_TRUE(((k.rowwise() - m.bounds.minimum()).array() == 0.0).any() ||
-              ((k.rowwise() - m.bounds.maximum()).array() == 0.0).any());   // some entry was clamped
+              ((k.rowwise() - m.bounds.maximum()).array() == 0.0).any());  // some entry was clamped
   body::BodyModel other = body;
   other.name = "other";
-  EXPECT_NE(error_of([&] { material_for_beta(model, other, body::Betas::Zero()); }).find("the run uses body 'other'"), std::string::npos);
+  EXPECT_NE(error_of([&] { material_for_beta(model, other, body::Betas::Zero()); }).find("the run uses body 'other'"),
+            std::string::npos);
   other = body;
-  other.v_template.row(10).x() += 0.01;   // control point #1 sits elsewhere on this body
+  other.v_template.row(10).x() += 0.01;  // control point #1 sits elsewhere on this body
   EXPECT_NE(error_of([&] { material_for_beta(model, other, body::Betas::Zero()); }).find("control_point #1"),
             std::string::npos);
 }
@@ -169,16 +171,17 @@ TEST(MaterialForBeta, BuildBodyLayerAcceptsTheMaterial) {
   const body::Motion motion = body::make_procedural_motion("dance", 30.0, 2);
   const model::BodyLayer base = model::build_body_layer(body, body::Betas::Zero(), motion, nullptr, 4, options);
   material::ParameterBounds bounds;
-  bounds.thickness.max = 0.6;   // what the coarse mesh retargets validly (validate's default)
+  bounds.thickness.max = 0.6;  // what the coarse mesh retargets validly (validate's default)
   ShapeElasticity s = ShapeElasticity::constant(material::normalize(base.material.kappa(), bounds));
-  for (ShapeMatrix& a : s.A) a(0, 0) = 0.02;   // thickness grows a little with β_1
+  for (ShapeMatrix& a : s.A) a(0, 0) = 0.02;  // thickness grows a little with β_1
   const ShapeModelFile model = make_shape_model_file(s, body, base.material.vertices(), bounds);
   body::Betas beta = body::Betas::Zero();
   beta[0] = 1.5;
   const material::MaterialFile m = material_for_beta(model, body, beta, "crowd_0");
   const model::BodyLayer layer = model::build_body_layer(body, beta, motion, &m, 0, options);
   EXPECT_EQ(layer.material.kappa(), m.kappa());
-  EXPECT_NEAR(m.kappa()(0, material::kThickness), base.material.kappa()(0, material::kThickness) + 0.02 * 1.5 * 0.6, 1e-12);
+  EXPECT_NEAR(m.kappa()(0, material::kThickness), base.material.kappa()(0, material::kThickness) + 0.02 * 1.5 * 0.6,
+              1e-12);
 }
 
 TEST(ShapeModelFile, ShippedDefaultLoadsAndGivesMaterials) {

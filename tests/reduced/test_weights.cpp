@@ -18,7 +18,8 @@ TEST(Weights, LinearlyPreciseLaplacianAnnihilatesAffineFunctions) {
   const auto c = box_case({3, 3, 2});
   const SparseMatrixd K = linearly_precise_laplacian(c.problem.rest, c.problem.tets);
   const Eigen::VectorXd one = Eigen::VectorXd::Ones(c.problem.num_nodes());
-  const Eigen::VectorXd affine = 0.3 * one + 2.0 * c.problem.rest.col(0) - 1.5 * c.problem.rest.col(1) + 0.7 * c.problem.rest.col(2);
+  const Eigen::VectorXd affine =
+      0.3 * one + 2.0 * c.problem.rest.col(0) - 1.5 * c.problem.rest.col(1) + 0.7 * c.problem.rest.col(2);
   // Round-off only: entries of K are V|∇φ|² ~ 1e-3, so 1e-12 is ~1e-9 relative.
   EXPECT_LT((K * one).cwiseAbs().maxCoeff(), 1e-12);
   EXPECT_LT((K * affine).cwiseAbs().maxCoeff(), 1e-12);
@@ -35,11 +36,12 @@ TEST(Weights, AffineConstraintValuesAreReproducedEverywhere) {
   constrained.insert(constrained.end(), c.point_handles.begin(), c.point_handles.end());
   const auto f = [](const Eigen::RowVector3d& x) { return 0.2 + 3.0 * x[0] - x[1] + 5.0 * x[2]; };
   Eigen::VectorXd values(static_cast<Eigen::Index>(constrained.size()));
-  for (std::size_t k = 0; k < constrained.size(); ++k) values[static_cast<Eigen::Index>(k)] = f(c.problem.rest.row(constrained[k]));
+  for (std::size_t k = 0; k < constrained.size(); ++k)
+    values[static_cast<Eigen::Index>(k)] = f(c.problem.rest.row(constrained[k]));
   const Eigen::VectorXd w = biharmonic_interpolate(c.problem.rest, c.problem.tets, constrained, values);
   double worst = 0.0;
   for (int i = 0; i < c.problem.num_nodes(); ++i) worst = std::max(worst, std::abs(w[i] - f(c.problem.rest.row(i))));
-  EXPECT_LT(worst, 1e-9);   // values ~0.5; a sparse direct solve: round-off amplified by the condition number
+  EXPECT_LT(worst, 1e-9);  // values ~0.5; a sparse direct solve: round-off amplified by the condition number
 }
 
 TEST(Weights, InterpolateAtHandlesAndSumToOne) {
@@ -91,7 +93,8 @@ TEST(Weights, BadHandleSetsAreRejected) {
 
 TEST(Subspace, TruncationKeepsTheLargestInfluencesAndZeroRowsOnAttachedNodes) {
   const auto c = box_case();
-  const Eigen::MatrixXd W = handle_weights(c.problem.rest, c.problem.tets, box_handle_sets(c), static_cast<int>(c.point_handles.size()));
+  const Eigen::MatrixXd W =
+      handle_weights(c.problem.rest, c.problem.tets, box_handle_sets(c), static_cast<int>(c.point_handles.size()));
   BasisOptions options;
   options.max_influences = 2;
   options.drop_below = 0.05;
@@ -106,7 +109,8 @@ TEST(Subspace, TruncationKeepsTheLargestInfluencesAndZeroRowsOnAttachedNodes) {
   }
   for (int v : c.attached) EXPECT_EQ(s.basis.row(v).nonZeros(), 0);
   // The handle itself keeps its own weight 1.
-  for (std::size_t j = 0; j < c.point_handles.size(); ++j) EXPECT_EQ(s.basis.coeff(c.point_handles[j], static_cast<Eigen::Index>(j)), 1.0);
+  for (std::size_t j = 0; j < c.point_handles.size(); ++j)
+    EXPECT_EQ(s.basis.coeff(c.point_handles[j], static_cast<Eigen::Index>(j)), 1.0);
 }
 
 TEST(Subspace, AffineHandlesReproduceARigidTranslationAndALinearField) {
@@ -115,7 +119,8 @@ TEST(Subspace, AffineHandlesReproduceARigidTranslationAndALinearField) {
   ASSERT_EQ(s.num_functions(), 4 * static_cast<int>(c.point_handles.size()));
   // Every handle translating by t: u = (Σ_j w_j) t, the point weights' share of a translation.
   Eigen::VectorXd q = Eigen::VectorXd::Zero(s.num_dofs());
-  for (std::size_t j = 0; j < c.point_handles.size(); ++j) q.segment<3>(3 * 4 * static_cast<Eigen::Index>(j)) = Eigen::Vector3d(0.01, 0, 0);
+  for (std::size_t j = 0; j < c.point_handles.size(); ++j)
+    q.segment<3>(3 * 4 * static_cast<Eigen::Index>(j)) = Eigen::Vector3d(0.01, 0, 0);
   Eigen::VectorXd x = Eigen::VectorXd::Zero(3 * c.problem.num_nodes());
   s.add_displacement(q, x);
   for (int v : c.point_handles) EXPECT_NEAR(x[3 * v], 0.01, 1e-15);

@@ -3,6 +3,7 @@
 // the truncation error h²/6·|φ'''| (|φ'''| ~ 1/ρ² with ρ ≳ 0.05 m) and the rounding error ε/h are
 // both ≲ 1e-8, far below the 1e-6 tolerances used.
 #include <Eigen/Core>
+
 #include <algorithm>
 #include <functional>
 

@@ -1,14 +1,15 @@
 // The contact penalty: derivatives, PSD Hessian, broad phase, refinement, a 1-dof Newton toy and a
 // free object resting on nodes.
-#include <gtest/gtest.h>
+#include "scene_test_support.hpp"
 
-#include <Eigen/Eigenvalues>
-#include <Eigen/Geometry>
-#include <memory>
 #include <sflsh/core/error.hpp>
 #include <sflsh/scene/contact_potential.hpp>
 
-#include "scene_test_support.hpp"
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+#include <gtest/gtest.h>
+
+#include <memory>
 
 namespace sflsh::scene {
 namespace {

@@ -1,20 +1,21 @@
 // Signed distances of the obstacle shapes: derivatives by finite differences in each geometric regime,
 // signs, surfaces, the mesh obstacle against the analytic shapes, vertex updates and mesh files.
-#include <gtest/gtest.h>
+#include "scene_test_support.hpp"
+#include "scratch_dir.hpp"
+
+#include <sflsh/core/error.hpp>
+#include <sflsh/scene/obstacle.hpp>
 
 #include <Eigen/Geometry>
+#include <gtest/gtest.h>
+
 #include <chrono>
 #include <fstream>
 #include <iostream>
 #include <memory>
 #include <numbers>
 #include <random>
-#include <sflsh/core/error.hpp>
-#include <sflsh/scene/obstacle.hpp>
 #include <thread>
-
-#include "scene_test_support.hpp"
-#include "scratch_dir.hpp"
 
 namespace sflsh::scene {
 namespace {

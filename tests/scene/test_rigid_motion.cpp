@@ -1,9 +1,10 @@
 // Rigid motions: keyframe interpolation (holds, keys, C¹ Catmull–Rom) and a free object under gravity.
+#include <sflsh/core/error.hpp>
+#include <sflsh/scene/rigid_motion.hpp>
+
 #include <gtest/gtest.h>
 
 #include <numbers>
-#include <sflsh/core/error.hpp>
-#include <sflsh/scene/rigid_motion.hpp>
 
 namespace sflsh::scene {
 namespace {

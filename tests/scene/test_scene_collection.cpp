@@ -2,19 +2,20 @@
 // world; scene_dynamics.pvd lists the σ maps, each where its body stands. The frames describe themselves
 // (units, soft_region, Normals of the placed posed surface), and [output] format = "xdmf" writes one series
 // per body and for the objects. Coarse layer, 30 handles, 4 frames.
+#include "scratch_dir.hpp"
+#include "self_described.hpp"
+
+#include <sflsh/core/vtk_io.hpp>
+#include <sflsh/scene/scene_file.hpp>
+#include <sflsh/scene/scene_runner.hpp>
+
 #include <fmt/format.h>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <fstream>
 #include <regex>
-#include <sflsh/core/vtk_io.hpp>
-#include <sflsh/scene/scene_file.hpp>
-#include <sflsh/scene/scene_runner.hpp>
 #include <sstream>
-
-#include "scratch_dir.hpp"
-#include "self_described.hpp"
 
 namespace sflsh::scene {
 namespace {

@@ -1,10 +1,10 @@
 // Scene files: the shipped examples parse, bad input is one error naming the file and line.
+#include "scratch_dir.hpp"
+
 #include <sflsh/core/error.hpp>
 #include <sflsh/scene/scene_file.hpp>
 
 #include <gtest/gtest.h>
-
-#include "scratch_dir.hpp"
 
 #include <fstream>
 
@@ -37,7 +37,8 @@ TEST(SceneFile, ShippedScenesParse) {
     EXPECT_GT(scene.num_frames(), 1);
   }
   const Scene belly = load_scene(std::filesystem::path(SFLSH_DATA_DIR) / "scenes" / "belly_press.toml");
-  EXPECT_TRUE(belly.effects.inertia && belly.effects.object_contact && !belly.effects.gravity && !belly.effects.body_contact);
+  EXPECT_TRUE(belly.effects.inertia && belly.effects.object_contact && !belly.effects.gravity &&
+              !belly.effects.body_contact);
   ASSERT_EQ(belly.objects.size(), 1u);
   EXPECT_EQ(belly.objects[0].shape, ShapeKind::sphere);
   EXPECT_EQ(belly.objects[0].motion, ObjectMotionKind::prescribed);
@@ -55,26 +56,37 @@ TEST(SceneFile, BadInputNamesFileAndLine) {
   const auto dir = testing::scratch_dir();
   struct Case {
     std::string text;
-    std::string expected;   // a part of the message
+    std::string expected;  // a part of the message
   };
   const std::vector<Case> cases = {
-      {"[scene]\nfps = 60\n[effects]\ninertia = true\nwobble = true\n" + std::string(kBody), "scene.toml:5: unknown key 'wobble'"},
+      {"[scene]\nfps = 60\n[effects]\ninertia = true\nwobble = true\n" + std::string(kBody),
+       "scene.toml:5: unknown key 'wobble'"},
       {"[scene]\nfps = -1\n" + std::string(kBody), "scene.toml:2: 'fps' in [scene] = -1 must be positive"},
-      {"[scene]\n[effects]\nobject_contact = true\n" + std::string(kBody), "'object_contact' is on but the scene has no [[object]]"},
+      {"[scene]\n[effects]\nobject_contact = true\n" + std::string(kBody),
+       "'object_contact' is on but the scene has no [[object]]"},
       {"[scene]\n[effects]\nbody_contact = true\n" + std::string(kBody), "fewer than two bodies"},
-      {"[scene]\n[effects]\nself_contact = true\n" + std::string(kBody), "scene.toml:3: 'self_contact' = true is not available"},
-      {"[scene]\n" + std::string(kBody) + "solver = \"fast\"\n", "scene.toml:5: 'solver' in body #0 = 'fast' is not one of full | reduced | skinned"},
-      {"[scene]\n" + std::string(kBody) + "material = \"nope.toml\"\n", "nope.toml: not found, expected a material TOML file"},
+      {"[scene]\n[effects]\nself_contact = true\n" + std::string(kBody),
+       "scene.toml:3: 'self_contact' = true is not available"},
+      {"[scene]\n" + std::string(kBody) + "solver = \"fast\"\n",
+       "scene.toml:5: 'solver' in body #0 = 'fast' is not one of full | reduced | skinned"},
+      {"[scene]\n" + std::string(kBody) + "material = \"nope.toml\"\n",
+       "nope.toml: not found, expected a material TOML file"},
       {"[scene]\n" + std::string(kBody) + "integrator = \"rk4\"\n",
        "scene.toml:5: 'integrator' in body #0 = 'rk4' is not one of backward_euler | bdf2 | newmark"},
-      {"[scene]\n" + std::string(kBody) + "mass = \"diagonal\"\n", "scene.toml:5: 'mass' in body #0 = 'diagonal' is not one of lumped | consistent"},
-      {"[scene]\n" + std::string(kBody) + "[[object]]\nshape = \"sphere\"\nradius = -0.1\n", "scene.toml:7: 'radius' in object #0 = -0.1 must be positive"},
-      {"[scene]\n" + std::string(kBody) + "[[object]]\nshape = \"box\"\nradius = 0.1\n", "'radius' in object #0 does not apply to a box"},
+      {"[scene]\n" + std::string(kBody) + "mass = \"diagonal\"\n",
+       "scene.toml:5: 'mass' in body #0 = 'diagonal' is not one of lumped | consistent"},
+      {"[scene]\n" + std::string(kBody) + "[[object]]\nshape = \"sphere\"\nradius = -0.1\n",
+       "scene.toml:7: 'radius' in object #0 = -0.1 must be positive"},
+      {"[scene]\n" + std::string(kBody) + "[[object]]\nshape = \"box\"\nradius = 0.1\n",
+       "'radius' in object #0 does not apply to a box"},
       {"[scene]\n" + std::string(kBody) +
-           "[[object]]\nshape = \"sphere\"\nradius = 0.1\nmotion = \"prescribed\"\nkeyframes = [{ t = 0.5, position = [0, 0, 0] }, { t = 0.2, position = [0, 0, 1] }]\n",
+           "[[object]]\nshape = \"sphere\"\nradius = 0.1\nmotion = \"prescribed\"\nkeyframes = [{ t = 0.5, position = "
+           "[0, 0, 0] }, { t = 0.2, position = [0, 0, 1] }]\n",
        "keyframe times in 'keyframes' in object #0 must increase"},
-      {"[scene]\n" + std::string(kBody) + "[[object]]\nshape = \"sphere\"\nradius = 0.1\nmotion = \"prescribed\"\n", "a prescribed object needs 'keyframes'"},
-      {"[scene]\n[effects]\nobject_contact = true\n[crowd]\ncount = 4\n[[object]]\nshape = \"sphere\"\nradius = 0.1\n", "a [crowd] runs without contact"},
+      {"[scene]\n" + std::string(kBody) + "[[object]]\nshape = \"sphere\"\nradius = 0.1\nmotion = \"prescribed\"\n",
+       "a prescribed object needs 'keyframes'"},
+      {"[scene]\n[effects]\nobject_contact = true\n[crowd]\ncount = 4\n[[object]]\nshape = \"sphere\"\nradius = 0.1\n",
+       "a [crowd] runs without contact"},
       {"[scene]\n" + std::string(kBody) + "[[body]]\nname = \"a\"\n", "the name 'a' is used twice"},
       {"[scene]\nfps = \n", "scene.toml:2:"},
       {"[effects]\n" + std::string(kBody), "missing key 'scene'"},
@@ -85,19 +97,22 @@ TEST(SceneFile, BadInputNamesFileAndLine) {
     EXPECT_NE(message.find(c.expected), std::string::npos) << message;
     EXPECT_EQ(message.find('\n'), std::string::npos) << "one line: " << message;
   }
-  EXPECT_NE(error_of(dir / "missing.toml").find("missing.toml: not found, expected a scene TOML file"), std::string::npos);
+  EXPECT_NE(error_of(dir / "missing.toml").find("missing.toml: not found, expected a scene TOML file"),
+            std::string::npos);
 }
 
 TEST(SceneFile, IntegratorAndMassPerBodyAndCrowd) {
   const auto dir = testing::scratch_dir();
   const Scene scene = load_scene(write_scene(
-      dir, "[scene]\n" + std::string(kBody) + "integrator = \"newmark\"\nmass = \"consistent\"\n[[body]]\nname = \"b\"\nmotion = \"rest\"\n"));
+      dir, "[scene]\n" + std::string(kBody) +
+               "integrator = \"newmark\"\nmass = \"consistent\"\n[[body]]\nname = \"b\"\nmotion = \"rest\"\n"));
   ASSERT_EQ(scene.bodies.size(), 2u);
   EXPECT_EQ(scene.bodies[0].integrator, model::Integrator::newmark);
   EXPECT_EQ(scene.bodies[0].mass, model::MassKind::consistent);
-  EXPECT_EQ(scene.bodies[1].integrator, model::Integrator::backward_euler);   // the defaults
+  EXPECT_EQ(scene.bodies[1].integrator, model::Integrator::backward_euler);  // the defaults
   EXPECT_EQ(scene.bodies[1].mass, model::MassKind::lumped);
-  const Scene crowd = load_scene(write_scene(dir, "[scene]\n[crowd]\ncount = 2\nintegrator = \"bdf2\"\nmass = \"consistent\"\n"));
+  const Scene crowd =
+      load_scene(write_scene(dir, "[scene]\n[crowd]\ncount = 2\nintegrator = \"bdf2\"\nmass = \"consistent\"\n"));
   ASSERT_TRUE(crowd.crowd.has_value());
   EXPECT_EQ(crowd.crowd->integrator, model::Integrator::bdf2);
   EXPECT_EQ(crowd.crowd->mass, model::MassKind::consistent);
@@ -107,7 +122,8 @@ TEST(SceneFile, RelativePathsAreTakenFromTheSceneFolder) {
   const auto dir = testing::scratch_dir();
   std::filesystem::create_directories(dir / "meshes");
   std::ofstream(dir / "meshes" / "ball.obj") << "v 0 0 0\n";
-  const Scene scene = load_scene(write_scene(dir, "[scene]\n" + std::string(kBody) + "[[object]]\nshape = \"mesh\"\nfile = \"meshes/ball.obj\"\n"));
+  const Scene scene = load_scene(write_scene(
+      dir, "[scene]\n" + std::string(kBody) + "[[object]]\nshape = \"mesh\"\nfile = \"meshes/ball.obj\"\n"));
   EXPECT_EQ(std::filesystem::path(scene.objects[0].mesh_path), (dir / "meshes" / "ball.obj").lexically_normal());
 }
 

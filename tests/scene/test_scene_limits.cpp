@@ -33,11 +33,14 @@ constexpr const char* kHeader = "[scene]\nfps = 30\nframes = 2\n";
 
 TEST(SceneLimits, MotionOffsetIsBoundedAndNamed) {
   const auto dir = testing::scratch_dir();
-  const auto path = write(dir / "scene.toml", std::string(kHeader) + "[[body]]\nmotion = \"dance\"\nsolver = \"skinned\"\nmotion_offset = 1e9\n");
+  const auto path =
+      write(dir / "scene.toml",
+            std::string(kHeader) + "[[body]]\nmotion = \"dance\"\nsolver = \"skinned\"\nmotion_offset = 1e9\n");
   const std::string message = error_of([&] { load_scene(path); });
   EXPECT_THAT(message, HasSubstr("scene.toml:7: motion_offset in body #0: 1e+09 s is outside [0, 3600] s")) << message;
   const auto crowd = write(dir / "crowd.toml", std::string(kHeader) + "[crowd]\ncount = 2\nmax_offset = -1.0\n");
-  EXPECT_THAT(error_of([&] { load_scene(crowd); }), HasSubstr("crowd.toml:6: max_offset in [crowd]: -1 s is outside [0, 3600] s"));
+  EXPECT_THAT(error_of([&] { load_scene(crowd); }),
+              HasSubstr("crowd.toml:6: max_offset in [crowd]: -1 s is outside [0, 3600] s"));
 }
 
 TEST(SceneLimits, AProceduralWindowIsTheTailOfTheWholeMotionAndCostsOnlyItsFrames) {
@@ -45,7 +48,7 @@ TEST(SceneLimits, AProceduralWindowIsTheTailOfTheWholeMotionAndCostsOnlyItsFrame
   const body::Motion tail = body::procedural_motion_window("dance", 30.0, 100, 5);
   ASSERT_EQ(tail.num_frames(), 5u);
   for (std::size_t f = 0; f < 5; ++f) {
-    EXPECT_EQ(tail.poses[f], whole.poses[100 + f]) << f;   // sample for sample, bit for bit
+    EXPECT_EQ(tail.poses[f], whole.poses[100 + f]) << f;  // sample for sample, bit for bit
     EXPECT_EQ(tail.trans[f], whole.trans[100 + f]) << f;
   }
   // An hour in (the bound of motion_offset) at 10000 fps: two frames, at once.
@@ -64,7 +67,8 @@ TEST(SceneLimits, EveryShapeNeedsItsSize) {
   };
   const std::vector<Case> cases = {
       {"[[object]]\nshape = \"box\"\n", "scene.toml:6: half_extents in object #0: missing (a box needs it)"},
-      {"[[object]]\nshape = \"capsule\"\nradius = 0.1\n", "scene.toml:6: length in object #0: missing (a capsule needs it)"},
+      {"[[object]]\nshape = \"capsule\"\nradius = 0.1\n",
+       "scene.toml:6: length in object #0: missing (a capsule needs it)"},
       {"[[object]]\nshape = \"sphere\"\n", "scene.toml:6: radius in object #0: missing (a sphere needs it)"},
       {"[[object]]\nshape = \"plane\"\n", "scene.toml:6: normal in object #0: missing (a plane needs it)"},
   };
@@ -83,15 +87,17 @@ TEST(SceneLimits, ObjObstaclesWithBadIndicesOrNonFiniteVerticesAreRefused) {
   const std::string nan = error_of([&] { TriangleMesh::load(write(dir / "nan.obj", "v nan 0 0\n" + tet)); });
   EXPECT_THAT(nan, HasSubstr("nan.obj:1: v: coordinate 1 is 'nan', expected a finite number")) << nan;
   std::filesystem::create_directories(dir / "mesh_dir.obj");
-  const auto scene = write(dir / "scene.toml", std::string(kHeader) +
-                                                   "[[body]]\nmotion = \"rest\"\n[[object]]\nshape = \"mesh\"\nfile = \"mesh_dir.obj\"\n");
+  const auto scene = write(
+      dir / "scene.toml",
+      std::string(kHeader) + "[[body]]\nmotion = \"rest\"\n[[object]]\nshape = \"mesh\"\nfile = \"mesh_dir.obj\"\n");
   EXPECT_THAT(error_of([&] { load_scene(scene); }),
               HasSubstr("scene.toml:8: file in object #0: " + (dir / "mesh_dir.obj").string() + ": is a directory"));
 }
 
 TEST(SceneLimits, RunawayWorkIsRefusedBeforeAnythingIsBuilt) {
   const auto dir = testing::scratch_dir();
-  const auto path = write(dir / "crowd.toml", "[scene]\nfps = 30\nduration = 2.0\n[effects]\ninertia = true\n[crowd]\ncount = 100000\n");
+  const auto path = write(dir / "crowd.toml",
+                          "[scene]\nfps = 30\nduration = 2.0\n[effects]\ninertia = true\n[crowd]\ncount = 100000\n");
   const Scene scene = load_scene(path);
   SceneRunOptions options;
   options.cache_dir = SFLSH_TEST_CACHE;
@@ -121,7 +127,8 @@ TEST(SceneLimits, ShapeModelBasisMustBeKnownAndFitTheCrowd) {
   EXPECT_NO_THROW(reduced::check_layer_match(ok, crowd_region, "coarse", "the [crowd]"));
 
   const std::string ultra = error_of([&] {
-    reduced::load_shape_model_file(write(dir / "ultra.toml", std::regex_replace(shipped, std::regex("mesh = 'coarse'"), "mesh = 'ultra'")));
+    reduced::load_shape_model_file(
+        write(dir / "ultra.toml", std::regex_replace(shipped, std::regex("mesh = 'coarse'"), "mesh = 'ultra'")));
   });
   EXPECT_THAT(ultra, HasSubstr("ultra.toml:"));
   EXPECT_THAT(ultra, HasSubstr(": mesh in [basis]: 'ultra' is not a mesh preset")) << ultra;
@@ -134,13 +141,19 @@ TEST(SceneLimits, ShapeModelBasisMustBeKnownAndFitTheCrowd) {
   const auto torso_path =
       write(dir / "torso.toml", std::regex_replace(shipped, std::regex("region = '[a-z_+]*'"), "region = 'torso'"));
   const reduced::ShapeModelFile torso = reduced::load_shape_model_file(torso_path);
-  const std::string mismatch = error_of([&] { reduced::check_layer_match(torso, crowd_region, "coarse", "the [crowd]"); });
+  const std::string mismatch =
+      error_of([&] { reduced::check_layer_match(torso, crowd_region, "coarse", "the [crowd]"); });
   EXPECT_THAT(mismatch, HasSubstr(torso_path.string() + ":")) << mismatch;
-  EXPECT_THAT(mismatch, HasSubstr("region in [basis]: the shape model was fitted on region 'torso', but the [crowd] uses layers of region "
-                                  "'thighs+torso+upper_arms'"))
+  EXPECT_THAT(
+      mismatch,
+      HasSubstr(
+          "region in [basis]: the shape model was fitted on region 'torso', but the [crowd] uses layers of region "
+          "'thighs+torso+upper_arms'"))
       << mismatch;
-  EXPECT_THAT(error_of([&] { reduced::check_layer_match(ok, crowd_region, "fine", "the [crowd]"); }),
-              HasSubstr("mesh in [basis]: the shape model was fitted on the 'coarse' mesh, but the [crowd] uses the 'fine' mesh"));
+  EXPECT_THAT(
+      error_of([&] { reduced::check_layer_match(ok, crowd_region, "fine", "the [crowd]"); }),
+      HasSubstr(
+          "mesh in [basis]: the shape model was fitted on the 'coarse' mesh, but the [crowd] uses the 'fine' mesh"));
 }
 
 }  // namespace

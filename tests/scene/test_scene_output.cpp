@@ -1,16 +1,15 @@
 // What a scene writes: [output] every writes exactly the chosen frames (the first and the last always) and the
 // .pvd lists exactly them with their times; [output] fields restricts the frames' arrays; bad values are one
 // error naming the file, line and key. Coarse layer, 30 handles, a few frames.
+#include "error_of.hpp"
+#include "scratch_dir.hpp"
+
 #include <sflsh/core/vtk_io.hpp>
 #include <sflsh/scene/scene_file.hpp>
 #include <sflsh/scene/scene_runner.hpp>
 
-#include <gtest/gtest.h>
-
-#include "error_of.hpp"
-#include "scratch_dir.hpp"
-
 #include <fmt/format.h>
+#include <gtest/gtest.h>
 
 #include <algorithm>
 #include <fstream>
@@ -67,7 +66,8 @@ std::vector<std::pair<double, std::string>> pvd_entries(const std::filesystem::p
 }
 
 /// The files of `dir` whose names start with `prefix` and end with `extension`, sorted.
-std::vector<std::string> files_of(const std::filesystem::path& dir, const std::string& prefix, const std::string& extension) {
+std::vector<std::string> files_of(const std::filesystem::path& dir, const std::string& prefix,
+                                  const std::string& extension) {
   std::vector<std::string> out;
   for (const auto& e : std::filesystem::directory_iterator(dir)) {
     const std::string name = e.path().filename().string();
@@ -104,13 +104,15 @@ TEST(SceneOutput, FieldsRestrictTheArraysAndEveryOneIsTheDefault) {
   const auto dir = testing::scratch_dir();
   run_in(dir / "some", R"(fields = ["elastic_displacement", "contact_force"])");
   const auto names = vtk::read_point_array_names(dir / "some" / "out" / "b_000007.vtp");
-  EXPECT_EQ(std::set<std::string>(names.begin(), names.end()), (std::set<std::string>{"elastic_displacement", "contact_force"}));
+  EXPECT_EQ(std::set<std::string>(names.begin(), names.end()),
+            (std::set<std::string>{"elastic_displacement", "contact_force"}));
   run_in(dir / "none", "fields = []\nevery = 7");
   EXPECT_TRUE(vtk::read_point_array_names(dir / "none" / "out" / "b_000007.vtp").empty());
   run_in(dir / "all", "compression = \"zlib\"");
   const auto all = vtk::read_point_array_names(dir / "all" / "out" / "b_000007.vtp");
-  for (const char* name : {"displacement", "velocity", "skin_weights_argmax", "soft_tissue_displacement", "elastic_displacement",
-                           "strain_energy_density", "thickness", "young_tangent", "young_normal", "contact_force", "penetration"})
+  for (const char* name :
+       {"displacement", "velocity", "skin_weights_argmax", "soft_tissue_displacement", "elastic_displacement",
+        "strain_energy_density", "thickness", "young_tangent", "young_normal", "contact_force", "penetration"})
     EXPECT_NE(std::find(all.begin(), all.end(), name), all.end()) << name;
   // The restricted frame holds the same values as the full one.
   EXPECT_EQ(vtk::read_point_array(dir / "some" / "out" / "b_000007.vtp", "elastic_displacement"),
@@ -125,9 +127,11 @@ TEST(SceneOutput, BadOutputValuesAreOneLineNamingTheKey) {
   for (const Case& c : std::vector<Case>{
            {"every = 0", "scene.toml:8: 'every' in [output] = 0 must be an integer ≥ 1"},
            {"every = 1.5", "scene.toml:8: 'every'"},
-           {R"(fields = ["displacement", "sigma"])", "scene.toml:8: unknown field 'sigma' in 'fields' of [output] (expected some of"},
+           {R"(fields = ["displacement", "sigma"])",
+            "scene.toml:8: unknown field 'sigma' in 'fields' of [output] (expected some of"},
            {R"(fields = "displacement")", "scene.toml:8: 'fields' in [output] must be an array of strings"},
-           {R"(compression = "gzip")", "scene.toml:8: 'compression' in [output] = 'gzip' is not one of lz4 | zlib | none"},
+           {R"(compression = "gzip")",
+            "scene.toml:8: 'compression' in [output] = 'gzip' is not one of lz4 | zlib | none"},
        }) {
     SCOPED_TRACE(c.output);
     const auto path = write_scene(dir, c.output);

@@ -1,15 +1,14 @@
 // Bodies that cannot touch each other step in parallel: a scene with body contact where two bodies push
 // together and a third dances far away gives, grouped and on two threads, exactly the frames of one
 // Gauss–Seidel sweep over all bodies on one thread.
+#include "scratch_dir.hpp"
+
 #include <sflsh/core/vtk_io.hpp>
 #include <sflsh/scene/scene_file.hpp>
 #include <sflsh/scene/scene_runner.hpp>
 
-#include <gtest/gtest.h>
-
-#include "scratch_dir.hpp"
-
 #include <fmt/format.h>
+#include <gtest/gtest.h>
 
 #include <fstream>
 
@@ -56,7 +55,7 @@ approach = [{ t = 0.0, position = [0.0, 0.0, 0.0] }, { t = 0.2, position = [0.0,
   const nlohmann::json serial = run("serial", false, 1);
   const nlohmann::json parallel = run("parallel", true, 2);
   EXPECT_DOUBLE_EQ(serial["body_groups_per_step"].get<double>(), 1.0);
-  EXPECT_DOUBLE_EQ(parallel["body_groups_per_step"].get<double>(), 2.0);   // {standing, pushing}, {dancer}
+  EXPECT_DOUBLE_EQ(parallel["body_groups_per_step"].get<double>(), 2.0);  // {standing, pushing}, {dancer}
   for (std::size_t b = 0; b < 3; ++b) {
     const std::string name = serial["bodies"][b]["name"];
     SCOPED_TRACE(name);

@@ -1,6 +1,8 @@
 // Scenes end to end: effects on demand (nothing built that is not asked for, idle bodies not solved, an
 // inactive effect changes nothing), a ball pressed into the belly stops at the skin, two bodies pushed
 // together do not interpenetrate. Coarse layers, 30 handles, short clips.
+#include "scratch_dir.hpp"
+
 #include <sflsh/body/body_io.hpp>
 #include <sflsh/body/skinning.hpp>
 #include <sflsh/core/vtk_io.hpp>
@@ -8,11 +10,8 @@
 #include <sflsh/scene/scene_file.hpp>
 #include <sflsh/scene/scene_runner.hpp>
 
-#include <gtest/gtest.h>
-
-#include "scratch_dir.hpp"
-
 #include <fmt/format.h>
+#include <gtest/gtest.h>
 
 #include <fstream>
 
@@ -89,10 +88,10 @@ TEST(SceneRun, InactiveContactChangesNothingAndIdleBodiesAreNotSolved) {
   const nlohmann::json without = run(dir / "without", off, true);
   EXPECT_EQ(with["built"]["contact_potentials"], 1);
   EXPECT_GT(with["built"]["broad_phase_passes"], 0);
-  EXPECT_EQ(with["built"]["narrow_phase_evaluations"], 0);   // far away: never evaluated
+  EXPECT_EQ(with["built"]["narrow_phase_evaluations"], 0);  // far away: never evaluated
   const auto a = vtk::read_points(dir / "with" / "out" / "b_000005.vtp");
   const auto b = vtk::read_points(dir / "without" / "out" / "b_000005.vtp");
-  EXPECT_EQ((a - b).cwiseAbs().maxCoeff(), 0.0);   // the same arithmetic: no term was added
+  EXPECT_EQ((a - b).cwiseAbs().maxCoeff(), 0.0);  // the same arithmetic: no term was added
   // Quasi-static without gravity and no contact in reach: at rest, no solve, the skinned surface.
   const nlohmann::json idle = run(dir / "idle", ball_scene("reduced", "object_contact = true", 0.19, 6), true);
   EXPECT_EQ(idle["bodies"][0]["idle_steps"], 5);
@@ -100,7 +99,7 @@ TEST(SceneRun, InactiveContactChangesNothingAndIdleBodiesAreNotSolved) {
   const nlohmann::json skin = run(dir / "skin", ball_scene("reduced", "", 0.19, 6), true);
   const auto c = vtk::read_points(dir / "idle" / "out" / "b_000005.vtp");
   const auto d = vtk::read_points(dir / "skin" / "out" / "b_000005.vtp");
-  EXPECT_LT((c - d).cwiseAbs().maxCoeff(), 1e-9);   // posing through the layer equals plain skinning (rounding)
+  EXPECT_LT((c - d).cwiseAbs().maxCoeff(), 1e-9);  // posing through the layer equals plain skinning (rounding)
 }
 
 // The ball ends 2.4 cm inside the rest surface; the skin must stay within the 1 mm tolerance of it.
@@ -112,7 +111,8 @@ void check_press(const std::string& solver, int frames) {
   Sphere ball(0.06);
   ball.set_pose({Eigen::Matrix3d::Identity(), Eigen::Vector3d(0.0, 0.064, 0.155)});
   double depth = 0.0;
-  for (Eigen::Index v = 0; v < model.v_template.rows(); ++v) depth = std::max(depth, -ball.distance(model.v_template.row(v).transpose()));
+  for (Eigen::Index v = 0; v < model.v_template.rows(); ++v)
+    depth = std::max(depth, -ball.distance(model.v_template.row(v).transpose()));
   EXPECT_GT(depth, 0.02);
   // 1 mm is the scene's tolerance (the default): the potential re-solves a substep that ends deeper.
   EXPECT_LE(s["contact"]["measured_max_penetration_mm"].get<double>(), 1.0 + 1e-9);
@@ -151,9 +151,9 @@ approach = [{ t = 0.0, position = [0.0, 0.0, 0.0] }, { t = 0.3, position = [0.0,
   EXPECT_EQ(s["built"]["contact_potentials"], 2);
   for (const auto& b : s["bodies"]) {
     SCOPED_TRACE(b["name"].get<std::string>());
-    EXPECT_GT(b["contact"]["bodies"]["narrow_phase_evaluations"].get<long>(), 0);   // they did touch
+    EXPECT_GT(b["contact"]["bodies"]["narrow_phase_evaluations"].get<long>(), 0);  // they did touch
     EXPECT_LE(b["contact"]["measured_max_penetration_mm"].get<double>(), 1.0 + 1e-9);
-    EXPECT_GT(b["dynamics"]["sigma_max_mm"].get<double>(), 1.0);   // both soft layers gave way
+    EXPECT_GT(b["dynamics"]["sigma_max_mm"].get<double>(), 1.0);  // both soft layers gave way
   }
   EXPECT_EQ(s["contact"]["skeleton_response"], false);
 }

@@ -2,6 +2,7 @@
 #include <CGAL/Delaunay_triangulation_3.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CLI/CLI.hpp>
+#include <Eigen/Sparse>
 #include <H5Cpp.h>
 #include <arkode/arkode_erkstep.h>
 #include <gmsh.h>
@@ -15,8 +16,8 @@
 #include <petsctao.h>
 #include <spdlog/spdlog.h>
 #include <sundials/sundials_context.h>
-#include <tbb/parallel_reduce.h>
 #include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
 #include <toml++/toml.h>
 #include <vtkNew.h>
 #include <vtkPoints.h>
@@ -25,7 +26,6 @@
 #include <vtkXMLPolyDataWriter.h>
 #include <zip.h>
 
-#include <Eigen/Sparse>
 #include <cmath>
 #include <filesystem>
 #include <numeric>

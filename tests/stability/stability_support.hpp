@@ -3,10 +3,10 @@
 // material with per-control-point κ, the skinned layer's kinetic energy (the energy scale the skeleton feeds
 // into the tissue) and the bounded-energy check.
 #include <sflsh/body/body_io.hpp>
-#include <sflsh/model/body_layer.hpp>
-#include <sflsh/model/step_stats.hpp>
 #include <sflsh/material/layer_material.hpp>
 #include <sflsh/meshing/layer_cache.hpp>
+#include <sflsh/model/body_layer.hpp>
+#include <sflsh/model/step_stats.hpp>
 
 #include <gtest/gtest.h>
 
@@ -34,19 +34,20 @@ inline material::MaterialFile material_with(const std::function<material::Kappa(
   const meshing::LayerMesh mesh = meshing::cached_layer_mesh(open_body(), mesh_options, SFLSH_TEST_CACHE);
   material::MaterialFile file = material::default_material(open_body(), mesh, 12, "stability");
   file.bounds.thickness = {0.05, 0.95};
-  for (std::size_t i = 0; i < file.control_points.size(); ++i) file.control_points[i].kappa = kappa_of(static_cast<int>(i));
+  for (std::size_t i = 0; i < file.control_points.size(); ++i)
+    file.control_points[i].kappa = kappa_of(static_cast<int>(i));
   return file;
 }
 
 struct Outcome {
-  double max_kinetic = 0.0;          ///< max over frames of ½ Σ m |ṗ|² [J]
-  double max_elastic = 0.0;          ///< max over frames of E(x) [J]
-  double skinned_kinetic = 0.0;      ///< max over frames of the kinetic energy of the purely skinned layer [J]
+  double max_kinetic = 0.0;      ///< max over frames of ½ Σ m |ṗ|² [J]
+  double max_elastic = 0.0;      ///< max over frames of E(x) [J]
+  double skinned_kinetic = 0.0;  ///< max over frames of the kinetic energy of the purely skinned layer [J]
   double initial_elastic = 0.0;
   long failed_attempts = 0;
-  long projected_retries = 0;        ///< exact-Hessian attempts repeated with the projected Hessian
-  long newton_iterations = 0;        ///< summed over the run
-  int max_newton_per_frame = 0;      ///< the largest Newton count of one frame
+  long projected_retries = 0;    ///< exact-Hessian attempts repeated with the projected Hessian
+  long newton_iterations = 0;    ///< summed over the run
+  int max_newton_per_frame = 0;  ///< the largest Newton count of one frame
   int frames = 0;
 };
 

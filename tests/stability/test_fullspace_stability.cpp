@@ -2,23 +2,22 @@
 // steps, a 100× stiffness contrast, the landing of a jump and an initially inverted element. Each run must
 // finish with a finite state at every frame and bounded energy (or fail with a clear sflsh::Error, which
 // these cases must not need).
+#include "long_test.hpp"
+#include "stability_support.hpp"
+
 #include <sflsh/body/body_io.hpp>
 #include <sflsh/body/motion.hpp>
 #include <sflsh/body/subjects.hpp>
 #include <sflsh/core/error.hpp>
 #include <sflsh/fullspace/fullspace_solver.hpp>
-#include <sflsh/model/body_layer.hpp>
 #include <sflsh/fullspace/reference_integrator.hpp>
 #include <sflsh/material/layer_material.hpp>
 #include <sflsh/meshing/layer_cache.hpp>
-
-#include "long_test.hpp"
-#include "stability_support.hpp"
-
-#include <gtest/gtest.h>
-#include <mpi.h>
+#include <sflsh/model/body_layer.hpp>
 
 #include <fmt/format.h>
+#include <gtest/gtest.h>
+#include <mpi.h>
 
 #include <functional>
 #include <iostream>
@@ -30,7 +29,6 @@ using namespace sflsh::stability;
 using model::BodyLayer;
 using model::build_body_layer;
 
-
 /// Runs backward Euler along the motion, checking every frame's state and energies for finiteness.
 Outcome run_case(const body::Betas& beta, const body::Motion& motion, const material::MaterialFile* material,
                  int substeps = 1, const std::function<void(const Problem&, State&)>& perturb = {},
@@ -41,7 +39,8 @@ Outcome run_case(const body::Betas& beta, const body::Motion& motion, const mate
   if (perturb) perturb(p, state);
   FullSpaceSolver integrator(p, MPI_COMM_WORLD, options);
   integrator.initialize(state);
-  if (std::getenv("SFLSH_PROBE")) std::cerr << fmt::format("{} nodes {} tets {} constrained\n", p.num_nodes(), p.num_tets(), p.dirichlet.dof.size());
+  if (std::getenv("SFLSH_PROBE"))
+    std::cerr << fmt::format("{} nodes {} tets {} constrained\n", p.num_nodes(), p.num_tets(), p.dirichlet.dof.size());
   Outcome out;
   out.initial_elastic = energies(p, integrator.state()).elastic;
   for (std::size_t f = 0; f < motion.num_frames(); ++f) {
@@ -51,8 +50,8 @@ Outcome run_case(const body::Betas& beta, const body::Motion& motion, const mate
         record_step(st, out);
         if (std::getenv("SFLSH_PROBE"))
           std::cerr << fmt::format("f {} newton {} lin {} sub {} fail {} s {:.3f} fn {:.3f} jac {:.3f} reason {}\n", f,
-                                   st.newton_iterations, st.linear_iterations, st.substeps, st.failed_attempts, st.seconds,
-                                   st.function_seconds, st.jacobian_seconds, st.converged_reason);
+                                   st.newton_iterations, st.linear_iterations, st.substeps, st.failed_attempts,
+                                   st.seconds, st.function_seconds, st.jacobian_seconds, st.converged_reason);
       }
     }
     record_frame(p, integrator.state(), motion.time(f), f, out);
@@ -101,14 +100,14 @@ TEST(FullspaceStability, ThickLayersSimulateOrAreRefusedBeforeTheSolve) {
 
 TEST(FullspaceStability, LargeStepsOfOneTwentyFourthSecond) {
   SFLSH_LONG_TEST();  // tens of seconds on 2 cores: label long
-  const body::Motion motion = body::make_procedural_motion("one_leg_jump", 24.0, 30);   // through the first landing
+  const body::Motion motion = body::make_procedural_motion("one_leg_jump", 24.0, 30);  // through the first landing
   expect_bounded(run_case(body::Betas::Zero(), motion, nullptr));
 }
 
 TEST(FullspaceStability, HundredfoldStiffnessContrastBetweenNeighbours) {
   const body::Motion motion = body::make_procedural_motion("shake_hips", 60.0, 30);
   const material::MaterialFile file = material_with([](int i) {
-    const double young = i % 2 ? 50000.0 : 500.0;   // Y_max / Y_min = 100, alternating along the sampling order
+    const double young = i % 2 ? 50000.0 : 500.0;  // Y_max / Y_min = 100, alternating along the sampling order
     return material::Kappa{0.5, young, young};
   });
   expect_bounded(run_case(body::Betas::Zero(), motion, &file));
@@ -147,7 +146,6 @@ TEST(FullspaceStability, ElementInvertedByTheInitialState) {
   expect_bounded(o);
 }
 
-
 // Issue 23: the softest material of the documented bounds (Y_t = Y_n = 500 Pa, docs/physics.md §6.5) on shake_hips.
 // There the exact Hessian turns indefinite (StVK's negative curvature in compression times the Fung factor
 // e^{2Ψ₀/c} of tets stretched at the same time, against a mass term M/h² that does not soften with Y): before
@@ -155,7 +153,7 @@ TEST(FullspaceStability, ElementInvertedByTheInitialState) {
 // (‖∇Φ‖ × 0.9 per iteration) into the 40-iteration cap and the steps were split (from t ≈ 0.33 s; measured
 // with truncate_on_negative_curvature = false, this test fails: projected retries and failed attempts, 250 s instead
 // of 33 s).
-constexpr int kSoftFrames = 31;   // through t = 0.5 s, past the first failures of the old ladder
+constexpr int kSoftFrames = 31;  // through t = 0.5 s, past the first failures of the old ladder
 // Measured at β = 0 (30 frames): softest 288 Newton iterations, at most 23 in a frame; stiffest 79, at most 3. The
 // bounds are SNES's 40-iteration cap of one attempt (a frame over it had to be solved twice) and 10 (a stiff frame
 // takes 3–5; more means the exact Hessian is being given up again).
@@ -188,7 +186,6 @@ TEST(FullspaceStability, StiffestMaterialShakeHips) {
   EXPECT_EQ(o.failed_attempts, 0);
   EXPECT_LE(o.max_newton_per_frame, kStiffMaxNewton);
 }
-
 
 TEST(FullspaceStability, ShakeHipsOfOpenTrain1WithoutRetries) {
   // The default material on OPEN_TRAIN_1/shake_hips: at t = 0.42–0.55 s the exact Hessian turns indefinite (as above)

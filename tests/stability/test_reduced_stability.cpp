@@ -2,21 +2,20 @@
 // shapes, thin and thick layers, large steps, a 100× stiffness contrast, the landing of a jump, and an
 // element inverted by the initial state. Each run must finish with a finite state at every frame and
 // bounded energy (or, for impossible thicknesses, be refused by the retargeter before any solve).
+#include "stability_support.hpp"
+
 #include <sflsh/body/body_io.hpp>
 #include <sflsh/body/motion.hpp>
 #include <sflsh/core/error.hpp>
-#include <sflsh/model/body_layer.hpp>
 #include <sflsh/fullspace/reference_integrator.hpp>
 #include <sflsh/material/layer_material.hpp>
 #include <sflsh/meshing/layer_cache.hpp>
-#include <sflsh/reduced/reduced_solver.hpp>
+#include <sflsh/model/body_layer.hpp>
 #include <sflsh/reduced/reduced_model.hpp>
-
-#include "stability_support.hpp"
-
-#include <gtest/gtest.h>
+#include <sflsh/reduced/reduced_solver.hpp>
 
 #include <Eigen/Geometry>
+#include <gtest/gtest.h>
 
 #include <functional>
 
@@ -24,7 +23,6 @@ namespace sflsh::reduced {
 namespace {
 
 using namespace sflsh::stability;
-
 
 /// Runs the reduced model (86 handles, 200 cubature tets) along the motion; `perturb` may change q₀.
 Outcome run_case(const body::Betas& beta, const body::Motion& motion, const material::MaterialFile* material,
@@ -122,7 +120,8 @@ TEST(ReducedStability, ElementInvertedByTheInitialState) {
     s.add_displacement(q, state.x);
     for (int e = 0; e < p.num_tets(); ++e) {
       Eigen::Matrix3d ds;
-      for (int a = 0; a < 3; ++a) ds.col(a) = state.x.segment<3>(3 * p.tets(e, a + 1)) - state.x.segment<3>(3 * p.tets(e, 0));
+      for (int a = 0; a < 3; ++a)
+        ds.col(a) = state.x.segment<3>(3 * p.tets(e, a + 1)) - state.x.segment<3>(3 * p.tets(e, 0));
       if (ds.determinant() <= 0.0) ++inverted;
     }
   };
@@ -131,7 +130,6 @@ TEST(ReducedStability, ElementInvertedByTheInitialState) {
   EXPECT_GT(o.initial_elastic, 0.0);
   expect_bounded(o);
 }
-
 
 /// A second of shake_hips on a uniform material Y_t = Y_n = young.
 Outcome shake_hips_with(double young) {

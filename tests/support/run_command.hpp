@@ -1,12 +1,13 @@
 #pragma once
 // Runs the sflsh executable in a shell and captures its exit code, stdout and stderr.
+#include <sys/wait.h>
+
 #include <array>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
-#include <sys/wait.h>
 
 namespace sflsh::testing {
 
@@ -19,7 +20,8 @@ struct CommandResult {
 inline CommandResult run_sflsh(const std::string& args, const std::filesystem::path& scratch) {
   const auto out_file = scratch / "cmd.stdout";
   const auto err_file = scratch / "cmd.stderr";
-  const std::string command = std::string(SFLSH_CLI) + " " + args + " >" + out_file.string() + " 2>" + err_file.string();
+  const std::string command =
+      std::string(SFLSH_CLI) + " " + args + " >" + out_file.string() + " 2>" + err_file.string();
   const int status = std::system(command.c_str());
   CommandResult result;
   result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;

@@ -2,6 +2,8 @@
 // Checks that an output file describes its arrays (docs/output.md): the field data `units` has exactly one
 // entry "<name>: <unit>" per numeric array name, every unit known (not "?"); label arrays come with their
 // names. Read back with VTK's own readers.
+#include <sflsh/core/vtk_io.hpp>
+
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -9,7 +11,6 @@
 #include <filesystem>
 #include <map>
 #include <set>
-#include <sflsh/core/vtk_io.hpp>
 #include <string>
 
 namespace sflsh::testing {

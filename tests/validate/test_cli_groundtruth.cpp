@@ -1,4 +1,7 @@
 // `sflsh groundtruth`: the synthetic ground truth in the DYNA layout with the true parameters beside it.
+#include "run_command.hpp"
+#include "scratch_dir.hpp"
+
 #include <sflsh/body/body_io.hpp>
 #include <sflsh/body/subjects.hpp>
 #include <sflsh/core/npz.hpp>
@@ -6,9 +9,6 @@
 #include <sflsh/validate/dyna_file.hpp>
 
 #include <gtest/gtest.h>
-
-#include "run_command.hpp"
-#include "scratch_dir.hpp"
 
 using namespace sflsh;
 
@@ -29,7 +29,8 @@ TEST(GroundTruthCommand, WritesDynaLayoutAndTrueParameters) {
   EXPECT_DOUBLE_EQ(seq.fps, 60.0);
   const body::Betas beta = body::find_subject(body::default_subjects(), "OPEN_TRAIN_2").beta;
   ASSERT_EQ(seq.attributes.numbers.at("beta").size(), 10u);
-  for (int k = 0; k < 10; ++k) EXPECT_DOUBLE_EQ(seq.attributes.numbers.at("beta")[static_cast<std::size_t>(k)], beta[k]);
+  for (int k = 0; k < 10; ++k)
+    EXPECT_DOUBLE_EQ(seq.attributes.numbers.at("beta")[static_cast<std::size_t>(k)], beta[k]);
   // The body moves (posed frames, not the template) and stays a body: stature within 1.4–2.1 m.
   const double height = seq.frames[3].col(1).maxCoeff() - seq.frames[3].col(1).minCoeff();
   EXPECT_GT(height, 1.4);
@@ -42,7 +43,7 @@ TEST(GroundTruthCommand, WritesDynaLayoutAndTrueParameters) {
   EXPECT_EQ(truth.read("region_vertices").size() * 3, kappa.size());
   for (std::size_t i = 0; i < kappa.size(); i += 3) {
     EXPECT_GE(kappa[i], 0.1);
-    EXPECT_LE(kappa[i], 0.6);   // the coarse mesh's thickness range
+    EXPECT_LE(kappa[i], 0.6);  // the coarse mesh's thickness range
     EXPECT_GE(kappa[i + 1], 500.0);
     EXPECT_LE(kappa[i + 2], 50000.0);
   }
@@ -54,9 +55,8 @@ TEST(GroundTruthCommand, WritesDynaLayoutAndTrueParameters) {
 
 TEST(GroundTruthCommand, UnknownSubjectFailsWithoutOutput) {
   const std::filesystem::path dir = sflsh::testing::scratch_dir();
-  const auto r = sflsh::testing::run_sflsh("groundtruth --subjects NOBODY --motions running_on_spot --frames 4 --out " +
-                                               (dir / "gt").string(),
-                                           dir);
+  const auto r = sflsh::testing::run_sflsh(
+      "groundtruth --subjects NOBODY --motions running_on_spot --frames 4 --out " + (dir / "gt").string(), dir);
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find("NOBODY"), std::string::npos) << r.err;
   EXPECT_FALSE(std::filesystem::exists(dir / "gt" / "groundtruth.h5"));

@@ -1,13 +1,13 @@
 // `sflsh metrics` on a small synthetic DYNA file: --list, the σ surface and table with β given and fitted,
 // and clean failures (one line on stderr, non-zero exit, nothing written).
+#include "run_command.hpp"
+#include "scratch_dir.hpp"
+#include "validate_fixtures.hpp"
+
 #include <sflsh/core/summary.hpp>
 #include <sflsh/core/vtk_io.hpp>
 #include <sflsh/validate/dyna_file.hpp>
 #include <sflsh/validate/dynamics_metrics.hpp>
-
-#include "run_command.hpp"
-#include "scratch_dir.hpp"
-#include "validate_fixtures.hpp"
 
 #include <H5Cpp.h>
 #include <fmt/format.h>
@@ -19,8 +19,8 @@
 namespace sflsh::validate {
 namespace {
 
-using ::testing::HasSubstr;
 using sflsh::testing::run_sflsh;
+using ::testing::HasSubstr;
 using testing::open_body;
 using testing::some_beta;
 
@@ -32,7 +32,8 @@ struct CliFile {
 CliFile write_file(const std::filesystem::path& dir) {
   CliFile f;
   f.path = dir / "dyna_synthetic.h5";
-  f.truth = testing::synthetic_sequence(open_body(), some_beta(), "shake_hips", 8, soft_region_vertices(open_body()), 0.004, 17);
+  f.truth = testing::synthetic_sequence(open_body(), some_beta(), "shake_hips", 8, soft_region_vertices(open_body()),
+                                        0.004, 17);
   DynaSequence a{"50004_shake_hips", f.truth.frames, {}, 60.0};
   DynaSequence b{"50004_jiggle_on_toes", {f.truth.frames.begin(), f.truth.frames.begin() + 3}, {}, 60.0};
   DynaSequence c{"50020_shake_hips", {f.truth.frames.begin(), f.truth.frames.begin() + 2}, {}, 60.0};
@@ -85,18 +86,24 @@ TEST(CliMetrics, BadRegistrationsAreRefusedAtLoadNamingFileAndDataset) {
   {
     H5::H5File file(empty.string(), H5F_ACC_TRUNC);
     const hsize_t fd[2] = {static_cast<hsize_t>(open_body().faces.rows()), 3};
-    file.createDataSet("faces", H5::PredType::STD_I32LE, H5::DataSpace(2, fd)).write(open_body().faces.data(), H5::PredType::NATIVE_INT);
+    file.createDataSet("faces", H5::PredType::STD_I32LE, H5::DataSpace(2, fd))
+        .write(open_body().faces.data(), H5::PredType::NATIVE_INT);
   }
   auto r = run_sflsh("metrics --dyna " + empty.string() + " --sequence 50004_shake_hips --out " + out.string(), dir);
   EXPECT_EQ(r.exit_code, 1);
-  EXPECT_THAT(r.err, HasSubstr(empty.string() + ": 50004_shake_hips: no such sequence in the file, which holds no sequence dataset"));
+  EXPECT_THAT(r.err, HasSubstr(empty.string() +
+                               ": 50004_shake_hips: no such sequence in the file, which holds no sequence dataset"));
   EXPECT_TRUE(one_error_line(r.err)) << r.err;
 
   // All-zero registrations of the body's vertex count: refused before any fitting (they used to run for
   // minutes and exit 0).
   const auto zeros = dir / "zeros.h5";
-  write_dyna_file(zeros, open_body().faces, {DynaSequence{"50004_shake_hips", {RowMatrixX3d::Zero(static_cast<Eigen::Index>(n), 3),
-                                                                               RowMatrixX3d::Zero(static_cast<Eigen::Index>(n), 3)}, {}, 60.0}});
+  write_dyna_file(zeros, open_body().faces,
+                  {DynaSequence{"50004_shake_hips",
+                                {RowMatrixX3d::Zero(static_cast<Eigen::Index>(n), 3),
+                                 RowMatrixX3d::Zero(static_cast<Eigen::Index>(n), 3)},
+                                {},
+                                60.0}});
   r = run_sflsh("metrics --dyna " + zeros.string() + " --sequence 50004_shake_hips --out " + out.string(), dir);
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_THAT(r.err, HasSubstr(zeros.string() + ": 50004_shake_hips: frame 0 is degenerate"));
@@ -113,11 +120,13 @@ TEST(CliMetrics, FramesOfAHugeSparseDatasetAreReadAlone) {
   {
     H5::H5File file(path.string(), H5F_ACC_TRUNC);
     const hsize_t fd[2] = {static_cast<hsize_t>(open_body().faces.rows()), 3};
-    file.createDataSet("faces", H5::PredType::STD_I32LE, H5::DataSpace(2, fd)).write(open_body().faces.data(), H5::PredType::NATIVE_INT);
+    file.createDataSet("faces", H5::PredType::STD_I32LE, H5::DataSpace(2, fd))
+        .write(open_body().faces.data(), H5::PredType::NATIVE_INT);
     const hsize_t dims[3] = {n, 3, 10000000}, chunk[3] = {std::min<hsize_t>(n, 1024), 3, 16};
     H5::DSetCreatPropList properties;
     properties.setChunk(3, chunk);
-    const H5::DataSet dataset = file.createDataSet("50004_shake_hips", H5::PredType::IEEE_F64LE, H5::DataSpace(3, dims), properties);
+    const H5::DataSet dataset =
+        file.createDataSet("50004_shake_hips", H5::PredType::IEEE_F64LE, H5::DataSpace(3, dims), properties);
     const hsize_t count[3] = {n, 3, 3}, start[3] = {0, 0, 0};
     std::vector<double> values;
     for (hsize_t v = 0; v < n; ++v)
@@ -128,15 +137,17 @@ TEST(CliMetrics, FramesOfAHugeSparseDatasetAreReadAlone) {
     dataset.write(values.data(), H5::PredType::NATIVE_DOUBLE, H5::DataSpace(3, count), selection);
   }
   const auto out = dir / "out";
-  auto r = run_sflsh("metrics --dyna " + path.string() + " --sequence 50004_shake_hips --frames 3 --betas " + betas_arg(some_beta()) +
-                         " --out " + out.string() + " -q",
+  auto r = run_sflsh("metrics --dyna " + path.string() + " --sequence 50004_shake_hips --frames 3 --betas " +
+                         betas_arg(some_beta()) + " --out " + out.string() + " -q",
                      dir);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(read_json(out / "summary.json")["dyna"]["frames"].get<int>(), 3);
   // Without --frames the whole dataset is refused by the read bound, naming file and dataset.
-  r = run_sflsh("metrics --dyna " + path.string() + " --sequence 50004_shake_hips --out " + (dir / "all").string(), dir);
+  r = run_sflsh("metrics --dyna " + path.string() + " --sequence 50004_shake_hips --out " + (dir / "all").string(),
+                dir);
   EXPECT_EQ(r.exit_code, 1);
-  EXPECT_THAT(r.err, HasSubstr(path.string() + ": 50004_shake_hips: 10000000 frames of " + std::to_string(n) + " vertices need"));
+  EXPECT_THAT(r.err, HasSubstr(path.string() + ": 50004_shake_hips: 10000000 frames of " + std::to_string(n) +
+                               " vertices need"));
   EXPECT_TRUE(one_error_line(r.err)) << r.err;
 }
 
@@ -144,8 +155,8 @@ TEST(CliMetrics, WritesTheSigmaSurfaceTableAndSummary) {
   const auto dir = sflsh::testing::scratch_dir();
   const CliFile f = write_file(dir);
   const auto out = dir / "out";
-  const auto r = run_sflsh("metrics --dyna " + f.path.string() + " --sequence 50004_shake_hips --betas " + betas_arg(some_beta()) +
-                               " --out " + out.string() + " -q",
+  const auto r = run_sflsh("metrics --dyna " + f.path.string() + " --sequence 50004_shake_hips --betas " +
+                               betas_arg(some_beta()) + " --out " + out.string() + " -q",
                            dir);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const std::vector<std::string> names = vtk::read_point_array_names(out / "metrics.vtp");
@@ -174,7 +185,9 @@ TEST(CliMetrics, FitsBetaWhenNotGiven) {
   const auto dir = sflsh::testing::scratch_dir();
   const CliFile f = write_file(dir);
   const auto out = dir / "out";
-  const auto r = run_sflsh("metrics --dyna " + f.path.string() + " --sequence 50004_shake_hips --frames 6 --out " + out.string() + " -q", dir);
+  const auto r = run_sflsh(
+      "metrics --dyna " + f.path.string() + " --sequence 50004_shake_hips --frames 6 --out " + out.string() + " -q",
+      dir);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const nlohmann::json summary = read_json(out / "summary.json");
   EXPECT_TRUE(summary["beta_fitted"].get<bool>());
@@ -182,7 +195,8 @@ TEST(CliMetrics, FitsBetaWhenNotGiven) {
   ASSERT_EQ(beta.size(), 10u);
   // With 1–4 mm soft-tissue waves in the data (down-weighted, not removed) β is recovered to ~2e-2
   // (measured 0.018 on 16 frames of jiggle_on_toes); 0.05 fails for a wrong or unconverged β.
-  for (int k = 0; k < body::kNumBetas; ++k) EXPECT_NEAR(beta[static_cast<std::size_t>(k)], some_beta()[k], 0.05) << "beta " << k;
+  for (int k = 0; k < body::kNumBetas; ++k)
+    EXPECT_NEAR(beta[static_cast<std::size_t>(k)], some_beta()[k], 0.05) << "beta " << k;
   EXPECT_EQ(summary["dyna"]["frames"].get<int>(), 6);
 }
 
@@ -194,7 +208,8 @@ TEST(CliMetrics, BadArgumentsFailCleanlyAndWriteNothing) {
 
   auto r = run_sflsh("metrics" + dyna + " --sequence 50004_knees --out " + out.string(), dir);
   EXPECT_NE(r.exit_code, 0);
-  EXPECT_THAT(r.err, HasSubstr(f.path.string() + ": 50004_knees: no such sequence in the file, expected one of 50004_jiggle_on_toes, "
+  EXPECT_THAT(r.err, HasSubstr(f.path.string() +
+                               ": 50004_knees: no such sequence in the file, expected one of 50004_jiggle_on_toes, "
                                "50004_shake_hips, 50020_shake_hips"));
   EXPECT_TRUE(one_error_line(r.err)) << r.err;
 
@@ -220,11 +235,12 @@ TEST(CliMetrics, BadArgumentsFailCleanlyAndWriteNothing) {
   write_dyna_file(small, faces, {DynaSequence{"1_a", {RowMatrixX3d::Zero(4, 3), RowMatrixX3d::Ones(4, 3)}, {}, 60.0}});
   r = run_sflsh("metrics --dyna " + small.string() + " --sequence 1_a --out " + out.string(), dir);
   EXPECT_NE(r.exit_code, 0);
-  EXPECT_THAT(r.err, HasSubstr(fmt::format("the registrations have 4 vertices, but the body model '{}' has {}", open_body().name,
-                                           open_body().num_vertices())));
+  EXPECT_THAT(r.err, HasSubstr(fmt::format("the registrations have 4 vertices, but the body model '{}' has {}",
+                                           open_body().name, open_body().num_vertices())));
   EXPECT_TRUE(one_error_line(r.err)) << r.err;
 
-  r = run_sflsh("metrics" + dyna + " --sequence 50004_shake_hips --betas \"1 2 3 4 5 6 7 8 9 10 11\" --out " + out.string(), dir);
+  r = run_sflsh(
+      "metrics" + dyna + " --sequence 50004_shake_hips --betas \"1 2 3 4 5 6 7 8 9 10 11\" --out " + out.string(), dir);
   EXPECT_NE(r.exit_code, 0);
   EXPECT_TRUE(one_error_line(r.err)) << r.err;
 

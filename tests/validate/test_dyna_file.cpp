@@ -1,10 +1,10 @@
 // DYNA HDF5 files: the writer/reader round trip, float32 input as h5py writes it, attributes, listing, and
 // one clear one-line error per kind of malformed file.
-#include <sflsh/validate/dyna_file.hpp>
-
 #include "error_of.hpp"
 #include "scratch_dir.hpp"
 #include "synthetic_body.hpp"
+
+#include <sflsh/validate/dyna_file.hpp>
 
 #include <H5Cpp.h>
 #include <gmock/gmock.h>
@@ -16,8 +16,8 @@
 namespace sflsh::validate {
 namespace {
 
-using ::testing::HasSubstr;
 using sflsh::testing::error_of;
+using ::testing::HasSubstr;
 
 RowMatrixX3i small_faces() {
   RowMatrixX3i f(2, 3);
@@ -38,12 +38,14 @@ DynaSequence ramp(const std::string& key, int vertices, int frames, double offse
 }
 
 /// Writes a raw HDF5 file: `faces` (unless empty) and one dataset of arbitrary shape and type.
-void write_raw(const std::filesystem::path& path, const RowMatrixX3i& faces, const std::string& name, const std::vector<hsize_t>& dims,
-               const std::vector<double>& values, const H5::PredType& file_type = H5::PredType::IEEE_F64LE) {
+void write_raw(const std::filesystem::path& path, const RowMatrixX3i& faces, const std::string& name,
+               const std::vector<hsize_t>& dims, const std::vector<double>& values,
+               const H5::PredType& file_type = H5::PredType::IEEE_F64LE) {
   H5::H5File file(path.string(), H5F_ACC_TRUNC);
   if (faces.rows() > 0) {
     const hsize_t fd[2] = {static_cast<hsize_t>(faces.rows()), 3};
-    file.createDataSet("faces", H5::PredType::STD_I64LE, H5::DataSpace(2, fd)).write(faces.data(), H5::PredType::NATIVE_INT);
+    file.createDataSet("faces", H5::PredType::STD_I64LE, H5::DataSpace(2, fd))
+        .write(faces.data(), H5::PredType::NATIVE_INT);
   }
   if (!name.empty())
     file.createDataSet(name, file_type, H5::DataSpace(static_cast<int>(dims.size()), dims.data()))
@@ -76,10 +78,11 @@ TEST(DynaFile, WriterAndReaderRoundTripWithAttributes) {
 
   const DynaSequence ra = file.read("50004_jiggle_on_toes");
   ASSERT_EQ(ra.num_frames(), 3);
-  for (int t = 0; t < 3; ++t) EXPECT_EQ(ra.frames[static_cast<std::size_t>(t)], a.frames[static_cast<std::size_t>(t)]);  // float64: bit-exact
+  for (int t = 0; t < 3; ++t)
+    EXPECT_EQ(ra.frames[static_cast<std::size_t>(t)], a.frames[static_cast<std::size_t>(t)]);  // float64: bit-exact
   EXPECT_EQ(ra.attributes.numbers.at("beta"), a.attributes.numbers.at("beta"));
   EXPECT_EQ(ra.attributes.strings.at("source"), "synthetic");
-  EXPECT_EQ(ra.fps, 120.0);                       // from the file attribute
+  EXPECT_EQ(ra.fps, 120.0);                            // from the file attribute
   EXPECT_EQ(file.read("50004_shake_hips").fps, 30.0);  // the dataset's own attribute wins
   EXPECT_EQ(file.read("50004_shake_hips").frames[4], b.frames[4]);
 }
@@ -133,7 +136,8 @@ TEST(DynaFile, MalformedFilesGiveOneLineErrors) {
   RowMatrixX3i faces = small_faces();
   faces(1, 1) = 9;
   write_raw(out_of_range, faces, "50002_hips", {4, 3, 2}, std::vector<double>(24, 0.0));
-  EXPECT_THAT(error_of([&] { DynaFile f(out_of_range); }), HasSubstr("faces: refers to vertex 9, but the sequences have 4 vertices"));
+  EXPECT_THAT(error_of([&] { DynaFile f(out_of_range); }),
+              HasSubstr("faces: refers to vertex 9, but the sequences have 4 vertices"));
 
   const auto nan = dir / "nan.h5";
   std::vector<double> values(24, 0.0);
@@ -150,7 +154,8 @@ TEST(DynaFile, MalformedFilesGiveOneLineErrors) {
 
   const body::BodyModel model = sflsh::testing::synthetic_body();
   e = error_of([&] { with_nan.require_vertices(model); });
-  EXPECT_THAT(e, HasSubstr(fmt::format("the registrations have 4 vertices, but the body model 'synthetic' has {}", model.num_vertices())));
+  EXPECT_THAT(e, HasSubstr(fmt::format("the registrations have 4 vertices, but the body model 'synthetic' has {}",
+                                       model.num_vertices())));
   EXPECT_TRUE(one_line(e)) << e;
 }
 
@@ -163,7 +168,8 @@ TEST(DynaFile, WriterRejectsBadSequencesAndLeavesNoFileBehind) {
     DynaSequence bad = ramp("50004_knees", 4, 2);
     bad.frames[1](0, 0) = std::numeric_limits<double>::infinity();
     EXPECT_THAT(error_of([&] { writer.add(bad); }), HasSubstr("sequence '50004_knees' frame 1 has a non-finite value"));
-    EXPECT_THAT(error_of([&] { writer.add(ramp("50004_punching", 5, 2)); }), HasSubstr("has 5 vertices, earlier sequences have 4"));
+    EXPECT_THAT(error_of([&] { writer.add(ramp("50004_punching", 5, 2)); }),
+                HasSubstr("has 5 vertices, earlier sequences have 4"));
     EXPECT_THAT(error_of([&] { writer.add(ramp("faces", 4, 2)); }), HasSubstr("not a valid sequence key"));
   }  // destroyed without commit
   EXPECT_FALSE(std::filesystem::exists(path));
@@ -200,7 +206,8 @@ void write_sparse(const std::filesystem::path& path, const std::string& name, hs
   H5::H5File file(path.string(), H5F_ACC_TRUNC);
   const RowMatrixX3i faces = small_faces();
   const hsize_t fd[2] = {static_cast<hsize_t>(faces.rows()), 3};
-  file.createDataSet("faces", H5::PredType::STD_I64LE, H5::DataSpace(2, fd)).write(faces.data(), H5::PredType::NATIVE_INT);
+  file.createDataSet("faces", H5::PredType::STD_I64LE, H5::DataSpace(2, fd))
+      .write(faces.data(), H5::PredType::NATIVE_INT);
   const hsize_t dims[3] = {vertices, 3, frames};
   const hsize_t chunk[3] = {std::min<hsize_t>(vertices, 1024), 3, 16};
   H5::DSetCreatPropList properties;
@@ -234,7 +241,8 @@ TEST(DynaFile, HugeSparseDatasetReadsOnlyTheFramesAsked) {
   EXPECT_EQ(file.info("50004_jiggle_on_toes").frames, 10000000);
   const DynaSequence three = file.read("50004_jiggle_on_toes", 3);
   ASSERT_EQ(three.num_frames(), 3);
-  for (int t = 0; t < 3; ++t) EXPECT_EQ(three.frames[static_cast<std::size_t>(t)], written[static_cast<std::size_t>(t)]) << t;
+  for (int t = 0; t < 3; ++t)
+    EXPECT_EQ(three.frames[static_cast<std::size_t>(t)], written[static_cast<std::size_t>(t)]) << t;
 
   // All of it: refused by the read bound before anything is allocated.
   std::string e = error_of([&] { file.read("50004_jiggle_on_toes"); });
@@ -252,13 +260,17 @@ TEST(DynaFile, DegenerateOrAbsurdRegistrationsAreRefusedAtLoad) {
   const auto zeros = dir / "zeros.h5";
   write_raw(zeros, small_faces(), "50002_hips", {4, 3, 2}, std::vector<double>(24, 0.0));
   std::string e = error_of([&] { DynaFile(zeros).read("50002_hips"); });
-  EXPECT_THAT(e, HasSubstr(zeros.string() + ": 50002_hips: frame 0 is degenerate: its vertices span 0 m, expected a body at least 0.01 m across"));
+  EXPECT_THAT(
+      e,
+      HasSubstr(zeros.string() +
+                ": 50002_hips: frame 0 is degenerate: its vertices span 0 m, expected a body at least 0.01 m across"));
   EXPECT_TRUE(one_line(e)) << e;
 
   // Every vertex at one point (not at the origin) is as collapsed.
   const auto point = dir / "point.h5";
   std::vector<double> same(24);
-  for (std::size_t i = 0; i < same.size(); ++i) same[i] = 0.3 + 0.1 * static_cast<double>((i / 2) % 3);  // [v][c][t]: c only
+  for (std::size_t i = 0; i < same.size(); ++i)
+    same[i] = 0.3 + 0.1 * static_cast<double>((i / 2) % 3);  // [v][c][t]: c only
   write_raw(point, small_faces(), "50002_hips", {4, 3, 2}, same);
   EXPECT_THAT(error_of([&] { DynaFile(point).read("50002_hips"); }), HasSubstr("50002_hips: frame 0 is degenerate"));
 
@@ -268,7 +280,8 @@ TEST(DynaFile, DegenerateOrAbsurdRegistrationsAreRefusedAtLoad) {
   for (RowMatrixX3d& f : far.frames) f *= 1e300;
   write_dyna_file(scaled, small_faces(), {far});
   e = error_of([&] { DynaFile(scaled).read("50002_hips"); });
-  EXPECT_THAT(e, HasSubstr(scaled.string() + ": 50002_hips: coordinate 3.2125e+301 m in frame 0 (vertex 3) is beyond ±10000 m"));
+  EXPECT_THAT(e, HasSubstr(scaled.string() +
+                           ": 50002_hips: coordinate 3.2125e+301 m in frame 0 (vertex 3) is beyond ±10000 m"));
   EXPECT_TRUE(one_line(e)) << e;
 
   // A frame rate attribute that is not a capture rate.
@@ -284,7 +297,8 @@ TEST(DynaFile, DegenerateOrAbsurdRegistrationsAreRefusedAtLoad) {
   write_raw(empty, small_faces(), "", {}, {});
   const DynaFile none(empty);
   EXPECT_THAT(error_of([&] { none.read("50004_hips"); }),
-              HasSubstr(empty.string() + ": 50004_hips: no such sequence in the file, which holds no sequence dataset (only 'faces')"));
+              HasSubstr(empty.string() +
+                        ": 50004_hips: no such sequence in the file, which holds no sequence dataset (only 'faces')"));
   EXPECT_THAT(error_of([&] { none.require_vertices(sflsh::testing::synthetic_body()); }),
               HasSubstr(empty.string() + ": the file holds no sequence dataset (only 'faces')"));
 }

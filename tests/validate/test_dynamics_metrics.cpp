@@ -1,19 +1,17 @@
 // The dynamics metric of docs/physics.md §4 on synthetic registrations with known sinusoidal displacements:
 // exact with the true poses (also in a rotated world frame), close with fitted poses.
+#include "scratch_dir.hpp"
+#include "validate_fixtures.hpp"
+
+#include <sflsh/core/error.hpp>
+#include <sflsh/core/vtk_io.hpp>
 #include <sflsh/validate/dynamics_metrics.hpp>
 #include <sflsh/validate/dynamics_report.hpp>
 #include <sflsh/validate/pose_fit.hpp>
 
-#include <sflsh/core/error.hpp>
-
-#include "scratch_dir.hpp"
-#include "validate_fixtures.hpp"
-
-#include <sflsh/core/vtk_io.hpp>
+#include <gtest/gtest.h>
 
 #include <fstream>
-
-#include <gtest/gtest.h>
 
 namespace sflsh::validate {
 namespace {
@@ -47,16 +45,18 @@ TEST(DynamicsMetrics, ExactPosesRecoverTheKnownAmplitudes) {
 
 TEST(DynamicsMetrics, RotatedWorldFrameAndStaticOffsetAreRemoved) {
   // A Z-up world (AMASS convention) and a constant extra offset on every displaced vertex: σ is unchanged.
-  auto s = synthetic_sequence(open_body(), some_beta(), "running_on_spot", 16, soft(), 0.003, 9, body::amass_world_from_body());
+  auto s = synthetic_sequence(open_body(), some_beta(), "running_on_spot", 16, soft(), 0.003, 9,
+                              body::amass_world_from_body());
   const DynamicsResult plain = dynamics_metrics(open_body(), s.beta, s.motion, s.frames, soft());
   EXPECT_LT(max_abs(plain.sigma - s.sigma), 1e-10);  // as above
   // The same data with a static 5 mm offset along x in the unposed frame, re-skinned with the known motion.
   const NeutralPullback pullback(open_body(), s.beta);
   for (std::size_t t = 0; t < s.frames.size(); ++t) {
-    body::RowMatrixX3d unposed = pullback.unposed(s.motion.poses[t], s.motion.trans[t], s.motion.world_from_body, s.frames[t]);
+    body::RowMatrixX3d unposed =
+        pullback.unposed(s.motion.poses[t], s.motion.trans[t], s.motion.world_from_body, s.frames[t]);
     unposed.col(0).array() += 0.005;
-    const body::Kinematics kin = body::forward_kinematics(open_body(), body::regress_joints(open_body(), pullback.shaped()),
-                                                          s.motion.poses[t], s.motion.trans[t]);
+    const body::Kinematics kin = body::forward_kinematics(
+        open_body(), body::regress_joints(open_body(), pullback.shaped()), s.motion.poses[t], s.motion.trans[t]);
     s.frames[t] = body::linear_blend_skinning(open_body(), kin, unposed) * s.motion.world_from_body.transpose();
   }
   const DynamicsResult offset = dynamics_metrics(open_body(), s.beta, s.motion, s.frames, soft());
@@ -68,10 +68,11 @@ TEST(DynamicsMetrics, RotatedWorldFrameAndStaticOffsetAreRemoved) {
 
 TEST(DynamicsMetrics, FractionRecoveredIsTheRatioOfMeans) {
   const auto full = synthetic_sequence(open_body(), some_beta(), "shake_hips", 12, soft(), 0.004, 21);
-  const auto half = synthetic_sequence(open_body(), some_beta(), "shake_hips", 12, soft(), 0.002, 21);  // same waves, half amplitude
+  const auto half =
+      synthetic_sequence(open_body(), some_beta(), "shake_hips", 12, soft(), 0.002, 21);  // same waves, half amplitude
   const DynamicsResult a = dynamics_metrics(open_body(), full.beta, full.motion, full.frames, soft());
   const DynamicsResult b = dynamics_metrics(open_body(), half.beta, half.motion, half.frames, soft());
-  EXPECT_NEAR(fraction_recovered(b, a), 0.5, 1e-9);   // exact up to the 1e-10 m of each σ
+  EXPECT_NEAR(fraction_recovered(b, a), 0.5, 1e-9);  // exact up to the 1e-10 m of each σ
   DynamicsResult still = a;
   still.sigma.setZero();
   EXPECT_THROW(fraction_recovered(a, still), Error);

@@ -1,18 +1,18 @@
 // The experiment pipeline of `sflsh validate` end to end on a small configuration, pinned as an accuracy
 // regression test (Table 2 of SFLSH on synthetic ground truth), and the command's input checks.
-#include <sflsh/body/body_io.hpp>
-#include <sflsh/body/subjects.hpp>
-#include <sflsh/material/material_file.hpp>
-#include <sflsh/reduced/shape_model_file.hpp>
-#include <sflsh/core/summary.hpp>
-#include <sflsh/validate/experiments.hpp>
-
-#include <gtest/gtest.h>
-
 #include "long_test.hpp"
 #include "png_check.hpp"
 #include "run_command.hpp"
 #include "scratch_dir.hpp"
+
+#include <sflsh/body/body_io.hpp>
+#include <sflsh/body/subjects.hpp>
+#include <sflsh/core/summary.hpp>
+#include <sflsh/material/material_file.hpp>
+#include <sflsh/reduced/shape_model_file.hpp>
+#include <sflsh/validate/experiments.hpp>
+
+#include <gtest/gtest.h>
 
 #include <filesystem>
 #include <fstream>
@@ -48,22 +48,23 @@ TEST(Experiments, SmallConfigurationReproducesPinnedTable2) {
   const nlohmann::json summary = validate::run_validation(config, dir, nlohmann::json::object());
   sflsh::testing::expect_drawn_png(dir / "lambda_sweep.png", 900, 600);
 
-  for (const char* file : {"table2.csv", "table2.md", "table2_error.csv", "cross_validation.csv", "lambda_sweep.csv",
-                           "covariance.csv", "parameter_error.csv", "dynamics.vtp", "fits.csv", "summary.json",
-                           "materials/ours/OPEN_TEST_1.toml"})
+  for (const char* file :
+       {"table2.csv", "table2.md", "table2_error.csv", "cross_validation.csv", "lambda_sweep.csv", "covariance.csv",
+        "parameter_error.csv", "dynamics.vtp", "fits.csv", "summary.json", "materials/ours/OPEN_TEST_1.toml"})
     EXPECT_TRUE(std::filesystem::exists(dir / file)) << file;
   {
     std::ifstream in(dir / "table2.csv");
     std::string header;
     std::getline(in, header);
-    EXPECT_EQ(header, "row,subjects,train_motions_subject_1,train_motions_subject_2,train_motions_avg,"
-                      "test_motions_subject_1,test_motions_subject_2,test_motions_avg");
+    EXPECT_EQ(header,
+              "row,subjects,train_motions_subject_1,train_motions_subject_2,train_motions_avg,"
+              "test_motions_subject_1,test_motions_subject_2,test_motions_avg");
     std::string line;
     std::vector<std::string> labels;
     while (std::getline(in, line)) labels.push_back(line.substr(1, line.find('"', 1) - 1));
-    const std::vector<std::string> expected{"Ground truth",  "Independent",    "Cross-val. L2", "Cross-val. ours",
-                                            "Full opt. L2",  "Full opt. ours", "Generaliz. L2", "Generaliz. ours",
-                                            "Ground truth (test subjects)"};
+    const std::vector<std::string> expected{"Ground truth",    "Independent",     "Cross-val. L2",
+                                            "Cross-val. ours", "Full opt. L2",    "Full opt. ours",
+                                            "Generaliz. L2",   "Generaliz. ours", "Ground truth (test subjects)"};
     EXPECT_EQ(labels, expected);
   }
   // Pinned values (this machine kind, measured when the pipeline landed), in mm.
@@ -98,7 +99,8 @@ TEST(Experiments, SmallConfigurationReproducesPinnedTable2) {
           reduced::material_for_beta(model, body, body::find_subject(body::default_subjects(), s).beta, s);
       EXPECT_EQ(from_model.vertices(), fitted.vertices());
       // Both are κ̂(β) clamped and de-normalized; the material file was written the same way.
-      EXPECT_LT((from_model.kappa() - fitted.kappa()).cwiseQuotient(fitted.kappa()).cwiseAbs().maxCoeff(), 1e-12) << tag << " " << s;
+      EXPECT_LT((from_model.kappa() - fitted.kappa()).cwiseQuotient(fitted.kappa()).cwiseAbs().maxCoeff(), 1e-12)
+          << tag << " " << s;
     }
   }
 
@@ -126,8 +128,11 @@ TEST(Experiments, BadArgumentsGiveOneLineErrors) {
 // pose and β fit and the metric (the path real DYNA data takes), for one train subject.
 TEST(Experiments, DynaFilesAreTheGroundTruthWhenGiven) {
   const std::filesystem::path dir = sflsh::testing::scratch_dir();
-  const auto gt = sflsh::testing::run_sflsh("groundtruth --subjects OPEN_TRAIN_2 --motions running_on_spot,jiggle_on_toes "
-                                            "--frames 12 --mesh coarse --out " + (dir / "gt").string(), dir);
+  const auto gt = sflsh::testing::run_sflsh(
+      "groundtruth --subjects OPEN_TRAIN_2 --motions running_on_spot,jiggle_on_toes "
+      "--frames 12 --mesh coarse --out " +
+          (dir / "gt").string(),
+      dir);
   ASSERT_EQ(gt.exit_code, 0) << gt.err;
   const nlohmann::json truth = read_json(dir / "gt" / "summary.json");
   double synthetic = 0.0;
@@ -142,7 +147,7 @@ TEST(Experiments, DynaFilesAreTheGroundTruthWhenGiven) {
   config.stages = {1};
   config.iterations = 2;
   config.lambdas = {1.0};
-  config.cross_validation = false;   // one train subject
+  config.cross_validation = false;  // one train subject
   config.threads = 2;
   config.progress = false;
   config.cache_dir = SFLSH_TEST_CACHE;
@@ -167,7 +172,7 @@ TEST(Experiments, DynaFilesAreTheGroundTruthWhenGiven) {
     }
   }
   EXPECT_GT(row_value(summary, "Generaliz. ours", "train_motions"), 0.0);
-  EXPECT_FALSE(std::filesystem::exists(dir / "validate" / "parameter_error.csv"));   // no true parameters
+  EXPECT_FALSE(std::filesystem::exists(dir / "validate" / "parameter_error.csv"));  // no true parameters
   EXPECT_TRUE(std::filesystem::exists(dir / "validate" / "table2.csv"));
 }
 
@@ -177,15 +182,19 @@ TEST(Experiments, TwoMpiProcessesGiveTheSameTable) {
   SFLSH_LONG_TEST();  // tens of seconds on 2 cores: label long
   if (std::system("command -v mpiexec >/dev/null 2>&1") != 0) GTEST_SKIP() << "mpiexec not found";
   const std::filesystem::path dir = sflsh::testing::scratch_dir();
-  const std::string args = " validate --train-subjects OPEN_TRAIN_1,OPEN_TRAIN_2 --test-subjects OPEN_TEST_1 --frames 10 "
-                           "--stages 1 --iterations 2 --lambdas 1 --no-cross-validation --threads 1 -q --out ";
+  const std::string args =
+      " validate --train-subjects OPEN_TRAIN_1,OPEN_TRAIN_2 --test-subjects OPEN_TEST_1 --frames 10 "
+      "--stages 1 --iterations 2 --lambdas 1 --no-cross-validation --threads 1 -q --out ";
   // The test process is an MPI singleton: its OMPI_*/PMIX_* variables must not reach the nested mpiexec.
   const std::string clean = "for v in $(env | sed -n 's/^\\(OMPI_[^=]*\\|PMIX_[^=]*\\)=.*/\\1/p'); do unset $v; done; ";
-  const std::string one = clean + std::string(SFLSH_CLI) + args + (dir / "one").string() + " >" + (dir / "one.log").string() + " 2>&1";
+  const std::string one =
+      clean + std::string(SFLSH_CLI) + args + (dir / "one").string() + " >" + (dir / "one.log").string() + " 2>&1";
   ASSERT_EQ(std::system(one.c_str()), 0) << "see " << (dir / "one.log");
-  const std::string two = clean + "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 "
-                          "mpiexec -n 2 " + std::string(SFLSH_CLI) + args + (dir / "two").string() + " >" +
-                          (dir / "two.log").string() + " 2>&1";
+  const std::string two =
+      clean +
+      "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 "
+      "mpiexec -n 2 " +
+      std::string(SFLSH_CLI) + args + (dir / "two").string() + " >" + (dir / "two.log").string() + " 2>&1";
   ASSERT_EQ(std::system(two.c_str()), 0) << "mpiexec -n 2 failed; see " << (dir / "two.log");
   auto slurp = [](const std::filesystem::path& p) {
     std::ifstream in(p);

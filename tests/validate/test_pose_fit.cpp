@@ -1,13 +1,11 @@
 // Pose and shape fits on clean synthetic registrations (the body posed by a procedural motion, no soft
 // tissue motion): the fitted model reproduces the registrations and the known poses, translations and β.
-#include <sflsh/validate/dynamics_metrics.hpp>
-#include <sflsh/validate/pose_fit.hpp>
-
-#include <sflsh/core/error.hpp>
-
 #include "validate_fixtures.hpp"
 
+#include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
+#include <sflsh/validate/dynamics_metrics.hpp>
+#include <sflsh/validate/pose_fit.hpp>
 
 #include <gtest/gtest.h>
 
@@ -23,7 +21,8 @@ double worst_vertex_error(const PoseFitResult& fit, const std::vector<RowMatrixX
   const body::Poser poser(open_body(), fit.beta);
   double worst = 0.0;
   for (std::size_t t = 0; t < frames.size(); ++t) {
-    const RowMatrixX3d v = poser.pose(fit.motion.poses[t], fit.motion.trans[t]) * fit.motion.world_from_body.transpose();
+    const RowMatrixX3d v =
+        poser.pose(fit.motion.poses[t], fit.motion.trans[t]) * fit.motion.world_from_body.transpose();
     worst = std::max(worst, (v - frames[t]).rowwise().norm().maxCoeff());
   }
   return worst;
@@ -44,7 +43,8 @@ TEST(PoseFit, RecoversKnownPosesAndTranslationsWithBetaGiven) {
   double worst_trans = 0.0, worst_root = 0.0;
   for (std::size_t t = 0; t < s.frames.size(); ++t) {
     worst_trans = std::max(worst_trans, (fit.motion.trans[t] - s.motion.trans[t]).norm());
-    const Eigen::Matrix3d r = body::rodrigues(fit.motion.poses[t].head<3>()).transpose() * body::rodrigues(s.motion.poses[t].head<3>());
+    const Eigen::Matrix3d r =
+        body::rodrigues(fit.motion.poses[t].head<3>()).transpose() * body::rodrigues(s.motion.poses[t].head<3>());
     worst_root = std::max(worst_root, Eigen::AngleAxisd(r).angle());
   }
   // Translation and root orientation are determined by thousands of vertices: 1e-6 m / 1e-6 rad.
@@ -56,7 +56,8 @@ TEST(PoseFit, RecoversKnownPosesAndTranslationsWithBetaGiven) {
       if (open_body().weights.col(k).maxCoeff() < 0.2) continue;  // too weakly observed to compare angles
       const Eigen::Matrix3d r = body::rodrigues(fit.motion.poses[t].segment<3>(3 * k)).transpose() *
                                 body::rodrigues(s.motion.poses[t].segment<3>(3 * k));
-      EXPECT_LT(Eigen::AngleAxisd(r).angle(), 1e-4) << "frame " << t << " joint " << body::kJointNames[static_cast<std::size_t>(k)];
+      EXPECT_LT(Eigen::AngleAxisd(r).angle(), 1e-4)
+          << "frame " << t << " joint " << body::kJointNames[static_cast<std::size_t>(k)];
     }
 }
 
@@ -76,9 +77,10 @@ TEST(PoseFit, RecoversBetaWhenNotGiven) {
 
 TEST(PoseFit, StartsFromARotatedWorldFrame) {
   // Z-up registrations: the rigid start (weighted Kabsch) finds the 90° root rotation.
-  const auto s = synthetic_sequence(open_body(), some_beta(), "shake_shoulders", 4, {}, 0.0, 3, body::amass_world_from_body());
+  const auto s =
+      synthetic_sequence(open_body(), some_beta(), "shake_shoulders", 4, {}, 0.0, 3, body::amass_world_from_body());
   const PoseFitResult fit = fit_motion(open_body(), s.frames, 60.0, s.beta, PoseFitOptions{});
-  EXPECT_LT(fit.max_rms, 1e-7);   // as in the first test
+  EXPECT_LT(fit.max_rms, 1e-7);  // as in the first test
 }
 
 TEST(PoseFit, RejectsNonFiniteRegistrations) {

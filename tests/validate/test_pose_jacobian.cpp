@@ -1,8 +1,8 @@
 // The analytic Jacobian of the posed vertices against central differences, on a synthetic body with pose
 // correctives, a rotated world frame and poses from small to large angles.
-#include <sflsh/validate/pose_jacobian.hpp>
-
 #include "synthetic_body.hpp"
+
+#include <sflsh/validate/pose_jacobian.hpp>
 
 #include <gtest/gtest.h>
 
@@ -14,7 +14,7 @@ namespace {
 class PoseJacobian : public ::testing::TestWithParam<double> {};
 
 TEST_P(PoseJacobian, MatchesCentralDifferences) {
-  const double scale = GetParam();   // typical joint angle [rad]
+  const double scale = GetParam();  // typical joint angle [rad]
   const body::BodyModel model = sflsh::testing::synthetic_body(6, true, 11);
   body::Betas beta = body::Betas::Zero();
   beta[0] = 0.7;
@@ -49,14 +49,15 @@ TEST_P(PoseJacobian, MatchesCentralDifferences) {
 INSTANTIATE_TEST_SUITE_P(AngleScales, PoseJacobian, ::testing::Values(1e-9, 0.05, 0.6, 1.5));
 
 TEST(PoseJacobian, LeftJacobianOfRodrigues) {
-  for (const Eigen::Vector3d& omega : {Eigen::Vector3d(1e-9, -2e-9, 0.5e-9), Eigen::Vector3d(0.2, 0.1, -0.3), Eigen::Vector3d(2.0, -1.0, 1.5)}) {
+  for (const Eigen::Vector3d& omega :
+       {Eigen::Vector3d(1e-9, -2e-9, 0.5e-9), Eigen::Vector3d(0.2, 0.1, -0.3), Eigen::Vector3d(2.0, -1.0, 1.5)}) {
     const Eigen::Matrix3d s = rotation_left_jacobian(omega);
     const Eigen::Matrix3d r = body::rodrigues(omega);
     for (int m = 0; m < 3; ++m) {
       const double h = 1e-6;
       const Eigen::Vector3d e = h * Eigen::Vector3d::Unit(m);
       const Eigen::Matrix3d dr = (body::rodrigues(omega + e) - body::rodrigues(omega - e)) / (2 * h);
-      const Eigen::Matrix3d skew = dr * r.transpose();   // [S e_m]×
+      const Eigen::Matrix3d skew = dr * r.transpose();  // [S e_m]×
       const Eigen::Vector3d axial(skew(2, 1), skew(0, 2), skew(1, 0));
       // Same error budget as above for O(1) entries.
       EXPECT_LT((axial - s.col(m)).norm(), 1e-8) << omega.transpose();

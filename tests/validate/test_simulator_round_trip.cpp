@@ -1,15 +1,15 @@
 // docs/physics.md §4, last paragraph: for a simulation driven by the same poses, inverse skinning returns the
 // elastic displacement exactly, so the metric pipeline run on the simulator's posed surfaces (written to and
 // read back from a DYNA file) must reproduce the simulator's own σ on the region's vertices.
+#include "scratch_dir.hpp"
+#include "validate_fixtures.hpp"
+
 #include <sflsh/fullspace/fullspace_solver.hpp>
-#include <sflsh/model/body_layer.hpp>
 #include <sflsh/fullspace/reference_integrator.hpp>
+#include <sflsh/model/body_layer.hpp>
 #include <sflsh/model/simulation_output.hpp>
 #include <sflsh/validate/dyna_file.hpp>
 #include <sflsh/validate/dynamics_metrics.hpp>
-
-#include "scratch_dir.hpp"
-#include "validate_fixtures.hpp"
 
 #include <gtest/gtest.h>
 #include <mpi.h>

@@ -33,13 +33,14 @@ inline body::Betas some_beta() {
 struct SyntheticSequence {
   body::Betas beta;
   body::Motion motion;
-  std::vector<body::RowMatrixX3d> frames;   ///< posed (world) vertices per frame
+  std::vector<body::RowMatrixX3d> frames;              ///< posed (world) vertices per frame
   Eigen::VectorXd sigma, sigma_normal, sigma_tangent;  ///< the known amplitudes per body vertex [m]
 };
 
 /// `displaced`: vertices that get a displacement (others none); amplitudes A_i ∈ [amplitude/4, amplitude].
-inline SyntheticSequence synthetic_sequence(const body::BodyModel& model, const body::Betas& beta, const std::string& motion_name,
-                                            int frames, const std::vector<int>& displaced, double amplitude, unsigned seed = 3,
+inline SyntheticSequence synthetic_sequence(const body::BodyModel& model, const body::Betas& beta,
+                                            const std::string& motion_name, int frames,
+                                            const std::vector<int>& displaced, double amplitude, unsigned seed = 3,
                                             const Eigen::Matrix3d& world_from_body = Eigen::Matrix3d::Identity()) {
   SyntheticSequence s;
   s.beta = beta;
@@ -64,7 +65,7 @@ inline SyntheticSequence synthetic_sequence(const body::BodyModel& model, const 
     Wave w;
     w.vertex = v;
     w.a = amplitude * (0.25 + 0.75 * uniform(rng));
-    w.m = 1 + static_cast<int>(3 * uniform(rng));   // 1..3 whole periods (T ≥ 8 keeps 2m < T)
+    w.m = 1 + static_cast<int>(3 * uniform(rng));  // 1..3 whole periods (T ≥ 8 keeps 2m < T)
     w.phase = 2 * std::numbers::pi * uniform(rng);
     const double alpha = 0.5 * std::numbers::pi * uniform(rng);
     const Eigen::Vector3d nv = normals.row(v).transpose();
@@ -81,7 +82,8 @@ inline SyntheticSequence synthetic_sequence(const body::BodyModel& model, const 
     body::RowMatrixX3d unposed = shaped + body::pose_correctives(model, theta);
     for (const Wave& w : waves)
       unposed.row(w.vertex) += (w.a * std::sin(2 * std::numbers::pi * w.m * t / T + w.phase)) * w.direction.transpose();
-    const body::Kinematics kin = body::forward_kinematics(model, joints, theta, s.motion.trans[static_cast<std::size_t>(t)]);
+    const body::Kinematics kin =
+        body::forward_kinematics(model, joints, theta, s.motion.trans[static_cast<std::size_t>(t)]);
     s.frames.push_back(body::linear_blend_skinning(model, kin, unposed) * world_from_body.transpose());
   }
   return s;

@@ -1,10 +1,9 @@
 // Reading DYNA registration files (docs/physics.md §3.2).
-#include <sflsh/validate/dyna_file.hpp>
-
 #include "hdf5_util.hpp"
 
 #include <sflsh/body/motion.hpp>
 #include <sflsh/core/error.hpp>
+#include <sflsh/validate/dyna_file.hpp>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -23,10 +22,20 @@ std::optional<double> Attributes::number(const std::string& name) const {
 }
 
 const std::vector<std::string>& dyna_sequence_names() {
-  static const std::vector<std::string> names = {
-      "chicken_wings", "hips",          "jiggle_on_toes", "jumping_jacks", "knees",       "light_hopping_loose",
-      "light_hopping_stiff", "one_leg_jump", "one_leg_loose", "punching", "running_on_spot", "shake_arms",
-      "shake_hips",    "shake_shoulders"};
+  static const std::vector<std::string> names = {"chicken_wings",
+                                                 "hips",
+                                                 "jiggle_on_toes",
+                                                 "jumping_jacks",
+                                                 "knees",
+                                                 "light_hopping_loose",
+                                                 "light_hopping_stiff",
+                                                 "one_leg_jump",
+                                                 "one_leg_loose",
+                                                 "punching",
+                                                 "running_on_spot",
+                                                 "shake_arms",
+                                                 "shake_hips",
+                                                 "shake_shoulders"};
   return names;
 }
 
@@ -105,7 +114,8 @@ RowMatrixX3i read_faces(const H5::H5File& file, const std::string& where) {
   require(dims.size() == 2 && dims[1] == 3 && dims[0] > 0, "{}: faces: shape {}, expected (F, 3) with F ≥ 1", where,
           shape_string(dims));
   require(dims[0] <= kMaxDynaFaces, "{}: faces: {} faces, above the limit of {}", where, dims[0], kMaxDynaFaces);
-  require(dataset.getTypeClass() == H5T_INTEGER, "{}: faces: not integer-valued, expected F×3 integer face indices", where);
+  require(dataset.getTypeClass() == H5T_INTEGER, "{}: faces: not integer-valued, expected F×3 integer face indices",
+          where);
   std::vector<long long> values(static_cast<std::size_t>(dims[0] * 3));
   dataset.read(values.data(), H5::PredType::NATIVE_LLONG);
   RowMatrixX3i faces(static_cast<Eigen::Index>(dims[0]), 3);
@@ -148,20 +158,22 @@ void check_frames(const std::vector<RowMatrixX3d>& frames, const std::string& wh
     if (!frames[t].allFinite()) {
       Eigen::Index bad = 0;
       while (bad < frames[t].rows() && frames[t].row(bad).allFinite()) ++bad;
-      throw_error("{}: {}: non-finite value in frame {} (vertex {}), expected finite positions [m]", where, key, t, bad);
+      throw_error("{}: {}: non-finite value in frame {} (vertex {}), expected finite positions [m]", where, key, t,
+                  bad);
     }
   }
   for (std::size_t t = 0; t < frames.size(); ++t) {
     Eigen::Index row = 0, col = 0;
     const double largest = frames[t].cwiseAbs().maxCoeff(&row, &col);
-    require(largest <= kMaxDynaMetres, "{}: {}: coordinate {:g} m in frame {} (vertex {}) is beyond ±{:g} m, expected positions in metres",
-            where, key, frames[t](row, col), t, row, kMaxDynaMetres);
+    require(largest <= kMaxDynaMetres,
+            "{}: {}: coordinate {:g} m in frame {} (vertex {}) is beyond ±{:g} m, expected positions in metres", where,
+            key, frames[t](row, col), t, row, kMaxDynaMetres);
   }
   for (std::size_t t = 0; t < frames.size(); ++t) {
     const double span = (frames[t].colwise().maxCoeff() - frames[t].colwise().minCoeff()).maxCoeff();
     require(span >= kMinDynaSpan,
-            "{}: {}: frame {} is degenerate: its vertices span {:g} m, expected a body at least {:g} m across", where, key,
-            t, span, kMinDynaSpan);
+            "{}: {}: frame {} is degenerate: its vertices span {:g} m, expected a body at least {:g} m across", where,
+            key, t, span, kMinDynaSpan);
   }
 }
 
@@ -172,7 +184,8 @@ DynaFile::DynaFile(const std::filesystem::path& path) : path_(path) {
   require(std::filesystem::is_regular_file(path), "{}: no such file (expected a DYNA registration file, HDF5)", where);
   detail::quiet_hdf5();
   try {
-    require(H5::H5File::isHdf5(where) > 0, "{}: not an HDF5 file (expected a DYNA registration file such as dyna_female.h5)", where);
+    require(H5::H5File::isHdf5(where) > 0,
+            "{}: not an HDF5 file (expected a DYNA registration file such as dyna_female.h5)", where);
     const H5::H5File file(where, H5F_ACC_RDONLY);
     faces_ = read_faces(file, where);
     attributes_ = detail::read_attributes(file, where);
@@ -184,7 +197,8 @@ DynaFile::DynaFile(const std::filesystem::path& path) : path_(path) {
               "{}: {}: shape {}, expected (V, 3, T) with V, T ≥ 1", where, name, shape_string(dims));
       require(dims[0] <= kMaxDynaVertices, "{}: {}: {} vertices, above the limit of {}", where, name, dims[0],
               kMaxDynaVertices);
-      require(dims[2] <= kMaxDynaFrames, "{}: {}: {} frames, above the limit of {}", where, name, dims[2], kMaxDynaFrames);
+      require(dims[2] <= kMaxDynaFrames, "{}: {}: {} frames, above the limit of {}", where, name, dims[2],
+              kMaxDynaFrames);
       require(dataset.getTypeClass() == H5T_FLOAT, "{}: {}: not floating-point, expected float32 or float64 positions",
               where, name);
       DynaSequenceInfo info;
@@ -193,8 +207,8 @@ DynaFile::DynaFile(const std::filesystem::path& path) : path_(path) {
       info.frames = static_cast<int>(dims[2]);
       info.dtype = dataset.getFloatType().getSize() == 4 ? "float32" : "float64";
       if (vertices_ == 0) vertices_ = info.vertices;
-      require(info.vertices == vertices_, "{}: {}: {} vertices, but '{}' has {}, expected one vertex count", where, name,
-              info.vertices, infos_.front().key, vertices_);
+      require(info.vertices == vertices_, "{}: {}: {} vertices, but '{}' has {}, expected one vertex count", where,
+              name, info.vertices, infos_.front().key, vertices_);
       keys_.push_back(name);
       infos_.push_back(std::move(info));
     }
@@ -203,8 +217,8 @@ DynaFile::DynaFile(const std::filesystem::path& path) : path_(path) {
   }
   if (vertices_ > 0) {
     const int max_index = faces_.maxCoeff();
-    require(max_index < vertices_, "{}: faces: refers to vertex {}, but the sequences have {} vertices", where, max_index,
-            vertices_);
+    require(max_index < vertices_, "{}: faces: refers to vertex {}, but the sequences have {} vertices", where,
+            max_index, vertices_);
   }
 }
 
@@ -231,9 +245,10 @@ const DynaSequenceInfo& DynaFile::info(const std::string& key) const {
   const auto it = std::lower_bound(keys_.begin(), keys_.end(), key);
   if (it == keys_.end() || *it != key) {
     if (keys_.empty())
-      throw_error("{}: {}: no such sequence in the file, which holds no sequence dataset (only 'faces')", path_.string(),
-                  key);
-    throw_error("{}: {}: no such sequence in the file, expected one of {}", path_.string(), key, fmt::join(keys_, ", "));
+      throw_error("{}: {}: no such sequence in the file, which holds no sequence dataset (only 'faces')",
+                  path_.string(), key);
+    throw_error("{}: {}: no such sequence in the file, expected one of {}", path_.string(), key,
+                fmt::join(keys_, ", "));
   }
   return infos_[static_cast<std::size_t>(it - keys_.begin())];
 }
@@ -248,9 +263,10 @@ DynaSequence DynaFile::read(const std::string& key, int max_frames) const {
                                 : static_cast<std::size_t>(meta.frames);
   // V ≤ 1e6 and T < 2^31, so the product fits; bound it before allocating anything.
   const double bytes = 24.0 * static_cast<double>(V) * static_cast<double>(T);
-  require(bytes <= static_cast<double>(kMaxDynaReadBytes),
-          "{}: {}: {} frames of {} vertices need {:.3g} GB, above the read limit of {:.3g} GB (2 GiB); read fewer frames",
-          where, key, T, V, 1e-9 * bytes, 1e-9 * static_cast<double>(kMaxDynaReadBytes));
+  require(
+      bytes <= static_cast<double>(kMaxDynaReadBytes),
+      "{}: {}: {} frames of {} vertices need {:.3g} GB, above the read limit of {:.3g} GB (2 GiB); read fewer frames",
+      where, key, T, V, 1e-9 * bytes, 1e-9 * static_cast<double>(kMaxDynaReadBytes));
   detail::quiet_hdf5();
   try {
     const H5::H5File file(where, H5F_ACC_RDONLY);
@@ -271,10 +287,13 @@ DynaSequence DynaFile::read(const std::string& key, int max_frames) const {
 }
 
 void DynaFile::require_vertices(const body::BodyModel& model) const {
-  require(vertices_ > 0, "{}: the file holds no sequence dataset (only 'faces'), expected <subject>_<sequence> datasets of shape (V, 3, T)",
+  require(vertices_ > 0,
+          "{}: the file holds no sequence dataset (only 'faces'), expected <subject>_<sequence> datasets of shape (V, "
+          "3, T)",
           path_.string());
   require(vertices_ == static_cast<int>(model.num_vertices()),
-          "{}: the registrations have {} vertices, but the body model '{}' has {} (DYNA registrations need the body's topology, "
+          "{}: the registrations have {} vertices, but the body model '{}' has {} (DYNA registrations need the body's "
+          "topology, "
           "e.g. SMPL's 6890 vertices; pass the matching model with --body)",
           path_.string(), vertices_, model.name, model.num_vertices());
 }

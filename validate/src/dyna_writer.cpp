@@ -1,10 +1,9 @@
 // Writing DYNA registration files in the layout of docs/physics.md §3.2 (used for synthetic ground truth).
-#include <sflsh/validate/dyna_file.hpp>
-
 #include "hdf5_util.hpp"
 
 #include <sflsh/core/atomic_file.hpp>
 #include <sflsh/core/error.hpp>
+#include <sflsh/validate/dyna_file.hpp>
 
 #include <cmath>
 
@@ -55,20 +54,24 @@ void DynaWriter::add(const DynaSequence& sequence) {
   require(!sequence.frames.empty(), "{}: sequence '{}' has no frames", where, sequence.key);
   const auto V = sequence.frames.front().rows();
   if (vertices_ == 0) vertices_ = static_cast<int>(V);
-  require(V == vertices_, "{}: sequence '{}' has {} vertices, earlier sequences have {}", where, sequence.key, V, vertices_);
-  require(faces_max_ < V, "{}: the faces refer to vertex {}, but sequence '{}' has {} vertices", where, faces_max_, sequence.key, V);
+  require(V == vertices_, "{}: sequence '{}' has {} vertices, earlier sequences have {}", where, sequence.key, V,
+          vertices_);
+  require(faces_max_ < V, "{}: the faces refer to vertex {}, but sequence '{}' has {} vertices", where, faces_max_,
+          sequence.key, V);
   const auto T = sequence.frames.size();
   std::vector<double> values(static_cast<std::size_t>(V) * 3 * T);
   for (std::size_t t = 0; t < T; ++t) {
     const RowMatrixX3d& frame = sequence.frames[t];
-    require(frame.rows() == V, "{}: sequence '{}' frame {} has {} vertices, frame 0 has {}", where, sequence.key, t, frame.rows(), V);
+    require(frame.rows() == V, "{}: sequence '{}' frame {} has {} vertices, frame 0 has {}", where, sequence.key, t,
+            frame.rows(), V);
     require(frame.allFinite(), "{}: sequence '{}' frame {} has a non-finite value", where, sequence.key, t);
     for (Eigen::Index v = 0; v < V; ++v)
-      for (int c = 0; c < 3; ++c) values[(3 * static_cast<std::size_t>(v) + static_cast<std::size_t>(c)) * T + t] = frame(v, c);
+      for (int c = 0; c < 3; ++c)
+        values[(3 * static_cast<std::size_t>(v) + static_cast<std::size_t>(c)) * T + t] = frame(v, c);
   }
   Attributes attributes = sequence.attributes;
-  require(std::isfinite(sequence.fps) && sequence.fps > 0.0, "{}: sequence '{}' has fps {}, expected a positive number", where,
-          sequence.key, sequence.fps);
+  require(std::isfinite(sequence.fps) && sequence.fps > 0.0, "{}: sequence '{}' has fps {}, expected a positive number",
+          where, sequence.key, sequence.fps);
   if (!attributes.numbers.count("fps") && sequence.fps != kDynaFps) attributes.numbers["fps"] = {sequence.fps};
   detail::quiet_hdf5();
   try {
@@ -100,8 +103,8 @@ void DynaWriter::commit() {
   committed_ = true;
 }
 
-void write_dyna_file(const std::filesystem::path& path, const RowMatrixX3i& faces, const std::vector<DynaSequence>& sequences,
-                     const Attributes& file_attributes) {
+void write_dyna_file(const std::filesystem::path& path, const RowMatrixX3i& faces,
+                     const std::vector<DynaSequence>& sequences, const Attributes& file_attributes) {
   DynaWriter writer(path, faces, file_attributes);
   for (const DynaSequence& sequence : sequences) writer.add(sequence);
   writer.commit();

@@ -1,8 +1,7 @@
-#include <sflsh/validate/dynamics_report.hpp>
-
 #include <sflsh/core/atomic_file.hpp>
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/vtk_io.hpp>
+#include <sflsh/validate/dynamics_report.hpp>
 
 #include <fmt/format.h>
 
@@ -15,7 +14,8 @@ constexpr double kMillimetres = 1e3;
 void write_dynamics_vtp(const std::filesystem::path& path, const RowMatrixX3d& shaped, const body::RowMatrixX3i& faces,
                         const DynamicsResult& result) {
   const Eigen::Index n = shaped.rows();
-  require(result.sigma.size() == n, "{}: σ has {} values for a surface of {} vertices", path.string(), result.sigma.size(), n);
+  require(result.sigma.size() == n, "{}: σ has {} values for a surface of {} vertices", path.string(),
+          result.sigma.size(), n);
   Eigen::MatrixXd soft = Eigen::MatrixXd::Zero(n, 1);
   for (int v : result.soft_vertices) soft(v, 0) = 1.0;
   vtk::Fields fields;
@@ -32,8 +32,9 @@ void write_dynamics_csv(const std::filesystem::path& path, const DynamicsResult&
   std::string text = "vertex,sigma_mm,sigma_normal_mm,sigma_tangent_mm,soft\n";
   text.reserve(static_cast<std::size_t>(result.sigma.size()) * 40);
   for (Eigen::Index v = 0; v < result.sigma.size(); ++v)
-    text += fmt::format("{},{:.6f},{:.6f},{:.6f},{}\n", v, kMillimetres * result.sigma[v], kMillimetres * result.sigma_normal[v],
-                        kMillimetres * result.sigma_tangent[v], soft[static_cast<std::size_t>(v)] ? 1 : 0);
+    text += fmt::format("{},{:.6f},{:.6f},{:.6f},{}\n", v, kMillimetres * result.sigma[v],
+                        kMillimetres * result.sigma_normal[v], kMillimetres * result.sigma_tangent[v],
+                        soft[static_cast<std::size_t>(v)] ? 1 : 0);
   write_text_atomically(path, text);
 }
 

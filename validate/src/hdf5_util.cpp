@@ -7,7 +7,7 @@
 namespace sflsh::validate::detail {
 
 void quiet_hdf5() {
-  H5::Exception::dontPrint();          // the C++ wrapper's printing
+  H5::Exception::dontPrint();                   // the C++ wrapper's printing
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // and the C library's
 }
 

@@ -1,16 +1,14 @@
 // Per-frame pose fit and shared-β fit by Levenberg–Marquardt (Eigen's MINPACK port); see pose_fit.hpp.
-#include <sflsh/validate/pose_fit.hpp>
-
 #include "lm_status.hpp"
 
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
 #include <sflsh/core/progress.hpp>
-
-#include <unsupported/Eigen/LevenbergMarquardt>
+#include <sflsh/validate/pose_fit.hpp>
 
 #include <Eigen/QR>
 #include <Eigen/SVD>
+#include <unsupported/Eigen/LevenbergMarquardt>
 
 #include <algorithm>
 #include <chrono>
@@ -36,7 +34,8 @@ FitRows fit_rows(Eigen::Index n, const PoseFitOptions& options) {
   for (Eigen::Index i = 0; i < n; i += options.vertex_stride) rows.vertices.push_back(static_cast<int>(i));
   rows.scales.resize(static_cast<Eigen::Index>(rows.vertices.size()));
   for (std::size_t s = 0; s < rows.vertices.size(); ++s)
-    rows.scales[static_cast<Eigen::Index>(s)] = soft[static_cast<std::size_t>(rows.vertices[s])] ? std::sqrt(options.soft_weight) : 1.0;
+    rows.scales[static_cast<Eigen::Index>(s)] =
+        soft[static_cast<std::size_t>(rows.vertices[s])] ? std::sqrt(options.soft_weight) : 1.0;
   return rows;
 }
 
@@ -59,7 +58,11 @@ struct FrameResidual : Eigen::DenseFunctor<double> {
   const FitRows* rows;
   PoseParameters base;
   FrameResidual(const PosedModel& m, const RowMatrixX3d& y, const FitRows& fr, const PoseParameters& start)
-      : DenseFunctor<double>(kNumPoseParameters, static_cast<int>(3 * fr.vertices.size())), model(&m), target(&y), rows(&fr), base(start) {}
+      : DenseFunctor<double>(kNumPoseParameters, static_cast<int>(3 * fr.vertices.size())),
+        model(&m),
+        target(&y),
+        rows(&fr),
+        base(start) {}
 
   int operator()(const Eigen::VectorXd& delta, Eigen::VectorXd& r) const {
     frame_residual(*target, *rows, model->posed(base + delta), r);
@@ -97,8 +100,8 @@ double absolute_norm(const PoseFitOptions& options, std::size_t vertices) {
 }
 
 /// One LM solve of a frame's pose on the fit rows; `parameters` in/out.
-FrameFitReport solve_frame(const PosedModel& model, const RowMatrixX3d& target, const FitRows& rows, const PoseFitOptions& options,
-                           PoseParameters& parameters) {
+FrameFitReport solve_frame(const PosedModel& model, const RowMatrixX3d& target, const FitRows& rows,
+                           const PoseFitOptions& options, PoseParameters& parameters) {
   FrameResidual residual(model, target, rows, parameters);
   Eigen::LevenbergMarquardt<FrameResidual> lm(residual);
   configure(lm, options, options.max_evaluations);
@@ -123,11 +126,15 @@ struct ShapeResidual : Eigen::DenseFunctor<double> {
   const std::vector<const RowMatrixX3d*>* targets;
   const FitRows* rows;
   const PoseFitOptions* options;
-  std::vector<PoseParameters>* poses;   // warm starts, updated by every evaluation
-  ShapeResidual(const body::BodyModel& m, const std::vector<const RowMatrixX3d*>& y, const FitRows& fr, const PoseFitOptions& o,
-                std::vector<PoseParameters>& p)
+  std::vector<PoseParameters>* poses;  // warm starts, updated by every evaluation
+  ShapeResidual(const body::BodyModel& m, const std::vector<const RowMatrixX3d*>& y, const FitRows& fr,
+                const PoseFitOptions& o, std::vector<PoseParameters>& p)
       : DenseFunctor<double>(body::kNumBetas, static_cast<int>(3 * fr.vertices.size() * y.size())),
-        model(&m), targets(&y), rows(&fr), options(&o), poses(&p) {}
+        model(&m),
+        targets(&y),
+        rows(&fr),
+        options(&o),
+        poses(&p) {}
 
   PosedModel posed_model(const Eigen::VectorXd& beta) const {
     RowMatrixX3d shaped = body::shaped_template(*model, beta);
@@ -154,7 +161,7 @@ struct ShapeResidual : Eigen::DenseFunctor<double> {
     const auto block = 3 * static_cast<Eigen::Index>(rows->vertices.size());
     jacobian.resize(block * static_cast<Eigen::Index>(targets->size()), body::kNumBetas);
     const PosedModel m = posed_model(beta);
-    const double h = 1e-6;   // central differences: O(h²) truncation, round-off ε/h ≈ 1e-10 on O(1) entries
+    const double h = 1e-6;  // central differences: O(h²) truncation, round-off ε/h ≈ 1e-10 on O(1) entries
     for (std::size_t f = 0; f < targets->size(); ++f) {
       const PoseParameters& p = (*poses)[f];
       Eigen::MatrixXd j_theta;
@@ -166,7 +173,8 @@ struct ShapeResidual : Eigen::DenseFunctor<double> {
         plus[k] += h;
         minus[k] -= h;
         const RowMatrixX3d dv = (posed_model(plus).posed(p) - posed_model(minus).posed(p)) / (2 * h);
-        for (std::size_t s = 0; s < rows->vertices.size(); ++s) j_beta.block<3, 1>(3 * static_cast<Eigen::Index>(s), k) = dv.row(rows->vertices[s]).transpose();
+        for (std::size_t s = 0; s < rows->vertices.size(); ++s)
+          j_beta.block<3, 1>(3 * static_cast<Eigen::Index>(s), k) = dv.row(rows->vertices[s]).transpose();
       }
       for (Eigen::Index s = 0; s < rows->scales.size(); ++s) {
         j_theta.middleRows<3>(3 * s) *= rows->scales[s];
@@ -225,17 +233,20 @@ PoseFitResult fit_motion(const body::BodyModel& model, const std::vector<RowMatr
                          const std::optional<body::Betas>& beta, const PoseFitOptions& options) {
   const auto t0 = std::chrono::steady_clock::now();
   require(!registered.empty(), "pose fit: no frames");
-  require(options.soft_weight >= 0.0 && options.soft_weight <= 1.0, "pose fit: soft_weight must be in [0, 1], got {}", options.soft_weight);
-  require(options.max_evaluations > 0 && options.shape_frames > 0 && options.shape_evaluations > 0 && options.vertex_stride >= 1,
+  require(options.soft_weight >= 0.0 && options.soft_weight <= 1.0, "pose fit: soft_weight must be in [0, 1], got {}",
+          options.soft_weight);
+  require(options.max_evaluations > 0 && options.shape_frames > 0 && options.shape_evaluations > 0 &&
+              options.vertex_stride >= 1,
           "pose fit: iteration limits and the vertex stride must be positive");
   const Eigen::Index n = model.num_vertices();
   for (std::size_t t = 0; t < registered.size(); ++t) {
-    require(registered[t].rows() == n, "pose fit: frame {} has {} vertices, the body has {}", t, registered[t].rows(), n);
+    require(registered[t].rows() == n, "pose fit: frame {} has {} vertices, the body has {}", t, registered[t].rows(),
+            n);
     require(registered[t].allFinite(), "pose fit: frame {} has a non-finite vertex position", t);
   }
   const auto T = static_cast<int>(registered.size());
   const FitRows rows = fit_rows(n, options);
-  Eigen::VectorXd weights = Eigen::VectorXd::Ones(n);   // for the rigid start
+  Eigen::VectorXd weights = Eigen::VectorXd::Ones(n);  // for the rigid start
   for (int v : options.soft_vertices) weights[v] = options.soft_weight;
 
   PoseFitResult result;
@@ -249,9 +260,11 @@ PoseFitResult fit_motion(const body::BodyModel& model, const std::vector<RowMatr
     std::vector<int> chain;
     for (int t = 0; t < T; t += chain_stride) chain.push_back(t);
     const int k = std::min<int>(options.shape_frames, static_cast<int>(chain.size()));
-    std::vector<int> picks;   // indices into the chain, evenly spaced, first and last included
+    std::vector<int> picks;  // indices into the chain, evenly spaced, first and last included
     for (int s = 0; s < k; ++s)
-      picks.push_back(k == 1 ? 0 : static_cast<int>(std::lround(static_cast<double>(s) * static_cast<double>(chain.size() - 1) / (k - 1))));
+      picks.push_back(k == 1 ? 0
+                             : static_cast<int>(std::lround(static_cast<double>(s) *
+                                                            static_cast<double>(chain.size() - 1) / (k - 1))));
     picks.erase(std::unique(picks.begin(), picks.end()), picks.end());
     std::vector<const RowMatrixX3d*> targets;
     std::vector<PoseParameters> poses;
@@ -259,8 +272,9 @@ PoseFitResult fit_motion(const body::BodyModel& model, const std::vector<RowMatr
       const RowMatrixX3d shaped = body::shaped_template(model, result.beta);
       const body::JointPositions joints = body::regress_joints(model, shaped);
       const PosedModel start_model(model, shaped, joints, options.world_from_body);
-      PoseParameters p = rigid_initial_pose(shaped, joints.row(0).transpose(), registered.front(), weights, options.world_from_body);
-      PoseFitOptions warm = options;   // only warm starts: a few evaluations each
+      PoseParameters p =
+          rigid_initial_pose(shaped, joints.row(0).transpose(), registered.front(), weights, options.world_from_body);
+      PoseFitOptions warm = options;  // only warm starts: a few evaluations each
       warm.max_evaluations = std::min(options.max_evaluations, 20);
       std::size_t next = 0;
       for (std::size_t c = 0; c < chain.size() && next < picks.size(); ++c) {
@@ -277,12 +291,15 @@ PoseFitResult fit_motion(const body::BodyModel& model, const std::vector<RowMatr
     Eigen::LevenbergMarquardt<ShapeResidual> lm(residual);
     configure(lm, options, options.shape_evaluations);
     Eigen::VectorXd x = result.beta;
-    const detail::LmOutcome outcome = detail::minimize_until(lm, x, absolute_norm(options, rows.vertices.size() * targets.size()));
-    require(outcome.status != Eigen::LevenbergMarquardtSpace::UserAsked && x.allFinite(), "shape fit: the residual became non-finite (NaN/Inf)");
+    const detail::LmOutcome outcome =
+        detail::minimize_until(lm, x, absolute_norm(options, rows.vertices.size() * targets.size()));
+    require(outcome.status != Eigen::LevenbergMarquardtSpace::UserAsked && x.allFinite(),
+            "shape fit: the residual became non-finite (NaN/Inf)");
     result.beta = x;
     result.shape_iterations = static_cast<int>(lm.iterations());
     result.shape_converged = outcome.converged();
-    if (!result.shape_converged) logger()->warn("shape fit: β did not converge ({}, {} evaluations)", outcome.name(), lm.nfev());
+    if (!result.shape_converged)
+      logger()->warn("shape fit: β did not converge ({}, {} evaluations)", outcome.name(), lm.nfev());
     logger()->debug("shape fit: {} iterations, {} evaluations ({})", lm.iterations(), lm.nfev(), outcome.name());
   }
 
@@ -295,7 +312,8 @@ PoseFitResult fit_motion(const body::BodyModel& model, const std::vector<RowMatr
   result.motion.source = "pose fit";
   result.motion.fps = fps;
   result.motion.world_from_body = options.world_from_body;
-  PoseParameters parameters = rigid_initial_pose(shaped, joints.row(0).transpose(), registered.front(), weights, options.world_from_body);
+  PoseParameters parameters =
+      rigid_initial_pose(shaped, joints.row(0).transpose(), registered.front(), weights, options.world_from_body);
   Progress progress("pose fit", static_cast<std::size_t>(T), options.progress);
   for (int t = 0; t < T; ++t) {
     const RowMatrixX3d& target = registered[static_cast<std::size_t>(t)];
@@ -306,8 +324,8 @@ PoseFitResult fit_motion(const body::BodyModel& model, const std::vector<RowMatr
     report.rms_rigid = rms_over(v, target, &soft);
     if (!report.converged) {
       ++result.unconverged_frames;
-      logger()->warn("pose fit: frame {} did not converge ({}, {} evaluations, RMS {:.2f} mm)", t, report.status, report.evaluations,
-                     1e3 * report.rms);
+      logger()->warn("pose fit: frame {} did not converge ({}, {} evaluations, RMS {:.2f} mm)", t, report.status,
+                     report.evaluations, 1e3 * report.rms);
     }
     result.max_rms = std::max(result.max_rms, report.rms);
     result.mean_rms += report.rms / T;

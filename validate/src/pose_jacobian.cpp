@@ -1,8 +1,7 @@
 // Posed SMPL vertices and their analytic Jacobian with respect to pose and root translation (derivation in
 // pose_jacobian.hpp).
-#include <sflsh/validate/pose_jacobian.hpp>
-
 #include <sflsh/core/error.hpp>
+#include <sflsh/validate/pose_jacobian.hpp>
 
 #include <cmath>
 
@@ -25,7 +24,8 @@ Eigen::Matrix3d rotation_left_jacobian(const Eigen::Vector3d& omega) {
   const Eigen::Matrix3d k = skew(omega);
   if (angle < 1e-6) return Eigen::Matrix3d::Identity() + 0.5 * k + (1.0 / 6.0) * k * k;
   const double a2 = angle * angle;
-  return Eigen::Matrix3d::Identity() + ((1.0 - std::cos(angle)) / a2) * k + ((angle - std::sin(angle)) / (a2 * angle)) * k * k;
+  return Eigen::Matrix3d::Identity() + ((1.0 - std::cos(angle)) / a2) * k +
+         ((angle - std::sin(angle)) / (a2 * angle)) * k * k;
 }
 
 PoseParameters pack_pose(const body::Pose& theta, const Eigen::Vector3d& trans) {
@@ -58,7 +58,8 @@ RowMatrixX3d PosedModel::posed(const PoseParameters& parameters) const {
   RowMatrixX3d out(unposed.rows(), 3);
   for (Eigen::Index i = 0; i < unposed.rows(); ++i) {
     Eigen::Matrix<double, 3, 4> a = Eigen::Matrix<double, 3, 4>::Zero();
-    for (const auto& [k, w] : weights_[static_cast<std::size_t>(i)]) a.noalias() += w * kin.skinning[static_cast<std::size_t>(k)].matrix().topRows<3>();
+    for (const auto& [k, w] : weights_[static_cast<std::size_t>(i)])
+      a.noalias() += w * kin.skinning[static_cast<std::size_t>(k)].matrix().topRows<3>();
     out.row(i) = (world_from_body_ * (a.leftCols<3>() * unposed.row(i).transpose() + a.col(3))).transpose();
   }
   return out;
@@ -78,8 +79,9 @@ void PosedModel::posed_and_jacobian(const PoseParameters& parameters, RowMatrixX
   for (int j = 0; j < J; ++j) {
     const int parent = model_.parents[static_cast<std::size_t>(j)];
     const Eigen::Vector3d omega = theta.segment<3>(3 * j);
-    const Eigen::Matrix3d parent_linear =
-        parent < 0 ? Eigen::Matrix3d(Eigen::Matrix3d::Identity()) : Eigen::Matrix3d(kin.global[static_cast<std::size_t>(parent)].linear());
+    const Eigen::Matrix3d parent_linear = parent < 0
+                                              ? Eigen::Matrix3d(Eigen::Matrix3d::Identity())
+                                              : Eigen::Matrix3d(kin.global[static_cast<std::size_t>(parent)].linear());
     g[static_cast<std::size_t>(j)] = parent_linear * rotation_left_jacobian(omega);
     rotation[static_cast<std::size_t>(j)] = body::rodrigues(omega);
   }
@@ -95,7 +97,8 @@ void PosedModel::posed_and_jacobian(const PoseParameters& parameters, RowMatrixX
         for (int a = 0; a < 3; ++a)
           for (int b = 0; b < 3; ++b) d_features(3 * a + b, m) = dr(a, b);
       }
-      corrective_jacobian.middleCols<3>(3 * (j - 1)).noalias() = model_.posedirs.middleCols<9>(9 * (j - 1)) * d_features;
+      corrective_jacobian.middleCols<3>(3 * (j - 1)).noalias() =
+          model_.posedirs.middleCols<9>(9 * (j - 1)) * d_features;
     }
   }
 
@@ -106,7 +109,7 @@ void PosedModel::posed_and_jacobian(const PoseParameters& parameters, RowMatrixX
     const Eigen::Index i = rows ? (*rows)[static_cast<std::size_t>(s)] : s;
     const Eigen::Vector3d x = unposed.row(i).transpose();
     Eigen::Matrix<double, 3, 4> a = Eigen::Matrix<double, 3, 4>::Zero();
-    std::array<Eigen::Vector3d, J> p_sum;   // P_ij
+    std::array<Eigen::Vector3d, J> p_sum;  // P_ij
     std::array<double, J> w_sum{};         // W_ij
     for (auto& p : p_sum) p.setZero();
     std::uint32_t touched = 0;
@@ -129,7 +132,8 @@ void PosedModel::posed_and_jacobian(const PoseParameters& parameters, RowMatrixX
         const Eigen::Vector3d lever = p_sum[sj] - w_sum[sj] * kin.joints_posed.row(j).transpose();
         block.noalias() -= skew(lever) * g[sj];
       }
-      if (correctives && j > 0) block.noalias() += a.leftCols<3>() * corrective_jacobian.block<3, 3>(3 * i, 3 * (j - 1));
+      if (correctives && j > 0)
+        block.noalias() += a.leftCols<3>() * corrective_jacobian.block<3, 3>(3 * i, 3 * (j - 1));
       jacobian.block<3, 3>(3 * s, 3 * j) = world_from_body_ * block;
     }
     double total = 0.0;

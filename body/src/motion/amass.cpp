@@ -2,7 +2,6 @@
 // mocap_framerate or mocap_frame_rate. AMASS is Z-up; SMPL+H poses map onto SMPL as
 // θ = [poses[:, :66], 0₆] (SMPL's hand joints 22, 23 do not exist in SMPL+H).
 #include <sflsh/body/motion.hpp>
-
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
 #include <sflsh/core/npz.hpp>
@@ -17,7 +16,7 @@ namespace {
 
 constexpr std::size_t kSmplhPoseWidth = 156;
 constexpr std::size_t kSmplPoseWidth = 3 * kNumJoints;  // 72
-constexpr std::size_t kBodyPoseWidth = 66;               // root + 21 body joints
+constexpr std::size_t kBodyPoseWidth = 66;              // root + 21 body joints
 constexpr const char* kFrameKey = "sflsh_world_from_body";
 
 /// "<file>: <key>: dtype …, expected …" unless the array holds floats or integers (bool and strings are
@@ -25,7 +24,11 @@ constexpr const char* kFrameKey = "sflsh_world_from_body";
 void require_number_kind(const npz::Array& array, const std::string& file, const std::string& key,
                          const char* expected) {
   require(array.kind == 'f' || array.kind == 'i' || array.kind == 'u', "{}: {}: dtype {} ({}), expected {}", file, key,
-          array.dtype(), array.kind == 'b' ? "bool" : array.is_numeric() ? "numbers" : "not numeric", expected);
+          array.dtype(),
+          array.kind == 'b'    ? "bool"
+          : array.is_numeric() ? "numbers"
+                               : "not numeric",
+          expected);
 }
 
 /// Reads a member holding floats or integers as doubles, with errors naming the file and the key.
@@ -41,8 +44,9 @@ std::vector<double> read_numbers(const npz::Reader& reader, const std::string& k
 void require_bounded(const std::vector<double>& values, std::size_t cols, const std::string& file,
                      const std::string& key, double bound, const char* unit, const char* meaning) {
   for (std::size_t i = 0; i < values.size(); ++i) {
-    require(std::isfinite(values[i]), "{}: {}: non-finite value ({}) at frame {}, column {}, expected {} within ±{:g} {}",
-            file, key, values[i], i / cols, i % cols, meaning, bound, unit);
+    require(std::isfinite(values[i]),
+            "{}: {}: non-finite value ({}) at frame {}, column {}, expected {} within ±{:g} {}", file, key, values[i],
+            i / cols, i % cols, meaning, bound, unit);
     require(std::abs(values[i]) <= bound, "{}: {}: {} {} at frame {}, column {} is beyond ±{:g} {}, not {}", file, key,
             values[i], unit, i / cols, i % cols, bound, unit, meaning);
   }
@@ -51,14 +55,17 @@ void require_bounded(const std::vector<double>& values, std::size_t cols, const 
 double read_frame_rate(const npz::Reader& reader) {
   const std::string file = reader.path().string();
   std::string key;
-  if (reader.has("mocap_framerate")) key = "mocap_framerate";
-  else if (reader.has("mocap_frame_rate")) key = "mocap_frame_rate";
-  else throw_error("{}: missing key 'mocap_framerate' (or 'mocap_frame_rate'), the capture rate [Hz]", file);
+  if (reader.has("mocap_framerate"))
+    key = "mocap_framerate";
+  else if (reader.has("mocap_frame_rate"))
+    key = "mocap_frame_rate";
+  else
+    throw_error("{}: missing key 'mocap_framerate' (or 'mocap_frame_rate'), the capture rate [Hz]", file);
   npz::Array array;
   const std::vector<double> v = read_numbers(reader, key, array, "a frame rate in Hz (float)");
   require(v.size() == 1, "{}: {}: shape {}, expected a scalar (0-d or 1 element)", file, key, array.shape_string());
-  require(std::isfinite(v[0]) && v[0] >= kMinMotionFps && v[0] <= kMaxMotionFps, "{}: {}: {:g} Hz is outside [{:g}, {:g}] Hz",
-          file, key, v[0], kMinMotionFps, kMaxMotionFps);
+  require(std::isfinite(v[0]) && v[0] >= kMinMotionFps && v[0] <= kMaxMotionFps,
+          "{}: {}: {:g} Hz is outside [{:g}, {:g}] Hz", file, key, v[0], kMinMotionFps, kMaxMotionFps);
   return v[0];
 }
 

@@ -28,7 +28,9 @@ inline Jet operator-(Jet a) { return {-a.v, -a.d, -a.dd}; }
 inline Jet operator*(double s, Jet a) { return {s * a.v, s * a.d, s * a.dd}; }
 inline Jet operator*(Jet a, double s) { return s * a; }
 /// Product rule: (fg)'' = f''g + 2f'g' + fg''.
-inline Jet operator*(Jet a, Jet b) { return {a.v * b.v, a.d * b.v + a.v * b.d, a.dd * b.v + 2.0 * a.d * b.d + a.v * b.dd}; }
+inline Jet operator*(Jet a, Jet b) {
+  return {a.v * b.v, a.d * b.v + a.v * b.d, a.dd * b.v + 2.0 * a.d * b.d + a.v * b.dd};
+}
 inline Jet operator+(Jet a, double s) { return {a.v + s, a.d, a.dd}; }
 inline Jet operator-(Jet a, double s) { return {a.v - s, a.d, a.dd}; }
 inline Jet operator+(double s, Jet a) { return a + s; }

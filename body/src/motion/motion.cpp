@@ -1,8 +1,7 @@
 // Motion::validate, the procedural-motion registry, and load_motion.
-#include <sflsh/body/motion.hpp>
-
 #include "procedural.hpp"
 
+#include <sflsh/body/motion.hpp>
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/input_file.hpp>
 #include <sflsh/core/log.hpp>
@@ -17,20 +16,15 @@ namespace motion_detail {
 
 std::span<const ProceduralSpec> procedural_specs() {
   static constexpr std::array<ProceduralSpec, 5> specs{{
-      {"one_leg_jump",
-       "hopping on the left leg at 2 hops/s, right leg lifted; ballistic flight, ≈4 g landings", 4.0,
+      {"one_leg_jump", "hopping on the left leg at 2 hops/s, right leg lifted; ballistic flight, ≈4 g landings", 4.0,
        &sample_one_leg_jump},
-      {"running_on_spot",
-       "jogging in place at 2.7 steps/s: hips to 45°, knees to 90°, 4 cm bounce, arms swinging", 4.0,
+      {"running_on_spot", "jogging in place at 2.7 steps/s: hips to 45°, knees to 90°, 4 cm bounce, arms swinging", 4.0,
        &sample_running_on_spot},
-      {"shake_hips",
-       "pelvis roll ±17° (yaw ±8°) at 2 Hz, spine counter-rotating, feet planted", 4.0,
+      {"shake_hips", "pelvis roll ±17° (yaw ±8°) at 2 Hz, spine counter-rotating, feet planted", 4.0,
        &sample_shake_hips},
-      {"jiggle_on_toes",
-       "bouncing on the balls of the feet at 2.75 Hz, ≈3 cm up and down, ankles plantar-flexing", 4.0,
+      {"jiggle_on_toes", "bouncing on the balls of the feet at 2.75 Hz, ≈3 cm up and down, ankles plantar-flexing", 4.0,
        &sample_jiggle_on_toes},
-      {"shake_shoulders",
-       "alternating shoulder shimmy: collars ±12° forward/back at 3.5 Hz, arms hanging", 4.0,
+      {"shake_shoulders", "alternating shoulder shimmy: collars ±12° forward/back at 3.5 Hz, arms hanging", 4.0,
        &sample_shake_shoulders},
   }};
   return specs;
@@ -133,8 +127,8 @@ Motion sample_procedural(const motion_detail::ProceduralSpec& spec, const std::s
     const double t = static_cast<double>(i) / fps;
     // Periodic motions shift the phase of their steady part; the others start later (held at rest
     // before t = 0 for negative offsets).
-    const motion_detail::PoseSample s = spec.sample_offset ? spec.sample_offset(t, time_offset)
-                                                           : spec.sample(std::max(0.0, t + time_offset));
+    const motion_detail::PoseSample s =
+        spec.sample_offset ? spec.sample_offset(t, time_offset) : spec.sample(std::max(0.0, t + time_offset));
     motion.poses.push_back(s.theta);
     motion.trans.push_back(s.trans);
   }
@@ -179,7 +173,7 @@ Motion offset_motion(const Motion& motion, double seconds) {
   for (std::size_t i = 0; i < n; ++i) {
     const double s = std::clamp((motion.time(i) + seconds) * motion.fps, 0.0, static_cast<double>(n - 1));
     const double nearest = std::round(s);
-    if (std::abs(s - nearest) <= 1e-9) {   // on a frame (offsets of whole frames are exact copies)
+    if (std::abs(s - nearest) <= 1e-9) {  // on a frame (offsets of whole frames are exact copies)
       const auto k = static_cast<std::size_t>(nearest);
       out.poses[i] = motion.poses[k];
       out.trans[i] = motion.trans[k];
@@ -198,8 +192,8 @@ Motion load_motion(const std::string& name_or_path, double fps, int frames, doub
     return make_procedural_motion(name_or_path, fps, frames, time_offset);
   const std::filesystem::path path(name_or_path);
   std::error_code ec;
-  require(std::filesystem::exists(path, ec), "motion '{}': not a procedural motion ({}) and no such file",
-          name_or_path, motion_detail::known_names());
+  require(std::filesystem::exists(path, ec), "motion '{}': not a procedural motion ({}) and no such file", name_or_path,
+          motion_detail::known_names());
   require_input_file(path, "an AMASS motion .npz file (or a procedural motion name)");
   Motion motion = load_amass(path, fps);
   if (frames > 0) {

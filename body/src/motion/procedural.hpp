@@ -22,7 +22,7 @@ struct ProceduralSpec {
   PoseSample (*sample)(double t);
   /// Periodic motions only: the sample with the steady part shifted by `offset` [s] (ease-in kept at t).
   PoseSample (*sample_offset)(double t, double offset) = nullptr;
-  double period = 0.0;           ///< [s] of the steady part; 0: not periodic by construction
+  double period = 0.0;  ///< [s] of the steady part; 0: not periodic by construction
 };
 
 /// The five motions in DYNA order (training: one_leg_jump, running_on_spot, shake_hips; testing:
@@ -38,11 +38,11 @@ inline constexpr double kEaseInSeconds = 0.5;
 /// translation are scaled by `weight` ∈ [0, 1] (per joint, this is slerp from the identity).
 PoseSample scaled_from_rest(const PoseSample& steady, double weight);
 
-PoseSample sample_one_leg_jump(double t);     // procedural_jump.cpp
-PoseSample sample_running_on_spot(double t);  // procedural_running.cpp
-PoseSample sample_shake_hips(double t);       // procedural_shake.cpp
-PoseSample sample_shake_shoulders(double t);  // procedural_shake.cpp
-PoseSample sample_jiggle_on_toes(double t);   // procedural_toes.cpp
+PoseSample sample_one_leg_jump(double t);          // procedural_jump.cpp
+PoseSample sample_running_on_spot(double t);       // procedural_running.cpp
+PoseSample sample_shake_hips(double t);            // procedural_shake.cpp
+PoseSample sample_shake_shoulders(double t);       // procedural_shake.cpp
+PoseSample sample_jiggle_on_toes(double t);        // procedural_toes.cpp
 PoseSample sample_dance(double t, double offset);  // procedural_dance.cpp
 double dance_period();                             // procedural_dance.cpp
 

@@ -22,15 +22,15 @@ namespace sflsh::body::motion_detail {
 
 namespace {
 
-constexpr double kBarSeconds = 2.0;        // T: four beats at 120 bpm
-constexpr double kSway = 0.045;            // hip sway amplitude [m]
+constexpr double kBarSeconds = 2.0;  // T: four beats at 120 bpm
+constexpr double kSway = 0.045;      // hip sway amplitude [m]
 constexpr double kPelvisRoll = deg(7.0);
 constexpr double kPelvisYaw = deg(6.0);
-constexpr double kCrouch = 0.03;           // least root drop [m] (keeps the knees bent)
-constexpr double kBounce = 0.03;           // extra drop at the bottom of each beat [m]
+constexpr double kCrouch = 0.03;                          // least root drop [m] (keeps the knees bent)
+constexpr double kBounce = 0.03;                          // extra drop at the bottom of each beat [m]
 constexpr double kSpineUndoRoll[3] = {0.35, 0.30, 0.20};  // shares of the pelvis roll undone by spine1..3
 constexpr double kTorsoTwist = deg(12.0);
-constexpr double kNeckShare = 0.5;         // part of the twist the neck turns back
+constexpr double kNeckShare = 0.5;  // part of the twist the neck turns back
 constexpr double kArmsDown = deg(60.0);
 constexpr double kArmSwing = deg(35.0);
 constexpr double kElbow = deg(45.0);

@@ -32,16 +32,16 @@ namespace sflsh::body::motion_detail {
 
 namespace {
 
-constexpr double kPeriod = 0.5;         // [s] (2 hops/s)
-constexpr double kStance = 0.28;        // [s]
-constexpr double kImpactWidth = 0.06;   // [s]
+constexpr double kPeriod = 0.5;        // [s] (2 hops/s)
+constexpr double kStance = 0.28;       // [s]
+constexpr double kImpactWidth = 0.06;  // [s]
 constexpr double kImpactPeak = 5.0 * kGravity;
 constexpr double kPushoffPeak = 3.5 * kGravity;
 constexpr double kRootOffset = 0.018;  // root height above the touchdown reference [m] (keeps the heel up)
 constexpr double kKneeBase = deg(12.0);
 constexpr double kKneeLoad = deg(30.0);
 constexpr double kFlightPitch = deg(32.0);  // toes pointed at mid-flight
-constexpr double kLateralShift = 0.05;  // root toward the stance (left) side [m]
+constexpr double kLateralShift = 0.05;      // root toward the stance (left) side [m]
 constexpr double kFreeHip = deg(30.0);
 constexpr double kFreeKnee = deg(75.0);
 constexpr double kFreeAnkle = deg(10.0);

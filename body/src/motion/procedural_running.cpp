@@ -19,14 +19,14 @@ namespace sflsh::body::motion_detail {
 
 namespace {
 constexpr double kStepsPerSecond = 2.7;
-constexpr double kBounce = 0.02;           // a [m]; peak to peak 2a
-constexpr double kBounceSharpness = 0.2;   // second-harmonic share
-constexpr double kCrouch = 0.015;          // mean root lowering [m]
-constexpr double kSwingLead = 0.2 * kPi;   // lift peak after the other foot's mid-stance [rad of stride]
+constexpr double kBounce = 0.02;          // a [m]; peak to peak 2a
+constexpr double kBounceSharpness = 0.2;  // second-harmonic share
+constexpr double kCrouch = 0.015;         // mean root lowering [m]
+constexpr double kSwingLead = 0.2 * kPi;  // lift peak after the other foot's mid-stance [rad of stride]
 constexpr double kHipMax = deg(45.0);
 constexpr double kKneeMax = deg(90.0);
-constexpr double kStancePitch = deg(8.0);      // on the forefoot, heel slightly up
-constexpr double kSwingAnkle = deg(-15.0);     // swing foot slightly dorsiflexed (toes 30° down)
+constexpr double kStancePitch = deg(8.0);   // on the forefoot, heel slightly up
+constexpr double kSwingAnkle = deg(-15.0);  // swing foot slightly dorsiflexed (toes 30° down)
 constexpr double kArmSwing = deg(30.0);
 constexpr double kElbow = deg(85.0);
 constexpr double kElbowSwing = deg(10.0);

@@ -9,14 +9,14 @@ namespace {
 
 // shake_hips: pelvis roll ±17° at 2 Hz (left hip up when rolling about +Z) with yaw ±8° a quarter
 // period later, so the hips trace a flat figure rather than a pure tilt; peak pelvis rotation ≈ 17°.
-constexpr double kHipsFrequency = 2.0;     // [Hz]
+constexpr double kHipsFrequency = 2.0;  // [Hz]
 constexpr double kHipsRoll = deg(17.0);
 constexpr double kHipsYaw = deg(8.0);
 // The spine joints counter-rotate (40/35/25 % of the pelvis rotation, in reverse) so the chest keeps
 // its orientation, and the root translates so that the chest (hence neck and head) stays in place on
 // the nominal spine: the hips sway sideways under a still upper body.
 constexpr double kSpineShare[3] = {0.40, 0.35, 0.25};
-constexpr double kHipsCrouch = 0.05;       // root lowered [m] so both knees stay bent
+constexpr double kHipsCrouch = 0.05;  // root lowered [m] so both knees stay bent
 
 // shake_shoulders: alternating shoulder shimmy at 3.5 Hz — the collars protract/retract ±12°
 // (left forward while right goes back), the chest twists ±4° with them and the neck undoes the twist
@@ -58,8 +58,8 @@ PoseSample sample_shake_hips(double t) {
   // place (minus the crouch); the global rotations of the pelvis, spine1 and spine2 are powers of R_p.
   const Eigen::Vector3d s1 = NominalSpine::pelvis_to_spine1(), s2 = NominalSpine::spine1_to_spine2(),
                         s3 = NominalSpine::spine2_to_spine3();
-  const Eigen::Vector3d chest = pelvis * s1 + fraction(pelvis, 1.0 - kSpineShare[0]) * s2 +
-                                fraction(pelvis, kSpineShare[2]) * s3;
+  const Eigen::Vector3d chest =
+      pelvis * s1 + fraction(pelvis, 1.0 - kSpineShare[0]) * s2 + fraction(pelvis, kSpineShare[2]) * s3;
   steady.trans = (s1 + s2 + s3) - chest + Eigen::Vector3d(0.0, -kHipsCrouch, 0.0);
 
   // Feet stay planted where they are in the rest pose (two-bone IK on the nominal leg).

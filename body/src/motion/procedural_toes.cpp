@@ -14,8 +14,8 @@
 namespace sflsh::body::motion_detail {
 
 namespace {
-constexpr double kFrequency = 2.75;        // bounces per second [Hz]
-constexpr double kPitchMean = deg(18.0);   // heel raise (foot pitch) [rad]
+constexpr double kFrequency = 2.75;       // bounces per second [Hz]
+constexpr double kPitchMean = deg(18.0);  // heel raise (foot pitch) [rad]
 constexpr double kPitchAmplitude = deg(7.0);
 constexpr double kKneeMean = deg(8.0);
 constexpr double kKneeAmplitude = deg(5.0);

@@ -1,8 +1,7 @@
 // Frame-rate conversion of motions: per-joint quaternion slerp (shortest arc), linear translation.
-#include <sflsh/body/motion.hpp>
-
 #include "rig.hpp"
 
+#include <sflsh/body/motion.hpp>
 #include <sflsh/core/error.hpp>
 
 #include <algorithm>
@@ -57,8 +56,8 @@ Motion resample(const Motion& motion, double fps) {
   // floor(duration · fps) + 1 frames; the 1e-9 guards rates whose ratio is not exact in binary.
   const double span = static_cast<double>(n_in - 1) * fps / motion.fps;
   require(std::isfinite(span) && span < static_cast<double>(kMaxMotionFrames),
-          "resample '{}': {} frames at {:g} fps become {:g} frames at {:g} fps, above the limit of {} frames", motion.name,
-          n_in, motion.fps, std::floor(span) + 1.0, fps, kMaxMotionFrames);
+          "resample '{}': {} frames at {:g} fps become {:g} frames at {:g} fps, above the limit of {} frames",
+          motion.name, n_in, motion.fps, std::floor(span) + 1.0, fps, kMaxMotionFrames);
   const auto n_out = static_cast<std::size_t>(std::floor(span + 1e-9)) + 1;
   out.poses.resize(n_out);
   out.trans.resize(n_out);

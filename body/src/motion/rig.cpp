@@ -10,14 +10,20 @@
 
 namespace sflsh::body::motion_detail {
 
-Eigen::Quaterniond rot_x(double angle) { return Eigen::Quaterniond(Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitX())); }
-Eigen::Quaterniond rot_y(double angle) { return Eigen::Quaterniond(Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitY())); }
-Eigen::Quaterniond rot_z(double angle) { return Eigen::Quaterniond(Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitZ())); }
+Eigen::Quaterniond rot_x(double angle) {
+  return Eigen::Quaterniond(Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitX()));
+}
+Eigen::Quaterniond rot_y(double angle) {
+  return Eigen::Quaterniond(Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitY()));
+}
+Eigen::Quaterniond rot_z(double angle) {
+  return Eigen::Quaterniond(Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitZ()));
+}
 
 Eigen::Vector3d log_rotation(const Eigen::Quaterniond& q_in) {
   Eigen::Quaterniond q = q_in.normalized();
   if (q.w() < 0.0) q.coeffs() = -q.coeffs();  // canonical half: angle ∈ [0, π]
-  const double s = q.vec().norm();             // sin(angle/2)
+  const double s = q.vec().norm();            // sin(angle/2)
   if (s == 0.0) return Eigen::Vector3d::Zero();
   // angle = 2 atan2(s, w); atan2 keeps full relative precision for small s.
   return (2.0 * std::atan2(s, q.w()) / s) * q.vec();
@@ -35,9 +41,7 @@ void set_joint(Pose& theta, int joint, const Eigen::Quaterniond& local) {
   theta.segment<3>(3 * joint) = log_rotation(local);
 }
 
-Eigen::Quaterniond joint_rotation(const Pose& theta, int joint) {
-  return exp_rotation(theta.segment<3>(3 * joint));
-}
+Eigen::Quaterniond joint_rotation(const Pose& theta, int joint) { return exp_rotation(theta.segment<3>(3 * joint)); }
 
 namespace {
 int hip_of(Side s) { return s == Side::kLeft ? kLeftHip : kRightHip; }
@@ -101,9 +105,7 @@ LegIkResult solve_leg_ik(Side side, const Eigen::Quaterniond& pelvis, const Eige
   return out;
 }
 
-double leg_drop(double knee_flexion) {
-  return 2.0 * NominalLeg::thigh * (1.0 - std::cos(0.5 * knee_flexion));
-}
+double leg_drop(double knee_flexion) { return 2.0 * NominalLeg::thigh * (1.0 - std::cos(0.5 * knee_flexion)); }
 
 double knee_for_drop(double drop) {
   assert(drop >= 0.0 && drop < 2.0 * NominalLeg::thigh);

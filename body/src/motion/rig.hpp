@@ -21,9 +21,30 @@ namespace sflsh::body::motion_detail {
 
 /// SMPL joint indices (kJointNames order).
 enum Joint : int {
-  kPelvis = 0, kLeftHip, kRightHip, kSpine1, kLeftKnee, kRightKnee, kSpine2, kLeftAnkle, kRightAnkle, kSpine3,
-  kLeftFoot, kRightFoot, kNeck, kLeftCollar, kRightCollar, kHead, kLeftShoulder, kRightShoulder, kLeftElbow,
-  kRightElbow, kLeftWrist, kRightWrist, kLeftHand, kRightHand
+  kPelvis = 0,
+  kLeftHip,
+  kRightHip,
+  kSpine1,
+  kLeftKnee,
+  kRightKnee,
+  kSpine2,
+  kLeftAnkle,
+  kRightAnkle,
+  kSpine3,
+  kLeftFoot,
+  kRightFoot,
+  kNeck,
+  kLeftCollar,
+  kRightCollar,
+  kHead,
+  kLeftShoulder,
+  kRightShoulder,
+  kLeftElbow,
+  kRightElbow,
+  kLeftWrist,
+  kRightWrist,
+  kLeftHand,
+  kRightHand
 };
 
 enum class Side : int { kLeft = 1, kRight = -1 };
@@ -32,9 +53,9 @@ inline double sign(Side s) { return static_cast<double>(static_cast<int>(s)); }
 /// Nominal leg dimensions [m] (Drillis & Contini fractions of a 1.70 m stature, docs/architecture.md §2), used
 /// only to keep feet planted; a real body's proportions differ a little, so feet may slide by a few mm.
 struct NominalLeg {
-  static constexpr double thigh = 0.42;        ///< hip → knee
-  static constexpr double shank = 0.42;        ///< knee → ankle
-  static constexpr double ankle_height = 0.07; ///< ankle above the ground
+  static constexpr double thigh = 0.42;          ///< hip → knee
+  static constexpr double shank = 0.42;          ///< knee → ankle
+  static constexpr double ankle_height = 0.07;   ///< ankle above the ground
   static constexpr double ankle_to_ball = 0.14;  ///< horizontal ankle → ball of the foot
   static constexpr double hip_offset_x = 0.085;  ///< |x| of a hip joint from the pelvis joint
   static constexpr double hip_offset_y = -0.09;  ///< y of the hip joints relative to the pelvis joint
@@ -78,10 +99,10 @@ void set_leg(Pose& theta, Side side, const LegAngles& leg);
 
 /// Arm angles [rad], relative to the chest (spine3) frame.
 struct ArmAngles {
-  double down = 0.0;        ///< upper arm lowered from the T-pose (total of collar and shoulder)
+  double down = 0.0;           ///< upper arm lowered from the T-pose (total of collar and shoulder)
   double collar_share = 0.15;  ///< part of `down` taken by the collar joint
-  double protraction = 0.0; ///< collar forward (+) / back (−) about the vertical; the arm follows it
-  double swing = 0.0;       ///< upper arm forward (+) about the body's X axis
+  double protraction = 0.0;    ///< collar forward (+) / back (−) about the vertical; the arm follows it
+  double swing = 0.0;          ///< upper arm forward (+) about the body's X axis
   double elbow_flexion = 0.0;
 };
 /// collar = R_y(∓protraction) R_z(∓share·down); the upper arm's orientation relative to the chest is
@@ -91,9 +112,9 @@ void set_arm(Pose& theta, Side side, const ArmAngles& arm);
 
 /// Pose of a leg whose ankle is placed by two-bone inverse kinematics on the nominal leg.
 struct LegIkResult {
-  Eigen::Quaterniond hip;    ///< local rotation of the hip joint (in the pelvis frame)
-  double knee_flexion = 0.0; ///< [rad]
-  Eigen::Quaterniond ankle;  ///< local rotation of the ankle joint (in the shank frame)
+  Eigen::Quaterniond hip;     ///< local rotation of the hip joint (in the pelvis frame)
+  double knee_flexion = 0.0;  ///< [rad]
+  Eigen::Quaterniond ankle;   ///< local rotation of the ankle joint (in the shank frame)
 };
 /// Places the ankle at `ankle_world` with the foot at orientation `foot_world` and the knee bending
 /// toward `pole` (a world direction, e.g. +Z). The pelvis joint is at `pelvis_world` with global

@@ -192,11 +192,15 @@ void add_leg(const Skeleton& sk, Builder& out) {
   heel.center = {ankle.x(), floor + 0.033 * e, ankle.z() - 0.036 * e};
   heel.radii = Eigen::Vector3d(0.030, 0.033, 0.032) * e;
   out.add_pair(heel, 0.02, 7);
-  RoundCone instep{ankle, {ankle.x() + 0.006 * e, floor + 0.035 * e, ankle.z() + 0.095 * e}, 0.95 * sk.shank_ankle,
-                   0.026 * e};
+  RoundCone instep{
+      ankle, {ankle.x() + 0.006 * e, floor + 0.035 * e, ankle.z() + 0.095 * e}, 0.95 * sk.shank_ankle, 0.026 * e};
   out.add_pair(instep, 0.02, 7);
-  RoundCone toes{j[10], {ankle.x() + 0.012 * e, floor + 0.020 * e, ankle.z() + 0.165 * e}, 0.042 * e, 0.030 * e,
-                 Eigen::Vector3d::UnitY(), 0.45};
+  RoundCone toes{j[10],
+                 {ankle.x() + 0.012 * e, floor + 0.020 * e, ankle.z() + 0.165 * e},
+                 0.042 * e,
+                 0.030 * e,
+                 Eigen::Vector3d::UnitY(),
+                 0.45};
   out.add_pair(toes, 0.015, 10);
 }
 

@@ -68,7 +68,9 @@ FieldSample BodyField::evaluate_over(const Eigen::Vector3d& p, const Indices& id
   return acc;
 }
 
-FieldSample BodyField::evaluate(const Eigen::Vector3d& p) const { return evaluate_over(p, AllIndices{primitives_.size()}); }
+FieldSample BodyField::evaluate(const Eigen::Vector3d& p) const {
+  return evaluate_over(p, AllIndices{primitives_.size()});
+}
 
 FieldSample BodyField::evaluate(const Eigen::Vector3d& p, std::span<const int> active) const {
   return evaluate_over(p, active);

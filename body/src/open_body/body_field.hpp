@@ -7,7 +7,6 @@
 #include <Eigen/Core>
 
 #include <cmath>
-
 #include <span>
 #include <vector>
 

@@ -94,8 +94,7 @@ RowMatrixX3d carry_template(const RowMatrixX3d& template_vertices, const Eigen::
     sample_field.active_near(y, std::abs(sample_field.value(y)) + kMaxSlide, active);
     active_offsets[static_cast<std::size_t>(v) + 1] = static_cast<int>(active.size());
   }
-  for (Eigen::Index v = 0; v < n; ++v)
-    out.row(v) = newton_project(field_at(v), warped.row(v).transpose()).transpose();
+  for (Eigen::Index v = 0; v < n; ++v) out.row(v) = newton_project(field_at(v), warped.row(v).transpose()).transpose();
 
   // Tangential relaxation: each vertex slides along the surface so that its offset from the mean of its
   // neighbours (its uniform-Laplacian coordinate) approaches the warped template's. This undoes the

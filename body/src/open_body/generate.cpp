@@ -13,8 +13,6 @@
 //  6. The named subjects are carried the same way and projected onto the PCA basis (subjects.cpp).
 // Everything is deterministic for fixed options: the population comes from std::mt19937(seed), the
 // mesher is seeded from the skeleton, and the parallel loop writes each sample to its own column.
-#include <sflsh/body/open_body.hpp>
-
 #include "body_field.hpp"
 #include "correspondence.hpp"
 #include "factors.hpp"
@@ -26,6 +24,7 @@
 #include "subjects.hpp"
 #include "surface_mesher.hpp"
 
+#include <sflsh/body/open_body.hpp>
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
 
@@ -48,7 +47,8 @@ OpenBodyResult generate_open_body(const OpenBodyOptions& options) {
   const Skeleton average = make_skeleton(AnthroFactors::Zero());
   const BodyField average_field = make_body_field(average);
   const TriangleSurface surface = mesh_body_surface(average_field, average, options.target_vertices);
-  const Eigen::MatrixXd weights = skinning_weights(surface.vertices, surface.faces, surface.mirror, average_field, average);
+  const Eigen::MatrixXd weights =
+      skinning_weights(surface.vertices, surface.faces, surface.mirror, average_field, average);
   const Eigen::Index n = surface.vertices.rows();
   logger()->info("open body: template {} vertices, {} faces, weights done ({:.1f} s)", n, surface.faces.rows(),
                  seconds());
@@ -88,9 +88,8 @@ OpenBodyResult generate_open_body(const OpenBodyOptions& options) {
 
   // 5. Joint regressor over the population.
   const std::vector<JointArray> population_joints(joints.begin(), joints.begin() + samples);
-  model.joint_regressor =
-      fit_joint_regressor(surface.vertices, surface.mirror, average_field, average, surfaces.leftCols(samples),
-                          population_joints);
+  model.joint_regressor = fit_joint_regressor(surface.vertices, surface.mirror, average_field, average,
+                                              surfaces.leftCols(samples), population_joints);
 
   // 6. Subjects' β.
   for (std::size_t s = 0; s < subjects.size(); ++s)

@@ -118,8 +118,7 @@ Primitive Primitive::torso_loft(const TorsoLoft& loft) {
   Primitive p;
   p.kind_ = Kind::kTorsoLoft;
   p.loft_ = loft;
-  p.loft_slopes_ = {monotone_slopes(loft.y, loft.a), monotone_slopes(loft.y, loft.b),
-                    monotone_slopes(loft.y, loft.c)};
+  p.loft_slopes_ = {monotone_slopes(loft.y, loft.a), monotone_slopes(loft.y, loft.b), monotone_slopes(loft.y, loft.c)};
   double widest = 0.0;
   for (std::size_t k = 0; k < n; ++k) widest = std::max({widest, loft.a[k], std::abs(loft.c[k]) + loft.b[k]});
   p.bound_center_ = Eigen::Vector3d(0.0, 0.5 * (loft.y.front() + loft.y.back()), 0.0);
@@ -133,17 +132,22 @@ double Primitive::lower_bound(const Eigen::Vector3d& p) const {
       const double t = std::clamp(frame_.col(0).dot(p - origin_), 0.0, length_);
       return (p - origin_ - t * frame_.col(0)).norm() - largest_radius_;
     }
-    case Kind::kEllipsoid: return (p - origin_).norm() - largest_radius_;
-    case Kind::kTorsoLoft: break;
+    case Kind::kEllipsoid:
+      return (p - origin_).norm() - largest_radius_;
+    case Kind::kTorsoLoft:
+      break;
   }
   return -std::numeric_limits<double>::infinity();
 }
 
 FieldSample Primitive::evaluate(const Eigen::Vector3d& p) const {
   switch (kind_) {
-    case Kind::kRoundCone: return evaluate_cone(p);
-    case Kind::kEllipsoid: return evaluate_ellipsoid(p);
-    case Kind::kTorsoLoft: return evaluate_loft(p);
+    case Kind::kRoundCone:
+      return evaluate_cone(p);
+    case Kind::kEllipsoid:
+      return evaluate_ellipsoid(p);
+    case Kind::kTorsoLoft:
+      return evaluate_loft(p);
   }
   return {};
 }

@@ -42,10 +42,10 @@ struct Ellipsoid {
 /// A vertical generalised cylinder for the trunk: elliptic cross-sections x²/a(y)² + (z − c(y))²/b(y)² = 1
 /// interpolated by monotone cubic Hermite splines between knots, closed by smooth caps at both ends.
 struct TorsoLoft {
-  std::vector<double> y;  ///< knot heights [m], increasing
-  std::vector<double> a;  ///< half-widths along x [m]
-  std::vector<double> b;  ///< half-depths along z [m]
-  std::vector<double> c;  ///< z of the section centre [m]
+  std::vector<double> y;    ///< knot heights [m], increasing
+  std::vector<double> a;    ///< half-widths along x [m]
+  std::vector<double> b;    ///< half-depths along z [m]
+  std::vector<double> c;    ///< z of the section centre [m]
   double cap_blend = 0.03;  ///< smooth-max radius of the end caps [m]
 };
 

@@ -13,7 +13,7 @@
 namespace sflsh::body::detail {
 namespace {
 
-constexpr double kRidge = 1e-5;        // λ [m²]
+constexpr double kRidge = 1e-5;  // λ [m²]
 constexpr int kIterations = 4000;
 
 /// Euclidean projection onto the probability simplex (Duchi et al. 2008).
@@ -61,7 +61,9 @@ double fit_joint(const std::vector<int>& ring, const Eigen::Vector3d& center, co
                  const std::vector<JointArray>& sample_joints, int j, Eigen::VectorXd& w) {
   const auto samples = static_cast<Eigen::Index>(sample_joints.size());
   const auto k = static_cast<Eigen::Index>(ring.size());
-  const auto target = [&](Eigen::Index s) { return sample_joints[static_cast<std::size_t>(s)][static_cast<std::size_t>(j)]; };
+  const auto target = [&](Eigen::Index s) {
+    return sample_joints[static_cast<std::size_t>(s)][static_cast<std::size_t>(j)];
+  };
   // Normal equations of the population term: H = (2/N) Σ P_kᵀP_k + 2λI, g = −(2/N) Σ P_kᵀ y_k − 2λu.
   const Eigen::VectorXd uniform = Eigen::VectorXd::Constant(k, 1.0 / static_cast<double>(k));
   Eigen::MatrixXd hessian = Eigen::MatrixXd::Zero(k, k);
@@ -95,7 +97,8 @@ double fit_joint(const std::vector<int>& ring, const Eigen::Vector3d& center, co
   double sq = 0.0;
   for (Eigen::Index s = 0; s < samples; ++s) {
     Eigen::Vector3d fit = Eigen::Vector3d::Zero();
-    for (Eigen::Index i = 0; i < k; ++i) fit += w(i) * sample_vertices.block<3, 1>(3 * ring[static_cast<std::size_t>(i)], s);
+    for (Eigen::Index i = 0; i < k; ++i)
+      fit += w(i) * sample_vertices.block<3, 1>(3 * ring[static_cast<std::size_t>(i)], s);
     sq += (fit - target(s)).squaredNorm();
   }
   return std::sqrt(sq / static_cast<double>(samples));

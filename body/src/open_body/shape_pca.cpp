@@ -58,8 +58,8 @@ ShapePca shape_pca(const Eigen::MatrixXd& samples, int components, const std::ve
       corr = -corr;
     }
     logger()->info("open body: shape component {} explains {:.2f}% of the variance, mostly {} (r = {:.2f}), then {}",
-                   m + 1, 100.0 * lambda / total, kAnthroFactorNames[static_cast<std::size_t>(strongest)], corr(strongest),
-                   second_factor(corr, strongest));
+                   m + 1, 100.0 * lambda / total, kAnthroFactorNames[static_cast<std::size_t>(strongest)],
+                   corr(strongest), second_factor(corr, strongest));
     pca.variances(m) = lambda;
     pca.explained(m) = lambda / total;
     // √λ e = √λ X u / √((N−1)λ) = X u / √(N−1).

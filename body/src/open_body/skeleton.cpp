@@ -17,8 +17,8 @@ constexpr double kArmDropDegrees = 12.0;  // arms below horizontal in the rest p
 
 /// A trunk knot of the average body and how strongly each factor acts on it (weights in [0, 1]).
 struct TrunkKnot {
-  double fraction;           // height as a fraction of stature
-  double a, b, c;            // half-width, half-depth, z-centre at the average body [m]
+  double fraction;                                 // height as a fraction of stature
+  double a, b, c;                                  // half-width, half-depth, z-centre at the average body [m]
   double hips, shoulders, chest, belly, buttocks;  // factor weights at this level
 };
 

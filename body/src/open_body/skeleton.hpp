@@ -16,11 +16,11 @@ namespace sflsh::body::detail {
 
 /// Multiplicative scales of one sample (1 at the average body).
 struct BodyScales {
-  double stature = 1.70;   ///< H [m]
-  double legs = 1.0;       ///< vertical scale of the legs (keeps H when the trunk grows)
-  double trunk = 1.0;      ///< vertical scale of the trunk (torso_length)
-  double frame = 1.0;      ///< lateral scale of the skeleton
-  double girth = 1.0;      ///< radial scale of the soft tissue
+  double stature = 1.70;  ///< H [m]
+  double legs = 1.0;      ///< vertical scale of the legs (keeps H when the trunk grows)
+  double trunk = 1.0;     ///< vertical scale of the trunk (torso_length)
+  double frame = 1.0;     ///< lateral scale of the skeleton
+  double girth = 1.0;     ///< radial scale of the soft tissue
   double shoulders = 1.0, hips = 1.0, chest = 1.0, breasts = 1.0, belly = 1.0, buttocks = 1.0;
   double thighs = 1.0, arms = 1.0;
   double extremities = 1.0;  ///< head, hands and feet
@@ -33,11 +33,11 @@ struct TrunkSection {
 
 struct Skeleton {
   BodyScales scales;
-  std::array<Eigen::Vector3d, kNumJoints> joints;  ///< SMPL joint positions [m]
-  double floor_y = 0.0;                            ///< height of the soles [m]
-  double head_top_y = 0.0;                         ///< height of the vertex of the head [m]
+  std::array<Eigen::Vector3d, kNumJoints> joints;            ///< SMPL joint positions [m]
+  double floor_y = 0.0;                                      ///< height of the soles [m]
+  double head_top_y = 0.0;                                   ///< height of the vertex of the head [m]
   Eigen::Vector3d arm_direction = Eigen::Vector3d::UnitX();  ///< left arm, shoulder → hand (unit)
-  std::vector<TrunkSection> trunk;                 ///< torso loft knots, bottom to top
+  std::vector<TrunkSection> trunk;                           ///< torso loft knots, bottom to top
   // Limb radii [m].
   double thigh_top = 0, thigh_knee = 0, shank_knee = 0, shank_ankle = 0;
   double upper_arm_top = 0, upper_arm_elbow = 0, forearm_elbow = 0, forearm_wrist = 0;

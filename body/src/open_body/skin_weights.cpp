@@ -30,7 +30,8 @@ std::array<std::array<int, kNumJoints>, kNumJoints> tree_distances() {
   for (int a = 0; a < kNumJoints; ++a) {
     std::array<int, kNumJoints> depth_a{};
     depth_a.fill(-1);
-    for (int x = a, d = 0; x >= 0; x = kJointParents[static_cast<std::size_t>(x)], ++d) depth_a[static_cast<std::size_t>(x)] = d;
+    for (int x = a, d = 0; x >= 0; x = kJointParents[static_cast<std::size_t>(x)], ++d)
+      depth_a[static_cast<std::size_t>(x)] = d;
     for (int b = 0; b < kNumJoints; ++b) {
       int d = 0, x = b;
       while (depth_a[static_cast<std::size_t>(x)] < 0) {
@@ -145,7 +146,8 @@ Eigen::MatrixXd skinning_weights(const RowMatrixX3d& vertices, const RowMatrixX3
   for (Eigen::Index v = 0; v < n; ++v) {
     std::array<int, kNumJoints> order;
     std::iota(order.begin(), order.end(), 0);
-    std::sort(order.begin(), order.end(), [&](int a, int b) { return w(v, a) > w(v, b) || (w(v, a) == w(v, b) && a < b); });
+    std::sort(order.begin(), order.end(),
+              [&](int a, int b) { return w(v, a) > w(v, b) || (w(v, a) == w(v, b) && a < b); });
     const double cut = w(v, order[kMaxBones]);
     Eigen::RowVectorXd kept = Eigen::RowVectorXd::Zero(kNumJoints);
     for (int k = 0; k < kMaxBones; ++k) {

@@ -4,19 +4,19 @@
 #include <sflsh/core/log.hpp>
 
 #include <CGAL/Complex_2_in_triangulation_3.h>
+#include <CGAL/Delaunay_triangulation_3.h>
+#include <CGAL/Delaunay_triangulation_cell_base_with_circumcenter_3.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/IO/facets_in_complex_2_to_triangle_mesh.h>
 #include <CGAL/Implicit_surface_3.h>
 #include <CGAL/Polygon_mesh_processing/clip.h>
 #include <CGAL/Polygon_mesh_processing/measure.h>
 #include <CGAL/Polygon_mesh_processing/orientation.h>
 #include <CGAL/Polygon_mesh_processing/remesh.h>
-#include <CGAL/Surface_mesh.h>
-#include <CGAL/Surface_mesh_default_criteria_3.h>
-#include <CGAL/Delaunay_triangulation_3.h>
-#include <CGAL/Delaunay_triangulation_cell_base_with_circumcenter_3.h>
-#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Robust_circumcenter_traits_3.h>
+#include <CGAL/Surface_mesh.h>
 #include <CGAL/Surface_mesh_cell_base_3.h>
+#include <CGAL/Surface_mesh_default_criteria_3.h>
 #include <CGAL/Surface_mesh_vertex_base_3.h>
 #include <CGAL/make_surface_mesh.h>
 
@@ -49,9 +49,10 @@ class Stamped : public Base {
 // CGAL::Surface_mesh_default_triangulation_3 with time-stamped vertices and cells.
 using Kernel = CGAL::Robust_circumcenter_traits_3<CGAL::Exact_predicates_inexact_constructions_kernel>;
 using VertexBase = Stamped<CGAL::Surface_mesh_vertex_base_3<Kernel>>;
-using CellBase = Stamped<
-    CGAL::Delaunay_triangulation_cell_base_with_circumcenter_3<Kernel, CGAL::Surface_mesh_cell_base_3<Kernel>>>;
-using Triangulation = CGAL::Delaunay_triangulation_3<Kernel, CGAL::Triangulation_data_structure_3<VertexBase, CellBase>>;
+using CellBase =
+    Stamped<CGAL::Delaunay_triangulation_cell_base_with_circumcenter_3<Kernel, CGAL::Surface_mesh_cell_base_3<Kernel>>>;
+using Triangulation =
+    CGAL::Delaunay_triangulation_3<Kernel, CGAL::Triangulation_data_structure_3<VertexBase, CellBase>>;
 using Complex = CGAL::Complex_2_in_triangulation_3<Triangulation>;
 using Traits = Triangulation::Geom_traits;
 using Point = Traits::Point_3;

@@ -3,9 +3,8 @@
 #include <sflsh/material/curves.hpp>
 #include <sflsh/material/orthotropic_fung.hpp>
 
-#include <fmt/format.h>
-
 #include <Eigen/LU>
+#include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
@@ -104,9 +103,12 @@ CurvePoint uniaxial_point(const SkinMaterial& material, const OrthotropicFung& m
 
 std::string_view curve_test_name(CurveTest test) {
   switch (test) {
-    case CurveTest::kUniaxialTangent: return "uniaxial_tangent";
-    case CurveTest::kUniaxialNormal: return "uniaxial_normal";
-    case CurveTest::kShear: return "shear";
+    case CurveTest::kUniaxialTangent:
+      return "uniaxial_tangent";
+    case CurveTest::kUniaxialNormal:
+      return "uniaxial_normal";
+    case CurveTest::kShear:
+      return "shear";
   }
   throw_error("unknown CurveTest value {}", static_cast<int>(test));
 }

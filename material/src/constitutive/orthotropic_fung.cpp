@@ -41,7 +41,7 @@ Strain strain_of(const Eigen::Matrix3d& F, const OrthotropicFung& m) {
   require_finite(F);
   Strain s;
   const Eigen::Matrix3d E = green_strain(F);
-  s.E_hat = m.scaling * E * m.scaling;                 // Ê = P_Y E P_Y (docs/physics.md §1.2)
+  s.E_hat = m.scaling * E * m.scaling;  // Ê = P_Y E P_Y (docs/physics.md §1.2)
   const double tr = s.E_hat.trace();
   s.psi0 = m.mu0 * s.E_hat.squaredNorm() + 0.5 * m.lambda0 * tr * tr;  // tr(Ê²) = ‖Ê‖²_F (Ê symmetric)
   require(std::isfinite(s.psi0), "orthotropic Fung: the StVK energy overflows (‖F‖ = {:.4g})", F.norm());
@@ -66,9 +66,10 @@ Fung fung_factor(double x, const OrthotropicFung& m) {
     return f;
   }
   if (m.overflow == ExponentOverflow::kThrow || !std::isfinite(x)) {
-    throw_error("orthotropic Fung: exponent 2Ψ₀/c = {:.4g} exceeds the cap {} (c = {:.4g} Pa); the strain is far "
-                "outside the material's range",
-                x, kFungExponentCap, m.c);
+    throw_error(
+        "orthotropic Fung: exponent 2Ψ₀/c = {:.4g} exceeds the cap {} (c = {:.4g} Pa); the strain is far "
+        "outside the material's range",
+        x, kFungExponentCap, m.c);
   }
   const double e_cap = std::exp(kFungExponentCap);
   f.phi = e_cap * (1.0 + (x - kFungExponentCap)) - 1.0;
@@ -89,12 +90,12 @@ Matrix9d stvk_hessian(const Eigen::Matrix3d& F, const Strain& s, const Orthotrop
       // Fᵀ dF has one non-zero column, j, equal to row i of F.
       Eigen::Matrix3d FtdF = Eigen::Matrix3d::Zero();
       FtdF.col(j) = F.row(i).transpose();
-      const Eigen::Matrix3d dE = 0.5 * (FtdF + FtdF.transpose());       // dE = sym(FᵀdF)
-      const Eigen::Matrix3d dE_hat = m.scaling * dE * m.scaling;        // dÊ = P_Y dE P_Y
-      const Eigen::Matrix3d dS0 =                                        // ℂ₀:dE (docs/physics.md §1.2)
+      const Eigen::Matrix3d dE = 0.5 * (FtdF + FtdF.transpose());  // dE = sym(FᵀdF)
+      const Eigen::Matrix3d dE_hat = m.scaling * dE * m.scaling;   // dÊ = P_Y dE P_Y
+      const Eigen::Matrix3d dS0 =                                  // ℂ₀:dE (docs/physics.md §1.2)
           m.scaling * (2.0 * m.mu0 * dE_hat + m.lambda0 * dE_hat.trace() * Eigen::Matrix3d::Identity()) * m.scaling;
-      Eigen::Matrix3d dP = F * dS0;                                      // F dS₀
-      dP.row(i) += s.S0.row(j);                                          // + dF S₀ = e_i (row j of S₀)
+      Eigen::Matrix3d dP = F * dS0;  // F dS₀
+      dP.row(i) += s.S0.row(j);      // + dF S₀ = e_i (row j of S₀)
       H.col(i + 3 * j) = Eigen::Map<const Vector9d>(dP.data());
     }
   }

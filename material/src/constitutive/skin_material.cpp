@@ -14,8 +14,8 @@ void validate(const SkinMaterial& material, const SkinMaterialNames& names) {
           "{} must be a positive Young modulus in Pa, got {}", names.young_normal, material.young_normal);
   require(material.poisson > -1.0 && material.poisson < 0.5,
           "{} must lie in (-1, 0.5) for a positive-definite stiffness, got {}", names.poisson, material.poisson);
-  require(std::isfinite(material.saturation) && material.saturation > 0.0,
-          "{} must be positive, got {}", names.saturation, material.saturation);
+  require(std::isfinite(material.saturation) && material.saturation > 0.0, "{} must be positive, got {}",
+          names.saturation, material.saturation);
 }
 
 double unit_lame_mu(double poisson) { return 1.0 / (2.0 * (1.0 + poisson)); }  // docs/physics.md §1.2
@@ -26,9 +26,12 @@ double unit_lame_lambda(double poisson) {  // docs/physics.md §1.2
 
 double fung_scale_c(const SkinMaterial& material) {
   switch (material.fung_scale) {
-    case FungScale::kTangentOverSaturation: return material.young_tangent / material.saturation;  // docs/physics.md §1.2
-    case FungScale::kTangentTimesSaturation: return material.young_tangent * material.saturation;
-    case FungScale::kNone: return std::numeric_limits<double>::infinity();
+    case FungScale::kTangentOverSaturation:
+      return material.young_tangent / material.saturation;  // docs/physics.md §1.2
+    case FungScale::kTangentTimesSaturation:
+      return material.young_tangent * material.saturation;
+    case FungScale::kNone:
+      return std::numeric_limits<double>::infinity();
   }
   throw_error("unknown FungScale value {}", static_cast<int>(material.fung_scale));
 }

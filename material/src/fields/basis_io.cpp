@@ -11,8 +11,8 @@ namespace {
 
 std::vector<std::int64_t> read_ints(const npz::Reader& in, const char* key, std::size_t expected) {
   const npz::Array a = in.read(key);
-  require(a.shape.size() == 1 && a.shape[0] == expected, "{}: key '{}' has shape {}, expected ({},)", in.path().string(),
-          key, a.shape_string(), expected);
+  require(a.shape.size() == 1 && a.shape[0] == expected, "{}: key '{}' has shape {}, expected ({},)",
+          in.path().string(), key, a.shape_string(), expected);
   try {
     return a.to_int64();
   } catch (const Error& e) {
@@ -61,7 +61,8 @@ BiharmonicBasis load_basis(const std::filesystem::path& path) {
   for (const std::int64_t k : read_ints(in, "iterations", N)) basis.iterations.push_back(static_cast<int>(k));
   for (const std::int64_t k : read_ints(in, "used_fallback", N)) basis.used_fallback.push_back(k != 0 ? 1 : 0);
   const std::vector<std::int64_t> flags = read_ints(in, "options", 3);
-  require(flags[2] == 0 || flags[2] == 1, "{}: key 'options' has lumping {} (expected 0 or 1)", path.string(), flags[2]);
+  require(flags[2] == 0 || flags[2] == 1, "{}: key 'options' has lumping {} (expected 0 or 1)", path.string(),
+          flags[2]);
   basis.bounded = flags[0] != 0;
   basis.normalized = flags[1] != 0;
   basis.lumping = flags[2] == 0 ? MassLumping::kVoronoi : MassLumping::kBarycentric;

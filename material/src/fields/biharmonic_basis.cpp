@@ -44,7 +44,8 @@ Eigen::MatrixXd unconstrained_basis(const SparseMatrixd& Q, const std::vector<in
   const auto n = static_cast<int>(Q.rows());
   const auto N = static_cast<Eigen::Index>(controls.size());
   std::vector<int> column_of(static_cast<std::size_t>(n), -1), free, local(static_cast<std::size_t>(n), -1);
-  for (std::size_t i = 0; i < controls.size(); ++i) column_of[static_cast<std::size_t>(controls[i])] = static_cast<int>(i);
+  for (std::size_t i = 0; i < controls.size(); ++i)
+    column_of[static_cast<std::size_t>(controls[i])] = static_cast<int>(i);
   for (int v = 0; v < n; ++v) {
     if (column_of[static_cast<std::size_t>(v)] >= 0) continue;
     local[static_cast<std::size_t>(v)] = static_cast<int>(free.size());
@@ -122,8 +123,9 @@ BiharmonicBasis biharmonic_basis(const RowMatrixX3d& V, const RowMatrixX3i& F, c
     }
     const int fallbacks = std::accumulate(basis.used_fallback.begin(), basis.used_fallback.end(), 0);
     if (fallbacks > 0)
-      logger()->info("biharmonic basis: the primal-dual active set cycled for {} of {} functions (primal fallback used)",
-                     fallbacks, N);
+      logger()->info(
+          "biharmonic basis: the primal-dual active set cycled for {} of {} functions (primal fallback used)",
+          fallbacks, N);
     const double worst = *std::max_element(multiplier_violation.begin(), multiplier_violation.end());
     logger()->debug("biharmonic basis: largest KKT multiplier violation {:.2e} (relative to max diag Q)", worst);
   }

@@ -9,16 +9,16 @@
 namespace sflsh::material::detail {
 
 struct BoxQpSettings {
-  int max_iterations = 200;             ///< primal-dual iterations, then as many primal ones at most
-  double primal_tolerance = 1e-10;      ///< bound violation accepted before clamping
-  double multiplier_tolerance = 1e-8;   ///< KKT multiplier sign tolerance, relative to max diag(Q)
+  int max_iterations = 200;            ///< primal-dual iterations, then as many primal ones at most
+  double primal_tolerance = 1e-10;     ///< bound violation accepted before clamping
+  double multiplier_tolerance = 1e-8;  ///< KKT multiplier sign tolerance, relative to max diag(Q)
 };
 
 struct BoxQpResult {
-  Eigen::VectorXd x;               ///< the minimizer, clamped exactly into [0, 1] on the unknowns
-  int iterations = 0;              ///< sparse factorizations spent (primal-dual + primal fallback)
-  bool used_fallback = false;      ///< true when the primal-dual active-set iteration cycled
-  double max_bound_violation = 0;  ///< before clamping
+  Eigen::VectorXd x;                    ///< the minimizer, clamped exactly into [0, 1] on the unknowns
+  int iterations = 0;                   ///< sparse factorizations spent (primal-dual + primal fallback)
+  bool used_fallback = false;           ///< true when the primal-dual active-set iteration cycled
+  double max_bound_violation = 0;       ///< before clamping
   double max_multiplier_violation = 0;  ///< wrong-sign multiplier magnitude at exit (relative), ≤ tolerance
 };
 

@@ -83,7 +83,8 @@ class Sampler {
   // symmetric group, so part coverage does not apply), else the vertices of the parts without a point
   // while there are any, else all. nullopt when no candidate is at a positive distance.
   std::optional<int> farthest(bool plane_only) const {
-    const bool uncovered = !plane_only && std::any_of(part_count_.begin(), part_count_.end(), [](const auto& pc) { return pc.second == 0; });
+    const bool uncovered = !plane_only && std::any_of(part_count_.begin(), part_count_.end(),
+                                                      [](const auto& pc) { return pc.second == 0; });
     int best = -1;
     double best_distance = 0.0;
     for (Eigen::Index v = 0; v < distance_.size(); ++v) {

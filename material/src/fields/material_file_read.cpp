@@ -92,7 +92,6 @@ class Reader : public TomlReader {
     validate(file, path().string());  // everything again (with each point's table line); nothing should be left
     return file;
   }
-
 };
 
 }  // namespace

@@ -1,14 +1,14 @@
 // Writing and checking material files (material_file.hpp, docs/material_file.md).
+#include <sflsh/body/body_model.hpp>
 #include <sflsh/core/atomic_file.hpp>
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/toml_reader.hpp>
-#include <sflsh/body/body_model.hpp>
 #include <sflsh/material/material_file.hpp>
 
 #include <toml++/toml.h>
 
-#include <cmath>
 #include <array>
+#include <cmath>
 #include <map>
 #include <sstream>
 
@@ -20,7 +20,6 @@ namespace {
 std::string where(std::string_view what, const MaterialControlPoint& point) {
   return point.line > 0 ? fmt::format("{}:{}", what, point.line) : std::string(what);
 }
-
 
 }  // namespace
 
@@ -69,8 +68,8 @@ void check_against_body(const MaterialFile& material, const RowMatrixX3d& V, dou
   for (std::size_t i = 0; i < material.control_points.size(); ++i) {
     const MaterialControlPoint& p = material.control_points[i];
     const std::string at = where(what, p);
-    require(p.vertex >= 0 && p.vertex < V.rows(), "{}: control_point #{} 'vertex' = {} is outside the body's {} vertices",
-            at, i, p.vertex, V.rows());
+    require(p.vertex >= 0 && p.vertex < V.rows(),
+            "{}: control_point #{} 'vertex' = {} is outside the body's {} vertices", at, i, p.vertex, V.rows());
     if (!p.position) continue;
     const Eigen::Vector3d actual = V.row(p.vertex).transpose();
     const double distance = (actual - *p.position).norm();
@@ -82,10 +81,12 @@ void check_against_body(const MaterialFile& material, const RowMatrixX3d& V, dou
 }
 
 void check_against_body(const MaterialFile& material, const body::BodyModel& body, double position_tolerance) {
-  const std::string_view what = material.source.empty() ? std::string_view("material") : std::string_view(material.source);
-  require(material.body == body.name,
-          "{}: body: the material is for body '{}', but the run uses body '{}' (write one for it with `sflsh material`)",
-          what, material.body, body.name);
+  const std::string_view what =
+      material.source.empty() ? std::string_view("material") : std::string_view(material.source);
+  require(
+      material.body == body.name,
+      "{}: body: the material is for body '{}', but the run uses body '{}' (write one for it with `sflsh material`)",
+      what, material.body, body.name);
   check_against_body(material, body.v_template, position_tolerance, what);
 }
 
@@ -102,7 +103,7 @@ void save_material_file(const std::filesystem::path& path, const MaterialFile& m
   out << "saturation = " << toml_float(material.saturation) << "\n";
   out << "\n[bounds]  # closed ranges of each parameter; the maxima normalize κ (SFLSH §4)\n";
   constexpr std::array<std::string_view, kNumKappa> comments = {"  # fraction of the maximum thickness", "  # Pa",
-                                                                  "  # Pa"};
+                                                                "  # Pa"};
   for (int c = 0; c < kNumKappa; ++c) {
     const auto i = static_cast<std::size_t>(c);
     out << kKappaNames[i] << " = [" << toml_float(material.bounds[c].min) << ", " << toml_float(material.bounds[c].max)

@@ -31,8 +31,8 @@ void validate(const ParameterBounds& bounds) {
   for (int c = 0; c < kNumKappa; ++c) {
     const ParameterRange& r = bounds[c];
     require(std::isfinite(r.min) && std::isfinite(r.max) && r.min > 0.0 && r.min <= r.max,
-            "parameter bounds: {} = [{}, {}] must be finite with 0 < min <= max", kKappaNames[static_cast<std::size_t>(c)],
-            r.min, r.max);
+            "parameter bounds: {} = [{}, {}] must be finite with 0 < min <= max",
+            kKappaNames[static_cast<std::size_t>(c)], r.min, r.max);
   }
   require(bounds.thickness.max <= 1.0, "parameter bounds: thickness max {} exceeds 1 (h is a fraction)",
           bounds.thickness.max);

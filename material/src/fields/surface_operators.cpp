@@ -31,8 +31,8 @@ double edge_weight(const RowMatrixX3d& V, const Eigen::VectorXd& scale, int a, i
 }
 
 // Dijkstra from the heap's entries, lowering `distance`; returns the number of settled improvements.
-int run_dijkstra(const RowMatrixX3d& V, const VertexAdjacency& adjacency, const Eigen::VectorXd& scale,
-                 MinHeap& heap, Eigen::VectorXd& distance) {
+int run_dijkstra(const RowMatrixX3d& V, const VertexAdjacency& adjacency, const Eigen::VectorXd& scale, MinHeap& heap,
+                 Eigen::VectorXd& distance) {
   int updated = 0;
   while (!heap.empty()) {
     const auto [d, v] = heap.top();
@@ -54,8 +54,8 @@ void check_scale(const Eigen::VectorXd& scale, Eigen::Index n) {
   if (scale.size() == 0) return;
   require(scale.size() == n, "distance scale has {} entries for {} vertices", scale.size(), n);
   for (Eigen::Index i = 0; i < n; ++i)
-    require(std::isfinite(scale(i)) && scale(i) > 0.0, "distance scale at vertex {} is {} (must be finite and > 0)",
-            i, scale(i));
+    require(std::isfinite(scale(i)) && scale(i) > 0.0, "distance scale at vertex {} is {} (must be finite and > 0)", i,
+            scale(i));
 }
 
 }  // namespace
@@ -72,8 +72,8 @@ void validate_surface(const RowMatrixX3d& V, const RowMatrixX3i& F) {
       require(v >= 0 && v < V.rows(), "surface face {} has vertex index {} outside [0, {})", f, v, V.rows());
       referenced[static_cast<std::size_t>(v)] = 1;
     }
-    require(F(f, 0) != F(f, 1) && F(f, 1) != F(f, 2) && F(f, 0) != F(f, 2), "surface face {} repeats a vertex ({} {} {})",
-            f, F(f, 0), F(f, 1), F(f, 2));
+    require(F(f, 0) != F(f, 1) && F(f, 1) != F(f, 2) && F(f, 0) != F(f, 2),
+            "surface face {} repeats a vertex ({} {} {})", f, F(f, 0), F(f, 1), F(f, 2));
     require(0.5 * double_area(V, F, f) > 1e-14 * diagonal * diagonal, "surface face {} has (near-)zero area", f);
   }
   for (std::size_t v = 0; v < referenced.size(); ++v)

@@ -9,7 +9,8 @@ namespace sflsh::material {
 meshing::RowMatrixX3d region_positions(const body::BodyModel& model, const meshing::LayerMesh& mesh) {
   const auto& region = mesh.region_surface;
   meshing::RowMatrixX3d V(region.num_vertices(), 3);
-  for (int v = 0; v < region.num_vertices(); ++v) V.row(v) = model.v_template.row(region.vertices[static_cast<std::size_t>(v)]);
+  for (int v = 0; v < region.num_vertices(); ++v)
+    V.row(v) = model.v_template.row(region.vertices[static_cast<std::size_t>(v)]);
   return V;
 }
 
@@ -86,14 +87,15 @@ LayerMaterialFields layer_material_fields(const meshing::Retargeter& retargeter,
   require(phi.rows() == mesh.region_surface.num_vertices() && phi.cols() == kappa_control.rows(),
           "material fields: basis is {}×{}, expected {} region vertices × {} control points", phi.rows(), phi.cols(),
           mesh.region_surface.num_vertices(), kappa_control.rows());
-  return layer_material_fields(retargeter, evaluate_field(phi, kappa_control), nodes);   // κ(s) = Σ φ_i(s) κ_i
+  return layer_material_fields(retargeter, evaluate_field(phi, kappa_control), nodes);  // κ(s) = Σ φ_i(s) κ_i
 }
 
 LayerMaterialFields layer_material_fields(const meshing::Retargeter& retargeter, const KappaMatrix& kappa_vertex,
                                           const meshing::RowMatrixX3d& nodes) {
   const meshing::LayerMesh& mesh = retargeter.mesh();
-  require(kappa_vertex.rows() == mesh.region_surface.num_vertices(), "material fields: {} vertex values for {} region vertices",
-          kappa_vertex.rows(), mesh.region_surface.num_vertices());
+  require(kappa_vertex.rows() == mesh.region_surface.num_vertices(),
+          "material fields: {} vertex values for {} region vertices", kappa_vertex.rows(),
+          mesh.region_surface.num_vertices());
   LayerMaterialFields fields;
   fields.vertex = kappa_vertex;
   fields.node = retargeter.extend_surface_field(fields.vertex);

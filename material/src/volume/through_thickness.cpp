@@ -11,7 +11,8 @@ namespace sflsh::material {
 
 meshing::RowMatrixX3d through_thickness_normals(const meshing::RowMatrixX3d& nodes, const meshing::RowMatrixX4i& tets,
                                                 const Eigen::VectorXd& depth) {
-  require(depth.size() == nodes.rows(), "through-thickness normals: {} depth values for {} nodes", depth.size(), nodes.rows());
+  require(depth.size() == nodes.rows(), "through-thickness normals: {} depth values for {} nodes", depth.size(),
+          nodes.rows());
   require(depth.allFinite(), "through-thickness normals: the depth field has non-finite values");
   meshing::RowMatrixX3d normals(tets.rows(), 3);
   std::vector<char> valid(static_cast<std::size_t>(tets.rows()), 0);

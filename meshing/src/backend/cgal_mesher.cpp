@@ -89,7 +89,9 @@ int add_surface_seeds(Complex& complex, const Domain& domain, const ClosedSurfac
   // feature point) lies within `spacing`.
   std::unordered_map<std::uint64_t, std::vector<Eigen::Vector3d>> grid;
   const auto cell = [&](const Eigen::Vector3d& p, int dx, int dy, int dz) {
-    const auto c = [&](double x, int d) { return static_cast<std::uint64_t>(static_cast<std::int64_t>(std::floor(x / spacing)) + d + (1 << 20)) & 0x1fffff; };
+    const auto c = [&](double x, int d) {
+      return static_cast<std::uint64_t>(static_cast<std::int64_t>(std::floor(x / spacing)) + d + (1 << 20)) & 0x1fffff;
+    };
     return (c(p.x(), dx) << 42) | (c(p.y(), dy) << 21) | c(p.z(), dz);
   };
   const auto near_taken = [&](const Eigen::Vector3d& p) {
@@ -116,12 +118,13 @@ int add_surface_seeds(Complex& complex, const Domain& domain, const ClosedSurfac
     if (n.norm() == 0.0 || near_taken(p)) continue;
     // The domain's own intersection gives the point its surface index.
     const Eigen::Vector3d d = 0.05 * spacing * n.normalized();
-    const Kernel::Segment_3 segment(Point((p - d).x(), (p - d).y(), (p - d).z()), Point((p + d).x(), (p + d).y(), (p + d).z()));
+    const Kernel::Segment_3 segment(Point((p - d).x(), (p - d).y(), (p - d).z()),
+                                    Point((p + d).x(), (p + d).y(), (p + d).z()));
     if (!crosses(segment)) continue;
     const auto hit = intersect(segment);
     if (std::get<2>(hit) == 0) continue;
     const auto vertex = complex.triangulation().insert(weighted(std::get<0>(hit)));
-    if (vertex == Triangulation::Vertex_handle()) continue;   // hidden by a protecting ball
+    if (vertex == Triangulation::Vertex_handle()) continue;  // hidden by a protecting ball
     complex.set_dimension(vertex, 2);
     complex.set_index(vertex, std::get<1>(hit));
     grid[cell(p, 0, 0, 0)].push_back(p);
@@ -163,7 +166,7 @@ TetMesh mesh_with_cgal(const ClosedSurface& surface, const SizeControl& size) {
   const double exude_seconds = knob("SFLSH_CGAL_EXUDE_S", 30.0);
   const bool use_features = knob("SFLSH_CGAL_FEATURES", 1.0) != 0.0;
 
-  CGAL::Random random(20231212);   // fixed seed: the same input gives the same mesh (sequential build)
+  CGAL::Random random(20231212);  // fixed seed: the same input gives the same mesh (sequential build)
   Domain domain(to_surface_mesh(surface), &random);
   if (use_features && !surface.features.empty()) {
     std::vector<std::vector<Point>> polylines;
@@ -193,7 +196,8 @@ TetMesh mesh_with_cgal(const ClosedSurface& surface, const SizeControl& size) {
                                              CGAL::Mesh_3::internal::has_Has_features<Domain>::value>()(
         complex, domain, criteria, use_features && !surface.features.empty());
     seeds = add_surface_seeds(complex, domain, surface, knob("SFLSH_CGAL_SEED", 3.0) * size.edge_length);
-    const auto perturb = perturb_seconds < 0 ? params::no_perturb() : params::perturb(params::time_limit = perturb_seconds);
+    const auto perturb =
+        perturb_seconds < 0 ? params::no_perturb() : params::perturb(params::time_limit = perturb_seconds);
     const auto exude = exude_seconds < 0 ? params::no_exude() : params::exude(params::time_limit = exude_seconds);
     CGAL::refine_mesh_3(complex, domain, criteria, perturb, exude, params::no_reset_c3t3());
     require(complex.number_of_cells_in_complex() > 0,
@@ -206,9 +210,9 @@ TetMesh mesh_with_cgal(const ClosedSurface& surface, const SizeControl& size) {
   } catch (const std::exception& e) {
     throw_error("cgal: Mesh_3 failed: {}", e.what());
   }
-  logger()->debug("cgal: {} tets, {} nodes in {:.2f} s ({} seeds, {} feature polylines{})", mesh.tets.rows(), mesh.nodes.rows(),
-                  std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), seeds,
-                  use_features ? surface.features.size() : 0, kParallel ? ", parallel" : "");
+  logger()->debug("cgal: {} tets, {} nodes in {:.2f} s ({} seeds, {} feature polylines{})", mesh.tets.rows(),
+                  mesh.nodes.rows(), std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
+                  seeds, use_features ? surface.features.size() : 0, kParallel ? ", parallel" : "");
   return mesh;
 }
 

@@ -25,7 +25,7 @@ namespace {
 // Surface edges longer than kSubdivideRatio · edge_length are halved (1→4 subdivision), so that after
 // subdivision the mean edge lies in [1/√2, √2] · edge_length unless the input is already finer.
 const double kSubdivideRatio = std::sqrt(2.0);
-constexpr int kMaxSubdivisions = 4;   // 256 triangles per input triangle at most
+constexpr int kMaxSubdivisions = 4;  // 256 triangles per input triangle at most
 
 // Temporary tuning knob (environment) while calibrating; removed once the constants are fixed.
 double knob(const char* name, double fallback) {
@@ -34,7 +34,7 @@ double knob(const char* name, double fallback) {
 }
 
 struct Boundary {
-  RowMatrixX3d vertices;   ///< the input vertices first, then midpoints
+  RowMatrixX3d vertices;  ///< the input vertices first, then midpoints
   RowMatrixX3i triangles;
   std::vector<NodeKind> patch;
   int levels = 0;
@@ -54,7 +54,8 @@ void subdivide_once(Boundary& boundary) {
   std::unordered_map<std::uint64_t, int> midpoint;
   std::vector<Eigen::Vector3d> added;
   const auto middle = [&](int a, int b) {
-    const std::uint64_t key = (static_cast<std::uint64_t>(std::min(a, b)) << 32) | static_cast<std::uint32_t>(std::max(a, b));
+    const std::uint64_t key =
+        (static_cast<std::uint64_t>(std::min(a, b)) << 32) | static_cast<std::uint32_t>(std::max(a, b));
     auto [it, inserted] = midpoint.emplace(key, static_cast<int>(count + static_cast<Eigen::Index>(added.size())));
     if (inserted) added.push_back(0.5 * (boundary.vertices.row(a) + boundary.vertices.row(b)).transpose());
     return it->second;
@@ -68,10 +69,12 @@ void subdivide_once(Boundary& boundary) {
     triangles.row(4 * t + 1) << ab, b, bc;
     triangles.row(4 * t + 2) << ca, bc, c;
     triangles.row(4 * t + 3) << ab, bc, ca;
-    for (int k = 0; k < 4; ++k) patch[static_cast<std::size_t>(4 * t + k)] = boundary.patch[static_cast<std::size_t>(t)];
+    for (int k = 0; k < 4; ++k)
+      patch[static_cast<std::size_t>(4 * t + k)] = boundary.patch[static_cast<std::size_t>(t)];
   }
   boundary.vertices.conservativeResize(count + static_cast<Eigen::Index>(added.size()), 3);
-  for (std::size_t i = 0; i < added.size(); ++i) boundary.vertices.row(count + static_cast<Eigen::Index>(i)) = added[i].transpose();
+  for (std::size_t i = 0; i < added.size(); ++i)
+    boundary.vertices.row(count + static_cast<Eigen::Index>(i)) = added[i].transpose();
   boundary.triangles = std::move(triangles);
   boundary.patch = std::move(patch);
   ++boundary.levels;
@@ -81,7 +84,8 @@ Boundary refined_boundary(const ClosedSurface& surface, double edge_length) {
   Boundary boundary{surface.vertices, surface.triangles, surface.patch, 0};
   if (boundary.patch.size() != static_cast<std::size_t>(surface.triangles.rows()))
     boundary.patch.assign(static_cast<std::size_t>(surface.triangles.rows()), NodeKind::outer);
-  while (boundary.levels < kMaxSubdivisions && mean_edge(boundary.vertices, boundary.triangles) > kSubdivideRatio * edge_length)
+  while (boundary.levels < kMaxSubdivisions &&
+         mean_edge(boundary.vertices, boundary.triangles) > kSubdivideRatio * edge_length)
     subdivide_once(boundary);
   return boundary;
 }
@@ -102,7 +106,7 @@ struct GmshSession {
     try {
       gmsh::logger::stop();
       gmsh::finalize();
-    } catch (...) {   // nothing sensible to do in a destructor; gmsh stays usable for the next call
+    } catch (...) {  // nothing sensible to do in a destructor; gmsh stays usable for the next call
     }
   }
   GmshSession(const GmshSession&) = delete;
@@ -124,11 +128,11 @@ TetMesh run_gmsh(const Boundary& boundary, int input_count, const SizeControl& s
   // meshes with unpaired boundary edges in CI (SFLSH_GMSH_THREADS overrides, e.g. for benchmarks).
   gmsh::option::setNumber("General.NumThreads", 1);
   gmsh::option::setNumber("Mesh.MaxNumThreads3D", knob("SFLSH_GMSH_THREADS", 1));
-  gmsh::option::setNumber("Mesh.Algorithm3D", knob("SFLSH_GMSH_ALGO", 10));   // 10 HXT, 1 Delaunay
+  gmsh::option::setNumber("Mesh.Algorithm3D", knob("SFLSH_GMSH_ALGO", 10));  // 10 HXT, 1 Delaunay
   gmsh::option::setNumber("Mesh.MeshSizeMax", size.edge_length);
   gmsh::option::setNumber("Mesh.Optimize", 1);
   gmsh::option::setNumber("Mesh.MeshSizeExtendFromBoundary", knob("SFLSH_GMSH_EXTEND", 1));
-  gmsh::option::setNumber("Mesh.Renumber", 0);   // keep our node tags: tag − 1 is the boundary vertex index
+  gmsh::option::setNumber("Mesh.Renumber", 0);  // keep our node tags: tag − 1 is the boundary vertex index
 
   // One discrete surface per patch; a node is classified on the first patch that uses it.
   const auto n = static_cast<std::size_t>(boundary.vertices.rows());
@@ -151,7 +155,7 @@ TetMesh run_gmsh(const Boundary& boundary, int input_count, const SizeControl& s
       for (int c = 0; c < 3; ++c) coords.push_back(boundary.vertices(static_cast<Eigen::Index>(node - 1), c));
     }
     gmsh::model::mesh::addNodes(2, tag, node_tags, coords);
-    gmsh::model::mesh::addElementsByType(tag, 2, {}, triangle_nodes);   // type 2: 3-node triangle
+    gmsh::model::mesh::addElementsByType(tag, 2, {}, triangle_nodes);  // type 2: 3-node triangle
     surfaces.push_back(tag);
   }
   const int loop = gmsh::model::geo::addSurfaceLoop(surfaces);
@@ -162,7 +166,7 @@ TetMesh run_gmsh(const Boundary& boundary, int input_count, const SizeControl& s
   std::vector<std::size_t> node_tags, tet_tags, tet_nodes;
   std::vector<double> coords, parametric;
   gmsh::model::mesh::getNodes(node_tags, coords, parametric, -1, -1, false, false);
-  gmsh::model::mesh::getElementsByType(4, tet_tags, tet_nodes);   // type 4: 4-node tet
+  gmsh::model::mesh::getElementsByType(4, tet_tags, tet_nodes);  // type 4: 4-node tet
   require(!tet_nodes.empty(), "gmsh: no tets generated ({})", last_gmsh_error());
 
   TetMesh mesh;
@@ -173,7 +177,8 @@ TetMesh run_gmsh(const Boundary& boundary, int input_count, const SizeControl& s
   mesh.input_vertex.assign(node_tags.size(), -1);
   for (std::size_t i = 0; i < node_tags.size(); ++i) {
     index[node_tags[i]] = static_cast<int>(i);
-    for (int c = 0; c < 3; ++c) mesh.nodes(static_cast<Eigen::Index>(i), c) = coords[3 * i + static_cast<std::size_t>(c)];
+    for (int c = 0; c < 3; ++c)
+      mesh.nodes(static_cast<Eigen::Index>(i), c) = coords[3 * i + static_cast<std::size_t>(c)];
     if (node_tags[i] >= 1 && node_tags[i] <= static_cast<std::size_t>(input_count)) {
       const int vertex = static_cast<int>(node_tags[i] - 1);
       require((mesh.nodes.row(static_cast<Eigen::Index>(i)) - boundary.vertices.row(vertex)).norm() == 0.0,

@@ -51,7 +51,7 @@ Eigen::Vector3d barycentric(const Eigen::Vector3d& p, const Eigen::Vector3d& a, 
   const Eigen::Vector3d e0 = b - a, e1 = c - a, d = p - a;
   const double d00 = e0.dot(e0), d01 = e0.dot(e1), d11 = e1.dot(e1), d20 = d.dot(e0), d21 = d.dot(e1);
   const double denominator = d00 * d11 - d01 * d01;
-  if (!(denominator > 0.0)) return Eigen::Vector3d(1.0, 0.0, 0.0);   // degenerate triangle: its first corner
+  if (!(denominator > 0.0)) return Eigen::Vector3d(1.0, 0.0, 0.0);  // degenerate triangle: its first corner
   const double v = (d11 * d20 - d01 * d21) / denominator;
   const double w = (d00 * d21 - d01 * d20) / denominator;
   Eigen::Vector3d bary(1.0 - v - w, v, w);
@@ -63,11 +63,14 @@ Eigen::Vector3d barycentric(const Eigen::Vector3d& p, const Eigen::Vector3d& a, 
 
 BoundaryLocation locate_boundary_nodes(const TetMesh& mesh, const ClosedSurface& surface) {
   require(surface.triangles.rows() > 0, "locate boundary nodes: the surface has no triangles");
-  const auto point = [&](int v) { return Point(surface.vertices(v, 0), surface.vertices(v, 1), surface.vertices(v, 2)); };
+  const auto point = [&](int v) {
+    return Point(surface.vertices(v, 0), surface.vertices(v, 1), surface.vertices(v, 2));
+  };
   std::vector<Triangle> triangles;
   triangles.reserve(static_cast<std::size_t>(surface.triangles.rows()));
   for (Eigen::Index t = 0; t < surface.triangles.rows(); ++t)
-    triangles.emplace_back(point(surface.triangles(t, 0)), point(surface.triangles(t, 1)), point(surface.triangles(t, 2)));
+    triangles.emplace_back(point(surface.triangles(t, 0)), point(surface.triangles(t, 1)),
+                           point(surface.triangles(t, 2)));
   Tree tree(triangles.cbegin(), triangles.cend());
   tree.accelerate_distance_queries();
 

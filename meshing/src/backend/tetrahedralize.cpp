@@ -37,7 +37,7 @@ void check_surface(const ClosedSurface& surface, const char* backend) {
           "{}: the input surface has {} patch labels for {} triangles", backend, surface.patch.size(), faces);
   require(surface.vertices.allFinite(), "{}: the input surface has non-finite vertex coordinates", backend);
   std::vector<char> used(static_cast<std::size_t>(count), 0);
-  std::map<std::pair<int, int>, std::array<int, 2>> edges;   // (low, high) → uses low→high, high→low
+  std::map<std::pair<int, int>, std::array<int, 2>> edges;  // (low, high) → uses low→high, high→low
   for (Eigen::Index t = 0; t < faces; ++t) {
     for (int k = 0; k < 3; ++k) {
       const int v = surface.triangles(t, k);
@@ -51,10 +51,12 @@ void check_surface(const ClosedSurface& surface, const char* backend) {
   }
   for (const auto& [edge, uses] : edges) {
     const int total = uses[0] + uses[1];
-    require(total >= 2, "{}: the input surface is open (edge {}–{} has one triangle)", backend, edge.first, edge.second);
-    require(total == 2, "{}: the input surface is not a two-manifold (edge {}–{} has {} triangles)", backend, edge.first,
-            edge.second, total);
-    require(uses[0] == 1, "{}: the input surface is not consistently oriented (both triangles at edge {}–{} run the same way)",
+    require(total >= 2, "{}: the input surface is open (edge {}–{} has one triangle)", backend, edge.first,
+            edge.second);
+    require(total == 2, "{}: the input surface is not a two-manifold (edge {}–{} has {} triangles)", backend,
+            edge.first, edge.second, total);
+    require(uses[0] == 1,
+            "{}: the input surface is not consistently oriented (both triangles at edge {}–{} run the same way)",
             backend, edge.first, edge.second);
   }
   const auto unused = std::count(used.begin(), used.end(), 0);
@@ -75,7 +77,8 @@ double enclosed_volume(const ClosedSurface& surface) {
 double signed_volume(const TetMesh& mesh, Eigen::Index e) {
   const Eigen::Vector3d x0 = mesh.nodes.row(mesh.tets(e, 0)).transpose();
   return (mesh.nodes.row(mesh.tets(e, 1)).transpose() - x0)
-             .dot((mesh.nodes.row(mesh.tets(e, 2)).transpose() - x0).cross(mesh.nodes.row(mesh.tets(e, 3)).transpose() - x0)) /
+             .dot((mesh.nodes.row(mesh.tets(e, 2)).transpose() - x0)
+                      .cross(mesh.nodes.row(mesh.tets(e, 3)).transpose() - x0)) /
          6.0;
 }
 
@@ -117,25 +120,28 @@ void validate(const TetMesh& mesh, const ClosedSurface& surface, Mesher mesher) 
   const char* backend = mesher_name(mesher);
   const QualityReport q = quality_report(mesh.nodes, mesh.tets);
   require(q.inverted == 0 && q.degenerate == 0,
-          "{}: {} inverted and {} degenerate of {} tets remain after optimization (min dihedral {:.3f}°, min volume {:.3e} m³)",
+          "{}: {} inverted and {} degenerate of {} tets remain after optimization (min dihedral {:.3f}°, min volume "
+          "{:.3e} m³)",
           backend, q.inverted, q.degenerate, q.tets, q.min_dihedral_deg, q.min_volume);
   const double enclosed = std::abs(enclosed_volume(surface));
   const double error = std::abs(q.total_volume - enclosed) / enclosed;
-  require(error <= kVolumeFail, "{}: the tets fill {:.4e} m³ of the {:.4e} m³ the surface encloses ({:.0f}% off)", backend,
-          q.total_volume, enclosed, 100.0 * error);
+  require(error <= kVolumeFail, "{}: the tets fill {:.4e} m³ of the {:.4e} m³ the surface encloses ({:.0f}% off)",
+          backend, q.total_volume, enclosed, 100.0 * error);
   if (error > kVolumeWarn)
     logger()->warn("{}: the tets fill {:.4e} m³ of the {:.4e} m³ the surface encloses ({:.1f}% off)", backend,
                    q.total_volume, enclosed, 100.0 * error);
-  if (mesher == Mesher::gmsh) {   // the caller relies on every input vertex being a node
+  if (mesher == Mesher::gmsh) {  // the caller relies on every input vertex being a node
     std::vector<int> seen(static_cast<std::size_t>(surface.vertices.rows()), 0);
     for (int v : mesh.input_vertex)
       if (v >= 0) ++seen[static_cast<std::size_t>(v)];
     const auto missing = std::count(seen.begin(), seen.end(), 0);
     const auto repeated = std::count_if(seen.begin(), seen.end(), [](int s) { return s > 1; });
-    require(missing == 0 && repeated == 0, "gmsh: {} input vertices are not mesh nodes and {} are several nodes", missing, repeated);
+    require(missing == 0 && repeated == 0, "gmsh: {} input vertices are not mesh nodes and {} are several nodes",
+            missing, repeated);
   }
   logger()->info("{}: {} tets, {} nodes; dihedral min {:.1f}° median {:.1f}° max {:.1f}°, max radius-edge {:.2f}",
-                 backend, q.tets, q.nodes, q.min_dihedral_deg, q.median_dihedral_deg, q.max_dihedral_deg, q.max_radius_edge);
+                 backend, q.tets, q.nodes, q.min_dihedral_deg, q.median_dihedral_deg, q.max_dihedral_deg,
+                 q.max_radius_edge);
 }
 
 }  // namespace
@@ -149,18 +155,22 @@ Mesher parse_mesher(const std::string& name) {
 
 const char* mesher_name(Mesher mesher) {
   switch (mesher) {
-    case Mesher::cgal: return "cgal";
-    case Mesher::gmsh: return "gmsh";
-    case Mesher::layered: return "layered";
+    case Mesher::cgal:
+      return "cgal";
+    case Mesher::gmsh:
+      return "gmsh";
+    case Mesher::layered:
+      return "layered";
   }
   return "unknown";
 }
 
 SizeControl size_for_target_tets(double volume, long target_tets, Mesher mesher, int threads) {
-  require(volume > 0.0 && std::isfinite(volume), "size: the volume to mesh is {} m³; expected a positive value", volume);
+  require(volume > 0.0 && std::isfinite(volume), "size: the volume to mesh is {} m³; expected a positive value",
+          volume);
   require(target_tets > 0, "size: target tet count {}; expected a positive count", target_tets);
   const double calibration = mesher == Mesher::cgal ? kCalibrationCgal : kCalibrationGmsh;
-  const double regular_volume_factor = 6.0 * std::numbers::sqrt2;   // a³ = 6√2 · (regular tet volume)
+  const double regular_volume_factor = 6.0 * std::numbers::sqrt2;  // a³ = 6√2 · (regular tet volume)
   SizeControl size;
   size.edge_length = std::cbrt(volume * regular_volume_factor / (calibration * static_cast<double>(target_tets)));
   size.surface_distance = 0.1 * size.edge_length;
@@ -172,19 +182,22 @@ TetMesh tetrahedralize(const ClosedSurface& surface, Mesher mesher, const SizeCo
   const char* backend = mesher_name(mesher);
   check_surface(surface, backend);
   require(size.edge_length > 0.0 && size.surface_distance > 0.0,
-          "{}: edge length {} m and surface distance {} m must be positive", backend, size.edge_length, size.surface_distance);
+          "{}: edge length {} m and surface distance {} m must be positive", backend, size.edge_length,
+          size.surface_distance);
   const auto start = std::chrono::steady_clock::now();
-  require(mesher != Mesher::layered, "layered: extruded layer meshes are built by build_layer_mesh, not from a closed surface");
+  require(mesher != Mesher::layered,
+          "layered: extruded layer meshes are built by build_layer_mesh, not from a closed surface");
   TetMesh mesh = mesher == Mesher::cgal ? detail::mesh_with_cgal(surface, size) : detail::mesh_with_gmsh(surface, size);
   require(mesh.tets.rows() > 0 && mesh.nodes.rows() > 0, "{}: the mesher returned no tets", backend);
-  require(mesh.tets.minCoeff() >= 0 && mesh.tets.maxCoeff() < mesh.nodes.rows(), "{}: a tet uses a node that does not exist",
-          backend);
+  require(mesh.tets.minCoeff() >= 0 && mesh.tets.maxCoeff() < mesh.nodes.rows(),
+          "{}: a tet uses a node that does not exist", backend);
   if (mesh.input_vertex.size() != static_cast<std::size_t>(mesh.nodes.rows()))
     mesh.input_vertex.assign(static_cast<std::size_t>(mesh.nodes.rows()), -1);
   orient(mesh);
   remove_unused_nodes(mesh);
   validate(mesh, surface, mesher);
-  logger()->debug("{}: meshed in {:.2f} s", backend, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  logger()->debug("{}: meshed in {:.2f} s", backend,
+                  std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   return mesh;
 }
 

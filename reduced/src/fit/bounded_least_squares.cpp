@@ -1,7 +1,6 @@
-#include <sflsh/reduced/bounded_least_squares.hpp>
-
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
+#include <sflsh/reduced/bounded_least_squares.hpp>
 
 #include <petsctao.h>
 
@@ -19,7 +18,7 @@ struct Context {
   NormalEquations J;
   bool have_r = false, have_J = false;
   int residual_evaluations = 0, jacobian_evaluations = 0;
-  std::string error;   ///< an exception from a callback, rethrown after TaoSolve returns
+  std::string error;  ///< an exception from a callback, rethrown after TaoSolve returns
 };
 
 Eigen::VectorXd to_eigen(Vec v) {
@@ -83,21 +82,19 @@ PetscErrorCode objective(Tao, Vec x, PetscReal* f, void* ctx) {
 
 PetscErrorCode gradient(Tao, Vec x, Vec g, void* ctx) {
   auto& c = *static_cast<Context*>(ctx);
-  return guarded(c, [&] {
-    from_eigen(jacobian_at(c, to_eigen(x)).Jtr, g);
-  });
+  return guarded(c, [&] { from_eigen(jacobian_at(c, to_eigen(x)).Jtr, g); });
 }
 
 PetscErrorCode hessian(Tao, Vec x, Mat H, Mat, void* ctx) {
   auto& c = *static_cast<Context*>(ctx);
   return guarded(c, [&] {
-    Eigen::MatrixXd JtJ = jacobian_at(c, to_eigen(x)).JtJ;   // Gauss–Newton
+    Eigen::MatrixXd JtJ = jacobian_at(c, to_eigen(x)).JtJ;  // Gauss–Newton
     // A relative floor on the diagonal keeps the model well posed where a parameter does not (yet) act.
     const double floor = 1e-12 * std::max(JtJ.diagonal().maxCoeff(), 1e-300);
     JtJ.diagonal().array() += floor;
     PetscScalar* a = nullptr;
     MatDenseGetArray(H, &a);
-    Eigen::Map<Eigen::MatrixXd>(a, JtJ.rows(), JtJ.cols()) = JtJ;   // column-major, as MATSEQDENSE
+    Eigen::Map<Eigen::MatrixXd>(a, JtJ.rows(), JtJ.cols()) = JtJ;  // column-major, as MATSEQDENSE
     MatDenseRestoreArray(H, &a);
     MatAssemblyBegin(H, MAT_FINAL_ASSEMBLY);
     MatAssemblyEnd(H, MAT_FINAL_ASSEMBLY);
@@ -118,13 +115,13 @@ PetscErrorCode monitor(Tao tao, void* ctx) {
   });
 }
 
-#define SFLSH_TAO(call)                                                                                  \
-  do {                                                                                                   \
-    const PetscErrorCode sflsh_tao_error = (call);                                                       \
-    if (sflsh_tao_error) {                                                                               \
-      if (!context.error.empty()) throw Error(context.error);                                            \
+#define SFLSH_TAO(call)                                                                                   \
+  do {                                                                                                    \
+    const PetscErrorCode sflsh_tao_error = (call);                                                        \
+    if (sflsh_tao_error) {                                                                                \
+      if (!context.error.empty()) throw Error(context.error);                                             \
       throw_error("least squares: {} failed (PETSc error {})", #call, static_cast<int>(sflsh_tao_error)); \
-    }                                                                                                    \
+    }                                                                                                     \
   } while (0)
 
 }  // namespace
@@ -133,13 +130,16 @@ LeastSquaresResult solve_bounded_least_squares(const LeastSquaresProblem& proble
                                                const LeastSquaresOptions& options) {
   const auto n = start.size();
   require(n > 0 && problem.lower.size() == n && problem.upper.size() == n,
-          "least squares: {} parameters with {} lower and {} upper bounds", n, problem.lower.size(), problem.upper.size());
+          "least squares: {} parameters with {} lower and {} upper bounds", n, problem.lower.size(),
+          problem.upper.size());
   require(problem.residual && problem.normal_equations, "least squares: residual and Jacobian callbacks are required");
-  require((problem.lower.array() <= problem.upper.array()).all(), "least squares: a lower bound exceeds its upper bound");
+  require((problem.lower.array() <= problem.upper.array()).all(),
+          "least squares: a lower bound exceeds its upper bound");
   require(start.allFinite(), "least squares: the start has non-finite entries");
   const Eigen::VectorXd x0 = start.cwiseMax(problem.lower).cwiseMin(problem.upper);
   if ((x0 - start).lpNorm<Eigen::Infinity>() > 1e-12)
-    logger()->debug("least squares: start projected onto the bounds (moved {:.3g})", (x0 - start).lpNorm<Eigen::Infinity>());
+    logger()->debug("least squares: start projected onto the bounds (moved {:.3g})",
+                    (x0 - start).lpNorm<Eigen::Infinity>());
 
   Context context;
   context.problem = &problem;
@@ -148,7 +148,11 @@ LeastSquaresResult solve_bounded_least_squares(const LeastSquaresProblem& proble
   Vec x = nullptr, lo = nullptr, hi = nullptr;
   Mat H = nullptr;
   struct Cleanup {
-    Tao* tao; Vec* x; Vec* lo; Vec* hi; Mat* H;
+    Tao* tao;
+    Vec* x;
+    Vec* lo;
+    Vec* hi;
+    Mat* H;
     ~Cleanup() {
       if (*tao) TaoDestroy(tao);
       if (*x) VecDestroy(x);
@@ -178,7 +182,7 @@ LeastSquaresResult solve_bounded_least_squares(const LeastSquaresProblem& proble
   SFLSH_TAO(TaoSetTolerances(tao, options.gradient_atol, options.gradient_rtol, options.gradient_ttol));
   if (options.initial_radius > 0.0) SFLSH_TAO(TaoSetInitialTrustRegionRadius(tao, options.initial_radius));
   SFLSH_TAO(TaoSetMonitor(tao, monitor, &context, nullptr));
-  SFLSH_TAO(TaoSetFromOptions(tao));   // -fit_tao_* options override
+  SFLSH_TAO(TaoSetFromOptions(tao));  // -fit_tao_* options override
   // A callback's exception comes back as a PETSc error code; keep PETSc from printing a traceback for it.
   PetscPushErrorHandler(PetscReturnErrorHandler, nullptr);
   const PetscErrorCode solved = TaoSolve(tao);
@@ -201,7 +205,8 @@ LeastSquaresResult solve_bounded_least_squares(const LeastSquaresProblem& proble
   result.converged = reason > 0;
   result.residual_evaluations = context.residual_evaluations;
   result.jacobian_evaluations = context.jacobian_evaluations;
-  require(reason > 0 || reason == TAO_DIVERGED_MAXITS || reason == TAO_DIVERGED_TR_REDUCTION || reason == TAO_DIVERGED_LS_FAILURE,
+  require(reason > 0 || reason == TAO_DIVERGED_MAXITS || reason == TAO_DIVERGED_TR_REDUCTION ||
+              reason == TAO_DIVERGED_LS_FAILURE,
           "least squares: TAO failed ({})", result.reason);
   return result;
 }

@@ -1,7 +1,6 @@
-#include <sflsh/reduced/dynamics_case.hpp>
-
 #include <sflsh/core/error.hpp>
 #include <sflsh/model/simulation_output.hpp>
+#include <sflsh/reduced/dynamics_case.hpp>
 #include <sflsh/reduced/dynamics_sensitivity.hpp>
 #include <sflsh/reduced/reduced_sensitivity.hpp>
 #include <sflsh/reduced/young_map.hpp>
@@ -65,19 +64,22 @@ CaseDynamics DynamicsCase::simulate(const LayerParameterization& parameterizatio
 }
 
 CaseDynamics DynamicsCase::simulate_with_sensitivity(const LayerParameterization& parameterization,
-                                                    const material::KappaMatrix& kappa, const ReducedModel& model,
-                                                    const Eigen::MatrixXd& young_map, Eigen::MatrixXd& dsigma,
-                                                    const ReducedOptions& options) const {
+                                                     const material::KappaMatrix& kappa, const ReducedModel& model,
+                                                     const Eigen::MatrixXd& young_map, Eigen::MatrixXd& dsigma,
+                                                     const ReducedOptions& options) const {
   const auto start = std::chrono::steady_clock::now();
   try {
     const model::Problem problem = parameterization.problem(*layer_, kappa, options_);
     require(problem.dirichlet.drives.empty(), "fit cases take fixed attachments only");
-    SensitivityIntegrator integrator(problem, model.subspace, model.cubature, young_map, sensitivity_solver_options(options));
+    SensitivityIntegrator integrator(problem, model.subspace, model.cubature, young_map,
+                                     sensitivity_solver_options(options));
     integrator.initialize(model::initial_state(problem, 0.0));
     const int columns = 2 * static_cast<int>(young_map.cols());
     DynamicsAmplitudeSensitivity amplitude(normals_, columns);
     const SkinDisplacementMap& skin = skin_map(model);
-    auto add_frame = [&] { amplitude.add(skin.displacement_of(integrator.q()), skin.derivative(integrator.dq_dyoung())); };
+    auto add_frame = [&] {
+      amplitude.add(skin.displacement_of(integrator.q()), skin.derivative(integrator.dq_dyoung()));
+    };
     add_frame();
     for (int f = 1; f < frames_; ++f) {
       integrator.step(1.0 / fps_);

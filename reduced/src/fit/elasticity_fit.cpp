@@ -1,10 +1,9 @@
-#include <sflsh/reduced/elasticity_fit.hpp>
-
 #include <sflsh/core/atomic_file.hpp>
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
 #include <sflsh/material/layer_material.hpp>
 #include <sflsh/material/surface_operators.hpp>
+#include <sflsh/reduced/elasticity_fit.hpp>
 #include <sflsh/reduced/young_map.hpp>
 
 #include <nlohmann/json.hpp>
@@ -49,13 +48,13 @@ struct Stage {
   const std::vector<FitTarget>* targets = nullptr;
   const LayerParameterization* parameterization = nullptr;
   int controls = 0;
-  std::vector<Eigen::SparseMatrix<double>> dq_dp;   ///< per subject (3N × P)
-  Eigen::SparseMatrix<double> L;                    ///< eq. 7 without √λ (shape fits)
-  double weight = 1.0;                              ///< w of r_fit
+  std::vector<Eigen::SparseMatrix<double>> dq_dp;  ///< per subject (3N × P)
+  Eigen::SparseMatrix<double> L;                   ///< eq. 7 without √λ (shape fits)
+  double weight = 1.0;                             ///< w of r_fit
   int fit_rows = 0;
   std::vector<const DynamicsCase*> cases;
   std::vector<std::vector<int>> targets_of_subject;
-  Eigen::MatrixXd young_map;                        ///< W (cubature tets × N), sensitivities only
+  Eigen::MatrixXd young_map;  ///< W (cubature tets × N), sensitivities only
   long simulations = 0;
   int jacobians = 0;
   double residual_seconds = 0.0, jacobian_seconds = 0.0;
@@ -83,7 +82,8 @@ struct Stage {
     const ScopedSeconds timer(residual_seconds);
     std::vector<SimulationJob> jobs;
     std::vector<material::KappaMatrix> kappa(static_cast<std::size_t>(num_subjects()));
-    for (int j = 0; j < num_subjects(); ++j) kappa[static_cast<std::size_t>(j)] = material::denormalize(q(j, p), context->bounds);
+    for (int j = 0; j < num_subjects(); ++j)
+      kappa[static_cast<std::size_t>(j)] = material::denormalize(q(j, p), context->bounds);
     for (std::size_t t = 0; t < targets->size(); ++t)
       jobs.push_back({static_cast<int>(t), kappa[static_cast<std::size_t>((*targets)[t].subject)]});
     const std::vector<Eigen::VectorXd> sigma = simulate(jobs);
@@ -91,10 +91,10 @@ struct Stage {
     int at = 0;
     for (std::size_t t = 0; t < targets->size(); ++t) {
       const auto n = sigma[t].size();
-      r.segment(at, n) = weight * (sigma[t] - (*targets)[t].sigma);   // eq. 6
+      r.segment(at, n) = weight * (sigma[t] - (*targets)[t].sigma);  // eq. 6
       at += static_cast<int>(n);
     }
-    if (spec->kind == FitKind::shape) r.tail(L.rows()) = std::sqrt(spec->lambda) * (L * p);   // eq. 7
+    if (spec->kind == FitKind::shape) r.tail(L.rows()) = std::sqrt(spec->lambda) * (L * p);  // eq. 7
     return r;
   }
 
@@ -139,11 +139,18 @@ struct Stage {
         const material::KappaMatrix kappa0 = material::denormalize(q0, context->bounds);
         const std::vector<Eigen::VectorXd> packed = context->pool->run_tasks(
             static_cast<int>(mine.size()),
-            [&](int m) { return Eigen::Index{2} * (*targets)[static_cast<std::size_t>(mine[static_cast<std::size_t>(m)])].simulation->num_region_vertices() * (1 + 2 * controls); },
             [&](int m) {
-              const DynamicsCase& c = *(*targets)[static_cast<std::size_t>(mine[static_cast<std::size_t>(m)])].simulation;
+              return Eigen::Index{2} *
+                     (*targets)[static_cast<std::size_t>(mine[static_cast<std::size_t>(m)])]
+                         .simulation->num_region_vertices() *
+                     (1 + 2 * controls);
+            },
+            [&](int m) {
+              const DynamicsCase& c =
+                  *(*targets)[static_cast<std::size_t>(mine[static_cast<std::size_t>(m)])].simulation;
               Eigen::MatrixXd d;
-              const CaseDynamics base = c.simulate_with_sensitivity(*parameterization, kappa0, *context->model, young_map, d, context->reduced);
+              const CaseDynamics base = c.simulate_with_sensitivity(*parameterization, kappa0, *context->model,
+                                                                    young_map, d, context->reduced);
               Eigen::VectorXd out(d.rows() * (1 + d.cols()));
               out.head(d.rows()) << base.sigma_normal, base.sigma_tangent;
               out.tail(d.size()) = Eigen::Map<const Eigen::VectorXd>(d.data(), d.size());
@@ -160,17 +167,20 @@ struct Stage {
       Eigen::VectorXd gq = Eigen::VectorXd::Zero(3 * controls);
       for (std::size_t m = 0; m < mine.size(); ++m) {
         const int t = mine[m];
-        const Eigen::VectorXd rt = r.segment(offset[static_cast<std::size_t>(t)], offset[static_cast<std::size_t>(t) + 1] - offset[static_cast<std::size_t>(t)]);
+        const Eigen::VectorXd rt =
+            r.segment(offset[static_cast<std::size_t>(t)],
+                      offset[static_cast<std::size_t>(t) + 1] - offset[static_cast<std::size_t>(t)]);
         const Eigen::VectorXd sigma_t = rt / weight + (*targets)[static_cast<std::size_t>(t)].sigma;
         Eigen::MatrixXd G(sigma_t.size(), 3 * controls);
         for (std::size_t f = 0; f < fd_columns.size(); ++f) {
           const int k = fd_columns[f];
           G.col(k) = (sigma[f * mine.size() + m] - sigma_t) / h[static_cast<std::size_t>(k)];
         }
-        if (sensitive)   // dσ/dq̂ = dσ/dY · Y_max (q̂ = Y / Y_max)
+        if (sensitive)  // dσ/dq̂ = dσ/dY · Y_max (q̂ = Y / Y_max)
           for (int i = 0; i < controls; ++i) {
             G.col(kK * i + material::kYoungTangent) = dsigma_dyoung[m].col(i) * context->bounds.young_tangent.max;
-            G.col(kK * i + material::kYoungNormal) = dsigma_dyoung[m].col(controls + i) * context->bounds.young_normal.max;
+            G.col(kK * i + material::kYoungNormal) =
+                dsigma_dyoung[m].col(controls + i) * context->bounds.young_normal.max;
           }
         G *= weight;
         Hq.noalias() += G.transpose() * G;
@@ -258,7 +268,7 @@ std::string spec_fingerprint(const FitSpec& spec, const std::vector<FitTarget>& 
 }
 
 struct Checkpoint {
-  bool finished = false;   ///< the whole fit is done: p is the result, `done` has every stage
+  bool finished = false;  ///< the whole fit is done: p is the result, `done` has every stage
   int stage = 0;
   int iteration = 0;
   Eigen::VectorXd p;
@@ -273,9 +283,14 @@ void save_checkpoint(const std::filesystem::path& path, const std::string& finge
   j["iteration"] = c.iteration;
   j["p"] = std::vector<double>(c.p.data(), c.p.data() + c.p.size());
   for (const FitStageReport& s : c.done)
-    j["done"].push_back({{"controls", s.controls}, {"iterations", s.iterations}, {"loss_fit", s.loss_fit},
-                         {"loss_reg", s.loss_reg}, {"seconds", s.seconds}, {"simulations", s.simulations},
-                         {"jacobians", s.jacobians}, {"reason", s.reason}});
+    j["done"].push_back({{"controls", s.controls},
+                         {"iterations", s.iterations},
+                         {"loss_fit", s.loss_fit},
+                         {"loss_reg", s.loss_reg},
+                         {"seconds", s.seconds},
+                         {"simulations", s.simulations},
+                         {"jacobians", s.jacobians},
+                         {"reason", s.reason}});
   write_text_atomically(path, j.dump(1));
 }
 
@@ -317,7 +332,8 @@ std::optional<Checkpoint> load_checkpoint(const std::filesystem::path& path, con
 
 /// Per-control parameter rows (N × k) of p, and back.
 Eigen::MatrixXd rows_of(const Eigen::VectorXd& p, int k) {
-  return Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(p.data(), p.size() / k, k);
+  return Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(p.data(),
+                                                                                                  p.size() / k, k);
 }
 Eigen::VectorXd from_rows(const Eigen::MatrixXd& rows) {
   const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> r = rows;
@@ -336,8 +352,9 @@ JacobianMethod parse_jacobian_method(const std::string& name) {
   throw_error("fit: unknown Jacobian method '{}' (expected fd or sensitivities)", name);
 }
 
-NormalEquations fit_normal_equations(const FitContext& context, const std::vector<FitTarget>& targets, const FitSpec& spec,
-                                     const Eigen::VectorXd& p, double* residual_seconds, double* jacobian_seconds) {
+NormalEquations fit_normal_equations(const FitContext& context, const std::vector<FitTarget>& targets,
+                                     const FitSpec& spec, const Eigen::VectorXd& p, double* residual_seconds,
+                                     double* jacobian_seconds) {
   require(!spec.stages.empty() && !targets.empty(), "fit {}: no stage or no target", spec.name);
   const int N = spec.stages.front();
   Stage stage;
@@ -350,7 +367,8 @@ NormalEquations fit_normal_equations(const FitContext& context, const std::vecto
   return ne;
 }
 
-material::KappaMatrix FitResult::kappa_normalized(const body::Betas& beta, const material::ParameterBounds& bounds) const {
+material::KappaMatrix FitResult::kappa_normalized(const body::Betas& beta,
+                                                  const material::ParameterBounds& bounds) const {
   if (kind == FitKind::independent) return clamp_normalized(independent_kappa(p), bounds);
   return clamp_normalized(ShapeElasticity::unpack(p, controls).kappa_normalized(beta), bounds);
 }
@@ -371,9 +389,11 @@ const LayerParameterization& ParameterizationCache::get(int controls) {
 }
 
 FitResult fit_elasticity(const FitContext& context, const std::vector<FitTarget>& targets, const FitSpec& spec) {
-  require(context.body && context.model && context.pool && context.parameterization, "fit {}: incomplete context", spec.name);
+  require(context.body && context.model && context.pool && context.parameterization, "fit {}: incomplete context",
+          spec.name);
   require(!targets.empty(), "fit {}: no targets", spec.name);
-  require(!spec.stages.empty() && spec.stages.front() >= 1, "fit {}: stages must start at ≥ 1 control point", spec.name);
+  require(!spec.stages.empty() && spec.stages.front() >= 1, "fit {}: stages must start at ≥ 1 control point",
+          spec.name);
   for (std::size_t s = 1; s < spec.stages.size(); ++s)
     require(spec.stages[s] > spec.stages[s - 1], "fit {}: stages must grow, got {} after {}", spec.name, spec.stages[s],
             spec.stages[s - 1]);
@@ -381,7 +401,8 @@ FitResult fit_elasticity(const FitContext& context, const std::vector<FitTarget>
   require(spec.kind == FitKind::shape || spec.betas.size() == 1, "fit {}: an independent fit has one subject, got {}",
           spec.name, spec.betas.size());
   require(spec.lambda >= 0.0 && std::isfinite(spec.lambda), "fit {}: λ must be ≥ 0, got {}", spec.name, spec.lambda);
-  require(spec.fd_step > 0.0 && spec.fd_step < 0.1, "fit {}: finite-difference step {} outside (0, 0.1)", spec.name, spec.fd_step);
+  require(spec.fd_step > 0.0 && spec.fd_step < 0.1, "fit {}: finite-difference step {} outside (0, 0.1)", spec.name,
+          spec.fd_step);
   for (const FitTarget& t : targets) {
     require(t.simulation && t.subject >= 0 && t.subject < static_cast<int>(spec.betas.size()),
             "fit {}: a target names subject {} of {}", spec.name, t.subject, spec.betas.size());
@@ -398,8 +419,8 @@ FitResult fit_elasticity(const FitContext& context, const std::vector<FitTarget>
   result.kind = spec.kind;
   const int k = params_per_control(spec.kind);
   if (checkpoint && checkpoint->finished) {
-    require(checkpoint->p.size() == k * spec.stages.back(), "fit {}: checkpoint {} does not match the stages", spec.name,
-            spec.checkpoint.string());
+    require(checkpoint->p.size() == k * spec.stages.back(), "fit {}: checkpoint {} does not match the stages",
+            spec.name, spec.checkpoint.string());
     logger()->info("fit {}: finished earlier (checkpoint {})", spec.name, spec.checkpoint.string());
     result.p = checkpoint->p;
     result.controls = spec.stages.back();
@@ -416,7 +437,8 @@ FitResult fit_elasticity(const FitContext& context, const std::vector<FitTarget>
     p = checkpoint->p;
     require(first_stage < spec.stages.size() && p.size() == k * spec.stages[first_stage],
             "fit {}: checkpoint {} does not match the stages", spec.name, spec.checkpoint.string());
-    logger()->info("fit {}: resuming at N = {} after iteration {}", spec.name, spec.stages[first_stage], checkpoint->iteration);
+    logger()->info("fit {}: resuming at N = {} after iteration {}", spec.name, spec.stages[first_stage],
+                   checkpoint->iteration);
   }
   for (std::size_t s = first_stage; s < spec.stages.size(); ++s) {
     const int N = spec.stages[s];
@@ -440,7 +462,9 @@ FitResult fit_elasticity(const FitContext& context, const std::vector<FitTarget>
 
     LeastSquaresProblem problem;
     problem.residual = [&](const Eigen::VectorXd& x) { return stage.residual(x); };
-    problem.normal_equations = [&](const Eigen::VectorXd& x, const Eigen::VectorXd& r) { return stage.normal_equations(x, r); };
+    problem.normal_equations = [&](const Eigen::VectorXd& x, const Eigen::VectorXd& r) {
+      return stage.normal_equations(x, r);
+    };
     if (spec.kind == FitKind::shape) {
       parameter_bounds(context.bounds, N, spec.a_max, problem.lower, problem.upper);
     } else {
@@ -455,7 +479,7 @@ FitResult fit_elasticity(const FitContext& context, const std::vector<FitTarget>
     }
     LeastSquaresOptions lso;
     lso.max_iterations = resumed_here ? std::max(0, spec.iterations - checkpoint->iteration) : spec.iterations;
-    lso.gradient_ttol = 1e-6;   // the iteration budget, not this, usually ends a stage
+    lso.gradient_ttol = 1e-6;  // the iteration budget, not this, usually ends a stage
     lso.gradient_rtol = 1e-8;
     const auto stage_start = std::chrono::steady_clock::now();
     const int done_before = resumed_here ? checkpoint->iteration : 0;
@@ -475,9 +499,10 @@ FitResult fit_elasticity(const FitContext& context, const std::vector<FitTarget>
         save_checkpoint(spec.checkpoint, fingerprint, c);
       }
     };
-    const LeastSquaresResult ls = lso.max_iterations > 0
-                                      ? solve_bounded_least_squares(problem, p, lso)
-                                      : LeastSquaresResult{p, 0.5 * stage.residual(p).squaredNorm(), 0, 0, 0, 0, "resumed", true};
+    const LeastSquaresResult ls =
+        lso.max_iterations > 0
+            ? solve_bounded_least_squares(problem, p, lso)
+            : LeastSquaresResult{p, 0.5 * stage.residual(p).squaredNorm(), 0, 0, 0, 0, "resumed", true};
     p = ls.p;
     const Eigen::VectorXd r = stage.residual(p);
     FitStageReport report;
@@ -497,7 +522,8 @@ FitResult fit_elasticity(const FitContext& context, const std::vector<FitTarget>
       Checkpoint c;
       c.stage = static_cast<int>(s + 1);
       c.iteration = 0;
-      c.p = from_rows(transfer_control_values(parameterization, context.parameterization(spec.stages[s + 1]), rows_of(p, k)));
+      c.p = from_rows(
+          transfer_control_values(parameterization, context.parameterization(spec.stages[s + 1]), rows_of(p, k)));
       c.done = result.stages;
       save_checkpoint(spec.checkpoint, fingerprint, c);
     }

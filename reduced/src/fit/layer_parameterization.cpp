@@ -1,9 +1,8 @@
-#include <sflsh/reduced/layer_parameterization.hpp>
-
 #include <sflsh/core/error.hpp>
 #include <sflsh/material/biharmonic_basis.hpp>
 #include <sflsh/material/layer_material.hpp>
 #include <sflsh/material/orthotropic_fung.hpp>
+#include <sflsh/reduced/layer_parameterization.hpp>
 
 namespace sflsh::reduced {
 
@@ -27,27 +26,28 @@ material::KappaMatrix LayerParameterization::field(const material::KappaMatrix& 
 }
 
 model::Problem LayerParameterization::problem(const model::BodyLayer& layer, const material::KappaMatrix& kappa,
-                                                  const model::BodyLayerOptions& options,
-                                                  meshing::RowMatrixX3d* rest_skin) const {
+                                              const model::BodyLayerOptions& options,
+                                              meshing::RowMatrixX3d* rest_skin) const {
   require(layer.mesh && layer.mesh->num_nodes() == mesh_->num_nodes() && layer.mesh->num_tets() == mesh_->num_tets(),
           "layer parameterization: the layer is not on the template mesh the parameterization was built for");
-  require(kappa.rows() == num_controls(), "layer parameterization: {} control values for {} control points", kappa.rows(),
-          num_controls());
+  require(kappa.rows() == num_controls(), "layer parameterization: {} control values for {} control points",
+          kappa.rows(), num_controls());
   material::validate(kappa, bounds_, "layer parameterization: control point");
   return problem_from_field(layer, field(kappa), options, rest_skin);
 }
 
 model::Problem LayerParameterization::problem_from_field(const model::BodyLayer& layer,
-                                                             const material::KappaMatrix& kappa_vertex,
-                                                             const model::BodyLayerOptions& options,
-                                                             meshing::RowMatrixX3d* rest_skin) const {
+                                                         const material::KappaMatrix& kappa_vertex,
+                                                         const model::BodyLayerOptions& options,
+                                                         meshing::RowMatrixX3d* rest_skin) const {
   require(layer.mesh && layer.mesh->num_nodes() == mesh_->num_nodes() && layer.mesh->num_tets() == mesh_->num_tets(),
           "layer parameterization: the layer is not on the template mesh the parameterization was built for");
   const Eigen::VectorXd thickness = kappa_vertex.col(material::kThickness);
   const meshing::RetargetedLayer retargeted = retargeter_->retarget(layer.beta, thickness);
-  const material::LayerMaterialFields fields = material::layer_material_fields(*retargeter_, kappa_vertex, retargeted.nodes);
+  const material::LayerMaterialFields fields =
+      material::layer_material_fields(*retargeter_, kappa_vertex, retargeted.nodes);
 
-  model::Problem p = layer.problem;   // tets, Dirichlet set and trajectory do not depend on κ
+  model::Problem p = layer.problem;  // tets, Dirichlet set and trajectory do not depend on κ
   p.rest = retargeted.nodes;
   p.tet_rest.clear();
   for (int e = 0; e < mesh_->num_tets(); ++e) {

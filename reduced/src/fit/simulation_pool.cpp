@@ -1,6 +1,5 @@
-#include <sflsh/reduced/simulation_pool.hpp>
-
 #include <sflsh/core/error.hpp>
+#include <sflsh/reduced/simulation_pool.hpp>
 
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
@@ -25,18 +24,23 @@ SimulationPool::SimulationPool(int threads, MPI_Comm comm) {
 
 std::vector<Eigen::VectorXd> SimulationPool::run(const std::vector<const DynamicsCase*>& cases,
                                                  const std::vector<SimulationJob>& jobs,
-                                                 const LayerParameterization& parameterization, const ReducedModel& model,
-                                                 const ReducedOptions& options) {
+                                                 const LayerParameterization& parameterization,
+                                                 const ReducedModel& model, const ReducedOptions& options) {
   for (std::size_t j = 0; j < jobs.size(); ++j) {
     const int c = jobs[j].case_index;
-    require(c >= 0 && c < static_cast<int>(cases.size()), "simulation pool: job {} names case {} of {}", j, c, cases.size());
+    require(c >= 0 && c < static_cast<int>(cases.size()), "simulation pool: job {} names case {} of {}", j, c,
+            cases.size());
   }
   return run_tasks(
       static_cast<int>(jobs.size()),
-      [&](int j) { return Eigen::Index{2} * cases[static_cast<std::size_t>(jobs[static_cast<std::size_t>(j)].case_index)]->num_region_vertices(); },
+      [&](int j) {
+        return Eigen::Index{2} *
+               cases[static_cast<std::size_t>(jobs[static_cast<std::size_t>(j)].case_index)]->num_region_vertices();
+      },
       [&](int j) {
         const SimulationJob& job = jobs[static_cast<std::size_t>(j)];
-        const CaseDynamics d = cases[static_cast<std::size_t>(job.case_index)]->simulate(parameterization, job.kappa, model, options);
+        const CaseDynamics d =
+            cases[static_cast<std::size_t>(job.case_index)]->simulate(parameterization, job.kappa, model, options);
         Eigen::VectorXd out(2 * d.sigma_normal.size());
         out << d.sigma_normal, d.sigma_tangent;
         return out;
@@ -47,7 +51,8 @@ std::vector<Eigen::VectorXd> SimulationPool::run_tasks(int count, const std::fun
                                                        const std::function<Eigen::VectorXd(int)>& task) {
   const auto start = std::chrono::steady_clock::now();
   std::vector<Eigen::Index> offset(static_cast<std::size_t>(count) + 1, 0);
-  for (int j = 0; j < count; ++j) offset[static_cast<std::size_t>(j) + 1] = offset[static_cast<std::size_t>(j)] + length(j);
+  for (int j = 0; j < count; ++j)
+    offset[static_cast<std::size_t>(j) + 1] = offset[static_cast<std::size_t>(j)] + length(j);
   Eigen::VectorXd buffer = Eigen::VectorXd::Zero(offset.back());
   std::vector<int> mine;
   for (int j = rank_; j < count; j += size_) mine.push_back(j);
@@ -85,7 +90,7 @@ std::vector<Eigen::VectorXd> SimulationPool::run_tasks(int count, const std::fun
     throw Error(error);
   }
   if (comm_ != MPI_COMM_NULL && size_ > 1) {
-    constexpr Eigen::Index kChunk = 1 << 24;   // stay far below int counts
+    constexpr Eigen::Index kChunk = 1 << 24;  // stay far below int counts
     for (Eigen::Index at = 0; at < buffer.size(); at += kChunk) {
       const int n = static_cast<int>(std::min<Eigen::Index>(kChunk, buffer.size() - at));
       MPI_Allreduce(MPI_IN_PLACE, buffer.data() + at, n, MPI_DOUBLE, MPI_SUM, comm_);
@@ -93,7 +98,9 @@ std::vector<Eigen::VectorXd> SimulationPool::run_tasks(int count, const std::fun
   }
   std::vector<Eigen::VectorXd> out(static_cast<std::size_t>(count));
   for (int j = 0; j < count; ++j)
-    out[static_cast<std::size_t>(j)] = buffer.segment(offset[static_cast<std::size_t>(j)], offset[static_cast<std::size_t>(j) + 1] - offset[static_cast<std::size_t>(j)]);
+    out[static_cast<std::size_t>(j)] =
+        buffer.segment(offset[static_cast<std::size_t>(j)],
+                       offset[static_cast<std::size_t>(j) + 1] - offset[static_cast<std::size_t>(j)]);
   simulations_ += count;
   seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;

@@ -1,6 +1,5 @@
-#include <sflsh/reduced/shape_elasticity.hpp>
-
 #include <sflsh/core/error.hpp>
+#include <sflsh/reduced/shape_elasticity.hpp>
 
 #include <Eigen/Cholesky>
 
@@ -60,7 +59,7 @@ Eigen::SparseMatrix<double> kappa_jacobian(const body::Betas& beta, int num_cont
     for (int c = 0; c < kK; ++c) {
       const int row = kK * i + c;
       for (int k = 0; k < kB; ++k) t.emplace_back(row, kParamsPerControl * i + kB * c + k, beta[k]);  // ∂κ̂_ic/∂A_i(k,c)
-      t.emplace_back(row, kParamsPerControl * i + kB * kK + c, 1.0);                               // ∂κ̂_ic/∂b_ic
+      t.emplace_back(row, kParamsPerControl * i + kB * kK + c, 1.0);  // ∂κ̂_ic/∂b_ic
     }
   Eigen::SparseMatrix<double> J(kK * num_controls, kParamsPerControl * num_controls);
   J.setFromTriplets(t.begin(), t.end());
@@ -72,8 +71,8 @@ const char* regularizer_name(Regularizer r) { return r == Regularizer::l2 ? "L2"
 std::vector<ShapeMetric> local_shape_metric(const body::BodyModel& model, const std::vector<int>& region_vertices,
                                             const Eigen::VectorXd& area, const Eigen::MatrixXd& phi) {
   const auto R = static_cast<Eigen::Index>(region_vertices.size());
-  require(area.size() == R && phi.rows() == R, "local shape metric: {} region vertices, {} areas, basis with {} rows", R,
-          area.size(), phi.rows());
+  require(area.size() == R && phi.rows() == R, "local shape metric: {} region vertices, {} areas, basis with {} rows",
+          R, area.size(), phi.rows());
   require(model.shapedirs.cols() >= kB, "local shape metric: the body has {} shape directions, expected ≥ {}",
           model.shapedirs.cols(), kB);
   // Per vertex a(t) B(t)ᵀB(t), then the φ-weighted sums (eq. 4).
@@ -94,7 +93,8 @@ std::vector<ShapeMetric> local_shape_metric(const body::BodyModel& model, const 
     require(llt.info() == Eigen::Success && moment.diagonal().minCoeff() > 0.0,
             "local shape metric: the shape blend-shape moment of control point {} is not positive definite", i);
     Q[static_cast<std::size_t>(i)] = llt.solve(ShapeMetric::Identity());
-    Q[static_cast<std::size_t>(i)] = 0.5 * (Q[static_cast<std::size_t>(i)] + Q[static_cast<std::size_t>(i)].transpose()).eval();
+    Q[static_cast<std::size_t>(i)] =
+        0.5 * (Q[static_cast<std::size_t>(i)] + Q[static_cast<std::size_t>(i)].transpose()).eval();
     trace_sum += Q[static_cast<std::size_t>(i)].trace();
   }
   const double scale = kB * N / trace_sum;  // mean tr(Q_i)/10 = 1

@@ -22,7 +22,6 @@ std::string where(std::string_view what, const ShapeModelControlPoint& point) {
   return point.line > 0 ? fmt::format("{}:{}", what, point.line) : std::string(what);
 }
 
-
 std::string toml_strings(const std::vector<std::string>& values) {
   std::string out = "[";
   for (std::size_t i = 0; i < values.size(); ++i) out += (i ? ", " : "") + toml_string(values[i]);
@@ -117,7 +116,7 @@ void save_shape_model_file(const std::filesystem::path& path, const ShapeModelFi
   out << "saturation = " << toml_float(model.saturation) << "\n";
   out << "\n[bounds]  # closed ranges of each parameter; the maxima normalize κ (SFLSH §4)\n";
   constexpr std::array<std::string_view, material::kNumKappa> comments = {"  # fraction of the maximum thickness",
-                                                                            "  # Pa", "  # Pa"};
+                                                                          "  # Pa", "  # Pa"};
   for (int c = 0; c < material::kNumKappa; ++c) {
     const auto i = static_cast<std::size_t>(c);
     out << material::kKappaNames[i] << " = [" << toml_float(model.bounds[c].min) << ", "
@@ -172,7 +171,7 @@ material::MaterialFile material_for_beta(const ShapeModelFile& model, const body
           model.body, body.name);
   require(beta.allFinite(), "{}: β has non-finite entries (subject '{}')", what, subject);
   const material::KappaMatrix normalized = clamp_normalized(model.elasticity().kappa_normalized(beta), model.bounds);
-  material::KappaMatrix kappa = material::denormalize(normalized, model.bounds);   // κ = κ̂ κ_max
+  material::KappaMatrix kappa = material::denormalize(normalized, model.bounds);  // κ = κ̂ κ_max
   // κ̂_min · κ_max can differ from κ_min by an ulp: clamp once more in physical units.
   for (Eigen::Index i = 0; i < kappa.rows(); ++i)
     for (int c = 0; c < material::kNumKappa; ++c)
@@ -181,17 +180,18 @@ material::MaterialFile material_for_beta(const ShapeModelFile& model, const body
   material::MaterialFile file;
   file.body = model.body;
   file.subject = subject.empty() ? "beta" : subject;
-  file.source = model.source;   // later checks name the shape model and its control point's line
+  file.source = model.source;  // later checks name the shape model and its control point's line
   file.poisson = model.poisson;
   file.saturation = model.saturation;
   file.bounds = model.bounds;
   for (int i = 0; i < model.num_controls(); ++i) {
     const ShapeModelControlPoint& p = model.control_points[static_cast<std::size_t>(i)];
     material::MaterialControlPoint cp;
-    cp.line = p.line;   // messages point at the shape model's control point
+    cp.line = p.line;  // messages point at the shape model's control point
     cp.vertex = p.vertex;
     cp.position = p.position;
-    if (!cp.position && p.vertex >= 0 && p.vertex < body.num_vertices()) cp.position = body.v_template.row(p.vertex).transpose();
+    if (!cp.position && p.vertex >= 0 && p.vertex < body.num_vertices())
+      cp.position = body.v_template.row(p.vertex).transpose();
     cp.kappa = material::from_row(kappa.row(i));
     file.control_points.push_back(cp);
   }

@@ -99,8 +99,8 @@ class Reader : public TomlReader {
             "{}: 'A'{} must be an array of {} rows (one per β) of {} numbers (h, Y_t, Y_n)", at(a), context,
             body::kNumBetas, material::kNumKappa);
     for (int k = 0; k < body::kNumBetas; ++k) {
-      const std::vector<double> row =
-          numbers((*rows)[static_cast<std::size_t>(k)], "A", material::kNumKappa, fmt::format("{} (row {})", context, k));
+      const std::vector<double> row = numbers((*rows)[static_cast<std::size_t>(k)], "A", material::kNumKappa,
+                                              fmt::format("{} (row {})", context, k));
       for (int c = 0; c < material::kNumKappa; ++c) point.A(k, c) = row[static_cast<std::size_t>(c)];
     }
     return point;
@@ -139,7 +139,6 @@ class Reader : public TomlReader {
     validate(file, path().string());  // everything again (with each point's table line); nothing should be left
     return file;
   }
-
 };
 
 }  // namespace

@@ -1,7 +1,6 @@
-#include <sflsh/validate/experiments.hpp>
-
 #include <sflsh/core/error.hpp>
 #include <sflsh/meshing/layer_mesh.hpp>
+#include <sflsh/validate/experiments.hpp>
 
 namespace sflsh::validate {
 

@@ -1,23 +1,21 @@
 // The experiment pipeline of `sflsh validate` (experiments.hpp): ground truth → reduced cases → fits →
 // evaluations → reports (report.cpp).
-#include <sflsh/validate/experiments.hpp>
+#include "report.hpp"
 
 #include <sflsh/body/body_io.hpp>
 #include <sflsh/body/subjects.hpp>
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
+#include <sflsh/core/progress.hpp>
 #include <sflsh/core/run_folder.hpp>
+#include <sflsh/core/summary.hpp>
 #include <sflsh/meshing/layer_cache.hpp>
 #include <sflsh/reduced/elasticity_fit.hpp>
 #include <sflsh/validate/dyna_file.hpp>
 #include <sflsh/validate/dynamics_metrics.hpp>
+#include <sflsh/validate/experiments.hpp>
 #include <sflsh/validate/ground_truth.hpp>
 #include <sflsh/validate/pose_fit.hpp>
-
-#include "report.hpp"
-
-#include <sflsh/core/progress.hpp>
-#include <sflsh/core/summary.hpp>
 
 #include <chrono>
 #include <map>
@@ -33,9 +31,12 @@ using reduced::Regularizer;
 double default_thickness_max(meshing::SizePreset size) {
   // The largest uniform thickness every subject's retarget keeps valid (docs/meshing.md).
   switch (size) {
-    case meshing::SizePreset::coarse: return 0.6;
-    case meshing::SizePreset::medium: return 0.8;
-    case meshing::SizePreset::fine: return 0.9;
+    case meshing::SizePreset::coarse:
+      return 0.6;
+    case meshing::SizePreset::medium:
+      return 0.8;
+    case meshing::SizePreset::fine:
+      return 0.9;
   }
   return 0.6;
 }
@@ -60,7 +61,8 @@ std::map<std::string, GroundTruthCase> compute_ground_truth(
     GroundTruthCase c;
     if (!load_ground_truth_case(file, c)) {
       const reduced::DynamicsCase& dc = *cases.at(keys[k]);
-      c = simulate_ground_truth(dc.layer(), motions.at(dc.motion()), dc.subject(), parameterizations.get(1), layer_options, gto);
+      c = simulate_ground_truth(dc.layer(), motions.at(dc.motion()), dc.subject(), parameterizations.get(1),
+                                layer_options, gto);
       save_ground_truth_case(file, c);
     }
     progress.advance();
@@ -70,7 +72,8 @@ std::map<std::string, GroundTruthCase> compute_ground_truth(
   if (initialized && pool.ranks() > 1) MPI_Barrier(MPI_COMM_WORLD);
   for (const std::string& key : keys) {
     GroundTruthCase c;
-    require(load_ground_truth_case(state / "groundtruth" / (key + ".npz"), c), "validate: ground truth {} is missing", key);
+    require(load_ground_truth_case(state / "groundtruth" / (key + ".npz"), c), "validate: ground truth {} is missing",
+            key);
     truth.emplace(key, std::move(c));
   }
   return truth;
@@ -95,18 +98,18 @@ struct Setup {
 
 /// The DYNA registrations of the train subjects as ground truth: β and poses fitted, σ* on the region.
 struct DynaTruth {
-  std::vector<std::string> subjects;                      ///< train subjects (file subject ids)
+  std::vector<std::string> subjects;  ///< train subjects (file subject ids)
   std::map<std::string, body::Betas> beta;
-  std::map<std::string, body::Motion> motion;             ///< key "<subject>_<motion>": fitted poses
+  std::map<std::string, body::Motion> motion;  ///< key "<subject>_<motion>": fitted poses
   std::map<std::string, std::vector<RowMatrixX3d>> frames;
-  std::map<std::string, double> mean_rms;                 ///< pose-fit RMS per sequence [m]
+  std::map<std::string, double> mean_rms;  ///< pose-fit RMS per sequence [m]
 };
 
 DynaTruth load_dyna_truth(const ValidateConfig& config, const body::BodyModel& model) {
   DynaTruth t;
   std::vector<std::string> motions = config.train_motions;
   motions.insert(motions.end(), config.test_motions.begin(), config.test_motions.end());
-  std::map<std::string, std::pair<const DynaFile*, std::string>> where;   // key → file
+  std::map<std::string, std::pair<const DynaFile*, std::string>> where;  // key → file
   std::vector<std::unique_ptr<DynaFile>> files;
   for (const auto& path : config.dyna) {
     files.push_back(std::make_unique<DynaFile>(path));
@@ -121,11 +124,13 @@ DynaTruth load_dyna_truth(const ValidateConfig& config, const body::BodyModel& m
       if (key.size() > m.size() + 1 && key.compare(key.size() - m.size() - 1, std::string::npos, "_" + m) == 0)
         ids.insert(key.substr(0, key.size() - m.size() - 1));
   const bool explicit_subjects = config.preset_subjects_overridden;
-  for (const std::string& id : explicit_subjects ? std::set<std::string>(config.train_subjects.begin(), config.train_subjects.end()) : ids) {
+  for (const std::string& id :
+       explicit_subjects ? std::set<std::string>(config.train_subjects.begin(), config.train_subjects.end()) : ids) {
     bool complete = true;
     for (const std::string& m : motions) complete = complete && where.count(id + "_" + m);
     if (!complete) {
-      require(!explicit_subjects, "validate: DYNA subject {} lacks one of the motions ({} files given)", id, config.dyna.size());
+      require(!explicit_subjects, "validate: DYNA subject {} lacks one of the motions ({} files given)", id,
+              config.dyna.size());
       logger()->info("validate: DYNA subject {} skipped (not every train and test motion is recorded)", id);
       continue;
     }
@@ -139,9 +144,9 @@ DynaTruth load_dyna_truth(const ValidateConfig& config, const body::BodyModel& m
       const auto& [file, key] = where.at(id + "_" + m);
       DynaSequence seq = file->read(key, config.frames);  // only the frames used are read
       const PoseFitResult fit = fit_motion(model, seq.frames, seq.fps, beta, po);
-      if (!beta) beta = fit.beta;   // β from the subject's first sequence, then shared
-      logger()->info("validate: DYNA {}: poses fitted (mean RMS {:.2f} mm, {} unconverged frames)", key, 1e3 * fit.mean_rms,
-                     fit.unconverged_frames);
+      if (!beta) beta = fit.beta;  // β from the subject's first sequence, then shared
+      logger()->info("validate: DYNA {}: poses fitted (mean RMS {:.2f} mm, {} unconverged frames)", key,
+                     1e3 * fit.mean_rms, fit.unconverged_frames);
       t.mean_rms[id + "_" + m] = fit.mean_rms;
       body::Motion motion = fit.motion;
       motion.name = m;
@@ -183,18 +188,21 @@ void prepare(const ValidateConfig& config, Setup& s, DynaTruth* dyna = nullptr) 
       // DYNA subjects move as their fitted poses; everyone else along the procedural motion.
       const std::string key = case_key(name, m);
       const body::Motion& motion = dyna && dyna->motion.count(key) ? dyna->motion.at(key) : s.motions.at(m);
-      s.cases.emplace(key, std::make_unique<reduced::DynamicsCase>(s.model, name, s.beta_of.at(name), motion, s.layer_options));
+      s.cases.emplace(
+          key, std::make_unique<reduced::DynamicsCase>(s.model, name, s.beta_of.at(name), motion, s.layer_options));
       progress.advance();
     }
 }
 
 }  // namespace
 
-nlohmann::json run_validation(const ValidateConfig& requested, const std::filesystem::path& out_dir, const nlohmann::json& header) {
+nlohmann::json run_validation(const ValidateConfig& requested, const std::filesystem::path& out_dir,
+                              const nlohmann::json& header) {
   const auto start = std::chrono::steady_clock::now();
-  ValidateConfig config = requested;   // with DYNA files, the train subjects become the files' subject ids
+  ValidateConfig config = requested;  // with DYNA files, the train subjects become the files' subject ids
   require(!config.train_subjects.empty() || !config.dyna.empty(), "validate: no train subjects");
-  require(!config.train_motions.empty() && !config.test_motions.empty(), "validate: train and test motions are required");
+  require(!config.train_motions.empty() && !config.test_motions.empty(),
+          "validate: train and test motions are required");
   require(!config.stages.empty(), "validate: no control-point stages");
   for (double l : config.lambdas) require(l > 0.0 && std::isfinite(l), "validate: λ must be positive, got {}", l);
   require(!config.lambdas.empty(), "validate: no λ values");
@@ -209,7 +217,8 @@ nlohmann::json run_validation(const ValidateConfig& requested, const std::filesy
   prepare(config, setup, from_dyna ? &dyna : nullptr);
   if (from_dyna) config.train_subjects = dyna.subjects;
   require(config.train_subjects.size() >= 2 || !config.cross_validation,
-          "validate: leave-one-out cross-validation needs at least 2 train subjects, have {}", config.train_subjects.size());
+          "validate: leave-one-out cross-validation needs at least 2 train subjects, have {}",
+          config.train_subjects.size());
   const body::BodyModel& model = setup.model;
   const std::map<std::string, body::Betas>& beta_of = setup.beta_of;
   const std::vector<std::string>& all_subjects = setup.all_subjects;
@@ -304,8 +313,8 @@ nlohmann::json run_validation(const ValidateConfig& requested, const std::filesy
   // Independent fits: the optimal targets (SFLSH §3).
   for (const std::string& s : config.train_subjects)
     report.fits.emplace("independent/" + s, reduced::fit_elasticity(context, targets_of({s}, config.train_motions),
-                                                                     spec_of("independent_" + s, FitKind::independent,
-                                                                             Regularizer::l2, 0.0, {s})));
+                                                                    spec_of("independent_" + s, FitKind::independent,
+                                                                            Regularizer::l2, 0.0, {s})));
   // Leave-one-out cross-validation and the λ sweep (SFLSH §6.2, Fig. 5).
   const std::vector<std::pair<Regularizer, std::string>> regs{{Regularizer::l2, "l2"}, {Regularizer::local, "ours"}};
   std::map<std::string, double> best_lambda;
@@ -329,9 +338,10 @@ nlohmann::json run_validation(const ValidateConfig& requested, const std::filesy
     for (const auto& [reg, tag] : regs) best_lambda[tag] = report.best_lambda(tag);
   // Full optimizations on every train subject (SFLSH §6.3) and their generalization (§6.4).
   for (const auto& [reg, tag] : regs)
-    report.fits.emplace("full/" + tag, reduced::fit_elasticity(context, targets_of(config.train_subjects, config.train_motions),
-                                                               spec_of("full_" + tag, FitKind::shape, reg, best_lambda.at(tag),
-                                                                       config.train_subjects)));
+    report.fits.emplace("full/" + tag,
+                        reduced::fit_elasticity(
+                            context, targets_of(config.train_subjects, config.train_motions),
+                            spec_of("full_" + tag, FitKind::shape, reg, best_lambda.at(tag), config.train_subjects)));
   report.evaluate(pool, reduced_model, context.reduced, cases);
   report.best = best_lambda;
 
@@ -363,7 +373,8 @@ nlohmann::json run_validation(const ValidateConfig& requested, const std::filesy
   return summary;
 }
 
-nlohmann::json run_ground_truth(const ValidateConfig& config, const std::filesystem::path& out_dir, const nlohmann::json& header) {
+nlohmann::json run_ground_truth(const ValidateConfig& config, const std::filesystem::path& out_dir,
+                                const nlohmann::json& header) {
   const auto start = std::chrono::steady_clock::now();
   require(!config.train_subjects.empty() || !config.test_subjects.empty(), "groundtruth: no subjects");
   require(!config.train_motions.empty() || !config.test_motions.empty(), "groundtruth: no motions");
@@ -380,8 +391,12 @@ nlohmann::json run_ground_truth(const ValidateConfig& config, const std::filesys
   nlohmann::json summary = header;
   summary["config"] = config.to_json();
   for (const auto& [key, c] : truth)
-    summary["cases"].push_back({{"key", key}, {"subject", c.subject}, {"motion", c.motion}, {"frames", c.posed.size()},
-                                {"sigma_mean_mm", c.mean_sigma()}, {"seconds", c.seconds}});
+    summary["cases"].push_back({{"key", key},
+                                {"subject", c.subject},
+                                {"motion", c.motion},
+                                {"frames", c.posed.size()},
+                                {"sigma_mean_mm", c.mean_sigma()},
+                                {"seconds", c.seconds}});
   if (pool.rank() == 0) {
     write_ground_truth_files(run, setup.model, *first.layer().mesh, truth_pointers(truth), setup.bounds);
     summary["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

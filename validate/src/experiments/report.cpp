@@ -39,7 +39,8 @@ double mean_of(const std::vector<double>& v) {
 }
 
 /// Region field (R) → one value per body vertex (0 outside the region).
-Eigen::MatrixXd on_body(const body::BodyModel& model, const meshing::LayerMesh& mesh, const Eigen::VectorXd& region_values) {
+Eigen::MatrixXd on_body(const body::BodyModel& model, const meshing::LayerMesh& mesh,
+                        const Eigen::VectorXd& region_values) {
   Eigen::MatrixXd out = Eigen::MatrixXd::Zero(model.num_vertices(), 1);
   const std::vector<int>& region = mesh.region_surface.vertices;
   for (std::size_t r = 0; r < region.size(); ++r) out(region[r], 0) = region_values[static_cast<Eigen::Index>(r)];
@@ -61,7 +62,8 @@ std::vector<std::string> Report::evaluated_subjects(const std::string& fit) cons
   return all;
 }
 
-void Report::evaluate(reduced::SimulationPool& pool, const reduced::ReducedModel& reduced_model, const reduced::ReducedOptions& options,
+void Report::evaluate(reduced::SimulationPool& pool, const reduced::ReducedModel& reduced_model,
+                      const reduced::ReducedOptions& options,
                       const std::map<std::string, std::unique_ptr<reduced::DynamicsCase>>& cases) {
   std::vector<const reduced::DynamicsCase*> case_list;
   std::map<std::string, int> case_index;
@@ -93,9 +95,10 @@ void Report::evaluate(reduced::SimulationPool& pool, const reduced::ReducedModel
     e.mean_sigma = e.sigma.mean();
     const auto t = truth->find(job_truth[j]);
     if (t == truth->end()) {
-      e.rms_error = kNaN;   // no truth for this subject (a test subject of DYNA data)
+      e.rms_error = kNaN;  // no truth for this subject (a test subject of DYNA data)
     } else {
-      const Eigen::VectorXd ts = (t->second.sigma_normal.array().square() + t->second.sigma_tangent.array().square()).sqrt().matrix();
+      const Eigen::VectorXd ts =
+          (t->second.sigma_normal.array().square() + t->second.sigma_tangent.array().square()).sqrt().matrix();
       e.rms_error = std::sqrt((e.sigma - ts).squaredNorm() / static_cast<double>(R));
     }
     evaluations.emplace(job_keys[j], std::move(e));
@@ -112,11 +115,13 @@ double Report::motion_mean(const std::string& fit, const std::string& subject, c
   return mean_of(v);
 }
 
-double Report::table_entry(const std::string& fit, const std::string& subject, const std::vector<std::string>& motions) const {
+double Report::table_entry(const std::string& fit, const std::string& subject,
+                           const std::vector<std::string>& motions) const {
   return motion_mean(fit, subject, motions, &Evaluation::mean_sigma);
 }
 
-double Report::table_error(const std::string& fit, const std::string& subject, const std::vector<std::string>& motions) const {
+double Report::table_error(const std::string& fit, const std::string& subject,
+                           const std::vector<std::string>& motions) const {
   return motion_mean(fit, subject, motions, &Evaluation::rms_error);
 }
 
@@ -157,8 +162,12 @@ void Report::write(RunFolder& run, nlohmann::json& summary) const {
   auto fit_row = [&](const std::string& label, std::function<std::string(const std::string&)> fit_of,
                      const std::vector<std::string>& subjects) {
     return Row{label, subjects,
-               [this, fit_of](const std::string& s, const std::vector<std::string>& m) { return table_entry(fit_of(s), s, m); },
-               [this, fit_of](const std::string& s, const std::vector<std::string>& m) { return table_error(fit_of(s), s, m); }};
+               [this, fit_of](const std::string& s, const std::vector<std::string>& m) {
+                 return table_entry(fit_of(s), s, m);
+               },
+               [this, fit_of](const std::string& s, const std::vector<std::string>& m) {
+                 return table_error(fit_of(s), s, m);
+               }};
   };
   const std::string l2 = fmt::format("{:g}", best.count("l2") ? best.at("l2") : config.lambdas.front());
   const std::string ours = fmt::format("{:g}", best.count("ours") ? best.at("ours") : config.lambdas.front());
@@ -166,17 +175,24 @@ void Report::write(RunFolder& run, nlohmann::json& summary) const {
   rows.push_back({"Ground truth", config.train_subjects,
                   [this](const std::string& s, const std::vector<std::string>& m) { return truth_entry(s, m); },
                   [](const std::string&, const std::vector<std::string>&) { return 0.0; }});
-  rows.push_back(fit_row("Independent", [](const std::string& s) { return "independent/" + s; }, config.train_subjects));
+  rows.push_back(fit_row(
+      "Independent", [](const std::string& s) { return "independent/" + s; }, config.train_subjects));
   if (config.cross_validation) {
-    rows.push_back(fit_row("Cross-val. L2", [l2](const std::string& s) { return "cv/l2/" + l2 + "/" + s; }, config.train_subjects));
-    rows.push_back(fit_row("Cross-val. ours", [ours](const std::string& s) { return "cv/ours/" + ours + "/" + s; },
-                           config.train_subjects));
+    rows.push_back(fit_row(
+        "Cross-val. L2", [l2](const std::string& s) { return "cv/l2/" + l2 + "/" + s; }, config.train_subjects));
+    rows.push_back(fit_row(
+        "Cross-val. ours", [ours](const std::string& s) { return "cv/ours/" + ours + "/" + s; },
+        config.train_subjects));
   }
-  rows.push_back(fit_row("Full opt. L2", [](const std::string&) { return std::string("full/l2"); }, config.train_subjects));
-  rows.push_back(fit_row("Full opt. ours", [](const std::string&) { return std::string("full/ours"); }, config.train_subjects));
+  rows.push_back(fit_row(
+      "Full opt. L2", [](const std::string&) { return std::string("full/l2"); }, config.train_subjects));
+  rows.push_back(fit_row(
+      "Full opt. ours", [](const std::string&) { return std::string("full/ours"); }, config.train_subjects));
   if (!config.test_subjects.empty()) {
-    rows.push_back(fit_row("Generaliz. L2", [](const std::string&) { return std::string("full/l2"); }, config.test_subjects));
-    rows.push_back(fit_row("Generaliz. ours", [](const std::string&) { return std::string("full/ours"); }, config.test_subjects));
+    rows.push_back(fit_row(
+        "Generaliz. L2", [](const std::string&) { return std::string("full/l2"); }, config.test_subjects));
+    rows.push_back(fit_row(
+        "Generaliz. ours", [](const std::string&) { return std::string("full/ours"); }, config.test_subjects));
     rows.push_back({"Ground truth (test subjects)", config.test_subjects,
                     [this](const std::string& s, const std::vector<std::string>& m) { return truth_entry(s, m); },
                     [](const std::string&, const std::vector<std::string>&) { return 0.0; }});
@@ -208,7 +224,9 @@ void Report::write(RunFolder& run, nlohmann::json& summary) const {
       for (const auto* motions : {&config.train_motions, &config.test_motions}) {
         std::vector<double> values;
         for (std::size_t c = 0; c < columns; ++c) {
-          const double v = c < row.subjects.size() ? (error ? row.error(row.subjects[c], *motions) : row.value(row.subjects[c], *motions)) : kNaN;
+          const double v = c < row.subjects.size()
+                               ? (error ? row.error(row.subjects[c], *motions) : row.value(row.subjects[c], *motions))
+                               : kNaN;
           if (c < row.subjects.size()) values.push_back(v);
           csv << "," << cell(v);
           md << " " << cell(v) << " |";
@@ -229,7 +247,8 @@ void Report::write(RunFolder& run, nlohmann::json& summary) const {
     write_text_atomically(run.stage("table2.csv"), csv);
     std::ostringstream doc;
     doc << "# Table 2: standard deviation of per-vertex dynamics [mm]\n\n"
-        << "Mean over the soft region's skin vertices of σ_i (docs/physics.md §4), averaged over the motions of each split.\n"
+        << "Mean over the soft region's skin vertices of σ_i (docs/physics.md §4), averaged over the motions of each "
+           "split.\n"
         << "Train motions: ";
     for (const auto& m : config.train_motions) doc << m << " ";
     doc << "· test motions: ";
@@ -245,7 +264,8 @@ void Report::write(RunFolder& run, nlohmann::json& summary) const {
   // ---- Cross-validation and the λ sweep (Fig. 5) -----------------------------------------------------------
   if (config.cross_validation) {
     std::ostringstream cv, sweep;
-    cv << "regularizer,lambda,left_out,train_motions_rms_error_mm,test_motions_rms_error_mm,train_motions_mean_sigma_mm,"
+    cv << "regularizer,lambda,left_out,train_motions_rms_error_mm,test_motions_rms_error_mm,train_motions_mean_sigma_"
+          "mm,"
           "test_motions_mean_sigma_mm\n";
     sweep << "regularizer,lambda,cv_train_motions_rms_error_mm,cv_test_motions_rms_error_mm\n";
     chart::Chart chart;
@@ -267,12 +287,14 @@ void Report::write(RunFolder& run, nlohmann::json& summary) const {
           tr.push_back(table_error(fit, s, config.train_motions));
           te.push_back(table_error(fit, s, config.test_motions));
           cv << tag << "," << lambda << "," << s << "," << cell(tr.back()) << "," << cell(te.back()) << ","
-             << cell(table_entry(fit, s, config.train_motions)) << "," << cell(table_entry(fit, s, config.test_motions)) << "\n";
+             << cell(table_entry(fit, s, config.train_motions)) << "," << cell(table_entry(fit, s, config.test_motions))
+             << "\n";
         }
         sweep << tag << "," << lambda << "," << cell(mean_of(tr)) << "," << cell(mean_of(te)) << "\n";
         series.x.push_back(lambda);
         series.y.push_back(mean_of(tr));
-        sweep_json.push_back({{"regularizer", tag}, {"lambda", lambda}, {"train_motions", mean_of(tr)}, {"test_motions", mean_of(te)}});
+        sweep_json.push_back(
+            {{"regularizer", tag}, {"lambda", lambda}, {"train_motions", mean_of(tr)}, {"test_motions", mean_of(te)}});
       }
       chart.series.push_back(series);
     }
@@ -301,7 +323,8 @@ void Report::write(RunFolder& run, nlohmann::json& summary) const {
     Eigen::VectorXd norms(N);
     for (int i = 0; i < N; ++i) {
       Eigen::MatrixXd pts(static_cast<Eigen::Index>(per_subject.size()), 3);
-      for (std::size_t s = 0; s < per_subject.size(); ++s) pts.row(static_cast<Eigen::Index>(s)) = per_subject[s].row(i);
+      for (std::size_t s = 0; s < per_subject.size(); ++s)
+        pts.row(static_cast<Eigen::Index>(s)) = per_subject[s].row(i);
       const Eigen::MatrixXd centred = pts.rowwise() - pts.colwise().mean();
       norms[i] = (centred.transpose() * centred / static_cast<double>(pts.rows())).norm();
     }
@@ -313,7 +336,8 @@ void Report::write(RunFolder& run, nlohmann::json& summary) const {
       if (true_parameters) {
         const material::KappaMatrix t = normalized_truth(s);
         material::KappaMatrix at_controls(N, 3);
-        for (int i = 0; i < N; ++i) at_controls.row(i) = t.row(parameterization->control_region_vertices()[static_cast<std::size_t>(i)]);
+        for (int i = 0; i < N; ++i)
+          at_controls.row(i) = t.row(parameterization->control_region_vertices()[static_cast<std::size_t>(i)]);
         truth_k.push_back(at_controls);
       }
       const body::Betas& beta = betas.at(s);
@@ -328,19 +352,25 @@ void Report::write(RunFolder& run, nlohmann::json& summary) const {
     for (int i = 0; i < N; ++i)
       cov_csv << i << "," << parameterization->control_vertices()[static_cast<std::size_t>(i)] << ","
               << (true_parameters ? fmt::format("{:.6g}", cov_norm.at("truth")[i]) : std::string())
-              << fmt::format(",{:.6g},{:.6g},{:.6g}", cov_norm["independent"][i], cov_norm["l2"][i], cov_norm["ours"][i]) << "\n";
+              << fmt::format(",{:.6g},{:.6g},{:.6g}", cov_norm["independent"][i], cov_norm["l2"][i],
+                             cov_norm["ours"][i])
+              << "\n";
     for (const auto& [tag, norms] : cov_norm)
       cov_fields.point_data.push_back({"covariance_" + tag, on_body(*model, mesh, parameterization->phi() * norms)});
     write_text_atomically(run.stage("covariance.csv"), cov_csv.str());
-    summary["covariance_mean"] = {{"truth", true_parameters ? cov_norm.at("truth").mean() : kNaN}, {"independent", cov_norm["independent"].mean()},
-                                  {"l2", cov_norm["l2"].mean()}, {"ours", cov_norm["ours"].mean()}};
+    summary["covariance_mean"] = {{"truth", true_parameters ? cov_norm.at("truth").mean() : kNaN},
+                                  {"independent", cov_norm["independent"].mean()},
+                                  {"l2", cov_norm["l2"].mean()},
+                                  {"ours", cov_norm["ours"].mean()}};
   }
   // Parameter recovery: the fitted field φ κ̂ against the true κ̂ on the region vertices.
   if (true_parameters) {
     std::ostringstream pe;
-    pe << "method,subject,split,thickness_rms,young_tangent_rms,young_normal_rms,young_tangent_log_rms,young_normal_log_rms\n";
+    pe << "method,subject,split,thickness_rms,young_tangent_rms,young_normal_rms,young_tangent_log_rms,young_normal_"
+          "log_rms\n";
     nlohmann::json pj = nlohmann::json::array();
-    auto add = [&](const std::string& method, const std::string& fit, const std::string& subject, const std::string& split) {
+    auto add = [&](const std::string& method, const std::string& fit, const std::string& subject,
+                   const std::string& split) {
       const GroundTruthCase& t = truth->at(subject + "_" + config.train_motions.front());
       const material::KappaMatrix fitted = parameterization->field(fits.at(fit).kappa(t.beta, bounds));
       const material::KappaMatrix fn = material::normalize(fitted, bounds), tn = material::normalize(t.kappa, bounds);
@@ -348,9 +378,15 @@ void Report::write(RunFolder& run, nlohmann::json& summary) const {
       const Eigen::RowVector3d rms = ((fn - tn).array().square().colwise().sum() / R).sqrt().matrix();
       const double lt = std::sqrt((fitted.col(1).array() / t.kappa.col(1).array()).log().square().mean());
       const double ln = std::sqrt((fitted.col(2).array() / t.kappa.col(2).array()).log().square().mean());
-      pe << method << "," << subject << "," << split << fmt::format(",{:.4f},{:.4f},{:.4f},{:.4f},{:.4f}\n", rms[0], rms[1], rms[2], lt, ln);
-      pj.push_back({{"method", method}, {"subject", subject}, {"split", split}, {"thickness_rms", rms[0]},
-                    {"young_tangent_rms", rms[1]}, {"young_normal_rms", rms[2]}, {"young_tangent_log_rms", lt},
+      pe << method << "," << subject << "," << split
+         << fmt::format(",{:.4f},{:.4f},{:.4f},{:.4f},{:.4f}\n", rms[0], rms[1], rms[2], lt, ln);
+      pj.push_back({{"method", method},
+                    {"subject", subject},
+                    {"split", split},
+                    {"thickness_rms", rms[0]},
+                    {"young_tangent_rms", rms[1]},
+                    {"young_normal_rms", rms[2]},
+                    {"young_tangent_log_rms", lt},
                     {"young_normal_log_rms", ln}});
     };
     for (const std::string& s : config.train_subjects) {
@@ -388,11 +424,13 @@ void Report::write(RunFolder& run, nlohmann::json& summary) const {
           const GroundTruthCase& c = *truth_of(s, m);
           t += (c.sigma_normal.array().square() + c.sigma_tangent.array().square()).sqrt().matrix();
         }
-        fields.point_data.push_back({"sigma_truth_" + s, on_body(*model, mesh, t / static_cast<double>(config.train_motions.size()))});
+        fields.point_data.push_back(
+            {"sigma_truth_" + s, on_body(*model, mesh, t / static_cast<double>(config.train_motions.size()))});
       }
       std::vector<std::pair<std::string, std::string>> fit_list{{"full_l2", "full/l2"}, {"full_ours", "full/ours"}};
       if (fits.count("independent/" + s)) fit_list.emplace_back("independent", "independent/" + s);
-      if (config.cross_validation && fits.count("cv/l2/" + l2 + "/" + s)) fit_list.emplace_back("cv_l2", "cv/l2/" + l2 + "/" + s);
+      if (config.cross_validation && fits.count("cv/l2/" + l2 + "/" + s))
+        fit_list.emplace_back("cv_l2", "cv/l2/" + l2 + "/" + s);
       if (config.cross_validation && fits.count("cv/ours/" + ours + "/" + s))
         fit_list.emplace_back("cv_ours", "cv/ours/" + ours + "/" + s);
       for (const auto& [tag, fit] : fit_list) {
@@ -411,8 +449,14 @@ void Report::write(RunFolder& run, nlohmann::json& summary) const {
       for (const reduced::FitStageReport& s : fit.stages) {
         fc << name << "," << s.controls << "," << s.iterations << fmt::format(",{:.6g},{:.6g},", s.loss_fit, s.loss_reg)
            << s.simulations << "," << s.jacobians << fmt::format(",{:.2f},", s.seconds) << s.reason << "\n";
-        fj.push_back({{"fit", name}, {"controls", s.controls}, {"iterations", s.iterations}, {"loss_fit", s.loss_fit},
-                      {"loss_reg", s.loss_reg}, {"simulations", s.simulations}, {"seconds", s.seconds}, {"reason", s.reason}});
+        fj.push_back({{"fit", name},
+                      {"controls", s.controls},
+                      {"iterations", s.iterations},
+                      {"loss_fit", s.loss_fit},
+                      {"loss_reg", s.loss_reg},
+                      {"simulations", s.simulations},
+                      {"seconds", s.seconds},
+                      {"reason", s.reason}});
       }
     write_text_atomically(run.stage("fits.csv"), fc.str());
     summary["fits"] = fj;
@@ -431,15 +475,15 @@ void Report::write(RunFolder& run, nlohmann::json& summary) const {
           cp.kappa = material::from_row(k.row(i));
           file.control_points.push_back(cp);
         }
-        material::save_material_file(run.stage("materials/" + tag + "/" + s + ".toml"), file,
-                                     fmt::format("Fitted by sflsh validate (full optimization, {} regularizer, λ = {:g})",
-                                                 tag == std::string("l2") ? "L2" : "local", best.count(tag) ? best.at(tag) : 0.0));
+        material::save_material_file(
+            run.stage("materials/" + tag + "/" + s + ".toml"), file,
+            fmt::format("Fitted by sflsh validate (full optimization, {} regularizer, λ = {:g})",
+                        tag == std::string("l2") ? "L2" : "local", best.count(tag) ? best.at(tag) : 0.0));
       }
     // The full fits themselves: κ̂(β) for any subject (shape_model_file.hpp; the crowd's materials).
     for (const std::string tag : {"l2", "ours"}) {
-      reduced::ShapeModelFile file =
-          reduced::make_shape_model_file(fits.at("full/" + tag).shape(), *model, parameterization->control_vertices(), bounds,
-                                         poisson, saturation);
+      reduced::ShapeModelFile file = reduced::make_shape_model_file(
+          fits.at("full/" + tag).shape(), *model, parameterization->control_vertices(), bounds, poisson, saturation);
       file.region = region;
       file.mesh = meshing::size_preset_name(config.mesh);
       reduced::ShapeModelFit fit;
@@ -448,10 +492,11 @@ void Report::write(RunFolder& run, nlohmann::json& summary) const {
       fit.subjects = config.train_subjects;
       fit.motions = config.train_motions;
       file.fit = fit;
-      reduced::save_shape_model_file(run.stage("shape_models/" + tag + ".toml"), file,
-                                     fmt::format("Fitted by sflsh validate --preset {} (full optimization, {} regularizer, "
-                                                 "λ = {:g}, N = {})",
-                                                 config.preset, tag == std::string("l2") ? "L2" : "local", fit.lambda, N));
+      reduced::save_shape_model_file(
+          run.stage("shape_models/" + tag + ".toml"), file,
+          fmt::format("Fitted by sflsh validate --preset {} (full optimization, {} regularizer, "
+                      "λ = {:g}, N = {})",
+                      config.preset, tag == std::string("l2") ? "L2" : "local", fit.lambda, N));
     }
   }
 }

@@ -13,29 +13,30 @@
 namespace sflsh::validate {
 
 struct Evaluation {
-  Eigen::VectorXd sigma;      ///< per region vertex [mm]
-  double mean_sigma = 0.0;    ///< [mm]
-  double rms_error = 0.0;     ///< RMS over region vertices of σ − σ* [mm]
+  Eigen::VectorXd sigma;    ///< per region vertex [mm]
+  double mean_sigma = 0.0;  ///< [mm]
+  double rms_error = 0.0;   ///< RMS over region vertices of σ − σ* [mm]
 };
 
 struct Report {
   ValidateConfig config;
   material::ParameterBounds bounds;
   const body::BodyModel* model = nullptr;
-  const reduced::LayerParameterization* parameterization = nullptr;   ///< of the final stage
-  const std::map<std::string, GroundTruthCase>* truth = nullptr;      ///< key "<subject>_<motion>"
-  std::map<std::string, reduced::FitResult> fits;   ///< "independent/S", "cv/<reg>/<λ>/S", "full/<reg>"
-  std::map<std::string, double> best;               ///< λ chosen per regularizer tag
-  std::map<std::string, body::Betas> betas;         ///< every subject's β
-  bool true_parameters = true;                      ///< the truth carries κ (synthetic); DYNA does not
-  double poisson = 0.2, saturation = 4.0;           ///< uniform ν and s of the layers (SFLSH §3)
-  std::string region;                               ///< the layer region the control points lie on
+  const reduced::LayerParameterization* parameterization = nullptr;  ///< of the final stage
+  const std::map<std::string, GroundTruthCase>* truth = nullptr;     ///< key "<subject>_<motion>"
+  std::map<std::string, reduced::FitResult> fits;  ///< "independent/S", "cv/<reg>/<λ>/S", "full/<reg>"
+  std::map<std::string, double> best;              ///< λ chosen per regularizer tag
+  std::map<std::string, body::Betas> betas;        ///< every subject's β
+  bool true_parameters = true;                     ///< the truth carries κ (synthetic); DYNA does not
+  double poisson = 0.2, saturation = 4.0;          ///< uniform ν and s of the layers (SFLSH §3)
+  std::string region;                              ///< the layer region the control points lie on
 
   const GroundTruthCase* truth_of(const std::string& subject, const std::string& motion) const;
-  std::map<std::string, Evaluation> evaluations;    ///< "<fit>|<subject>|<motion>"
+  std::map<std::string, Evaluation> evaluations;  ///< "<fit>|<subject>|<motion>"
 
   /// Simulates every (fit, subject, motion) the report needs and has not evaluated yet.
-  void evaluate(reduced::SimulationPool& pool, const reduced::ReducedModel& reduced_model, const reduced::ReducedOptions& options,
+  void evaluate(reduced::SimulationPool& pool, const reduced::ReducedModel& reduced_model,
+                const reduced::ReducedOptions& options,
                 const std::map<std::string, std::unique_ptr<reduced::DynamicsCase>>& cases);
   /// λ with the least cross-validation error (train motions of the left-out subjects) for "l2" / "ours".
   double best_lambda(const std::string& tag) const;

@@ -1,11 +1,10 @@
-#include <sflsh/validate/ground_truth.hpp>
-
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
 #include <sflsh/core/npz.hpp>
 #include <sflsh/fullspace/fullspace_solver.hpp>
 #include <sflsh/fullspace/reference_integrator.hpp>
 #include <sflsh/model/simulation_output.hpp>
+#include <sflsh/validate/ground_truth.hpp>
 #include <sflsh/validate/true_material.hpp>
 
 #include <chrono>
@@ -22,7 +21,8 @@ double GroundTruthCase::mean_sigma() const {
   return sigma_normal.size() ? (sigma_normal.array().square() + sigma_tangent.array().square()).sqrt().mean() : 0.0;
 }
 
-GroundTruthCase simulate_ground_truth(const model::BodyLayer& layer, const body::Motion& motion, const std::string& subject,
+GroundTruthCase simulate_ground_truth(const model::BodyLayer& layer, const body::Motion& motion,
+                                      const std::string& subject,
                                       const reduced::LayerParameterization& parameterization,
                                       const model::BodyLayerOptions& layer_options, const GroundTruthOptions& options) {
   const auto start = std::chrono::steady_clock::now();
@@ -39,7 +39,8 @@ GroundTruthCase simulate_ground_truth(const model::BodyLayer& layer, const body:
   const std::vector<int>& region = layer.mesh->region_surface.vertices;
   const meshing::RowMatrixX3d all_normals = model::vertex_normals(layer.shaped, layer.model->faces);
   meshing::RowMatrixX3d normals(static_cast<Eigen::Index>(region.size()), 3);
-  for (std::size_t r = 0; r < region.size(); ++r) normals.row(static_cast<Eigen::Index>(r)) = all_normals.row(region[r]);
+  for (std::size_t r = 0; r < region.size(); ++r)
+    normals.row(static_cast<Eigen::Index>(r)) = all_normals.row(region[r]);
   model::DynamicsAmplitude amplitude(normals);
   auto record = [&](double t) {
     const Eigen::Map<const meshing::RowMatrixX3d> nodes(solver.state().x.data(), problem.num_nodes(), 3);
@@ -52,19 +53,20 @@ GroundTruthCase simulate_ground_truth(const model::BodyLayer& layer, const body:
   loop.frames = static_cast<int>(motion.num_frames());
   loop.fps = motion.fps;
   try {
-    const model::StepStats total =
-        model::run_frames(solver, loop, [&](int f, double, const model::StepStats&) { record(motion.time(static_cast<std::size_t>(f))); });
+    const model::StepStats total = model::run_frames(solver, loop, [&](int f, double, const model::StepStats&) {
+      record(motion.time(static_cast<std::size_t>(f)));
+    });
     out.newton_iterations += total.newton_iterations;
   } catch (const Error& e) {
     throw_error("ground truth {} / {}: {}", subject, motion.name, e.what());
   }
   out.sigma_normal = 1e3 * amplitude.sigma_normal();
   out.sigma_tangent = 1e3 * amplitude.sigma_tangent();
-  require(out.sigma_normal.allFinite() && out.sigma_tangent.allFinite(), "ground truth {} / {}: non-finite dynamics", subject,
-          motion.name);
+  require(out.sigma_normal.allFinite() && out.sigma_tangent.allFinite(), "ground truth {} / {}: non-finite dynamics",
+          subject, motion.name);
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  logger()->info("ground truth {} / {}: {} frames, mean σ {:.3f} mm, {:.1f} s", subject, motion.name, loop.frames, out.mean_sigma(),
-                 out.seconds);
+  logger()->info("ground truth {} / {}: {} frames, mean σ {:.3f} mm, {:.1f} s", subject, motion.name, loop.frames,
+                 out.mean_sigma(), out.seconds);
   return out;
 }
 
@@ -114,7 +116,8 @@ bool load_ground_truth_case(const std::filesystem::path& path, GroundTruthCase& 
       const std::vector<double> pv = p.to_doubles();
       const std::size_t T = p.shape.at(0), V = p.shape.at(1);
       for (std::size_t t = 0; t < T; ++t)
-        c.posed.emplace_back(Eigen::Map<const body::RowMatrixX3d>(pv.data() + t * V * 3, static_cast<Eigen::Index>(V), 3));
+        c.posed.emplace_back(
+            Eigen::Map<const body::RowMatrixX3d>(pv.data() + t * V * 3, static_cast<Eigen::Index>(V), 3));
     }
     return c.sigma_normal.size() == c.sigma_tangent.size() && c.sigma_normal.allFinite();
   } catch (const std::exception& e) {

@@ -1,10 +1,9 @@
-#include <sflsh/validate/ground_truth.hpp>
-
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/npz.hpp>
 #include <sflsh/core/run_folder.hpp>
 #include <sflsh/core/summary.hpp>
 #include <sflsh/validate/dyna_file.hpp>
+#include <sflsh/validate/ground_truth.hpp>
 #include <sflsh/validate/true_material.hpp>
 
 #include <map>
@@ -12,7 +11,8 @@
 namespace sflsh::validate {
 
 void write_ground_truth_files(RunFolder& run, const body::BodyModel& model, const meshing::LayerMesh& mesh,
-                              const std::vector<const GroundTruthCase*>& cases, const material::ParameterBounds& bounds) {
+                              const std::vector<const GroundTruthCase*>& cases,
+                              const material::ParameterBounds& bounds) {
   require(!cases.empty(), "ground truth: no cases to write");
   std::vector<DynaSequence> sequences;
   std::map<std::string, const GroundTruthCase*> subjects;
@@ -37,10 +37,9 @@ void write_ground_truth_files(RunFolder& run, const body::BodyModel& model, cons
   const std::vector<int>& region = mesh.region_surface.vertices;
   std::vector<std::int64_t> region64(region.begin(), region.end());
   for (const auto& [name, c] : subjects)
-    npz::write(run.stage("truth/" + name + ".npz"),
-               {{"region_vertices", npz::make_i64({region64.size()}, region64)},
-                {"kappa", npz::make_f64(Eigen::MatrixXd(c->kappa))},
-                {"beta", npz::make_f64(Eigen::MatrixXd(c->beta.transpose()))}});
+    npz::write(run.stage("truth/" + name + ".npz"), {{"region_vertices", npz::make_i64({region64.size()}, region64)},
+                                                     {"kappa", npz::make_f64(Eigen::MatrixXd(c->kappa))},
+                                                     {"beta", npz::make_f64(Eigen::MatrixXd(c->beta.transpose()))}});
   nlohmann::json j;
   j["description"] = true_material_description();
   j["columns"] = {"thickness", "young_tangent_pa", "young_normal_pa"};

@@ -1,13 +1,12 @@
-#include <sflsh/validate/true_material.hpp>
-
 #include <sflsh/model/simulation_output.hpp>
+#include <sflsh/validate/true_material.hpp>
 
 #include <cmath>
 
 namespace sflsh::validate {
 
-material::KappaMatrix true_kappa_field(const body::BodyModel& model, const meshing::LayerMesh& mesh, const body::Betas& beta,
-                                       const material::ParameterBounds& bounds) {
+material::KappaMatrix true_kappa_field(const body::BodyModel& model, const meshing::LayerMesh& mesh,
+                                       const body::Betas& beta, const material::ParameterBounds& bounds) {
   const meshing::RowMatrixX3d normals = model::vertex_normals(model.v_template, model.faces);
   const std::vector<int>& region = mesh.region_surface.vertices;
   material::KappaMatrix kappa(static_cast<Eigen::Index>(region.size()), material::kNumKappa);

@@ -27,17 +27,17 @@ using RowMatrixX3i = Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor>;
 
 /// The arrays of a body model. n = vertex count, m = face count.
 struct BodyModel {
-  std::string name;             ///< e.g. "sflsh-open-body" or the file stem of a SMPL file
-  RowMatrixX3d v_template;      ///< n×3 rest template [m]
-  RowMatrixX3i faces;           ///< m×3 vertex indices, counter-clockwise seen from outside
+  std::string name;         ///< e.g. "sflsh-open-body" or the file stem of a SMPL file
+  RowMatrixX3d v_template;  ///< n×3 rest template [m]
+  RowMatrixX3i faces;       ///< m×3 vertex indices, counter-clockwise seen from outside
   /// shapedirs (n×3×B): stored as a (3n)×B matrix, row 3v+c = shapedirs[v, c, :]. B ≥ 10; only
   /// the first kNumBetas columns are used.
   Eigen::MatrixXd shapedirs;
   /// posedirs (n×3×207) as (3n)×207, row 3v+c; empty when the model has no pose correctives.
   Eigen::MatrixXd posedirs;
   Eigen::SparseMatrix<double, Eigen::RowMajor> joint_regressor;  ///< 24×n
-  Eigen::MatrixXd weights;      ///< n×24 skinning weights, rows sum to 1
-  std::array<int, kNumJoints> parents = kJointParents;  ///< kintree_table row 0 (-1 = root)
+  Eigen::MatrixXd weights;                                       ///< n×24 skinning weights, rows sum to 1
+  std::array<int, kNumJoints> parents = kJointParents;           ///< kintree_table row 0 (-1 = root)
 
   Eigen::Index num_vertices() const { return v_template.rows(); }
   Eigen::Index num_faces() const { return faces.rows(); }

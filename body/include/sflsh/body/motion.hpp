@@ -23,9 +23,9 @@ inline constexpr double kMaxRootMetres = 10000.0;
 
 struct Motion {
   std::string name;
-  std::string source;          ///< "procedural" or the file path it was read from
-  double fps = 60.0;           ///< frames per second of `poses` / `trans`
-  std::vector<Pose> poses;     ///< θ per frame (72 axis-angle values)
+  std::string source;                  ///< "procedural" or the file path it was read from
+  double fps = 60.0;                   ///< frames per second of `poses` / `trans`
+  std::vector<Pose> poses;             ///< θ per frame (72 axis-angle values)
   std::vector<Eigen::Vector3d> trans;  ///< root translation per frame [m], in the body's frame
   /// Rotation applied to posed positions to bring them into the world frame (Y up). Identity for
   /// procedural motions; AMASS data is Z-up, so loading it sets a −90° rotation about X.

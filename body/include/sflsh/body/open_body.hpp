@@ -19,18 +19,18 @@ extern const std::array<const char*, kNumAnthroFactors> kAnthroFactorNames;
 using AnthroFactors = Eigen::Matrix<double, kNumAnthroFactors, 1>;
 
 struct OpenBodyOptions {
-  int population = 300;            ///< sampled bodies for the shape PCA
-  unsigned seed = 20231212;        ///< population sampling seed (deterministic output)
-  int target_vertices = 7000;      ///< approximate vertex count of the template surface
+  int population = 300;        ///< sampled bodies for the shape PCA
+  unsigned seed = 20231212;    ///< population sampling seed (deterministic output)
+  int target_vertices = 7000;  ///< approximate vertex count of the template surface
 };
 
 /// A named subject of the open body, defined in anthropometric-factor space.
 struct OpenBodySubject {
   std::string name;
-  std::string split;               ///< "train" or "test"
+  std::string split;  ///< "train" or "test"
   std::string description;
   AnthroFactors factors;
-  Betas beta;                      ///< its β in the generated model's PCA basis
+  Betas beta;  ///< its β in the generated model's PCA basis
 };
 
 struct OpenBodyResult {

@@ -29,9 +29,9 @@ RowMatrixX3d pose_correctives(const BodyModel& model, const Pose& theta);
 
 /// The world transforms of the joints for one pose.
 struct Kinematics {
-  std::array<Eigen::Isometry3d, kNumJoints> global;    ///< G_k: joint frame to world (no translation)
-  std::array<Eigen::Affine3d, kNumJoints> skinning;    ///< G'_k = G_k [I | −J_k], plus root translation
-  JointPositions joints_posed;                         ///< posed joint positions incl. translation
+  std::array<Eigen::Isometry3d, kNumJoints> global;  ///< G_k: joint frame to world (no translation)
+  std::array<Eigen::Affine3d, kNumJoints> skinning;  ///< G'_k = G_k [I | −J_k], plus root translation
+  JointPositions joints_posed;                       ///< posed joint positions incl. translation
 };
 
 /// Forward kinematics: G_0 = [R_0 | J_0], G_k = G_par(k) [R_k | J_k − J_par(k)], then G'_k and `trans`.
@@ -47,9 +47,9 @@ RowMatrixX3d linear_blend_skinning(const BodyModel& model, const Kinematics& kin
 
 /// Everything one evaluation of the model produces.
 struct PosedBody {
-  RowMatrixX3d shaped;      ///< T_S (n×3)
-  RowMatrixX3d unposed;     ///< T_S + B_P(θ) (n×3)
-  RowMatrixX3d posed;       ///< world positions (n×3)
+  RowMatrixX3d shaped;   ///< T_S (n×3)
+  RowMatrixX3d unposed;  ///< T_S + B_P(θ) (n×3)
+  RowMatrixX3d posed;    ///< world positions (n×3)
   JointPositions joints_rest;
   Kinematics kinematics;
 };

@@ -11,9 +11,9 @@
 namespace sflsh::body {
 
 struct Subject {
-  std::string name;         ///< e.g. "DYNA_1", "TEST_3", "OPEN_TRAIN_2"
-  std::string split;        ///< "train" or "test"
-  std::string body;         ///< body model the β refers to: "smpl" (paper) or "open"
+  std::string name;   ///< e.g. "DYNA_1", "TEST_3", "OPEN_TRAIN_2"
+  std::string split;  ///< "train" or "test"
+  std::string body;   ///< body model the β refers to: "smpl" (paper) or "open"
   std::string description;
   Betas beta = Betas::Zero();
 };

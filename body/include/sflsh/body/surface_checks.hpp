@@ -7,17 +7,17 @@
 namespace sflsh::body {
 
 struct SurfaceReport {
-  bool closed = false;              ///< every edge has exactly two incident faces
-  bool edge_manifold = false;       ///< no edge with more than two faces
-  bool vertex_manifold = false;     ///< every vertex's link is one cycle (one path on a boundary)
+  bool closed = false;           ///< every edge has exactly two incident faces
+  bool edge_manifold = false;    ///< no edge with more than two faces
+  bool vertex_manifold = false;  ///< every vertex's link is one cycle (one path on a boundary)
   bool consistently_oriented = false;
-  bool outward = false;             ///< signed volume positive
+  bool outward = false;  ///< signed volume positive
   int connected_components = 0;
-  int euler_characteristic = 0;     ///< V − E + F (2 for a sphere)
-  int degenerate_faces = 0;         ///< faces with (near-)zero area
-  int self_intersections = -1;      ///< intersecting non-adjacent face pairs (-1: not checked)
-  double volume = 0.0;              ///< enclosed volume [m³]
-  double area = 0.0;                ///< [m²]
+  int euler_characteristic = 0;  ///< V − E + F (2 for a sphere)
+  int degenerate_faces = 0;      ///< faces with (near-)zero area
+  int self_intersections = -1;   ///< intersecting non-adjacent face pairs (-1: not checked)
+  double volume = 0.0;           ///< enclosed volume [m³]
+  double area = 0.0;             ///< [m²]
   double min_angle_deg = 0.0;
   bool ok() const {
     return closed && edge_manifold && vertex_manifold && consistently_oriented && outward &&

@@ -18,8 +18,8 @@ enum class Marker { none, cross, plus, square, circle, diamond };
 enum class Line { none, solid, dashed };
 
 struct Series {
-  std::string label;                               ///< legend entry (empty: not in the legend)
-  std::vector<double> x, y;                        ///< same length
+  std::string label;         ///< legend entry (empty: not in the legend)
+  std::vector<double> x, y;  ///< same length
   Marker marker = Marker::circle;
   Line line = Line::none;
   std::array<unsigned char, 3> color = {40, 90, 200};
@@ -30,7 +30,7 @@ struct Series {
 struct Chart {
   std::string title;
   std::string x_label, y_label;
-  bool log_x = false, log_y = false;               ///< every value on a log axis must be positive
+  bool log_x = false, log_y = false;  ///< every value on a log axis must be positive
   int width = 900, height = 600;
   std::vector<Series> series;
 };

@@ -42,10 +42,10 @@ struct Array {
   /// below name it in their errors ("array" when empty).
   std::string origin;
 
-  std::size_t size() const;                 ///< number of elements
-  std::string dtype() const;                ///< e.g. "<f8", "<u4", "<U6"
-  std::string shape_string() const;         ///< e.g. "(6890, 3)"
-  std::string describe() const;             ///< origin, or "array" when it has none
+  std::size_t size() const;          ///< number of elements
+  std::string dtype() const;         ///< e.g. "<f8", "<u4", "<U6"
+  std::string shape_string() const;  ///< e.g. "(6890, 3)"
+  std::string describe() const;      ///< origin, or "array" when it has none
   bool is_numeric() const { return kind == 'f' || kind == 'i' || kind == 'u' || kind == 'b'; }
 
   /// All elements converted to double (numeric kinds only; throws otherwise). float16 converts

@@ -19,10 +19,10 @@ struct Surface {
 };
 
 struct View {
-  std::string name = "front";   ///< front (+Z toward the camera), side (from +X), back, three_quarter, top
+  std::string name = "front";  ///< front (+Z toward the camera), side (from +X), back, three_quarter, top
   int width = 800;
   int height = 1000;
-  std::string title;            ///< drawn in the top-left corner when not empty
+  std::string title;  ///< drawn in the top-left corner when not empty
   std::optional<std::pair<double, double>> scalar_range;
 };
 

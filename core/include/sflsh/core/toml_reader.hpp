@@ -5,9 +5,8 @@
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/input_file.hpp>
 
-#include <toml++/toml.h>
-
 #include <Eigen/Core>
+#include <toml++/toml.h>
 
 #include <cmath>
 #include <cstdint>
@@ -40,7 +39,9 @@ class TomlReader {
     }
   }
 
-  std::string at(const toml::node& node) const { return fmt::format("{}:{}", path_.string(), node.source().begin.line); }
+  std::string at(const toml::node& node) const {
+    return fmt::format("{}:{}", path_.string(), node.source().begin.line);
+  }
 
   /// Throws "<file>:<line>: <field>: <what>" — the project's one-line error convention.
   template <typename... Args>
@@ -61,7 +62,8 @@ class TomlReader {
   }
 
   /// Every key of `table` must be one of `allowed`.
-  void check_keys(const toml::table& table, std::initializer_list<std::string_view> allowed, std::string_view context) const {
+  void check_keys(const toml::table& table, std::initializer_list<std::string_view> allowed,
+                  std::string_view context) const {
     for (const auto& [key, node] : table) {
       bool known = false;
       for (const std::string_view a : allowed) known = known || key.str() == a;
@@ -118,10 +120,11 @@ class TomlReader {
     return value;
   }
 
-  std::vector<double> numbers(const toml::node& node, std::string_view key, std::size_t count, std::string_view context) const {
+  std::vector<double> numbers(const toml::node& node, std::string_view key, std::size_t count,
+                              std::string_view context) const {
     const toml::array* array = node.as_array();
-    require(array != nullptr && array->size() == count, "{}: '{}'{} must be an array of {} numbers", at(node), key, context,
-            count);
+    require(array != nullptr && array->size() == count, "{}: '{}'{} must be an array of {} numbers", at(node), key,
+            context, count);
     std::vector<double> out;
     for (const toml::node& item : *array) out.push_back(number(item, key, context));
     return out;
@@ -129,12 +132,13 @@ class TomlReader {
 
   /// The 'vertex' of a [[control_point]] table (a body vertex index ≥ 0 that no earlier entry used: `seen`
   /// maps vertex → entry index) and its optional 'position' [m].
-  int control_vertex(const toml::table& table, std::size_t index, std::string_view context, std::map<int, std::size_t>& seen,
-                     std::optional<Eigen::Vector3d>& position) const {
+  int control_vertex(const toml::table& table, std::size_t index, std::string_view context,
+                     std::map<int, std::size_t>& seen, std::optional<Eigen::Vector3d>& position) const {
     const toml::node& vertex = required(table, "vertex", context);
     const auto v = vertex.value_exact<std::int64_t>();
     require(v.has_value(), "{}: 'vertex'{} must be an integer", at(vertex), context);
-    require(*v >= 0 && *v <= std::numeric_limits<int>::max(), "{}: 'vertex'{} = {} must be a vertex index >= 0", at(vertex), context, *v);
+    require(*v >= 0 && *v <= std::numeric_limits<int>::max(), "{}: 'vertex'{} = {} must be a vertex index >= 0",
+            at(vertex), context, *v);
     const int id = static_cast<int>(*v);
     const auto [first, inserted] = seen.emplace(id, index);
     require(inserted, "{}: 'vertex'{} repeats vertex {} of control_point #{}", at(vertex), context, id, first->second);

@@ -18,14 +18,14 @@ using Cells = Eigen::Matrix<int, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor
 /// A named data array with one row per point (or cell) and 1, 3 or more components.
 struct Field {
   std::string name;
-  Eigen::MatrixXd values;   ///< rows = points (or cells), cols = components
-  bool integer = false;     ///< store as Int32 instead of Float64 (e.g. labels)
+  Eigen::MatrixXd values;  ///< rows = points (or cells), cols = components
+  bool integer = false;    ///< store as Int32 instead of Float64 (e.g. labels)
 };
 
 /// A string array of field data: the names of the values of a label array (`part_names`, `node_kind_names`).
 struct Labels {
   std::string name;
-  std::vector<std::string> values;   ///< values[k] names the label value k
+  std::vector<std::string> values;  ///< values[k] names the label value k
 };
 
 struct Fields {
@@ -66,9 +66,13 @@ class PvdSeries {
   /// Records `file` (relative to the .pvd's folder) at time `t` [s].
   void add(double t, const std::string& file) { entries_.push_back({t, true, file, 0, {}}); }
   /// Records `file` at time `t` [s] as part `part` (0, 1, …) named `name` (e.g. a scene's bodies and objects).
-  void add(double t, const std::string& file, int part, const std::string& name) { entries_.push_back({t, true, file, part, name}); }
+  void add(double t, const std::string& file, int part, const std::string& name) {
+    entries_.push_back({t, true, file, part, name});
+  }
   /// Records a file that holds at every time (no timestep), as part `part` named `name`.
-  void add_untimed(const std::string& file, int part, const std::string& name) { entries_.push_back({0.0, false, file, part, name}); }
+  void add_untimed(const std::string& file, int part, const std::string& name) {
+    entries_.push_back({0.0, false, file, part, name});
+  }
   /// Writes the .pvd atomically (may be called repeatedly to keep a partial series readable).
   void write() const;
   std::size_t size() const { return entries_.size(); }

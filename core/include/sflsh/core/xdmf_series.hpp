@@ -27,7 +27,8 @@ Precision parse_precision(const std::string& name, const std::string& what);
 class Series {
  public:
   /// Opens `<stem>.h5` beside `xmf_path` (replacing it) for the mesh of `cells` (3 or 4 columns).
-  Series(std::filesystem::path xmf_path, const Eigen::Ref<const vtk::Cells>& cells, Precision precision = Precision::float64);
+  Series(std::filesystem::path xmf_path, const Eigen::Ref<const vtk::Cells>& cells,
+         Precision precision = Precision::float64);
   ~Series();
   Series(const Series&) = delete;
   Series& operator=(const Series&) = delete;

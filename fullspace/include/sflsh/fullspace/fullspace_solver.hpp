@@ -30,15 +30,15 @@
 namespace sflsh::fullspace {
 
 struct FullSpaceOptions {
-  model::Integrator integrator = model::Integrator::backward_euler;   ///< time_integrator.hpp
-  bool quasi_static = false;       ///< drop inertia (equilibrium at each time; gravity still acts through mass)
-  int max_halvings = 6;            ///< a failed step is retried as 2, 4, … 2^max_halvings substeps
-  std::string options_prefix;      ///< PETSc options prefix of the SNES (e.g. "full_")
-  double default_snes_rtol = 1e-8; ///< used unless -snes_rtol is given
-  double default_snes_atol = 1e-10;///< [N], used unless -snes_atol is given
+  model::Integrator integrator = model::Integrator::backward_euler;  ///< time_integrator.hpp
+  bool quasi_static = false;         ///< drop inertia (equilibrium at each time; gravity still acts through mass)
+  int max_halvings = 6;              ///< a failed step is retried as 2, 4, … 2^max_halvings substeps
+  std::string options_prefix;        ///< PETSc options prefix of the SNES (e.g. "full_")
+  double default_snes_rtol = 1e-8;   ///< used unless -snes_rtol is given
+  double default_snes_atol = 1e-10;  ///< [N], used unless -snes_atol is given
   int default_snes_max_it = 40;
   double default_ksp_rtol = 1e-6;
-  bool use_predictor = true;       ///< start Newton from the pulled-back inertial prediction when it has lower Φ
+  bool use_predictor = true;  ///< start Newton from the pulled-back inertial prediction when it has lower Φ
   /// Dynamic steps try the exact elastic Hessian first: M/h² keeps the system positive definite unless the
   /// tissue is strongly compressed, CG then converges and Newton is quadratic, and the PSD projection
   /// (≈ 4 µs of the ≈ 5 µs per tet, bench_element) is skipped. A failed attempt (indefinite system, failed
@@ -52,7 +52,6 @@ struct FullSpaceOptions {
   /// projected Hessian from the start of the step (linear convergence; docs/fullspace.md "Hard cases").
   bool truncate_on_negative_curvature = true;
 };
-
 
 class FullSpaceSolver final : public model::BodySolver {
  public:

@@ -9,19 +9,19 @@ namespace sflsh::fullspace {
 using model::Dirichlet;
 using model::ElasticEvaluation;
 using model::Energies;
+using model::energies;
+using model::evaluate_elastic;
+using model::initial_state;
+using model::lumped_masses;
 using model::NodeFrame;
 using model::NodePotential;
 using model::NodeTrajectory;
+using model::posed_positions;
 using model::Problem;
 using model::RowMatrixX3d;
 using model::RowMatrixX4i;
 using model::ScalarDrive;
 using model::State;
-using model::energies;
-using model::evaluate_elastic;
 using model::StepStats;
-using model::initial_state;
-using model::lumped_masses;
-using model::posed_positions;
 
 }  // namespace sflsh::fullspace

@@ -17,9 +17,9 @@ namespace sflsh::fullspace {
 std::vector<int> reverse_cuthill_mckee(int num_nodes, const meshing::RowMatrixX4i& tets);
 
 struct NodePartition {
-  std::vector<int> node_of;    ///< solver index → mesh node
-  std::vector<int> index_of;   ///< mesh node → solver index
-  std::vector<int> range;      ///< size + 1 entries: rank r owns solver indices [range[r], range[r + 1])
+  std::vector<int> node_of;   ///< solver index → mesh node
+  std::vector<int> index_of;  ///< mesh node → solver index
+  std::vector<int> range;     ///< size + 1 entries: rank r owns solver indices [range[r], range[r + 1])
 };
 
 /// The RCM order split into `size` contiguous ranges with about equal numbers of incident tets (the cost of

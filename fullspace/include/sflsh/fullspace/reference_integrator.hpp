@@ -12,13 +12,13 @@
 //   \f[ \sum_j M_{ij} \dot w_j = -A_i^{-T}\nabla_i E(x) + m_i g - \sum_{c\ \mathrm{prescribed}} M_{ic}\, a_c(t) \f]
 // per axis on the free components, M_w = M ⊗ I₃ restricted to them (identity rows on prescribed components,
 // ẇ = 0 there as above), a_c the prescribed posed acceleration (a difference of the prescribed velocity,
-// fullspace/src/reference_mass.hpp). M_y is time-independent and factorized once per initialize by a second KLU solver; the
-// lumped path is the explicit form above (M_y = I). Both obey the same constraint rules.
-// Prescribed (Dirichlet) components of x take their prescribed value X + u(t) wherever x enters the forces
-// (the state's entry is ignored), get ẋ = du/dt and ẇ = 0. Component-wise constraints need A_i = I (the
-// verification problems); a node with some but not all components prescribed under A_i ≉ I is an error.
-// Reported states carry the prescribed x and, on constrained components, the kinematic velocity
-// ṗ = Ȧx + ḋ + Aẋ (the state's own w there is frozen at its initial value and means nothing).
+// fullspace/src/reference_mass.hpp). M_y is time-independent and factorized once per initialize by a second KLU solver;
+// the lumped path is the explicit form above (M_y = I). Both obey the same constraint rules. Prescribed (Dirichlet)
+// components of x take their prescribed value X + u(t) wherever x enters the forces (the state's entry is ignored), get
+// ẋ = du/dt and ẇ = 0. Component-wise constraints need A_i = I (the verification problems); a node with some but not
+// all components prescribed under A_i ≉ I is an error. Reported states carry the prescribed x and, on constrained
+// components, the kinematic velocity ṗ = Ȧx + ḋ + Aẋ (the state's own w there is frozen at its initial value and means
+// nothing).
 //
 // Jacobian J = ∂f/∂y (sparse CSR, pattern from the tet connectivity, built once):
 //   ∂ẋ_i/∂x_i = −A_i⁻¹Ȧ_i,  ∂ẋ_i/∂w_i = A_i⁻¹,  ∂ẇ_i/∂x_j = −(1/m_i) A_i⁻ᵀ K_ij,  ∂ẇ/∂w = 0,
@@ -39,16 +39,16 @@ namespace sflsh::fullspace {
 
 /// Settings of the reference run.
 struct ReferenceOptions {
-  double rtol = 1e-6;          ///< ARKODE relative tolerance (scalar)
-  double atol = 1e-9;          ///< ARKODE absolute tolerance (scalar; [m] on x, [m/s] on w)
-  long max_steps = 1000000;    ///< most internal steps per advance_to call ("too much work" beyond)
+  double rtol = 1e-6;        ///< ARKODE relative tolerance (scalar)
+  double atol = 1e-9;        ///< ARKODE absolute tolerance (scalar; [m] on x, [m/s] on w)
+  long max_steps = 1000000;  ///< most internal steps per advance_to call ("too much work" beyond)
   /// Order of the implicit method, 2..5, with ARKODE's default table for it: 2 SDIRK_2_1_2,
   /// 3 ARK324L2SA_DIRK_4_2_3, 4 SDIRK_5_3_4, 5 ARK548L2SA_DIRK_8_4_5. For rtol ≲ 1e-10 take 5 (a 3-cell
   /// bar to rtol 1e-12: 1163 steps at order 5, 16730 at order 4); order 2 is only for comparisons.
   int order = 4;
-  double initial_step = 0.0;   ///< first step [s]; 0 lets ARKODE estimate it
-  double max_step = 0.0;       ///< largest step [s]; 0 = unlimited
-  double min_step = 0.0;       ///< smallest step [s]; 0 = ARKODE's default (none)
+  double initial_step = 0.0;  ///< first step [s]; 0 lets ARKODE estimate it
+  double max_step = 0.0;      ///< largest step [s]; 0 = unlimited
+  double min_step = 0.0;      ///< smallest step [s]; 0 = ARKODE's default (none)
   /// The elastic Hessian in the Jacobian. Exact by default: the Jacobian only steers Newton, and the exact
   /// one keeps Newton quadratic; a projection changes no result, only the iteration counts.
   material::HessianProjection projection = material::HessianProjection::kNone;
@@ -106,6 +106,5 @@ class ReferenceIntegrator {
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
-
 
 }  // namespace sflsh::fullspace

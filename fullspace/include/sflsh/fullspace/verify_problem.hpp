@@ -13,11 +13,12 @@
 //   [[fix]]      group = "bone"  components = "xy"           # non-empty subset of "xyz"
 //   [[drive]]    group = "bone"  component = "z"  expression = "0.01*sin(2*pi*2*t)"   # u(t) [m]
 //   [time]       duration = 1.0  step = 0.001  rtol  atol
-//                integrator = "backward_euler" | "bdf2" | "newmark" | "reference"   # bdf2/newmark/reference: dynamic only
+//                integrator = "backward_euler" | "bdf2" | "newmark" | "reference"   # bdf2/newmark/reference: dynamic
+//                only
 //   [record]     group = "top"  every = 16
 //   [solver]     hessian = "projected" | "exact"             # optional
-#include <sflsh/fullspace/msh_reader.hpp>
 #include <sflsh/fullspace/model_names.hpp>
+#include <sflsh/fullspace/msh_reader.hpp>
 #include <sflsh/material/psd_projection.hpp>
 #include <sflsh/material/skin_material.hpp>
 
@@ -84,8 +85,9 @@ VerifyProblem load_verify_problem(const std::filesystem::path& path);
 ScalarDrive expression_drive(const std::string& expression);
 
 /// The full-space problem: rest = mesh nodes, homogeneous make_orthotropic_fung(material, normal), lumped
-/// masses ρV/4 (and mass_kind = spec.mass; validate() fills ρV per tet), gravity, projection, and the Dirichlet set of the fixes and drives (one ScalarDrive per
-/// drive entry). No trajectory (p = x). Call Problem::validate() before integrating.
+/// masses ρV/4 (and mass_kind = spec.mass; validate() fills ρV per tet), gravity, projection, and the Dirichlet set of
+/// the fixes and drives (one ScalarDrive per drive entry). No trajectory (p = x). Call Problem::validate() before
+/// integrating.
 Problem make_problem(const VerifyProblem& spec);
 
 /// "backward_euler" | "bdf2" | "newmark" | "reference" (the spelling of the problem file).

@@ -21,8 +21,8 @@
 namespace sflsh::material {
 
 struct BiharmonicOptions {
-  bool bounded = true;      ///< impose 0 ≤ φ ≤ 1 (BBW); false: plain biharmonic interpolation (may leave [0, 1])
-  bool normalize = true;    ///< divide each row by its sum (partition of unity); only changes bounded results
+  bool bounded = true;    ///< impose 0 ≤ φ ≤ 1 (BBW); false: plain biharmonic interpolation (may leave [0, 1])
+  bool normalize = true;  ///< divide each row by its sum (partition of unity); only changes bounded results
   MassLumping lumping = MassLumping::kVoronoi;
   int max_iterations = 50;  ///< primal-dual active-set iterations per function before the primal fallback
   bool parallel = true;     ///< solve the functions concurrently (TBB)

@@ -22,8 +22,7 @@ namespace sflsh::material {
 enum class CurveTest { kUniaxialTangent, kUniaxialNormal, kShear };
 
 /// All tests, in the order of curves.csv.
-inline constexpr CurveTest kCurveTests[] = {CurveTest::kUniaxialTangent, CurveTest::kUniaxialNormal,
-                                            CurveTest::kShear};
+inline constexpr CurveTest kCurveTests[] = {CurveTest::kUniaxialTangent, CurveTest::kUniaxialNormal, CurveTest::kShear};
 
 /// "uniaxial_tangent", "uniaxial_normal", "shear" (the `test` column of curves.csv).
 std::string_view curve_test_name(CurveTest test);
@@ -37,9 +36,9 @@ StrainRange curve_strain_range(CurveTest test);
 
 /// One solved homogeneous state.
 struct CurvePoint {
-  double strain = 0.0;                               ///< ε = stretch − 1, or γ for shear
-  double stress = 0.0;                               ///< the Cauchy stress component of the test [Pa]
-  Eigen::Matrix3d F = Eigen::Matrix3d::Identity();   ///< the deformation gradient (lateral stretches solved)
+  double strain = 0.0;                              ///< ε = stretch − 1, or γ for shear
+  double stress = 0.0;                              ///< the Cauchy stress component of the test [Pa]
+  Eigen::Matrix3d F = Eigen::Matrix3d::Identity();  ///< the deformation gradient (lateral stretches solved)
 };
 
 /// The state of `test` at `strain`. Uniaxial tests solve the two lateral stretches by Newton (with

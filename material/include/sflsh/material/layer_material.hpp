@@ -14,7 +14,8 @@ inline constexpr double kTorsoDensity = 1.5;
 
 /// For each region vertex, its left/right mirror (x → −x) among the region's vertices, or −1 when no
 /// vertex lies within `tolerance` [m] of the mirrored position (SMPL-like bodies are symmetric).
-std::vector<int> region_mirror_map(const meshing::LayerMesh& mesh, const body::BodyModel& model, double tolerance = 2e-3);
+std::vector<int> region_mirror_map(const meshing::LayerMesh& mesh, const body::BodyModel& model,
+                                   double tolerance = 2e-3);
 
 /// The template positions of the layer's region vertices (R × 3), the surface κ and φ live on.
 meshing::RowMatrixX3d region_positions(const body::BodyModel& model, const meshing::LayerMesh& mesh);
@@ -37,10 +38,10 @@ MaterialFile default_material(const body::BodyModel& model, const meshing::Layer
                               const std::string& subject);
 
 struct LayerMaterialFields {
-  KappaMatrix vertex;              ///< per region vertex (R × 3)
-  KappaMatrix node;                ///< per mesh node (harmonic extension of the skin values)
-  KappaMatrix tet;                 ///< per tet: mean of its nodes
-  meshing::RowMatrixX3d normal;    ///< per tet: through-thickness unit normal (towards the skin)
+  KappaMatrix vertex;            ///< per region vertex (R × 3)
+  KappaMatrix node;              ///< per mesh node (harmonic extension of the skin values)
+  KappaMatrix tet;               ///< per tet: mean of its nodes
+  meshing::RowMatrixX3d normal;  ///< per tet: through-thickness unit normal (towards the skin)
 };
 
 /// κ from control values (N × 3, physical) through φ (R × N) to vertices, nodes and tets of the layer

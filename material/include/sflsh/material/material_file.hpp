@@ -54,7 +54,7 @@ struct MaterialFile {
   double saturation = 4.0;  ///< Fung saturation s > 0, uniform (SFLSH §3)
   ParameterBounds bounds;   ///< ranges the κ_i must lie in; their maxima normalize κ
   std::vector<MaterialControlPoint> control_points;
-  std::string source;       ///< the file it was read from (load_material_file); empty when built in memory
+  std::string source;  ///< the file it was read from (load_material_file); empty when built in memory
 
   std::vector<int> vertices() const;  ///< control vertices, in file order
   KappaMatrix kappa() const;          ///< N by 3 physical κ_i, in file order
@@ -65,7 +65,8 @@ MaterialFile load_material_file(const std::filesystem::path& path);
 
 /// Writes the file atomically after validate(); positions are written when present. `header` becomes a
 /// leading comment block (one "# " line per line).
-void save_material_file(const std::filesystem::path& path, const MaterialFile& material, const std::string& header = "");
+void save_material_file(const std::filesystem::path& path, const MaterialFile& material,
+                        const std::string& header = "");
 
 /// Checks names non-empty, ν ∈ (−1, ½), s > 0, bounds (validate(ParameterBounds)), at least one control
 /// point, vertices ≥ 0 and distinct, positions finite, every κ_i within the bounds. Messages start with

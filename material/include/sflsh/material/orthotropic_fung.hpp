@@ -61,8 +61,9 @@ double psi_ortho_fung(const Eigen::Matrix3d& F, const OrthotropicFung& m);
 /// First Piola–Kirchhoff stress [Pa]: \f[ P = \partial\Psi/\partial F = g\,F S_0,\quad g = e^{2\Psi_0/c} \f]
 Eigen::Matrix3d dpsi_ortho_fung_dF(const Eigen::Matrix3d& F, const OrthotropicFung& m);
 /// dP/dF [Pa] (9×9, symmetric, vec order above):
-/// \f[ \partial^2\Psi/\partial F^2 = g\,\partial^2\Psi_0/\partial F^2 + \tfrac{2g}{c}\,\mathrm{vec}(FS_0)\,\mathrm{vec}(FS_0)^T \f]
-/// — the same as docs/physics.md's dS = g[ℂ₀:dE + (2/c)(S₀:dE)S₀] since S₀:sym(FᵀdF) = (F S₀):dF.
+/// \f[ \partial^2\Psi/\partial F^2 = g\,\partial^2\Psi_0/\partial F^2 +
+/// \tfrac{2g}{c}\,\mathrm{vec}(FS_0)\,\mathrm{vec}(FS_0)^T \f] — the same as docs/physics.md's dS = g[ℂ₀:dE +
+/// (2/c)(S₀:dE)S₀] since S₀:sym(FᵀdF) = (F S₀):dF.
 Matrix9d d2psi_ortho_fung_dF2(const Eigen::Matrix3d& F, const OrthotropicFung& m);
 
 /// Ψ, P and dP/dF from one evaluation of the shared terms (what an element needs).

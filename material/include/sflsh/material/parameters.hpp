@@ -4,7 +4,8 @@
 // values" (SFLSH §4): κ̂ = κ / κ_max, component-wise, with κ_max the upper bounds below.
 //
 // Bounds (SFLSH gives no ranges; docs/physics.md §6.5 proposes Y in ~0.5–50 kPa and h in [0.2, 0.9]):
-//   thickness      h   ∈ [0.1, 0.9]       fraction of the maximum surface-to-skeleton thickness (docs/architecture.md §3);
+//   thickness      h   ∈ [0.1, 0.9]       fraction of the maximum surface-to-skeleton thickness (docs/architecture.md
+//   §3);
 //                                         0.1 rather than 0.2 leaves room for thin layers while keeping
 //                                         elements away from zero height; 0.9 keeps the inner surface off
 //                                         the bones.

@@ -15,7 +15,7 @@ namespace sflsh::material {
 /// c = Y_t / saturation; what SFLSH's "saturation = 4" multiplies is not published (docs/physics.md §6.1),
 /// so the reading is a choice.
 enum class FungScale {
-  kTangentOverSaturation,   ///< c = Y_t / s (default, docs/physics.md §1.2): exponent ≈ s·ε² in tangential stretch
+  kTangentOverSaturation,  ///< c = Y_t / s (default, docs/physics.md §1.2): exponent ≈ s·ε² in tangential stretch
   kTangentTimesSaturation,  ///< c = s·Y_t: the alternative reading (saturation sets in ~s² times later)
   kNone,                    ///< c = ∞: Fung factor off, Ψ = Ψ₀ (plain orthotropic StVK)
 };

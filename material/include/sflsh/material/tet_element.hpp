@@ -31,7 +31,7 @@ using TetNodes = Eigen::Matrix<double, 3, 4>;
 /// What a tet keeps from its rest shape.
 struct TetRest {
   Eigen::Matrix3d dm_inv = Eigen::Matrix3d::Identity();  ///< D_m⁻¹ [1/m]
-  double volume = 0.0;                                    ///< V = det(D_m)/6 [m³]
+  double volume = 0.0;                                   ///< V = det(D_m)/6 [m³]
 };
 
 /// D_m⁻¹ and V of a rest tet. Throws sflsh::Error when the tet is inverted (det D_m ≤ 0) or degenerate
@@ -58,9 +58,9 @@ Matrix12d tet_elastic_dq2(const TetRest& rest, const TetNodes& x, const Orthotro
 
 /// Energy, gradient and Hessian from one constitutive evaluation (what an assembly loop calls).
 struct TetElastic {
-  double energy = 0.0;                      ///< V·Ψ [J]
-  Vector12d gradient = Vector12d::Zero();   ///< ∂(VΨ)/∂q [N] (= −forces)
-  Matrix12d hessian = Matrix12d::Zero();    ///< ∂²(VΨ)/∂q² [N/m]; zero unless requested
+  double energy = 0.0;                     ///< V·Ψ [J]
+  Vector12d gradient = Vector12d::Zero();  ///< ∂(VΨ)/∂q [N] (= −forces)
+  Matrix12d hessian = Matrix12d::Zero();   ///< ∂²(VΨ)/∂q² [N/m]; zero unless requested
 };
 TetElastic tet_elastic(const TetRest& rest, const TetNodes& x, const OrthotropicFung& material, bool with_hessian,
                        HessianProjection projection = HessianProjection::kNone);

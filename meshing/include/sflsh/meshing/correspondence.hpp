@@ -26,9 +26,9 @@ SkeletonCorrespondence skeleton_correspondence(const body::BodyModel& model, con
 /// The layer geometry of one shape: shaped skin s, correspondence c and thickness fraction h per
 /// region vertex; positions of anchors follow p = Σ w_k [s_k + depth·h_k (c_k − s_k)].
 struct LayerGeometry {
-  RowMatrixX3d skin;           ///< s (R×3)
-  RowMatrixX3d skeleton;       ///< c (R×3)
-  Eigen::VectorXd thickness;   ///< h ∈ (0, 1) per region vertex
+  RowMatrixX3d skin;          ///< s (R×3)
+  RowMatrixX3d skeleton;      ///< c (R×3)
+  Eigen::VectorXd thickness;  ///< h ∈ (0, 1) per region vertex
 
   Eigen::Vector3d position(const SurfaceAnchor& anchor) const;
   /// Maximum thickness |c − s| per region vertex [m].

@@ -31,10 +31,10 @@ class HarmonicInterpolator {
 
  private:
   std::vector<char> fixed_;
-  std::vector<int> free_;                         ///< free node indices
-  std::vector<int> fixed_list_;                   ///< fixed node indices
-  Eigen::SparseMatrix<double> coupling_;          ///< L_FB (free × fixed)
-  std::shared_ptr<Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>> solver_;   ///< of L_FF
+  std::vector<int> free_;                                                       ///< free node indices
+  std::vector<int> fixed_list_;                                                 ///< fixed node indices
+  Eigen::SparseMatrix<double> coupling_;                                        ///< L_FB (free × fixed)
+  std::shared_ptr<Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>> solver_;  ///< of L_FF
 };
 
 }  // namespace sflsh::meshing

@@ -2,6 +2,7 @@
 // The names of the values of the label arrays `part` and `node_kind` (types.hpp), written beside them as
 // the field data `part_names` and `node_kind_names` (docs/output.md, "Label names").
 #include <sflsh/meshing/types.hpp>
+
 #include <string>
 #include <vector>
 

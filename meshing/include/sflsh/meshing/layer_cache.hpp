@@ -38,7 +38,6 @@ const char* cache_outcome_name(CacheOutcome outcome);
 /// stale, or when `rebuild` is set. A corrupt entry throws (naming the file and suggesting
 /// --rebuild-cache) unless `rebuild` is set.
 LayerMesh cached_layer_mesh(const body::BodyModel& model, const LayerMeshOptions& options,
-                            const std::filesystem::path& dir, bool rebuild = false,
-                            CacheOutcome* outcome = nullptr);
+                            const std::filesystem::path& dir, bool rebuild = false, CacheOutcome* outcome = nullptr);
 
 }  // namespace sflsh::meshing

@@ -12,36 +12,36 @@ namespace sflsh::meshing {
 
 /// Size presets: the target tet count of the template layer.
 enum class SizePreset { coarse, medium, fine };
-SizePreset parse_size_preset(const std::string& name);   ///< "coarse" | "default" | "fine"
-const char* size_preset_name(SizePreset preset);         ///< "coarse" | "default" | "fine"
-long target_tets(SizePreset preset);                     ///< 10 k, 50 k, 200 k
+SizePreset parse_size_preset(const std::string& name);  ///< "coarse" | "default" | "fine"
+const char* size_preset_name(SizePreset preset);        ///< "coarse" | "default" | "fine"
+long target_tets(SizePreset preset);                    ///< 10 k, 50 k, 200 k
 
 /// How the region's skin vertices are found in the mesh. gmsh keeps them as mesh nodes (node ≥ 0);
 /// CGAL resamples the boundary, so they are embedded: x = Σ bary_k nodes[tet_k] (bary may leave
 /// [0, 1] by the surface approximation error, which keeps the embedding exact in the template).
 struct SkinEmbedding {
-  std::vector<int> node;                     ///< per region vertex: the mesh node, or −1
-  std::vector<int> tet;                      ///< per region vertex: the containing (or nearest) tet
-  std::vector<Eigen::Vector4d> bary;         ///< per region vertex: coordinates in that tet
+  std::vector<int> node;              ///< per region vertex: the mesh node, or −1
+  std::vector<int> tet;               ///< per region vertex: the containing (or nearest) tet
+  std::vector<Eigen::Vector4d> bary;  ///< per region vertex: coordinates in that tet
 };
 
 struct LayerMesh {
   // Key (what the mesh was built from); see layer_cache.hpp.
   std::string body_name;
-  std::string region;                        ///< region_key(names)
+  std::string region;  ///< region_key(names)
   Mesher mesher = Mesher::cgal;
   SizePreset size = SizePreset::medium;
-  double template_thickness = 0.5;           ///< uniform h of the template
-  double edge_length = 0.0;                  ///< target edge given to the mesher [m]
+  double template_thickness = 0.5;  ///< uniform h of the template
+  double edge_length = 0.0;         ///< target edge given to the mesher [m]
 
-  Region region_surface;                     ///< the region on the body skin
+  Region region_surface;  ///< the region on the body skin
   SkeletonCorrespondence correspondence;
-  RowMatrixX3d nodes;                        ///< template positions (β = 0, h = template_thickness)
-  RowMatrixX4i tets;                         ///< positively oriented
-  std::vector<NodeKind> kind;                ///< per node
-  std::vector<SurfaceAnchor> anchor;         ///< per node; invalid for interior nodes
-  std::vector<Part> node_part;               ///< per node
-  std::vector<Part> tet_part;                ///< per tet
+  RowMatrixX3d nodes;                 ///< template positions (β = 0, h = template_thickness)
+  RowMatrixX4i tets;                  ///< positively oriented
+  std::vector<NodeKind> kind;         ///< per node
+  std::vector<SurfaceAnchor> anchor;  ///< per node; invalid for interior nodes
+  std::vector<Part> node_part;        ///< per node
+  std::vector<Part> tet_part;         ///< per tet
   SkinEmbedding skin;
   double meshing_seconds = 0.0;
 
@@ -59,7 +59,7 @@ struct LayerMesh {
 };
 
 struct LayerMeshOptions {
-  std::vector<std::string> region_names;     ///< empty: default_region_names()
+  std::vector<std::string> region_names;  ///< empty: default_region_names()
   Mesher mesher = Mesher::cgal;
   SizePreset size = SizePreset::medium;
   double template_thickness = 0.5;

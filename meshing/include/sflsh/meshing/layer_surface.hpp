@@ -11,7 +11,7 @@ struct LayerSurface {
   ClosedSurface surface;
   /// Per surface vertex: where it sits in layer terms (region vertex, depth).
   std::vector<SurfaceAnchor> anchors;
-  int side_layers = 0;   ///< subdivisions of the side walls through the thickness
+  int side_layers = 0;  ///< subdivisions of the side walls through the thickness
 };
 
 /// Builds the closed layer boundary for a geometry: vertices [0, R) are the skin (region vertex order),

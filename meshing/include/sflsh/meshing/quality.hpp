@@ -12,11 +12,11 @@ struct QualityReport {
   double min_dihedral_deg = 0.0;
   double median_dihedral_deg = 0.0;
   double max_dihedral_deg = 0.0;
-  double max_radius_edge = 0.0;     ///< circumradius / shortest edge (regular tet: 0.612)
-  double min_volume = 0.0;          ///< signed [m³]
-  double total_volume = 0.0;        ///< [m³]
-  long inverted = 0;                ///< signed volume ≤ 0
-  long degenerate = 0;              ///< |volume| below 1e-12 · (mean edge)³ or min dihedral < 0.1°
+  double max_radius_edge = 0.0;  ///< circumradius / shortest edge (regular tet: 0.612)
+  double min_volume = 0.0;       ///< signed [m³]
+  double total_volume = 0.0;     ///< [m³]
+  long inverted = 0;             ///< signed volume ≤ 0
+  long degenerate = 0;           ///< |volume| below 1e-12 · (mean edge)³ or min dihedral < 0.1°
   /// Layer thickness h·|c − s| over the region's skin vertices [m] (zeros when not a layer mesh).
   double thickness_min = 0.0;
   double thickness_median = 0.0;
@@ -27,7 +27,7 @@ struct QualityReport {
 
 /// Per-tet quality measures (for VTK cell data).
 struct TetQuality {
-  Eigen::VectorXd volume;           ///< signed
+  Eigen::VectorXd volume;  ///< signed
   Eigen::VectorXd min_dihedral_deg;
   Eigen::VectorXd radius_edge;
 };

@@ -21,11 +21,11 @@ std::string region_key(const std::vector<std::string>& names);
 
 struct Region {
   std::vector<std::string> names;
-  std::vector<int> vertices;        ///< body vertex index of each local region vertex (ascending)
-  std::vector<int> local_of;        ///< body vertex → local index, or −1 outside the region
-  RowMatrixX3i faces;               ///< region faces in LOCAL indices, orientation as in the body
-  std::vector<int> body_faces;      ///< body face index of each region face
-  std::vector<Part> part;           ///< per local vertex
+  std::vector<int> vertices;    ///< body vertex index of each local region vertex (ascending)
+  std::vector<int> local_of;    ///< body vertex → local index, or −1 outside the region
+  RowMatrixX3i faces;           ///< region faces in LOCAL indices, orientation as in the body
+  std::vector<int> body_faces;  ///< body face index of each region face
+  std::vector<Part> part;       ///< per local vertex
   /// Boundary curves as closed loops of local vertex indices, each ordered so that it runs along the
   /// region faces' boundary edges in their orientation (a → b for a face edge a → b).
   std::vector<std::vector<int>> boundary_loops;

@@ -13,10 +13,10 @@
 namespace sflsh::meshing {
 
 struct RetargetedLayer {
-  RowMatrixX3d nodes;          ///< node positions for (β, h), unposed
-  LayerGeometry geometry;      ///< shaped skin, skeleton correspondence and h per region vertex
+  RowMatrixX3d nodes;      ///< node positions for (β, h), unposed
+  LayerGeometry geometry;  ///< shaped skin, skeleton correspondence and h per region vertex
   QualityReport quality;
-  int untangled_nodes = 0;     ///< interior nodes moved by the local untangling pass (0 when none was needed)
+  int untangled_nodes = 0;  ///< interior nodes moved by the local untangling pass (0 when none was needed)
   double seconds = 0.0;
 };
 
@@ -50,9 +50,10 @@ class Retargeter {
   const body::BodyModel& model_;
   const LayerMesh& mesh_;
   HarmonicInterpolator interpolator_;
-  Eigen::VectorXd depth_;          ///< harmonic depth δ per node
+  Eigen::VectorXd depth_;  ///< harmonic depth δ per node
   Eigen::MatrixXd residual_;
-  std::vector<std::vector<int>> tets_of_;   ///< tets around each node       ///< template x − (S + δ C) per node (zero on the boundary)
+  std::vector<std::vector<int>>
+      tets_of_;  ///< tets around each node       ///< template x − (S + δ C) per node (zero on the boundary)
 };
 
 }  // namespace sflsh::meshing

@@ -14,7 +14,7 @@ namespace sflsh::meshing {
 /// split into tets, so every node follows the layer map exactly (valid for any thickness, see
 /// docs/meshing.md); tetrahedralize() does not take it.
 enum class Mesher { cgal, gmsh, layered };
-Mesher parse_mesher(const std::string& name);   ///< "cgal" | "gmsh" | "layered"; throws naming the value
+Mesher parse_mesher(const std::string& name);  ///< "cgal" | "gmsh" | "layered"; throws naming the value
 const char* mesher_name(Mesher mesher);
 
 /// A closed two-manifold triangle surface, counter-clockwise seen from outside, split into patches
@@ -24,7 +24,7 @@ const char* mesher_name(Mesher mesher);
 struct ClosedSurface {
   RowMatrixX3d vertices;
   RowMatrixX3i triangles;
-  std::vector<NodeKind> patch;                       ///< per triangle
+  std::vector<NodeKind> patch;  ///< per triangle
   std::vector<std::vector<Eigen::Vector3d>> features;
 };
 
@@ -46,7 +46,7 @@ SizeControl size_for_target_tets(double volume, long target_tets, Mesher mesher,
 
 struct TetMesh {
   RowMatrixX3d nodes;
-  RowMatrixX4i tets;   ///< positively oriented: det[x1−x0, x2−x0, x3−x0] > 0
+  RowMatrixX4i tets;  ///< positively oriented: det[x1−x0, x2−x0, x3−x0] > 0
   /// For each node: the index of the input surface vertex it coincides with, or −1 (new node).
   /// gmsh keeps every input vertex as a node; CGAL resamples the surface and reports −1 throughout.
   std::vector<int> input_vertex;
@@ -61,7 +61,7 @@ TetMesh tetrahedralize(const ClosedSurface& surface, Mesher mesher, const SizeCo
 struct BoundaryLocation {
   std::vector<int> triangle;
   std::vector<Eigen::Vector3d> bary;
-  double max_distance = 0.0;   ///< largest node-to-surface distance found [m]
+  double max_distance = 0.0;  ///< largest node-to-surface distance found [m]
 };
 BoundaryLocation locate_boundary_nodes(const TetMesh& mesh, const ClosedSurface& surface);
 

@@ -1,15 +1,15 @@
 #pragma once
-// A subject's soft-tissue layer set up for the full-space solver (docs/architecture.md §4, docs/physics.md §5): the template
-// layer retargeted to β and the material's thickness field, the heterogeneous κ per tet, lumped masses,
-// inner and side nodes attached to the skinned body (Dirichlet: zero elastic displacement), and the
-// skinning trajectory that carries the unposed elastic state to posed positions along a motion.
+// A subject's soft-tissue layer set up for the full-space solver (docs/architecture.md §4, docs/physics.md §5): the
+// template layer retargeted to β and the material's thickness field, the heterogeneous κ per tet, lumped masses, inner
+// and side nodes attached to the skinned body (Dirichlet: zero elastic displacement), and the skinning trajectory that
+// carries the unposed elastic state to posed positions along a motion.
 #include <sflsh/body/motion.hpp>
-#include <sflsh/model/problem.hpp>
-#include <sflsh/model/skinned_trajectory.hpp>
 #include <sflsh/material/layer_material.hpp>
 #include <sflsh/material/skin_material.hpp>
 #include <sflsh/meshing/layer_mesh.hpp>
 #include <sflsh/meshing/retarget.hpp>
+#include <sflsh/model/problem.hpp>
+#include <sflsh/model/skinned_trajectory.hpp>
 
 #include <filesystem>
 #include <memory>
@@ -19,29 +19,29 @@ namespace sflsh::model {
 struct BodyLayerOptions {
   meshing::Mesher mesher = meshing::Mesher::layered;
   meshing::SizePreset size = meshing::SizePreset::medium;
-  std::filesystem::path cache_dir;    ///< template mesh cache; empty: meshing::default_cache_dir()
-  double density = 1000.0;            ///< ρ [kg/m³]
-  MassKind mass = MassKind::lumped;    ///< lumped or consistent inertia (mass.hpp)
-  bool gravity = false;               ///< g = (0, −9.81, 0) in the world frame (Y up); off by default (docs/physics.md §5)
-  double stiffness_scale = 1.0;       ///< multiplies Y_t and Y_n
+  std::filesystem::path cache_dir;   ///< template mesh cache; empty: meshing::default_cache_dir()
+  double density = 1000.0;           ///< ρ [kg/m³]
+  MassKind mass = MassKind::lumped;  ///< lumped or consistent inertia (mass.hpp)
+  bool gravity = false;  ///< g = (0, −9.81, 0) in the world frame (Y up); off by default (docs/physics.md §5)
+  double stiffness_scale = 1.0;  ///< multiplies Y_t and Y_n
   material::ExponentOverflow overflow = material::ExponentOverflow::kThrow;
 };
 
 /// Everything a body simulation needs. Movable; the body model passed to build_body_layer must outlive it.
 struct BodyLayer {
   body::Betas beta;
-  std::unique_ptr<meshing::LayerMesh> mesh;          ///< template (β = 0) layer; heap so Retargeter refs stay valid
-  meshing::RetargetedLayer layer;                    ///< nodes for (β, h)
-  material::MaterialFile material;                   ///< the material used (given, or the defaults)
-  material::LayerMaterialFields fields;              ///< κ per region vertex, node, tet; normals per tet
-  Eigen::VectorXd depth;                             ///< harmonic depth per node (0 skin, 1 bone)
-  RowMatrixX3d shaped;                               ///< the body's shaped template T_S (n×3)
+  std::unique_ptr<meshing::LayerMesh> mesh;  ///< template (β = 0) layer; heap so Retargeter refs stay valid
+  meshing::RetargetedLayer layer;            ///< nodes for (β, h)
+  material::MaterialFile material;           ///< the material used (given, or the defaults)
+  material::LayerMaterialFields fields;      ///< κ per region vertex, node, tet; normals per tet
+  Eigen::VectorXd depth;                     ///< harmonic depth per node (0 skin, 1 bone)
+  RowMatrixX3d shaped;                       ///< the body's shaped template T_S (n×3)
   std::shared_ptr<const MotionCurve> curve;
   std::shared_ptr<const SkinnedTrajectory> trajectory;
-  Problem problem;                                   ///< validated
+  Problem problem;  ///< validated
   const body::BodyModel* model = nullptr;
-  RowMatrixX3d rest_skin;                            ///< the region's skin at the rest state (R×3)
-  std::vector<std::vector<std::pair<int, double>>> vertex_weights;   ///< per body vertex: its non-zero skinning weights
+  RowMatrixX3d rest_skin;                                           ///< the region's skin at the rest state (R×3)
+  std::vector<std::vector<std::pair<int, double>>> vertex_weights;  ///< per body vertex: its non-zero skinning weights
 
   /// Unposed elastic displacement of the region's skin vertices (R×3) at state x (3N).
   RowMatrixX3d surface_displacement(const Eigen::VectorXd& x) const;

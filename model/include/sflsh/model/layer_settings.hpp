@@ -16,13 +16,13 @@ namespace sflsh::model {
 /// The layer's mesher and material (the resolution is chosen per run).
 struct LayerSettings {
   std::string mesher = "layered";
-  std::string material;                 ///< TOML path; empty: the project defaults at control_points
+  std::string material;  ///< TOML path; empty: the project defaults at control_points
   int control_points = 12;
-  std::string cache;                    ///< empty: $SFLSH_CACHE or ~/.cache/sflsh
-  double density = 1000.0;              ///< [kg/m³]
+  std::string cache;        ///< empty: $SFLSH_CACHE or ~/.cache/sflsh
+  double density = 1000.0;  ///< [kg/m³]
   bool gravity = false;
-  double stiffness_scale = 1.0;         ///< multiplies Y_t and Y_n
-  std::string mass = "lumped";          ///< lumped | consistent (mass.hpp)
+  double stiffness_scale = 1.0;  ///< multiplies Y_t and Y_n
+  std::string mass = "lumped";   ///< lumped | consistent (mass.hpp)
 };
 
 /// Throws a one-line sflsh::Error for a non-positive density or stiffness scale or an unknown mass kind.

@@ -32,7 +32,8 @@ class NodePotential {
 
   /// u of candidate k (an index into candidates()) at posed position p [J]; its gradient [N] and a positive
   /// semi-definite Hessian [N/m] when not null.
-  virtual double evaluate(int k, const Eigen::Vector3d& p, Eigen::Vector3d* gradient, Eigen::Matrix3d* hessian) const = 0;
+  virtual double evaluate(int k, const Eigen::Vector3d& p, Eigen::Vector3d* gradient,
+                          Eigen::Matrix3d* hessian) const = 0;
 
   /// After a converged substep, with the posed positions of the candidates at its end (one row per entry of
   /// candidates()): true accepts it. False means the potential changed itself (e.g. raised a penalty

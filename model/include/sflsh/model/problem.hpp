@@ -7,15 +7,16 @@
 // The elastic energy E(x) is measured in the unposed frame; inertia and gravity act on p.
 // Equation of motion (Euler–Lagrange of ½ṗᵀMṗ − E(x) + gᵀMp): A_iᵀ [M (p̈ − g)]_i = −∇_i E(x), with M the
 // lumped diagonal m_i or the consistent matrix M_ij (per axis).
-#include <sflsh/model/mass.hpp>
-#include <sflsh/model/node_potential.hpp>
 #include <sflsh/material/orthotropic_fung.hpp>
 #include <sflsh/material/psd_projection.hpp>
 #include <sflsh/material/tet_element.hpp>
 #include <sflsh/meshing/types.hpp>
+#include <sflsh/model/mass.hpp>
+#include <sflsh/model/node_potential.hpp>
 
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
+
 #include <functional>
 #include <memory>
 #include <string>
@@ -28,8 +29,8 @@ using meshing::RowMatrixX4i;
 
 /// The affine maps of all nodes at one instant: p_i = A_i x_i + d_i.
 struct NodeFrame {
-  std::vector<Eigen::Matrix3d> A;   ///< per node (3×3); identity for an unposed problem
-  RowMatrixX3d d;                   ///< per node offset [m]
+  std::vector<Eigen::Matrix3d> A;  ///< per node (3×3); identity for an unposed problem
+  RowMatrixX3d d;                  ///< per node offset [m]
 };
 
 /// Time-dependent node maps (the skinning of the layer, or the identity). Implementations must be C¹ in
@@ -47,15 +48,15 @@ class NodeTrajectory {
 
 /// A scalar prescribed displacement u(t) [m] and its time derivative.
 struct ScalarDrive {
-  std::function<double(double)> value;   ///< u(t)
-  std::function<double(double)> rate;    ///< du/dt
+  std::function<double(double)> value;  ///< u(t)
+  std::function<double(double)> rate;   ///< du/dt
 };
 
 /// Prescribed components of x: x_dof(t) = rest_dof + u(t), with u ≡ 0 for fixed components.
 /// dof = 3·node + axis. Each dof appears at most once.
 struct Dirichlet {
-  std::vector<int> dof;          ///< constrained dofs, ascending
-  std::vector<int> drive;        ///< per entry of `dof`: index into `drives`, or −1 (fixed: u ≡ 0)
+  std::vector<int> dof;    ///< constrained dofs, ascending
+  std::vector<int> drive;  ///< per entry of `dof`: index into `drives`, or −1 (fixed: u ≡ 0)
   std::vector<ScalarDrive> drives;
 
   /// Adds components of one node (axes as a mask bit 0 = x, 1 = y, 2 = z) with an optional drive
@@ -73,16 +74,16 @@ struct Dirichlet {
 
 /// The full-space problem. Build it, then call validate() once before handing it to an integrator.
 struct Problem {
-  RowMatrixX3d rest;                               ///< X: unposed rest positions (N×3) [m]
-  RowMatrixX4i tets;                               ///< positively oriented (M×4)
-  std::vector<material::TetRest> tet_rest;         ///< per tet: D_m⁻¹ and V (filled by validate() when empty)
+  RowMatrixX3d rest;                                    ///< X: unposed rest positions (N×3) [m]
+  RowMatrixX4i tets;                                    ///< positively oriented (M×4)
+  std::vector<material::TetRest> tet_rest;              ///< per tet: D_m⁻¹ and V (filled by validate() when empty)
   std::vector<material::OrthotropicFung> tet_material;  ///< per tet
-  std::vector<double> tet_energy_scale;            ///< optional per-tet factor on the energy (empty = 1)
-  Eigen::VectorXd mass;                            ///< lumped mass per node [kg]; all zero = quasi-static
-  double density = 0.0;                            ///< ρ [kg/m³] that `mass` came from
+  std::vector<double> tet_energy_scale;                 ///< optional per-tet factor on the energy (empty = 1)
+  Eigen::VectorXd mass;                                 ///< lumped mass per node [kg]; all zero = quasi-static
+  double density = 0.0;                                 ///< ρ [kg/m³] that `mass` came from
   /// Lumped (diagonal `mass`) or consistent (ρV_e/20 (1 + δ_ab) per tet node pair, mass.hpp) inertia.
   MassKind mass_kind = MassKind::lumped;
-  Eigen::VectorXd tet_mass;                        ///< ρV per tet [kg]; filled by validate() from `density`
+  Eigen::VectorXd tet_mass;                           ///< ρV per tet [kg]; filled by validate() from `density`
   Eigen::Vector3d gravity = Eigen::Vector3d::Zero();  ///< g in the posed (world) frame [m/s²]
   Dirichlet dirichlet;
   std::shared_ptr<const NodeTrajectory> trajectory;  ///< null: p = x (identity maps, d = 0)
@@ -114,7 +115,7 @@ Eigen::VectorXd lumped_masses(const RowMatrixX3d& rest, const RowMatrixX4i& tets
 /// Serial and threaded (TBB) over tets; the PETSc assembly uses the same element kernel.
 struct ElasticEvaluation {
   double energy = 0.0;
-  Eigen::VectorXd gradient;   ///< ∂E/∂x (3N) [N]
+  Eigen::VectorXd gradient;  ///< ∂E/∂x (3N) [N]
 };
 ElasticEvaluation evaluate_elastic(const Problem& problem, const Eigen::VectorXd& x, bool with_gradient = true);
 
@@ -125,19 +126,19 @@ RowMatrixX3d posed_positions(const NodeFrame& frame, const Eigen::VectorXd& x);
 /// multistep integrators carry (time_integrator.hpp).
 struct State {
   double t = 0.0;
-  Eigen::VectorXd x;   ///< unposed elastic positions (3N) [m]
-  Eigen::VectorXd w;   ///< posed velocities ṗ (3N) [m/s]
-  Eigen::VectorXd a;   ///< posed accelerations p̈ (3N) [m/s²] (Newmark); empty until an integrator sets it
-  Eigen::VectorXd p_previous;   ///< posed positions one step back (3N) [m] (BDF2); empty at the start
-  Eigen::VectorXd w_previous;   ///< posed velocities one step back (3N) [m/s] (BDF2)
-  double h_previous = 0.0;      ///< length of that step [s]
+  Eigen::VectorXd x;           ///< unposed elastic positions (3N) [m]
+  Eigen::VectorXd w;           ///< posed velocities ṗ (3N) [m/s]
+  Eigen::VectorXd a;           ///< posed accelerations p̈ (3N) [m/s²] (Newmark); empty until an integrator sets it
+  Eigen::VectorXd p_previous;  ///< posed positions one step back (3N) [m] (BDF2); empty at the start
+  Eigen::VectorXd w_previous;  ///< posed velocities one step back (3N) [m/s] (BDF2)
+  double h_previous = 0.0;     ///< length of that step [s]
 };
 
 /// Energy bookkeeping of a state (for bounded-energy checks and summaries) [J].
 struct Energies {
-  double kinetic = 0.0;    ///< ½ wᵀ M w (lumped or consistent, as the problem says)
-  double elastic = 0.0;    ///< E(x)
-  double gravity = 0.0;    ///< −Σ m_i gᵀ p_i
+  double kinetic = 0.0;  ///< ½ wᵀ M w (lumped or consistent, as the problem says)
+  double elastic = 0.0;  ///< E(x)
+  double gravity = 0.0;  ///< −Σ m_i gᵀ p_i
 };
 Energies energies(const Problem& problem, const State& state);
 

@@ -39,7 +39,8 @@ class DynamicsAmplitude {
 };
 
 /// Area-weighted unit vertex normals of a triangle surface.
-RowMatrixX3d vertex_normals(const RowMatrixX3d& vertices, const Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor>& faces);
+RowMatrixX3d vertex_normals(const RowMatrixX3d& vertices,
+                            const Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor>& faces);
 
 /// Strain-energy density ψ = E_e / V_e per tet [J/m³] at elastic state x.
 Eigen::VectorXd strain_energy_density(const Problem& problem, const Eigen::VectorXd& x);
@@ -54,7 +55,8 @@ const std::vector<std::string>& frame_field_names();
 /// The frame output formats: "vtk", "xdmf"; throws sflsh::Error "<where>: …" for another name.
 void check_output_format(const std::string& format, const std::string& where);
 /// Throws sflsh::Error "<where>: unknown field '<name>'<context> (expected …)" for a name not in frame_field_names().
-void check_frame_field_names(const std::vector<std::string>& names, const std::string& where, const std::string& context = "");
+void check_frame_field_names(const std::vector<std::string>& names, const std::string& where,
+                             const std::string& context = "");
 
 /// Whether frame `frame` of `frames` (0 … frames − 1) is written with `every` ≥ 1: every N-th frame, plus
 /// always the first and the last one (a series starts at rest and ends where the run ends).
@@ -62,7 +64,7 @@ bool is_written_frame(int frame, int frames, int every);
 
 /// Where and how a SimulationWriter writes (scenes write several bodies, each placed in the world).
 struct SimulationWriterOptions {
-  std::string prefix = "body";       ///< <prefix>.pvd, <prefix>_NNNNNN.vtp, <prefix>_layer.pvd, <prefix>_dynamics.vtp
+  std::string prefix = "body";  ///< <prefix>.pvd, <prefix>_NNNNNN.vtp, <prefix>_layer.pvd, <prefix>_dynamics.vtp
   bool write_layer = false;
   /// A rigid placement applied to every written point (p_world = rotation p + translation) and the
   /// rotation to every written vector field; σ is unaffected.
@@ -108,7 +110,8 @@ class SimulationWriter {
   /// writes <prefix>_<index>.vtp. Frames that are not written cost only the skin's displacement.
   void add_frame(int index, double t, const State& state, bool write, const std::vector<vtk::Field>& extra = {});
   /// The same from the node positions x [m] alone (what σ and the written fields need; no velocities).
-  void add_positions(int index, double t, const Eigen::VectorXd& x, bool write, const std::vector<vtk::Field>& extra = {});
+  void add_positions(int index, double t, const Eigen::VectorXd& x, bool write,
+                     const std::vector<vtk::Field>& extra = {});
   /// Whether a frame array is requested (SimulationWriterOptions::fields).
   bool wants(const std::string& field) const;
   /// Writes the .pvd collections and dynamics.vtp.
@@ -129,16 +132,17 @@ class SimulationWriter {
   std::string dynamics_file() const;
 
  private:
-  void add(int index, double t, const Eigen::VectorXd& x, const State* state, bool write, const std::vector<vtk::Field>& extra);
+  void add(int index, double t, const Eigen::VectorXd& x, const State* state, bool write,
+           const std::vector<vtk::Field>& extra);
   const BodyLayer& layer_;
   RunFolder* run_;
   SimulationWriterOptions options_;
   bool write_layer_;
   std::unique_ptr<vtk::PvdSeries> body_series_, layer_series_;
-  std::unique_ptr<xdmf::Series> body_xdmf_, layer_xdmf_;   ///< format "xdmf" instead of the .pvd series
-  Eigen::MatrixXd dominant_joint_;      ///< per body vertex: argmax of the skinning weights
-  Eigen::MatrixXd vertex_kappa_;        ///< per body vertex (h, Y_t, Y_n), zero outside the region
-  Eigen::MatrixXd soft_region_;         ///< per body vertex 1 in the region, 0 elsewhere
+  std::unique_ptr<xdmf::Series> body_xdmf_, layer_xdmf_;  ///< format "xdmf" instead of the .pvd series
+  Eigen::MatrixXd dominant_joint_;                        ///< per body vertex: argmax of the skinning weights
+  Eigen::MatrixXd vertex_kappa_;                          ///< per body vertex (h, Y_t, Y_n), zero outside the region
+  Eigen::MatrixXd soft_region_;                           ///< per body vertex 1 in the region, 0 elsewhere
   DynamicsAmplitude amplitude_;
   RowMatrixX3d previous_posed_;
   double previous_t_ = 0.0;

@@ -35,7 +35,7 @@ class MotionCurve {
   void locate(double t, std::size_t& f, double& u, bool& clamped) const;
 
   double fps_;
-  std::array<std::vector<Matrix34d>, body::kNumJoints> transforms_;   ///< per joint, per frame
+  std::array<std::vector<Matrix34d>, body::kNumJoints> transforms_;  ///< per joint, per frame
   std::vector<PoseFeatures> features_;
 };
 
@@ -50,12 +50,14 @@ class SkinnedTrajectory final : public NodeTrajectory {
   void evaluate(double t, NodeFrame& frame, NodeFrame* rate = nullptr) const override;
   void evaluate_nodes(double t, const std::vector<int>& nodes, NodeFrame& frame) const override;
   const MotionCurve& curve() const { return *curve_; }
-  const std::vector<std::pair<int, double>>& node_weights(int node) const { return weights_[static_cast<std::size_t>(node)]; }
+  const std::vector<std::pair<int, double>>& node_weights(int node) const {
+    return weights_[static_cast<std::size_t>(node)];
+  }
 
  private:
   std::shared_ptr<const MotionCurve> curve_;
   std::vector<std::vector<std::pair<int, double>>> weights_;
-  Eigen::MatrixXd pose_dirs_;   ///< (3N) × 207, or empty
+  Eigen::MatrixXd pose_dirs_;  ///< (3N) × 207, or empty
 };
 
 /// Sparse blend weights from a dense per-node table (N × 24): negatives clamped, entries below `drop`

@@ -29,7 +29,7 @@ class LadderSolver {
 };
 
 struct LadderOptions {
-  bool exact_hessian_first = true;   ///< rung 1 (skipped for quasi-static problems by the solvers)
+  bool exact_hessian_first = true;  ///< rung 1 (skipped for quasi-static problems by the solvers)
   /// The Hessian of rungs 2–3 (kNone keeps the exact one: the ladder then only halves).
   material::HessianProjection projection = material::HessianProjection::kStressDerivative;
   int max_halvings = 6;

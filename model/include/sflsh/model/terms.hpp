@@ -37,9 +37,9 @@ class HessianSink {
 
 /// The tets and nodes a term sums over (see the file comment).
 struct TermSubset {
-  std::vector<int> value_tets;   ///< tets counted in the value
-  std::vector<int> row_tets;     ///< tets giving the gradient and Hessian rows (order = HessianSink's k)
-  std::vector<int> nodes;        ///< nodes whose node-level terms are counted (value, rows)
+  std::vector<int> value_tets;  ///< tets counted in the value
+  std::vector<int> row_tets;    ///< tets giving the gradient and Hessian rows (order = HessianSink's k)
+  std::vector<int> nodes;       ///< nodes whose node-level terms are counted (value, rows)
   /// Every tet and node.
   static std::shared_ptr<const TermSubset> whole(const Problem& problem);
 };
@@ -83,7 +83,7 @@ class InertiaTerm final : public Term {
   bool add_hessian(const Eigen::VectorXd& x, HessianSink& sink) const override;
 
  private:
-  Eigen::Vector3d residual(const Eigen::VectorXd& x, int node) const;   ///< p_i(x) − p̃_i
+  Eigen::Vector3d residual(const Eigen::VectorXd& x, int node) const;  ///< p_i(x) − p̃_i
   const Problem& problem_;
   std::shared_ptr<const TermSubset> subset_;
   const NodeFrame* frame_ = nullptr;
@@ -127,8 +127,8 @@ class PotentialTerm final : public Term {
  private:
   struct Active {
     NodePotential* potential = nullptr;
-    std::vector<int> node;    ///< per candidate: its mesh node
-    std::vector<int> owned;   ///< candidate entries counted by this process
+    std::vector<int> node;   ///< per candidate: its mesh node
+    std::vector<int> owned;  ///< candidate entries counted by this process
   };
   Eigen::Vector3d posed(const Eigen::VectorXd& x, int node) const;
   const Problem& problem_;

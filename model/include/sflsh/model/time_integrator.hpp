@@ -30,20 +30,20 @@ std::string_view to_string(Integrator integrator);
 
 /// The posed kinematics an integrator carries between steps, for the nodes it tracks (3 entries per node).
 struct PosedHistory {
-  Eigen::VectorXd p;            ///< positions at t_n [m]
-  Eigen::VectorXd v;            ///< velocities at t_n [m/s]
-  Eigen::VectorXd a;            ///< accelerations at t_n [m/s²] (Newmark; empty until known)
-  Eigen::VectorXd p_previous;   ///< positions at t_{n−1} [m] (BDF2; empty at the start)
-  Eigen::VectorXd v_previous;   ///< velocities at t_{n−1} [m/s]
-  double h_previous = 0.0;      ///< t_n − t_{n−1} [s]
+  Eigen::VectorXd p;           ///< positions at t_n [m]
+  Eigen::VectorXd v;           ///< velocities at t_n [m/s]
+  Eigen::VectorXd a;           ///< accelerations at t_n [m/s²] (Newmark; empty until known)
+  Eigen::VectorXd p_previous;  ///< positions at t_{n−1} [m] (BDF2; empty at the start)
+  Eigen::VectorXd v_previous;  ///< velocities at t_{n−1} [m/s]
+  double h_previous = 0.0;     ///< t_n − t_{n−1} [s]
 };
 
 /// What one step minimizes beside E, gravity and U: 1/(2ĥ²)(p − p̃)ᵀM(p − p̃).
 struct InertiaTarget {
-  Integrator integrator = Integrator::backward_euler;   ///< the one this step uses (BDF2 may start as backward Euler)
-  double h = 0.0;                                        ///< step [s]
-  double h_eff = 0.0;                                    ///< ĥ [s]
-  Eigen::VectorXd p_tilde;                               ///< p̃ [m]
+  Integrator integrator = Integrator::backward_euler;  ///< the one this step uses (BDF2 may start as backward Euler)
+  double h = 0.0;                                      ///< step [s]
+  double h_eff = 0.0;                                  ///< ĥ [s]
+  Eigen::VectorXd p_tilde;                             ///< p̃ [m]
 };
 
 /// ĥ and p̃ of `integrator` for a step of h from `history`. Newmark throws when history.a is missing.

@@ -29,23 +29,23 @@ struct LeastSquaresProblem {
 
 struct LeastSquaresOptions {
   int max_iterations = 20;
-  double gradient_atol = 1e-8;     ///< stop when ‖proj. gradient‖ ≤ atol
-  double gradient_rtol = 1e-6;     ///< … or ≤ rtol · loss
-  double gradient_ttol = 1e-4;     ///< … or ≤ ttol · initial ‖gradient‖
-  double initial_radius = 0.0;     ///< 0: TAO's default
+  double gradient_atol = 1e-8;  ///< stop when ‖proj. gradient‖ ≤ atol
+  double gradient_rtol = 1e-6;  ///< … or ≤ rtol · loss
+  double gradient_ttol = 1e-4;  ///< … or ≤ ttol · initial ‖gradient‖
+  double initial_radius = 0.0;  ///< 0: TAO's default
   /// Called after every accepted iteration (and at iteration 0) with the current point and loss ½‖r‖².
   std::function<void(int iteration, const Eigen::VectorXd& p, double loss, double gradient_norm)> monitor;
 };
 
 struct LeastSquaresResult {
   Eigen::VectorXd p;
-  double loss = 0.0;             ///< ½‖r(p)‖²
+  double loss = 0.0;  ///< ½‖r(p)‖²
   double gradient_norm = 0.0;
   int iterations = 0;
   int residual_evaluations = 0;
   int jacobian_evaluations = 0;
-  std::string reason;            ///< TAO's converged reason
-  bool converged = false;        ///< a convergence test was met (not: iteration limit, failure)
+  std::string reason;      ///< TAO's converged reason
+  bool converged = false;  ///< a convergence test was met (not: iteration limit, failure)
 };
 
 /// Throws sflsh::Error on inconsistent sizes, a start outside the bounds (it is projected first, with a

@@ -2,7 +2,8 @@
 // Cubature of the elastic energy in the handle subspace (docs/physics.md §2.2; An, Kim, James 2008 for the
 // form, Tapia et al. 2021 for doing without training simulations):
 // \f[ E(q) \approx \sum_{c \in C} \omega_c V_c \Psi(F_c(q)),\quad
-//     f = -\sum_c \omega_c V_c B_c^T \mathrm{vec}(P_c),\quad H = \sum_c \omega_c V_c B_c^T \tfrac{\partial P}{\partial F}\Big|_c B_c \f]
+//     f = -\sum_c \omega_c V_c B_c^T \mathrm{vec}(P_c),\quad H = \sum_c \omega_c V_c B_c^T \tfrac{\partial P}{\partial
+//     F}\Big|_c B_c \f]
 // Data-oblivious: the points are chosen by farthest-point sampling over the rest volume (denser on the
 // torso, like the handles), and the non-negative weights ω by NNLS so that the cubature reproduces
 // integrals that need no training data — the total volume and the exact reduced forces at random handle
@@ -20,7 +21,7 @@ namespace sflsh::reduced {
 struct Cubature {
   std::vector<int> tets;
   std::vector<double> weights;
-  std::string method = "exact";   ///< "exact" | "voronoi" | "nnls"
+  std::string method = "exact";  ///< "exact" | "voronoi" | "nnls"
   /// The coverage of the subspace's rest stiffness (cubature_coverage()); 0 when not measured.
   double stiffness_ratio_max = 0.0;
   double stiffness_ratio_min = 0.0;
@@ -33,9 +34,9 @@ Cubature exact_cubature(int num_tets);
 enum class CubatureWeighting { voronoi, nnls };
 
 struct CubatureOptions {
-  int count = 200;                              ///< K cubature tets
+  int count = 200;  ///< K cubature tets
   CubatureWeighting weighting = CubatureWeighting::nnls;
-  std::vector<double> amplitudes{0.003, 0.01, 0.02};   ///< σ of the random handle displacements [m]
+  std::vector<double> amplitudes{0.003, 0.01, 0.02};  ///< σ of the random handle displacements [m]
   int samples_per_amplitude = 8;
   unsigned seed = 20231212;
   /// Per-tet sampling density factor (empty = 1): distances are multiplied by it, as for the handles.
@@ -72,7 +73,7 @@ CubatureCoverage cubature_coverage(const Eigen::MatrixXd& exact_stiffness, const
 
 /// The smallest cubature of the farthest-point sequence, from options.count up by factors of `growth`, whose
 /// coverage λ_max is ≤ max_ratio (the exact cubature when none below every tet is). Records the coverage.
-Cubature select_covering_cubature(const model::Problem& problem, const Subspace& subspace, const CubatureOptions& options,
-                                  double max_ratio, double growth = 1.25);
+Cubature select_covering_cubature(const model::Problem& problem, const Subspace& subspace,
+                                  const CubatureOptions& options, double max_ratio, double growth = 1.25);
 
 }  // namespace sflsh::reduced

@@ -48,13 +48,16 @@ class CubatureElastic {
 
   int num_points() const { return static_cast<int>(point_tet_.size()); }
   /// F_c(q) of one point.
-  Eigen::Matrix3d point_deformation_gradient(int point, const Eigen::VectorXd& q) const { return deformation_gradient(point, q); }
+  Eigen::Matrix3d point_deformation_gradient(int point, const Eigen::VectorXd& q) const {
+    return deformation_gradient(point, q);
+  }
   /// The mesh tet of one point and its weight ω V (· energy scale).
   int point_tet(int point) const { return point_tet_[static_cast<std::size_t>(point)]; }
   double point_weight(int point) const { return point_weight_[static_cast<std::size_t>(point)]; }
   /// Adds scale · ω V · stress · c_s to the slots t_s of `gradient` (3S) for the point's functions: the reduced
   /// gradient of a stress-like 3×3 field at that point (∂E/∂t_s = ω V P c_s with stress = P).
-  void add_point_stress(int point, const Eigen::Matrix3d& stress, double scale, Eigen::Ref<Eigen::VectorXd> gradient) const;
+  void add_point_stress(int point, const Eigen::Matrix3d& stress, double scale,
+                        Eigen::Ref<Eigen::VectorXd> gradient) const;
   /// Largest number of basis functions touching one point (the size of its local Hessian / 3).
   int max_local_functions() const { return max_local_; }
 
@@ -63,13 +66,13 @@ class CubatureElastic {
 
   const model::Problem& problem_;
   const Subspace& subspace_;
-  Eigen::VectorXd x_prescribed_;       ///< the prescribed state x_D (3N) of f_prescribed_
+  Eigen::VectorXd x_prescribed_;  ///< the prescribed state x_D (3N) of f_prescribed_
   std::vector<int> point_tet_;
-  std::vector<double> tet_scale_;      ///< V_c (· energy scale) per point
-  std::vector<double> point_weight_;   ///< ω_c V_c (· energy scale)
-  std::vector<int> offset_;            ///< point p's functions are function_[offset_[p] .. offset_[p+1])
+  std::vector<double> tet_scale_;     ///< V_c (· energy scale) per point
+  std::vector<double> point_weight_;  ///< ω_c V_c (· energy scale)
+  std::vector<int> offset_;           ///< point p's functions are function_[offset_[p] .. offset_[p+1])
   std::vector<int> function_;
-  std::vector<Eigen::Vector3d> c_;     ///< c_s per (point, function), parallel to function_
+  std::vector<Eigen::Vector3d> c_;  ///< c_s per (point, function), parallel to function_
   std::vector<Eigen::Matrix3d> f_prescribed_;
   int max_local_ = 0;
 };

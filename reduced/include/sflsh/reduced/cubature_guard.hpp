@@ -22,14 +22,15 @@ namespace sflsh::reduced {
 /// A guarded tet over the limit at a full check.
 struct GuardViolation {
   int tet = -1;
-  double exponent = 0.0;   ///< its Fung exponent x = 2Ψ₀/c (+∞ for a non-finite F)
+  double exponent = 0.0;  ///< its Fung exponent x = 2Ψ₀/c (+∞ for a non-finite F)
 };
 
 class CubatureGuard {
  public:
   /// Guards every tet of `problem` that carries no weight in `cubature`; `exponent_limit` is the x above which a
   /// tet counts as leaving the material's range (the energy itself refuses x > material::kFungExponentCap).
-  CubatureGuard(const model::Problem& problem, const Subspace& subspace, const Cubature& cubature, double exponent_limit);
+  CubatureGuard(const model::Problem& problem, const Subspace& subspace, const Cubature& cubature,
+                double exponent_limit);
 
   /// The prescribed state changed (attached nodes driven): the next check is a full one.
   void set_prescribed_state(const Eigen::VectorXd& x_prescribed);
@@ -58,23 +59,23 @@ class CubatureGuard {
   std::vector<GuardViolation> renew(const Eigen::VectorXd& q);
 
   const model::Problem& problem_;
-  CubatureElastic tets_;                 ///< the guarded tets as points of weight 1 (their F(q), S_e and c_s)
-  std::vector<char> active_;             ///< per point: still guarded
-  std::vector<double> spectral_;         ///< ‖P_Y‖₂² per point
-  std::vector<double> allowed_;          ///< the ‖Ê‖_F at which x reaches the limit, per point (+∞: Fung off)
-  std::vector<double> scaled_;           ///< ‖c_s‖ / r_e, parallel to the points' functions (+∞ when r_e = 0)
-  std::vector<int> offset_;              ///< point p's entries of scaled_ are [offset_[p], offset_[p+1])
-  std::vector<int> point_of_tet_;        ///< −1 for tets not guarded
+  CubatureElastic tets_;           ///< the guarded tets as points of weight 1 (their F(q), S_e and c_s)
+  std::vector<char> active_;       ///< per point: still guarded
+  std::vector<double> spectral_;   ///< ‖P_Y‖₂² per point
+  std::vector<double> allowed_;    ///< the ‖Ê‖_F at which x reaches the limit, per point (+∞: Fung off)
+  std::vector<double> scaled_;     ///< ‖c_s‖ / r_e, parallel to the points' functions (+∞ when r_e = 0)
+  std::vector<int> offset_;        ///< point p's entries of scaled_ are [offset_[p], offset_[p+1])
+  std::vector<int> point_of_tet_;  ///< −1 for tets not guarded
   Eigen::VectorXd q_reference_;
-  std::vector<double> moved_;            ///< ‖t_s − t_ref,s‖ per function (scratch)
-  std::vector<double> budget_;           ///< β_s = min over the tets touching s of r_e / L_e, per function
-  std::vector<int> function_offset_;     ///< function s touches the points function_points_[offset[s] .. offset[s+1])
+  std::vector<double> moved_;         ///< ‖t_s − t_ref,s‖ per function (scratch)
+  std::vector<double> budget_;        ///< β_s = min over the tets touching s of r_e / L_e, per function
+  std::vector<int> function_offset_;  ///< function s touches the points function_points_[offset[s] .. offset[s+1])
   std::vector<int> function_points_;
-  std::vector<unsigned> visited_;        ///< per point: the generation of the check that last bounded it
+  std::vector<unsigned> visited_;  ///< per point: the generation of the check that last bounded it
   unsigned generation_ = 0;
-  bool valid_ = false;                   ///< a reference is set
+  bool valid_ = false;  ///< a reference is set
   double limit_ = 0.0;
-  double renew_fraction_ = 0.05;         ///< renew the reference when more tets than this fraction need evaluating
+  double renew_fraction_ = 0.05;  ///< renew the reference when more tets than this fraction need evaluating
   double last_max_ = 0.0;
   int guarded_ = 0, full_checks_ = 0, checks_ = 0, tet_passes_ = 0;
   long exact_ = 0;

@@ -5,8 +5,8 @@
 // inverse skinning returns the elastic displacement exactly, so d̃ = u − mean_t u).
 #include <sflsh/model/body_layer.hpp>
 #include <sflsh/reduced/layer_parameterization.hpp>
-#include <sflsh/reduced/reduced_solver.hpp>
 #include <sflsh/reduced/reduced_model.hpp>
+#include <sflsh/reduced/reduced_solver.hpp>
 
 #include <memory>
 #include <mutex>
@@ -18,10 +18,10 @@ class SkinDisplacementMap;
 
 /// Per-vertex dynamics of one simulation over the region's skin vertices, in mm.
 struct CaseDynamics {
-  Eigen::VectorXd sigma_normal;    ///< σ_n (R)
-  Eigen::VectorXd sigma_tangent;   ///< σ_t (R)
-  Eigen::VectorXd sigma() const;   ///< √(σ_n² + σ_t²)
-  double mean_sigma() const;       ///< mean over the region vertices [mm] (the Table 2 entry of one motion)
+  Eigen::VectorXd sigma_normal;   ///< σ_n (R)
+  Eigen::VectorXd sigma_tangent;  ///< σ_t (R)
+  Eigen::VectorXd sigma() const;  ///< √(σ_n² + σ_t²)
+  double mean_sigma() const;      ///< mean over the region vertices [mm] (the Table 2 entry of one motion)
   double seconds = 0.0;
   int frames = 0;
 };
@@ -51,9 +51,10 @@ class DynamicsCase {
   /// moduli of the N control points: `dsigma` receives (2R × 2N) [mm/Pa], rows [σ_n; σ_t], columns Y_t of
   /// controls 0..N−1 then Y_n. `young_map` is W of young_map.hpp for the model's cubature tets. Newton runs to
   /// the sensitivity tolerance (sensitivity_solver_options), so σ agrees with simulate() to that tolerance.
-  CaseDynamics simulate_with_sensitivity(const LayerParameterization& parameterization, const material::KappaMatrix& kappa,
-                                         const ReducedModel& model, const Eigen::MatrixXd& young_map,
-                                         Eigen::MatrixXd& dsigma, const ReducedOptions& options = {}) const;
+  CaseDynamics simulate_with_sensitivity(const LayerParameterization& parameterization,
+                                         const material::KappaMatrix& kappa, const ReducedModel& model,
+                                         const Eigen::MatrixXd& young_map, Eigen::MatrixXd& dsigma,
+                                         const ReducedOptions& options = {}) const;
 
  private:
   /// K B of the skin (built on first use; every simulation of this case shares the one subspace).
@@ -66,7 +67,7 @@ class DynamicsCase {
   int frames_ = 0;
   double fps_ = 60.0;
   mutable std::once_flag skin_map_once_;
-  mutable std::unique_ptr<SkinDisplacementMap> skin_map_;   ///< K B, built on first use
+  mutable std::unique_ptr<SkinDisplacementMap> skin_map_;  ///< K B, built on first use
 };
 
 }  // namespace sflsh::reduced

@@ -20,10 +20,10 @@ class DynamicsAmplitudeSensitivity {
   /// One frame: u (R × 3) [m] and du/dp (3R × m, row 3r + axis) [m per unit of p].
   void add(const meshing::RowMatrixX3d& displacement, const Eigen::MatrixXd& derivative);
   int frames() const { return frames_; }
-  Eigen::VectorXd sigma_normal() const;    ///< σ_n (R) [m]
-  Eigen::VectorXd sigma_tangent() const;   ///< σ_t (R) [m]
-  Eigen::MatrixXd sigma_normal_derivative() const;    ///< dσ_n/dp (R × m)
-  Eigen::MatrixXd sigma_tangent_derivative() const;   ///< dσ_t/dp (R × m)
+  Eigen::VectorXd sigma_normal() const;              ///< σ_n (R) [m]
+  Eigen::VectorXd sigma_tangent() const;             ///< σ_t (R) [m]
+  Eigen::MatrixXd sigma_normal_derivative() const;   ///< dσ_n/dp (R × m)
+  Eigen::MatrixXd sigma_tangent_derivative() const;  ///< dσ_t/dp (R × m)
 
  private:
   meshing::RowMatrixX3d normals_, sum_u_;

@@ -27,8 +27,8 @@ namespace sflsh::reduced {
 /// What the fit must reproduce for one case: σ*_n and σ*_t per region vertex (stacked, 2R, mm).
 struct FitTarget {
   const DynamicsCase* simulation = nullptr;
-  int subject = 0;                  ///< index into FitSpec::betas
-  Eigen::VectorXd sigma;            ///< [σ*_n; σ*_t]
+  int subject = 0;        ///< index into FitSpec::betas
+  Eigen::VectorXd sigma;  ///< [σ*_n; σ*_t]
 };
 
 enum class FitKind { independent, shape };
@@ -38,20 +38,20 @@ enum class FitKind { independent, shape };
 /// reduced_sensitivity.hpp) with finite differences for the thickness only (1 + N plain simulations).
 enum class JacobianMethod { finite_differences, sensitivities };
 const char* jacobian_method_name(JacobianMethod m);
-JacobianMethod parse_jacobian_method(const std::string& name);   ///< "fd" or "sensitivities" 
+JacobianMethod parse_jacobian_method(const std::string& name);  ///< "fd" or "sensitivities"
 
 struct FitSpec {
-  std::string name;                         ///< for logs, checkpoints and reports
+  std::string name;  ///< for logs, checkpoints and reports
   FitKind kind = FitKind::shape;
   Regularizer regularizer = Regularizer::local;
-  double lambda = 1.0;                      ///< λ of eq. 7 (shape fits)
-  std::vector<body::Betas> betas;           ///< per subject (independent: exactly one)
-  std::vector<int> stages{1, 12, 24, 84};   ///< control-point counts, ascending
-  int iterations = 8;                       ///< trust-region iterations per stage
-  double fd_step = 2e-3;                    ///< one-sided step in normalized κ̂
-  double a_max = 0.25;                      ///< |A_i(k, c)| bound (normalized κ̂ per unit β)
+  double lambda = 1.0;                                      ///< λ of eq. 7 (shape fits)
+  std::vector<body::Betas> betas;                           ///< per subject (independent: exactly one)
+  std::vector<int> stages{1, 12, 24, 84};                   ///< control-point counts, ascending
+  int iterations = 8;                                       ///< trust-region iterations per stage
+  double fd_step = 2e-3;                                    ///< one-sided step in normalized κ̂
+  double a_max = 0.25;                                      ///< |A_i(k, c)| bound (normalized κ̂ per unit β)
   JacobianMethod jacobian = JacobianMethod::sensitivities;  ///< measured ≈ 38× cheaper for the Y columns
-  std::filesystem::path checkpoint;         ///< empty: none
+  std::filesystem::path checkpoint;                         ///< empty: none
 };
 
 /// Shared by every fit of an experiment.
@@ -69,8 +69,8 @@ struct FitContext {
 struct FitStageReport {
   int controls = 0;
   int iterations = 0;
-  double loss_fit = 0.0;     ///< ‖r_fit‖² [mm²]
-  double loss_reg = 0.0;     ///< ‖r_reg‖²
+  double loss_fit = 0.0;  ///< ‖r_fit‖² [mm²]
+  double loss_reg = 0.0;  ///< ‖r_reg‖²
   double seconds = 0.0;
   long simulations = 0;
   int jacobians = 0;
@@ -82,20 +82,20 @@ struct FitResult {
   std::string name;
   FitKind kind = FitKind::shape;
   int controls = 0;
-  Eigen::VectorXd p;                     ///< final parameters (layout of the kind)
+  Eigen::VectorXd p;  ///< final parameters (layout of the kind)
   std::vector<FitStageReport> stages;
   /// κ̂ (N × 3, clamped) the fit gives a subject of shape β (independent fits ignore β).
   material::KappaMatrix kappa_normalized(const body::Betas& beta, const material::ParameterBounds& bounds) const;
   material::KappaMatrix kappa(const body::Betas& beta, const material::ParameterBounds& bounds) const;  ///< physical
-  ShapeElasticity shape() const;         ///< shape fits only
+  ShapeElasticity shape() const;  ///< shape fits only
 };
 
 FitResult fit_elasticity(const FitContext& context, const std::vector<FitTarget>& targets, const FitSpec& spec);
 
 /// The normal-equation terms JᵀJ, Jᵀr of the fit at p for N = spec.stages.front() (what one trust-region
 /// iteration needs), by the spec's Jacobian method — to compare the methods and time them.
-NormalEquations fit_normal_equations(const FitContext& context, const std::vector<FitTarget>& targets, const FitSpec& spec,
-                                     const Eigen::VectorXd& p, double* residual_seconds = nullptr,
+NormalEquations fit_normal_equations(const FitContext& context, const std::vector<FitTarget>& targets,
+                                     const FitSpec& spec, const Eigen::VectorXd& p, double* residual_seconds = nullptr,
                                      double* jacobian_seconds = nullptr);
 
 /// Parameterizations per control-point count, built on demand from one base layer.

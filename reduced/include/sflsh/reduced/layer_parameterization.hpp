@@ -4,9 +4,9 @@
 // κ (N × 3, physical) into a subject's problem — thickness field → retargeted nodes → κ per tet → tet
 // materials and lumped masses — without rebuilding anything that does not depend on κ (the template mesh,
 // the skinning trajectory, the reduced model). A fit evaluates it hundreds of times per iteration.
-#include <sflsh/model/body_layer.hpp>
 #include <sflsh/material/parameters.hpp>
 #include <sflsh/meshing/retarget.hpp>
+#include <sflsh/model/body_layer.hpp>
 
 #include <Eigen/Core>
 
@@ -22,8 +22,8 @@ class LayerParameterization {
   LayerParameterization(const model::BodyLayer& base, int control_points);
 
   int num_controls() const { return static_cast<int>(control_vertices_.size()); }
-  const std::vector<int>& control_vertices() const { return control_vertices_; }   ///< body vertex indices
-  const Eigen::MatrixXd& phi() const { return phi_; }                                ///< R × N
+  const std::vector<int>& control_vertices() const { return control_vertices_; }  ///< body vertex indices
+  const Eigen::MatrixXd& phi() const { return phi_; }                             ///< R × N
   /// The region index of each control point (row of φ where φ_i = 1).
   const std::vector<int>& control_region_vertices() const { return control_local_; }
   const meshing::LayerMesh& mesh() const { return *mesh_; }
@@ -33,12 +33,12 @@ class LayerParameterization {
   /// layer's problem with new rest nodes, tet materials and masses; `rest_skin` receives the region skin
   /// at rest (R × 3). Thread-safe (const). Throws when κ is out of range or the retarget inverts a tet.
   model::Problem problem(const model::BodyLayer& layer, const material::KappaMatrix& kappa,
-                             const model::BodyLayerOptions& options, meshing::RowMatrixX3d* rest_skin = nullptr) const;
+                         const model::BodyLayerOptions& options, meshing::RowMatrixX3d* rest_skin = nullptr) const;
 
   /// The same for κ given at every region vertex (R × 3, physical): any field, not only the span of φ.
   model::Problem problem_from_field(const model::BodyLayer& layer, const material::KappaMatrix& kappa_vertex,
-                                        const model::BodyLayerOptions& options,
-                                        meshing::RowMatrixX3d* rest_skin = nullptr) const;
+                                    const model::BodyLayerOptions& options,
+                                    meshing::RowMatrixX3d* rest_skin = nullptr) const;
 
   /// κ per region vertex (R × 3) for control values κ (N × 3): φ κ.
   material::KappaMatrix field(const material::KappaMatrix& kappa) const;

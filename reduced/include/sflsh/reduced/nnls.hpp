@@ -9,9 +9,9 @@
 namespace sflsh::reduced {
 
 struct NnlsResult {
-  Eigen::VectorXd x;      ///< the minimizer (≥ 0)
-  int iterations = 0;     ///< outer iterations (variables released)
-  bool converged = false; ///< KKT conditions met within tolerance
+  Eigen::VectorXd x;       ///< the minimizer (≥ 0)
+  int iterations = 0;      ///< outer iterations (variables released)
+  bool converged = false;  ///< KKT conditions met within tolerance
 };
 
 /// @param[in] G  K × K symmetric positive semi-definite Gram matrix AᵀA

@@ -27,7 +27,8 @@ void scatter_nodes(const Eigen::VectorXd& values, const std::vector<int>& nodes,
 
 /// ζ of every node at coordinates q (3N) [m/s²]: a forward difference (δ = 1 µs, the step model::initial_acceleration
 /// uses) of the posed velocity ṗ(t) = Ȧ(t) x(t) + ḋ(t) + A(t) ẋ_D(t), x(t) = x_D(t) + (B ⊗ I₃) q.
-Eigen::VectorXd prescribed_acceleration(const model::Problem& problem, const Subspace& subspace, const Eigen::VectorXd& q, double t);
+Eigen::VectorXd prescribed_acceleration(const model::Problem& problem, const Subspace& subspace,
+                                        const Eigen::VectorXd& q, double t);
 
 /// a = J q̈ + ζ on the inertia nodes (3 per node) at the inertia's current time, from the elastic gradient ∇E(q)
 /// (3S) [N] and ζ on the inertia nodes (see the file comment). Throws sflsh::Error when JᵀMJ is singular or the

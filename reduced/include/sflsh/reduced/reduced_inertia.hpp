@@ -4,7 +4,8 @@
 // with z_i = A_i x_D,i + d_i (the skinned prescribed state) and u_i = Σ_s b_is t_s; every other node sits at
 // p_j = z_j. With the node-level mass M (lumped m_i or consistent M_ij, model/mass.hpp),
 //   1/(2ĥ²)(p(q) − p̃)ᵀM(p(q) − p̃) − gᵀMp(q) = const + cᵀq + ½ qᵀ H q,
-//   c_s = Σ_{i active} b_is A_iᵀ (Σ_j M_ij (z_j − p̃_j)/ĥ² − m_i g),   H_(s,r) = Σ_{i,j active} M_ij b_is b_jr A_iᵀA_j / ĥ²,
+//   c_s = Σ_{i active} b_is A_iᵀ (Σ_j M_ij (z_j − p̃_j)/ĥ² − m_i g),   H_(s,r) = Σ_{i,j active} M_ij b_is b_jr A_iᵀA_j /
+//   ĥ²,
 // (gᵀMp = Σ_i m_i gᵀp_i: the row sums of the consistent matrix are the lumped masses). The j of the linear term
 // run over the "inertia nodes": the active nodes and, for a consistent mass, their mass neighbours that no
 // basis function moves (attached nodes next to free ones), whose targets p̃_j reach q through M_ij.
@@ -68,20 +69,20 @@ class ReducedInertia {
 
  private:
   void build_consistent(const model::Problem& problem);
-  void posed_into(const Eigen::VectorXd& q, double* out) const;   ///< node-major, 3 per inertia node
+  void posed_into(const Eigen::VectorXd& q, double* out) const;  ///< node-major, 3 per inertia node
 
   const model::Problem& problem_;
   const Subspace& subspace_;
   model::MassKind kind_ = model::MassKind::lumped;
   std::vector<int> active_;
-  std::vector<int> nodes_;                 ///< inertia nodes: active_, then mass neighbours
-  std::vector<double> mass_;               ///< lumped mass per inertia node
+  std::vector<int> nodes_;    ///< inertia nodes: active_, then mass neighbours
+  std::vector<double> mass_;  ///< lumped mass per inertia node
   // Consistent M over the active rows (CSR): row a holds (inertia-node index, M_ij) for every j with M_ij ≠ 0.
   std::vector<int> row_offset_, row_column_;
   std::vector<double> row_value_;
   double t_ = 0.0;
-  model::NodeFrame frame_;                 ///< per inertia node
-  meshing::RowMatrixX3d z_;                ///< per inertia node
+  model::NodeFrame frame_;   ///< per inertia node
+  meshing::RowMatrixX3d z_;  ///< per inertia node
   const model::SkinnedTrajectory* skinned_ = nullptr;
   JointPairMass pairs_;
   model::JointTransforms joints_;

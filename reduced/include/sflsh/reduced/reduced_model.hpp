@@ -26,20 +26,20 @@ struct ReducedModelOptions {
   /// direction of the subspace is at most this many times stiffer in the exact rest stiffness than in the cubature's
   /// (cubature.hpp, cubature_coverage); explicit counts are only measured against it.
   double coverage_ratio = 4.0;
-  bool cubature_auto = false;           ///< set by build_reduced_model (part of the cache key)
+  bool cubature_auto = false;  ///< set by build_reduced_model (part of the cache key)
   CubatureWeighting weighting = CubatureWeighting::nnls;
   BasisOptions basis;
-  std::filesystem::path cache_dir;      ///< empty: meshing::default_cache_dir()
+  std::filesystem::path cache_dir;  ///< empty: meshing::default_cache_dir()
   bool use_cache = true;
 };
 
 struct BodyHandles {
-  std::vector<int> point_nodes;         ///< P mesh nodes
-  std::vector<int> point_vertices;      ///< the body vertex each point handle sits under
-  std::vector<int> bone_of_node;        ///< per node: joint of an attached node, −1 for free nodes
+  std::vector<int> point_nodes;     ///< P mesh nodes
+  std::vector<int> point_vertices;  ///< the body vertex each point handle sits under
+  std::vector<int> bone_of_node;    ///< per node: joint of an attached node, −1 for free nodes
   /// Point handles first (one node each), then one set per joint that has attached nodes.
   HandleSets sets() const;
-  std::vector<int> bone_joints() const; ///< the joints of the bone sets, in order
+  std::vector<int> bone_joints() const;  ///< the joints of the bone sets, in order
 };
 
 /// Places the handles on a body layer (template mesh, its depth field and node skinning weights).
@@ -50,7 +50,7 @@ struct ReducedModel {
   Subspace subspace;
   Cubature cubature;
   std::string cache_key;
-  std::string cache_outcome;            ///< "hit" | "built" | "off"
+  std::string cache_outcome;  ///< "hit" | "built" | "off"
   double build_seconds = 0.0;
 };
 

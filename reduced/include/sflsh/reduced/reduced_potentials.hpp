@@ -33,14 +33,14 @@ class ReducedPotentials {
  private:
   struct Term {
     model::NodePotential* potential = nullptr;
-    std::vector<int> active;   ///< per candidate: index into the active nodes
+    std::vector<int> active;  ///< per candidate: index into the active nodes
   };
   Eigen::Vector3d posed(const Eigen::VectorXd& q, const ReducedInertia& inertia, int a) const;
 
   const Subspace& subspace_;
   const std::vector<int>& active_nodes_;
   std::vector<model::NodePotential*> potentials_;
-  std::vector<std::vector<int>> active_of_;   ///< per potential, per entry of nodes(): its active index
+  std::vector<std::vector<int>> active_of_;  ///< per potential, per entry of nodes(): its active index
   std::vector<Term> terms_;
 };
 

@@ -92,15 +92,16 @@ class SensitivityIntegrator {
 struct SensitivityResult {
   std::vector<double> t;
   std::vector<Eigen::VectorXd> q;
-  std::vector<Eigen::MatrixXd> dq_dyoung;   ///< 3S × 2N per frame [m/Pa]
-  double seconds = 0.0;                     ///< wall time of the run
-  double sensitivity_seconds = 0.0;         ///< of which the sensitivity solves
+  std::vector<Eigen::MatrixXd> dq_dyoung;  ///< 3S × 2N per frame [m/Pa]
+  double seconds = 0.0;                    ///< wall time of the run
+  double sensitivity_seconds = 0.0;        ///< of which the sensitivity solves
   long newton_iterations = 0;
 };
 
 /// Runs `frames` steps of h [s] from `start` with sensitivities (a one-off SensitivityIntegrator).
-SensitivityResult simulate_with_sensitivities(const model::Problem& problem, const Subspace& subspace, const Cubature& cubature,
-                                              const Eigen::MatrixXd& young_map, const model::State& start, double h, int frames,
+SensitivityResult simulate_with_sensitivities(const model::Problem& problem, const Subspace& subspace,
+                                              const Cubature& cubature, const Eigen::MatrixXd& young_map,
+                                              const model::State& start, double h, int frames,
                                               const ReducedOptions& options = sensitivity_solver_options());
 
 }  // namespace sflsh::reduced

@@ -11,13 +11,14 @@ namespace sflsh::reduced {
 
 /// The reduced-model options that do not change along a sweep.
 struct ReducedSettings {
-  std::string cubature_weights = "nnls";   ///< nnls | voronoi
+  std::string cubature_weights = "nnls";  ///< nnls | voronoi
   bool affine = false;
 };
 
 /// Options of one reduced model: `handles` point handles, `cubature` tets (0 = every tet, −1 = auto); `cache`
 /// empty: the default cache folder.
-ReducedModelOptions reduced_model_options(const ReducedSettings& settings, int handles, int cubature, const std::string& cache);
+ReducedModelOptions reduced_model_options(const ReducedSettings& settings, int handles, int cubature,
+                                          const std::string& cache);
 
 /// Throws a one-line error naming the largest count when a handle count exceeds what the layer allows.
 void check_handle_counts(const model::BodyLayer& layer, const std::vector<int>& handles);

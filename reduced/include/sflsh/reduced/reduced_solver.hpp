@@ -14,7 +14,10 @@
 // (StepStats::startup_steps); Newmark needs p̈ at the start, computed in the subspace (reduced_history.hpp)
 // unless the initial state carries it.
 // Single-threaded on purpose: crowds parallelize over bodies.
+#include <sflsh/model/frame_loop.hpp>
 #include <sflsh/model/problem.hpp>
+#include <sflsh/model/step_stats.hpp>
+#include <sflsh/model/time_integrator.hpp>
 #include <sflsh/reduced/cubature.hpp>
 #include <sflsh/reduced/cubature_elastic.hpp>
 #include <sflsh/reduced/cubature_guard.hpp>
@@ -22,9 +25,6 @@
 #include <sflsh/reduced/reduced_potentials.hpp>
 #include <sflsh/reduced/reduced_terms.hpp>
 #include <sflsh/reduced/subspace.hpp>
-#include <sflsh/model/frame_loop.hpp>
-#include <sflsh/model/step_stats.hpp>
-#include <sflsh/model/time_integrator.hpp>
 
 #include <Eigen/Cholesky>
 
@@ -35,12 +35,12 @@
 namespace sflsh::reduced {
 
 struct ReducedOptions {
-  model::Integrator integrator = model::Integrator::backward_euler;   ///< model/time_integrator.hpp
-  bool quasi_static = false;   ///< drop inertia (gravity still acts through mass)
+  model::Integrator integrator = model::Integrator::backward_euler;  ///< model/time_integrator.hpp
+  bool quasi_static = false;                                         ///< drop inertia (gravity still acts through mass)
   int max_halvings = 6;
   int max_newton = 30;
-  double gradient_rtol = 1e-8;     ///< ‖∇Φ‖ ≤ rtol·‖∇Φ₀‖ …
-  double gradient_atol = 1e-9;     ///< … or ≤ atol [N]
+  double gradient_rtol = 1e-8;  ///< ‖∇Φ‖ ≤ rtol·‖∇Φ₀‖ …
+  double gradient_atol = 1e-9;  ///< … or ≤ atol [N]
   /// … or the distance left to the step's solution, estimated from the contraction of the last two full Newton
   /// steps (ρ/(1 − ρ)‖Δq‖∞, ‖Δq‖∞ after the first), below this [m]. 10 µm is 0.1–0.3 % of the σ the
   /// motions produce (docs/reduced.md "Newton iterations"); sensitivities solve tighter (1e-9 m).
@@ -52,8 +52,8 @@ struct ReducedOptions {
   bool reuse_factorization = true;
   double refresh_ratio = 0.25;
   bool exact_hessian_first = true;
-  bool use_predictor = true;       ///< start Newton from the extrapolated q when its Φ is lower than at q_n
-  int predictor_order = 2;         ///< 1: q_n + h q̇_n; 2: + ½h² q̈_n (backward differences)
+  bool use_predictor = true;  ///< start Newton from the extrapolated q when its Φ is lower than at q_n
+  int predictor_order = 2;    ///< 1: q_n + h q̇_n; 2: + ½h² q̈_n (backward differences)
   /// Keep the converged substeps of the last step (last_substeps()), for forward sensitivities.
   bool record_substeps = false;
   /// Guard the tets outside the cubature (cubature_guard.hpp): a tet whose Fung exponent x = 2Ψ₀/c passes
@@ -71,14 +71,13 @@ struct ReducedSubstep {
   Eigen::VectorXd q;
 };
 
-
 class ReducedSolver final : public model::BodySolver {
  public:
   /// The problem, subspace and cubature must outlive the integrator; the problem must be validated and its
   /// constrained nodes fully constrained (all three components) with zero basis rows.
   ReducedSolver(const model::Problem& problem, const Subspace& subspace, const Cubature& cubature,
                 const ReducedOptions& options = {});
-  ReducedSolver(const ReducedSolver&) = delete;   // the terms hold references to the members
+  ReducedSolver(const ReducedSolver&) = delete;  // the terms hold references to the members
   ReducedSolver& operator=(const ReducedSolver&) = delete;
 
   /// Sets the state from a full one: x projected onto the subspace by least squares on the active nodes; w, and
@@ -116,11 +115,11 @@ class ReducedSolver final : public model::BodySolver {
   const std::vector<ReducedSubstep>& last_substeps() const { return substeps_; }
 
  private:
-  class Ladder;   ///< the solver on the model's robustness ladder (model/step_ladder.hpp)
+  class Ladder;  ///< the solver on the model's robustness ladder (model/step_ladder.hpp)
   Eigen::VectorXd prescribed_state(double t) const;
   /// One substep from the current state; `startup` counts a BDF2 substep taken as backward Euler.
-  bool solve_substep(double t0, double dt, material::HessianProjection projection, model::StepStats& stats, std::string& reason,
-                     int& startup);
+  bool solve_substep(double t0, double dt, material::HessianProjection projection, model::StepStats& stats,
+                     std::string& reason, int& startup);
   /// Newmark's p̈ at the inertia nodes for the current q and time (zero without inertia).
   Eigen::VectorXd initial_acceleration() const;
   /// Adds the guard's violations to the cubature (reduced_solver_guard.cpp).
@@ -128,7 +127,7 @@ class ReducedSolver final : public model::BodySolver {
 
   const model::Problem& problem_;
   const Subspace& subspace_;
-  Cubature cubature_;                     ///< the model's cubature, grown by the guard
+  Cubature cubature_;  ///< the model's cubature, grown by the guard
   ReducedOptions options_;
   CubatureElastic elastic_;
   std::unique_ptr<CubatureGuard> guard_;
@@ -143,15 +142,15 @@ class ReducedSolver final : public model::BodySolver {
   // The reusable factorization and what it was computed for.
   Eigen::LLT<Eigen::MatrixXd> factor_;
   bool factor_valid_ = false;
-  double factor_h_ = 0.0;                 ///< ĥ of the factorized Hessian
+  double factor_h_ = 0.0;  ///< ĥ of the factorized Hessian
   material::HessianProjection factor_projection_ = material::HessianProjection::kNone;
 
   double t_ = 0.0;
-  Eigen::VectorXd q_, q_rate_;            ///< q and its backward difference (for the predictor)
-  Eigen::VectorXd q_rate_previous_;       ///< the backward difference one step earlier
-  double rate_dt_ = 0.0;                  ///< the step of q_rate_ [s]
-  int rate_steps_ = 0;                    ///< substeps behind q_rate_ (0, 1, ≥ 2)
-  model::PosedHistory history_;           ///< posed kinematics of the inertia nodes
+  Eigen::VectorXd q_, q_rate_;       ///< q and its backward difference (for the predictor)
+  Eigen::VectorXd q_rate_previous_;  ///< the backward difference one step earlier
+  double rate_dt_ = 0.0;             ///< the step of q_rate_ [s]
+  int rate_steps_ = 0;               ///< substeps behind q_rate_ (0, 1, ≥ 2)
+  model::PosedHistory history_;      ///< posed kinematics of the inertia nodes
   std::vector<ReducedSubstep> substeps_;
 };
 

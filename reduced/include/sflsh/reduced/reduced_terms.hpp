@@ -5,7 +5,8 @@
 //   ReducedElasticTerm    E(q) = Σ_c ω_c V_c Ψ(F_c(q)) by cubature (cubature_elastic.hpp); exact or PSD-projected dP/dF
 //   ReducedInertiaTerm    1/(2ĥ²)(p(q) − p̃)ᵀM(p(q) − p̃) = const + c_Mᵀq + ½ qᵀ (JᵀMJ/ĥ²) q   (reduced_inertia.hpp)
 //   ReducedGravityTerm    −gᵀM p(q) = const + c_gᵀ q
-//   ReducedPotentialTerm  Σ_k u_k(p_{n_k}(q)) over the node potentials' candidates of the substep (reduced_potentials.hpp)
+//   ReducedPotentialTerm  Σ_k u_k(p_{n_k}(q)) over the node potentials' candidates of the substep
+//   (reduced_potentials.hpp)
 // Values leave out the constants in q (the inertia and gravity terms are exactly quadratic and linear in q). The
 // finite-difference harness in tests/reduced runs over every term.
 #include <sflsh/material/psd_projection.hpp>
@@ -78,7 +79,7 @@ class ReducedGravityTerm final : public ReducedTerm {
   void update() { linear_ = inertia_.gravity_linear_term(); }
   double value(const Eigen::VectorXd& q) const override { return linear_.dot(q); }
   void add_gradient(const Eigen::VectorXd&, Eigen::VectorXd& gradient) const override { gradient += linear_; }
-  void add_hessian(const Eigen::VectorXd&, Eigen::MatrixXd&) const override {}   // linear
+  void add_hessian(const Eigen::VectorXd&, Eigen::MatrixXd&) const override {}  // linear
 
  private:
   const ReducedInertia& inertia_;
@@ -88,13 +89,16 @@ class ReducedGravityTerm final : public ReducedTerm {
 class ReducedPotentialTerm final : public ReducedTerm {
  public:
   /// The candidates are those of the potentials' last begin(); `inertia` gives the maps of the substep's end.
-  ReducedPotentialTerm(const ReducedPotentials& potentials, const ReducedInertia& inertia) : potentials_(potentials), inertia_(inertia) {}
+  ReducedPotentialTerm(const ReducedPotentials& potentials, const ReducedInertia& inertia)
+      : potentials_(potentials), inertia_(inertia) {}
   std::string_view name() const override { return "potential"; }
   double value(const Eigen::VectorXd& q) const override;
   void add_gradient(const Eigen::VectorXd& q, Eigen::VectorXd& gradient) const override {
     potentials_.add_gradient(q, inertia_, gradient);
   }
-  void add_hessian(const Eigen::VectorXd& q, Eigen::MatrixXd& hessian) const override { potentials_.add_hessian(q, inertia_, hessian); }
+  void add_hessian(const Eigen::VectorXd& q, Eigen::MatrixXd& hessian) const override {
+    potentials_.add_hessian(q, inertia_, hessian);
+  }
 
  private:
   const ReducedPotentials& potentials_;

@@ -25,12 +25,12 @@ namespace sflsh::reduced {
 
 inline constexpr int kParamsPerControl = body::kNumBetas * material::kNumKappa + material::kNumKappa;  // 33
 
-using ShapeMatrix = Eigen::Matrix<double, body::kNumBetas, material::kNumKappa>;   ///< A_i (10×3)
-using ShapeMetric = Eigen::Matrix<double, body::kNumBetas, body::kNumBetas>;       ///< Q_i (10×10)
+using ShapeMatrix = Eigen::Matrix<double, body::kNumBetas, material::kNumKappa>;  ///< A_i (10×3)
+using ShapeMetric = Eigen::Matrix<double, body::kNumBetas, body::kNumBetas>;      ///< Q_i (10×10)
 
 struct ShapeElasticity {
-  std::vector<ShapeMatrix> A;    ///< per control point
-  material::KappaMatrix b;       ///< N×3 normalized intercepts
+  std::vector<ShapeMatrix> A;  ///< per control point
+  material::KappaMatrix b;     ///< N×3 normalized intercepts
 
   int num_controls() const { return static_cast<int>(b.rows()); }
   /// A ≡ 0 and b_i = the normalized κ of every control point (a shape-independent material).

@@ -20,11 +20,10 @@
 //   young_normal = [500.0, 50000.0]            # Pa
 //   [basis]                                    # φ of build_body_layer (material::layer_basis)
 //   kind = "bounded_biharmonic"                # the only kind: 0 ≤ φ ≤ 1, Σφ = 1, Voronoi mass
-//   region = "thighs+torso+upper_arms"         # optional: the layer region of the fit (names of meshing::known_region_names, '+')
-//   mesh = "coarse"                            # optional: the layer mesh size preset of the fit (coarse | default | fine)
-//   [fit]                                      # optional metadata
-//   regularizer = "local"                      # "l2" | "local" (eq. 7)
-//   lambda = 1.0                               # λ of eq. 7, ≥ 0
+//   region = "thighs+torso+upper_arms"         # optional: the layer region of the fit (names of
+//   meshing::known_region_names, '+') mesh = "coarse"                            # optional: the layer mesh size preset
+//   of the fit (coarse | default | fine) [fit]                                      # optional metadata regularizer =
+//   "local"                      # "l2" | "local" (eq. 7) lambda = 1.0                               # λ of eq. 7, ≥ 0
 //   subjects = ["OPEN_TRAIN_1", "OPEN_TRAIN_2"]
 //   motions = ["running_on_spot"]
 //   [[control_point]]
@@ -55,36 +54,36 @@ inline constexpr int kShapeModelFileVersion = 1;
 inline constexpr std::string_view kShapeModelBasisKind = "bounded_biharmonic";
 
 struct ShapeModelControlPoint {
-  int vertex = -1;                                      ///< body template vertex index
-  std::optional<Eigen::Vector3d> position;              ///< template position of that vertex [m], for checking
-  ShapeMatrix A = ShapeMatrix::Zero();                  ///< A_i (10×3): normalized κ̂ per unit β (eq. 1)
-  Eigen::RowVector3d b = Eigen::RowVector3d::Zero();    ///< b_i: normalized κ̂ at β = 0 (h, Y_t, Y_n)
-  int line = 0;                                         ///< source line when read from a file (0 otherwise)
+  int vertex = -1;                                    ///< body template vertex index
+  std::optional<Eigen::Vector3d> position;            ///< template position of that vertex [m], for checking
+  ShapeMatrix A = ShapeMatrix::Zero();                ///< A_i (10×3): normalized κ̂ per unit β (eq. 1)
+  Eigen::RowVector3d b = Eigen::RowVector3d::Zero();  ///< b_i: normalized κ̂ at β = 0 (h, Y_t, Y_n)
+  int line = 0;                                       ///< source line when read from a file (0 otherwise)
 };
 
 /// How the model was fitted (metadata; not needed to evaluate it).
 struct ShapeModelFit {
   Regularizer regularizer = Regularizer::local;
-  double lambda = 0.0;                  ///< λ of eq. 7
-  std::vector<std::string> subjects;    ///< train subjects
-  std::vector<std::string> motions;     ///< train motions
+  double lambda = 0.0;                ///< λ of eq. 7
+  std::vector<std::string> subjects;  ///< train subjects
+  std::vector<std::string> motions;   ///< train motions
 };
 
 struct ShapeModelFile {
-  std::string body;                     ///< body model name (body::BodyModel::name)
-  double poisson = 0.2;                 ///< ν ∈ (−1, ½), uniform (SFLSH §3)
-  double saturation = 4.0;              ///< Fung saturation s > 0, uniform (SFLSH §3)
-  material::ParameterBounds bounds;     ///< κ ranges; their maxima normalize κ (κ̂ = κ / κ_max)
-  std::string region;                   ///< layer region of the fit, a meshing::region_key (empty: not recorded)
-  std::string mesh;                     ///< layer mesh size preset of the fit: coarse | default | fine (empty: not recorded)
+  std::string body;                  ///< body model name (body::BodyModel::name)
+  double poisson = 0.2;              ///< ν ∈ (−1, ½), uniform (SFLSH §3)
+  double saturation = 4.0;           ///< Fung saturation s > 0, uniform (SFLSH §3)
+  material::ParameterBounds bounds;  ///< κ ranges; their maxima normalize κ (κ̂ = κ / κ_max)
+  std::string region;                ///< layer region of the fit, a meshing::region_key (empty: not recorded)
+  std::string mesh;  ///< layer mesh size preset of the fit: coarse | default | fine (empty: not recorded)
   std::optional<ShapeModelFit> fit;
   std::vector<ShapeModelControlPoint> control_points;
-  std::string source;                   ///< the file it was read from (load_shape_model_file); empty in memory
-  int basis_line = 0;                   ///< line of [basis] in `source` (0: not read from a file)
+  std::string source;  ///< the file it was read from (load_shape_model_file); empty in memory
+  int basis_line = 0;  ///< line of [basis] in `source` (0: not read from a file)
 
   int num_controls() const { return static_cast<int>(control_points.size()); }
-  std::vector<int> vertices() const;    ///< control vertices, in file order
-  ShapeElasticity elasticity() const;   ///< (A_i, b_i) in file order
+  std::vector<int> vertices() const;   ///< control vertices, in file order
+  ShapeElasticity elasticity() const;  ///< (A_i, b_i) in file order
 };
 
 /// A shape-model file for `elasticity` on `control_vertices` (body vertex indices, the order of
@@ -98,15 +97,17 @@ ShapeModelFile load_shape_model_file(const std::filesystem::path& path);
 
 /// Writes the file atomically after validate(); numbers as shortest round-trip decimals, so loading
 /// gives back identical A_i, b_i. `header` becomes a leading comment block (one "# " line per line).
-void save_shape_model_file(const std::filesystem::path& path, const ShapeModelFile& model, const std::string& header = "");
+void save_shape_model_file(const std::filesystem::path& path, const ShapeModelFile& model,
+                           const std::string& header = "");
 
 /// Throws unless a shape model recorded with `region` and `mesh` (when it records them) fits layers of region
 /// `layer_region` (a meshing::region_key) and mesh preset `layer_mesh`: "<file>:<line>: region in [basis]: …".
 void check_layer_match(const ShapeModelFile& model, const std::string& layer_region, const std::string& layer_mesh,
                        std::string_view user);
 
-/// Checks the body name non-empty, ν ∈ (−1, ½), 0 < s ≤ material::kSaturationMax, the bounds, at least one control point, vertices
-/// ≥ 0 and distinct, every number finite, λ ≥ 0. Messages start with `what` (load passes "<file>:<line>").
+/// Checks the body name non-empty, ν ∈ (−1, ½), 0 < s ≤ material::kSaturationMax, the bounds, at least one control
+/// point, vertices ≥ 0 and distinct, every number finite, λ ≥ 0. Messages start with `what` (load passes
+/// "<file>:<line>").
 void validate(const ShapeModelFile& model, std::string_view what = "shape model");
 
 /// The shipped shape model, data/shape_models/default.toml (body::data_dir(); $SFLSH_DATA overrides): the

@@ -12,8 +12,8 @@
 namespace sflsh::reduced {
 
 struct SimulationJob {
-  int case_index = 0;              ///< into the cases given to run()
-  material::KappaMatrix kappa;     ///< physical control values (N × 3)
+  int case_index = 0;           ///< into the cases given to run()
+  material::KappaMatrix kappa;  ///< physical control values (N × 3)
 };
 
 class SimulationPool {
@@ -23,7 +23,8 @@ class SimulationPool {
 
   /// Per job the stacked dynamics [σ_n; σ_t] (2R, mm). The first failing job's error is rethrown on
   /// every rank (naming subject and motion).
-  std::vector<Eigen::VectorXd> run(const std::vector<const DynamicsCase*>& cases, const std::vector<SimulationJob>& jobs,
+  std::vector<Eigen::VectorXd> run(const std::vector<const DynamicsCase*>& cases,
+                                   const std::vector<SimulationJob>& jobs,
                                    const LayerParameterization& parameterization, const ReducedModel& model,
                                    const ReducedOptions& options);
 
@@ -35,8 +36,8 @@ class SimulationPool {
   int threads() const { return threads_; }
   int ranks() const { return size_; }
   int rank() const { return rank_; }
-  long simulations() const { return simulations_; }   ///< jobs run so far (all ranks)
-  double seconds() const { return seconds_; }         ///< wall time spent in run()
+  long simulations() const { return simulations_; }  ///< jobs run so far (all ranks)
+  double seconds() const { return seconds_; }        ///< wall time spent in run()
 
  private:
   int threads_ = 1;

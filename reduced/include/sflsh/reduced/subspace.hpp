@@ -16,7 +16,7 @@ namespace sflsh::reduced {
 using SparseRowMatrix = Eigen::SparseMatrix<double, Eigen::RowMajor>;
 
 struct Subspace {
-  SparseRowMatrix basis;   ///< B (N × S)
+  SparseRowMatrix basis;  ///< B (N × S)
 
   int num_nodes() const { return static_cast<int>(basis.rows()); }
   int num_functions() const { return static_cast<int>(basis.cols()); }

@@ -8,9 +8,8 @@
 // precision"), and constants in particular, so the weights of all handles sum to one (partition of unity)
 // whenever every constrained node belongs to exactly one handle. One sparse LDLᵀ factorization of the free
 // block, then one back-substitution per handle.
-#include <sflsh/reduced/subspace.hpp>
-
 #include <sflsh/meshing/types.hpp>
+#include <sflsh/reduced/subspace.hpp>
 
 #include <vector>
 
@@ -37,25 +36,27 @@ struct HandleSets {
 /// Weights of the first `columns` handles (all when −1) at every node (#N × columns, dense, not truncated).
 /// Every handle constrains the solve; only the requested columns are back-substituted. Throws when a set is
 /// empty, sets overlap, an index is out of range, or the factorization fails (a part touching no handle).
-Eigen::MatrixXd handle_weights(const RowMatrixX3d& nodes, const RowMatrixX4i& tets, const HandleSets& handles, int columns = -1);
+Eigen::MatrixXd handle_weights(const RowMatrixX3d& nodes, const RowMatrixX4i& tets, const HandleSets& handles,
+                               int columns = -1);
 
 /// Solves the same constrained minimization for arbitrary values on the constrained nodes (#N result):
 /// `values` gives the prescribed value per entry of `constrained` (used by the linear-precision test).
-Eigen::VectorXd biharmonic_interpolate(const RowMatrixX3d& nodes, const RowMatrixX4i& tets, const std::vector<int>& constrained,
-                                       const Eigen::VectorXd& values);
+Eigen::VectorXd biharmonic_interpolate(const RowMatrixX3d& nodes, const RowMatrixX4i& tets,
+                                       const std::vector<int>& constrained, const Eigen::VectorXd& values);
 
 /// How point-handle weights become the reduced basis B.
 struct BasisOptions {
-  double drop_below = 1e-3;   ///< |w| below this is dropped (relative to 1, the value at the handle)
-  int max_influences = 8;     ///< at most this many point handles per node (the largest |w|)
-  bool affine = false;        ///< affine point handles: 4 functions per handle, w_j·{1, (x̄ − c_j)/ℓ}
-  double affine_length = 0.1; ///< ℓ [m]: scales the linear functions so all coordinates are in metres
+  double drop_below = 1e-3;    ///< |w| below this is dropped (relative to 1, the value at the handle)
+  int max_influences = 8;      ///< at most this many point handles per node (the largest |w|)
+  bool affine = false;         ///< affine point handles: 4 functions per handle, w_j·{1, (x̄ − c_j)/ℓ}
+  double affine_length = 0.1;  ///< ℓ [m]: scales the linear functions so all coordinates are in metres
 };
 
 /// B from the point-handle columns of `weights` (#N × P), zero rows on `attached` nodes.
 /// @param[in] nodes         #N by 3 template positions (centres c_j of affine handles) [m]
 /// @param[in] handle_nodes  P node indices (c_j = nodes.row(handle_nodes[j]))
-Subspace point_handle_subspace(const Eigen::MatrixXd& weights, const std::vector<char>& attached, const RowMatrixX3d& nodes,
-                               const std::vector<int>& handle_nodes, const BasisOptions& options);
+Subspace point_handle_subspace(const Eigen::MatrixXd& weights, const std::vector<char>& attached,
+                               const RowMatrixX3d& nodes, const std::vector<int>& handle_nodes,
+                               const BasisOptions& options);
 
 }  // namespace sflsh::reduced

@@ -19,8 +19,8 @@ namespace sflsh::reduced {
 
 /// ∂P/∂Y_t and ∂P/∂Y_n at fixed F [dimensionless: Pa per Pa].
 struct YoungStressDerivative {
-  Eigen::Matrix3d tangent = Eigen::Matrix3d::Zero();   ///< ∂P/∂Y_t
-  Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();    ///< ∂P/∂Y_n
+  Eigen::Matrix3d tangent = Eigen::Matrix3d::Zero();  ///< ∂P/∂Y_t
+  Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();   ///< ∂P/∂Y_n
 };
 
 /// The moduli (Y_t, Y_n) [Pa] a material was made with, read back from P_Y (eigenvalue Y_t^{1/4} on the tangent

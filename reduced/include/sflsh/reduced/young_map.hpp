@@ -5,8 +5,8 @@
 // with φ the region's biharmonic basis (R × N), X the retargeter's harmonic extension of a skin field to the
 // nodes (linear for fixed geometry) and T the mean over a tet's four nodes; the same W serves Y_t and Y_n. The
 // thickness h moves the rest geometry (retargeting) and is not part of this map.
-#include <sflsh/model/body_layer.hpp>
 #include <sflsh/meshing/retarget.hpp>
+#include <sflsh/model/body_layer.hpp>
 #include <sflsh/reduced/subspace.hpp>
 
 #include <vector>
@@ -19,8 +19,8 @@ namespace sflsh::reduced {
 /// @param[in] phi              #region vertices by N basis
 /// @param[in] tets             mesh tets (e.g. Cubature::tets)
 /// @param[in] stiffness_scale  BodyLayerOptions::stiffness_scale (multiplies Y)
-Eigen::MatrixXd young_tet_map(const meshing::Retargeter& retargeter, const Eigen::MatrixXd& phi, const std::vector<int>& tets,
-                              double stiffness_scale = 1.0);
+Eigen::MatrixXd young_tet_map(const meshing::Retargeter& retargeter, const Eigen::MatrixXd& phi,
+                              const std::vector<int>& tets, double stiffness_scale = 1.0);
 
 /// The material maps of one body layer: its basis and retargeter, rebuilt once (the layer keeps neither).
 /// The layer and its body model must outlive the map.
@@ -65,7 +65,7 @@ class SkinDisplacementMap {
  private:
   const model::BodyLayer& layer_;
   const Subspace& subspace_;
-  SparseRowMatrix skin_basis_;   ///< K B (R × S), a few non-zeros per row
+  SparseRowMatrix skin_basis_;  ///< K B (R × S), a few non-zeros per row
 };
 
 }  // namespace sflsh::reduced

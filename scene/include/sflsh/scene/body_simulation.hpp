@@ -39,12 +39,12 @@ namespace sflsh::scene {
 struct BodyRunSettings {
   std::string solver = "full";  ///< full | reduced
   body::SubjectSelection subject;
-  std::string motion;           ///< a procedural name or an AMASS .npz path
-  int frames = 0;               ///< 0: the motion's length
+  std::string motion;  ///< a procedural name or an AMASS .npz path
+  int frames = 0;      ///< 0: the motion's length
   double fps = 60.0;
   int substeps = 1;
-  std::string mesh = "default";               ///< coarse | default | fine
-  model::LayerSettings layer;                 ///< mesher, material, cache, density, gravity, stiffness, mass
+  std::string mesh = "default";  ///< coarse | default | fine
+  model::LayerSettings layer;    ///< mesher, material, cache, density, gravity, stiffness, mass
   /// A material held in memory (the Python module's Material), used instead of layer.material when set.
   std::shared_ptr<const material::MaterialFile> material_data;
   std::string integrator = "backward_euler";  ///< backward_euler | bdf2 | newmark (time_integrator.hpp)
@@ -57,8 +57,8 @@ struct BodyRunSettings {
   int cubature = -1;                      ///< −1 auto, 0 every tet, else a tet count
   std::string cubature_weights = "nnls";  ///< nnls | voronoi
   bool affine = false;
-  double newton_tolerance = 1e-5;         ///< [m] reduced::ReducedOptions::step_tolerance
-  bool allow_long = false;                ///< run even when the work estimate exceeds WorkLimits (--allow-long)
+  double newton_tolerance = 1e-5;  ///< [m] reduced::ReducedOptions::step_tolerance
+  bool allow_long = false;         ///< run even when the work estimate exceeds WorkLimits (--allow-long)
 };
 
 /// How a run reports while it runs.
@@ -131,7 +131,7 @@ class BodySimulation {
   int rank_ = 0;
   int size_ = 1;
   Clock::time_point t_start_;
-  std::unique_ptr<body::BodyModel> body_;   ///< heap: the layer keeps a pointer to it
+  std::unique_ptr<body::BodyModel> body_;  ///< heap: the layer keeps a pointer to it
   std::string subject_label_;
   body::Betas beta_ = body::Betas::Zero();
   body::Motion motion_;

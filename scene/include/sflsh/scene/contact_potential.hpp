@@ -4,14 +4,16 @@
 // obstacle j with signed distance φ_j (obstacle.hpp):
 //   u_ij(p) = ½ k_i (δ − φ_j(p))²  if φ_j(p) < δ,  0 otherwise,   k_i = stiffness · area_i · factor_i
 // C¹ in p (value and gradient vanish at φ = δ). Model, units and defaults: docs/contact.md.
+#include <sflsh/model/node_potential.hpp>
+#include <sflsh/scene/obstacle.hpp>
+#include <sflsh/scene/rigid_motion.hpp>
+
 #include <Eigen/Core>
+
 #include <atomic>
 #include <cstdint>
 #include <limits>
 #include <memory>
-#include <sflsh/model/node_potential.hpp>
-#include <sflsh/scene/obstacle.hpp>
-#include <sflsh/scene/rigid_motion.hpp>
 #include <vector>
 
 namespace sflsh::scene {

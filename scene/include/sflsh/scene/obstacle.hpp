@@ -5,11 +5,13 @@
 // φ is a true (1-Lipschitz) distance for every shape, so |∇φ| = 1 and ∇²φ ∇φ = 0 wherever φ is smooth.
 // Where it is not smooth (medial axes inside, the surface of a mesh at a vertex/edge, the axis of a
 // capsule, the centre of a sphere) each shape returns one of the one-sided values and says which below.
+#include <sflsh/meshing/types.hpp>
+
 #include <Eigen/Core>
+
 #include <filesystem>
 #include <limits>
 #include <memory>
-#include <sflsh/meshing/types.hpp>
 #include <vector>
 
 namespace sflsh::scene {

@@ -2,9 +2,11 @@
 // How a rigid obstacle moves: fixed, prescribed by keyframes, or free (translation under gravity and the
 // contact reaction). ContactPotential asks a motion for the pose at the end of each substep and, after an
 // accepted substep, commits it with the contact force the body exerted on the object in that substep.
+#include <sflsh/scene/obstacle.hpp>
+
 #include <Eigen/Core>
 #include <Eigen/Geometry>
-#include <sflsh/scene/obstacle.hpp>
+
 #include <vector>
 
 namespace sflsh::scene {
@@ -97,7 +99,7 @@ class FreeMotion final : public RigidMotion {
   Pose pose_;
   Eigen::Vector3d velocity_;
   Eigen::Vector3d force_ = Eigen::Vector3d::Zero();  ///< F_n: contact force of the last committed substep
-  double contact_stiffness_ = 0.0;                    ///< k of set_contact_stiffness [N/m]
+  double contact_stiffness_ = 0.0;                   ///< k of set_contact_stiffness [N/m]
   double t_;
 };
 

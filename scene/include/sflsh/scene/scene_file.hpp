@@ -4,6 +4,7 @@
 // Every error names the file and line: unknown keys, missing keys, wrong types, impossible values.
 #include <sflsh/core/vtk_io.hpp>
 #include <sflsh/model/time_integrator.hpp>
+
 #include <Eigen/Core>
 
 #include <cstdint>
@@ -16,10 +17,10 @@ namespace sflsh::scene {
 
 /// What a scene asks to simulate. Anything not switched on is not built.
 struct Effects {
-  bool inertia = false;          ///< dynamics (backward Euler); off: quasi-static equilibrium per frame
-  bool gravity = false;          ///< g = (0, −9.81, 0) on the soft tissue (and on free objects)
-  bool object_contact = false;   ///< rigid objects against the soft layers
-  bool body_contact = false;     ///< bodies against each other
+  bool inertia = false;         ///< dynamics (backward Euler); off: quasi-static equilibrium per frame
+  bool gravity = false;         ///< g = (0, −9.81, 0) on the soft tissue (and on free objects)
+  bool object_contact = false;  ///< rigid objects against the soft layers
+  bool body_contact = false;    ///< bodies against each other
   /// Whether any effect deforms the tissue (otherwise every body is only skinned).
   bool elastic() const { return inertia || gravity || object_contact || body_contact; }
 };
@@ -29,8 +30,8 @@ const char* solver_name(SolverKind kind);
 
 /// A rigid placement in the world: p_world = R_y(yaw) p + position (Y up).
 struct Placement {
-  Eigen::Vector3d position = Eigen::Vector3d::Zero();   ///< [m]
-  double yaw_degrees = 0.0;                             ///< about +Y
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();  ///< [m]
+  double yaw_degrees = 0.0;                            ///< about +Y
 };
 
 /// A keyframe of a prescribed position (and, for objects, orientation).
@@ -50,26 +51,26 @@ inline constexpr double kMaxSceneDuration = 86400.0;
 
 struct BodySpec {
   std::string name;
-  int line = 0;                       ///< of its [[body]] table
-  std::string body_path;              ///< SMPL-layout .npz; empty: the open body
-  std::string subject;                ///< a subject name (data/subjects.toml) …
-  std::optional<std::vector<double>> betas;   ///< … or β (up to 10 values)
-  std::string motion = "rest";        ///< procedural name, an AMASS .npz, or "rest" (the rest pose, still)
-  double motion_offset = 0.0;         ///< [s] the body's motion starts this far into the motion
+  int line = 0;                              ///< of its [[body]] table
+  std::string body_path;                     ///< SMPL-layout .npz; empty: the open body
+  std::string subject;                       ///< a subject name (data/subjects.toml) …
+  std::optional<std::vector<double>> betas;  ///< … or β (up to 10 values)
+  std::string motion = "rest";               ///< procedural name, an AMASS .npz, or "rest" (the rest pose, still)
+  double motion_offset = 0.0;                ///< [s] the body's motion starts this far into the motion
   /// Root translation keyframes [m] added to the motion's (the body's own frame): a body walking into
   /// another. Empty: none.
   std::vector<SceneKeyframe> approach;
   Placement placement;
   SolverKind solver = SolverKind::reduced;
-  std::string mesh = "coarse";        ///< coarse | default | fine
-  std::string material;               ///< material file; empty: the defaults at control_points
+  std::string mesh = "coarse";  ///< coarse | default | fine
+  std::string material;         ///< material file; empty: the defaults at control_points
   int control_points = 12;
-  int handles = 30;                   ///< reduced: point handles
-  int cubature = -1;                  ///< reduced: −1 auto, 0 every tet
-  double density = 1000.0;            ///< [kg/m³]
+  int handles = 30;         ///< reduced: point handles
+  int cubature = -1;        ///< reduced: −1 auto, 0 every tet
+  double density = 1000.0;  ///< [kg/m³]
   double stiffness_scale = 1.0;
-  model::Integrator integrator = model::Integrator::backward_euler;   ///< `integrator` (docs/integrators.md)
-  model::MassKind mass = model::MassKind::lumped;                      ///< `mass`
+  model::Integrator integrator = model::Integrator::backward_euler;  ///< `integrator` (docs/integrators.md)
+  model::MassKind mass = model::MassKind::lumped;                    ///< `mass`
 };
 
 enum class ShapeKind { plane, sphere, box, capsule, mesh };
@@ -81,27 +82,27 @@ struct ObjectSpec {
   std::string name;
   int line = 0;
   ShapeKind shape = ShapeKind::sphere;
-  double radius = 0.1;                                  ///< sphere, capsule [m]
-  double length = 0.2;                                  ///< capsule: segment length along its local Z [m]
-  Eigen::Vector3d half_extents = Eigen::Vector3d::Constant(0.1);   ///< box [m]
-  Eigen::Vector3d normal = Eigen::Vector3d::UnitY();    ///< plane (world; through `position`)
-  std::string mesh_path;                                ///< mesh: a closed triangle mesh file
-  double scale = 1.0;                                   ///< mesh: uniform scale of the file's coordinates
-  Eigen::Vector3d position = Eigen::Vector3d::Zero();   ///< [m] world (the start for prescribed / free)
-  Eigen::Vector3d rotation = Eigen::Vector3d::Zero();   ///< axis-angle [degrees]
+  double radius = 0.1;                                            ///< sphere, capsule [m]
+  double length = 0.2;                                            ///< capsule: segment length along its local Z [m]
+  Eigen::Vector3d half_extents = Eigen::Vector3d::Constant(0.1);  ///< box [m]
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitY();              ///< plane (world; through `position`)
+  std::string mesh_path;                                          ///< mesh: a closed triangle mesh file
+  double scale = 1.0;                                             ///< mesh: uniform scale of the file's coordinates
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();             ///< [m] world (the start for prescribed / free)
+  Eigen::Vector3d rotation = Eigen::Vector3d::Zero();             ///< axis-angle [degrees]
   ObjectMotionKind motion = ObjectMotionKind::fixed;
-  std::vector<SceneKeyframe> keyframes;                      ///< prescribed: at least two, increasing t
-  bool smooth = true;                                   ///< prescribed: C¹ (Catmull–Rom) instead of piecewise linear
-  double mass = 1.0;                                    ///< free [kg]
-  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();   ///< free: initial [m/s]
+  std::vector<SceneKeyframe> keyframes;                ///< prescribed: at least two, increasing t
+  bool smooth = true;                                  ///< prescribed: C¹ (Catmull–Rom) instead of piecewise linear
+  double mass = 1.0;                                   ///< free [kg]
+  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();  ///< free: initial [m/s]
 };
 
 /// Penalty contact (docs/contact.md): all optional; zero / negative stiffness means the automatic one.
 struct ContactSpec {
-  double stiffness = 0.0;          ///< [N/m] per skin node; 0: automatic
-  double tolerance = 1e-3;         ///< [m] deepest accepted penetration
-  double margin = 1e-3;            ///< [m] the penalty acts within this distance outside the obstacle
-  int max_refinements = 4;         ///< stiffenings per substep when the tolerance is exceeded
+  double stiffness = 0.0;   ///< [N/m] per skin node; 0: automatic
+  double tolerance = 1e-3;  ///< [m] deepest accepted penetration
+  double margin = 1e-3;     ///< [m] the penalty acts within this distance outside the obstacle
+  int max_refinements = 4;  ///< stiffenings per substep when the tolerance is exceeded
 };
 
 /// The paper's Fig. 1: `count` avatars with random shapes, each with its own shape-dependent material.
@@ -109,27 +110,27 @@ struct CrowdSpec {
   int line = 0;
   int count = 25;
   std::uint64_t seed = 1;
-  double shape_sigma = 1.0;          ///< β ~ N(0, σ²) per component, clamped to ±3
+  double shape_sigma = 1.0;  ///< β ~ N(0, σ²) per component, clamped to ±3
   std::string motion = "dance";
-  double max_offset = 2.0;           ///< [s] per-avatar time offsets uniform in [0, max_offset)
-  double spacing = 1.0;              ///< [m] grid spacing
+  double max_offset = 2.0;  ///< [s] per-avatar time offsets uniform in [0, max_offset)
+  double spacing = 1.0;     ///< [m] grid spacing
   int columns = 5;
-  std::string shape_model;           ///< shape-model file; empty: data/shape_models/default.toml
+  std::string shape_model;  ///< shape-model file; empty: data/shape_models/default.toml
   SolverKind solver = SolverKind::reduced;
   std::string mesh = "coarse";
   int handles = 30;
-  model::Integrator integrator = model::Integrator::backward_euler;   ///< `integrator`
-  model::MassKind mass = model::MassKind::lumped;                      ///< `mass`
+  model::Integrator integrator = model::Integrator::backward_euler;  ///< `integrator`
+  model::MassKind mass = model::MassKind::lumped;                    ///< `mass`
   int cubature = -1;
 };
 
 struct OutputSpec {
-  bool layer = false;        ///< also the tet layers (<body>_layer.pvd)
-  bool frames = true;        ///< the .pvd series (off: summary.json only)
-  int every = 1;             ///< write every N-th frame (frame 0 and the last frame always)
+  bool layer = false;  ///< also the tet layers (<body>_layer.pvd)
+  bool frames = true;  ///< the .pvd series (off: summary.json only)
+  int every = 1;       ///< write every N-th frame (frame 0 and the last frame always)
   /// The arrays of the body (and layer) frames, names of model::frame_field_names(); nullopt: all.
   std::optional<std::vector<std::string>> fields;
-  vtk::Compression compression = vtk::Compression::lz4;   ///< of the frame files: lz4 | zlib | none
+  vtk::Compression compression = vtk::Compression::lz4;  ///< of the frame files: lz4 | zlib | none
   /// "vtk": a .pvd of .vtp frames per body and object, and scene.pvd over all of them; "xdmf": <name>.xmf +
   /// <name>.h5 per body and for the objects (docs/output.md), no collection.
   std::string format = "vtk";
@@ -138,10 +139,10 @@ struct OutputSpec {
 struct Scene {
   std::filesystem::path file;
   std::string name;
-  double fps = 60.0;         ///< output frame rate
-  int frames = 0;            ///< frames (0: from duration)
-  double duration = 1.0;     ///< [s]
-  int substeps = 1;          ///< solver steps per frame
+  double fps = 60.0;      ///< output frame rate
+  int frames = 0;         ///< frames (0: from duration)
+  double duration = 1.0;  ///< [s]
+  int substeps = 1;       ///< solver steps per frame
   Effects effects;
   std::vector<BodySpec> bodies;
   std::vector<ObjectSpec> objects;

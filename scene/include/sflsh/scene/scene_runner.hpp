@@ -21,20 +21,20 @@
 namespace sflsh::scene {
 
 struct SceneRunOptions {
-  int frames = 0;                     ///< > 0 overrides the scene's frame count
-  std::filesystem::path out;          ///< run folder; empty: nothing is written
-  std::filesystem::path cache_dir;    ///< template meshes and reduced models; empty: the default
-  std::filesystem::path data_dir;     ///< the project's data folder (default shape model of crowds)
-  int threads = 0;                    ///< bodies solved in parallel when they do not interact (0: all cores)
-  bool write_frames = true;           ///< false: summary.json only
-  int every = 0;                      ///< > 0 overrides the scene's [output] every (write every N-th frame)
-  bool background_writing = true;     ///< false: frame files are written on the stepping thread
+  int frames = 0;                   ///< > 0 overrides the scene's frame count
+  std::filesystem::path out;        ///< run folder; empty: nothing is written
+  std::filesystem::path cache_dir;  ///< template meshes and reduced models; empty: the default
+  std::filesystem::path data_dir;   ///< the project's data folder (default shape model of crowds)
+  int threads = 0;                  ///< bodies solved in parallel when they do not interact (0: all cores)
+  bool write_frames = true;         ///< false: summary.json only
+  int every = 0;                    ///< > 0 overrides the scene's [output] every (write every N-th frame)
+  bool background_writing = true;   ///< false: frame files are written on the stepping thread
   /// true: bodies that cannot touch each other in a step form separate groups stepped in parallel; false: one
   /// Gauss–Seidel sweep over all bodies (the reference the groups must reproduce exactly).
   bool group_bodies = true;
-  bool allow_long = false;            ///< run even when the work estimate exceeds WorkLimits (--allow-long)
-  int rank = 0;                       ///< MPI rank: only rank 0 writes
-  nlohmann::json header;              ///< summary header (command line, versions)
+  bool allow_long = false;  ///< run even when the work estimate exceeds WorkLimits (--allow-long)
+  int rank = 0;             ///< MPI rank: only rank 0 writes
+  nlohmann::json header;    ///< summary header (command line, versions)
 };
 
 /// The size of the run before anything is built: bodies (the crowd's count included), their solver steps

@@ -30,13 +30,13 @@ inline constexpr double kDynaFps = 60.0;
 
 /// Bounds on a DYNA file. Opening checks the counts from the dataset shapes; reading checks the bytes it
 /// is about to allocate (V × 3 × frames read × 8 B) and then every value.
-inline constexpr std::size_t kMaxDynaVertices = 1000000;      ///< vertices per registration
-inline constexpr std::size_t kMaxDynaFaces = 4000000;         ///< rows of `faces`
-inline constexpr std::size_t kMaxDynaFrames = 2147483647;     ///< frames of one dataset (fits `int`)
+inline constexpr std::size_t kMaxDynaVertices = 1000000;                ///< vertices per registration
+inline constexpr std::size_t kMaxDynaFaces = 4000000;                   ///< rows of `faces`
+inline constexpr std::size_t kMaxDynaFrames = 2147483647;               ///< frames of one dataset (fits `int`)
 inline constexpr std::size_t kMaxDynaReadBytes = std::size_t{1} << 31;  ///< positions read at once: 2 GiB
-inline constexpr double kMaxDynaMetres = 1e4;                 ///< |coordinate| of a registered vertex [m]
-inline constexpr double kMinDynaSpan = 0.01;                  ///< smallest extent of one frame's vertices [m]
-inline constexpr double kMinDynaFps = 1.0;                    ///< "fps" attribute bounds [Hz]
+inline constexpr double kMaxDynaMetres = 1e4;                           ///< |coordinate| of a registered vertex [m]
+inline constexpr double kMinDynaSpan = 0.01;                            ///< smallest extent of one frame's vertices [m]
+inline constexpr double kMinDynaFps = 1.0;                              ///< "fps" attribute bounds [Hz]
 inline constexpr double kMaxDynaFps = 10000.0;
 
 /// DYNA sequence names (docs/physics.md §3.2), used to split keys whose subject contains '_'.
@@ -62,10 +62,10 @@ std::string sequence_of(const std::string& key);
 
 /// One sequence as read from (or to be written to) a DYNA file.
 struct DynaSequence {
-  std::string key;                    ///< "<subject>_<sequence>"
-  std::vector<RowMatrixX3d> frames;   ///< T frames of V×3 vertex positions [m]
-  Attributes attributes;              ///< the dataset's attributes
-  double fps = kDynaFps;              ///< dataset "fps", else file "fps", else 60
+  std::string key;                   ///< "<subject>_<sequence>"
+  std::vector<RowMatrixX3d> frames;  ///< T frames of V×3 vertex positions [m]
+  Attributes attributes;             ///< the dataset's attributes
+  double fps = kDynaFps;             ///< dataset "fps", else file "fps", else 60
 
   int num_frames() const { return static_cast<int>(frames.size()); }
   int num_vertices() const { return frames.empty() ? 0 : static_cast<int>(frames.front().rows()); }
@@ -76,7 +76,7 @@ struct DynaSequenceInfo {
   std::string key;
   int vertices = 0;
   int frames = 0;
-  std::string dtype;                  ///< "float32" or "float64"
+  std::string dtype;  ///< "float32" or "float64"
 };
 
 /// A DYNA file opened for reading. Opening checks the layout (faces, every dataset's rank and shape,
@@ -147,7 +147,7 @@ class DynaWriter {
 };
 
 /// One-call writer: faces, sequences, file attributes (atomic).
-void write_dyna_file(const std::filesystem::path& path, const RowMatrixX3i& faces, const std::vector<DynaSequence>& sequences,
-                     const Attributes& file_attributes = {});
+void write_dyna_file(const std::filesystem::path& path, const RowMatrixX3i& faces,
+                     const std::vector<DynaSequence>& sequences, const Attributes& file_attributes = {});
 
 }  // namespace sflsh::validate

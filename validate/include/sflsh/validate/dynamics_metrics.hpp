@@ -51,10 +51,10 @@ class NeutralPullback {
 
 /// Per-vertex dynamics amplitudes of one sequence.
 struct DynamicsResult {
-  Eigen::VectorXd sigma;            ///< σ_i per body vertex [m]
-  Eigen::VectorXd sigma_normal;     ///< σ_i^n [m]
-  Eigen::VectorXd sigma_tangent;    ///< σ_i^t [m]
-  std::vector<int> soft_vertices;   ///< the region the summary means are taken over (ascending)
+  Eigen::VectorXd sigma;           ///< σ_i per body vertex [m]
+  Eigen::VectorXd sigma_normal;    ///< σ_i^n [m]
+  Eigen::VectorXd sigma_tangent;   ///< σ_i^t [m]
+  std::vector<int> soft_vertices;  ///< the region the summary means are taken over (ascending)
   int frames = 0;
 
   /// mean_i σ_i over the soft-region vertices (the Table-2 scalar) [m]; 0 when the region is empty.

@@ -18,26 +18,26 @@ struct ValidateConfig {
   std::string preset = "quick";
   meshing::SizePreset mesh = meshing::SizePreset::coarse;
   int point_handles = 30;
-  int cubature = -1;                          ///< −1: auto
-  std::vector<std::string> train_subjects;    ///< fit on these
-  std::vector<std::string> test_subjects;     ///< generalization
+  int cubature = -1;                        ///< −1: auto
+  std::vector<std::string> train_subjects;  ///< fit on these
+  std::vector<std::string> test_subjects;   ///< generalization
   std::vector<std::string> train_motions{"one_leg_jump", "running_on_spot", "shake_hips"};
   std::vector<std::string> test_motions{"jiggle_on_toes", "shake_shoulders"};
-  int frames = 0;                             ///< per clip; 0 = the motions' default length
+  int frames = 0;  ///< per clip; 0 = the motions' default length
   std::vector<int> stages{1, 12, 24, 84};
-  int iterations = 8;                         ///< per stage
-  std::vector<double> lambdas{0.01, 0.1, 1.0};///< cross-validation sweep (Fig. 5)
+  int iterations = 8;                           ///< per stage
+  std::vector<double> lambdas{0.01, 0.1, 1.0};  ///< cross-validation sweep (Fig. 5)
   bool cross_validation = true;
-  int threads = 0;                            ///< 0: all
-  double thickness_max = 0.0;                 ///< 0: what the mesh size retargets validly
+  int threads = 0;             ///< 0: all
+  double thickness_max = 0.0;  ///< 0: what the mesh size retargets validly
   /// DYNA files: when given, the ground truth comes from their registrations instead of the synthetic
   /// solver runs. Train subjects are the files' subject ids (all that have every train motion, or
   /// train_subjects when set); their β and per-frame poses are fitted (pose_fit.hpp) and σ* measured by
   /// dynamics_metrics on the layer's region. Test subjects (β from data/*subjects.toml) have no truth.
   std::vector<std::filesystem::path> dyna;
-  std::filesystem::path body_path;            ///< body model (empty: the open body); SMPL for DYNA data
-  bool preset_subjects_overridden = false;    ///< train_subjects were chosen by the user (DYNA: select those ids)
-  std::filesystem::path cache_dir;            ///< template mesh cache (empty: default)
+  std::filesystem::path body_path;          ///< body model (empty: the open body); SMPL for DYNA data
+  bool preset_subjects_overridden = false;  ///< train_subjects were chosen by the user (DYNA: select those ids)
+  std::filesystem::path cache_dir;          ///< template mesh cache (empty: default)
   bool progress = true;
 
   /// The presets: "quick" (coarse mesh, 3 train + 2 test subjects, one train and one test motion, 40
@@ -55,6 +55,7 @@ nlohmann::json run_validation(const ValidateConfig& config, const std::filesyste
 /// `sflsh groundtruth`: only the ground truth of every (train and test subject, train and test motion) of
 /// `config`, written by write_ground_truth_files (groundtruth.h5 in the DYNA layout, truth/), plus
 /// summary.json with the mean σ per case. Shares the state/groundtruth cache layout with run_validation.
-nlohmann::json run_ground_truth(const ValidateConfig& config, const std::filesystem::path& out_dir, const nlohmann::json& header);
+nlohmann::json run_ground_truth(const ValidateConfig& config, const std::filesystem::path& out_dir,
+                                const nlohmann::json& header);
 
 }  // namespace sflsh::validate

@@ -18,24 +18,25 @@ struct GroundTruthCase {
   std::string subject, motion;
   body::Betas beta = body::Betas::Zero();
   double fps = 60.0;
-  Eigen::VectorXd sigma_normal, sigma_tangent;   ///< per region vertex [mm]
-  material::KappaMatrix kappa;                   ///< the true κ per region vertex (physical)
-  std::vector<body::RowMatrixX3d> posed;         ///< whole posed body per frame [m] (empty unless asked)
+  Eigen::VectorXd sigma_normal, sigma_tangent;  ///< per region vertex [mm]
+  material::KappaMatrix kappa;                  ///< the true κ per region vertex (physical)
+  std::vector<body::RowMatrixX3d> posed;        ///< whole posed body per frame [m] (empty unless asked)
   double seconds = 0.0;
   int newton_iterations = 0;
 
-  Eigen::VectorXd sigma() const;                 ///< [σ*_n; σ*_t] (2R), the fit's target layout
-  double mean_sigma() const;                     ///< mean over region vertices of √(σ_n² + σ_t²) [mm]
+  Eigen::VectorXd sigma() const;  ///< [σ*_n; σ*_t] (2R), the fit's target layout
+  double mean_sigma() const;      ///< mean over region vertices of √(σ_n² + σ_t²) [mm]
 };
 
 struct GroundTruthOptions {
   material::ParameterBounds bounds;
-  bool keep_frames = true;       ///< fill GroundTruthCase::posed
+  bool keep_frames = true;  ///< fill GroundTruthCase::posed
 };
 
 /// Runs the full-space solver (one process, PETSc on MPI_COMM_SELF) over the layer's motion with the true
 /// material of `layer.beta`. `parameterization` supplies the retargeter of the layer's template.
-GroundTruthCase simulate_ground_truth(const model::BodyLayer& layer, const body::Motion& motion, const std::string& subject,
+GroundTruthCase simulate_ground_truth(const model::BodyLayer& layer, const body::Motion& motion,
+                                      const std::string& subject,
                                       const reduced::LayerParameterization& parameterization,
                                       const model::BodyLayerOptions& layer_options, const GroundTruthOptions& options);
 
@@ -55,6 +56,7 @@ namespace sflsh::validate {
 /// `<dir>/truth/<subject>.npz` (region_vertices, kappa per region vertex [h, Pa, Pa], beta) and
 /// `<dir>/truth/true_material.json`. Files are staged in `run` (atomic). Cases need their posed frames.
 void write_ground_truth_files(RunFolder& run, const body::BodyModel& model, const meshing::LayerMesh& mesh,
-                              const std::vector<const GroundTruthCase*>& cases, const material::ParameterBounds& bounds);
+                              const std::vector<const GroundTruthCase*>& cases,
+                              const material::ParameterBounds& bounds);
 
 }  // namespace sflsh::validate

@@ -25,39 +25,39 @@ namespace sflsh::validate {
 using body::RowMatrixX3d;
 
 struct PoseFitOptions {
-  std::vector<int> soft_vertices;   ///< body vertices whose residuals are down-weighted
-  double soft_weight = 0.05;        ///< w_i of the soft vertices (squared-residual weight; 1 elsewhere)
-  int max_evaluations = 100;        ///< per Levenberg–Marquardt solve (residual evaluations)
-  double tolerance = 1e-7;          ///< relative tolerance on the step and on the reduction of the sum of squares
+  std::vector<int> soft_vertices;     ///< body vertices whose residuals are down-weighted
+  double soft_weight = 0.05;          ///< w_i of the soft vertices (squared-residual weight; 1 elsewhere)
+  int max_evaluations = 100;          ///< per Levenberg–Marquardt solve (residual evaluations)
+  double tolerance = 1e-7;            ///< relative tolerance on the step and on the reduction of the sum of squares
   double absolute_tolerance = 1e-10;  ///< [m] a fit whose weighted RMS residual falls below this is exact
-  int vertex_stride = 2;            ///< fit on vertices 0, s, 2s, … (1: every vertex)
-  int shape_frames = 4;             ///< frames used for the β fit (evenly spaced, first and last included)
-  int shape_evaluations = 60;       ///< outer LM evaluations of the β fit (each re-fits the shape frames' poses)
+  int vertex_stride = 2;              ///< fit on vertices 0, s, 2s, … (1: every vertex)
+  int shape_frames = 4;               ///< frames used for the β fit (evenly spaced, first and last included)
+  int shape_evaluations = 60;         ///< outer LM evaluations of the β fit (each re-fits the shape frames' poses)
   Eigen::Matrix3d world_from_body = Eigen::Matrix3d::Identity();  ///< applied to posed vertices before comparing
-  bool progress = false;            ///< show a progress line
+  bool progress = false;                                          ///< show a progress line
 };
 
 /// How one frame's fit went.
 struct FrameFitReport {
   int frame = 0;
-  double rms = 0.0;            ///< sqrt(mean_i ‖v_i − y_i‖²) over every vertex [m]
-  double rms_rigid = 0.0;      ///< the same over the vertices outside the soft region [m]
+  double rms = 0.0;        ///< sqrt(mean_i ‖v_i − y_i‖²) over every vertex [m]
+  double rms_rigid = 0.0;  ///< the same over the vertices outside the soft region [m]
   int iterations = 0;
   int evaluations = 0;
   bool converged = false;
-  std::string status;          ///< Levenberg–Marquardt's stopping reason
+  std::string status;  ///< Levenberg–Marquardt's stopping reason
 };
 
 struct PoseFitResult {
   body::Betas beta = body::Betas::Zero();
   bool beta_fitted = false;
-  int shape_iterations = 0;               ///< outer LM iterations of the β fit
+  int shape_iterations = 0;  ///< outer LM iterations of the β fit
   bool shape_converged = true;
-  body::Motion motion;                    ///< fitted θ_t, trans_t; fps as given; world_from_body of the options
+  body::Motion motion;  ///< fitted θ_t, trans_t; fps as given; world_from_body of the options
   std::vector<FrameFitReport> frames;
   int unconverged_frames = 0;
-  double max_rms = 0.0;                   ///< [m]
-  double mean_rms = 0.0;                  ///< [m]
+  double max_rms = 0.0;   ///< [m]
+  double mean_rms = 0.0;  ///< [m]
   double seconds = 0.0;
 };
 

@@ -46,8 +46,8 @@ class PosedModel {
   RowMatrixX3d shaped_;
   body::JointPositions joints_;
   Eigen::Matrix3d world_from_body_;
-  std::vector<std::vector<std::pair<int, double>>> weights_;   ///< per vertex: its non-zero skinning weights
-  std::array<std::uint32_t, body::kNumJoints> ancestors_{};    ///< bit j of ancestors_[k]: j ⪰ k (k included)
+  std::vector<std::vector<std::pair<int, double>>> weights_;  ///< per vertex: its non-zero skinning weights
+  std::array<std::uint32_t, body::kNumJoints> ancestors_{};   ///< bit j of ancestors_[k]: j ⪰ k (k included)
 };
 
 /// Splits / joins the parameter vector.

@@ -11,15 +11,15 @@
 namespace sflsh::validate {
 
 struct RegistrationMetrics {
-  PoseFitResult fit;          ///< β, θ_t, trans_t and the per-frame fit reports
-  DynamicsResult dynamics;    ///< σ, σ_n, σ_t per body vertex [m]
-  double metrics_seconds = 0.0;   ///< the pull-back and σ (the fit's own time is fit.seconds)
+  PoseFitResult fit;             ///< β, θ_t, trans_t and the per-frame fit reports
+  DynamicsResult dynamics;       ///< σ, σ_n, σ_t per body vertex [m]
+  double metrics_seconds = 0.0;  ///< the pull-back and σ (the fit's own time is fit.seconds)
 };
 
 /// σ of `registered` (T ≥ 2 frames of n×3 vertex positions [m], n the body's vertex count) at `fps`, with β
 /// fixed when given and fitted otherwise. `options.soft_vertices` empty: the soft region of `model`
 /// (soft_region_vertices). Throws sflsh::Error with a one-line message on bad input.
-RegistrationMetrics registration_metrics(const body::BodyModel& model, const std::vector<RowMatrixX3d>& registered, double fps,
-                                         const std::optional<body::Betas>& beta, PoseFitOptions options);
+RegistrationMetrics registration_metrics(const body::BodyModel& model, const std::vector<RowMatrixX3d>& registered,
+                                         double fps, const std::optional<body::Betas>& beta, PoseFitOptions options);
 
 }  // namespace sflsh::validate

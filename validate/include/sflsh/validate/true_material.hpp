@@ -18,8 +18,8 @@
 namespace sflsh::validate {
 
 /// κ per region vertex (R × 3, physical) of subject β.
-material::KappaMatrix true_kappa_field(const body::BodyModel& model, const meshing::LayerMesh& mesh, const body::Betas& beta,
-                                       const material::ParameterBounds& bounds);
+material::KappaMatrix true_kappa_field(const body::BodyModel& model, const meshing::LayerMesh& mesh,
+                                       const body::Betas& beta, const material::ParameterBounds& bounds);
 
 /// The formulas above as text (written beside the ground truth).
 std::string true_material_description();
