@@ -23,9 +23,20 @@ if(NOT TARGET gmsh::gmsh)
     IMPORTED_LOCATION "${GMSH_LIBRARY}" INTERFACE_INCLUDE_DIRECTORIES "${GMSH_INCLUDE_DIR}")
 endif()
 
-find_package(VTK 9 REQUIRED COMPONENTS
+# VTK from Debian's libvtk9-dev (9.1), or, on a machine with ParaView's Python (python3-paraview conflicts with
+# libvtk9-dev's python3-vtk9), the VTK 9.2 that paraview-dev installs under cmake/paraview-5.11/vtk
+# (docs/build.md, "ParaView on the same machine"). The PATHS are searched after the default locations, so
+# libvtk9-dev wins when both are present.
+set(SFLSH_VTK_COMPONENTS
   CommonCore CommonDataModel CommonExecutionModel IOXML IOLegacy FiltersGeometry
   RenderingCore RenderingOpenGL2 InteractionStyle RenderingFreeType IOImage)
+file(GLOB SFLSH_PARAVIEW_VTK_DIRS /usr/lib/${CMAKE_LIBRARY_ARCHITECTURE}/cmake/paraview-*/vtk)
+find_package(VTK 9 COMPONENTS ${SFLSH_VTK_COMPONENTS} PATHS ${SFLSH_PARAVIEW_VTK_DIRS})
+if(NOT VTK_FOUND)
+  message(FATAL_ERROR "VTK 9 not found: install Debian's libvtk9-dev (scripts/setup.sh), or paraview-dev on a "
+                      "machine with python3-paraview (SFLSH_PARAVIEW=1 scripts/setup.sh)")
+endif()
+message(STATUS "VTK ${VTK_VERSION} from ${VTK_DIR}")
 # The mesh-file readers of the scene stage (.obj/.stl: IOGeometry, .ply: IOPLY) are linked by sflsh_scene
 # only: found here, at the top level, so that their own dependencies (JsonCpp) are visible to every
 # directory, but kept out of VTK_LIBRARIES so that the other targets' link and compile lines do not change.
