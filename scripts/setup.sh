@@ -10,7 +10,7 @@ set -euo pipefail
 vtk_packages=(libvtk9-dev python3-vtk9)
 if [ "${SFLSH_PARAVIEW:-0}" = 1 ] ||
   dpkg-query -W -f='${Status}' python3-paraview 2>/dev/null | grep -q "install ok installed"; then
-  vtk_packages=(paraview python3-paraview paraview-dev)
+  vtk_packages=(paraview python3-paraview paraview-dev libfreetype-dev libglew-dev)  # the last two: targets ParaView's VTK config links
 fi
 
 packages=(
