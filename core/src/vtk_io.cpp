@@ -146,8 +146,10 @@ void write_with(Writer* writer, vtkDataObject* data, const std::filesystem::path
   write_atomically(path, [&](const std::filesystem::path& tmp) {
     writer->SetFileName(tmp.c_str());
     writer->SetInputData(data);
-    writer->SetDataModeToAppended();
-    writer->EncodeAppendedDataOff();
+    // Inline binary (base64 per array), not raw appended data: VTK 9.1–9.2.6's XML reader loses its place in
+    // appended data under expat ≥ 2.6 (Debian 12's security update), so Debian's ParaView 5.11 reads appended
+    // files as empty (docs/decisions.md). Inline binary is about a third larger and every reader opens it.
+    writer->SetDataModeToBinary();
     vtkSmartPointer<vtkDataCompressor> compressor;
     if (compression == Compression::zlib)
       compressor = vtkSmartPointer<vtkZLibDataCompressor>::New();
