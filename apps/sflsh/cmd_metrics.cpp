@@ -40,7 +40,7 @@ struct MetricsOptions {
   int frames = 0;
   double soft_weight = 0.05;
   std::string pose_weights = "rigidity";
-  double rigid_depth = 0.03;
+  double rigid_depth = validate::PoseFitOptions{}.rigid_depth;
   double temporal_weight = validate::PoseFitOptions{}.temporal_weight;
   std::string out;
   // --synthesize MOTION: write a synthetic DYNA file with known soft-tissue motion instead of measuring one.

@@ -40,12 +40,15 @@ PoseFitWeighting parse_weighting(const std::string& name);
 struct PoseFitOptions {
   std::vector<int> soft_vertices;  ///< body vertices of the soft region (the layer's region)
   PoseFitWeighting weighting = PoseFitWeighting::rigidity;
-  double soft_weight = 0.05;          ///< soft_weight: w_i of the soft vertices (squared-residual weight; 1 elsewhere)
-  double rigid_depth = 0.03;          ///< rigidity: D_0 [m], soft vertices nearer the bones count as rigid
-  double min_weight = 1e-3;           ///< rigidity: vertices weighing less are left out of the fit
-  double temporal_weight = 1e-5;      ///< rigidity: λ_θ [m²/rad²] of the second-difference prior on θ
-  int max_evaluations = 100;          ///< per Levenberg–Marquardt solve (residual evaluations)
-  double tolerance = 1e-7;            ///< relative tolerance on the step and on the reduction of the sum of squares
+  double soft_weight = 0.05;      ///< soft_weight: w_i of the soft vertices (squared-residual weight; 1 elsewhere)
+  double rigid_depth = 0.05;      ///< rigidity: D_0 [m], soft vertices nearer the bones count as rigid
+  double min_weight = 1e-3;       ///< rigidity: vertices weighing less are left out of the fit
+  double temporal_weight = 1e-5;  ///< rigidity: λ_θ [m²/rad²] of the second-difference prior on θ
+  int reweighting_passes = 2;     ///< rigidity: refits with w_i max(f_min, 1/(1 + (σ_i/σ_0)²)), σ_i of the last fit
+  double motion_scale = 0.2e-3;   ///< rigidity: σ_0 [m] of that reweighting
+  double min_reweight = 0.02;     ///< rigidity: f_min, the reweighting factor's floor
+  int max_evaluations = 100;      ///< per Levenberg–Marquardt solve (residual evaluations)
+  double tolerance = 1e-7;        ///< relative tolerance on the step and on the reduction of the sum of squares
   double absolute_tolerance = 1e-10;  ///< [m] a fit whose weighted RMS residual falls below this is exact
   int vertex_stride = 2;              ///< fit on vertices 0, s, 2s, … (1: every vertex)
   int shape_frames = 4;               ///< frames used for the β fit (evenly spaced, first and last included)
