@@ -113,9 +113,9 @@ void expect_recovery(const RecoveryCase& c, bool beta_given, int frames) {
                                     << (beta_given ? "given" : "fitted") << ": error " << 100 * error
                                     << " %, correlation " << r);
   // The acceptance: the mean σ over the soft region within 5 % and σ per vertex correlated at ≥ 0.95.
-  // Measured (docs/validate.md table): errors 0.3–1.7 % and correlations ≥ 0.999 with every region moving; the
+  // Measured (docs/validate.md table): errors 0.6–2.3 % and correlations ≥ 0.999 with every region moving; the
   // earlier soft-weight fit is 21 % off on these cases (correlation 0.957), so the 5 % bound separates a fit that
-  // keeps the dynamics from one that absorbs them into the joints, with room for the remaining ~1 %.
+  // keeps the dynamics from one that absorbs them into the joints, with room for the remaining ~2 %.
   EXPECT_LT(std::abs(error), 0.05);
   EXPECT_GE(r, 0.95);
   EXPECT_EQ(m.fit.unconverged_frames, 0);
