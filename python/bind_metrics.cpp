@@ -38,7 +38,7 @@ py::array frames_to(const std::vector<body::RowMatrixX3d>& frames) {
 }
 
 py::dict metrics(const DoubleArray& vertices, const py::object& faces, const py::object& betas, double fps,
-                 const py::object& body, double soft_weight) {
+                 const py::object& body, double soft_weight, const std::string& pose_weights) {
   require(soft_weight >= 0.0 && soft_weight <= 1.0, "metrics: --soft-weight must be in [0, 1], got {}", soft_weight);
   require(fps >= validate::kMinDynaFps && fps <= validate::kMaxDynaFps, "metrics: fps: {} Hz is outside [{}, {}] Hz",
           fps, validate::kMinDynaFps, validate::kMaxDynaFps);
@@ -61,6 +61,7 @@ py::dict metrics(const DoubleArray& vertices, const py::object& faces, const py:
   if (!betas.is_none()) beta = betas_from(betas);
   validate::PoseFitOptions options;
   options.soft_weight = soft_weight;
+  options.weighting = validate::parse_weighting(pose_weights);
   validate::RegistrationMetrics result;
   {
     py::gil_scoped_release release;
@@ -131,8 +132,10 @@ void bind_metrics(py::module_& m) {
   m.def(
       "metrics", &metrics, py::arg("vertices"), py::arg("faces") = py::none(), py::arg("betas") = py::none(),
       py::kw_only(), py::arg("fps") = validate::kDynaFps, py::arg("body") = py::none(), py::arg("soft_weight") = 0.05,
+      py::arg("pose_weights") = "rigidity",
       "The DYNA metric of registrations (T × n × 3, the body's vertex order) as `sflsh metrics`: fits pose (and β when "
-      "betas is None) per frame and returns a dict with sigma, sigma_normal, sigma_tangent per vertex [m], beta, "
+      "betas is None) per frame (pose_weights 'rigidity', or 'soft_weight' for the earlier fit with soft_weight on the "
+      "soft region) and returns a dict with sigma, sigma_normal, sigma_tangent per vertex [m], beta, "
       "poses, trans and the fit's RMS");
   m.def("read_dyna", &read_dyna, py::arg("path"), py::arg("key") = py::none(), py::arg("frames") = 0,
         "Reads a DYNA HDF5 file: {'faces': F × 3, 'sequences': {key: T × V × 3}, 'fps': {key: Hz}} (one key, or all; "

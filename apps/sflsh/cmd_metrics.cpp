@@ -16,6 +16,7 @@
 #include <sflsh/validate/dynamics_report.hpp>
 #include <sflsh/validate/pose_fit.hpp>
 #include <sflsh/validate/registration_metrics.hpp>
+#include <sflsh/validate/synthetic_dyna.hpp>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -24,6 +25,8 @@
 #include <chrono>
 #include <iostream>
 #include <memory>
+#include <numbers>
+#include <sstream>
 
 namespace sflsh::app {
 
@@ -36,7 +39,16 @@ struct MetricsOptions {
   SubjectOptions subject;
   int frames = 0;
   double soft_weight = 0.05;
+  std::string pose_weights = "rigidity";
+  double rigid_depth = validate::PoseFitOptions{}.rigid_depth;
+  double temporal_weight = validate::PoseFitOptions{}.temporal_weight;
   std::string out;
+  // --synthesize MOTION: write a synthetic DYNA file with known soft-tissue motion instead of measuring one.
+  std::string synthesize;
+  double amplitude_mm = 6.0;
+  double frequency = 3.0;
+  double angle_degrees = 45.0;
+  std::string regions;
 };
 
 void list_file(const validate::DynaFile& file) {
@@ -54,8 +66,54 @@ void list_file(const validate::DynaFile& file) {
 
 nlohmann::json vector_json(const Eigen::VectorXd& v) { return std::vector<double>(v.data(), v.data() + v.size()); }
 
+/// `sflsh metrics --synthesize MOTION --out DIR`: DIR/soft_motion.h5 (dataset SYNTH_<motion>), DIR/truth.csv
+/// (the known σ per vertex, the layout of metrics.csv) and DIR/summary.json (the spec and the known means).
+void run_synthesize(const MetricsOptions& opt, const Invocation& invocation) {
+  require(!opt.out.empty(), "metrics: --out DIR is required");
+  validate::SyntheticSoftMotion spec;
+  spec.motion = opt.synthesize;
+  spec.frames = opt.frames > 0 ? opt.frames : 300;
+  spec.amplitude = 1e-3 * opt.amplitude_mm;
+  spec.frequency = opt.frequency;
+  spec.angle = opt.angle_degrees * std::numbers::pi / 180.0;
+  if (!opt.regions.empty()) {
+    spec.regions.clear();
+    std::stringstream list(opt.regions);
+    for (std::string name; std::getline(list, name, ',');) spec.regions.push_back(name);
+  }
+  const body::BodyModel model = load_selected_body(opt.subject);
+  if (!opt.subject.betas.empty()) spec.beta = body::parse_betas(opt.subject.betas);
+  const validate::SyntheticSoftSequence s = validate::synthetic_soft_motion(model, spec);
+  RunFolder run(opt.out);
+  validate::write_dyna_file(run.stage("soft_motion.h5"), model.faces, {validate::to_dyna_sequence(s, spec, "SYNTH")});
+  validate::write_dynamics_csv(run.stage("truth.csv"), s.truth);
+  nlohmann::json summary = summary_header("metrics", invocation.argc, invocation.argv);
+  summary["synthetic"] = {{"file", "soft_motion.h5"},
+                          {"sequence", "SYNTH_" + spec.motion},
+                          {"frames", spec.frames},
+                          {"fps", spec.fps},
+                          {"beta", vector_json(spec.beta)},
+                          {"regions", spec.regions},
+                          {"amplitude_mm", opt.amplitude_mm},
+                          {"frequency_hz", spec.frequency},
+                          {"angle_degrees", opt.angle_degrees},
+                          {"radius_mm", 1e3 * spec.radius},
+                          {"moving_vertices", s.moving_vertices.size()}};
+  summary["truth"] = validate::dynamics_summary(s.truth);
+  write_json(run.stage("summary.json"), summary);
+  run.commit();
+  logger()->info(
+      "metrics: wrote {} frames of {} with {} mm at {} Hz on {}: known mean σ {:.3f} mm over the soft region",
+      spec.frames, spec.motion, opt.amplitude_mm, spec.frequency, opt.regions.empty() ? "every region" : opt.regions,
+      1e3 * s.truth.mean_sigma_soft());
+}
+
 void run_metrics(const MetricsOptions& opt, const Invocation& invocation) {
   const auto t_start = std::chrono::steady_clock::now();
+  if (!opt.synthesize.empty()) {
+    run_synthesize(opt, invocation);
+    return;
+  }
   require(!opt.dyna.empty(), "metrics: --dyna FILE.h5 is required");
   require_input_file(opt.dyna, "a DYNA registration .h5 file");
   const validate::DynaFile file(opt.dyna);
@@ -69,6 +127,9 @@ void run_metrics(const MetricsOptions& opt, const Invocation& invocation) {
   require(opt.frames >= 0, "metrics: --frames must be non-negative, got {}", opt.frames);
   require(opt.soft_weight >= 0.0 && opt.soft_weight <= 1.0, "metrics: --soft-weight must be in [0, 1], got {}",
           opt.soft_weight);
+  validate::parse_weighting(opt.pose_weights);  // a bad name fails before anything is read
+  require(opt.rigid_depth > 0.0, "metrics: --rigid-depth must be positive, got {}", opt.rigid_depth);
+  require(opt.temporal_weight >= 0.0, "metrics: --temporal-weight must be non-negative, got {}", opt.temporal_weight);
 
   file.info(opt.sequence);  // an unknown sequence is named (with the file's list) before the body is loaded
   const body::BodyModel model = load_selected_body(opt.subject);
@@ -83,6 +144,9 @@ void run_metrics(const MetricsOptions& opt, const Invocation& invocation) {
   validate::PoseFitOptions fit_options;
   fit_options.soft_vertices = soft;
   fit_options.soft_weight = opt.soft_weight;
+  fit_options.weighting = validate::parse_weighting(opt.pose_weights);
+  fit_options.rigid_depth = opt.rigid_depth;
+  fit_options.temporal_weight = opt.temporal_weight;
   fit_options.progress = true;
   logger()->info("metrics: {} frames of '{}' ({} vertices, {} in the soft region), β {}", sequence.num_frames(),
                  opt.sequence, model.num_vertices(), soft.size(), given_beta ? "given" : "fitted");
@@ -119,7 +183,10 @@ void run_metrics(const MetricsOptions& opt, const Invocation& invocation) {
                          {"converged", f.converged},
                          {"status", f.status}});
   summary["fit"] = {{"solver", "Levenberg-Marquardt (Eigen, MINPACK lmder)"},
+                    {"weighting", validate::weighting_name(fit_options.weighting)},
                     {"soft_weight", opt.soft_weight},
+                    {"rigid_depth_m", opt.rigid_depth},
+                    {"temporal_weight_m2_per_rad2", opt.temporal_weight},
                     {"shape_iterations", fit.shape_iterations},
                     {"shape_converged", fit.shape_converged},
                     {"vertex_stride", fit_options.vertex_stride},
@@ -156,15 +223,31 @@ void register_metrics_commands(CLI::App& app, const Invocation& invocation) {
       "σ_t [mm] "
       "per vertex (metrics.vtp, metrics.csv, summary.json). --list shows a file's subjects and sequences.");
   cmd->add_option("--dyna", opt->dyna,
-                  "DYNA registration file (HDF5: faces + <subject>_<sequence> datasets of shape (V, 3, T))")
-      ->required();
+                  "DYNA registration file (HDF5: faces + <subject>_<sequence> datasets of shape (V, 3, T))");
   cmd->add_flag("--list", opt->list, "List the subjects and sequences of the file and exit");
   cmd->add_option("--sequence", opt->sequence, "Dataset key <subject>_<sequence>, e.g. 50004_jiggle_on_toes");
   add_body_option(*cmd, opt->subject);
   cmd->add_option("--betas", opt->subject.betas,
                   "Shape β (up to 10 numbers); fitted from the registrations when absent");
-  cmd->add_option("--frames", opt->frames, "Use only the first N frames (0: all)");
-  cmd->add_option("--soft-weight", opt->soft_weight, "Weight of soft-region vertices in the pose fit (1 elsewhere)");
+  cmd->add_option("--frames", opt->frames,
+                  "Use only the first N frames (0: all); --synthesize: frames to write (0: 300)");
+  cmd->add_option("--soft-weight", opt->soft_weight,
+                  "--pose-weights soft_weight: weight of soft-region vertices in the pose fit (1 elsewhere)");
+  cmd->add_option("--pose-weights", opt->pose_weights,
+                  "Pose-fit weighting: rigidity (default: rigidity weights and a temporal prior on θ) or soft_weight "
+                  "(the earlier fit: --soft-weight on the soft region, 1 elsewhere)");
+  cmd->add_option("--rigid-depth", opt->rigid_depth,
+                  "rigidity: D_0 [m], soft vertices nearer the bones count as rigid (w = (D_0/D)^4 beyond)");
+  cmd->add_option("--temporal-weight", opt->temporal_weight,
+                  "rigidity: weight [m²/rad²] of the prior on θ's second difference (0: none)");
+  cmd->add_option("--synthesize", opt->synthesize,
+                  "Write a synthetic DYNA file with known soft-tissue motion over this procedural motion to --out "
+                  "(soft_motion.h5, truth.csv, summary.json) instead of measuring one");
+  cmd->add_option("--amplitude", opt->amplitude_mm, "--synthesize: peak soft-tissue displacement [mm] (default 6)");
+  cmd->add_option("--frequency", opt->frequency, "--synthesize: oscillation frequency [Hz] (default 3)");
+  cmd->add_option("--angle", opt->angle_degrees,
+                  "--synthesize: direction, 0 normal … 90 tangential (downwards) [degrees] (default 45)");
+  cmd->add_option("--regions", opt->regions, "--synthesize: comma-separated chest,belly,buttocks,thighs (default all)");
   cmd->add_option("--out", opt->out, "Output folder");
   cmd->callback([opt, invocation] { run_metrics(*opt, invocation); });
 }

@@ -249,3 +249,40 @@ TEST(CliMetrics, BadArgumentsFailCleanlyAndWriteNothing) {
 
 }  // namespace
 }  // namespace sflsh::validate
+
+namespace sflsh::validate {
+namespace {
+
+TEST(CliMetrics, SynthesizesKnownSoftMotionAndMeasuresItBack) {
+  const auto dir = sflsh::testing::scratch_dir();
+  auto r = sflsh::testing::run_sflsh("metrics --synthesize shake_hips --frames 60 --amplitude 6 --frequency 4 --out " +
+                                         (dir / "synth").string() + " -q",
+                                     dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json truth = read_json(dir / "synth" / "summary.json");
+  EXPECT_EQ(truth["synthetic"]["sequence"], "SYNTH_shake_hips");
+  const double known_mm = truth["truth"]["sigma_mean_soft_mm"].get<double>();
+  ASSERT_GT(known_mm, 0.1);
+  EXPECT_TRUE(std::filesystem::exists(dir / "synth" / "truth.csv"));
+  r = sflsh::testing::run_sflsh("metrics --dyna " + (dir / "synth" / "soft_motion.h5").string() +
+                                    " --sequence SYNTH_shake_hips --betas 0 --out " + (dir / "out").string() + " -q",
+                                dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json measured = read_json(dir / "out" / "summary.json");
+  EXPECT_EQ(measured["fit"]["weighting"], "rigidity");
+  // The default fit keeps the dynamics: within the 5 % of the acceptance (measured < 1 %, docs/validate.md).
+  EXPECT_NEAR(measured["dynamics"]["sigma_mean_soft_mm"].get<double>() / known_mm, 1.0, 0.05);
+  r = sflsh::testing::run_sflsh("metrics --dyna " + (dir / "synth" / "soft_motion.h5").string() +
+                                    " --sequence SYNTH_shake_hips --pose-weights stiff --out " + (dir / "bad").string(),
+                                dir);
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_THAT(r.err, ::testing::HasSubstr("unknown weighting 'stiff', expected rigidity or soft_weight"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "bad"));
+  r = sflsh::testing::run_sflsh("metrics --synthesize shake_hips --regions knees --out " + (dir / "bad").string(), dir);
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_THAT(r.err, ::testing::HasSubstr("unknown region 'knees'"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "bad"));
+}
+
+}  // namespace
+}  // namespace sflsh::validate

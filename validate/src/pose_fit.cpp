@@ -1,10 +1,13 @@
 // Per-frame pose fit and shared-β fit by Levenberg–Marquardt (Eigen's MINPACK port); see pose_fit.hpp.
 #include "lm_status.hpp"
+#include "pose_gauss_newton.hpp"
 
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
 #include <sflsh/core/progress.hpp>
+#include <sflsh/validate/dynamics_metrics.hpp>
 #include <sflsh/validate/pose_fit.hpp>
+#include <sflsh/validate/rigidity.hpp>
 
 #include <Eigen/QR>
 #include <Eigen/SVD>
@@ -18,26 +21,46 @@ namespace sflsh::validate {
 
 namespace {
 
-/// The vertices the fit uses (every stride-th) and √w of each.
+/// The vertices the fit uses (every stride-th, heavy enough) and √w of each; `weights` is w per body vertex.
 struct FitRows {
   std::vector<int> vertices;
   Eigen::VectorXd scales;
+  Eigen::VectorXd weights;      ///< w_i of every body vertex (the rigid start uses them all)
+  Eigen::VectorXd fit_weights;  ///< w of each fit row (scales²)
 };
 
-FitRows fit_rows(Eigen::Index n, const PoseFitOptions& options) {
-  std::vector<char> soft(static_cast<std::size_t>(n), 0);
-  for (int v : options.soft_vertices) {
+/// w_i per body vertex for the options' weighting.
+Eigen::VectorXd vertex_weights(const body::BodyModel& model, const PoseFitOptions& options) {
+  const Eigen::Index n = model.num_vertices();
+  for (int v : options.soft_vertices)
     require(v >= 0 && v < n, "pose fit: soft-region vertex {} outside the body's {} vertices", v, n);
-    soft[static_cast<std::size_t>(v)] = 1;
-  }
+  if (options.weighting == PoseFitWeighting::rigidity)
+    return rigidity_weights(model, options.soft_vertices, options.rigid_depth);
+  Eigen::VectorXd weights = Eigen::VectorXd::Ones(n);
+  for (int v : options.soft_vertices) weights[v] = options.soft_weight;
+  return weights;
+}
+
+FitRows fit_rows(const Eigen::VectorXd& weights, const PoseFitOptions& options) {
   FitRows rows;
-  for (Eigen::Index i = 0; i < n; i += options.vertex_stride) rows.vertices.push_back(static_cast<int>(i));
+  rows.weights = weights;
+  const bool drop_light = options.weighting == PoseFitWeighting::rigidity;
+  for (Eigen::Index i = 0; i < weights.size(); i += options.vertex_stride)
+    if (!drop_light || rows.weights[i] >= options.min_weight) rows.vertices.push_back(static_cast<int>(i));
+  require(!rows.vertices.empty(), "pose fit: no vertex weighs at least min_weight {}", options.min_weight);
   rows.scales.resize(static_cast<Eigen::Index>(rows.vertices.size()));
   for (std::size_t s = 0; s < rows.vertices.size(); ++s)
-    rows.scales[static_cast<Eigen::Index>(s)] =
-        soft[static_cast<std::size_t>(rows.vertices[s])] ? std::sqrt(options.soft_weight) : 1.0;
+    rows.scales[static_cast<Eigen::Index>(s)] = std::sqrt(rows.weights[rows.vertices[s]]);
+  rows.fit_weights = rows.scales.cwiseAbs2();
   return rows;
 }
+
+/// The temporal prior of one frame: residual √λ_θ (θ − prediction), prediction = 2θ_{t−1} − θ_{t−2}.
+struct TemporalPrior {
+  bool active = false;
+  double scale = 0.0;  ///< √λ_θ
+  body::Pose prediction = body::Pose::Zero();
+};
 
 /// r_s = √w_s (v_i − y_i) for the fit rows i = vertices[s].
 void frame_residual(const RowMatrixX3d& target, const FitRows& rows, const RowMatrixX3d& v, Eigen::VectorXd& r) {
@@ -99,9 +122,29 @@ double absolute_norm(const PoseFitOptions& options, std::size_t vertices) {
   return options.absolute_tolerance * std::sqrt(static_cast<double>(vertices));
 }
 
-/// One LM solve of a frame's pose on the fit rows; `parameters` in/out.
+/// One solve of a frame's pose on the fit rows; `parameters` in/out. Rigidity weighting: damped Gauss–Newton on
+/// the normal equations with the temporal prior (pose_gauss_newton.hpp); soft_weight: MINPACK's LM as before.
 FrameFitReport solve_frame(const PosedModel& model, const RowMatrixX3d& target, const FitRows& rows,
-                           const PoseFitOptions& options, PoseParameters& parameters) {
+                           const PoseFitOptions& options, PoseParameters& parameters, const TemporalPrior& prior = {}) {
+  if (options.weighting == PoseFitWeighting::rigidity) {
+    detail::GaussNewtonSettings settings;
+    settings.max_evaluations = options.max_evaluations;
+    settings.tolerance = options.tolerance;
+    const double norm = absolute_norm(options, rows.vertices.size());
+    settings.absolute_cost = norm * norm;
+    if (prior.active) {
+      settings.prior_weight = prior.scale * prior.scale;
+      settings.prediction = prior.prediction;
+    }
+    const detail::GaussNewtonReport gn =
+        detail::solve_pose_gauss_newton(model, target, rows.vertices, rows.fit_weights, settings, parameters);
+    FrameFitReport report;
+    report.iterations = gn.iterations;
+    report.evaluations = gn.evaluations;
+    report.converged = gn.converged;
+    report.status = gn.status;
+    return report;
+  }
   FrameResidual residual(model, target, rows, parameters);
   Eigen::LevenbergMarquardt<FrameResidual> lm(residual);
   configure(lm, options, options.max_evaluations);
@@ -192,6 +235,16 @@ struct ShapeResidual : Eigen::DenseFunctor<double> {
 
 }  // namespace
 
+const char* weighting_name(PoseFitWeighting weighting) {
+  return weighting == PoseFitWeighting::rigidity ? "rigidity" : "soft_weight";
+}
+
+PoseFitWeighting parse_weighting(const std::string& name) {
+  if (name == "rigidity") return PoseFitWeighting::rigidity;
+  if (name == "soft_weight") return PoseFitWeighting::soft_weight;
+  throw Error(fmt::format("pose fit: unknown weighting '{}', expected rigidity or soft_weight", name));
+}
+
 PoseParameters rigid_initial_pose(const RowMatrixX3d& shaped, const Eigen::Vector3d& root, const RowMatrixX3d& target,
                                   const Eigen::VectorXd& weights, const Eigen::Matrix3d& world_from_body) {
   // Weighted Kabsch: y ≈ R x + t in the body frame (targets rotated back by world_from_body).
@@ -219,7 +272,7 @@ FrameFitReport fit_frame(const body::BodyModel& model, const RowMatrixX3d& shape
   require(target.rows() == n, "pose fit: {} target vertices for a body of {}", target.rows(), n);
   require(options.vertex_stride >= 1, "pose fit: vertex_stride must be at least 1, got {}", options.vertex_stride);
   const PosedModel posed_model(model, shaped, joints, options.world_from_body);
-  const FitRows rows = fit_rows(n, options);
+  const FitRows rows = fit_rows(vertex_weights(model, options), options);
   FrameFitReport report = solve_frame(posed_model, target, rows, options, parameters);
   const RowMatrixX3d v = posed_model.posed(parameters);
   std::vector<char> soft(static_cast<std::size_t>(n), 0);
@@ -229,29 +282,22 @@ FrameFitReport fit_frame(const body::BodyModel& model, const RowMatrixX3d& shape
   return report;
 }
 
-PoseFitResult fit_motion(const body::BodyModel& model, const std::vector<RowMatrixX3d>& registered, double fps,
-                         const std::optional<body::Betas>& beta, const PoseFitOptions& options) {
+namespace {
+
+/// One fit of every frame with the vertex weights `weights`; β fitted (from `initial_beta`) when `beta` is empty.
+PoseFitResult fit_motion_weighted(const body::BodyModel& model, const std::vector<RowMatrixX3d>& registered, double fps,
+                                  const std::optional<body::Betas>& beta, const body::Betas& initial_beta,
+                                  const PoseFitOptions& options, const Eigen::VectorXd& vertex_weight) {
   const auto t0 = std::chrono::steady_clock::now();
-  require(!registered.empty(), "pose fit: no frames");
-  require(options.soft_weight >= 0.0 && options.soft_weight <= 1.0, "pose fit: soft_weight must be in [0, 1], got {}",
-          options.soft_weight);
-  require(options.max_evaluations > 0 && options.shape_frames > 0 && options.shape_evaluations > 0 &&
-              options.vertex_stride >= 1,
-          "pose fit: iteration limits and the vertex stride must be positive");
   const Eigen::Index n = model.num_vertices();
-  for (std::size_t t = 0; t < registered.size(); ++t) {
-    require(registered[t].rows() == n, "pose fit: frame {} has {} vertices, the body has {}", t, registered[t].rows(),
-            n);
-    require(registered[t].allFinite(), "pose fit: frame {} has a non-finite vertex position", t);
-  }
   const auto T = static_cast<int>(registered.size());
-  const FitRows rows = fit_rows(n, options);
-  Eigen::VectorXd weights = Eigen::VectorXd::Ones(n);  // for the rigid start
-  for (int v : options.soft_vertices) weights[v] = options.soft_weight;
+  const FitRows rows = fit_rows(vertex_weight, options);
+  const Eigen::VectorXd& weights = rows.weights;  // for the rigid start
 
   PoseFitResult result;
   result.beta = beta.value_or(body::Betas::Zero());
   result.beta_fitted = !beta.has_value();
+  const body::Betas beta_start = beta.value_or(initial_beta);
 
   if (result.beta_fitted) {
     // Warm starts for the shape frames at β = 0: a chain of pose fits over every c-th frame (≤ 40 frames),
@@ -290,7 +336,7 @@ PoseFitResult fit_motion(const body::BodyModel& model, const std::vector<RowMatr
     ShapeResidual residual(model, targets, rows, options, poses);
     Eigen::LevenbergMarquardt<ShapeResidual> lm(residual);
     configure(lm, options, options.shape_evaluations);
-    Eigen::VectorXd x = result.beta;
+    Eigen::VectorXd x = beta_start;
     const detail::LmOutcome outcome =
         detail::minimize_until(lm, x, absolute_norm(options, rows.vertices.size() * targets.size()));
     require(outcome.status != Eigen::LevenbergMarquardtSpace::UserAsked && x.allFinite(),
@@ -315,9 +361,27 @@ PoseFitResult fit_motion(const body::BodyModel& model, const std::vector<RowMatr
   PoseParameters parameters =
       rigid_initial_pose(shaped, joints.row(0).transpose(), registered.front(), weights, options.world_from_body);
   Progress progress("pose fit", static_cast<std::size_t>(T), options.progress);
+  const bool use_prior = options.weighting == PoseFitWeighting::rigidity && options.temporal_weight > 0.0;
   for (int t = 0; t < T; ++t) {
     const RowMatrixX3d& target = registered[static_cast<std::size_t>(t)];
-    FrameFitReport report = solve_frame(posed_model, target, rows, options, parameters);  // warm start from frame t − 1
+    TemporalPrior prior;
+    if (use_prior) {
+      // θ_t − 2θ_{t−1} + θ_{t−2}: the prior pulls towards the constant-velocity prediction, which is also the
+      // warm start (trans included). Frame 1 has only θ_0 to go by (first difference), frame 0 its rigid start.
+      const auto& poses = result.motion.poses;
+      const auto& trans = result.motion.trans;
+      prior.active = true;
+      prior.scale = std::sqrt(options.temporal_weight);
+      if (t >= 2) {
+        const std::size_t a = static_cast<std::size_t>(t - 1), b = static_cast<std::size_t>(t - 2);
+        prior.prediction = 2.0 * poses[a] - poses[b];
+        parameters = pack_pose(prior.prediction, 2.0 * trans[a] - trans[b]);
+      } else {
+        prior.prediction = pose_of(parameters);
+      }
+    }
+    FrameFitReport report =
+        solve_frame(posed_model, target, rows, options, parameters, prior);  // warm start from frame t − 1
     report.frame = t;
     const RowMatrixX3d v = posed_model.posed(parameters);
     report.rms = rms_over(v, target, nullptr);
@@ -335,6 +399,46 @@ PoseFitResult fit_motion(const body::BodyModel& model, const std::vector<RowMatr
     progress.advance();
   }
   progress.finish();
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return result;
+}
+
+}  // namespace
+
+PoseFitResult fit_motion(const body::BodyModel& model, const std::vector<RowMatrixX3d>& registered, double fps,
+                         const std::optional<body::Betas>& beta, const PoseFitOptions& options) {
+  const auto t0 = std::chrono::steady_clock::now();
+  require(!registered.empty(), "pose fit: no frames");
+  require(options.soft_weight >= 0.0 && options.soft_weight <= 1.0, "pose fit: soft_weight must be in [0, 1], got {}",
+          options.soft_weight);
+  require(options.max_evaluations > 0 && options.shape_frames > 0 && options.shape_evaluations > 0 &&
+              options.vertex_stride >= 1,
+          "pose fit: iteration limits and the vertex stride must be positive");
+  require(options.rigid_depth > 0.0 && options.min_weight >= 0.0 && options.min_weight <= 1.0 &&
+              options.temporal_weight >= 0.0 && options.reweighting_passes >= 0 && options.motion_scale > 0.0 &&
+              options.min_reweight > 0.0 && options.min_reweight <= 1.0,
+          "pose fit: rigid_depth and motion_scale must be positive, min_weight in [0, 1], temporal_weight and "
+          "reweighting_passes non-negative");
+  const Eigen::Index n = model.num_vertices();
+  for (std::size_t t = 0; t < registered.size(); ++t) {
+    require(registered[t].rows() == n, "pose fit: frame {} has {} vertices, the body has {}", t, registered[t].rows(),
+            n);
+    require(registered[t].allFinite(), "pose fit: frame {} has a non-finite vertex position", t);
+  }
+  const Eigen::VectorXd prior_weight = vertex_weights(model, options);
+  PoseFitResult result = fit_motion_weighted(model, registered, fps, beta, body::Betas::Zero(), options, prior_weight);
+  if (options.weighting == PoseFitWeighting::rigidity && registered.size() >= 2) {
+    for (int pass = 0; pass < options.reweighting_passes; ++pass) {
+      // Measured rigidity: the σ_i this fit leaves (docs/physics.md §4) down-weighs the vertices that move on
+      // their own, w_i ← w_i max(f_min, 1 / (1 + (σ_i / σ_0)²)), and the fit is repeated (β from the last one). The
+      // floor f_min keeps joints that only soft vertices observe (the spine's) determined when all of them move.
+      const Eigen::VectorXd sigma = dynamics_metrics(model, result.beta, result.motion, registered, {}).sigma;
+      const Eigen::VectorXd factor =
+          (1.0 + (sigma / options.motion_scale).array().square()).inverse().max(options.min_reweight).matrix();
+      const Eigen::VectorXd weight = prior_weight.cwiseProduct(factor);
+      result = fit_motion_weighted(model, registered, fps, beta, result.beta, options, weight);
+    }
+  }
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return result;
 }

@@ -137,7 +137,8 @@ DynaTruth load_dyna_truth(const ValidateConfig& config, const body::BodyModel& m
     t.subjects.push_back(id);
   }
   require(!t.subjects.empty(), "validate: no DYNA subject has every train and test motion");
-  PoseFitOptions po;
+  PoseFitOptions po;  // the default rigidity-weighted fit over the layer's soft region (docs/validate.md)
+  po.soft_vertices = soft_region_vertices(model);
   for (const std::string& id : t.subjects) {
     std::optional<body::Betas> beta;
     for (const std::string& m : motions) {

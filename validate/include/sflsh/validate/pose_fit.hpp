@@ -2,10 +2,13 @@
 // Fitting SMPL pose θ_t, root translation trans_t (and shape β) to registrations with the body's topology
 // (vertex-to-vertex; docs/physics.md §3.2 "poses are not in the file"). Nonlinear least squares on vertex
 // positions,
-//   min Σ_i w_i ‖v_i(β, θ_t, trans_t) − y_i(t)‖²,   w_i = soft_weight in the soft region, 1 elsewhere,
-// so that the soft tissue's dynamics is not explained by pose. Solved with Eigen's Levenberg–Marquardt
-// (unsupported/Eigen/LevenbergMarquardt, MINPACK's lmder): per frame with the analytic Jacobian of
-// pose_jacobian.hpp, warm-started from the previous frame (frame 0 from a weighted Kabsch alignment of the
+//   min Σ_i w_i ‖v_i(β, θ_t, trans_t) − y_i(t)‖² + λ_θ ‖θ_t − 2θ_{t−1} + θ_{t−2}‖²,
+// so that the soft tissue's dynamics is not explained by pose. Default (PoseFitWeighting::rigidity): w_i the
+// rigidity weights of rigidity.hpp (1 off the soft region, (D_0/D_i)⁴ on it, D_i the distance to the bones)
+// and a temporal prior λ_θ on the second difference of θ towards the previous two fitted frames (causal).
+// PoseFitWeighting::soft_weight is the earlier fit: w_i = soft_weight on the soft region, 1 elsewhere, no prior. Solved
+// with Eigen's Levenberg–Marquardt (unsupported/Eigen/LevenbergMarquardt, MINPACK's lmder): per frame with the analytic
+// Jacobian of pose_jacobian.hpp, warm-started from the previous frame (frame 0 from a weighted Kabsch alignment of the
 // rest shape). When β is not given it is shared over frames and fitted jointly with the poses of a few
 // evenly spaced frames by variable projection (Golub & Pereyra 1973; Kaufman 1975): the outer LM over β
 // sees the residual with each frame's pose re-optimized for that β, and its Jacobian is the β-Jacobian
@@ -24,11 +27,28 @@ namespace sflsh::validate {
 
 using body::RowMatrixX3d;
 
+/// How the fit weighs vertices.
+enum class PoseFitWeighting {
+  rigidity,     ///< rigidity weights (rigidity.hpp) and the temporal prior on θ (the default)
+  soft_weight,  ///< w_i = soft_weight on the soft region, 1 elsewhere, no temporal prior (the earlier fit)
+};
+
+/// "rigidity" / "soft_weight"; parse throws naming the accepted values.
+const char* weighting_name(PoseFitWeighting weighting);
+PoseFitWeighting parse_weighting(const std::string& name);
+
 struct PoseFitOptions {
-  std::vector<int> soft_vertices;     ///< body vertices whose residuals are down-weighted
-  double soft_weight = 0.05;          ///< w_i of the soft vertices (squared-residual weight; 1 elsewhere)
-  int max_evaluations = 100;          ///< per Levenberg–Marquardt solve (residual evaluations)
-  double tolerance = 1e-7;            ///< relative tolerance on the step and on the reduction of the sum of squares
+  std::vector<int> soft_vertices;  ///< body vertices of the soft region (the layer's region)
+  PoseFitWeighting weighting = PoseFitWeighting::rigidity;
+  double soft_weight = 0.05;      ///< soft_weight: w_i of the soft vertices (squared-residual weight; 1 elsewhere)
+  double rigid_depth = 0.05;      ///< rigidity: D_0 [m], soft vertices nearer the bones count as rigid
+  double min_weight = 1e-3;       ///< rigidity: vertices weighing less are left out of the fit
+  double temporal_weight = 1e-5;  ///< rigidity: λ_θ [m²/rad²] of the second-difference prior on θ
+  int reweighting_passes = 2;     ///< rigidity: refits with w_i max(f_min, 1/(1 + (σ_i/σ_0)²)), σ_i of the last fit
+  double motion_scale = 0.2e-3;   ///< rigidity: σ_0 [m] of that reweighting
+  double min_reweight = 0.02;     ///< rigidity: f_min, the reweighting factor's floor
+  int max_evaluations = 100;      ///< per Levenberg–Marquardt solve (residual evaluations)
+  double tolerance = 1e-7;        ///< relative tolerance on the step and on the reduction of the sum of squares
   double absolute_tolerance = 1e-10;  ///< [m] a fit whose weighted RMS residual falls below this is exact
   int vertex_stride = 2;              ///< fit on vertices 0, s, 2s, … (1: every vertex)
   int shape_frames = 4;               ///< frames used for the β fit (evenly spaced, first and last included)

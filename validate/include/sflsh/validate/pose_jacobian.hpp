@@ -12,6 +12,10 @@
 //   ∂v_i/∂trans = R_wb Σ_k w_ik.
 #include <sflsh/body/skinning.hpp>
 
+#include <array>
+#include <cstdint>
+#include <vector>
+
 namespace sflsh::validate {
 
 using body::RowMatrixX3d;
@@ -37,11 +41,33 @@ class PosedModel {
   void posed_and_jacobian(const PoseParameters& parameters, RowMatrixX3d& posed, Eigen::MatrixXd& jacobian,
                           const std::vector<int>* rows = nullptr) const;
 
+  /// Σ_s w_s ‖v_{rows[s]} − y_{rows[s]}‖² at `parameters` (only the listed vertices are posed).
+  double rows_cost(const PoseParameters& parameters, const std::vector<int>& rows, const Eigen::VectorXd& weights,
+                   const RowMatrixX3d& target) const;
+  /// The Gauss–Newton normal equations of that cost: H = Σ_s w_s J_sᵀ J_s (75×75), g = Σ_s w_s J_sᵀ (v − y);
+  /// returns the cost. Accumulates only the non-zero 3×3 blocks (the joints above each vertex and trans).
+  double normal_equations(const PoseParameters& parameters, const std::vector<int>& rows,
+                          const Eigen::VectorXd& weights, const RowMatrixX3d& target,
+                          Eigen::Matrix<double, kNumPoseParameters, kNumPoseParameters>& hessian,
+                          PoseParameters& gradient) const;
+
   const body::BodyModel& model() const { return model_; }
   const RowMatrixX3d& shaped() const { return shaped_; }
   const body::JointPositions& joints() const { return joints_; }
 
  private:
+  /// What every vertex's Jacobian needs at one pose.
+  struct Linearization {
+    body::Kinematics kinematics;
+    RowMatrixX3d unposed;                               ///< T_S + B_P(θ)
+    std::array<Eigen::Matrix3d, body::kNumJoints> g{};  ///< G_par(j) S(ω_j)
+    Eigen::MatrixXd corrective_jacobian;                ///< 3n × 69 ∂B_P/∂ω (empty without correctives)
+  };
+  Linearization linearize(const PoseParameters& parameters) const;
+  /// v_i (world) and its 3×75 Jacobian; returns the bit mask of the joints whose columns can be non-zero.
+  std::uint32_t vertex_jacobian(const Linearization& lin, Eigen::Index i, Eigen::Vector3d& position,
+                                Eigen::Matrix<double, 3, kNumPoseParameters>& block) const;
+
   const body::BodyModel& model_;
   RowMatrixX3d shaped_;
   body::JointPositions joints_;

@@ -1,0 +1,138 @@
+// The dynamics metric keeps the dynamics it is given: synthetic DYNA-layout sequences with known, localized soft-
+// tissue motion (chest, belly, buttocks, thighs; synthetic_dyna.hpp) over procedural poses, fitted with the default
+// rigidity-weighted pose fit, β given and fitted (docs/validate.md "Recovery of known dynamics").
+#include "scratch_dir.hpp"
+#include "validate_fixtures.hpp"
+
+#include <sflsh/core/error.hpp>
+#include <sflsh/validate/dyna_file.hpp>
+#include <sflsh/validate/registration_metrics.hpp>
+#include <sflsh/validate/rigidity.hpp>
+#include <sflsh/validate/synthetic_dyna.hpp>
+
+#include <gtest/gtest.h>
+
+namespace sflsh::validate {
+namespace {
+
+using testing::open_body;
+
+double correlation(const Eigen::VectorXd& a, const Eigen::VectorXd& b, const std::vector<int>& vertices) {
+  Eigen::VectorXd x(static_cast<Eigen::Index>(vertices.size())), y(x.size());
+  for (std::size_t k = 0; k < vertices.size(); ++k) {
+    x[static_cast<Eigen::Index>(k)] = a[vertices[k]];
+    y[static_cast<Eigen::Index>(k)] = b[vertices[k]];
+  }
+  const Eigen::VectorXd dx = x.array() - x.mean(), dy = y.array() - y.mean();
+  return dx.dot(dy) / std::sqrt(dx.squaredNorm() * dy.squaredNorm());
+}
+
+TEST(SyntheticSoftMotion, KnownSigmaIsWhatTheMetricMeasuresWithTheTruePoses) {
+  SyntheticSoftMotion spec;
+  spec.motion = "one_leg_jump";
+  spec.frames = 40;
+  spec.beta = testing::some_beta();
+  const SyntheticSoftSequence s = synthetic_soft_motion(open_body(), spec);
+  ASSERT_EQ(s.frames.size(), 40u);
+  // Localized: every moving vertex lies in the soft region, a few hundred move (seven blobs of r = 5 cm), and
+  // σ vanishes elsewhere.
+  const std::vector<char> soft = s.truth.soft_mask();
+  EXPECT_GT(s.moving_vertices.size(), 200u);
+  EXPECT_LT(s.moving_vertices.size(), s.truth.soft_vertices.size() / 2);
+  for (int v : s.moving_vertices) EXPECT_TRUE(soft[static_cast<std::size_t>(v)]) << v;
+  std::vector<char> moving(soft.size(), 0);
+  for (int v : s.moving_vertices) moving[static_cast<std::size_t>(v)] = 1;
+  for (Eigen::Index v = 0; v < s.truth.sigma.size(); ++v) {
+    if (!moving[static_cast<std::size_t>(v)]) EXPECT_EQ(s.truth.sigma[v], 0.0);
+  }
+  // A sinusoid of peak A at the blob centres: σ ≤ A (its RMS over a window is near A/√2).
+  EXPECT_LT(s.truth.sigma.maxCoeff(), spec.amplitude);
+  EXPECT_GT(s.truth.sigma.maxCoeff(), 0.5 * spec.amplitude);
+  // Normal and tangential at α = 45°: both parts carry about half of σ² (the tangent is the unit vector nearest −y).
+  EXPECT_NEAR(s.truth.mean_sigma_normal_soft() / s.truth.mean_sigma_tangent_soft(), 1.0, 1e-9);
+  // With the true poses, inverse skinning undoes the skinning to round-off: the metric returns the known σ.
+  const DynamicsResult r = dynamics_metrics(open_body(), s.beta, s.motion, s.frames, s.truth.soft_vertices);
+  EXPECT_LT((r.sigma - s.truth.sigma).cwiseAbs().maxCoeff(), 1e-10);  // 1e-7 of mm amplitudes
+}
+
+TEST(SyntheticSoftMotion, WritesADynaFileAndRejectsBadSpecs) {
+  SyntheticSoftMotion spec;
+  spec.frames = 6;
+  spec.regions = {"belly"};
+  const SyntheticSoftSequence s = synthetic_soft_motion(open_body(), spec);
+  const auto path = sflsh::testing::scratch_dir() / "soft.h5";
+  write_dyna_file(path, open_body().faces, {to_dyna_sequence(s, spec, "SYNTH")});
+  const DynaFile file(path);
+  const DynaSequence back = file.read("SYNTH_running_on_spot");
+  ASSERT_EQ(back.num_frames(), 6);
+  EXPECT_LT((back.frames[5] - s.frames[5]).cwiseAbs().maxCoeff(), 1e-15);  // float64 in the file
+  EXPECT_EQ(back.attributes.strings.at("soft_regions"), "belly");
+  EXPECT_DOUBLE_EQ(*back.attributes.number("soft_frequency"), 3.0);
+  spec.regions = {"elbow"};
+  EXPECT_THROW(synthetic_soft_motion(open_body(), spec), Error);
+  spec.regions = {"belly"};
+  spec.frequency = 0.0;
+  EXPECT_THROW(synthetic_soft_motion(open_body(), spec), Error);
+}
+
+TEST(RigidityWeights, FollowTheDistanceToTheBones) {
+  const std::vector<int> soft = soft_region_vertices(open_body());
+  const Eigen::VectorXd w = rigidity_weights(open_body(), soft, 0.03);
+  std::vector<char> is_soft(static_cast<std::size_t>(w.size()), 0);
+  for (int v : soft) is_soft[static_cast<std::size_t>(v)] = 1;
+  const RowMatrixX3d shaped = body::shaped_template(open_body(), body::Betas::Zero());
+  const Eigen::VectorXd depth = bone_distance(open_body(), shaped, body::regress_joints(open_body(), shaped));
+  for (Eigen::Index v = 0; v < w.size(); ++v) {
+    if (!is_soft[static_cast<std::size_t>(v)])
+      EXPECT_EQ(w[v], 1.0);
+    else
+      EXPECT_NEAR(w[v], std::pow(0.03 / std::max(depth[v], 0.03), 4), 1e-15);
+  }
+  EXPECT_THROW(rigidity_weights(open_body(), soft, 0.0), Error);
+}
+
+struct RecoveryCase {
+  const char* motion;
+  double amplitude, frequency;
+};
+
+/// Fits the sequence with the default options and checks the recovery of the mean σ and of σ per vertex.
+void expect_recovery(const RecoveryCase& c, bool beta_given, int frames) {
+  SyntheticSoftMotion spec;
+  spec.motion = c.motion;
+  spec.frames = frames;
+  spec.amplitude = c.amplitude;
+  spec.frequency = c.frequency;
+  const SyntheticSoftSequence s = synthetic_soft_motion(open_body(), spec);
+  const RegistrationMetrics m = registration_metrics(
+      open_body(), s.frames, spec.fps, beta_given ? std::optional<body::Betas>(s.beta) : std::nullopt, {});
+  const double truth = s.truth.mean_sigma_soft();
+  const double error = m.dynamics.mean_sigma_soft() / truth - 1.0;
+  const double r = correlation(s.truth.sigma, m.dynamics.sigma, s.truth.soft_vertices);
+  SCOPED_TRACE(::testing::Message() << c.motion << " A " << c.amplitude << " m, f " << c.frequency << " Hz, β "
+                                    << (beta_given ? "given" : "fitted") << ": error " << 100 * error
+                                    << " %, correlation " << r);
+  // The acceptance: the mean σ over the soft region within 5 % and σ per vertex correlated at ≥ 0.95.
+  // Measured (docs/validate.md table): errors 0.6–2.3 % and correlations ≥ 0.999 with every region moving; the
+  // earlier soft-weight fit is 21 % off on these cases (correlation 0.957), so the 5 % bound separates a fit that
+  // keeps the dynamics from one that absorbs them into the joints, with room for the remaining ~2 %.
+  EXPECT_LT(std::abs(error), 0.05);
+  EXPECT_GE(r, 0.95);
+  EXPECT_EQ(m.fit.unconverged_frames, 0);
+}
+
+TEST(MetricRecovery, BetaGivenSeveralMotionsAmplitudesAndFrequencies) {
+  // 90 frames (1.5 s): at least three periods of the slowest oscillation (2 Hz) after the 0.5 s ease-in.
+  for (const RecoveryCase& c : {RecoveryCase{"running_on_spot", 0.006, 3.0}, RecoveryCase{"one_leg_jump", 0.002, 6.0},
+                                RecoveryCase{"shake_hips", 0.008, 2.0}})
+    expect_recovery(c, true, 90);
+}
+
+TEST(MetricRecovery, BetaFitted) {
+  for (const RecoveryCase& c :
+       {RecoveryCase{"jiggle_on_toes", 0.006, 4.0}, RecoveryCase{"shake_shoulders", 0.004, 2.0}})
+    expect_recovery(c, false, 90);
+}
+
+}  // namespace
+}  // namespace sflsh::validate
