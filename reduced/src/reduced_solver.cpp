@@ -259,8 +259,12 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
     clock = Clock::now();
     const auto inertia_nodes = static_cast<Eigen::Index>(inertia_.inertia_nodes().size());
     const meshing::RowMatrixX3d p_start = Eigen::Map<const meshing::RowMatrixX3d>(history_.p.data(), inertia_nodes, 3);
-    const RootFrame start_frame = root_frame(x_start, offset, pivot);
-    contact = potentials_.begin(t0, dt, p_start, inertia_, track ? &start_frame : nullptr);
+    if (track) {
+      const RootFrame start_frame = root_frame(x_start, offset, pivot);
+      contact = potentials_.begin(t0, dt, p_start, inertia_, &start_frame);
+    } else {
+      contact = potentials_.begin(t0, dt, p_start, inertia_);
+    }
     stats.potential_seconds += seconds_since(clock);
   }
 
@@ -467,8 +471,13 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
     }
     if (!contact) break;
     clock = Clock::now();
-    const RootFrame end_frame = root_frame(q, offset, pivot);
-    const bool accepted = potentials_.accept(q, inertia_, track ? &end_frame : nullptr);
+    bool accepted = false;
+    if (track) {
+      const RootFrame end_frame = root_frame(q, offset, pivot);
+      accepted = potentials_.accept(q, inertia_, &end_frame);
+    } else {
+      accepted = potentials_.accept(q, inertia_);
+    }
     stats.potential_seconds += seconds_since(clock);
     factor_valid_ = false;  // the factor holds this substep's contact Hessian
     if (accepted) break;
