@@ -91,7 +91,9 @@ void ReducedSolver::carried_posed(double t, const Eigen::VectorXd& x_prescribed,
   for (std::size_t k = 0; k < carried_.size(); ++k) {
     const Eigen::Vector3d x = x_prescribed.segment<3>(3 * carried_[k]);
     const auto row = static_cast<Eigen::Index>(k);
-    p.row(row) = problem_.trajectory ? (frame.A[k] * x + frame.d.row(row).transpose()).transpose() : x.transpose();
+    const Eigen::Vector3d posed =
+        problem_.trajectory ? Eigen::Vector3d(frame.A[k] * x + frame.d.row(row).transpose()) : x;
+    p.row(row) = posed.transpose();
   }
 }
 
