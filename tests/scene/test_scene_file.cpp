@@ -101,7 +101,7 @@ TEST(SceneFile, BadInputNamesFileAndLine) {
        "scene.toml:8: 'root' in body #0 = 'loose' is not one of tracked | free"},
       {"[scene]\n[effects]\ninertia = true\n" + std::string(kBody) +
            "skeleton = \"tracking\"\ntracking_stiffness = -1.0\n",
-       "scene.toml:8: 'tracking_stiffness' in body #0"},
+       "scene.toml:8: tracking_stiffness in body #0: -1 N/m is outside"},
       {"[scene]\n[effects]\ninertia = true\n" + std::string(kBody) +
            "skeleton = \"tracking\"\nintegrator = \"newmark\"\n",
        "needs integrator = \"backward_euler\""},

