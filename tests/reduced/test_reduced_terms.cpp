@@ -229,7 +229,7 @@ TEST_F(ReducedTermsFixture, NodePotentialMatchesFiniteDifferences) {
 TEST(RotationVector, DerivativesMatchFiniteDifferencesAndRIsARotation) {
   const double h = 1e-6;
   for (const Eigen::Vector3d& theta : {Eigen::Vector3d(0.0, 0.0, 0.0), Eigen::Vector3d(0.01, -0.03, 0.02),
-                                      Eigen::Vector3d(0.04, 0.05, -0.07), Eigen::Vector3d(0.3, -0.5, 0.9)}) {
+                                       Eigen::Vector3d(0.04, 0.05, -0.07), Eigen::Vector3d(0.3, -0.5, 0.9)}) {
     const RotationVectorDerivatives d = rotation_vector_derivatives(theta);
     EXPECT_LE((d.R * d.R.transpose() - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff(), 1e-14);
     EXPECT_NEAR(d.R.determinant(), 1.0, 1e-14);
