@@ -155,7 +155,9 @@ SimulationWriter::SimulationWriter(const BodyLayer& layer, RunFolder* run, const
       run_(run),
       options_(options),
       write_layer_(options.write_layer),
-      amplitude_(region_normals(layer)) {
+      amplitude_(region_normals(layer)),
+      frame_rotation_(options.rotation),
+      frame_translation_(options.translation) {
   if (options_.fields) check_frame_field_names(*options_.fields, "simulation output");
   const body::BodyModel& model = *layer.model;
   dominant_joint_.resize(model.num_vertices(), 1);
@@ -276,7 +278,7 @@ void SimulationWriter::add(int index, double t, const Eigen::VectorXd& x_state, 
     body_series_->add(t, name);
     path = run_->stage(name);
   }
-  run_job([this, path, t, posed, own_fields, fields = std::move(fields),
+  run_job([this, path, t, posed, own_fields, fields = std::move(fields), R = frame_rotation_, T = frame_translation_,
            x = energy ? x_state : Eigen::VectorXd()]() mutable {
     if (x.size() > 0) {
       // Only the tets under the skin's vertices (a sixth of the layer's on the coarse mesh).
@@ -284,12 +286,12 @@ void SimulationWriter::add(int index, double t, const Eigen::VectorXd& x_state, 
       for (vtk::Field& f : fields.point_data)
         if (f.name == "strain_energy_density" && f.values.size() == 0) f.values = scatter(layer_, vertex_psi);
     }
-    if (placed()) {
+    if (!R.isIdentity(0.0) || !T.isZero(0.0)) {
       for (std::size_t k = 0; k < own_fields; ++k) {
         vtk::Field& f = fields.point_data[k];
-        if (f.values.cols() == 3 && !f.integer) f.values = (f.values * options_.rotation.transpose()).eval();
+        if (f.values.cols() == 3 && !f.integer) f.values = (f.values * R.transpose()).eval();
       }
-      posed = place(posed);
+      posed = (posed * R.transpose()).rowwise() + T.transpose();
     }
     // Normals of the placed posed surface: the vtk writer adds them (Float32), an xdmf series gets them here.
     fields.normals = wants("Normals");
@@ -318,7 +320,7 @@ void SimulationWriter::write_layer_frame(int index, double t, const State& state
     path = run_->stage(name);
   }
   run_job([this, &problem, path, t, nodes = std::move(nodes), x = Eigen::VectorXd(state.x),
-           w = Eigen::VectorXd(state.w)]() mutable {
+           w = Eigen::VectorXd(state.w), R = frame_rotation_, T = frame_translation_]() mutable {
     const Eigen::Map<const RowMatrixX3d> elastic(x.data(), problem.num_nodes(), 3);
     const Eigen::Map<const RowMatrixX3d> velocity(w.data(), problem.num_nodes(), 3);
     vtk::Fields fields;
@@ -326,9 +328,9 @@ void SimulationWriter::write_layer_frame(int index, double t, const State& state
     if (wants("elastic_displacement"))
       fields.point_data.push_back({"elastic_displacement", elastic - problem.rest, false});
     if (wants("velocity")) fields.point_data.push_back({"velocity", velocity, false});
-    if (placed()) {  // as the body frames: the vectors turn with the body, the positions move with it
-      for (vtk::Field& f : fields.point_data) f.values = (f.values * options_.rotation.transpose()).eval();
-      nodes = place(nodes);
+    if (!R.isIdentity(0.0) || !T.isZero(0.0)) {  // as the body frames: vectors turn with the body, positions move
+      for (vtk::Field& f : fields.point_data) f.values = (f.values * R.transpose()).eval();
+      nodes = (nodes * R.transpose()).rowwise() + T.transpose();
     }
     if (!layer_xdmf_) {  // an xdmf series holds them once
       add_kappa_fields(fields.point_data, layer_.fields.node, [this](const std::string& name) { return wants(name); });
@@ -363,6 +365,11 @@ void SimulationWriter::finish() {
 
 std::string SimulationWriter::dynamics_file() const {
   return options_.prefix == "body" ? "dynamics.vtp" : options_.prefix + "_dynamics.vtp";
+}
+
+void SimulationWriter::set_frame_placement(const Eigen::Matrix3d& rotation, const Eigen::Vector3d& translation) {
+  frame_rotation_ = rotation;
+  frame_translation_ = translation;
 }
 
 bool SimulationWriter::placed() const {

@@ -59,8 +59,67 @@ ReducedSolver::ReducedSolver(const model::Problem& problem, const Subspace& subs
   }
   for (int id : problem.dirichlet.drive) has_drives_ = has_drives_ || id >= 0;
   q_ = Eigen::VectorXd::Zero(subspace.num_dofs());
-  q_rate_ = q_;
-  q_rate_previous_ = q_;
+  q_rate_ = Eigen::VectorXd::Zero(subspace.num_dofs() + (options.root.enabled ? 6 : 0));
+  q_rate_previous_ = q_rate_;
+  if (options.root.enabled) setup_root();
+}
+
+void ReducedSolver::setup_root() {
+  require(options_.integrator == model::Integrator::backward_euler,
+          "reduced: a tracking skeleton needs integrator = \"backward_euler\", got \"{}\"",
+          model::to_string(options_.integrator));
+  require(!options_.quasi_static && problem_.dynamic(), "reduced: a tracking skeleton needs inertia (masses)");
+  std::vector<char> inertia_node(static_cast<std::size_t>(problem_.num_nodes()), 0);
+  for (int i : inertia_.inertia_nodes()) inertia_node[static_cast<std::size_t>(i)] = 1;
+  for (int i = 0; i < problem_.num_nodes(); ++i) {
+    if (inertia_node[static_cast<std::size_t>(i)] || problem_.mass[i] <= 0.0) continue;
+    carried_.push_back(i);
+    carried_mass_.push_back(problem_.mass[i]);
+  }
+  const auto offset = static_cast<Eigen::Index>(subspace_.num_dofs());
+  elastic_head_ = std::make_unique<HeadTerm>(elastic_term_, offset);
+  gravity_head_ = std::make_unique<HeadTerm>(gravity_term_, offset);
+  root_inertia_term_ = std::make_unique<RootInertiaTerm>(inertia_, carried_mass_, offset);
+  root_tracking_term_ = std::make_unique<RootTrackingTerm>(offset);
+  root_potential_term_ = std::make_unique<RootPotentialTerm>(potentials_, inertia_, offset);
+}
+
+void ReducedSolver::carried_posed(double t, const Eigen::VectorXd& x_prescribed, meshing::RowMatrixX3d& p) const {
+  p.resize(static_cast<Eigen::Index>(carried_.size()), 3);
+  model::NodeFrame frame;
+  if (problem_.trajectory) problem_.trajectory->evaluate_nodes(t, carried_, frame);
+  for (std::size_t k = 0; k < carried_.size(); ++k) {
+    const Eigen::Vector3d x = x_prescribed.segment<3>(3 * carried_[k]);
+    const auto row = static_cast<Eigen::Index>(k);
+    const Eigen::Vector3d posed =
+        problem_.trajectory ? Eigen::Vector3d(frame.A[k] * x + frame.d.row(row).transpose()) : x;
+    p.row(row) = posed.transpose();
+  }
+}
+
+// The pelvis from the options, else the centre of mass of the skinned layer at t.
+Eigen::Vector3d ReducedSolver::root_pivot(double t, const meshing::RowMatrixX3d& carried) const {
+  if (options_.root.pivot) return options_.root.pivot(t);
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  double mass = 0.0;
+  const std::vector<double>& m = inertia_.lumped_mass();
+  for (Eigen::Index i = 0; i < inertia_.posed_prescribed().rows(); ++i) {
+    sum += m[static_cast<std::size_t>(i)] * inertia_.posed_prescribed().row(i).transpose();
+    mass += m[static_cast<std::size_t>(i)];
+  }
+  for (Eigen::Index k = 0; k < carried.rows(); ++k) {
+    sum += carried_mass_[static_cast<std::size_t>(k)] * carried.row(k).transpose();
+    mass += carried_mass_[static_cast<std::size_t>(k)];
+  }
+  return sum / mass;
+}
+
+void ReducedSolver::root_transform(Eigen::Matrix3d& R, Eigen::Vector3d& t) const {
+  R.setIdentity();
+  t.setZero();
+  if (!tracking()) return;
+  R = rotation_of_vector(root_.head<3>());
+  t = pivot_ - R * pivot_ + root_.tail<3>();  // R(p − c) + c + τ
 }
 
 Eigen::VectorXd ReducedSolver::prescribed_state(double t) const {
@@ -109,6 +168,7 @@ void ReducedSolver::initialize(const model::State& state) {
   q_rate_.setZero();
   q_rate_previous_.setZero();
   rate_steps_ = 0;
+  root_.setZero();  // a state carries no root deviation: the root starts on its motion
   factor_valid_ = false;
   if (has_drives_) {
     elastic_.set_prescribed_state(x_prescribed);
@@ -129,6 +189,33 @@ void ReducedSolver::initialize(const model::State& state) {
     history_.v_previous = gather_nodes(state.w_previous, nodes);
     history_.h_previous = state.h_previous;
   }
+  if (tracking()) {
+    meshing::RowMatrixX3d carried;
+    carried_posed(t_, x_prescribed, carried);
+    carried_history_ = model::PosedHistory{};
+    carried_history_.p = node_major(carried);
+    carried_history_.v = gather_nodes(state.w, carried_);
+    // The tracking spring and damper: translation k, d; rotation k ρ², d ρ² with ρ² = ⅔ Σ m|p − c|²/Σ m (the mean
+    // over axes of the layer's moment of inertia per unit mass), so that both swing with one period.
+    const Eigen::Vector3d c = root_pivot(t_, carried);
+    pivot_ = c;
+    double inertia_sum = 0.0, mass = 0.0;
+    const std::vector<double>& m = inertia_.lumped_mass();
+    for (Eigen::Index i = 0; i < inertia_.posed_prescribed().rows(); ++i) {
+      inertia_sum +=
+          m[static_cast<std::size_t>(i)] * (inertia_.posed_prescribed().row(i).transpose() - c).squaredNorm();
+      mass += m[static_cast<std::size_t>(i)];
+    }
+    for (Eigen::Index k = 0; k < carried.rows(); ++k) {
+      inertia_sum += carried_mass_[static_cast<std::size_t>(k)] * (carried.row(k).transpose() - c).squaredNorm();
+      mass += carried_mass_[static_cast<std::size_t>(k)];
+    }
+    const double rho2 = 2.0 / 3.0 * inertia_sum / mass;
+    const RootTrackingOptions& o = options_.root;
+    root_stiffness_ << o.stiffness * rho2 * Eigen::Vector3d::Ones(), o.stiffness * Eigen::Vector3d::Ones();
+    root_damping_ << o.damping * rho2 * Eigen::Vector3d::Ones(), o.damping * Eigen::Vector3d::Ones();
+    if (o.free_translation) root_stiffness_[3] = root_stiffness_[5] = 0.0;  // x and z: the horizontal plane (Y up)
+  }
 }
 
 bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProjection projection, model::StepStats& stats,
@@ -139,8 +226,28 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
   const Eigen::VectorXd x_prescribed = prescribed_state(t1);
   inertia_.set_time(t1, x_prescribed);
   const model::InertiaTarget target = model::inertia_target(options_.integrator, history_, dt);
-  if (inertia_on) inertia_term_.set_step(target.p_tilde, target.h_eff);
+  const bool track = tracking();
+  const auto offset = static_cast<Eigen::Index>(subspace_.num_dofs());
+  model::InertiaTarget carried_target;
+  meshing::RowMatrixX3d carried_end;
+  Eigen::Vector3d pivot = Eigen::Vector3d::Zero();
+  if (track) {  // the root's inertia over every node, its tracking spring and damper
+    carried_posed(t1, x_prescribed, carried_end);
+    pivot = root_pivot(t1, carried_end);
+    carried_target = model::inertia_target(options_.integrator, carried_history_, dt);
+    root_inertia_term_->set_step(target.p_tilde, carried_target.p_tilde, carried_end, pivot, target.h_eff);
+    root_tracking_term_->set_step(root_stiffness_, root_damping_, root_, dt);
+    root_potential_term_->set_pivot(pivot);
+  } else if (inertia_on) {
+    inertia_term_.set_step(target.p_tilde, target.h_eff);
+  }
   gravity_term_.update();
+  // x = [q; θ; τ] with a tracking root, else q.
+  Eigen::VectorXd x_start = q_;
+  if (track) {
+    x_start.resize(offset + 6);
+    x_start << q_, root_;
+  }
   stats.inertia_seconds += seconds_since(clock);
   clock = Clock::now();
   if (has_drives_) {
@@ -154,17 +261,30 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
     clock = Clock::now();
     const auto inertia_nodes = static_cast<Eigen::Index>(inertia_.inertia_nodes().size());
     const meshing::RowMatrixX3d p_start = Eigen::Map<const meshing::RowMatrixX3d>(history_.p.data(), inertia_nodes, 3);
-    contact = potentials_.begin(t0, dt, p_start, inertia_);
+    if (track) {
+      const RootFrame start_frame = root_frame(x_start, offset, pivot);
+      contact = potentials_.begin(t0, dt, p_start, inertia_, &start_frame);
+    } else {
+      contact = potentials_.begin(t0, dt, p_start, inertia_);
+    }
     stats.potential_seconds += seconds_since(clock);
   }
 
   // Φ = Σ of the substep's terms (reduced_terms.hpp).
-  std::array<TimedTerm, 4> terms_storage;
+  std::array<TimedTerm, 5> terms_storage;
   std::size_t num_terms = 0;
-  if (inertia_on) terms_storage[num_terms++] = {&inertia_term_, &stats.inertia_seconds};
-  terms_storage[num_terms++] = {&gravity_term_, &stats.inertia_seconds};
-  terms_storage[num_terms++] = {&elastic_term_, &stats.elastic_seconds};
-  if (contact) terms_storage[num_terms++] = {&potential_term_, &stats.potential_seconds};
+  if (track) {
+    terms_storage[num_terms++] = {root_inertia_term_.get(), &stats.inertia_seconds};
+    terms_storage[num_terms++] = {root_tracking_term_.get(), &stats.inertia_seconds};
+    terms_storage[num_terms++] = {gravity_head_.get(), &stats.inertia_seconds};
+    terms_storage[num_terms++] = {elastic_head_.get(), &stats.elastic_seconds};
+    if (contact) terms_storage[num_terms++] = {root_potential_term_.get(), &stats.potential_seconds};
+  } else {
+    if (inertia_on) terms_storage[num_terms++] = {&inertia_term_, &stats.inertia_seconds};
+    terms_storage[num_terms++] = {&gravity_term_, &stats.inertia_seconds};
+    terms_storage[num_terms++] = {&elastic_term_, &stats.elastic_seconds};
+    if (contact) terms_storage[num_terms++] = {&potential_term_, &stats.potential_seconds};
+  }
   const auto terms = std::span<const TimedTerm>(terms_storage.data(), num_terms);
 
   // +∞ where a term refuses the state.
@@ -183,11 +303,11 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
   Eigen::VectorXd q;
   int enlargements = 0;
   for (int refinement = 0;;) {
-    q = q_;
+    q = x_start;
     double phi = potential(q);
     if (options_.use_predictor && rate_steps_ >= 1) {
       // q_n + h q̇_n, plus ½h² q̈_n from the last two backward differences once there are two.
-      Eigen::VectorXd predicted = q_ + dt * q_rate_;
+      Eigen::VectorXd predicted = x_start + dt * q_rate_;
       if (options_.predictor_order >= 2 && rate_steps_ >= 2 && rate_dt_ > 0.0)
         predicted += (0.5 * dt * dt / rate_dt_) * (q_rate_ - q_rate_previous_);
       const double phi_predicted = potential(predicted);
@@ -201,7 +321,7 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
       return false;
     }
 
-    Eigen::VectorXd gradient(subspace_.num_dofs());
+    Eigen::VectorXd gradient(q.size());
     Eigen::MatrixXd hessian;
     // A factor from another ĥ or projection, or any factor while contact is active (its Hessian changes with the
     // candidates), is not reused. ĥ is compared to 1e-12 relative: the ladder's substeps end on t0 + h exactly, so
@@ -332,7 +452,8 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
     }
     if (guard_) {  // the tets outside the cubature: over the limit → into the cubature, and solve again
       clock = Clock::now();
-      const std::vector<GuardViolation> over = guard_->check(q);
+      const std::vector<GuardViolation> over =
+          track ? guard_->check(Eigen::VectorXd(q.head(offset))) : guard_->check(q);
       stats.elastic_seconds += seconds_since(clock);
       if (!over.empty()) {
         if (enlargements >= options_.max_enlargements) {
@@ -352,7 +473,13 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
     }
     if (!contact) break;
     clock = Clock::now();
-    const bool accepted = potentials_.accept(q, inertia_);
+    bool accepted = false;
+    if (track) {
+      const RootFrame end_frame = root_frame(q, offset, pivot);
+      accepted = potentials_.accept(q, inertia_, &end_frame);
+    } else {
+      accepted = potentials_.accept(q, inertia_);
+    }
     stats.potential_seconds += seconds_since(clock);
     factor_valid_ = false;  // the factor holds this substep's contact Hessian
     if (accepted) break;
@@ -367,14 +494,31 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
   }
   clock = Clock::now();
   Eigen::VectorXd p_new;
-  inertia_.posed(q, p_new);
+  if (track) {  // the history holds the deviated (world) positions
+    inertia_.posed(Eigen::VectorXd(q.head(offset)), p_new);
+    const RootFrame end_frame = root_frame(q, offset, pivot);
+    for (Eigen::Index i = 0; i < p_new.size() / 3; ++i)
+      p_new.segment<3>(3 * i) = end_frame.apply(p_new.segment<3>(3 * i));
+    Eigen::VectorXd carried_new(3 * carried_end.rows());
+    for (Eigen::Index k = 0; k < carried_end.rows(); ++k)
+      carried_new.segment<3>(3 * k) = end_frame.apply(carried_end.row(k).transpose());
+    model::advance_history(carried_target, carried_history_, carried_new);
+  } else {
+    inertia_.posed(q, p_new);
+  }
   model::advance_history(target, history_, p_new);
   if (target.integrator != options_.integrator) ++startup;  // BDF2 started (or restarted) as backward Euler
   q_rate_previous_ = q_rate_;
-  q_rate_ = (q - q_) / dt;
+  q_rate_ = (q - x_start) / dt;
   rate_dt_ = dt;
   ++rate_steps_;
-  q_ = q;
+  if (track) {
+    root_ = q.tail<6>();
+    pivot_ = pivot;
+    q_ = q.head(offset);
+  } else {
+    q_ = q;
+  }
   t_ = t1;
   if (options_.record_substeps) substeps_.push_back({t0, dt, q_});
   stats.inertia_seconds += seconds_since(clock);
@@ -396,6 +540,8 @@ class ReducedSolver::Ladder final : public model::LadderSolver {
     rate_previous_ = solver_.q_rate_previous_;
     rate_dt_ = solver_.rate_dt_;
     rate_steps_ = solver_.rate_steps_;
+    root_ = solver_.root_;
+    pivot_ = solver_.pivot_;
     history_saved_ = false;
     solver_.substeps_.clear();
   }
@@ -406,12 +552,18 @@ class ReducedSolver::Ladder final : public model::LadderSolver {
     solver_.q_rate_previous_ = rate_previous_;
     solver_.rate_dt_ = rate_dt_;
     solver_.rate_steps_ = rate_steps_;
-    if (history_saved_) solver_.history_ = history_;
+    solver_.root_ = root_;
+    solver_.pivot_ = pivot_;
+    if (history_saved_) {
+      solver_.history_ = history_;
+      solver_.carried_history_ = carried_history_;
+    }
     solver_.substeps_.clear();
   }
   bool attempt(double dt, material::HessianProjection hessian, model::StepStats& stats, std::string& reason) override {
     if (!history_saved_ && solver_.t_ == t_ && dt < 0.75 * h_) {  // the first substep of a split rung
       history_ = solver_.history_;
+      carried_history_ = solver_.carried_history_;
       history_saved_ = true;
     }
     int startup = 0;
@@ -427,7 +579,9 @@ class ReducedSolver::Ladder final : public model::LadderSolver {
   Eigen::VectorXd q_, rate_, rate_previous_;
   double rate_dt_ = 0.0;
   int rate_steps_ = 0;
-  model::PosedHistory history_;
+  model::PosedHistory history_, carried_history_;
+  Vector6d root_ = Vector6d::Zero();
+  Eigen::Vector3d pivot_ = Eigen::Vector3d::Zero();
   bool history_saved_ = false;
 };
 

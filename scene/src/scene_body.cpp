@@ -103,6 +103,21 @@ void SceneBody::start(bool inertia) {
     reduced::ReducedOptions options;
     options.quasi_static = quasi_static_;
     options.integrator = spec_.integrator;
+    if (spec_.tracking) {
+      require(!quasi_static_, "scene body '{}': skeleton = \"tracking\" needs inertia ([effects] inertia = true)",
+              name());
+      options.root.enabled = true;
+      options.root.stiffness = spec_.tracking_stiffness;
+      options.root.damping = spec_.tracking_damping;
+      options.root.free_translation = spec_.free_root;
+      // The pivot: the posed pelvis, M_0(t) (J_0, 1) with J_0 regressed from the shaped template.
+      const Eigen::Vector3d pelvis = body::regress_joints(*layer_->model, layer_->shaped).row(0).transpose();
+      options.root.pivot = [curve = layer_->curve, pelvis](double t) {
+        model::JointTransforms m;
+        curve->transforms(t, m);
+        return Eigen::Vector3d(m[0].leftCols<3>() * pelvis + m[0].col(3));
+      };
+    }
     fast_ =
         std::make_unique<reduced::ReducedSolver>(problem, reduced_model_->subspace, reduced_model_->cubature, options);
     fast_->initialize(model::initial_state(problem, 0.0));
@@ -200,6 +215,44 @@ void SceneBody::step(double t0, double h, EffectSeconds& seconds) {
   }
   t_ = t0 + h;
   solve_seconds += seconds_since(clock);
+  if (tracking()) {
+    const reduced::Vector6d& r = fast_->root();
+    if (r.tail<3>().norm() > root_max_displacement_) {
+      root_max_displacement_ = r.tail<3>().norm();
+      root_max_displacement_time_ = t_;
+      root_max_direction_ = r.tail<3>();
+    }
+    if (r.head<3>().norm() > root_max_rotation_) {
+      root_max_rotation_ = r.head<3>().norm();
+      root_max_rotation_time_ = t_;
+    }
+  }
+}
+
+Rigid SceneBody::root_deviation() const {
+  Rigid root;
+  if (tracking()) fast_->root_transform(root.R, root.t);
+  return root;
+}
+
+nlohmann::json SceneBody::skeleton_summary() const {
+  if (!tracking()) return {{"skeleton", "prescribed"}};
+  const reduced::Vector6d& r = fast_->root();
+  return {
+      {"skeleton", "tracking"},
+      {"root", spec_.free_root ? "free" : "tracked"},
+      {"tracking_stiffness_n_per_m", spec_.tracking_stiffness},
+      {"tracking_damping_n_s_per_m", spec_.tracking_damping},
+      {"root_stiffness", std::vector<double>(fast_->root_stiffness().data(), fast_->root_stiffness().data() + 6)},
+      {"root_damping", std::vector<double>(fast_->root_damping().data(), fast_->root_damping().data() + 6)},
+      {"root_coordinates_units", "rotation x, y, z [N·m/rad | N·m·s/rad], translation x, y, z [N/m | N·s/m]"},
+      {"max_root_displacement_m", root_max_displacement_},
+      {"max_root_displacement_time_s", root_max_displacement_time_},
+      {"max_root_displacement_vector_m", {root_max_direction_.x(), root_max_direction_.y(), root_max_direction_.z()}},
+      {"max_root_rotation_rad", root_max_rotation_},
+      {"max_root_rotation_time_s", root_max_rotation_time_},
+      {"final_root_displacement_m", r.tail<3>().norm()},
+      {"final_root_rotation_rad", r.head<3>().norm()}};
 }
 
 // The skinned pose at time t, interpolated between the motion's frames (slerp per joint).
@@ -216,11 +269,14 @@ RowMatrixX3d SceneBody::skinned_world_surface(double t) const {
 
 RowMatrixX3d SceneBody::world_surface() const {
   if (!soft()) return skinned_world_surface(t_);
+  if (tracking()) return (placement_ * root_deviation()).apply(layer_->posed_surface(positions(), t_));
   return placement_.apply(layer_->posed_surface(positions(), t_));
 }
 
+// A tracking root is carried at its current deviation.
 RowMatrixX3d SceneBody::predicted_world_surface(double t) const {
   if (!soft()) return skinned_world_surface(t);
+  if (tracking()) return (placement_ * root_deviation()).apply(layer_->posed_surface(positions(), t));
   return placement_.apply(layer_->posed_surface(positions(), t));
 }
 

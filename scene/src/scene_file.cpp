@@ -255,15 +255,61 @@ class SceneReader : public TomlReader {
     return p;
   }
 
+  /// skeleton = "prescribed" | "tracking", tracking_stiffness [N/m], tracking_damping [N·s/m], root = "tracked" |
+  /// "free"; the tracking keys need skeleton = "tracking", which needs the reduced solver, lumped masses and
+  /// backward Euler.
+  void read_skeleton(const toml::table& t, const std::string& context, BodySpec& b) const {
+    if (const toml::node* n = t.get("skeleton"))
+      b.tracking = choice(*n, "skeleton", {"prescribed", "tracking"}, context) == "tracking";
+    for (const char* key : {"tracking_stiffness", "tracking_damping", "root"}) {
+      const toml::node* n = t.get(key);
+      require(n == nullptr || b.tracking, "{}: '{}'{} needs skeleton = \"tracking\"", n ? at(*n) : std::string(), key,
+              context);
+    }
+    if (const toml::node* n = t.get("tracking_stiffness"))
+      b.tracking_stiffness = number_in(*n, "tracking_stiffness", context, 0.0, 1e6, "N/m");
+    if (const toml::node* n = t.get("tracking_damping"))
+      b.tracking_damping = number_in(*n, "tracking_damping", context, 0.0, 1e5, "N·s/m");
+    if (const toml::node* n = t.get("root")) b.free_root = choice(*n, "root", {"tracked", "free"}, context) == "free";
+    if (!b.tracking) return;
+    const toml::node& at_node = *t.get("skeleton");
+    require(b.solver == SolverKind::reduced,
+            "{}: skeleton = \"tracking\"{} needs solver = \"reduced\" (the full-space solver keeps prescribed bones)",
+            at(at_node), context);
+    require(b.mass == model::MassKind::lumped, "{}: skeleton = \"tracking\"{} needs mass = \"lumped\"", at(at_node),
+            context);
+    require(b.integrator == model::Integrator::backward_euler,
+            "{}: skeleton = \"tracking\"{} needs integrator = \"backward_euler\"", at(at_node), context);
+  }
+
   BodySpec read_body(const toml::node& node, std::size_t index) const {
     const toml::table* t = node.as_table();
     require(t != nullptr, "{}: 'body' must be an array of tables ([[body]])", at(node));
     const std::string context = fmt::format(" in body #{}", index);
-    check_keys(
-        *t,
-        {"name", "body", "subject", "betas", "motion", "motion_offset", "approach", "placement", "solver", "mesh",
-         "material", "control_points", "handles", "cubature", "density", "stiffness_scale", "integrator", "mass"},
-        context);
+    check_keys(*t,
+               {"name",
+                "body",
+                "subject",
+                "betas",
+                "motion",
+                "motion_offset",
+                "approach",
+                "placement",
+                "solver",
+                "mesh",
+                "material",
+                "control_points",
+                "handles",
+                "cubature",
+                "density",
+                "stiffness_scale",
+                "integrator",
+                "mass",
+                "skeleton",
+                "tracking_stiffness",
+                "tracking_damping",
+                "root"},
+               context);
     BodySpec b;
     b.line = static_cast<int>(t->source().begin.line);
     b.name = t->get("name") ? string_value(*t->get("name"), "name") : fmt::format("body{}", index);
@@ -297,6 +343,7 @@ class SceneReader : public TomlReader {
       b.stiffness_scale = number_in(*n, "stiffness_scale", context, 1e-3, 1e3);
     if (const toml::node* n = t->get("integrator")) b.integrator = integrator(*n, context);
     if (const toml::node* n = t->get("mass")) b.mass = mass(*n, context);
+    read_skeleton(*t, context, b);
     if (!b.body_path.empty()) input_file(*t->get("body"), "body", context, b.body_path, "a body model .npz file");
     if (!b.material.empty()) input_file(*t->get("material"), "material", context, b.material, "a material TOML file");
     if (b.motion.ends_with(".npz"))
@@ -438,6 +485,11 @@ class SceneReader : public TomlReader {
       require(scene.crowd->solver != SolverKind::full,
               "{}:{}: a [crowd] runs the reduced solver or skinning, not 'full'", path().string(), scene.crowd->line);
     }
+    for (const BodySpec& b : scene.bodies)
+      require(!b.tracking || scene.effects.inertia,
+              "{}:{}: body '{}' has skeleton = \"tracking\", which needs [effects] inertia = true (the skeleton's "
+              "inertia)",
+              path().string(), b.line, b.name);
     for (const ObjectSpec& o : scene.objects) {
       require(o.motion != ObjectMotionKind::free || scene.effects.object_contact,
               "{}:{}: object '{}' is free, which needs object_contact (nothing else acts on it but gravity)",

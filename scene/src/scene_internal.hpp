@@ -13,6 +13,7 @@
 #include <sflsh/scene/scene_file.hpp>
 
 #include <Eigen/Geometry>
+#include <nlohmann/json.hpp>
 
 #include <memory>
 #include <optional>
@@ -94,6 +95,12 @@ class SceneBody {
   Eigen::VectorXd positions() const;
   /// The largest elastic displacement of the skin now [m] (0 for a skinned body).
   double max_elastic_displacement() const;
+  /// Whether the skeleton tracks its motion (skeleton = "tracking"), and its root's deviation from the motion now,
+  /// p ↦ R p + t in the body's own (posed) frame (identity otherwise).
+  bool tracking() const { return fast_ && fast_->tracking(); }
+  Rigid root_deviation() const;
+  /// summary.json "skeleton" of a tracking body: the largest root displacement and rotation and when.
+  nlohmann::json skeleton_summary() const;
 
   // Counters for summary.json.
   long steps = 0, idle_steps = 0, newton_iterations = 0, refinements = 0, failed_attempts = 0;
@@ -119,6 +126,10 @@ class SceneBody {
   std::vector<int> vertex_node_;
   bool quasi_static_ = false;
   double t_ = 0.0;
+  // The tracking root's largest deviation so far: |τ| [m], |θ| [rad] and their times [s].
+  double root_max_displacement_ = 0.0, root_max_rotation_ = 0.0;
+  double root_max_displacement_time_ = 0.0, root_max_rotation_time_ = 0.0;
+  Eigen::Vector3d root_max_direction_ = Eigen::Vector3d::Zero();  ///< τ at its largest (body frame) [m]
 };
 
 }  // namespace sflsh::scene::detail

@@ -414,6 +414,7 @@ class SceneRun {
         j["contact_refinements"] = body.refinements;
         j["solve_seconds"] = body.solve_seconds;
         j["dynamics"] = output_->dynamics_summary(b);
+        if (body.solver() == SolverKind::reduced) j["skeleton"] = body.skeleton_summary();
       }
       nlohmann::json contact = nlohmann::json::object();
       for (const auto& [label, p] : {std::pair{"objects", c.objects.get()}, std::pair{"bodies", c.bodies.get()}}) {
@@ -485,7 +486,8 @@ class SceneRun {
                       {"max_penetration_mm", 1e3 * total.max_penetration},
                       {"measured_max_penetration_mm", 1e3 * measured},
                       {"measured_at", deepest_time_},
-                      {"skeleton_response", false}};
+                      {"skeleton_response",
+                       std::any_of(bodies_.begin(), bodies_.end(), [](const auto& b) { return b->tracking(); })}};
     s["timings"] = {{"setup_seconds", setup_seconds},
                     {"loop_seconds", loop_seconds},
                     {"step_seconds", step_seconds_},

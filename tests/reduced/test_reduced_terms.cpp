@@ -1,7 +1,9 @@
 // One finite-difference harness over every term of the reduced incremental potential (reduced_terms.hpp): value,
 // gradient and Hessian in q against central differences at several amplitudes, on the box under swinging node maps,
 // for the cubature elasticity (exact; projected: PSD), the inertia (lumped, consistent), gravity and a node
-// potential; the inertia and gravity values against their node-by-node definitions; and the consistent joint-pair
+// potential; the tracking root's terms (root inertia, tracking spring and damper, node potential at the deviated
+// positions) on x = [q; θ; τ] and the rotation vector's derivatives; the inertia and gravity values against their
+// node-by-node definitions; and the consistent joint-pair
 // precompute and cross-time mass of a skinned body layer against node-by-node sums.
 #include "integrator_fixtures.hpp"
 #include "reduced_fixtures.hpp"
@@ -12,6 +14,8 @@
 #include <sflsh/reduced/reduced_history.hpp>
 #include <sflsh/reduced/reduced_model.hpp>
 #include <sflsh/reduced/reduced_terms.hpp>
+#include <sflsh/reduced/root_tracking.hpp>
+#include <sflsh/reduced/rotation_vector.hpp>
 
 #include <Eigen/Eigenvalues>
 #include <gtest/gtest.h>
@@ -214,6 +218,142 @@ TEST_F(ReducedTermsFixture, NodePotentialMatchesFiniteDifferences) {
   ReducedPotentialTerm term(potentials, inertia);
   unsigned seed = 61;
   for (double amplitude : kAmplitudes) check_derivatives(term, q(amplitude, seed++));
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// The tracking root (root_tracking.hpp): x = [q; θ; τ].
+
+/// R(θ)'s first and second derivatives against central differences, in the series range (|θ|² < 1e-2) and beyond.
+/// Step 1e-6 rad on entries of order 1: truncation and rounding both ≲ 1e-10, so 1e-8 is far below any error in a
+/// coefficient (O(1) wrong entries).
+TEST(RotationVector, DerivativesMatchFiniteDifferencesAndRIsARotation) {
+  const double h = 1e-6;
+  for (const Eigen::Vector3d& theta : {Eigen::Vector3d(0.0, 0.0, 0.0), Eigen::Vector3d(0.01, -0.03, 0.02),
+                                       Eigen::Vector3d(0.04, 0.05, -0.07), Eigen::Vector3d(0.3, -0.5, 0.9)}) {
+    const RotationVectorDerivatives d = rotation_vector_derivatives(theta);
+    EXPECT_LE((d.R * d.R.transpose() - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff(), 1e-14);
+    EXPECT_NEAR(d.R.determinant(), 1.0, 1e-14);
+    EXPECT_LE((d.R - rotation_of_vector(theta)).cwiseAbs().maxCoeff(), 1e-15);
+    if (theta.norm() > 0.0) {
+      const Eigen::Matrix3d expected = Eigen::AngleAxisd(theta.norm(), theta.normalized()).toRotationMatrix();
+      EXPECT_LE((d.R - expected).cwiseAbs().maxCoeff(), 1e-14);
+    }
+    for (int k = 0; k < 3; ++k) {
+      Eigen::Vector3d p = theta, m = theta;
+      p[k] += h;
+      m[k] -= h;
+      const RotationVectorDerivatives dp = rotation_vector_derivatives(p), dm = rotation_vector_derivatives(m);
+      EXPECT_LE((d.dR[k] - (dp.R - dm.R) / (2.0 * h)).cwiseAbs().maxCoeff(), 1e-8) << theta.transpose() << " k " << k;
+      for (int l = 0; l < 3; ++l)
+        EXPECT_LE((d.d2R[l][k] - (dp.dR[l] - dm.dR[l]) / (2.0 * h)).cwiseAbs().maxCoeff(), 1e-8)
+            << theta.transpose() << " k " << k << " l " << l;
+    }
+  }
+}
+
+struct RootTermsFixture : ReducedTermsFixture {
+  std::vector<int> carried;  ///< the attached nodes: only the root moves them
+  std::vector<double> carried_mass;
+  meshing::RowMatrixX3d carried_posed;
+  Eigen::VectorXd carried_tilde;
+  const Eigen::Vector3d pivot{0.06, 0.05, 0.01};
+  Eigen::Index offset = 0;
+
+  void SetUp() override {
+    ReducedTermsFixture::SetUp();
+    const model::Problem& p = box.problem;
+    carried = box.attached;
+    std::sort(carried.begin(), carried.end());
+    model::NodeFrame frame;
+    p.frame(t, frame);
+    const model::RowMatrixX3d skinned = model::posed_positions(frame, x_prescribed);
+    carried_posed.resize(static_cast<Eigen::Index>(carried.size()), 3);
+    for (std::size_t k = 0; k < carried.size(); ++k) {
+      carried_posed.row(static_cast<Eigen::Index>(k)) = skinned.row(carried[k]);
+      carried_mass.push_back(p.mass[carried[k]]);
+    }
+    carried_tilde = Eigen::Map<const Eigen::VectorXd>(carried_posed.data(), carried_posed.size()) +
+                    testing::random_q(static_cast<int>(carried_posed.size()), 0.02, 3);
+    offset = subspace.num_dofs();
+  }
+  /// x = [q; θ; τ] with q of `amplitude` [m], θ up to 10·amplitude [rad] (0.001–0.04 rad), τ of `amplitude`.
+  Eigen::VectorXd x(double amplitude, unsigned seed) const {
+    Eigen::VectorXd v(offset + 6);
+    v << q(amplitude, seed), testing::random_q(3, 10.0 * amplitude, seed + 100),
+        testing::random_q(3, amplitude, seed + 200);
+    return v;
+  }
+};
+
+TEST_F(RootTermsFixture, RootInertiaMatchesFiniteDifferencesAndTheInertiaAtZeroDeviation) {
+  const model::Problem& p = box.problem;
+  ReducedInertia inertia(p, subspace);
+  inertia.set_time(t, x_prescribed);
+  model::NodeFrame frame;
+  p.frame(t, frame);
+  const model::RowMatrixX3d skinned = model::posed_positions(frame, x_prescribed);
+  const Eigen::VectorXd p_tilde_all =
+      Eigen::Map<const Eigen::VectorXd>(skinned.data(), skinned.size()) + testing::random_q(p.num_dofs(), 0.02, 7);
+  const Eigen::VectorXd p_tilde = gather_nodes(p_tilde_all, inertia.inertia_nodes());
+  const double h_eff = 1.0 / 240.0;
+  RootInertiaTerm term(inertia, carried_mass, offset);
+  term.set_step(p_tilde, carried_tilde, carried_posed, pivot, h_eff);
+  unsigned seed = 71;
+  for (double amplitude : kAmplitudes) check_derivatives(term, x(amplitude, seed++));
+  // At zero deviation the root term is the soft tissue's inertia (plus the carried nodes' constant).
+  ReducedInertiaTerm plain(inertia);
+  plain.set_step(p_tilde, h_eff);
+  Eigen::VectorXd at = x(1e-2, 81), zero = Eigen::VectorXd::Zero(offset + 6);
+  at.tail<6>().setZero();
+  const double expected = plain.value(at.head(offset)) - plain.value(zero.head(offset));
+  EXPECT_NEAR(term.value(at) - term.value(zero), expected, 1e-9 * std::abs(expected));
+  // A rigid deviation of everything that keeps each node's distance to its target leaves the value: a pure
+  // translation of the targets by τ with q = 0 gives the value at zero with shifted targets.
+  const Eigen::Vector3d shift(0.01, -0.02, 0.005);
+  Eigen::VectorXd shifted_tilde = p_tilde, shifted_carried = carried_tilde;
+  for (Eigen::Index i = 0; i < shifted_tilde.size() / 3; ++i) shifted_tilde.segment<3>(3 * i) += shift;
+  for (Eigen::Index i = 0; i < shifted_carried.size() / 3; ++i) shifted_carried.segment<3>(3 * i) += shift;
+  RootInertiaTerm moved(inertia, carried_mass, offset);
+  moved.set_step(shifted_tilde, shifted_carried, carried_posed, pivot, h_eff);
+  Eigen::VectorXd translated = zero;
+  translated.tail<3>() = shift;
+  EXPECT_NEAR(moved.value(translated), term.value(zero), 1e-12 * term.value(zero));
+}
+
+TEST_F(RootTermsFixture, TrackingSpringAndDamperMatchFiniteDifferences) {
+  RootTrackingTerm term(offset);
+  Vector6d stiffness, damping, previous;
+  stiffness << 30.0, 40.0, 50.0, 600.0, 700.0, 0.0;  // a free horizontal translation has no spring
+  damping << 3.0, 4.0, 5.0, 120.0, 130.0, 140.0;
+  previous << 0.01, -0.02, 0.0, 0.005, 0.0, -0.01;
+  term.set_step(stiffness, damping, previous, 1.0 / 60.0);
+  unsigned seed = 91;
+  for (double amplitude : kAmplitudes) check_derivatives(term, x(amplitude, seed++));
+  Eigen::VectorXd at = Eigen::VectorXd::Zero(offset + 6);
+  at.tail<6>() = previous;
+  EXPECT_NEAR(term.value(at), 0.5 * previous.cwiseProduct(stiffness).dot(previous), 1e-15);  // no rate: no damping
+}
+
+TEST_F(RootTermsFixture, NodePotentialAtTheDeviatedPositionsMatchesFiniteDifferences) {
+  model::Problem& p = box.problem;
+  const std::vector<int> active = subspace.active_nodes();
+  p.potentials.push_back(std::make_shared<CubicFloor>(active, 0.5, 1e6));  // every moving node below z = 0.5 m
+  ReducedInertia inertia(p, subspace);
+  ReducedPotentials potentials(p, subspace, inertia.active_nodes());
+  inertia.set_time(t, x_prescribed);
+  meshing::RowMatrixX3d p_start;
+  inertia.posed(Eigen::VectorXd::Zero(subspace.num_dofs()), p_start);
+  const RootFrame start = root_frame(Eigen::VectorXd::Zero(offset + 6), offset, pivot);
+  ASSERT_TRUE(potentials.begin(t - 0.01, 0.01, p_start, inertia, &start));
+  RootPotentialTerm term(potentials, inertia, offset);
+  term.set_pivot(pivot);
+  unsigned seed = 101;
+  for (double amplitude : kAmplitudes) check_derivatives(term, x(amplitude, seed++));
+  // Without deviation it is the plain potential term (R(p − c) + c = p up to the round-off of ~0.1 m coordinates).
+  ReducedPotentialTerm plain(potentials, inertia);
+  Eigen::VectorXd at = x(1e-3, 111);
+  at.tail<6>().setZero();
+  EXPECT_NEAR(term.value(at), plain.value(at.head(offset)), 1e-12 * std::abs(plain.value(at.head(offset))));
 }
 
 // ---------------------------------------------------------------------------------------------------------

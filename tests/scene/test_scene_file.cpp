@@ -30,7 +30,7 @@ std::string error_of(const std::filesystem::path& path) {
 constexpr const char* kBody = "[[body]]\nname = \"a\"\nmotion = \"rest\"\n";
 
 TEST(SceneFile, ShippedScenesParse) {
-  for (const char* name : {"belly_press", "two_bodies_push", "crowd", "skinning_only"}) {
+  for (const char* name : {"belly_press", "two_bodies_push", "crowd", "skinning_only", "push_sway"}) {
     SCOPED_TRACE(name);
     const Scene scene = load_scene(std::filesystem::path(SFLSH_DATA_DIR) / "scenes" / (std::string(name) + ".toml"));
     EXPECT_EQ(scene.name, name);
@@ -90,6 +90,23 @@ TEST(SceneFile, BadInputNamesFileAndLine) {
       {"[scene]\n" + std::string(kBody) + "[[body]]\nname = \"a\"\n", "the name 'a' is used twice"},
       {"[scene]\nfps = \n", "scene.toml:2:"},
       {"[effects]\n" + std::string(kBody), "missing key 'scene'"},
+      {"[scene]\n[effects]\ninertia = true\n" + std::string(kBody) + "skeleton = \"loose\"\n",
+       "scene.toml:7: 'skeleton' in body #0 = 'loose' is not one of prescribed | tracking"},
+      {"[scene]\n[effects]\ninertia = true\n" + std::string(kBody) + "skeleton = \"tracking\"\nsolver = \"full\"\n",
+       "scene.toml:7: skeleton = \"tracking\" in body #0 needs solver = \"reduced\" (the full-space solver keeps "
+       "prescribed bones)"},
+      {"[scene]\n[effects]\ninertia = true\n" + std::string(kBody) + "tracking_stiffness = 500.0\n",
+       "scene.toml:7: 'tracking_stiffness' in body #0 needs skeleton = \"tracking\""},
+      {"[scene]\n[effects]\ninertia = true\n" + std::string(kBody) + "skeleton = \"tracking\"\nroot = \"loose\"\n",
+       "scene.toml:8: 'root' in body #0 = 'loose' is not one of tracked | free"},
+      {"[scene]\n[effects]\ninertia = true\n" + std::string(kBody) +
+           "skeleton = \"tracking\"\ntracking_stiffness = -1.0\n",
+       "scene.toml:8: tracking_stiffness in body #0: -1 N/m is outside"},
+      {"[scene]\n[effects]\ninertia = true\n" + std::string(kBody) +
+           "skeleton = \"tracking\"\nintegrator = \"newmark\"\n",
+       "needs integrator = \"backward_euler\""},
+      {"[scene]\n" + std::string(kBody) + "skeleton = \"tracking\"\n",
+       "body 'a' has skeleton = \"tracking\", which needs [effects] inertia = true"},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.text);

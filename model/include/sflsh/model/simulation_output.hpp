@@ -112,6 +112,9 @@ class SimulationWriter {
   /// The same from the node positions x [m] alone (what σ and the written fields need; no velocities).
   void add_positions(int index, double t, const Eigen::VectorXd& x, bool write,
                      const std::vector<vtk::Field>& extra = {});
+  /// The placement of the frames added from now on (p_world = rotation p + translation), instead of the options':
+  /// a scene body whose skeleton tracks its motion moves frame by frame. dynamics.vtp keeps the options' placement.
+  void set_frame_placement(const Eigen::Matrix3d& rotation, const Eigen::Vector3d& translation);
   /// Whether a frame array is requested (SimulationWriterOptions::fields).
   bool wants(const std::string& field) const;
   /// Writes the .pvd collections and dynamics.vtp.
@@ -148,6 +151,8 @@ class SimulationWriter {
   double previous_t_ = 0.0;
   int frame_ = 0;
   double posing_seconds_ = 0.0;
+  Eigen::Matrix3d frame_rotation_;  ///< the placement of the next frames (options' unless set_frame_placement)
+  Eigen::Vector3d frame_translation_;
 
   void write_layer_frame(int index, double t, const State& state);
   /// Whether the options place the body (a rotation or translation other than the identity).

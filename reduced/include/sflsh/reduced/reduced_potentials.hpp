@@ -3,8 +3,11 @@
 // with p_i(q) = z_i + A_i Σ_s b_is t_s (z_i: posed at q = 0),
 //   U(q) = Σ_k u_k(p_{n_k}(q)),   ∂U/∂t_s = Σ_k b_{n_k s} A_kᵀ ∇u_k,   ∂²U/∂t_s∂t_r = Σ_k b_ks b_kr A_kᵀ ∇²u_k A_k,
 // summed over each potential's candidates of the substep only, so an idle or absent potential costs nothing.
+// With a tracking root (root_tracking.hpp) every position is carried by the root deviation, p ↦ R(θ)(p − c) + c + τ,
+// and the gradient and Hessian gain the root's rows: ∂p/∂t_s = b_s R A, ∂p/∂τ = I, ∂p/∂θ_k = ∂_kR (p − c).
 #include <sflsh/model/problem.hpp>
 #include <sflsh/reduced/reduced_inertia.hpp>
+#include <sflsh/reduced/rotation_vector.hpp>
 #include <sflsh/reduced/subspace.hpp>
 
 #include <Eigen/Core>
@@ -21,13 +24,18 @@ class ReducedPotentials {
   bool empty() const { return potentials_.empty(); }
   /// begin_substep of every potential; `inertia` must be set to the end time, p_start are the active nodes'
   /// posed positions at t0. Returns whether any potential has candidates.
-  bool begin(double t0, double dt, const meshing::RowMatrixX3d& p_start, const ReducedInertia& inertia);
+  /// `root` (may be null) carries the skinned end positions (the root at the start of the substep).
+  bool begin(double t0, double dt, const meshing::RowMatrixX3d& p_start, const ReducedInertia& inertia,
+             const RootFrame* root = nullptr);
   bool active() const { return !terms_.empty(); }
-  double energy(const Eigen::VectorXd& q, const ReducedInertia& inertia) const;
-  void add_gradient(const Eigen::VectorXd& q, const ReducedInertia& inertia, Eigen::VectorXd& gradient) const;
-  void add_hessian(const Eigen::VectorXd& q, const ReducedInertia& inertia, Eigen::MatrixXd& hessian) const;
+  /// With `root`, q is x = [q; θ; τ] and the gradient and Hessian also fill the root's rows and columns.
+  double energy(const Eigen::VectorXd& q, const ReducedInertia& inertia, const RootFrame* root = nullptr) const;
+  void add_gradient(const Eigen::VectorXd& q, const ReducedInertia& inertia, Eigen::VectorXd& gradient,
+                    const RootFrame* root = nullptr) const;
+  void add_hessian(const Eigen::VectorXd& q, const ReducedInertia& inertia, Eigen::MatrixXd& hessian,
+                   const RootFrame* root = nullptr) const;
   /// accept_substep of the active potentials at q; false when one refused (and stiffened).
-  bool accept(const Eigen::VectorXd& q, const ReducedInertia& inertia);
+  bool accept(const Eigen::VectorXd& q, const ReducedInertia& inertia, const RootFrame* root = nullptr);
   int max_refinements() const;
 
  private:
@@ -35,7 +43,11 @@ class ReducedPotentials {
     model::NodePotential* potential = nullptr;
     std::vector<int> active;  ///< per candidate: index into the active nodes
   };
+  /// Posed position of active node a (before the root deviation).
   Eigen::Vector3d posed(const Eigen::VectorXd& q, const ReducedInertia& inertia, int a) const;
+  /// The root's rows and columns of one candidate's Hessian (at unrotated position p, ∇u = g, ∇²u = H).
+  void add_root_blocks(const RootFrame& root, int node, const Eigen::Matrix3d& A, const Eigen::Vector3d& p,
+                       const Eigen::Vector3d& g, const Eigen::Matrix3d& H, Eigen::MatrixXd& hessian) const;
 
   const Subspace& subspace_;
   const std::vector<int>& active_nodes_;

@@ -24,6 +24,7 @@
 #include <sflsh/reduced/reduced_inertia.hpp>
 #include <sflsh/reduced/reduced_potentials.hpp>
 #include <sflsh/reduced/reduced_terms.hpp>
+#include <sflsh/reduced/root_tracking.hpp>
 #include <sflsh/reduced/subspace.hpp>
 
 #include <Eigen/Cholesky>
@@ -62,6 +63,9 @@ struct ReducedOptions {
   bool guard = true;
   double guard_exponent = 25.0;
   int max_enlargements = 8;
+  /// A tracking root (root_tracking.hpp): the six root coordinates join q in the Newton solve. Off: the skeleton
+  /// follows its motion exactly (prescribed), bit for bit as before.
+  RootTrackingOptions root;
 };
 
 /// One converged substep of an accepted step: from t0 over dt to coordinates q.
@@ -111,6 +115,15 @@ class ReducedSolver final : public model::BodySolver {
   /// The guard (nullptr when options.guard is off).
   const CubatureGuard* guard() const { return guard_.get(); }
   const ReducedOptions& options() const { return options_; }
+  /// Whether the root tracks its motion (options.root.enabled), and its deviation r = (θ [rad], τ [m]) from the
+  /// motion's pose now (zero with a prescribed skeleton).
+  bool tracking() const { return options_.root.enabled; }
+  const Vector6d& root() const { return root_; }
+  /// The root deviation now as p ↦ R p + t in the problem's posed frame (identity with a prescribed skeleton).
+  void root_transform(Eigen::Matrix3d& R, Eigen::Vector3d& t) const;
+  /// The root's tracking spring and damper per coordinate (θ then τ) [N·m/rad, N/m; N·m·s/rad, N·s/m].
+  const Vector6d& root_stiffness() const { return root_stiffness_; }
+  const Vector6d& root_damping() const { return root_damping_; }
   /// The substeps of the last successful step(), in order (empty unless options.record_substeps).
   const std::vector<ReducedSubstep>& last_substeps() const { return substeps_; }
 
@@ -124,6 +137,10 @@ class ReducedSolver final : public model::BodySolver {
   Eigen::VectorXd initial_acceleration() const;
   /// Adds the guard's violations to the cubature (reduced_solver_guard.cpp).
   void enlarge_cubature(const std::vector<GuardViolation>& over, double t);
+  /// Tracking root: the attached nodes' skinned positions at t (x_D the prescribed state) and the pivot c(t).
+  void carried_posed(double t, const Eigen::VectorXd& x_prescribed, meshing::RowMatrixX3d& p) const;
+  Eigen::Vector3d root_pivot(double t, const meshing::RowMatrixX3d& carried) const;
+  void setup_root();
 
   const model::Problem& problem_;
   const Subspace& subspace_;
@@ -152,6 +169,17 @@ class ReducedSolver final : public model::BodySolver {
   int rate_steps_ = 0;               ///< substeps behind q_rate_ (0, 1, ≥ 2)
   model::PosedHistory history_;      ///< posed kinematics of the inertia nodes
   std::vector<ReducedSubstep> substeps_;
+  // Tracking root (options.root.enabled): x = [q; θ; τ], the root's coordinates at offset 3S.
+  std::vector<int> carried_;          ///< nodes with mass that only the root moves (not inertia nodes)
+  std::vector<double> carried_mass_;  ///< their lumped masses [kg]
+  model::PosedHistory carried_history_;
+  Vector6d root_ = Vector6d::Zero();
+  Eigen::Vector3d pivot_ = Eigen::Vector3d::Zero();  ///< c at t_
+  Vector6d root_stiffness_ = Vector6d::Zero(), root_damping_ = Vector6d::Zero();
+  std::unique_ptr<HeadTerm> elastic_head_, gravity_head_;
+  std::unique_ptr<RootInertiaTerm> root_inertia_term_;
+  std::unique_ptr<RootTrackingTerm> root_tracking_term_;
+  std::unique_ptr<RootPotentialTerm> root_potential_term_;
 };
 
 }  // namespace sflsh::reduced

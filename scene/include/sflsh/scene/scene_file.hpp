@@ -71,6 +71,12 @@ struct BodySpec {
   double stiffness_scale = 1.0;
   model::Integrator integrator = model::Integrator::backward_euler;  ///< `integrator` (docs/integrators.md)
   model::MassKind mass = model::MassKind::lumped;                    ///< `mass`
+  /// `skeleton`: false ("prescribed") the bones follow the motion whatever touches them; true ("tracking", reduced
+  /// only) the root's deviation from the motion is solved with the soft tissue (reduced/root_tracking.hpp).
+  bool tracking = false;
+  double tracking_stiffness = 600.0;  ///< [N/m] the root's translation; the rotation gets k ρ² (docs/scenes.md)
+  double tracking_damping = 120.0;    ///< [N·s/m]; the rotation gets d ρ²
+  bool free_root = false;             ///< `root = "free"`: no spring on the horizontal translation
 };
 
 enum class ShapeKind { plane, sphere, box, capsule, mesh };
