@@ -43,7 +43,9 @@ TEST(SyntheticSoftMotion, KnownSigmaIsWhatTheMetricMeasuresWithTheTruePoses) {
   std::vector<char> moving(soft.size(), 0);
   for (int v : s.moving_vertices) moving[static_cast<std::size_t>(v)] = 1;
   for (Eigen::Index v = 0; v < s.truth.sigma.size(); ++v) {
-    if (!moving[static_cast<std::size_t>(v)]) EXPECT_EQ(s.truth.sigma[v], 0.0);
+    if (!moving[static_cast<std::size_t>(v)]) {
+      EXPECT_EQ(s.truth.sigma[v], 0.0);
+    }
   }
   // A sinusoid of peak A at the blob centres: σ ≤ A (its RMS over a window is near A/√2).
   EXPECT_LT(s.truth.sigma.maxCoeff(), spec.amplitude);
