@@ -32,16 +32,6 @@ struct Case {
   double amplitude_mm, frequency;
 };
 
-double correlation(const Eigen::VectorXd& a, const Eigen::VectorXd& b, const std::vector<int>& vertices) {
-  Eigen::VectorXd x(static_cast<Eigen::Index>(vertices.size())), y(x.size());
-  for (std::size_t k = 0; k < vertices.size(); ++k) {
-    x[static_cast<Eigen::Index>(k)] = a[vertices[k]];
-    y[static_cast<Eigen::Index>(k)] = b[vertices[k]];
-  }
-  const Eigen::VectorXd dx = x.array() - x.mean(), dy = y.array() - y.mean();
-  return dx.dot(dy) / std::sqrt(dx.squaredNorm() * dy.squaredNorm());
-}
-
 std::string join(const std::vector<std::string>& names) {
   std::string out;
   for (const std::string& n : names) out += (out.empty() ? "" : "+") + n;
@@ -127,7 +117,7 @@ int main(int argc, char** argv) {
           const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
           const double recovered = m.dynamics.mean_sigma_soft();
           const double error = 100.0 * (recovered - truth) / truth;
-          const double r = correlation(s.truth.sigma, m.dynamics.sigma, s.truth.soft_vertices);
+          const double r = validate::sigma_correlation(s.truth.sigma, m.dynamics.sigma, s.truth.soft_vertices);
           // Where the error sits (stderr): mean σ over the moving vertices and over the still soft vertices [mm].
           std::vector<char> moving(static_cast<std::size_t>(model.num_vertices()), 0);
           for (int v : s.moving_vertices) moving[static_cast<std::size_t>(v)] = 1;

@@ -17,16 +17,6 @@ namespace {
 
 using testing::open_body;
 
-double correlation(const Eigen::VectorXd& a, const Eigen::VectorXd& b, const std::vector<int>& vertices) {
-  Eigen::VectorXd x(static_cast<Eigen::Index>(vertices.size())), y(x.size());
-  for (std::size_t k = 0; k < vertices.size(); ++k) {
-    x[static_cast<Eigen::Index>(k)] = a[vertices[k]];
-    y[static_cast<Eigen::Index>(k)] = b[vertices[k]];
-  }
-  const Eigen::VectorXd dx = x.array() - x.mean(), dy = y.array() - y.mean();
-  return dx.dot(dy) / std::sqrt(dx.squaredNorm() * dy.squaredNorm());
-}
-
 TEST(SyntheticSoftMotion, KnownSigmaIsWhatTheMetricMeasuresWithTheTruePoses) {
   SyntheticSoftMotion spec;
   spec.motion = "one_leg_jump";
@@ -110,7 +100,7 @@ void expect_recovery(const RecoveryCase& c, bool beta_given, int frames) {
       open_body(), s.frames, spec.fps, beta_given ? std::optional<body::Betas>(s.beta) : std::nullopt, {});
   const double truth = s.truth.mean_sigma_soft();
   const double error = m.dynamics.mean_sigma_soft() / truth - 1.0;
-  const double r = correlation(s.truth.sigma, m.dynamics.sigma, s.truth.soft_vertices);
+  const double r = sigma_correlation(s.truth.sigma, m.dynamics.sigma, s.truth.soft_vertices);
   SCOPED_TRACE(::testing::Message() << c.motion << " A " << c.amplitude << " m, f " << c.frequency << " Hz, β "
                                     << (beta_given ? "given" : "fitted") << ": error " << 100 * error
                                     << " %, correlation " << r);

@@ -148,4 +148,15 @@ DynaSequence to_dyna_sequence(const SyntheticSoftSequence& sequence, const Synth
   return out;
 }
 
+double sigma_correlation(const Eigen::VectorXd& a, const Eigen::VectorXd& b, const std::vector<int>& vertices) {
+  Eigen::VectorXd x(static_cast<Eigen::Index>(vertices.size())), y(x.size());
+  for (std::size_t k = 0; k < vertices.size(); ++k) {
+    x[static_cast<Eigen::Index>(k)] = a[vertices[k]];
+    y[static_cast<Eigen::Index>(k)] = b[vertices[k]];
+  }
+  const Eigen::VectorXd dx = x.array() - x.mean(), dy = y.array() - y.mean();
+  const double norms = std::sqrt(dx.squaredNorm() * dy.squaredNorm());
+  return norms > 0.0 ? dx.dot(dy) / norms : 0.0;
+}
+
 }  // namespace sflsh::validate

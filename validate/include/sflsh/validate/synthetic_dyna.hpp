@@ -48,6 +48,10 @@ struct SyntheticSoftSequence {
 /// amplitude, frequency, fps or radius).
 SyntheticSoftSequence synthetic_soft_motion(const body::BodyModel& model, const SyntheticSoftMotion& spec);
 
+/// Pearson correlation of two per-vertex fields (e.g. known and recovered σ) over `vertices`; 0 when either is
+/// constant there. How recovery of known dynamics is judged (docs/validate.md).
+double sigma_correlation(const Eigen::VectorXd& a, const Eigen::VectorXd& b, const std::vector<int>& vertices);
+
 /// The sequence as one DYNA dataset "<subject>_<motion>" with attributes fps, beta [–], and the spec
 /// (soft_amplitude [m], soft_frequency [Hz], soft_angle [rad], soft_radius [m], soft_regions).
 DynaSequence to_dyna_sequence(const SyntheticSoftSequence& sequence, const SyntheticSoftMotion& spec,
