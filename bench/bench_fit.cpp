@@ -16,6 +16,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstring>
 #include <iostream>
@@ -96,6 +97,20 @@ int main(int argc, char** argv) {
     for (std::size_t c = 0; c < cases.size(); ++c)
       targets.push_back({cases[c].get(), static_cast<int>(c / 3), 1.1 * sigma[c]});
 
+    // Set-up of one simulation (problem for κ, integrator, initial state) against the whole, one thread, every
+    // case once after the residual above warmed the per-case caches; medians.
+    std::vector<double> setup_times, simulation_times;
+    for (const auto& c : cases) {
+      const reduced::CaseDynamics d = c->simulate(param, start, rm, context.reduced);
+      setup_times.push_back(d.setup_seconds);
+      simulation_times.push_back(d.seconds);
+    }
+    auto median = [](std::vector<double> v) {
+      std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+      return v[v.size() / 2];
+    };
+    const double setup_median = median(setup_times), simulation_median = median(simulation_times);
+
     // Finite-difference columns: fd_columns × every case.
     std::vector<reduced::SimulationJob> fd_jobs;
     for (int k = 0; k < fd_columns; ++k) {
@@ -138,6 +153,8 @@ int main(int argc, char** argv) {
     std::cout << fmt::format("{:<58} {:>12}\n", "quantity", "seconds");
     auto row = [](const std::string& name, double s) { std::cout << fmt::format("{:<58} {:>12.2f}\n", name, s); };
     row(fmt::format("one residual ({} simulations)", cases.size()), residual_seconds);
+    row("one simulation, one thread (median over the cases)", simulation_median);
+    row("  of which set-up: problem for κ, integrator, initial state", setup_median);
     row(fmt::format("one finite-difference column ({} simulations)", cases.size()), column_seconds);
     row(fmt::format("Young columns by sensitivities ({} runs, {} columns each)", cases.size(), 2 * controls),
         sensitivity_seconds);
@@ -154,6 +171,8 @@ int main(int argc, char** argv) {
                      {"threads", pool.threads()},
                      {"residual_seconds", residual_seconds},
                      {"fd_column_seconds", column_seconds},
+                     {"simulation_seconds_median", simulation_median},
+                     {"simulation_setup_seconds_median", setup_median},
                      {"sensitivity_seconds", sensitivity_seconds},
                      {"jacobian_fd_seconds_projected", fd_jacobian},
                      {"jacobian_sensitivity_seconds_projected", hybrid_jacobian},

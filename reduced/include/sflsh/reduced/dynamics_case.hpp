@@ -22,7 +22,8 @@ struct CaseDynamics {
   Eigen::VectorXd sigma_tangent;  ///< σ_t (R)
   Eigen::VectorXd sigma() const;  ///< √(σ_n² + σ_t²)
   double mean_sigma() const;      ///< mean over the region vertices [mm] (the Table 2 entry of one motion)
-  double seconds = 0.0;
+  double seconds = 0.0;           ///< wall time of the whole simulation [s]
+  double setup_seconds = 0.0;     ///< of which the set-up: problem for κ, integrator, initial state [s]
   int frames = 0;
 };
 
