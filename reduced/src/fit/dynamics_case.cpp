@@ -33,11 +33,19 @@ const SkinDisplacementMap& DynamicsCase::skin_map(const ReducedModel& model) con
   return *skin_map_;
 }
 
+const meshing::ShapedLayer& DynamicsCase::shaped_layer(const LayerParameterization& parameterization) const {
+  std::call_once(shaped_once_, [&] {
+    shaped_ = std::make_unique<meshing::ShapedLayer>(parameterization.retargeter().shape(layer_->beta));
+  });
+  return *shaped_;
+}
+
 CaseDynamics DynamicsCase::simulate(const LayerParameterization& parameterization, const material::KappaMatrix& kappa,
                                     const ReducedModel& model, const ReducedOptions& options) const {
   const auto start = std::chrono::steady_clock::now();
   try {
-    const model::Problem problem = parameterization.problem(*layer_, kappa, options_);
+    const model::Problem problem =
+        parameterization.problem(*layer_, kappa, options_, nullptr, &shaped_layer(parameterization));
     ReducedSolver integrator(problem, model.subspace, model.cubature, options);
     integrator.initialize(model::initial_state(problem, 0.0));
     const double setup_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -68,16 +76,24 @@ CaseDynamics DynamicsCase::simulate(const LayerParameterization& parameterizatio
 CaseDynamics DynamicsCase::simulate_with_sensitivity(const LayerParameterization& parameterization,
                                                      const material::KappaMatrix& kappa, const ReducedModel& model,
                                                      const Eigen::MatrixXd& young_map, Eigen::MatrixXd& dsigma,
-                                                     const ReducedOptions& options) const {
+                                                     const ReducedOptions& options, bool thickness) const {
   const auto start = std::chrono::steady_clock::now();
   try {
-    const model::Problem problem = parameterization.problem(*layer_, kappa, options_);
+    const model::Problem problem =
+        parameterization.problem(*layer_, kappa, options_, nullptr, &shaped_layer(parameterization));
     require(problem.dirichlet.drives.empty(), "fit cases take fixed attachments only");
+    RestDirections rest;
+    if (thickness) {  // dX/dh_i = (dX/dh) φ_i: the nodes are affine in h
+      const meshing::ShapedLayer& shaped = shaped_layer(parameterization);
+      for (int i = 0; i < parameterization.num_controls(); ++i)
+        rest.directions.push_back(parameterization.retargeter().node_derivative(shaped, parameterization.phi().col(i)));
+      rest.depth = parameterization.retargeter().depth();
+    }
     SensitivityIntegrator integrator(problem, model.subspace, model.cubature, young_map,
-                                     sensitivity_solver_options(options));
+                                     sensitivity_solver_options(options), thickness ? &rest : nullptr);
     integrator.initialize(model::initial_state(problem, 0.0));
     const double setup_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    const int columns = 2 * static_cast<int>(young_map.cols());
+    const int columns = static_cast<int>(integrator.dq_dyoung().cols());
     DynamicsAmplitudeSensitivity amplitude(normals_, columns);
     const SkinDisplacementMap& skin = skin_map(model);
     auto add_frame = [&] {
