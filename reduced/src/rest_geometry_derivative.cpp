@@ -103,12 +103,12 @@ RestGeometryDerivative::RestGeometryDerivative(const model::Problem& problem, co
     const material::TetRest& rest = problem.tet_rest[static_cast<std::size_t>(e)];
     const std::span<const int> functions = elastic.point_functions(p);
     const int count = static_cast<int>(functions.size());
-    const Eigen::Vector3d n = problem.tet_material[static_cast<std::size_t>(e)].normal;
+    const Eigen::Vector3d axis = problem.tet_material[static_cast<std::size_t>(e)].normal;
     Eigen::Vector3d dd;
     for (int k = 0; k < 3; ++k) dd(k) = depth(problem.tets(e, k + 1)) - depth(problem.tets(e, 0));
     const Eigen::Vector3d gradient = rest.dm_inv.transpose() * dd;  // ∇δ (through_thickness.hpp)
     const double length = gradient.norm();
-    const bool own_axis = length > 0.0 && (-gradient / length - n).norm() < 1e-6;
+    const bool own_axis = length > 0.0 && (-gradient / length - axis).norm() < 1e-6;
     for (int j = 0; j < C; ++j) {
       const auto at = static_cast<std::size_t>(p) * C + static_cast<std::size_t>(j);
       const Eigen::Matrix3d M = rest.dm_inv * dm_of(e, j);  // D_m⁻¹ dD_m
@@ -126,7 +126,7 @@ RestGeometryDerivative::RestGeometryDerivative(const model::Problem& problem, co
         }
       if (own_axis) {  // n = −∇δ/|∇δ|: dn = −(I − nnᵀ) d∇δ/|∇δ|, d∇δ = dD_m⁻ᵀ dd
         const Eigen::Vector3d dgradient = dDm_inv.transpose() * dd;
-        dn_[at] = -(dgradient - n * n.dot(dgradient)) / length;
+        dn_[at] = -(dgradient - axis * axis.dot(dgradient)) / length;
       }
     }
   }
