@@ -8,6 +8,9 @@
 
 #include <gtest/gtest.h>
 
+#include <iostream>
+#include <string>
+
 using namespace sflsh;
 using namespace sflsh::reduced;
 
@@ -45,9 +48,9 @@ TEST(ThicknessSensitivity, MatchesCentralDifferencesOfTheSimulation) {
   EXPECT_LT((sigma_at(kappa) - sigma0).cwiseAbs().maxCoeff(), 1e-9);  // the thickness columns leave σ alone
   // Central differences with a step of 1e-3 in h: truncation O(step²) ≈ 1e-6 relative, and noise from Newton's
   // tolerance (‖Δq‖ ≤ 1e-9 m, sensitivity_solver_options: σ to ~1e-6 mm) over 2e-3: ~1e-3 mm per unit h, against
-  // columns of ~1–10 mm per unit h. What the comparison has to catch is a missing term (a mass, a volume, the
-  // prediction's history or the material axis), each of which moves a column by several percent: 1 % of the
-  // column's norm separates the two.
+  // columns of 20–90 mm per unit h. Measured: 3e-7 to 2e-6 relative. A missing term (a mass, a volume, the
+  // prediction's history or the material axis) moves a column by percents: 1e-4 of the column's norm separates
+  // the two with room for either side.
   const double step = 1e-3;
   for (int i = 0; i < N; ++i) {
     material::KappaMatrix plus = kappa, minus = kappa;
@@ -55,8 +58,11 @@ TEST(ThicknessSensitivity, MatchesCentralDifferencesOfTheSimulation) {
     minus(i, material::kThickness) -= step;
     const Eigen::VectorXd fd = (sigma_at(plus) - sigma_at(minus)) / (2.0 * step);
     const Eigen::VectorXd exact = dsigma.col(2 * N + i);
+    RecordProperty("relative_error_control_" + std::to_string(i), std::to_string((exact - fd).norm() / fd.norm()));
+    std::cout << "control " << i << ": |fd| " << fd.norm() << " mm per unit h, relative error "
+              << (exact - fd).norm() / fd.norm() << "\n";
     EXPECT_GT(fd.norm(), 0.1) << "control " << i;  // the thickness matters here: not a comparison of zeros
-    EXPECT_LT((exact - fd).norm(), 0.01 * fd.norm())
+    EXPECT_LT((exact - fd).norm(), 1e-4 * fd.norm())
         << "control " << i << ": |exact| " << exact.norm() << ", |fd| " << fd.norm();
   }
 }
