@@ -102,6 +102,39 @@ TetQuality tet_quality(const RowMatrixX3d& nodes, const RowMatrixX4i& tets) {
   return quality;
 }
 
+bool tets_valid(const RowMatrixX3d& nodes, const RowMatrixX4i& tets) {
+  if (tets.rows() == 0) return false;
+  // θ < 0.1° ⇔ cos θ > cos 0.1° (cos θ_kl = −n_k·n_l / (|n_k| |n_l|), as in measure_tet).
+  const double cos_min = std::cos(kDegenerateDihedralDeg * std::numbers::pi / 180.0);
+  static constexpr int kFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+  for (Eigen::Index e = 0; e < tets.rows(); ++e) {
+    std::array<Eigen::Vector3d, 4> x;
+    for (int k = 0; k < 4; ++k) x[static_cast<std::size_t>(k)] = nodes.row(tets(e, k)).transpose();
+    const Eigen::Vector3d a = x[1] - x[0], b = x[2] - x[0], c = x[3] - x[0];
+    const double volume = a.dot(b.cross(c)) / 6.0;
+    if (!(volume > 0.0)) return false;
+    double sum = 0.0;
+    for (int i = 0; i < 4; ++i)
+      for (int j = i + 1; j < 4; ++j) sum += (x[static_cast<std::size_t>(j)] - x[static_cast<std::size_t>(i)]).norm();
+    const double mean_edge = sum / 6.0;
+    if (volume < kDegenerateVolume * mean_edge * mean_edge * mean_edge) return false;
+    std::array<Eigen::Vector3d, 4> normal;
+    for (int k = 0; k < 4; ++k) {
+      const auto& p = x[static_cast<std::size_t>(kFace[k][0])];
+      normal[static_cast<std::size_t>(k)] =
+          (x[static_cast<std::size_t>(kFace[k][1])] - p).cross(x[static_cast<std::size_t>(kFace[k][2])] - p);
+    }
+    for (int k = 0; k < 4; ++k)
+      for (int l = k + 1; l < 4; ++l) {
+        const auto& nk = normal[static_cast<std::size_t>(k)];
+        const auto& nl = normal[static_cast<std::size_t>(l)];
+        const double scale = nk.norm() * nl.norm();
+        if (!(scale > 0.0) || -nk.dot(nl) > cos_min * scale) return false;
+      }
+  }
+  return true;
+}
+
 QualityReport quality_report(const RowMatrixX3d& nodes, const RowMatrixX4i& tets) {
   QualityReport report;
   report.tets = static_cast<long>(tets.rows());

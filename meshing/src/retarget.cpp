@@ -111,17 +111,81 @@ RetargetedLayer Retargeter::retarget(const body::Betas& beta, double uniform_thi
   return retarget(beta, Eigen::VectorXd::Constant(mesh_.region_surface.num_vertices(), uniform_thickness));
 }
 
-RetargetedLayer Retargeter::retarget(const body::Betas& beta, const Eigen::VectorXd& thickness) const {
-  const auto start = std::chrono::steady_clock::now();
+ShapedLayer Retargeter::shape(const body::Betas& beta) const {
   require(beta.allFinite(), "retarget: β has non-finite entries");
+  const LayerGeometry geometry =
+      layer_geometry(model_, mesh_.region_surface, mesh_.correspondence, beta, mesh_.template_thickness_field());
+  ShapedLayer shaped;
+  shaped.beta = beta;
+  shaped.skin = geometry.skin;
+  shaped.skeleton = geometry.skeleton;
+  // S of the anchors carried inside; the extension is linear and column by column, so E[S] alone equals the
+  // first three columns of the extension of (S, C) bit for bit.
+  shaped.skin_extension = interpolator_.extend(layer_coordinates(geometry).leftCols<3>());
+  return shaped;
+}
+
+Eigen::MatrixXd Retargeter::column_coordinates(const LayerGeometry& geometry) const {
+  Eigen::MatrixXd values = Eigen::MatrixXd::Zero(mesh_.num_nodes(), 3);
+  for (int i = 0; i < mesh_.num_nodes(); ++i) {
+    const auto& anchor = mesh_.anchor[static_cast<std::size_t>(i)];
+    if (!anchor.valid()) continue;
+    for (int k = 0; k < 3; ++k) {
+      const int v = anchor.vertex[k];
+      const double w = anchor.weight(k);
+      values.block<1, 3>(i, 0) += w * geometry.thickness(v) * (geometry.skeleton.row(v) - geometry.skin.row(v));
+    }
+  }
+  return values;
+}
+
+RowMatrixX3d Retargeter::node_derivative(const ShapedLayer& shaped, const Eigen::VectorXd& dthickness) const {
+  require(shaped.skin.rows() == mesh_.region_surface.num_vertices() && dthickness.size() == shaped.skin.rows() &&
+              dthickness.allFinite(),
+          "retarget: a thickness change needs {} finite values, got {}", mesh_.region_surface.num_vertices(),
+          dthickness.size());
+  LayerGeometry change;
+  change.skin = shaped.skin;
+  change.skeleton = shaped.skeleton;
+  change.thickness = dthickness;
+  // dx = δ ⊙ E[dC] inside (E[S] and r do not depend on h) …
+  RowMatrixX3d dx = interpolator_.extend(column_coordinates(change)).cwiseProduct(depth_.replicate(1, 3));
+  for (int i = 0; i < mesh_.num_nodes(); ++i) {  // … and Σ_k w_k depth dh_k (c_k − s_k) on the boundary
+    const auto& anchor = mesh_.anchor[static_cast<std::size_t>(i)];
+    if (!anchor.valid()) continue;
+    Eigen::RowVector3d d = Eigen::RowVector3d::Zero();
+    for (int k = 0; k < 3; ++k) {
+      const double w = anchor.weight(k);
+      if (w == 0.0) continue;
+      const int v = anchor.vertex[k];
+      d += w * anchor.depth * dthickness(v) * (shaped.skeleton.row(v) - shaped.skin.row(v));
+    }
+    dx.row(i) = d;
+  }
+  return dx;
+}
+
+RetargetedLayer Retargeter::retarget(const body::Betas& beta, const Eigen::VectorXd& thickness) const {
+  return retarget(shape(beta), thickness, RetargetCheck::report);
+}
+
+RetargetedLayer Retargeter::retarget(const ShapedLayer& shaped, const Eigen::VectorXd& thickness,
+                                     RetargetCheck check) const {
+  const auto start = std::chrono::steady_clock::now();
+  require(
+      shaped.skin_extension.rows() == mesh_.num_nodes() && shaped.skin.rows() == mesh_.region_surface.num_vertices(),
+      "retarget: the shaped layer was prepared for another mesh");
+  validate_thickness(thickness, mesh_.region_surface.num_vertices(), "thickness");
+  const body::Betas& beta = shaped.beta;
   RetargetedLayer result;
-  result.geometry = layer_geometry(model_, mesh_.region_surface, mesh_.correspondence, beta, thickness);
+  result.geometry.skin = shaped.skin;
+  result.geometry.skeleton = shaped.skeleton;
+  result.geometry.thickness = thickness;
 
   // Layer coordinates (S, C) from the anchors, carried inside harmonically; x = S + δ C + r.
   const int n = mesh_.num_nodes();
-  const Eigen::MatrixXd coordinates = interpolator_.extend(layer_coordinates(result.geometry));
-  result.nodes =
-      coordinates.leftCols<3>() + coordinates.rightCols<3>().cwiseProduct(depth_.replicate(1, 3)) + residual_;
+  const Eigen::MatrixXd columns = interpolator_.extend(column_coordinates(result.geometry));
+  result.nodes = shaped.skin_extension + columns.cwiseProduct(depth_.replicate(1, 3)) + residual_;
   for (int i = 0; i < n; ++i) {  // boundary nodes exactly on their anchors (the formula above is exact up to round-off)
     const auto& anchor = mesh_.anchor[static_cast<std::size_t>(i)];
     if (anchor.valid()) result.nodes.row(i) = result.geometry.position(anchor).transpose();
@@ -130,7 +194,12 @@ RetargetedLayer Retargeter::retarget(const body::Betas& beta, const Eigen::Vecto
   for (Eigen::Index e = 0; e < mesh_.tets.rows() && !inverted; ++e)
     inverted = signed_volume(result.nodes, mesh_.tets, e) <= 0.0;
   if (inverted) result.untangled_nodes = untangle(result.nodes, mesh_.tets, mesh_.anchor, tets_of_, 20);
-  result.quality = layer_quality(mesh_, result.nodes, result.geometry);
+  if (check == RetargetCheck::light && tets_valid(result.nodes, mesh_.tets)) {
+    result.quality.tets = static_cast<long>(mesh_.tets.rows());
+    result.quality.nodes = static_cast<long>(n);
+  } else {
+    result.quality = layer_quality(mesh_, result.nodes, result.geometry);
+  }
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
   if (result.quality.inverted > 0 || result.quality.degenerate > 0) {

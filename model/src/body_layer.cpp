@@ -63,7 +63,7 @@ BodyLayer build_body_layer(const body::BodyModel& model, const body::Betas& beta
   const Eigen::VectorXd thickness = material::evaluate_field(basis.phi, kappa).col(0);
   out.layer = retargeter.retarget(beta, thickness);
   out.fields = material::layer_material_fields(retargeter, basis.phi, kappa, out.layer.nodes);
-  out.depth = retargeter.depth_field();
+  out.depth = retargeter.depth();
   out.shaped = body::shaped_template(model, beta);
 
   // Skinning weights of the nodes: the region vertices' weights carried inside like any surface field.

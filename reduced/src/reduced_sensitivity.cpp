@@ -48,7 +48,7 @@ Eigen::MatrixXd solve_step_sensitivity(const Eigen::MatrixXd& hessian, const Eig
 
 SensitivityIntegrator::SensitivityIntegrator(const model::Problem& problem, const Subspace& subspace,
                                              const Cubature& cubature, Eigen::MatrixXd young_map,
-                                             const ReducedOptions& options)
+                                             const ReducedOptions& options, const RestDirections* rest)
     : problem_(problem),
       integrator_(problem, subspace, cubature,
                   [&] {
@@ -69,12 +69,16 @@ SensitivityIntegrator::SensitivityIntegrator(const model::Problem& problem, cons
   require(young_map_.cols() >= 1 && young_map_.allFinite(), "sensitivity: the Young map must have ≥ 1 finite column");
   inertia_on_ = !options.quasi_static && problem.dynamic();
   for (int id : problem.dirichlet.drive) has_drives_ = has_drives_ || id >= 0;
-  sensitivity_ = Eigen::MatrixXd::Zero(subspace.num_dofs(), 2 * young_map_.cols());
+  if (rest)
+    rest_ = std::make_unique<RestGeometryDerivative>(problem_, subspace, elastic_, inertia_, rest->directions,
+                                                     rest->depth, inertia_on_);
+  sensitivity_ = Eigen::MatrixXd::Zero(subspace.num_dofs(), 2 * young_map_.cols() + (rest_ ? rest_->columns() : 0));
 }
 
 void SensitivityIntegrator::initialize(const model::State& state) {
   integrator_.initialize(state);
-  sensitivity_.setZero();  // the initial state does not depend on Y
+  sensitivity_.setZero();  // the initial state does not depend on Y (nor on X: q₀ = 0 for x = x_D)
+  if (rest_) rest_->initialize(integrator_.time(), integrator_.history().p, integrator_.history().v);
   previous_.resize(0, 0);
   has_previous_ = false;
   t_current_ = integrator_.time();
@@ -108,7 +112,9 @@ void SensitivityIntegrator::substep_sensitivity(const ReducedSubstep& substep, S
 
   // Right-hand side −(∂G/∂Y + ∂G/∂q_n S_n + ∂G/∂q_{n−1} S_{n−1}).
   auto clock = Clock::now();
-  Eigen::MatrixXd rhs = -elastic_gradient_dyoung(substep.q);
+  Eigen::MatrixXd rhs(substep.q.size(), sensitivity_.cols());
+  rhs.leftCols(2 * young_map_.cols()) = -elastic_gradient_dyoung(substep.q);
+  if (rest_) rhs.rightCols(rest_->columns()) = -rest_->gradient_derivative(substep.q, dt);
   stats.young_seconds += seconds_since(clock);
   clock = Clock::now();
   Eigen::MatrixXd hessian;
@@ -132,6 +138,7 @@ void SensitivityIntegrator::substep_sensitivity(const ReducedSubstep& substep, S
   clock = Clock::now();
   Eigen::MatrixXd next = solve_step_sensitivity(hessian, rhs, t1);
   stats.solve_seconds += seconds_since(clock);
+  if (rest_) rest_->advance(substep.q, dt);
   previous_ = std::move(sensitivity_);
   sensitivity_ = std::move(next);
   t_previous_ = t_current_;

@@ -104,7 +104,7 @@ LayerMaterialFields layer_material_fields(const meshing::Retargeter& retargeter,
     fields.tet.row(e).setZero();
     for (int c = 0; c < 4; ++c) fields.tet.row(e) += 0.25 * fields.node.row(mesh.tets(e, c));
   }
-  fields.normal = through_thickness_normals(nodes, mesh.tets, retargeter.depth_field());
+  fields.normal = through_thickness_normals(nodes, mesh.tets, retargeter.depth());
   return fields;
 }
 

@@ -33,13 +33,22 @@ const SkinDisplacementMap& DynamicsCase::skin_map(const ReducedModel& model) con
   return *skin_map_;
 }
 
+const meshing::ShapedLayer& DynamicsCase::shaped_layer(const LayerParameterization& parameterization) const {
+  std::call_once(shaped_once_, [&] {
+    shaped_ = std::make_unique<meshing::ShapedLayer>(parameterization.retargeter().shape(layer_->beta));
+  });
+  return *shaped_;
+}
+
 CaseDynamics DynamicsCase::simulate(const LayerParameterization& parameterization, const material::KappaMatrix& kappa,
                                     const ReducedModel& model, const ReducedOptions& options) const {
   const auto start = std::chrono::steady_clock::now();
   try {
-    const model::Problem problem = parameterization.problem(*layer_, kappa, options_);
+    const model::Problem problem =
+        parameterization.problem(*layer_, kappa, options_, nullptr, &shaped_layer(parameterization));
     ReducedSolver integrator(problem, model.subspace, model.cubature, options);
     integrator.initialize(model::initial_state(problem, 0.0));
+    const double setup_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     model::DynamicsAmplitude amplitude(normals_);
     // The attached nodes carry no elastic displacement (x_D = X), so u = (B ⊗ I₃) q; the skin embedding is
     // affine with weights summing to one, hence linear in u. No pass over the skinned trajectory per frame.
@@ -56,6 +65,7 @@ CaseDynamics DynamicsCase::simulate(const LayerParameterization& parameterizatio
     out.sigma_tangent = 1e3 * amplitude.sigma_tangent();
     require(out.sigma_normal.allFinite() && out.sigma_tangent.allFinite(), "non-finite dynamics amplitude");
     out.frames = frames_;
+    out.setup_seconds = setup_seconds;
     out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return out;
   } catch (const Error& e) {
@@ -66,15 +76,24 @@ CaseDynamics DynamicsCase::simulate(const LayerParameterization& parameterizatio
 CaseDynamics DynamicsCase::simulate_with_sensitivity(const LayerParameterization& parameterization,
                                                      const material::KappaMatrix& kappa, const ReducedModel& model,
                                                      const Eigen::MatrixXd& young_map, Eigen::MatrixXd& dsigma,
-                                                     const ReducedOptions& options) const {
+                                                     const ReducedOptions& options, bool thickness) const {
   const auto start = std::chrono::steady_clock::now();
   try {
-    const model::Problem problem = parameterization.problem(*layer_, kappa, options_);
+    const model::Problem problem =
+        parameterization.problem(*layer_, kappa, options_, nullptr, &shaped_layer(parameterization));
     require(problem.dirichlet.drives.empty(), "fit cases take fixed attachments only");
+    RestDirections rest;
+    if (thickness) {  // dX/dh_i = (dX/dh) φ_i: the nodes are affine in h
+      const meshing::ShapedLayer& shaped = shaped_layer(parameterization);
+      for (int i = 0; i < parameterization.num_controls(); ++i)
+        rest.directions.push_back(parameterization.retargeter().node_derivative(shaped, parameterization.phi().col(i)));
+      rest.depth = parameterization.retargeter().depth();
+    }
     SensitivityIntegrator integrator(problem, model.subspace, model.cubature, young_map,
-                                     sensitivity_solver_options(options));
+                                     sensitivity_solver_options(options), thickness ? &rest : nullptr);
     integrator.initialize(model::initial_state(problem, 0.0));
-    const int columns = 2 * static_cast<int>(young_map.cols());
+    const double setup_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const int columns = static_cast<int>(integrator.dq_dyoung().cols());
     DynamicsAmplitudeSensitivity amplitude(normals_, columns);
     const SkinDisplacementMap& skin = skin_map(model);
     auto add_frame = [&] {
@@ -94,6 +113,7 @@ CaseDynamics DynamicsCase::simulate_with_sensitivity(const LayerParameterization
     require(out.sigma_normal.allFinite() && out.sigma_tangent.allFinite() && dsigma.allFinite(),
             "non-finite dynamics amplitude or derivative");
     out.frames = frames_;
+    out.setup_seconds = setup_seconds;
     out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return out;
   } catch (const Error& e) {

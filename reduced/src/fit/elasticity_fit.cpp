@@ -119,9 +119,11 @@ struct Stage {
       // One-sided differences (backwards at an upper bound) in every entry of q_j, or only in the thickness
       // entries when the Young moduli come from sensitivities.
       const bool sensitive = spec->jacobian == JacobianMethod::sensitivities;
+      const bool exact_thickness = sensitive && !spec->thickness_differences;
+      const int sensitivity_columns = exact_thickness ? 3 * controls : 2 * controls;
       std::vector<int> fd_columns;
       for (int k = 0; k < 3 * controls; ++k)
-        if (!sensitive || k % kK == material::kThickness) fd_columns.push_back(k);
+        if (!sensitive || (k % kK == material::kThickness && !exact_thickness)) fd_columns.push_back(k);
       std::vector<SimulationJob> jobs;
       std::vector<double> h(static_cast<std::size_t>(3 * controls), 0.0);
       for (int k : fd_columns) {
@@ -132,7 +134,7 @@ struct Stage {
         const material::KappaMatrix kappa = material::denormalize(qk, context->bounds);
         for (int t : mine) jobs.push_back({t, kappa});
       }
-      const std::vector<Eigen::VectorXd> sigma = simulate(jobs);
+      const std::vector<Eigen::VectorXd> sigma = jobs.empty() ? std::vector<Eigen::VectorXd>{} : simulate(jobs);
       // Sensitivity runs: one per target, dσ/dY (2R × 2N) [mm/Pa].
       std::vector<Eigen::MatrixXd> dsigma_dyoung(mine.size());
       if (sensitive) {
@@ -143,14 +145,14 @@ struct Stage {
               return Eigen::Index{2} *
                      (*targets)[static_cast<std::size_t>(mine[static_cast<std::size_t>(m)])]
                          .simulation->num_region_vertices() *
-                     (1 + 2 * controls);
+                     (1 + sensitivity_columns);
             },
             [&](int m) {
               const DynamicsCase& c =
                   *(*targets)[static_cast<std::size_t>(mine[static_cast<std::size_t>(m)])].simulation;
               Eigen::MatrixXd d;
               const CaseDynamics base = c.simulate_with_sensitivity(*parameterization, kappa0, *context->model,
-                                                                    young_map, d, context->reduced);
+                                                                    young_map, d, context->reduced, exact_thickness);
               Eigen::VectorXd out(d.rows() * (1 + d.cols()));
               out.head(d.rows()) << base.sigma_normal, base.sigma_tangent;
               out.tail(d.size()) = Eigen::Map<const Eigen::VectorXd>(d.data(), d.size());
@@ -158,8 +160,8 @@ struct Stage {
             });
         simulations += static_cast<long>(mine.size());
         for (std::size_t m = 0; m < mine.size(); ++m) {
-          const Eigen::Index rows = packed[m].size() / (1 + 2 * controls);
-          dsigma_dyoung[m] = Eigen::Map<const Eigen::MatrixXd>(packed[m].data() + rows, rows, 2 * controls);
+          const Eigen::Index rows = packed[m].size() / (1 + sensitivity_columns);
+          dsigma_dyoung[m] = Eigen::Map<const Eigen::MatrixXd>(packed[m].data() + rows, rows, sensitivity_columns);
         }
       }
       // G_t = dσ_t/dq_j; accumulate H_q = Σ w² G_tᵀG_t and g_q = Σ w G_tᵀ r_t.
@@ -181,6 +183,9 @@ struct Stage {
             G.col(kK * i + material::kYoungTangent) = dsigma_dyoung[m].col(i) * context->bounds.young_tangent.max;
             G.col(kK * i + material::kYoungNormal) =
                 dsigma_dyoung[m].col(controls + i) * context->bounds.young_normal.max;
+            if (exact_thickness)  // dσ/dĥ = dσ/dh · h_max
+              G.col(kK * i + material::kThickness) =
+                  dsigma_dyoung[m].col(2 * controls + i) * context->bounds.thickness.max;
           }
         G *= weight;
         Hq.noalias() += G.transpose() * G;

@@ -26,24 +26,30 @@ material::KappaMatrix LayerParameterization::field(const material::KappaMatrix& 
 }
 
 model::Problem LayerParameterization::problem(const model::BodyLayer& layer, const material::KappaMatrix& kappa,
-                                              const model::BodyLayerOptions& options,
-                                              meshing::RowMatrixX3d* rest_skin) const {
+                                              const model::BodyLayerOptions& options, meshing::RowMatrixX3d* rest_skin,
+                                              const meshing::ShapedLayer* shaped) const {
   require(layer.mesh && layer.mesh->num_nodes() == mesh_->num_nodes() && layer.mesh->num_tets() == mesh_->num_tets(),
           "layer parameterization: the layer is not on the template mesh the parameterization was built for");
   require(kappa.rows() == num_controls(), "layer parameterization: {} control values for {} control points",
           kappa.rows(), num_controls());
   material::validate(kappa, bounds_, "layer parameterization: control point");
-  return problem_from_field(layer, field(kappa), options, rest_skin);
+  return problem_from_field(layer, field(kappa), options, rest_skin, shaped);
 }
 
 model::Problem LayerParameterization::problem_from_field(const model::BodyLayer& layer,
                                                          const material::KappaMatrix& kappa_vertex,
                                                          const model::BodyLayerOptions& options,
-                                                         meshing::RowMatrixX3d* rest_skin) const {
+                                                         meshing::RowMatrixX3d* rest_skin,
+                                                         const meshing::ShapedLayer* shaped) const {
   require(layer.mesh && layer.mesh->num_nodes() == mesh_->num_nodes() && layer.mesh->num_tets() == mesh_->num_tets(),
           "layer parameterization: the layer is not on the template mesh the parameterization was built for");
   const Eigen::VectorXd thickness = kappa_vertex.col(material::kThickness);
-  const meshing::RetargetedLayer retargeted = retargeter_->retarget(layer.beta, thickness);
+  if (shaped)
+    require(shaped->beta.size() == layer.beta.size() && shaped->beta == layer.beta,
+            "layer parameterization: the shaped layer was prepared for another β");
+  const meshing::RetargetedLayer retargeted =
+      shaped ? retargeter_->retarget(*shaped, thickness, meshing::RetargetCheck::light)
+             : retargeter_->retarget(layer.beta, thickness);
   const material::LayerMaterialFields fields =
       material::layer_material_fields(*retargeter_, kappa_vertex, retargeted.nodes);
 

@@ -34,6 +34,9 @@ struct TetQuality {
 
 TetQuality tet_quality(const RowMatrixX3d& nodes, const RowMatrixX4i& tets);
 QualityReport quality_report(const RowMatrixX3d& nodes, const RowMatrixX4i& tets);
+/// quality_report(nodes, tets).valid() in one cheap pass: no tet inverted or degenerate (the same volume and
+/// dihedral thresholds, the angle compared through its cosine, without acos or circumradii).
+bool tets_valid(const RowMatrixX3d& nodes, const RowMatrixX4i& tets);
 void to_json(nlohmann::json& json, const QualityReport& report);
 
 }  // namespace sflsh::meshing

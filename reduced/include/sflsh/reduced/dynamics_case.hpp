@@ -22,7 +22,8 @@ struct CaseDynamics {
   Eigen::VectorXd sigma_tangent;  ///< σ_t (R)
   Eigen::VectorXd sigma() const;  ///< √(σ_n² + σ_t²)
   double mean_sigma() const;      ///< mean over the region vertices [mm] (the Table 2 entry of one motion)
-  double seconds = 0.0;
+  double seconds = 0.0;           ///< wall time of the whole simulation [s]
+  double setup_seconds = 0.0;     ///< of which the set-up: problem for κ, integrator, initial state [s]
   int frames = 0;
 };
 
@@ -51,14 +52,19 @@ class DynamicsCase {
   /// moduli of the N control points: `dsigma` receives (2R × 2N) [mm/Pa], rows [σ_n; σ_t], columns Y_t of
   /// controls 0..N−1 then Y_n. `young_map` is W of young_map.hpp for the model's cubature tets. Newton runs to
   /// the sensitivity tolerance (sensitivity_solver_options), so σ agrees with simulate() to that tolerance.
+  /// With `thickness`, N more columns: dσ/dh of the control points' thickness [mm per unit h], exact through the
+  /// retarget (meshing::Retargeter::node_derivative) and the rest geometry (rest_geometry_derivative.hpp).
   CaseDynamics simulate_with_sensitivity(const LayerParameterization& parameterization,
                                          const material::KappaMatrix& kappa, const ReducedModel& model,
                                          const Eigen::MatrixXd& young_map, Eigen::MatrixXd& dsigma,
-                                         const ReducedOptions& options = {}) const;
+                                         const ReducedOptions& options = {}, bool thickness = false) const;
 
  private:
   /// K B of the skin (built on first use; every simulation of this case shares the one subspace).
   const SkinDisplacementMap& skin_map(const ReducedModel& model) const;
+  /// The β part of the retarget (meshing::Retargeter::shape), made on first use: every parameterization is on
+  /// the one template mesh, so any of their retargeters gives the same.
+  const meshing::ShapedLayer& shaped_layer(const LayerParameterization& parameterization) const;
 
   std::string subject_, motion_;
   model::BodyLayerOptions options_;
@@ -68,6 +74,8 @@ class DynamicsCase {
   double fps_ = 60.0;
   mutable std::once_flag skin_map_once_;
   mutable std::unique_ptr<SkinDisplacementMap> skin_map_;  ///< K B, built on first use
+  mutable std::once_flag shaped_once_;
+  mutable std::unique_ptr<meshing::ShapedLayer> shaped_;  ///< built on first use
 };
 
 }  // namespace sflsh::reduced

@@ -32,13 +32,17 @@ class LayerParameterization {
   /// `layer`'s problem with the material κ (N × 3, physical, validated against `bounds`): a copy of the
   /// layer's problem with new rest nodes, tet materials and masses; `rest_skin` receives the region skin
   /// at rest (R × 3). Thread-safe (const). Throws when κ is out of range or the retarget inverts a tet.
+  /// With `shaped` (retargeter().shape(layer.beta), made once per subject) the retarget skips its β part and checks
+  /// the mesh by the light pass (meshing::RetargetCheck::light): the same problem, bit for bit, and the same
+  /// errors, for a fraction of the set-up.
   model::Problem problem(const model::BodyLayer& layer, const material::KappaMatrix& kappa,
-                         const model::BodyLayerOptions& options, meshing::RowMatrixX3d* rest_skin = nullptr) const;
+                         const model::BodyLayerOptions& options, meshing::RowMatrixX3d* rest_skin = nullptr,
+                         const meshing::ShapedLayer* shaped = nullptr) const;
 
   /// The same for κ given at every region vertex (R × 3, physical): any field, not only the span of φ.
   model::Problem problem_from_field(const model::BodyLayer& layer, const material::KappaMatrix& kappa_vertex,
-                                    const model::BodyLayerOptions& options,
-                                    meshing::RowMatrixX3d* rest_skin = nullptr) const;
+                                    const model::BodyLayerOptions& options, meshing::RowMatrixX3d* rest_skin = nullptr,
+                                    const meshing::ShapedLayer* shaped = nullptr) const;
 
   /// κ per region vertex (R × 3) for control values κ (N × 3): φ κ.
   material::KappaMatrix field(const material::KappaMatrix& kappa) const;

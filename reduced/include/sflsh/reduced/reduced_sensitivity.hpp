@@ -16,9 +16,11 @@
 // active nodes: the targets p̃_j of their attached neighbours do not depend on Y. Backward Euler only: the
 // constructor refuses BDF2 and Newmark (their targets depend on more of the history).
 #include <sflsh/reduced/reduced_solver.hpp>
+#include <sflsh/reduced/rest_geometry_derivative.hpp>
 
 #include <Eigen/Core>
 
+#include <memory>
 #include <vector>
 
 namespace sflsh::reduced {
@@ -43,6 +45,12 @@ struct SensitivityStepStats {
   int factorizations = 0;        ///< one per substep
 };
 
+/// Rest-geometry columns of the sensitivities (rest_geometry_derivative.hpp): dX per parameter and the depth field.
+struct RestDirections {
+  std::vector<meshing::RowMatrixX3d> directions;  ///< dX_j (N × 3 each) [m per unit of parameter j]
+  Eigen::VectorXd depth;                          ///< the retargeter's harmonic depth per node
+};
+
 class SensitivityIntegrator {
  public:
   /// @param[in] young_map  W (cubature.size() × N): Y of cubature tet c = Σ_i W(c, i) Y_i, for both Y_t and Y_n
@@ -50,8 +58,10 @@ class SensitivityIntegrator {
   /// The problem, subspace and cubature must outlive the integrator. `options` are used as given (pass
   /// sensitivity_solver_options() for derivatives that a finite-difference check can reproduce);
   /// record_substeps is switched on.
+  /// With `rest` (not null; it must outlive the constructor only) H columns dq/dX·dX_j follow the 2N Young ones.
   SensitivityIntegrator(const model::Problem& problem, const Subspace& subspace, const Cubature& cubature,
-                        Eigen::MatrixXd young_map, const ReducedOptions& options = sensitivity_solver_options());
+                        Eigen::MatrixXd young_map, const ReducedOptions& options = sensitivity_solver_options(),
+                        const RestDirections* rest = nullptr);
 
   /// The state (as ReducedSolver::initialize) and S = 0.
   void initialize(const model::State& state);
@@ -63,7 +73,7 @@ class SensitivityIntegrator {
   double time() const { return integrator_.time(); }
   const Eigen::VectorXd& q() const { return integrator_.q(); }
   /// dq/dY (3S × 2N) [m/Pa]: columns Y_t of controls 0..N−1, then Y_n of 0..N−1 (physical moduli, before any
-  /// stiffness scale — the scale sits in W).
+  /// stiffness scale — the scale sits in W); then, with rest directions, dq/dX·dX_j (3S × H) [m per unit].
   const Eigen::MatrixXd& dq_dyoung() const { return sensitivity_; }
   int num_controls() const { return static_cast<int>(young_map_.cols()); }
   const ReducedSolver& integrator() const { return integrator_; }
@@ -79,6 +89,7 @@ class SensitivityIntegrator {
   CubatureElastic elastic_;
   ReducedInertia inertia_;
   Eigen::MatrixXd young_map_;
+  std::unique_ptr<RestGeometryDerivative> rest_;  ///< rest-geometry columns (null without)
   bool inertia_on_ = false;
   bool has_drives_ = false;
   bool valid_ = false;
