@@ -68,7 +68,10 @@ FreeObjects::FreeObjects(std::vector<SceneObject>& objects, const ContactSpec& c
   parameters.tolerance = contact.tolerance;
   for (std::size_t j = 0; j < objects.size(); ++j) {
     SceneObject& o = objects[j];
-    if (o.spec.motion != ObjectMotionKind::free) continue;
+    if (o.spec.motion != ObjectMotionKind::free) {
+      obstacles_.emplace_back(j, make_shape(o.spec));
+      continue;
+    }
     parameters.friction = o.spec.friction;
     RigidState initial;
     const Pose start = spec_pose(o.spec.position, o.spec.rotation);
@@ -91,13 +94,10 @@ void FreeObjects::step(double t0, double h, const std::vector<BodySurfaceStep>& 
   const auto clock = std::chrono::steady_clock::now();
   const double t1 = t0 + h;
   // The other objects at the step's end (free objects do not touch each other).
-  std::vector<std::shared_ptr<Obstacle>> shapes;
   std::vector<const Obstacle*> obstacles;
-  for (const SceneObject& o : objects_) {
-    if (o.spec.motion == ObjectMotionKind::free) continue;
-    shapes.push_back(make_shape(o.spec));
-    shapes.back()->set_pose(o.motion->pose(t1));
-    obstacles.push_back(shapes.back().get());
+  for (const auto& [j, shape] : obstacles_) {
+    shape->set_pose(objects_[j].motion->pose(t1));
+    obstacles.push_back(shape.get());
   }
   for (Free& f : free_) {
     std::vector<SurfacePoints> surfaces;

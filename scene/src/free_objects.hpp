@@ -12,6 +12,7 @@
 #include <sflsh/scene/rigid_object.hpp>
 
 #include <memory>
+#include <utility>
 #include <vector>
 
 namespace sflsh::scene::detail {
@@ -80,6 +81,7 @@ class FreeObjects {
 
   std::vector<SceneObject>& objects_;
   std::vector<Free> free_;
+  std::vector<std::pair<std::size_t, std::shared_ptr<Obstacle>>> obstacles_;  ///< the other objects' shapes
   double tolerance_ = 1e-3;
   double seconds_ = 0.0;
 };
