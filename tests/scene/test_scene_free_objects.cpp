@@ -11,6 +11,7 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <fstream>
 
 namespace sflsh::scene {
@@ -127,6 +128,7 @@ void expect_landed_and_resting(const nlohmann::json& s, double resting_seconds) 
 }
 
 TEST(SceneFreeObjects, BallDroppedOnTheBellyNeverGainsEnergyAndRests) {
+  SFLSH_LONG_TEST();  // a reduced body with gravity and contact for 0.75 s: not yet timed below 60 s
   const auto dir = testing::scratch_dir();
   expect_landed_and_resting(run(dir, belly_drop(0.01, 0.75)), 0.6);
 }
@@ -139,6 +141,39 @@ TEST(SceneFreeObjects, BallRestsOnTheBellyWithinToleranceForTwoSeconds) {
   // Every written frame after the landing (t ≥ 0.5 s) within the tolerance of the skin.
   for (const auto& f : s["free_objects"][0]["frames"])
     if (f["t"].get<double>() >= 0.5) EXPECT_LE(f["penetration_m"].get<double>(), 1e-3 + 1e-9) << f.dump();
+}
+
+// The shipped free-object scenes end to end (a few minutes on 2 cores): each object lands, never gains energy
+// and ends within the tolerance; the numbers of docs/contact.md are printed.
+TEST(SceneFreeObjects, ShippedScenesRun) {
+  SFLSH_LONG_TEST();
+  for (const char* name : {"ball_drop_belly", "ball_roll_thigh", "box_on_lap"}) {
+    SCOPED_TRACE(name);
+    SceneRunOptions options;
+    options.cache_dir = SFLSH_TEST_CACHE;
+    options.threads = 1;
+    const nlohmann::json s = run_scene(
+        load_scene(std::filesystem::path(SFLSH_DATA_DIR) / "scenes" / (std::string(name) + ".toml")), options);
+    const nlohmann::json& o = s["free_objects"][0];
+    const double frames = s["scene"]["frames"].get<double>() - 1.0;
+    std::printf(
+        "%s: %.3f s/frame (objects %.3f s total), E0 %.4f J, E %.4f J (kinetic %.2e), max gain %.2e J, "
+        "dissipated %.4f J, max force: body %.1f N, reaction %.1f N, obstacles %.1f N, penetration max "
+        "%.2e m, last second %.2e m, measured on the skin %.3f mm, final position [%.4f %.4f %.4f], "
+        "newton %ld, refinements %ld, halved %ld, unresolved %ld\n",
+        name, s["timings"]["step_seconds"].get<double>() / frames, s["effects"].back()["seconds"].get<double>(),
+        o["energy"]["initial_J"].get<double>(), o["energy"]["total_J"].get<double>(),
+        o["energy"]["kinetic_J"].get<double>(), o["energy"]["max_gain_J"].get<double>(),
+        o["energy"]["dissipated_J"].get<double>(), o["contact"]["max_body_force_N"].get<double>(),
+        o["contact"]["max_body_reaction_N"].get<double>(), o["contact"]["max_obstacle_force_N"].get<double>(),
+        o["contact"]["max_penetration_m"].get<double>(), o["contact"]["last_second_max_penetration_m"].get<double>(),
+        s["contact"]["measured_max_penetration_mm"].get<double>(), o["final_position_m"][0].get<double>(),
+        o["final_position_m"][1].get<double>(), o["final_position_m"][2].get<double>(),
+        o["solver"]["newton_iterations"].get<long>(), o["solver"]["refinements"].get<long>(),
+        o["solver"]["halved_steps"].get<long>(), o["solver"]["unresolved_steps"].get<long>());
+    EXPECT_LE(o["energy"]["max_gain_J"].get<double>(), 1e-6);
+    EXPECT_LE(o["contact"]["last_second_max_penetration_m"].get<double>(), 1e-3 + 1e-9);
+  }
 }
 
 }  // namespace
