@@ -175,9 +175,15 @@ class SceneReader : public TomlReader {
 
   void read_effects(const toml::node& node, Effects& effects) const {
     const toml::table& t = table(node, "effects");
-    check_keys(t, {"inertia", "gravity", "object_contact", "body_contact", "self_contact"}, " in [effects]");
+    check_keys(t, {"inertia", "gravity", "gravity_direction", "object_contact", "body_contact", "self_contact"},
+               " in [effects]");
     if (const toml::node* n = t.get("inertia")) effects.inertia = boolean(*n, "inertia", " in [effects]");
     if (const toml::node* n = t.get("gravity")) effects.gravity = boolean(*n, "gravity", " in [effects]");
+    if (const toml::node* n = t.get("gravity_direction")) {
+      const Eigen::Vector3d d = vector3(*n, "gravity_direction", " in [effects]");
+      require(d.norm() > 1e-12, "{}: 'gravity_direction' in [effects] must not be zero", at(*n));
+      effects.gravity_direction = d.normalized();
+    }
     if (const toml::node* n = t.get("object_contact"))
       effects.object_contact = boolean(*n, "object_contact", " in [effects]");
     if (const toml::node* n = t.get("body_contact"))
@@ -357,7 +363,7 @@ class SceneReader : public TomlReader {
     const std::string context = fmt::format(" in object #{}", index);
     check_keys(*t,
                {"name", "shape", "radius", "length", "half_extents", "normal", "file", "scale", "position", "rotation",
-                "motion", "keyframes", "smooth", "mass", "velocity"},
+                "motion", "keyframes", "smooth", "mass", "velocity", "density", "angular_velocity", "friction"},
                context);
     ObjectSpec o;
     o.line = static_cast<int>(t->source().begin.line);
@@ -420,13 +426,25 @@ class SceneReader : public TomlReader {
       require(keys == nullptr, "{}: 'keyframes'{} need motion = \"prescribed\"", keys ? at(*keys) : at(node), context);
     }
     if (const toml::node* n = t->get("smooth")) o.smooth = boolean(*n, "smooth", context);
-    for (const char* key : {"mass", "velocity"}) {
+    for (const char* key : {"mass", "velocity", "density", "angular_velocity", "friction"}) {
       const toml::node* n = t->get(key);
       require(n == nullptr || o.motion == ObjectMotionKind::free, "{}: '{}'{} needs motion = \"free\"",
               n ? at(*n) : at(node), key, context);
     }
     if (const toml::node* n = t->get("mass")) o.mass = positive(*n, "mass", context);
     if (const toml::node* n = t->get("velocity")) o.velocity = vector3(*n, "velocity", context);
+    if (const toml::node* n = t->get("density")) {
+      require(t->get("mass") == nullptr, "{}: give 'mass' [kg] or 'density' [kg/m³]{}, not both", at(*n), context);
+      o.density = positive(*n, "density", context);
+    }
+    if (const toml::node* n = t->get("angular_velocity")) o.angular_velocity = vector3(*n, "angular_velocity", context);
+    if (const toml::node* n = t->get("friction")) {
+      o.friction = number(*n, "friction", context);
+      require(o.friction >= 0.0 && o.friction <= 10.0, "{}: 'friction'{} = {} must be in [0, 10] (Coulomb μ)", at(*n),
+              context, o.friction);
+    }
+    require(o.motion != ObjectMotionKind::free || o.shape != ShapeKind::mesh,
+            "{}: a free object must be a sphere, box or capsule (a free mesh is not supported){}", at(node), context);
     require(o.motion != ObjectMotionKind::free || o.shape != ShapeKind::plane, "{}: a plane cannot be free{}", at(node),
             context);
     return o;

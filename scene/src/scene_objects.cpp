@@ -31,7 +31,7 @@ std::shared_ptr<Obstacle> make_shape(const ObjectSpec& spec) {
   throw_error("object '{}': unknown shape", spec.name);
 }
 
-SceneObject make_object(const ObjectSpec& spec, const Eigen::Vector3d& gravity) {
+SceneObject make_object(const ObjectSpec& spec) {
   SceneObject object;
   object.spec = spec;
   object.world_shape = make_shape(spec);
@@ -52,7 +52,8 @@ SceneObject make_object(const ObjectSpec& spec, const Eigen::Vector3d& gravity) 
       break;
     }
     case ObjectMotionKind::free:
-      object.motion = std::make_shared<FreeMotion>(spec.mass, gravity, start, spec.velocity);
+      // Held at its start until FreeObjects (free_objects.hpp) replaces it with the solved rigid motion.
+      object.motion = std::make_shared<FixedMotion>(start);
       break;
   }
   object.world_shape->set_pose(object.motion->pose(0.0));

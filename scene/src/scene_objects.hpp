@@ -21,8 +21,8 @@ struct SceneObject {
 
 /// The shape of an object spec in its local frame (a new instance each call).
 std::shared_ptr<Obstacle> make_shape(const ObjectSpec& spec);
-/// The object with its world motion; gravity applies to free objects.
-SceneObject make_object(const ObjectSpec& spec, const Eigen::Vector3d& gravity);
+/// The object with its world motion (a free object is held at its start until FreeObjects takes it over).
+SceneObject make_object(const ObjectSpec& spec);
 /// Every object's surface in the world at its current pose, merged (`object_id` per triangle in `ids`).
 Surface merged_object_surfaces(const std::vector<SceneObject>& objects, Eigen::MatrixXd& ids);
 /// The world pose of a spec's position and axis-angle rotation [degrees].

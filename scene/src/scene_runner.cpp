@@ -1,6 +1,7 @@
 // Running a scene (scene_runner.hpp): bodies, objects, contact on demand, stepping, output and summary.
 #include "body_groups.hpp"
 #include "crowd.hpp"
+#include "free_objects.hpp"
 #include "scene_contact.hpp"
 #include "scene_internal.hpp"
 #include "scene_objects.hpp"
@@ -42,7 +43,8 @@ using meshing::RowMatrixX3d;
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
-const Eigen::Vector3d kGravity(0.0, -9.81, 0.0);
+/// g [m/s²] in the world: 9.81 along the scene's gravity direction.
+Eigen::Vector3d gravity_vector(const Effects& effects) { return 9.81 * effects.gravity_direction; }
 
 class SceneRun {
  public:
@@ -138,6 +140,10 @@ class SceneRun {
       } catch (const Error& e) {
         throw_error("{}:{}: body '{}': {}", scene.file.string(), specs[i].line, specs[i].name, e.what());
       }
+      // A tilted gravity acts on the tissue in the body's frame (placement: world = R p + t).
+      if (bodies_.back()->soft() && scene.effects.gravity)
+        bodies_.back()->layer().problem.gravity =
+            bodies_.back()->placement().R.transpose() * gravity_vector(scene.effects);
       logger()->info("scene: body '{}' ({}): {}", specs[i].name, solver_name(bodies_.back()->solver()),
                      bodies_.back()->model_info);
     }
@@ -146,10 +152,17 @@ class SceneRun {
   void build_objects() {
     for (const ObjectSpec& spec : scene_.objects) {
       try {
-        objects_.push_back(detail::make_object(spec, scene_.effects.gravity ? kGravity : Eigen::Vector3d::Zero()));
+        objects_.push_back(detail::make_object(spec));
+        if (spec.motion == ObjectMotionKind::free) detail::free_object_properties(spec);  // refused here, with its line
       } catch (const Error& e) {
         throw_error("{}:{}: object '{}': {}", scene_.file.string(), spec.line, spec.name, e.what());
       }
+    }
+    try {
+      free_.emplace(objects_, scene_.contact,
+                    scene_.effects.gravity ? gravity_vector(scene_.effects) : Eigen::Vector3d::Zero());
+    } catch (const Error& e) {
+      throw_error("{}: {}", scene_.file.string(), e.what());
     }
   }
 
@@ -203,6 +216,7 @@ class SceneRun {
   // (lagged), so they do not couple the bodies within a step.
   void step(double t0, double h) {
     const double t1 = t0 + h;
+    if (!free_->empty()) free_->step(t0, h, detail::body_surfaces(bodies_, scene_.contact, t1, surface_stiffness_));
     std::vector<RowMatrixX3d> predicted;
     std::vector<std::vector<std::size_t>> groups;
     if (scene_.effects.body_contact) {
@@ -311,6 +325,11 @@ class SceneRun {
         }
         if (auto* free = dynamic_cast<FreeMotion*>(o.motion.get())) free->set_contact_stiffness(stiffness);
         o.motion->commit(t1, force);
+      } else if (o.spec.motion == ObjectMotionKind::free) {
+        Eigen::Vector3d force = Eigen::Vector3d::Zero();  // the bodies' reaction on the rigid object (summary)
+        for (BodyContact& c : contact_)
+          if (c.objects) force += c.placed[j]->take_force();
+        free_->add_body_reaction(j, force);
       }
       o.world_shape->set_pose(o.motion->pose(t1));
     }
@@ -363,6 +382,7 @@ class SceneRun {
       measure_penetration(t);
       check_seconds_ += seconds_since(clock);
     }
+    if (output) free_->record(t);
     output_->frame(f, t, output);
   }
 
@@ -450,6 +470,7 @@ class SceneRun {
                          {"final_position", {p.x(), p.y(), p.z()}}});
     }
     s["objects"] = objects;
+    if (!free_->empty()) s["free_objects"] = free_->summary();
 
     // The effects that ran, with their time and share of the stepping loop.
     nlohmann::json ran = nlohmann::json::array();
@@ -471,6 +492,7 @@ class SceneRun {
     }
     if (e.object_contact && potentials > 0)
       entry("object_contact", object_seconds, "broad phase, penalty terms, acceptance");
+    if (!free_->empty()) entry("free_objects", free_->seconds(), "the rigid objects' implicit solves");
     if (e.body_contact && potentials > 0)
       entry("body_contact", body_seconds, "other bodies' surfaces (trees), penalty terms");
     s["effects"] = ran;
@@ -515,6 +537,8 @@ class SceneRun {
   detail::Crowd crowd_;
   std::vector<std::unique_ptr<SceneBody>> bodies_;
   std::vector<SceneObject> objects_;
+  std::optional<detail::FreeObjects> free_;             ///< the free rigid objects among objects_
+  std::vector<std::vector<double>> surface_stiffness_;  ///< per body and vertex, for the free objects [N/m]
   std::vector<BodyContact> contact_;
   std::optional<detail::SceneOutput> output_;  ///< the files of run() (its jobs are run()'s)
   int every_ = 1;

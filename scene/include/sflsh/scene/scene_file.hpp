@@ -17,8 +17,10 @@ namespace sflsh::scene {
 
 /// What a scene asks to simulate. Anything not switched on is not built.
 struct Effects {
-  bool inertia = false;         ///< dynamics (backward Euler); off: quasi-static equilibrium per frame
-  bool gravity = false;         ///< g = (0, −9.81, 0) on the soft tissue (and on free objects)
+  bool inertia = false;  ///< dynamics (backward Euler); off: quasi-static equilibrium per frame
+  bool gravity = false;  ///< g = 9.81 m/s² · gravity_direction on the soft tissue (and on free objects)
+  /// World direction of gravity (unit). [0, 0, −1]: the bodies lie on their backs, held by their skeletons.
+  Eigen::Vector3d gravity_direction = -Eigen::Vector3d::UnitY();
   bool object_contact = false;  ///< rigid objects against the soft layers
   bool body_contact = false;    ///< bodies against each other
   /// Whether any effect deforms the tissue (otherwise every body is only skinned).
@@ -99,8 +101,11 @@ struct ObjectSpec {
   ObjectMotionKind motion = ObjectMotionKind::fixed;
   std::vector<SceneKeyframe> keyframes;                ///< prescribed: at least two, increasing t
   bool smooth = true;                                  ///< prescribed: C¹ (Catmull–Rom) instead of piecewise linear
-  double mass = 1.0;                                   ///< free [kg]
+  double mass = 1.0;                                   ///< free [kg] (used when density is 0)
+  double density = 0.0;                                ///< free [kg/m³]; 0: the mass is given instead
   Eigen::Vector3d velocity = Eigen::Vector3d::Zero();  ///< free: initial [m/s]
+  Eigen::Vector3d angular_velocity = Eigen::Vector3d::Zero();  ///< free: initial, world [rad/s]
+  double friction = 0.5;                                       ///< free: Coulomb coefficient μ
 };
 
 /// Penalty contact (docs/contact.md): all optional; zero / negative stiffness means the automatic one.

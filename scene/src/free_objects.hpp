@@ -1,0 +1,89 @@
+#pragma once
+// Internal to the scene runner: the scene's free objects (motion = "free"), rigid with six degrees of
+// freedom (rigid_object.hpp). Each step, before the bodies, every free object is solved implicitly against
+// the ground and the other objects posed at the step's end and against every body's skin (its surface now
+// and predicted at the step's end). The bodies then solve against the object's new pose in their own
+// ContactPotential, so both sides of the contact are implicit; the exchange is staggered once per step.
+// The energy balance, contact forces and penetration go into summary.json → free_objects.
+#include "scene_internal.hpp"
+#include "scene_objects.hpp"
+
+#include <sflsh/core/summary.hpp>
+#include <sflsh/scene/rigid_object.hpp>
+
+#include <memory>
+#include <utility>
+#include <vector>
+
+namespace sflsh::scene::detail {
+
+/// The pose of a free object as its last solve left it (the runner's objects and the bodies' potentials
+/// read it; the object is not moved by commit()).
+class SolvedMotion final : public RigidMotion {
+ public:
+  explicit SolvedMotion(const Pose& pose) : pose_(pose) {}
+  Pose pose(double /*t*/) const override { return pose_; }
+  void set(const Pose& pose) { pose_ = pose; }
+
+ private:
+  Pose pose_;
+};
+
+/// The mass properties of a free object's spec: from `density`, or scaled to `mass`. Throws sflsh::Error
+/// for shapes that cannot be free.
+RigidProperties free_object_properties(const ObjectSpec& spec);
+
+/// A body's surface over a step: world vertices now and predicted at the step's end, stiffness per vertex.
+struct BodySurfaceStep {
+  RowMatrixX3d start, end;
+  std::vector<double> stiffness;  ///< [N/m]
+};
+
+/// Every body's surface over [now, t1] for the free objects; `stiffness` caches k = stiffness · lumped area
+/// per body and vertex (filled on the first call).
+std::vector<BodySurfaceStep> body_surfaces(const std::vector<std::unique_ptr<SceneBody>>& bodies,
+                                           const ContactSpec& contact, double t1,
+                                           std::vector<std::vector<double>>& stiffness);
+
+class FreeObjects {
+ public:
+  /// Builds a RigidObject for every free object of `objects` (their motions become SolvedMotion).
+  FreeObjects(std::vector<SceneObject>& objects, const ContactSpec& contact, const Eigen::Vector3d& gravity);
+  bool empty() const { return free_.empty(); }
+
+  /// Steps every free object over [t0, t0 + h] (see above); errors name the object.
+  void step(double t0, double h, const std::vector<BodySurfaceStep>& bodies);
+  /// The force the bodies' potentials exerted on object j in the last step [N] (world), for the summary.
+  void add_body_reaction(std::size_t object, const Eigen::Vector3d& force);
+  /// Energies [J] per object and step are sampled at every call (the runner calls it once per frame).
+  void record(double t);
+  nlohmann::json summary() const;
+  double seconds() const { return seconds_; }  ///< in the objects' solves [s]
+
+ private:
+  struct Free {
+    std::size_t object = 0;  ///< index in the runner's objects
+    std::unique_ptr<RigidObject> rigid;
+    std::shared_ptr<SolvedMotion> motion;
+    double initial_energy = 0.0;       ///< T + V at t = 0 [J]
+    double last_contact_energy = 0.0;  ///< penalty energy at the last step's end [J]
+    double max_energy_gain = 0.0;      ///< max over steps of E − E(0), E = T + V + penalty [J]
+    double friction_work = 0.0;        ///< Σ D at the solutions [J]
+    double max_obstacle_force = 0.0, max_surface_force = 0.0, max_body_reaction = 0.0;  ///< [N]
+    double max_penetration = 0.0;                                                       ///< over the steps [m]
+    double last_penetration = 0.0;                                                      ///< at the last step [m]
+    double resting_max_penetration = 0.0;                                               ///< over the last second [m]
+    double last_time = 0.0;
+    std::vector<std::pair<double, double>> penetration_history;  ///< (t, depth) of the last second
+    long steps = 0, newton_iterations = 0, refinements = 0, halvings = 0, unresolved = 0;
+    nlohmann::json frames = nlohmann::json::array();  ///< per written frame: t, energies
+  };
+
+  std::vector<SceneObject>& objects_;
+  std::vector<Free> free_;
+  std::vector<std::pair<std::size_t, std::shared_ptr<Obstacle>>> obstacles_;  ///< the other objects' shapes
+  double tolerance_ = 1e-3;
+  double seconds_ = 0.0;
+};
+
+}  // namespace sflsh::scene::detail

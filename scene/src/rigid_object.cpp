@@ -1,0 +1,222 @@
+// A free rigid object stepped implicitly (rigid_object.hpp).
+#include <sflsh/core/error.hpp>
+#include <sflsh/scene/rigid_object.hpp>
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <cmath>
+
+namespace sflsh::scene {
+
+void RigidObjectParameters::validate() const {
+  auto positive = [](double v, const char* name) {
+    require(std::isfinite(v) && v > 0.0, "free object: {} must be positive (got {})", name, v);
+  };
+  require(std::isfinite(friction) && friction >= 0.0, "free object: friction must be ≥ 0 (got {})", friction);
+  positive(slip_velocity, "slip_velocity [m/s]");
+  positive(stiffness, "contact stiffness [N/m³]");
+  require(std::isfinite(margin) && margin >= 0.0, "free object: margin must be ≥ 0 (got {} m)", margin);
+  positive(tolerance, "contact tolerance [m]");
+  require(std::isfinite(refinement_factor) && refinement_factor > 1.0,
+          "free object: refinement_factor must be > 1 (got {})", refinement_factor);
+  require(max_refinements >= 0 && friction_updates >= 0 && max_halvings >= 0,
+          "free object: refinement, friction-update and halving counts must be ≥ 0");
+}
+
+std::vector<RigidSample> contact_samples(const Obstacle& shape, double area, double stiffness) {
+  std::vector<RigidSample> samples;
+  if (const auto* sphere = dynamic_cast<const Sphere*>(&shape)) {
+    samples.push_back({Eigen::Vector3d::Zero(), sphere->radius(), 0.0});
+  } else if (const auto* capsule = dynamic_cast<const Capsule*>(&shape)) {
+    const int n = 5;  // the segment's ends and three inner points (a flat contact along the side)
+    for (int i = 0; i < n; ++i)
+      samples.push_back(
+          {Eigen::Vector3d(0, 0, capsule->half_length() * (2.0 * i / (n - 1) - 1.0)), capsule->radius(), 0.0});
+  } else if (const auto* box = dynamic_cast<const Box*>(&shape)) {
+    // Corners, edge midpoints and face centres: every point of the 3×3×3 lattice on the surface.
+    for (int i = -1; i <= 1; ++i)
+      for (int j = -1; j <= 1; ++j)
+        for (int k = -1; k <= 1; ++k)
+          if (i != 0 || j != 0 || k != 0)
+            samples.push_back({box->half_extent().cwiseProduct(Eigen::Vector3d(i, j, k)), 0.0, 0.0});
+  } else {
+    throw_error("free object: only spheres, boxes and capsules can be free");
+  }
+  for (RigidSample& s : samples) s.stiffness = stiffness * area / static_cast<double>(samples.size());
+  return samples;
+}
+
+RigidObject::RigidObject(std::string name, std::shared_ptr<Obstacle> shape, const RigidProperties& properties,
+                         const RigidState& initial, const Eigen::Vector3d& gravity,
+                         const RigidObjectParameters& parameters)
+    : name_(std::move(name)),
+      shape_(std::move(shape)),
+      properties_(properties),
+      state_(initial),
+      gravity_(gravity),
+      parameters_(parameters) {
+  parameters_.validate();
+  require(std::isfinite(properties.mass) && properties.mass > 0.0,
+          "free object '{}': mass must be positive (got {} kg)", name_, properties.mass);
+  require(properties.second_moment.allFinite() && properties.second_moment.diagonal().minCoeff() > 0.0,
+          "free object '{}': the second moment of mass must be positive definite", name_);
+  require(initial.placement.x.allFinite() && initial.velocity.allFinite() && initial.angular_velocity.allFinite(),
+          "free object '{}': position and velocities must be finite", name_);
+  samples_ = contact_samples(*shape_, properties.area, parameters.stiffness);
+  const Aabb box = shape_->local_bounds();
+  bounding_radius_ = box.lower.cwiseAbs().cwiseMax(box.upper.cwiseAbs()).norm();
+  gyration_radius_ = std::sqrt(properties.second_moment.trace() / properties.mass);
+}
+
+RigidStepReport RigidObject::step(double h, const std::vector<const Obstacle*>& obstacles,
+                                  const std::vector<SurfacePoints>& surfaces) {
+  require(std::isfinite(h) && h > 0.0, "free object '{}': step must be positive (got {} s)", name_, h);
+  const RigidState saved = state_;
+  std::string failure;
+  for (int halving = 0; halving <= parameters_.max_halvings; ++halving) {
+    const int n = 1 << halving;
+    state_ = saved;
+    RigidStepReport total;
+    total.halvings = halving;
+    bool ok = true;
+    for (int k = 0; k < n && ok; ++k) {
+      // The surfaces' points move linearly over the step.
+      std::vector<SurfacePoints> part = surfaces;
+      for (std::size_t s = 0; s < surfaces.size(); ++s)
+        for (std::size_t i = 0; i < surfaces[s].start.size(); ++i) {
+          const Eigen::Vector3d d = surfaces[s].end[i] - surfaces[s].start[i];
+          part[s].start[i] = surfaces[s].start[i] + d * (static_cast<double>(k) / n);
+          part[s].end[i] = surfaces[s].start[i] + d * (static_cast<double>(k + 1) / n);
+        }
+      try {
+        const RigidStepReport r = solve(h / n, obstacles, part);
+        total.newton_iterations += r.newton_iterations;
+        total.refinements += r.refinements;
+        total.unresolved = total.unresolved || r.unresolved;
+        total.max_penetration = std::max(total.max_penetration, r.max_penetration);
+        total.obstacle_force = r.obstacle_force;
+        total.surface_force = r.surface_force;
+        total.contact_energy = r.contact_energy;
+        total.friction_work += r.friction_work;
+      } catch (const Error& e) {
+        failure = e.what();
+        ok = false;
+      }
+    }
+    if (ok) return total;
+  }
+  state_ = saved;
+  throw_error("free object '{}': the step of {} s failed after {} halvings: {}", name_, h, parameters_.max_halvings,
+              failure);
+}
+
+RigidStepReport RigidObject::solve(double h, const std::vector<const Obstacle*>& obstacles,
+                                   const std::vector<SurfacePoints>& surfaces) {
+  const RigidPlacement start = state_.placement;
+  const double delta = parameters_.margin;
+  const RigidInertiaTerm inertia(properties_, state_, h, gravity_);
+  RigidObstacleContactTerm on_obstacles(samples_, obstacles, delta);
+
+  // Broad phase: surface points that can come within δ of the object in this step.
+  const double reach = bounding_radius_ + delta + h * state_.velocity.norm() +
+                       h * state_.angular_velocity.norm() * bounding_radius_ + 0.02;
+  std::vector<Eigen::Vector3d> points, moved;
+  std::vector<double> stiffness;
+  for (const SurfacePoints& s : surfaces)
+    for (std::size_t i = 0; i < s.end.size(); ++i) {
+      const Eigen::Vector3d d = s.end[i] - s.start[i];
+      if ((s.end[i] - start.x).norm() < reach + d.norm()) {
+        points.push_back(s.end[i]);
+        moved.push_back(d);
+        stiffness.push_back(s.stiffness[i]);
+      }
+    }
+  ObjectSurfaceContactTerm on_surfaces(*shape_, points, stiffness, delta);
+
+  // Friction contacts (point, other side's motion, normal, normal force) lagged from a placement.
+  auto friction_at = [&](const RigidPlacement& P) {
+    std::vector<FrictionContact> contacts;
+    for (std::size_t s = 0; s < on_obstacles.samples().size(); ++s)
+      for (std::size_t j = 0; j < obstacles.size(); ++j) {
+        Eigen::Vector3d n;
+        const double phi = on_obstacles.gap(P, s, j, &n);
+        if (!(phi < delta)) continue;
+        const RigidSample& sample = on_obstacles.samples()[s];
+        contacts.push_back({sample.point - sample.radius * P.R.transpose() * n, Eigen::Vector3d::Zero(), n,
+                            sample.stiffness * (delta - phi)});
+      }
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      Eigen::Vector3d n;
+      const double phi = on_surfaces.gap(P, i, &n);
+      if (!(phi < delta)) continue;
+      const Eigen::Vector3d closest = P.R.transpose() * (points[i] - phi * n - P.x);  // on the object's surface
+      contacts.push_back({closest, moved[i], n, on_surfaces.stiffness(i) * (delta - phi)});
+    }
+    return contacts;
+  };
+
+  RigidNewtonSettings settings;
+  settings.length = gyration_radius_;
+  settings.tolerance = 1e-10 + 1e-6 * parameters_.tolerance;
+  RigidStepReport report;
+  RigidPlacement placement = start;
+  std::vector<FrictionContact> contacts = friction_at(start);
+  const double epsilon = parameters_.slip_velocity * h;
+  for (int refinement = 0;; ++refinement) {
+    for (int update = 0; update <= parameters_.friction_updates; ++update) {
+      const RigidFrictionTerm friction(contacts, start, parameters_.friction, epsilon);
+      const std::vector<const RigidTerm*> terms = {&inertia, &on_obstacles, &on_surfaces, &friction};
+      const RigidNewtonResult result = minimize_rigid(terms, placement, settings);
+      report.newton_iterations += result.iterations;
+      if (!result.converged) throw_error("{}", result.failure);
+      if (parameters_.friction == 0.0) break;
+      contacts = friction_at(placement);
+      if (update == parameters_.friction_updates) report.friction_work = friction.evaluate(placement, nullptr, nullptr);
+    }
+    // Penetration at the end: stiffen what is deeper than the tolerance and solve again.
+    bool too_deep = false;
+    report.max_penetration = 0.0;
+    for (std::size_t s = 0; s < on_obstacles.samples().size(); ++s)
+      for (std::size_t j = 0; j < obstacles.size(); ++j) {
+        const double depth = -on_obstacles.gap(placement, s, j);
+        report.max_penetration = std::max(report.max_penetration, depth);
+        if (depth > parameters_.tolerance) {
+          too_deep = true;
+          if (refinement < parameters_.max_refinements)
+            on_obstacles.samples()[s].stiffness *= parameters_.refinement_factor;
+        }
+      }
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      const double depth = -on_surfaces.gap(placement, i);
+      report.max_penetration = std::max(report.max_penetration, depth);
+      if (depth > parameters_.tolerance) {
+        too_deep = true;
+        if (refinement < parameters_.max_refinements) on_surfaces.scale_stiffness(i, parameters_.refinement_factor);
+      }
+    }
+    if (!too_deep) break;
+    if (refinement == parameters_.max_refinements) {
+      report.unresolved = true;
+      break;
+    }
+    ++report.refinements;
+    placement = start;
+    contacts = friction_at(start);
+  }
+  if (!placement.x.allFinite() || !placement.R.allFinite()) throw_error("NaN/Inf in the placement after the solve");
+
+  Vector6d g_obstacles = Vector6d::Zero(), g_surfaces = Vector6d::Zero();
+  report.contact_energy =
+      on_obstacles.evaluate(placement, &g_obstacles, nullptr) + on_surfaces.evaluate(placement, &g_surfaces, nullptr);
+  report.obstacle_force = -g_obstacles.head<3>();  // F = −∂u/∂x
+  report.surface_force = -g_surfaces.head<3>();
+  // v_{n+1} = (x_{n+1} − x_n)/h,  ω_{n+1} = log(R_{n+1} R_nᵀ)/h (world).
+  state_.velocity = (placement.x - start.x) / h;
+  state_.angular_velocity = rotation_log(placement.R * start.R.transpose()) / h;
+  placement.R = Eigen::Quaterniond(placement.R).normalized().toRotationMatrix();  // round-off back onto SO(3)
+  state_.placement = placement;
+  return report;
+}
+
+}  // namespace sflsh::scene

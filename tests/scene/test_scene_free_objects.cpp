@@ -1,0 +1,180 @@
+// Free rigid objects in scenes: the shipped free-object scenes parse, bad free-object keys are one line
+// naming the file and line, and a ball dropped on the belly of a reduced body (lying on its back) lands,
+// never gains energy and rests within the contact tolerance.
+#include "long_test.hpp"
+#include "scratch_dir.hpp"
+
+#include <sflsh/core/error.hpp>
+#include <sflsh/scene/scene_file.hpp>
+#include <sflsh/scene/scene_runner.hpp>
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <fstream>
+
+namespace sflsh::scene {
+namespace {
+
+std::filesystem::path write_scene(const std::filesystem::path& dir, const std::string& text) {
+  std::filesystem::create_directories(dir);
+  const auto path = dir / "scene.toml";
+  std::ofstream(path) << text;
+  return path;
+}
+
+std::string error_of(const std::filesystem::path& path) {
+  try {
+    load_scene(path);
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(SceneFreeObjects, ShippedScenesParse) {
+  for (const char* name : {"ball_drop_belly", "ball_roll_thigh", "box_on_lap"}) {
+    SCOPED_TRACE(name);
+    const Scene scene = load_scene(std::filesystem::path(SFLSH_DATA_DIR) / "scenes" / (std::string(name) + ".toml"));
+    EXPECT_EQ(scene.name, name);
+    ASSERT_EQ(scene.objects.size(), 1u);
+    EXPECT_EQ(scene.objects[0].motion, ObjectMotionKind::free);
+    EXPECT_TRUE(scene.effects.gravity && scene.effects.object_contact);
+    EXPECT_LT((scene.effects.gravity_direction - Eigen::Vector3d(0, 0, -1)).norm(), 1e-12);
+  }
+}
+
+TEST(SceneFreeObjects, BadFreeObjectKeysAreOneLineWithTheLine) {
+  const auto dir = testing::scratch_dir();
+  const std::string head =
+      "[effects]\nobject_contact = true\n[[body]]\nname = \"a\"\nmotion = \"rest\"\n[[object]]\nname = \"o\"\n";
+  const std::pair<const char*, const char*> cases[] = {
+      {"shape = \"sphere\"\nradius = 0.05\nmotion = \"free\"\nmass = 1.0\ndensity = 1000.0\n", "not both"},
+      {"shape = \"sphere\"\nradius = 0.05\nmotion = \"free\"\nfriction = -0.5\n", "friction"},
+      {"shape = \"sphere\"\nradius = 0.05\nmotion = \"free\"\ndensity = 0.0\n", "density"},
+      {"shape = \"sphere\"\nradius = 0.05\nangular_velocity = [0, 1, 0]\n", "needs motion = \"free\""},
+      {"shape = \"mesh\"\nfile = \"scene.toml\"\nmotion = \"free\"\n", "sphere, box or capsule"},
+  };
+  for (const auto& [text, expected] : cases) {
+    SCOPED_TRACE(text);
+    const std::string what = error_of(write_scene(dir, head + text));
+    EXPECT_NE(what.find(expected), std::string::npos) << what;
+    EXPECT_NE(what.find("scene.toml:"), std::string::npos) << what;
+    EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+  }
+  // The old keys (mass, velocity) of a free object still load.
+  EXPECT_EQ(error_of(write_scene(dir, head + "shape = \"box\"\nhalf_extents = [0.1, 0.1, 0.1]\nmotion = \"free\"\n"
+                                             "mass = 2.0\nvelocity = [0, 0, 0]\n")),
+            "");
+}
+
+nlohmann::json run(const std::filesystem::path& dir, const std::string& text) {
+  SceneRunOptions options;
+  options.cache_dir = SFLSH_TEST_CACHE;
+  options.threads = 1;
+  return run_scene(load_scene(write_scene(dir, text)), options);
+}
+
+/// A 2 kg ball released `drop` [m] above the belly of a reduced body lying on its back, for `seconds`.
+std::string belly_drop(double drop, double seconds) {
+  return fmt::format(R"([scene]
+fps = 60
+substeps = 2
+duration = {1}
+[effects]
+inertia = true
+gravity = true
+gravity_direction = [0, 0, -1]
+object_contact = true
+[[body]]
+name = "b"
+motion = "rest"
+solver = "reduced"
+mesh = "coarse"
+handles = 30
+[[object]]
+name = "ball"
+shape = "sphere"
+radius = 0.06
+motion = "free"
+mass = 2.0
+position = [0.0, 0.06, {0}]
+)",
+                     0.119 + 0.06 + drop, seconds);
+}
+
+/// The energy balance never shows a gain beyond 1e-6 J (the solves' tolerance: Newton steps of 1e-9 m
+/// against forces ~ 20 N give ~1e-8 J per step), and the ball ends resting: within the tolerance of the
+/// skin and (nearly) still.
+void expect_landed_and_resting(const nlohmann::json& s, double resting_seconds) {
+  ASSERT_TRUE(s.contains("free_objects"));
+  const nlohmann::json& ball = s["free_objects"][0];
+  const nlohmann::json& energy = ball["energy"];
+  EXPECT_LE(energy["max_gain_J"].get<double>(), 1e-6) << energy.dump();
+  EXPECT_GT(energy["dissipated_J"].get<double>(), 0.0);
+  for (const auto& f : ball["frames"])
+    EXPECT_LE(f["kinetic_J"].get<double>() + f["potential_J"].get<double>() + f["contact_J"].get<double>(),
+              energy["initial_J"].get<double>() + 1e-6);
+  // It touched the body: a force of at least the weight (2 kg · 9.81 m/s²), from both sides of the contact.
+  EXPECT_GT(ball["contact"]["max_body_force_N"].get<double>(), 19.0);
+  EXPECT_GT(ball["contact"]["max_body_reaction_N"].get<double>(), 19.0);
+  // 1 mm: the scene's contact tolerance (the default), on the object's side and on the body's.
+  EXPECT_LE(ball["contact"]["last_second_max_penetration_m"].get<double>(), 1e-3 + 1e-9);
+  EXPECT_LE(s["contact"]["measured_max_penetration_mm"].get<double>(), 1.0 + 1e-6);
+  // Resting: the speed at the end below 1 cm/s after `resting_seconds` of contact.
+  const auto v = ball["final_velocity_m_per_s"];
+  EXPECT_LT(Eigen::Vector3d(v[0], v[1], v[2]).norm(), 1e-2) << "after " << resting_seconds << " s";
+}
+
+TEST(SceneFreeObjects, BallDroppedOnTheBellyNeverGainsEnergyAndRests) {
+  SFLSH_LONG_TEST();  // a reduced body with gravity and contact for 0.75 s: not yet timed below 60 s
+  const auto dir = testing::scratch_dir();
+  expect_landed_and_resting(run(dir, belly_drop(0.01, 0.75)), 0.6);
+}
+
+TEST(SceneFreeObjects, BallRestsOnTheBellyWithinToleranceForTwoSeconds) {
+  SFLSH_LONG_TEST();
+  const auto dir = testing::scratch_dir();
+  const nlohmann::json s = run(dir, belly_drop(0.10, 2.5));
+  expect_landed_and_resting(s, 2.2);
+  // Every written frame after the landing (t ≥ 0.5 s) within the tolerance of the skin.
+  for (const auto& f : s["free_objects"][0]["frames"])
+    if (f["t"].get<double>() >= 0.5) EXPECT_LE(f["penetration_m"].get<double>(), 1e-3 + 1e-9) << f.dump();
+}
+
+// The shipped free-object scenes end to end (a few minutes on 2 cores): each object lands, never gains energy
+// and ends within the tolerance; the numbers of docs/contact.md are printed.
+TEST(SceneFreeObjects, ShippedScenesRun) {
+  SFLSH_LONG_TEST();
+  for (const char* name : {"ball_drop_belly", "ball_roll_thigh", "box_on_lap"}) {
+    SCOPED_TRACE(name);
+    SceneRunOptions options;
+    options.cache_dir = SFLSH_TEST_CACHE;
+    options.threads = 1;
+    const nlohmann::json s = run_scene(
+        load_scene(std::filesystem::path(SFLSH_DATA_DIR) / "scenes" / (std::string(name) + ".toml")), options);
+    const nlohmann::json& o = s["free_objects"][0];
+    const double frames = s["scene"]["frames"].get<double>() - 1.0;
+    std::printf(
+        "%s: %.3f s/frame (objects %.3f s total), E0 %.4f J, E %.4f J (kinetic %.2e), max gain %.2e J, "
+        "dissipated %.4f J, max force: body %.1f N, reaction %.1f N, obstacles %.1f N, penetration max "
+        "%.2e m, last second %.2e m, measured on the skin %.3f mm, final position [%.4f %.4f %.4f], "
+        "newton %ld, refinements %ld, halved %ld, unresolved %ld\n",
+        name, s["timings"]["step_seconds"].get<double>() / frames, s["effects"].back()["seconds"].get<double>(),
+        o["energy"]["initial_J"].get<double>(), o["energy"]["total_J"].get<double>(),
+        o["energy"]["kinetic_J"].get<double>(), o["energy"]["max_gain_J"].get<double>(),
+        o["energy"]["dissipated_J"].get<double>(), o["contact"]["max_body_force_N"].get<double>(),
+        o["contact"]["max_body_reaction_N"].get<double>(), o["contact"]["max_obstacle_force_N"].get<double>(),
+        o["contact"]["max_penetration_m"].get<double>(), o["contact"]["last_second_max_penetration_m"].get<double>(),
+        s["contact"]["measured_max_penetration_mm"].get<double>(), o["final_position_m"][0].get<double>(),
+        o["final_position_m"][1].get<double>(), o["final_position_m"][2].get<double>(),
+        o["solver"]["newton_iterations"].get<long>(), o["solver"]["refinements"].get<long>(),
+        o["solver"]["halved_steps"].get<long>(), o["solver"]["unresolved_steps"].get<long>());
+    EXPECT_LE(o["energy"]["max_gain_J"].get<double>(), 1e-6);
+    EXPECT_LE(o["contact"]["last_second_max_penetration_m"].get<double>(), 1e-3 + 1e-9);
+  }
+}
+
+}  // namespace
+}  // namespace sflsh::scene
