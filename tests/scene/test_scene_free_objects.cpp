@@ -48,7 +48,8 @@ TEST(SceneFreeObjects, ShippedScenesParse) {
 TEST(SceneFreeObjects, BadFreeObjectKeysAreOneLineWithTheLine) {
   const auto dir = testing::scratch_dir();
   const std::string head =
-      "[effects]\nobject_contact = true\n[[body]]\nname = \"a\"\nmotion = \"rest\"\n[[object]]\nname = \"o\"\n";
+      "[scene]\nname = \"bad\"\nduration = 0.1\n[effects]\nobject_contact = true\n[[body]]\nname = \"a\"\nmotion = "
+      "\"rest\"\n[[object]]\nname = \"o\"\n";
   const std::pair<const char*, const char*> cases[] = {
       {"shape = \"sphere\"\nradius = 0.05\nmotion = \"free\"\nmass = 1.0\ndensity = 1000.0\n", "not both"},
       {"shape = \"sphere\"\nradius = 0.05\nmotion = \"free\"\nfriction = -0.5\n", "friction"},
@@ -140,7 +141,9 @@ TEST(SceneFreeObjects, BallRestsOnTheBellyWithinToleranceForTwoSeconds) {
   expect_landed_and_resting(s, 2.2);
   // Every written frame after the landing (t ≥ 0.5 s) within the tolerance of the skin.
   for (const auto& f : s["free_objects"][0]["frames"])
-    if (f["t"].get<double>() >= 0.5) EXPECT_LE(f["penetration_m"].get<double>(), 1e-3 + 1e-9) << f.dump();
+    if (f["t"].get<double>() >= 0.5) {
+      EXPECT_LE(f["penetration_m"].get<double>(), 1e-3 + 1e-9) << f.dump();
+    }
 }
 
 // The shipped free-object scenes end to end (a few minutes on 2 cores): each object lands, never gains energy
