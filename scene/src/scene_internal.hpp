@@ -83,6 +83,10 @@ class SceneBody {
   /// rest and is not solved (counted in idle_steps). Solver failures throw naming the body.
   void step(double t0, double h, EffectSeconds& seconds);
   double time() const { return t_; }
+  /// Remembers the state at the start of a step, and puts it back (with the step counters): the step is then
+  /// solved again from the same start, e.g. against other bodies' newer surfaces (body-contact exchanges).
+  void save_step_start();
+  void restore_step_start();
 
   /// The posed body surface (n×3) in the world at the current time.
   RowMatrixX3d world_surface() const;
@@ -119,6 +123,8 @@ class SceneBody {
   std::vector<int> vertex_node_;
   bool quasi_static_ = false;
   double t_ = 0.0;
+  struct StepStart;                         ///< save_step_start()'s state (scene_body.cpp)
+  std::shared_ptr<const StepStart> start_;  ///< null until saved
 };
 
 }  // namespace sflsh::scene::detail
