@@ -111,21 +111,24 @@ nlohmann::json exchange_summary(const std::vector<ExchangeRecord>& records, cons
                         {"converged", r.converged}});
   }
   const auto n = static_cast<double>(records.size());
-  return {{"scheme",
-           "touching bodies solved from the step's start against each other's end-of-step surfaces (block Jacobi), "
-           "exchanged with interface quasi-Newton acceleration until they agree"},
-          {"tolerance_mm", 1e3 * contact.exchange_tolerance},
-          {"force_change_tolerance", 0.02},
-          {"max_exchanges", contact.max_exchanges},
-          {"contact_steps", records.size()},
-          {"recordsmean", n > 0 ? static_cast<double>(total) / n : 0.0},
-          {"recordsmax", most},
-          {"surface_residual_max_mm", 1e3 * residual},
-          {"residual_penetration_max_mm", 1e3 * penetration},
-          {"unconverged_steps", unconverged},
-          {"converged", unconverged == 0},
-          {"per_step", per_step},
-          {"per_step_truncated", records.size() > kListed}};
+  return {
+      {"enabled", contact.body_exchange},
+      {"scheme",
+       "touching bodies solved from the step's start against each other's end-of-step surfaces (block Jacobi), "
+       "exchanged with interface quasi-Newton acceleration until they agree (enabled = false: one Gauss–Seidel sweep "
+       "per step in scene order)"},
+      {"tolerance_mm", 1e3 * contact.exchange_tolerance},
+      {"force_change_tolerance", 0.02},
+      {"max_exchanges", contact.max_exchanges},
+      {"contact_steps", records.size()},
+      {"recordsmean", n > 0 ? static_cast<double>(total) / n : 0.0},
+      {"recordsmax", most},
+      {"surface_residual_max_mm", 1e3 * residual},
+      {"residual_penetration_max_mm", 1e3 * penetration},
+      {"unconverged_steps", unconverged},
+      {"converged", unconverged == 0},
+      {"per_step", per_step},
+      {"per_step_truncated", records.size() > kListed}};
 }
 
 }  // namespace sflsh::scene::detail

@@ -27,6 +27,8 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 // bodies does not decide who gives way.
 void GroupStep::run(const std::vector<std::size_t>& group, const std::vector<RowMatrixX3d>& predicted, double t0,
                     double h, std::vector<EffectSeconds>& seconds, std::vector<ExchangeRecord>& records, bool threads) {
+  if (scene_.effects.body_contact && group.size() > 1 && !scene_.contact.body_exchange)
+    return sweep(group, predicted, t0, h, seconds);
   const bool exchange = scene_.effects.body_contact && group.size() > 1;
   if (exchange)
     for (std::size_t b : group) save_step_start(b);
@@ -39,6 +41,20 @@ void GroupStep::run(const std::vector<std::size_t>& group, const std::vector<Row
   for (std::size_t i = 0; i < group.size(); ++i) touches[i] = touched_bodies(group[i]);
   for (const auto& cluster : touching_clusters(group, touches))
     records.push_back(exchange_cluster(cluster, predicted, t0, h, seconds, threads));
+}
+
+// [contact] body_exchange = false: one Gauss–Seidel sweep in scene order, each body against the bodies before it
+// at the step's end and the ones after it predicted (the body solved first takes most of the deformation).
+void GroupStep::sweep(const std::vector<std::size_t>& group, const std::vector<RowMatrixX3d>& predicted, double t0,
+                      double h, std::vector<EffectSeconds>& seconds) {
+  std::vector<RowMatrixX3d> stepped(bodies_.size());
+  for (std::size_t b : group) {
+    see_bodies(
+        b, [&](std::size_t o) -> const RowMatrixX3d& { return stepped[o].rows() > 0 ? stepped[o] : predicted[o]; },
+        nullptr);
+    bodies_[b]->step(t0, h, seconds[b]);
+    stepped[b] = bodies_[b]->world_surface();
+  }
 }
 
 // Sets body b's body obstacles to the surfaces `surface(o)` (world) of the other bodies o, of all of them or

@@ -25,6 +25,8 @@ class GroupStep {
            std::vector<EffectSeconds>& seconds, std::vector<ExchangeRecord>& records, bool threads);
 
  private:
+  void sweep(const std::vector<std::size_t>& group, const std::vector<RowMatrixX3d>& predicted, double t0, double h,
+             std::vector<EffectSeconds>& seconds);
   void see_bodies(std::size_t b, const std::function<const RowMatrixX3d&(std::size_t)>& surface,
                   const std::vector<std::size_t>* only);
   void solve_bodies(const std::vector<std::size_t>& bodies, double t0, double h, std::vector<EffectSeconds>& seconds,
