@@ -90,6 +90,7 @@ inertia = true
 body_contact = true
 [contact]
 tolerance = 0.001
+body_exchange = true
 {}
 {}{})",
                      contact, pushing_first ? pushing : standing, pushing_first ? standing : pushing);

@@ -5,8 +5,10 @@
 //     a step is at rest and is not solved;
 //   - no contact effect → no contact potential and no proximity structure is ever built;
 //   - object contact: each soft body gets a penalty potential against the scene's objects (placed in the body's
-//     frame); body contact: against the other bodies' posed surfaces, exchanged within every step until the
-//     touching bodies agree (group_step.cpp, exchange_accelerator.hpp; the order of the bodies plays no part).
+//     frame); body contact: against the other bodies' posed surfaces, one Gauss–Seidel sweep per step (bodies
+//     solved earlier are seen at the step's end, later ones predicted), or with [contact] body_exchange = true
+//     exchanged within the step until the touching bodies agree (group_step.cpp, exchange_accelerator.hpp; the
+//     order of the bodies plays no part).
 //     Skeletons follow their motions: contact moves soft tissue only.
 // Output in the run folder: <body>.pvd / <body>_NNNNNN.vtp per body in world coordinates (with contact_force
 // and penetration fields when contact is on), objects.pvd, summary.json with "effects" (the effects that ran
