@@ -72,7 +72,7 @@ handles = 30
 name = "skinned"
 motion = "shake_hips"
 solver = "skinned"
-placement = { position = [0.8, 0.0, 0.0] }
+placement = { position = [1.7, 0.0, 0.0] }
 [[object]]
 name = "ball"
 shape = "sphere"
