@@ -1,5 +1,6 @@
 // sflsh render --run DIR --out FILE.png: a picture of a simulation's result, the posed body of one frame coloured
-// by its soft-tissue motion (σ per vertex, or the frame's soft-tissue displacement), drawn offscreen.
+// by its soft-tissue motion (σ per vertex, or the frame's soft-tissue displacement), drawn offscreen; with
+// --strip N, evenly spaced frames of a scene run side by side (every body and object of scene.pvd).
 #include "commands.hpp"
 
 #include <sflsh/core/error.hpp>
@@ -9,7 +10,9 @@
 #include <sflsh/core/vtk_io.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <regex>
 
 namespace sflsh::app {
@@ -25,6 +28,7 @@ struct RenderRunOptions {
   std::string view = "three_quarter";
   int width = 900;
   int height = 1000;
+  int strip = 0;  ///< > 0: a strip of that many frames of a scene run
   std::string out;
 };
 
@@ -113,6 +117,100 @@ void run_render(const RenderRunOptions& opt) {
   logger()->info("render: frame {} of {} coloured by {} → {}", index, frames.size(), opt.color, opt.out);
 }
 
+/// One DataSet of a .pvd collection.
+struct PvdEntry {
+  double time = 0.0;
+  std::string name;
+  fs::path file;
+};
+
+/// The timed entries of scene.pvd (our own collection file: one DataSet per line), grouped by time in order.
+std::vector<std::vector<PvdEntry>> scene_frames(const fs::path& pvd) {
+  std::ifstream in(pvd);
+  require(in.good(), "{}: cannot be read", pvd.string());
+  std::vector<std::vector<PvdEntry>> frames;
+  const std::regex timestep(R"re(timestep="([^"]+)")re"), name(R"re(name="([^"]*)")re"), file(R"re(file="([^"]+)")re");
+  std::string line;
+  while (std::getline(in, line)) {
+    std::smatch t, n, f;
+    if (!std::regex_search(line, t, timestep) || !std::regex_search(line, f, file)) continue;
+    PvdEntry e;
+    try {
+      e.time = std::stod(t[1].str());
+    } catch (const std::exception&) {
+      throw_error("{}: timestep \"{}\" is not a number", pvd.string(), t[1].str());
+    }
+    if (std::regex_search(line, n, name)) e.name = n[1].str();
+    e.file = pvd.parent_path() / f[1].str();
+    if (frames.empty() || frames.back().front().time != e.time) frames.emplace_back();
+    frames.back().push_back(e);
+  }
+  return frames;
+}
+
+/// A strip of `opt.strip` evenly spaced written frames of a scene run: every body and object of scene.pvd in the
+/// world, bodies coloured by their soft-tissue displacement (mm; skinned bodies in skin tone), objects grey,
+/// the time under each panel.
+void run_render_strip(const RenderRunOptions& opt) {
+  const fs::path run = opt.run;
+  require(fs::is_directory(run), "--run {}: not a folder, expected the --out folder of `sflsh simulate --scene`",
+          opt.run);
+  const fs::path pvd = run / "scene.pvd";
+  require(fs::exists(pvd),
+          "--run {}: no scene.pvd, expected the --out folder of `sflsh simulate --scene` written with format vtk",
+          opt.run);
+  require(fs::path(opt.out).extension() == ".png", "--out {}: expected a .png file", opt.out);
+  const std::vector<std::vector<PvdEntry>> frames = scene_frames(pvd);
+  require(!frames.empty(), "{}: no timed frames", pvd.string());
+  const auto count = std::min<std::size_t>(static_cast<std::size_t>(opt.strip), frames.size());
+  std::vector<std::size_t> chosen;  // evenly spaced, first and last included
+  for (std::size_t i = 0; i < count; ++i)
+    chosen.push_back(count == 1 ? frames.size() - 1
+                                : static_cast<std::size_t>(
+                                      std::lround(static_cast<double>(i) * static_cast<double>(frames.size() - 1) /
+                                                  static_cast<double>(count - 1))));
+  std::vector<render::Panel> panels;
+  double peak = 0.0;
+  for (std::size_t index : chosen) {
+    render::Panel panel;
+    panel.caption = fmt::format("t = {:.2f} s", frames[index].front().time);
+    for (const PvdEntry& e : frames[index]) {
+      require(fs::exists(e.file), "{}: lists {}, which is missing", pvd.string(), e.file.string());
+      render::Surface surface;
+      surface.points = vtk::read_points(e.file);
+      surface.triangles = vtk::read_cells(e.file);
+      require(surface.triangles.cols() == 3, "{}: expected a triangle surface", e.file.string());
+      if (e.name == "objects") {
+        surface.color = {0.62, 0.64, 0.68};
+        surface.framed = false;  // a floor would shrink the bodies to dots
+      } else {
+        const std::vector<std::string> arrays = vtk::read_point_array_names(e.file);
+        if (std::find(arrays.begin(), arrays.end(), "soft_tissue_displacement") != arrays.end()) {
+          const Eigen::MatrixXd u = vtk::read_point_array(e.file, "soft_tissue_displacement");
+          surface.scalars = 1e3 * u.rowwise().norm();
+          require(surface.scalars->allFinite(), "{}: non-finite soft_tissue_displacement", e.file.string());
+          peak = std::max(peak, surface.scalars->maxCoeff());
+        }
+      }
+      panel.surfaces.push_back(std::move(surface));
+    }
+    panels.push_back(std::move(panel));
+  }
+  std::string scene = run.filename().string();
+  if (fs::exists(run / "summary.json")) {
+    const nlohmann::json summary = read_json(run / "summary.json");
+    if (summary.contains("scene") && summary["scene"].is_object()) scene = summary["scene"].value("name", scene);
+  }
+  render::View view;
+  view.name = opt.view;
+  view.width = opt.width;
+  view.height = opt.height;
+  view.scalar_range = std::make_pair(0.0, std::max(peak, 1e-9));
+  view.title = fmt::format("{}: |soft-tissue displacement| 0-{:.1f} mm (blue-red)", scene, peak);
+  render::render_strip_png(opt.out, panels, view);
+  logger()->info("render: {} of {} written frames of {} → {}", panels.size(), frames.size(), pvd.string(), opt.out);
+}
+
 }  // namespace
 
 void register_render_commands(CLI::App& app, const Invocation& /*invocation*/) {
@@ -125,10 +223,25 @@ void register_render_commands(CLI::App& app, const Invocation& /*invocation*/) {
   cmd->add_option("--frame", opt->frame, "peak (largest soft-tissue displacement) or a frame index");
   cmd->add_option("--view", opt->view, "front | back | side | three_quarter | top")
       ->check(CLI::IsMember({"front", "back", "side", "three_quarter", "top"}));
-  cmd->add_option("--width", opt->width, "Picture width [px]")->check(CLI::Range(64, 8000));
-  cmd->add_option("--height", opt->height, "Picture height [px]")->check(CLI::Range(64, 8000));
+  CLI::Option* width = cmd->add_option("--width", opt->width, "Picture width [px] (with --strip: of each panel, 360)")
+                           ->check(CLI::Range(64, 8000));
+  CLI::Option* height =
+      cmd->add_option("--height", opt->height, "Picture height [px] (with --strip: of each panel, 560)")
+          ->check(CLI::Range(64, 8000));
+  CLI::Option* strip =
+      cmd->add_option("--strip", opt->strip,
+                      "A scene run (`simulate --scene`): that many evenly spaced frames side by side, every body and "
+                      "object, coloured by soft-tissue displacement (mm)")
+          ->check(CLI::Range(1, 24));
   cmd->add_option("--out", opt->out, "The PNG to write")->required();
-  cmd->callback([opt] { run_render(*opt); });
+  cmd->callback([opt, width, height, strip, cmd] {
+    if (strip->count() == 0) return run_render(*opt);
+    require(cmd->count("--frame") == 0 && cmd->count("--color") == 0,
+            "--strip: draws evenly spaced frames coloured by soft-tissue displacement; leave out --frame and --color");
+    if (width->count() == 0) opt->width = 360;
+    if (height->count() == 0) opt->height = 560;
+    run_render_strip(*opt);
+  });
 }
 
 }  // namespace sflsh::app

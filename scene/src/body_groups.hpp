@@ -2,7 +2,7 @@
 // Internal to the scene runner: which bodies can touch each other in a step. Bodies in different groups
 // cannot reach each other's surfaces in that step, so their contact potentials find no candidate against
 // each other whichever surface they see, and the groups can step in parallel with the same result as one
-// Gauss–Seidel sweep over all bodies.
+// step of all bodies as one group.
 #include <sflsh/scene/obstacle.hpp>
 
 #include <cstddef>

@@ -180,6 +180,32 @@ bool SceneBody::at_rest_this_step(double t0, double h) const {
   return true;
 }
 
+struct SceneBody::StepStart {
+  double t = 0.0;
+  long steps = 0, idle_steps = 0;
+  std::optional<reduced::ReducedSolver::Checkpoint> reduced;
+  std::optional<model::State> full;
+};
+
+void SceneBody::save_step_start() {
+  auto s = std::make_shared<StepStart>();
+  s->t = t_;
+  s->steps = steps;
+  s->idle_steps = idle_steps;
+  if (fast_) s->reduced = fast_->checkpoint();
+  if (full_) s->full = full_->state();
+  start_ = std::move(s);
+}
+
+void SceneBody::restore_step_start() {
+  require(start_ != nullptr, "scene body '{}': no step start saved", name());
+  t_ = start_->t;
+  steps = start_->steps;
+  idle_steps = start_->idle_steps;
+  if (fast_) fast_->restore(*start_->reduced);
+  if (full_) full_->initialize(*start_->full);
+}
+
 void SceneBody::step(double t0, double h, EffectSeconds& seconds) {
   ++steps;
   if (!soft()) {

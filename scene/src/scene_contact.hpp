@@ -23,6 +23,7 @@ struct BodyContact {
   std::vector<int> entry_of_node;                             ///< per layer node: its entry in the potentials, or −1
   double surface_seconds = 0.0;                               ///< updating the other bodies' surfaces
   double max_penetration = 0.0;                               ///< measured at the written frames on the skin [m]
+  ContactPotential::Checkpoint objects_start, bodies_start;   ///< the potentials at the start of the step
 };
 
 /// Lumped skin area per contact node: the region vertex's (lumped_vertex_areas) on the node it sits on;

@@ -198,12 +198,21 @@ class SceneReader : public TomlReader {
 
   void read_contact(const toml::node& node, ContactSpec& contact) const {
     const toml::table& t = table(node, "contact");
-    check_keys(t, {"stiffness", "tolerance", "margin", "max_refinements"}, " in [contact]");
+    check_keys(
+        t,
+        {"stiffness", "tolerance", "margin", "max_refinements", "max_exchanges", "exchange_tolerance", "body_exchange"},
+        " in [contact]");
     if (const toml::node* n = t.get("stiffness")) contact.stiffness = non_negative(*n, "stiffness", " in [contact]");
     if (const toml::node* n = t.get("tolerance")) contact.tolerance = positive(*n, "tolerance", " in [contact]");
     if (const toml::node* n = t.get("margin")) contact.margin = non_negative(*n, "margin", " in [contact]");
     if (const toml::node* n = t.get("max_refinements"))
       contact.max_refinements = count(*n, "max_refinements", " in [contact]", 0);
+    if (const toml::node* n = t.get("max_exchanges"))
+      contact.max_exchanges = count(*n, "max_exchanges", " in [contact]", 1);
+    if (const toml::node* n = t.get("body_exchange"))
+      contact.body_exchange = boolean(*n, "body_exchange", " in [contact]");
+    if (const toml::node* n = t.get("exchange_tolerance"))
+      contact.exchange_tolerance = positive(*n, "exchange_tolerance", " in [contact]");
   }
 
   void read_output(const toml::node& node, OutputSpec& output) const {

@@ -84,6 +84,10 @@ class SceneBody {
   /// rest and is not solved (counted in idle_steps). Solver failures throw naming the body.
   void step(double t0, double h, EffectSeconds& seconds);
   double time() const { return t_; }
+  /// Remembers the state at the start of a step, and puts it back (with the step counters): the step is then
+  /// solved again from the same start, e.g. against other bodies' newer surfaces (body-contact exchanges).
+  void save_step_start();
+  void restore_step_start();
 
   /// The posed body surface (n×3) in the world at the current time.
   RowMatrixX3d world_surface() const;
@@ -130,6 +134,8 @@ class SceneBody {
   double root_max_displacement_ = 0.0, root_max_rotation_ = 0.0;
   double root_max_displacement_time_ = 0.0, root_max_rotation_time_ = 0.0;
   Eigen::Vector3d root_max_direction_ = Eigen::Vector3d::Zero();  ///< τ at its largest (body frame) [m]
+  struct StepStart;                         ///< save_step_start()'s state (scene_body.cpp)
+  std::shared_ptr<const StepStart> start_;  ///< null until saved
 };
 
 }  // namespace sflsh::scene::detail

@@ -1,7 +1,9 @@
 // Running a scene (scene_runner.hpp): bodies, objects, contact on demand, stepping, output and summary.
+#include "body_exchange.hpp"
 #include "body_groups.hpp"
 #include "crowd.hpp"
 #include "free_objects.hpp"
+#include "group_step.hpp"
 #include "scene_contact.hpp"
 #include "scene_internal.hpp"
 #include "scene_objects.hpp"
@@ -23,6 +25,7 @@
 #include <algorithm>
 #include <chrono>
 #include <functional>
+#include <limits>
 #include <map>
 #include <numeric>
 
@@ -210,10 +213,11 @@ class SceneRun {
 
   // --- stepping ------------------------------------------------------------------------------------------
   // The bodies fall into groups that cannot touch each other in this step (every body its own group without
-  // body contact). Within a group the bodies step as one Gauss–Seidel sweep in scene order; groups of reduced
-  // and skinned bodies step in parallel (each integrator is single-threaded), groups with a full-space body
-  // one after another (PETSc runs them on all ranks). Free objects react once per step, after all bodies
-  // (lagged), so they do not couple the bodies within a step.
+  // body contact). Within a group the touching bodies exchange their end-of-step surfaces until they agree
+  // (step_group); groups of reduced and skinned bodies step in parallel (each integrator is single-threaded), and
+  // so do the bodies within such a group; groups with a full-space body one after another (PETSc runs them on all
+  // ranks). Free rigid objects take their implicit step first, against the bodies' skins predicted for the
+  // step's end (free_objects.cpp); the bodies then feel them as obstacles where they now are.
   void step(double t0, double h) {
     const double t1 = t0 + h;
     if (!free_->empty()) free_->step(t0, h, detail::body_surfaces(bodies_, scene_.contact, t1, surface_stiffness_));
@@ -245,18 +249,22 @@ class SceneRun {
     }
     std::vector<detail::EffectSeconds> seconds(bodies_.size());
     std::vector<std::string> errors(groups.size());
+    std::vector<std::vector<detail::ExchangeRecord>> records(groups.size());
     tbb::parallel_for(std::size_t{0}, parallel.size(), [&](std::size_t k) {
       const std::size_t g = parallel[k];
       try {
-        step_group(groups[g], predicted, t0, h, seconds);
+        detail::GroupStep(scene_, bodies_, contact_).run(groups[g], predicted, t0, h, seconds, records[g], true);
       } catch (const std::exception& e) {
         errors[g] = e.what();
       }
     });
     for (const std::string& e : errors)
       if (!e.empty()) throw_error("{}", e);
-    for (std::size_t g : serial) step_group(groups[g], predicted, t0, h, seconds);
+    for (std::size_t g : serial)
+      detail::GroupStep(scene_, bodies_, contact_).run(groups[g], predicted, t0, h, seconds, records[g], false);
     for (const auto& s : seconds) add(s);
+    for (auto& group_records : records)
+      for (auto& r : group_records) exchanges_.push_back(std::move(r));
     ++steps_;
     groups_ += static_cast<long>(groups.size());
     commit_objects(t1);
@@ -283,30 +291,6 @@ class SceneRun {
     }
     r.pad = motion + 2.0 * body.max_elastic_displacement();
     return r;
-  }
-
-  // One Gauss–Seidel sweep over a group: each body sees the group's bodies before it at the step's end and
-  // the ones after it predicted (their current elastic displacement carried by the new pose); bodies of other
-  // groups are out of reach and are seen predicted.
-  void step_group(const std::vector<std::size_t>& group, const std::vector<RowMatrixX3d>& predicted, double t0,
-                  double h, std::vector<detail::EffectSeconds>& seconds) {
-    const double t1 = t0 + h;
-    for (std::size_t b : group) {
-      BodyContact& c = contact_[b];
-      if (c.bodies) {
-        const auto clock = Clock::now();
-        const Rigid body_from_world = bodies_[b]->placement().inverse();
-        for (std::size_t k = 0; k < c.other.size(); ++k) {
-          const auto o = static_cast<std::size_t>(c.other[k]);
-          const bool in_group = std::find(group.begin(), group.end(), o) != group.end();
-          const SceneBody& other = *bodies_[o];
-          const bool stepped = in_group && other.time() >= t1 - 1e-12;
-          c.surfaces[k]->set_vertices(body_from_world.apply(stepped ? other.world_surface() : predicted[o]));
-        }
-        c.surface_seconds += seconds_since(clock);
-      }
-      bodies_[b]->step(t0, h, seconds[b]);
-    }
   }
 
   // Free objects: the reaction of every body, summed, moves the object once per step.
@@ -525,6 +509,9 @@ class SceneRun {
                    {"collections", output_->collections()}};
     if (scene_.output.fields) s["output"]["fields"] = *scene_.output.fields;
     if (e.body_contact)
+      s["body_exchange"] =
+          detail::exchange_summary(exchanges_, scene_.contact, [&](std::size_t b) { return bodies_[b]->name(); });
+    if (e.body_contact)
       s["body_groups_per_step"] = steps_ > 0 ? static_cast<double>(groups_) / static_cast<double>(steps_) : 0.0;
     if (!crowd_.bodies.empty()) s["crowd"] = {{"avatars", crowd_.bodies.size()}, {"shape_model", crowd_.shape_model}};
     return s;
@@ -545,6 +532,7 @@ class SceneRun {
   detail::EffectSeconds seconds_;
   double output_seconds_ = 0.0, step_seconds_ = 0.0, check_seconds_ = 0.0, deepest_time_ = 0.0;
   long steps_ = 0, groups_ = 0;
+  std::vector<detail::ExchangeRecord> exchanges_;  ///< per step and touching cluster, in step and group order
 };
 
 }  // namespace

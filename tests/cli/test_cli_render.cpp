@@ -6,6 +6,8 @@
 #include <fmt/format.h>
 #include <gmock/gmock.h>
 
+#include <fstream>
+
 using sflsh::testing::count_entries;
 using sflsh::testing::run_sflsh;
 using ::testing::HasSubstr;
@@ -49,4 +51,61 @@ TEST(CliRender, BadRunOrFrameGivesOneLineAndWritesNothing) {
   result = run_sflsh(fmt::format("render --run {} --frame nine --out {}", (dir / "empty").string(), png.string()), dir);
   EXPECT_EQ(result.exit_code, 1);
   EXPECT_FALSE(std::filesystem::exists(png));
+}
+
+TEST(CliRender, DrawsAStripOfASceneRunWithoutADisplay) {
+  const auto dir = sflsh::testing::scratch_dir();
+  // A ball pressed into the belly of a soft body beside a skinned one: bodies and objects in every panel.
+  std::ofstream(dir / "scene.toml") << R"([scene]
+fps = 30
+frames = 7
+[effects]
+inertia = true
+object_contact = true
+[[body]]
+name = "soft"
+motion = "rest"
+solver = "reduced"
+mesh = "coarse"
+handles = 30
+[[body]]
+name = "skinned"
+motion = "shake_hips"
+solver = "skinned"
+placement = { position = [1.7, 0.0, 0.0] }
+[[object]]
+name = "ball"
+shape = "sphere"
+radius = 0.06
+motion = "prescribed"
+keyframes = [{ t = 0.0, position = [0.0, 0.064, 0.19] }, { t = 0.2, position = [0.0, 0.064, 0.16] }]
+)";
+  const auto run = dir / "run";
+  auto result = run_sflsh(fmt::format("-q simulate --scene {} --cache {} --out {}", (dir / "scene.toml").string(),
+                                      SFLSH_TEST_CACHE, run.string()),
+                          dir);
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+
+  const sflsh::testing::NoDisplay no_display;  // sflsh starts its own virtual display
+  result = run_sflsh(
+      fmt::format("-q render --run {} --strip 3 --view front --out {}", run.string(), (dir / "strip.png").string()),
+      dir);
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  // Three 360×560 panels side by side; shaded bodies under a rainbow map, a grey ball and text give hundreds of
+  // colours, a blank picture one.
+  sflsh::testing::expect_drawn_png(dir / "strip.png", 3 * 360, 560, 200);
+
+  // A single-body run has no scene.pvd: one line, nothing written.
+  result = run_sflsh(fmt::format("render --run {} --strip 3 --out {}", (dir / "scene.toml").parent_path().string(),
+                                 (dir / "none.png").string()),
+                     dir);
+  EXPECT_EQ(result.exit_code, 1);
+  EXPECT_THAT(result.err, HasSubstr("scene.pvd"));
+  EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "none.png"));
+  // --strip draws displacement at evenly spaced frames: --frame is refused with it.
+  result = run_sflsh(
+      fmt::format("render --run {} --strip 3 --frame 2 --out {}", run.string(), (dir / "none.png").string()), dir);
+  EXPECT_EQ(result.exit_code, 1);
+  EXPECT_THAT(result.err, HasSubstr("--frame"));
 }

@@ -1,6 +1,6 @@
 // Bodies that cannot touch each other step in parallel: a scene with body contact where two bodies push
 // together and a third dances far away gives, grouped and on two threads, exactly the frames of one
-// Gauss–Seidel sweep over all bodies on one thread.
+// step of all bodies as one group on one thread.
 #include "scratch_dir.hpp"
 
 #include <sflsh/core/vtk_io.hpp>

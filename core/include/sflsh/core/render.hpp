@@ -3,6 +3,7 @@
 // without a display a virtual one is started (virtual_display.hpp).
 #include <sflsh/core/vtk_io.hpp>
 
+#include <array>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -16,6 +17,13 @@ struct Surface {
   std::optional<Eigen::VectorXd> scalars;  ///< per-point values to colour by (else a skin tone)
   std::array<double, 3> color = {0.87, 0.72, 0.62};
   Eigen::Vector3d offset = Eigen::Vector3d::Zero();  ///< translation applied when drawing (for line-ups)
+  bool framed = true;  ///< strips: the camera frames this surface (false: drawn, but may be cut off, e.g. a floor)
+};
+
+/// One panel of a strip: its surfaces and the caption under it.
+struct Panel {
+  std::vector<Surface> surfaces;
+  std::string caption;
 };
 
 struct View {
@@ -28,5 +36,9 @@ struct View {
 
 /// Renders the surfaces into one PNG (atomic write). Throws sflsh::Error when no X display can be had.
 void render_png(const std::filesystem::path& path, const std::vector<Surface>& surfaces, const View& view);
+
+/// Renders the panels side by side into one PNG, each view.width × view.height (title across the top, each
+/// panel's caption under it), with one colour scale and one camera over every panel. Throws like render_png.
+void render_strip_png(const std::filesystem::path& path, const std::vector<Panel>& panels, const View& view);
 
 }  // namespace sflsh::render

@@ -127,6 +127,24 @@ class ReducedSolver final : public model::BodySolver {
   /// The substeps of the last successful step(), in order (empty unless options.record_substeps).
   const std::vector<ReducedSubstep>& last_substeps() const { return substeps_; }
 
+  /// The whole state a step starts from (time, q, the predictor's rates, the posed history, the reusable
+  /// factorization), so that a step can be solved again from the same start with other potentials' obstacles
+  /// (the scene's body-contact exchanges). The cubature the guard grew is kept on restore (it only grows).
+  struct Checkpoint {
+    double t = 0.0;
+    Eigen::VectorXd q, rate, rate_previous;
+    double rate_dt = 0.0;
+    int rate_steps = 0;
+    model::PosedHistory history;
+    Eigen::LLT<Eigen::MatrixXd> factor;
+    bool factor_valid = false;
+    double factor_h = 0.0;
+    material::HessianProjection factor_projection = material::HessianProjection::kNone;
+  };
+  Checkpoint checkpoint() const;
+  /// Puts the state of checkpoint() back: the same step then gives the same result bit for bit.
+  void restore(const Checkpoint& checkpoint);
+
  private:
   class Ladder;  ///< the solver on the model's robustness ladder (model/step_ladder.hpp)
   Eigen::VectorXd prescribed_state(double t) const;

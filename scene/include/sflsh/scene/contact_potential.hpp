@@ -103,6 +103,21 @@ class ContactPotential final : public model::NodePotential {
   ContactStats stats() const;
   void reset_stats();
 
+  /// The obstacles entry k is near in the current substep (bit j for obstacle j); 0 when not a candidate.
+  std::uint64_t obstacle_mask(int k) const { return mask_[static_cast<std::size_t>(k)]; }
+  /// The state a step changes besides the results: the refinement factors and the deepest accepted
+  /// penetration. Saved at a step's start and put back when the step is solved again (a scene's body-contact
+  /// exchanges), so that every exchange starts from the same stiffness.
+  struct Checkpoint {
+    std::vector<double> factor;
+    double max_penetration = 0.0;
+  };
+  Checkpoint checkpoint() const { return {factor_, stats_.max_penetration}; }
+  void restore(const Checkpoint& c) {
+    factor_ = c.factor;
+    stats_.max_penetration = c.max_penetration;
+  }
+
  private:
   /// u of entry k summed over the obstacles in `mask`, with derivatives; counts evaluations.
   double evaluate_masked(int k, std::uint64_t mask, const Eigen::Vector3d& p, Eigen::Vector3d* gradient,

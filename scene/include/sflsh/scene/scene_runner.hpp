@@ -5,9 +5,11 @@
 //     a step is at rest and is not solved;
 //   - no contact effect → no contact potential and no proximity structure is ever built;
 //   - object contact: each soft body gets a penalty potential against the scene's objects (placed in the body's
-//     frame); body contact: against the other bodies' posed surfaces, updated every step (Gauss–Seidel: bodies
-//     solved earlier in the step are seen at the step's end, later ones predicted by carrying their elastic
-//     displacement with the new pose). Skeletons follow their motions: contact moves soft tissue only.
+//     frame); body contact: against the other bodies' posed surfaces, one Gauss–Seidel sweep per step (bodies
+//     solved earlier are seen at the step's end, later ones predicted), or with [contact] body_exchange = true
+//     exchanged within the step until the touching bodies agree (group_step.cpp, exchange_accelerator.hpp; the
+//     order of the bodies plays no part).
+//     Skeletons follow their motions: contact moves soft tissue only.
 // Output in the run folder: <body>.pvd / <body>_NNNNNN.vtp per body in world coordinates (with contact_force
 // and penetration fields when contact is on), objects.pvd, summary.json with "effects" (the effects that ran
 // and their time).
@@ -30,7 +32,7 @@ struct SceneRunOptions {
   int every = 0;                    ///< > 0 overrides the scene's [output] every (write every N-th frame)
   bool background_writing = true;   ///< false: frame files are written on the stepping thread
   /// true: bodies that cannot touch each other in a step form separate groups stepped in parallel; false: one
-  /// Gauss–Seidel sweep over all bodies (the reference the groups must reproduce exactly).
+  /// group of all bodies (the reference the groups must reproduce exactly).
   bool group_bodies = true;
   bool allow_long = false;  ///< run even when the work estimate exceeds WorkLimits (--allow-long)
   int rank = 0;             ///< MPI rank: only rank 0 writes
