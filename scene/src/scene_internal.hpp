@@ -134,8 +134,8 @@ class SceneBody {
   double root_max_displacement_ = 0.0, root_max_rotation_ = 0.0;
   double root_max_displacement_time_ = 0.0, root_max_rotation_time_ = 0.0;
   Eigen::Vector3d root_max_direction_ = Eigen::Vector3d::Zero();  ///< τ at its largest (body frame) [m]
-  struct StepStart;                         ///< save_step_start()'s state (scene_body.cpp)
-  std::shared_ptr<const StepStart> start_;  ///< null until saved
+  struct StepStart;                                               ///< save_step_start()'s state (scene_body.cpp)
+  std::shared_ptr<const StepStart> start_;                        ///< null until saved
 };
 
 }  // namespace sflsh::scene::detail
