@@ -28,6 +28,7 @@ struct ValidateOptions {
   std::vector<double> lambdas;
   std::vector<std::string> train_subjects, test_subjects, train_motions, test_motions;
   bool no_cross_validation = false;
+  std::string jacobian = "exact";
   std::vector<std::string> dyna;
   std::string body;
   bool quiet = false;
@@ -53,6 +54,7 @@ void run_validate(const ValidateOptions& o, const Invocation& invocation) {
   if (!o.train_motions.empty()) config.train_motions = o.train_motions;
   if (!o.test_motions.empty()) config.test_motions = o.test_motions;
   if (o.no_cross_validation) config.cross_validation = false;
+  config.jacobian = o.jacobian;
   config.progress = !o.quiet;
   const nlohmann::json summary =
       validate::run_validation(config, o.out, summary_header("validate", invocation.argc, invocation.argv));
@@ -103,6 +105,10 @@ void register_validate_commands(CLI::App& app, const Invocation& invocation) {
   cmd->add_option("--body", o->body, "Body model .npz (default: the open body; SMPL for DYNA data)")
       ->check(CLI::ExistingFile);
   cmd->add_option("--threads", o->threads, "Threads per process (0 = all)")->check(CLI::NonNegativeNumber);
+  cmd->add_option("--jacobian", o->jacobian,
+                  "dσ/dq: exact (sensitivities, thickness through the retarget; default), hybrid (thickness columns "
+                  "by differences) or fd (differences of every column, the paper's method)")
+      ->check(CLI::IsMember({"exact", "hybrid", "fd"}));
   cmd->add_flag("--no-cross-validation", o->no_cross_validation,
                 "Skip the leave-one-out fits (λ = the first of --lambdas)");
   cmd->add_flag("--quiet", o->quiet, "No progress lines");

@@ -89,7 +89,7 @@ namespace sflsh::scene::detail {
 nlohmann::json exchange_summary(const std::vector<ExchangeRecord>& records, const ContactSpec& contact,
                                 const std::function<std::string(std::size_t)>& name) {
   constexpr std::size_t kListed = 5000;  // per-step entries listed (the totals cover every step)
-  long total = 0, unconverged = 0;
+  long total = 0, unconverged = 0, apart = 0, restarts = 0;
   int most = 0;
   double residual = 0.0, penetration = 0.0;
   nlohmann::json per_step = nlohmann::json::array();
@@ -97,7 +97,11 @@ nlohmann::json exchange_summary(const std::vector<ExchangeRecord>& records, cons
     total += r.exchanges;
     most = std::max(most, r.exchanges);
     if (!r.converged) ++unconverged;
-    residual = std::max(residual, r.surface_residual);
+    restarts += r.restarts;
+    if (r.apart)
+      ++apart;  // the solves did not feel the other surface: how far apart it ended says nothing of agreement
+    else
+      residual = std::max(residual, r.surface_residual);
     penetration = std::max(penetration, r.residual_penetration);
     if (per_step.size() >= kListed) continue;
     nlohmann::json names = nlohmann::json::array();
@@ -108,7 +112,9 @@ nlohmann::json exchange_summary(const std::vector<ExchangeRecord>& records, cons
                         {"surface_residual_mm", 1e3 * r.surface_residual},
                         {"force_change", r.force_change},
                         {"residual_penetration_mm", 1e3 * r.residual_penetration},
-                        {"converged", r.converged}});
+                        {"converged", r.converged},
+                        {"apart", r.apart},
+                        {"restarts", r.restarts}});
   }
   const auto n = static_cast<double>(records.size());
   return {
@@ -124,6 +130,8 @@ nlohmann::json exchange_summary(const std::vector<ExchangeRecord>& records, cons
       {"exchanges_mean", n > 0 ? static_cast<double>(total) / n : 0.0},
       {"exchanges_max", most},
       {"surface_residual_max_mm", 1e3 * residual},
+      {"apart_steps", apart},
+      {"restarts", restarts},
       {"residual_penetration_max_mm", 1e3 * penetration},
       {"unconverged_steps", unconverged},
       {"converged", unconverged == 0},

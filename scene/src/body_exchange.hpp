@@ -22,6 +22,8 @@ struct ExchangeRecord {
   double force_change = 0.0;          ///< relative change of the cluster's summed contact force in the last exchange
   double residual_penetration = 0.0;  ///< [m] deepest skin vertex inside another body's final surface
   bool converged = false;
+  bool apart = false;  ///< converged because no force acted and the surfaces ended apart (surface_residual moot)
+  int restarts = 0;    ///< times the quasi-Newton history was dropped after it stopped reducing the residual
 };
 
 /// summary.json "body_exchange": the exchanges over the steps where bodies touched (`name`: a body's name by

@@ -12,6 +12,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <memory>
 
 namespace sflsh::scene::detail {
 
@@ -160,12 +161,28 @@ ExchangeRecord GroupStep::exchange_cluster(const std::vector<std::size_t>& clust
   r.t = t1;
   r.bodies = cluster;
   r.exchanges = 1;
-  ExchangeAccelerator accelerator(0.5);
+  auto accelerator = std::make_unique<ExchangeAccelerator>(0.5);
+  // Restart: the quasi-Newton model is dropped when kStall exchanges have not brought the residual norm below
+  // kProgress of the best so far (a contact set that changed makes the old differences mislead it).
+  constexpr int kStall = 4;
+  constexpr double kProgress = 0.9;
+  double best = std::numeric_limits<double>::infinity();
+  int since_best = 0;
   bool penetration_known = false;
   for (;;) {
     r.surface_residual = 0.0;
     for (Eigen::Index v = 0; v < offset.back() / 3; ++v)
       r.surface_residual = std::max(r.surface_residual, (y.segment<3>(3 * v) - x.segment<3>(3 * v)).norm());
+    const double norm = (y - x).norm();
+    if (norm < kProgress * best) {
+      best = norm;
+      since_best = 0;
+    } else if (++since_best >= kStall) {
+      accelerator = std::make_unique<ExchangeAccelerator>(0.5);
+      best = norm;
+      since_best = 0;
+      ++r.restarts;
+    }
     r.force_change = previous_force < 0.0 ? 0.0 : std::abs(force - previous_force) / std::max(force, kForceFloor);
     if (r.surface_residual <= scene_.contact.exchange_tolerance && r.force_change <= kForceChange) {
       r.converged = true;
@@ -176,11 +193,12 @@ ExchangeRecord GroupStep::exchange_cluster(const std::vector<std::size_t>& clust
       penetration_known = true;
       if (r.residual_penetration < -contact_parameters(scene_.contact).margin) {  // apart: x was not felt
         r.converged = true;
+        r.apart = true;
         break;
       }
     }
     if (r.exchanges >= scene_.contact.max_exchanges) break;
-    x = accelerator.next(x, y);
+    x = accelerator->next(x, y);
     for (std::size_t k = 0; k < felt.size(); ++k)
       seen[felt[k]] = Eigen::Map<const RowMatrixX3d>(x.data() + offset[k], (offset[k + 1] - offset[k]) / 3, 3);
     for (std::size_t i = 0; i < n; ++i) {

@@ -181,6 +181,7 @@ TEST(ElasticityFit, SensitivityJacobianMatchesFiniteDifferences) {
   spec.jacobian = JacobianMethod::finite_differences;
   const NormalEquations fd = fit_normal_equations(f.context, targets, spec, p);
   spec.jacobian = JacobianMethod::sensitivities;
+  spec.thickness_differences = true;  // the hybrid: sensitivities for Y, differences for h
   const NormalEquations se = fit_normal_equations(f.context, targets, spec, p);
   // One-sided differences with step 1e-4 in κ̂ (≈ 2–5 % of the moduli's normalized values) carry a
   // truncation error of that relative order in the Young columns; the sensitivities are exact to the
@@ -190,7 +191,7 @@ TEST(ElasticityFit, SensitivityJacobianMatchesFiniteDifferences) {
   // The thickness rows agree closely: both are the same finite differences (only the base σ differs by the
   // tighter Newton tolerance of the sensitivity run).
   for (int i = 0; i < 4; ++i) EXPECT_NEAR(se.Jtr[3 * i], fd.Jtr[3 * i], 0.02 * fd.Jtr.norm()) << "control " << i;
-  // Exact thickness sensitivities (opt-in) against the one-sided differences with step 1e-4 in ĥ (truncation of
+  // Exact thickness sensitivities (the default) against the one-sided differences with step 1e-4 in ĥ (truncation of
   // that relative order): 2 % of the gradient's norm leaves room for the differences' Newton noise, and a missing
   // term of the rest-geometry derivative (a mass, a volume, the prediction's history, the axis) moves them by more.
   spec.thickness_differences = false;

@@ -1,4 +1,5 @@
 #include <sflsh/core/error.hpp>
+#include <sflsh/core/log.hpp>
 #include <sflsh/model/simulation_output.hpp>
 #include <sflsh/reduced/dynamics_case.hpp>
 #include <sflsh/reduced/dynamics_sensitivity.hpp>
@@ -79,9 +80,15 @@ CaseDynamics DynamicsCase::simulate_with_sensitivity(const LayerParameterization
                                                      const ReducedOptions& options, bool thickness) const {
   const auto start = std::chrono::steady_clock::now();
   try {
+    int untangled = 0;
     const model::Problem problem =
-        parameterization.problem(*layer_, kappa, options_, nullptr, &shaped_layer(parameterization));
+        parameterization.problem(*layer_, kappa, options_, nullptr, &shaped_layer(parameterization), &untangled);
     require(problem.dirichlet.drives.empty(), "fit cases take fixed attachments only");
+    if (thickness && untangled > 0)  // the exact columns assume nodes affine in h, which untangling breaks
+      logger()->warn(
+          "{} / {}: the retarget untangled {} nodes; the exact thickness columns are approximate here "
+          "(--jacobian hybrid takes differences)",
+          subject_, motion_, untangled);
     RestDirections rest;
     if (thickness) {  // dX/dh_i = (dX/dh) φ_i: the nodes are affine in h
       const meshing::ShapedLayer& shaped = shaped_layer(parameterization);

@@ -27,20 +27,18 @@ material::KappaMatrix LayerParameterization::field(const material::KappaMatrix& 
 
 model::Problem LayerParameterization::problem(const model::BodyLayer& layer, const material::KappaMatrix& kappa,
                                               const model::BodyLayerOptions& options, meshing::RowMatrixX3d* rest_skin,
-                                              const meshing::ShapedLayer* shaped) const {
+                                              const meshing::ShapedLayer* shaped, int* untangled_nodes) const {
   require(layer.mesh && layer.mesh->num_nodes() == mesh_->num_nodes() && layer.mesh->num_tets() == mesh_->num_tets(),
           "layer parameterization: the layer is not on the template mesh the parameterization was built for");
   require(kappa.rows() == num_controls(), "layer parameterization: {} control values for {} control points",
           kappa.rows(), num_controls());
   material::validate(kappa, bounds_, "layer parameterization: control point");
-  return problem_from_field(layer, field(kappa), options, rest_skin, shaped);
+  return problem_from_field(layer, field(kappa), options, rest_skin, shaped, untangled_nodes);
 }
 
-model::Problem LayerParameterization::problem_from_field(const model::BodyLayer& layer,
-                                                         const material::KappaMatrix& kappa_vertex,
-                                                         const model::BodyLayerOptions& options,
-                                                         meshing::RowMatrixX3d* rest_skin,
-                                                         const meshing::ShapedLayer* shaped) const {
+model::Problem LayerParameterization::problem_from_field(
+    const model::BodyLayer& layer, const material::KappaMatrix& kappa_vertex, const model::BodyLayerOptions& options,
+    meshing::RowMatrixX3d* rest_skin, const meshing::ShapedLayer* shaped, int* untangled_nodes) const {
   require(layer.mesh && layer.mesh->num_nodes() == mesh_->num_nodes() && layer.mesh->num_tets() == mesh_->num_tets(),
           "layer parameterization: the layer is not on the template mesh the parameterization was built for");
   const Eigen::VectorXd thickness = kappa_vertex.col(material::kThickness);
@@ -50,6 +48,7 @@ model::Problem LayerParameterization::problem_from_field(const model::BodyLayer&
   const meshing::RetargetedLayer retargeted =
       shaped ? retargeter_->retarget(*shaped, thickness, meshing::RetargetCheck::light)
              : retargeter_->retarget(layer.beta, thickness);
+  if (untangled_nodes) *untangled_nodes = retargeted.untangled_nodes;
   const material::LayerMaterialFields fields =
       material::layer_material_fields(*retargeter_, kappa_vertex, retargeted.nodes);
 

@@ -296,6 +296,9 @@ nlohmann::json run_validation(const ValidateConfig& requested, const std::filesy
     spec.stages = config.stages;
     spec.iterations = config.iterations;
     spec.checkpoint = state / "fits" / (name + ".json");
+    spec.jacobian =
+        config.jacobian == "fd" ? reduced::JacobianMethod::finite_differences : reduced::JacobianMethod::sensitivities;
+    spec.thickness_differences = config.jacobian == "hybrid";
     return spec;
   };
 

@@ -35,14 +35,15 @@ class LayerParameterization {
   /// With `shaped` (retargeter().shape(layer.beta), made once per subject) the retarget skips its β part and checks
   /// the mesh by the light pass (meshing::RetargetCheck::light): the same problem, bit for bit, and the same
   /// errors, for a fraction of the set-up.
+  /// `untangled_nodes`, when given, receives RetargetedLayer::untangled_nodes (nodes are affine in h only at 0).
   model::Problem problem(const model::BodyLayer& layer, const material::KappaMatrix& kappa,
                          const model::BodyLayerOptions& options, meshing::RowMatrixX3d* rest_skin = nullptr,
-                         const meshing::ShapedLayer* shaped = nullptr) const;
+                         const meshing::ShapedLayer* shaped = nullptr, int* untangled_nodes = nullptr) const;
 
   /// The same for κ given at every region vertex (R × 3, physical): any field, not only the span of φ.
   model::Problem problem_from_field(const model::BodyLayer& layer, const material::KappaMatrix& kappa_vertex,
                                     const model::BodyLayerOptions& options, meshing::RowMatrixX3d* rest_skin = nullptr,
-                                    const meshing::ShapedLayer* shaped = nullptr) const;
+                                    const meshing::ShapedLayer* shaped = nullptr, int* untangled_nodes = nullptr) const;
 
   /// κ per region vertex (R × 3) for control values κ (N × 3): φ κ.
   material::KappaMatrix field(const material::KappaMatrix& kappa) const;

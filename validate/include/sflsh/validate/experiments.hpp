@@ -28,6 +28,9 @@ struct ValidateConfig {
   int iterations = 8;                           ///< per stage
   std::vector<double> lambdas{0.01, 0.1, 1.0};  ///< cross-validation sweep (Fig. 5)
   bool cross_validation = true;
+  /// dσ/dq: "exact" (forward sensitivities, thickness columns through the retarget), "hybrid" (sensitivities,
+  /// thickness columns by one-sided differences) or "fd" (one-sided differences of every column, the paper's).
+  std::string jacobian = "exact";
   int threads = 0;             ///< 0: all
   double thickness_max = 0.0;  ///< 0: what the mesh size retargets validly
   /// DYNA files: when given, the ground truth comes from their registrations instead of the synthetic
