@@ -50,6 +50,13 @@ TEST(SceneFile, ShippedScenesParse) {
   const Scene crowd = load_scene(std::filesystem::path(SFLSH_DATA_DIR) / "scenes" / "crowd.toml");
   ASSERT_TRUE(crowd.crowd.has_value());
   EXPECT_EQ(crowd.crowd->count, 25);
+  // Touching bodies exchange surfaces by default; the one-sweep coupling stays available by name.
+  const Scene push = load_scene(std::filesystem::path(SFLSH_DATA_DIR) / "scenes" / "two_bodies_push.toml");
+  EXPECT_TRUE(push.contact.body_exchange);
+  const auto sweep = write_scene(testing::scratch_dir(),
+                                 "[scene]\n[effects]\nbody_contact = true\n[contact]\nbody_exchange = false\n" +
+                                     std::string(kBody) + "[[body]]\nname = \"b\"\nmotion = \"rest\"\n");
+  EXPECT_FALSE(load_scene(sweep).contact.body_exchange);
 }
 
 TEST(SceneFile, BadInputNamesFileAndLine) {

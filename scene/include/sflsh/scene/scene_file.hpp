@@ -118,9 +118,9 @@ struct ContactSpec {
   /// previous one) before the step is taken unconverged, with a warning.
   int max_exchanges = 30;
   /// true: the touching bodies exchange their end-of-step surfaces until they agree (the order of the bodies does
-  /// not decide who deforms); false (default until the exchange has been measured on the shipped scenes): one
-  /// Gauss–Seidel sweep per step in scene order (the body solved first takes most of the deformation).
-  bool body_exchange = false;
+  /// not decide who deforms; the default); false: one Gauss–Seidel sweep per step in scene order (the body solved
+  /// first takes most of the deformation), the former coupling, kept for comparison and speed.
+  bool body_exchange = true;
   /// [m] the exchange has converged when no surface moved more than this from the surface it was solved against.
   double exchange_tolerance = 1e-4;
 };
