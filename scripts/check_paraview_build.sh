@@ -16,10 +16,12 @@ if [ ! -x "$root/usr/bin/apt-get" ]; then
   debootstrap --variant=minbase bookworm "$root" http://deb.debian.org/debian
 fi
 cp /etc/resolv.conf "$root/etc/"
-cleanup() { umount "$root/proc" "$root/dev" 2>/dev/null || true; }
+cleanup() { umount "$root/proc" "$root/sys" "$root/dev" 2>/dev/null || true; }
 trap cleanup EXIT
 mountpoint -q "$root/proc" || mount -t proc proc "$root/proc"
 mountpoint -q "$root/dev" || mount --bind /dev "$root/dev"
+# MPI (hwloc) reads the CPU topology from sysfs and prints a warning on every start without it.
+mountpoint -q "$root/sys" || mount -t sysfs sysfs "$root/sys"
 
 rm -rf "$root/src/sflsh"
 mkdir -p "$root/src"
