@@ -41,22 +41,32 @@ RigidProperties free_object_properties(const ObjectSpec& spec) {
 }
 
 std::vector<BodySurfaceStep> body_surfaces(const std::vector<std::unique_ptr<SceneBody>>& bodies,
-                                           const ContactSpec& contact, double t1,
-                                           std::vector<std::vector<double>>& stiffness) {
+                                           const ContactSpec& contact, double t1, BodySurfaceCache& cache) {
   std::vector<BodySurfaceStep> out(bodies.size());
-  if (stiffness.size() != bodies.size()) {
+  if (cache.stiffness.size() != bodies.size()) {
     const double k = contact_parameters(contact).stiffness;  // [N/m³]
-    stiffness.clear();
+    cache = {};
     for (const auto& body : bodies) {
       std::vector<double> area = lumped_vertex_areas(body->world_surface(), body->model().faces);
       for (double& a : area) a *= k;  // k_i = stiffness · area_i [N/m]
-      stiffness.push_back(std::move(area));
+      std::vector<char> rigid(area.size(), 1);
+      if (body->soft()) {
+        std::vector<char> contact_node(static_cast<std::size_t>(body->layer().problem.num_nodes()), 0);
+        for (int i : body->contact_nodes()) contact_node[static_cast<std::size_t>(i)] = 1;
+        for (std::size_t v = 0; v < rigid.size() && v < body->vertex_node().size(); ++v) {
+          const int node = body->vertex_node()[v];
+          rigid[v] = node >= 0 && contact_node[static_cast<std::size_t>(node)] ? 0 : 1;
+        }
+      }
+      cache.stiffness.push_back(std::move(area));
+      cache.rigid.push_back(std::move(rigid));
     }
   }
   for (std::size_t b = 0; b < bodies.size(); ++b) {
     out[b].start = bodies[b]->world_surface();
     out[b].end = bodies[b]->predicted_world_surface(t1);
-    out[b].stiffness = stiffness[b];
+    out[b].stiffness = cache.stiffness[b];
+    out[b].rigid = cache.rigid[b];
   }
   return out;
 }
@@ -99,21 +109,31 @@ void FreeObjects::step(double t0, double h, const std::vector<BodySurfaceStep>& 
     shape->set_pose(objects_[j].motion->pose(t1));
     obstacles.push_back(shape.get());
   }
+  friction_on_bodies_.assign(bodies.size(), {});
   for (Free& f : free_) {
     std::vector<SurfacePoints> surfaces;
+    std::vector<std::size_t> surface_body;         // per surface: its body
+    std::vector<std::vector<int>> surface_vertex;  // per surface and point: the body vertex
     const Eigen::Vector3d centre = f.rigid->state().placement.x;
     // Only the vertices within reach of the object's ball over the step (the object refines this).
     const double reach = f.rigid->bounding_radius() + h * f.rigid->state().velocity.norm() + 0.05;
-    for (const BodySurfaceStep& b : bodies) {
+    for (std::size_t bi = 0; bi < bodies.size(); ++bi) {
+      const BodySurfaceStep& b = bodies[bi];
       SurfacePoints s;
+      std::vector<int> vertex;
       for (Eigen::Index v = 0; v < b.end.rows(); ++v) {
         const Eigen::Vector3d e = b.end.row(v).transpose(), a = b.start.row(v).transpose();
         if ((e - centre).norm() > reach + (e - a).norm()) continue;
         s.start.push_back(a);
         s.end.push_back(e);
         s.stiffness.push_back(b.stiffness[static_cast<std::size_t>(v)]);
+        s.rigid.push_back(b.rigid[static_cast<std::size_t>(v)]);
+        vertex.push_back(static_cast<int>(v));
       }
-      if (!s.end.empty()) surfaces.push_back(std::move(s));
+      if (s.end.empty()) continue;
+      surfaces.push_back(std::move(s));
+      surface_body.push_back(bi);
+      surface_vertex.push_back(std::move(vertex));
     }
     const RigidStepReport r = f.rigid->step(h, obstacles, surfaces);
     f.motion->set(to_pose(f.rigid->state().placement));
@@ -127,6 +147,20 @@ void FreeObjects::step(double t0, double h, const std::vector<BodySurfaceStep>& 
     f.friction_work += r.friction_work;
     f.max_obstacle_force = std::max(f.max_obstacle_force, r.obstacle_force.norm());
     f.max_surface_force = std::max(f.max_surface_force, r.surface_force.norm());
+    f.max_skeleton_force = std::max(f.max_skeleton_force, r.rigid_surface_force.norm());
+    f.last_surface_force = r.surface_force;
+    f.last_skeleton_force = r.rigid_surface_force;
+    // Friction: the bodies' soft skins take the opposite of what each of their vertices exerted.
+    f.last_friction = r.surface_friction_force;
+    f.last_soft_friction.setZero();
+    f.max_friction = std::max(f.max_friction, r.surface_friction_force.norm());
+    for (std::size_t s = 0; s < r.surface_friction.size(); ++s)
+      for (std::size_t i = 0; i < r.surface_friction[s].size(); ++i) {
+        const Eigen::Vector3d& force = r.surface_friction[s][i];
+        if (force.isZero(0.0) || surfaces[s].rigid[i]) continue;
+        f.last_soft_friction += force;
+        friction_on_bodies_[surface_body[s]].emplace_back(surface_vertex[s][i], -force);
+      }
     f.max_penetration = std::max(f.max_penetration, r.max_penetration);
     f.last_penetration = r.max_penetration;
     f.last_time = t1;
@@ -141,7 +175,12 @@ void FreeObjects::step(double t0, double h, const std::vector<BodySurfaceStep>& 
 
 void FreeObjects::add_body_reaction(std::size_t object, const Eigen::Vector3d& force) {
   for (Free& f : free_)
-    if (f.object == object) f.max_body_reaction = std::max(f.max_body_reaction, force.norm());
+    if (f.object == object) {
+      // The soft layers' penalty and the friction they took (applied to them as loads).
+      const Eigen::Vector3d total = force + f.last_soft_friction;
+      f.max_body_reaction = std::max(f.max_body_reaction, total.norm());
+      f.last_body_reaction = total;
+    }
 }
 
 void FreeObjects::record(double t) {
@@ -193,6 +232,17 @@ nlohmann::json FreeObjects::summary() const {
                      {"max_obstacle_force_N", f.max_obstacle_force},
                      {"max_body_force_N", f.max_surface_force},
                      {"max_body_reaction_N", f.max_body_reaction},
+                     {"max_skeleton_force_N", f.max_skeleton_force},
+                     {"max_friction_force_N", f.max_friction},
+                     {"final_friction_force_N", vec(f.last_friction)},
+                     {"final_body_force_N", vec(f.last_surface_force)},
+                     {"final_skeleton_force_N", vec(f.last_skeleton_force)},
+                     {"final_body_reaction_N", vec(f.last_body_reaction)},
+                     {"note",
+                      "body_force: penalty on the object from the bodies' skins (object side); skeleton_force: its "
+                      "part from skin outside the soft layers, carried by the skeletons; friction_force: friction on "
+                      "the object from the skins; body_reaction: penalty of the soft layers' contact potentials "
+                      "(body side) plus the friction the soft layers took as loads, on the object"},
                      {"max_penetration_m", f.max_penetration},
                      {"final_penetration_m", f.last_penetration},
                      {"last_second_max_penetration_m", resting}}},

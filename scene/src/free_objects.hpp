@@ -37,13 +37,20 @@ RigidProperties free_object_properties(const ObjectSpec& spec);
 struct BodySurfaceStep {
   RowMatrixX3d start, end;
   std::vector<double> stiffness;  ///< [N/m]
+  std::vector<char> rigid;        ///< 1: the vertex is not a contact node of the body's soft layer
 };
 
-/// Every body's surface over [now, t1] for the free objects; `stiffness` caches k = stiffness · lumped area
-/// per body and vertex (filled on the first call).
+/// What body_surfaces() computes once per body: k = stiffness · lumped area [N/m] and the rigid flag per vertex.
+struct BodySurfaceCache {
+  std::vector<std::vector<double>> stiffness;
+  std::vector<std::vector<char>> rigid;
+};
+
+/// Every body's surface over [now, t1] for the free objects (the cache is filled on the first call). A vertex
+/// is rigid when no contact node of the body's soft layer carries it (outside the soft region, or a skinned
+/// body): the skeleton, which follows its motion, takes its force.
 std::vector<BodySurfaceStep> body_surfaces(const std::vector<std::unique_ptr<SceneBody>>& bodies,
-                                           const ContactSpec& contact, double t1,
-                                           std::vector<std::vector<double>>& stiffness);
+                                           const ContactSpec& contact, double t1, BodySurfaceCache& cache);
 
 class FreeObjects {
  public:
@@ -53,6 +60,11 @@ class FreeObjects {
 
   /// Steps every free object over [t0, t0 + h] (see above); errors name the object.
   void step(double t0, double h, const std::vector<BodySurfaceStep>& bodies);
+  /// Per body: (vertex, friction force [N], world) the objects exerted on the body's skin vertices in the last
+  /// step (the opposite of what they felt), for the bodies' own solves of the step; rigid vertices omitted.
+  const std::vector<std::vector<std::pair<int, Eigen::Vector3d>>>& friction_on_bodies() const {
+    return friction_on_bodies_;
+  }
   /// The force the bodies' potentials exerted on object j in the last step [N] (world), for the summary.
   void add_body_reaction(std::size_t object, const Eigen::Vector3d& force);
   /// Energies [J] per object and step are sampled at every call (the runner calls it once per frame).
@@ -70,9 +82,15 @@ class FreeObjects {
     double max_energy_gain = 0.0;      ///< max over steps of E − E(0), E = T + V + penalty [J]
     double friction_work = 0.0;        ///< Σ D at the solutions [J]
     double max_obstacle_force = 0.0, max_surface_force = 0.0, max_body_reaction = 0.0;  ///< [N]
-    double max_penetration = 0.0;                                                       ///< over the steps [m]
-    double last_penetration = 0.0;                                                      ///< at the last step [m]
-    double resting_max_penetration = 0.0;                                               ///< over the last second [m]
+    double max_skeleton_force = 0.0;  ///< the part of the surface force from rigid vertices [N]
+    Eigen::Vector3d last_surface_force = Eigen::Vector3d::Zero(), last_skeleton_force = Eigen::Vector3d::Zero();
+    Eigen::Vector3d last_body_reaction = Eigen::Vector3d::Zero();  ///< [N] of the last step
+    Eigen::Vector3d last_friction = Eigen::Vector3d::Zero();       ///< on the object from the skins [N]
+    Eigen::Vector3d last_soft_friction = Eigen::Vector3d::Zero();  ///< its part from soft vertices [N]
+    double max_friction = 0.0;                                     ///< [N]
+    double max_penetration = 0.0;                                  ///< over the steps [m]
+    double last_penetration = 0.0;                                 ///< at the last step [m]
+    double resting_max_penetration = 0.0;                          ///< over the last second [m]
     double last_time = 0.0;
     std::vector<std::pair<double, double>> penetration_history;  ///< (t, depth) of the last second
     long steps = 0, newton_iterations = 0, refinements = 0, halvings = 0, unresolved = 0;
@@ -82,6 +100,7 @@ class FreeObjects {
   std::vector<SceneObject>& objects_;
   std::vector<Free> free_;
   std::vector<std::pair<std::size_t, std::shared_ptr<Obstacle>>> obstacles_;  ///< the other objects' shapes
+  std::vector<std::vector<std::pair<int, Eigen::Vector3d>>> friction_on_bodies_;
   double tolerance_ = 1e-3;
   double seconds_ = 0.0;
 };

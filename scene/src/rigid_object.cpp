@@ -97,6 +97,9 @@ RigidStepReport RigidObject::step(double h, const std::vector<const Obstacle*>& 
         total.max_penetration = std::max(total.max_penetration, r.max_penetration);
         total.obstacle_force = r.obstacle_force;
         total.surface_force = r.surface_force;
+        total.rigid_surface_force = r.rigid_surface_force;
+        total.surface_friction_force = r.surface_friction_force;
+        total.surface_friction = r.surface_friction;
         total.contact_energy = r.contact_energy;
         total.friction_work += r.friction_work;
       } catch (const Error& e) {
@@ -123,13 +126,18 @@ RigidStepReport RigidObject::solve(double h, const std::vector<const Obstacle*>&
                        h * state_.angular_velocity.norm() * bounding_radius_ + 0.02;
   std::vector<Eigen::Vector3d> points, moved;
   std::vector<double> stiffness;
-  for (const SurfacePoints& s : surfaces)
-    for (std::size_t i = 0; i < s.end.size(); ++i) {
+  std::vector<char> rigid;
+  std::vector<std::pair<std::size_t, std::size_t>> origin;  // (surface, point) of each point
+  for (std::size_t si = 0; si < surfaces.size(); ++si)
+    for (std::size_t i = 0; i < surfaces[si].end.size(); ++i) {
+      const SurfacePoints& s = surfaces[si];
       const Eigen::Vector3d d = s.end[i] - s.start[i];
       if ((s.end[i] - start.x).norm() < reach + d.norm()) {
         points.push_back(s.end[i]);
         moved.push_back(d);
         stiffness.push_back(s.stiffness[i]);
+        rigid.push_back(s.rigid.empty() ? 0 : s.rigid[i]);
+        origin.emplace_back(si, i);
       }
     }
   ObjectSurfaceContactTerm on_surfaces(*shape_, points, stiffness, delta);
@@ -151,7 +159,7 @@ RigidStepReport RigidObject::solve(double h, const std::vector<const Obstacle*>&
       const double phi = on_surfaces.gap(P, i, &n);
       if (!(phi < delta)) continue;
       const Eigen::Vector3d closest = P.R.transpose() * (points[i] - phi * n - P.x);  // on the object's surface
-      contacts.push_back({closest, moved[i], n, on_surfaces.stiffness(i) * (delta - phi)});
+      contacts.push_back({closest, moved[i], n, on_surfaces.stiffness(i) * (delta - phi), static_cast<int>(i)});
     }
     return contacts;
   };
@@ -172,7 +180,22 @@ RigidStepReport RigidObject::solve(double h, const std::vector<const Obstacle*>&
       if (!result.converged) throw_error("{}", result.failure);
       if (parameters_.friction == 0.0) break;
       contacts = friction_at(placement);
-      if (update == parameters_.friction_updates) report.friction_work = friction.evaluate(placement, nullptr, nullptr);
+      if (update == parameters_.friction_updates) {
+        report.friction_work = friction.evaluate(placement, nullptr, nullptr);
+        // The friction each surface point exerts at the solution, for the other side's reaction.
+        report.surface_friction.assign(surfaces.size(), {});
+        for (std::size_t si = 0; si < surfaces.size(); ++si)
+          report.surface_friction[si].assign(surfaces[si].end.size(), Eigen::Vector3d::Zero());
+        report.surface_friction_force.setZero();
+        const std::vector<Eigen::Vector3d> forces = friction.forces(placement);
+        for (std::size_t k = 0; k < forces.size(); ++k) {
+          const int source = friction.contacts()[k].source;
+          if (source < 0) continue;
+          const auto [si, i] = origin[static_cast<std::size_t>(source)];
+          report.surface_friction[si][i] += forces[k];
+          report.surface_friction_force += forces[k];
+        }
+      }
     }
     // Penetration at the end: stiffen what is deeper than the tolerance and solve again.
     bool too_deep = false;
@@ -211,6 +234,14 @@ RigidStepReport RigidObject::solve(double h, const std::vector<const Obstacle*>&
       on_obstacles.evaluate(placement, &g_obstacles, nullptr) + on_surfaces.evaluate(placement, &g_surfaces, nullptr);
   report.obstacle_force = -g_obstacles.head<3>();  // F = −∂u/∂x
   report.surface_force = -g_surfaces.head<3>();
+  // The rigid points' share: u_i = ½ k_i (δ − φ_i)² pushes the object by −k_i (δ − φ_i) n_i (n_i: from the
+  // object's surface to the point).
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (!rigid[i]) continue;
+    Eigen::Vector3d n;
+    const double phi = on_surfaces.gap(placement, i, &n);
+    if (phi < delta) report.rigid_surface_force -= on_surfaces.stiffness(i) * (delta - phi) * n;
+  }
   // v_{n+1} = (x_{n+1} − x_n)/h,  ω_{n+1} = log(R_{n+1} R_nᵀ)/h (world).
   state_.velocity = (placement.x - start.x) / h;
   state_.angular_velocity = rotation_log(placement.R * start.R.transpose()) / h;

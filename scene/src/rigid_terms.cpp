@@ -173,34 +173,55 @@ RigidFrictionTerm::RigidFrictionTerm(std::vector<FrictionContact> contacts, cons
           "friction: smoothing length must be positive (got {} m)", smoothing_length);
 }
 
+double RigidFrictionTerm::slip(const FrictionContact& c, const RigidPlacement& at, Eigen::Vector3d& w, double* f0,
+                               Eigen::Matrix3d* Hp) const {
+  const double eps = epsilon_;
+  const double scale = coefficient_ * c.normal_force;  // μ λ [N]
+  const Eigen::Vector3d u = (at.R * c.point + at.x) - start_.to_world(c.point) - c.other_displacement;
+  const Eigen::Matrix3d P = Eigen::Matrix3d::Identity() - c.normal * c.normal.transpose();
+  w = P * u;  // tangential slip over the step
+  const double y = w.norm();
+  double f1_over_y;
+  if (y < eps) {
+    if (f0) *f0 = -y * y * y / (3.0 * eps * eps) + y * y / eps + eps / 3.0;  // f0(y) = −y³/(3ε²) + y²/ε + ε/3
+    f1_over_y = 2.0 / eps - y / eps / eps;                                   // f0'(y)/y
+    // ∇² = μλ [(f1/y) P + (f0'' − f1/y) ŵŵᵀ], f0'' − f1/y = −y/ε², so −w wᵀ/(ε² y).
+    if (Hp) {
+      *Hp = f1_over_y * P;
+      if (y > 0.0) *Hp -= w * w.transpose() / (eps * eps * y);
+    }
+  } else {
+    if (f0) *f0 = y;
+    f1_over_y = 1.0 / y;
+    if (Hp) *Hp = (P - w * w.transpose() / (y * y)) / y;
+  }
+  if (Hp) *Hp *= scale;
+  return scale * f1_over_y;
+}
+
 double RigidFrictionTerm::evaluate(const RigidPlacement& at, Vector6d* gradient, Matrix6d* hessian) const {
   double value = 0.0;
-  const double eps = epsilon_;
   for (const FrictionContact& c : contacts_) {
     const double scale = coefficient_ * c.normal_force;  // μ λ [N]
     if (!(scale > 0.0)) continue;
-    const Eigen::Vector3d r = at.R * c.point;
-    const Eigen::Vector3d u = (r + at.x) - start_.to_world(c.point) - c.other_displacement;
-    const Eigen::Matrix3d P = Eigen::Matrix3d::Identity() - c.normal * c.normal.transpose();
-    const Eigen::Vector3d w = P * u;  // tangential slip over the step
-    const double y = w.norm();
-    double f0, f1_over_y;
+    Eigen::Vector3d w;
+    double f0 = 0.0;
     Eigen::Matrix3d Hp;
-    if (y < eps) {
-      f0 = -y * y * y / (3.0 * eps * eps) + y * y / eps + eps / 3.0;  // f0(y) = −y³/(3ε²) + y²/ε + ε/3
-      f1_over_y = 2.0 / eps - y / eps / eps;                          // f0'(y)/y
-      // ∇² = μλ [(f1/y) P + (f0'' − f1/y) ŵŵᵀ], f0'' − f1/y = −y/ε², so −w wᵀ/(ε² y).
-      Hp = f1_over_y * P;
-      if (y > 0.0) Hp -= w * w.transpose() / (eps * eps * y);
-    } else {
-      f0 = y;
-      f1_over_y = 1.0 / y;
-      Hp = (P - w * w.transpose() / (y * y)) / y;
-    }
+    const double g = slip(c, at, w, &f0, &Hp);
     value += scale * f0;
-    add_attached_point(r, scale * f1_over_y * w, scale * Hp, gradient, hessian);
+    add_attached_point(at.R * c.point, g * w, Hp, gradient, hessian);
   }
   return value;
+}
+
+std::vector<Eigen::Vector3d> RigidFrictionTerm::forces(const RigidPlacement& at) const {
+  std::vector<Eigen::Vector3d> out(contacts_.size(), Eigen::Vector3d::Zero());
+  for (std::size_t k = 0; k < contacts_.size(); ++k) {
+    if (!(coefficient_ * contacts_[k].normal_force > 0.0)) continue;
+    Eigen::Vector3d w;
+    out[k] = -slip(contacts_[k], at, w, nullptr, nullptr) * w;  // F = −∂D/∂x at the contact
+  }
+  return out;
 }
 
 double evaluate_terms(const std::vector<const RigidTerm*>& terms, const RigidPlacement& at, Vector6d* gradient,

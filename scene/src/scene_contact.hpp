@@ -6,6 +6,7 @@
 
 #include <sflsh/core/vtk_io.hpp>
 #include <sflsh/scene/contact_potential.hpp>
+#include <sflsh/scene/node_loads.hpp>
 #include <sflsh/scene/obstacle.hpp>
 
 #include <memory>
@@ -18,12 +19,13 @@ struct BodyContact {
   std::shared_ptr<ContactPotential> objects;                  ///< null without object contact
   std::vector<std::shared_ptr<detail::PlacedMotion>> placed;  ///< per scene object (object potential)
   std::shared_ptr<ContactPotential> bodies;                   ///< null without body contact
-  std::vector<int> other;                                     ///< per body obstacle: the other body's index
-  std::vector<std::shared_ptr<TriangleMesh>> surfaces;        ///< per body obstacle, in this body's frame
-  std::vector<int> entry_of_node;                             ///< per layer node: its entry in the potentials, or −1
-  double surface_seconds = 0.0;                               ///< updating the other bodies' surfaces
-  double max_penetration = 0.0;                               ///< measured at the written frames on the skin [m]
-  ContactPotential::Checkpoint objects_start, bodies_start;   ///< the potentials at the start of the step
+  std::shared_ptr<NodeLoads> friction;  ///< the free objects' friction on the skin (null without free objects)
+  std::vector<int> other;               ///< per body obstacle: the other body's index
+  std::vector<std::shared_ptr<TriangleMesh>> surfaces;       ///< per body obstacle, in this body's frame
+  std::vector<int> entry_of_node;                            ///< per layer node: its entry in the potentials, or −1
+  double surface_seconds = 0.0;                              ///< updating the other bodies' surfaces
+  double max_penetration = 0.0;                              ///< measured at the written frames on the skin [m]
+  ContactPotential::Checkpoint objects_start, bodies_start;  ///< the potentials at the start of the step
 };
 
 /// Lumped skin area per contact node: the region vertex's (lumped_vertex_areas) on the node it sits on;

@@ -193,6 +193,10 @@ class SceneRun {
         }
         c.objects = std::make_shared<ContactPotential>(nodes, areas, std::move(obstacles), parameters);
         body.layer().problem.potentials.push_back(c.objects);
+        if (!free_->empty()) {
+          c.friction = std::make_shared<NodeLoads>(nodes);
+          body.layer().problem.potentials.push_back(c.friction);
+        }
       }
       if (scene_.effects.body_contact) {
         std::vector<ContactObstacle> obstacles;
@@ -220,7 +224,10 @@ class SceneRun {
   // step's end (free_objects.cpp); the bodies then feel them as obstacles where they now are.
   void step(double t0, double h) {
     const double t1 = t0 + h;
-    if (!free_->empty()) free_->step(t0, h, detail::body_surfaces(bodies_, scene_.contact, t1, surface_stiffness_));
+    if (!free_->empty()) {
+      free_->step(t0, h, detail::body_surfaces(bodies_, scene_.contact, t1, surface_cache_));
+      apply_object_friction();
+    }
     std::vector<RowMatrixX3d> predicted;
     std::vector<std::vector<std::size_t>> groups;
     if (scene_.effects.body_contact) {
@@ -268,6 +275,23 @@ class SceneRun {
     ++steps_;
     groups_ += static_cast<long>(groups.size());
     commit_objects(t1);
+  }
+
+  /// The friction the free objects exerted on the bodies' skins in their step, as loads on the contact nodes
+  /// under the skin vertices (in each body's frame) for the bodies' solves of the same step.
+  void apply_object_friction() {
+    const auto& on_bodies = free_->friction_on_bodies();
+    for (std::size_t b = 0; b < bodies_.size(); ++b) {
+      BodyContact& c = contact_[b];
+      if (!c.friction) continue;
+      c.friction->clear();
+      const Eigen::Matrix3d body_from_world = bodies_[b]->placement().inverse().R;
+      for (const auto& [vertex, force] : on_bodies[b]) {
+        const int node = bodies_[b]->vertex_node()[static_cast<std::size_t>(vertex)];
+        const int entry = node >= 0 ? c.entry_of_node[static_cast<std::size_t>(node)] : -1;
+        if (entry >= 0) c.friction->add(entry, body_from_world * force);
+      }
+    }
   }
 
   /// The distance within which two bodies' reaches link them [m]: the potentials' margin and broad-phase
@@ -524,8 +548,8 @@ class SceneRun {
   detail::Crowd crowd_;
   std::vector<std::unique_ptr<SceneBody>> bodies_;
   std::vector<SceneObject> objects_;
-  std::optional<detail::FreeObjects> free_;             ///< the free rigid objects among objects_
-  std::vector<std::vector<double>> surface_stiffness_;  ///< per body and vertex, for the free objects [N/m]
+  std::optional<detail::FreeObjects> free_;  ///< the free rigid objects among objects_
+  detail::BodySurfaceCache surface_cache_;   ///< per body and vertex, for the free objects
   std::vector<BodyContact> contact_;
   std::optional<detail::SceneOutput> output_;  ///< the files of run() (its jobs are run()'s)
   int every_ = 1;

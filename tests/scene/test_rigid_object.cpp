@@ -162,6 +162,27 @@ TEST(RigidTerms, FrictionMatchesFiniteDifferencesWhenStickingAndSliding) {
                           1e-9);
 }
 
+TEST(RigidTerms, FrictionForcesPerContactSumToMinusTheGradient) {
+  // The per-contact forces (what the other side takes the opposite of) add up to −∂D/∂x, sliding and sticking.
+  const RigidPlacement start = tilted(Eigen::Vector3d(0.0, 0.06, 0.0));
+  const std::vector<FrictionContact> contacts = {
+      {Eigen::Vector3d(0.0, -0.06, 0.0), Eigen::Vector3d(1e-4, 0.0, 0.0), Eigen::Vector3d::UnitY(), 20.0, 7},
+      {Eigen::Vector3d(0.03, -0.05, 0.01), Eigen::Vector3d::Zero(), Eigen::Vector3d(0.1, 1.0, 0.0).normalized(), 5.0}};
+  const RigidFrictionTerm friction(contacts, start, 0.5, 1e-3 / 120);
+  for (const Vector6d& z : {(Vector6d() << 1e-3, 0, 5e-4, 0.0, 0.01, 0.02).finished(),
+                            (Vector6d() << 2e-6, 0, -1e-6, 0.0, 1e-5, 0.0).finished()}) {
+    const RigidPlacement at = start.moved(z);
+    Vector6d gradient = Vector6d::Zero();
+    friction.evaluate(at, &gradient, nullptr);
+    const std::vector<Eigen::Vector3d> forces = friction.forces(at);
+    ASSERT_EQ(forces.size(), 2u);
+    EXPECT_GT(forces[0].norm(), 0.0);
+    EXPECT_LT((forces[0] + forces[1] + gradient.head<3>()).norm(), 1e-12 * (1.0 + gradient.norm()));
+  }
+  EXPECT_EQ(friction.contacts()[0].source, 7);
+  EXPECT_EQ(friction.contacts()[1].source, -1);
+}
+
 // A 2 kg ball (r = 6 cm) dropped 10 cm onto the ground at 1/120 s, 3 s: the energy E = T + V + penalty
 // never exceeds its start (plus 1e-9 J of round-off), it comes to rest and stays within the 1 mm tolerance.
 struct DropResult {
@@ -216,6 +237,38 @@ TEST(RigidObject, BallDroppedOnAPlaneNeverGainsEnergyAndRestsWithinTolerance) {
     } else {
       EXPECT_NEAR(r.final_state.velocity.x(), 0.3, 1e-6);  // nothing acts sideways
       EXPECT_LT(r.final_state.angular_velocity.norm(), 1e-9);
+    }
+  }
+}
+
+TEST(RigidObject, RigidPointsShareOfTheSurfaceForceIsReportedApart) {
+  // A ball pressed onto a 2 cm grid of surface points, centred between the columns x = 0 and x = 0.02: with
+  // every point rigid the rigid share is the whole surface force; with the columns x ≤ 0 rigid it is half of it
+  // (the grid is symmetric about x = 0.01).
+  SurfacePoints grid;
+  for (int i = -6; i <= 6; ++i)
+    for (int k = -6; k <= 6; ++k) {
+      const Eigen::Vector3d p(0.02 * i, 0.0, 0.02 * k);
+      grid.start.push_back(p);
+      grid.end.push_back(p);
+      grid.stiffness.push_back(2000.0);
+      grid.rigid.push_back(i <= 0 ? 1 : 0);
+    }
+  for (const bool all_rigid : {true, false}) {
+    SurfacePoints points = grid;
+    if (all_rigid) points.rigid.assign(points.rigid.size(), 1);
+    RigidState start;
+    start.placement.x = Eigen::Vector3d(0.01, 0.0605, 0.0);
+    RigidObject ball("ball", std::make_shared<Sphere>(0.06), sphere_properties(0.06, 1000.0).with_mass(2.0), start,
+                     Eigen::Vector3d(0, -9.81, 0), RigidObjectParameters{});
+    // Released 0.5 mm above the grid's contact margin: the first steps press it in.
+    RigidStepReport r;
+    for (int s = 0; s < 3 && !(r.surface_force.y() > 1.0); ++s) r = ball.step(1.0 / 120, {}, {points});
+    ASSERT_GT(r.surface_force.y(), 1.0) << "the grid pushes the ball";
+    if (all_rigid) {
+      EXPECT_LT((r.rigid_surface_force - r.surface_force).norm(), 1e-9 * r.surface_force.norm());
+    } else {
+      EXPECT_NEAR(r.rigid_surface_force.y(), 0.5 * r.surface_force.y(), 1e-3 * r.surface_force.y());
     }
   }
 }

@@ -33,6 +33,9 @@ struct RigidObjectParameters {
 struct SurfacePoints {
   std::vector<Eigen::Vector3d> start, end;
   std::vector<double> stiffness;
+  /// Per point (empty: none): 1 when the point does not answer the contact itself (a body's skin outside its
+  /// soft region, carried by the skeleton); its force is reported apart in RigidStepReport::rigid_surface_force.
+  std::vector<char> rigid;
 };
 
 /// What one step did.
@@ -44,8 +47,13 @@ struct RigidStepReport {
   double max_penetration = 0.0;                              ///< [m] at the step's end, over obstacles and surfaces
   Eigen::Vector3d obstacle_force = Eigen::Vector3d::Zero();  ///< on the object from obstacles [N] (world)
   Eigen::Vector3d surface_force = Eigen::Vector3d::Zero();   ///< on the object from the surfaces [N]
-  double contact_energy = 0.0;                               ///< penalty energy stored at the step's end [J]
-  double friction_work = 0.0;  ///< D at the solution [J] (an estimate of the friction loss)
+  Eigen::Vector3d rigid_surface_force = Eigen::Vector3d::Zero();  ///< the part of it from rigid points [N]
+  /// Friction on the object from the surfaces [N] (world), in total and per input surface and point (empty
+  /// without friction); the surfaces feel the opposite.
+  Eigen::Vector3d surface_friction_force = Eigen::Vector3d::Zero();
+  std::vector<std::vector<Eigen::Vector3d>> surface_friction;
+  double contact_energy = 0.0;  ///< penalty energy stored at the step's end [J]
+  double friction_work = 0.0;   ///< D at the solution [J] (an estimate of the friction loss)
 };
 
 class RigidObject {

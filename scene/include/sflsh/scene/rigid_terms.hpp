@@ -97,6 +97,7 @@ struct FrictionContact {
   Eigen::Vector3d other_displacement = Eigen::Vector3d::Zero();
   Eigen::Vector3d normal = Eigen::Vector3d::UnitY();
   double normal_force = 0.0;
+  int source = -1;  ///< the caller's index of the other side's point (−1: an obstacle)
 };
 
 /// Smoothed Coulomb friction with lagged normal force and tangent plane (IPC, Li et al. 2020):
@@ -108,8 +109,15 @@ class RigidFrictionTerm final : public RigidTerm {
   RigidFrictionTerm(std::vector<FrictionContact> contacts, const RigidPlacement& start, double coefficient,
                     double smoothing_length);
   double evaluate(const RigidPlacement& at, Vector6d* gradient, Matrix6d* hessian) const override;
+  /// Per contact, the friction force on the object at `at` [N] (world): −μ λ f0'(y) w/y, the other side feels
+  /// its opposite.
+  std::vector<Eigen::Vector3d> forces(const RigidPlacement& at) const;
+  const std::vector<FrictionContact>& contacts() const { return contacts_; }
 
  private:
+  /// μ λ f0'(|w|)/|w| and w = P u of contact c at `at` (slip over the step [m]).
+  double slip(const FrictionContact& c, const RigidPlacement& at, Eigen::Vector3d& w, double* f0,
+              Eigen::Matrix3d* Hp) const;
   std::vector<FrictionContact> contacts_;
   RigidPlacement start_;
   double coefficient_;
