@@ -41,7 +41,8 @@ RigidProperties free_object_properties(const ObjectSpec& spec) {
 }
 
 std::vector<BodySurfaceStep> body_surfaces(const std::vector<std::unique_ptr<SceneBody>>& bodies,
-                                           const ContactSpec& contact, double t1, BodySurfaceCache& cache) {
+                                           const ContactSpec& contact, double t1, BodySurfaceCache& cache,
+                                           const std::vector<std::function<double(int)>>& factor) {
   std::vector<BodySurfaceStep> out(bodies.size());
   if (cache.stiffness.size() != bodies.size()) {
     const double k = contact_parameters(contact).stiffness;  // [N/m³]
@@ -67,6 +68,9 @@ std::vector<BodySurfaceStep> body_surfaces(const std::vector<std::unique_ptr<Sce
     out[b].end = bodies[b]->predicted_world_surface(t1);
     out[b].stiffness = cache.stiffness[b];
     out[b].rigid = cache.rigid[b];
+    if (b < factor.size() && factor[b])
+      for (std::size_t v = 0; v < out[b].stiffness.size(); ++v)
+        if (!out[b].rigid[v]) out[b].stiffness[v] *= factor[b](bodies[b]->vertex_node()[v]);
   }
   return out;
 }

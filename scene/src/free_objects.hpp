@@ -11,6 +11,7 @@
 #include <sflsh/core/summary.hpp>
 #include <sflsh/scene/rigid_object.hpp>
 
+#include <functional>
 #include <memory>
 #include <utility>
 #include <vector>
@@ -48,9 +49,12 @@ struct BodySurfaceCache {
 
 /// Every body's surface over [now, t1] for the free objects (the cache is filled on the first call). A vertex
 /// is rigid when no contact node of the body's soft layer carries it (outside the soft region, or a skinned
-/// body): the skeleton, which follows its motion, takes its force.
+/// body): the skeleton, which follows its motion, takes its force. A soft vertex's stiffness carries the
+/// refinement factor its node has now in the body's object-contact potential (`factor`: per body, the
+/// potential's factor of a layer node, or empty), so that the object pushes with the stiffness the body feels.
 std::vector<BodySurfaceStep> body_surfaces(const std::vector<std::unique_ptr<SceneBody>>& bodies,
-                                           const ContactSpec& contact, double t1, BodySurfaceCache& cache);
+                                           const ContactSpec& contact, double t1, BodySurfaceCache& cache,
+                                           const std::vector<std::function<double(int)>>& factor = {});
 
 class FreeObjects {
  public:

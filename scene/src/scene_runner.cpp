@@ -225,7 +225,15 @@ class SceneRun {
   void step(double t0, double h) {
     const double t1 = t0 + h;
     if (!free_->empty()) {
-      free_->step(t0, h, detail::body_surfaces(bodies_, scene_.contact, t1, surface_cache_));
+      // The object pushes each skin vertex with the stiffness the body's potential has there now.
+      std::vector<std::function<double(int)>> factor(bodies_.size());
+      for (std::size_t b = 0; b < bodies_.size(); ++b)
+        if (const BodyContact& c = contact_[b]; c.objects)
+          factor[b] = [&c](int node) {
+            const int entry = c.entry_of_node[static_cast<std::size_t>(node)];
+            return entry >= 0 ? c.objects->stiffness_factor(entry) : 1.0;
+          };
+      free_->step(t0, h, detail::body_surfaces(bodies_, scene_.contact, t1, surface_cache_, factor));
       apply_object_friction();
     }
     std::vector<RowMatrixX3d> predicted;

@@ -126,6 +126,17 @@ void expect_landed_and_resting(const nlohmann::json& s, double resting_seconds) 
   // Resting: the speed at the end below 1 cm/s after `resting_seconds` of contact.
   const auto v = ball["final_velocity_m_per_s"];
   EXPECT_LT(Eigen::Vector3d(v[0], v[1], v[2]).norm(), 1e-2) << "after " << resting_seconds << " s";
+  // At rest both sides of the contact carry the weight, 2 kg · 9.81 m/s² = 19.62 N along +z: the skin's push
+  // and friction on the ball in its solve, and the reaction the body's potentials and friction loads felt.
+  // 5 %: the slow sinking that is left (below 1 cm/s) and the two sides' penalties being evaluated one solve
+  // apart.
+  const auto as_vector = [](const nlohmann::json& a) { return Eigen::Vector3d(a[0], a[1], a[2]); };
+  const nlohmann::json& c = ball["contact"];
+  const Eigen::Vector3d weight(0.0, 0.0, 2.0 * 9.81);
+  EXPECT_LT((as_vector(c["final_body_force_N"]) + as_vector(c["final_friction_force_N"]) - weight).norm(),
+            0.05 * weight.norm())
+      << c.dump();
+  EXPECT_LT((as_vector(c["final_body_reaction_N"]) - weight).norm(), 0.05 * weight.norm()) << c.dump();
 }
 
 TEST(SceneFreeObjects, BallDroppedOnTheBellyNeverGainsEnergyAndRests) {
