@@ -38,8 +38,13 @@ TEST(SceneFreeObjects, ShippedScenesParse) {
     SCOPED_TRACE(name);
     const Scene scene = load_scene(std::filesystem::path(SFLSH_DATA_DIR) / "scenes" / (std::string(name) + ".toml"));
     EXPECT_EQ(scene.name, name);
-    ASSERT_EQ(scene.objects.size(), 1u);
+    // One free object, first; ball_roll_thigh also has a fixed floor.
+    ASSERT_EQ(scene.objects.size(), std::string(name) == "ball_roll_thigh" ? 2u : 1u);
     EXPECT_EQ(scene.objects[0].motion, ObjectMotionKind::free);
+    if (scene.objects.size() > 1) {
+      EXPECT_EQ(scene.objects[1].shape, ShapeKind::plane);
+      EXPECT_EQ(scene.objects[1].motion, ObjectMotionKind::fixed);
+    }
     EXPECT_TRUE(scene.effects.gravity && scene.effects.object_contact);
     EXPECT_LT((scene.effects.gravity_direction - Eigen::Vector3d(0, 0, -1)).norm(), 1e-12);
   }
