@@ -1,8 +1,6 @@
 // The scene's free rigid objects (free_objects.hpp).
 #include "free_objects.hpp"
 
-#include "scene_contact.hpp"
-
 #include <sflsh/core/error.hpp>
 
 #include <algorithm>
@@ -41,36 +39,30 @@ RigidProperties free_object_properties(const ObjectSpec& spec) {
 }
 
 std::vector<BodySurfaceStep> body_surfaces(const std::vector<std::unique_ptr<SceneBody>>& bodies,
-                                           const ContactSpec& contact, double t1, BodySurfaceCache& cache,
-                                           const std::vector<std::function<double(int)>>& factor) {
+                                           const std::vector<BodyContact>& contact, const ContactSpec& spec, double t1,
+                                           BodySurfaceCache& cache) {
   std::vector<BodySurfaceStep> out(bodies.size());
   if (cache.stiffness.size() != bodies.size()) {
-    const double k = contact_parameters(contact).stiffness;  // [N/m³]
+    const double k = contact_parameters(spec).stiffness;  // [N/m³]
     cache = {};
     for (const auto& body : bodies) {
       std::vector<double> area = lumped_vertex_areas(body->world_surface(), body->model().faces);
       for (double& a : area) a *= k;  // k_i = stiffness · area_i [N/m]
-      std::vector<char> rigid(area.size(), 1);
-      if (body->soft()) {
-        std::vector<char> contact_node(static_cast<std::size_t>(body->layer().problem.num_nodes()), 0);
-        for (int i : body->contact_nodes()) contact_node[static_cast<std::size_t>(i)] = 1;
-        for (std::size_t v = 0; v < rigid.size() && v < body->vertex_node().size(); ++v) {
-          const int node = body->vertex_node()[v];
-          rigid[v] = node >= 0 && contact_node[static_cast<std::size_t>(node)] ? 0 : 1;
-        }
-      }
       cache.stiffness.push_back(std::move(area));
-      cache.rigid.push_back(std::move(rigid));
     }
   }
   for (std::size_t b = 0; b < bodies.size(); ++b) {
     out[b].start = bodies[b]->world_surface();
     out[b].end = bodies[b]->predicted_world_surface(t1);
     out[b].stiffness = cache.stiffness[b];
-    out[b].rigid = cache.rigid[b];
-    if (b < factor.size() && factor[b])
-      for (std::size_t v = 0; v < out[b].stiffness.size(); ++v)
-        if (!out[b].rigid[v]) out[b].stiffness[v] *= factor[b](bodies[b]->vertex_node()[v]);
+    out[b].rigid.assign(out[b].stiffness.size(), 1);
+    const BodyContact& c = contact[b];
+    if (!c.objects) continue;
+    for (std::size_t v = 0; v < out[b].stiffness.size() && v < c.entry_of_vertex.size(); ++v)
+      if (const int entry = c.entry_of_vertex[v]; entry >= 0) {
+        out[b].rigid[v] = 0;
+        out[b].stiffness[v] *= c.objects->stiffness_factor(entry);
+      }
   }
   return out;
 }

@@ -5,13 +5,13 @@
 // and predicted at the step's end). The bodies then solve against the object's new pose in their own
 // ContactPotential, so both sides of the contact are implicit; the exchange is staggered once per step.
 // The energy balance, contact forces and penetration go into summary.json → free_objects.
+#include "scene_contact.hpp"
 #include "scene_internal.hpp"
 #include "scene_objects.hpp"
 
 #include <sflsh/core/summary.hpp>
 #include <sflsh/scene/rigid_object.hpp>
 
-#include <functional>
 #include <memory>
 #include <utility>
 #include <vector>
@@ -41,20 +41,19 @@ struct BodySurfaceStep {
   std::vector<char> rigid;        ///< 1: the vertex is not a contact node of the body's soft layer
 };
 
-/// What body_surfaces() computes once per body: k = stiffness · lumped area [N/m] and the rigid flag per vertex.
+/// What body_surfaces() computes once per body: k = stiffness · lumped area [N/m] per vertex.
 struct BodySurfaceCache {
   std::vector<std::vector<double>> stiffness;
-  std::vector<std::vector<char>> rigid;
 };
 
 /// Every body's surface over [now, t1] for the free objects (the cache is filled on the first call). A vertex
-/// is rigid when no contact node of the body's soft layer carries it (outside the soft region, or a skinned
-/// body): the skeleton, which follows its motion, takes its force. A soft vertex's stiffness carries the
-/// refinement factor its node has now in the body's object-contact potential (`factor`: per body, the
-/// potential's factor of a layer node, or empty), so that the object pushes with the stiffness the body feels.
+/// is rigid when it sits on no entry of the body's object-contact potential (BodyContact::entry_of_vertex:
+/// outside the soft region, an embedded skin, or a skinned body): the skeleton, which follows its motion, takes
+/// its force. A soft vertex's stiffness carries the refinement factor its node has now in that potential, so
+/// that the object pushes with the stiffness the body feels.
 std::vector<BodySurfaceStep> body_surfaces(const std::vector<std::unique_ptr<SceneBody>>& bodies,
-                                           const ContactSpec& contact, double t1, BodySurfaceCache& cache,
-                                           const std::vector<std::function<double(int)>>& factor = {});
+                                           const std::vector<BodyContact>& contact, const ContactSpec& spec, double t1,
+                                           BodySurfaceCache& cache);
 
 class FreeObjects {
  public:

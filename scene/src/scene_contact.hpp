@@ -21,10 +21,11 @@ struct BodyContact {
   std::shared_ptr<ContactPotential> bodies;                   ///< null without body contact
   std::shared_ptr<NodeLoads> friction;  ///< the free objects' friction on the skin (null without free objects)
   std::vector<int> other;               ///< per body obstacle: the other body's index
-  std::vector<std::shared_ptr<TriangleMesh>> surfaces;       ///< per body obstacle, in this body's frame
-  std::vector<int> entry_of_node;                            ///< per layer node: its entry in the potentials, or −1
-  double surface_seconds = 0.0;                              ///< updating the other bodies' surfaces
-  double max_penetration = 0.0;                              ///< measured at the written frames on the skin [m]
+  std::vector<std::shared_ptr<TriangleMesh>> surfaces;  ///< per body obstacle, in this body's frame
+  std::vector<int> entry_of_node;                       ///< per layer node: its entry in the potentials, or −1
+  std::vector<int> entry_of_vertex;  ///< per body vertex: the entry of the node it sits on, or −1 (not soft)
+  double surface_seconds = 0.0;      ///< updating the other bodies' surfaces
+  double max_penetration = 0.0;      ///< measured at the written frames on the skin [m]
   ContactPotential::Checkpoint objects_start, bodies_start;  ///< the potentials at the start of the step
 };
 

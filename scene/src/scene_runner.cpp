@@ -183,6 +183,10 @@ class SceneRun {
       c.entry_of_node.assign(static_cast<std::size_t>(body.layer().problem.num_nodes()), -1);
       for (std::size_t k = 0; k < nodes.size(); ++k)
         c.entry_of_node[static_cast<std::size_t>(nodes[k])] = static_cast<int>(k);
+      c.entry_of_vertex.assign(body.vertex_node().size(), -1);
+      for (std::size_t v = 0; v < body.vertex_node().size(); ++v)
+        if (const int node = body.vertex_node()[v]; node >= 0)
+          c.entry_of_vertex[v] = c.entry_of_node[static_cast<std::size_t>(node)];
       const Rigid body_from_world = body.placement().inverse();
       if (scene_.effects.object_contact) {
         std::vector<ContactObstacle> obstacles;
@@ -225,15 +229,7 @@ class SceneRun {
   void step(double t0, double h) {
     const double t1 = t0 + h;
     if (!free_->empty()) {
-      // The object pushes each skin vertex with the stiffness the body's potential has there now.
-      std::vector<std::function<double(int)>> factor(bodies_.size());
-      for (std::size_t b = 0; b < bodies_.size(); ++b)
-        if (const BodyContact& c = contact_[b]; c.objects)
-          factor[b] = [&c](int node) {
-            const int entry = c.entry_of_node[static_cast<std::size_t>(node)];
-            return entry >= 0 ? c.objects->stiffness_factor(entry) : 1.0;
-          };
-      free_->step(t0, h, detail::body_surfaces(bodies_, scene_.contact, t1, surface_cache_, factor));
+      free_->step(t0, h, detail::body_surfaces(bodies_, contact_, scene_.contact, t1, surface_cache_));
       apply_object_friction();
     }
     std::vector<RowMatrixX3d> predicted;
@@ -294,11 +290,8 @@ class SceneRun {
       if (!c.friction) continue;
       c.friction->clear();
       const Eigen::Matrix3d body_from_world = bodies_[b]->placement().inverse().R;
-      for (const auto& [vertex, force] : on_bodies[b]) {
-        const int node = bodies_[b]->vertex_node()[static_cast<std::size_t>(vertex)];
-        const int entry = node >= 0 ? c.entry_of_node[static_cast<std::size_t>(node)] : -1;
-        if (entry >= 0) c.friction->add(entry, body_from_world * force);
-      }
+      for (const auto& [vertex, force] : on_bodies[b])  // soft vertices only
+        c.friction->add(c.entry_of_vertex[static_cast<std::size_t>(vertex)], body_from_world * force);
     }
   }
 
