@@ -54,11 +54,16 @@ void ReducedPotentials::add_root_blocks(const RootFrame& root, int node, const E
   }
 }
 
-Eigen::Vector3d ReducedPotentials::posed(const Eigen::VectorXd& q, const ReducedInertia& inertia, int a) const {
+Eigen::Vector3d posed_node(const Subspace& subspace, const ReducedInertia& inertia, const Eigen::VectorXd& q, int a) {
+  const auto sa = static_cast<std::size_t>(a);
   Eigen::Vector3d u = Eigen::Vector3d::Zero();
-  for (SparseRowMatrix::InnerIterator it(subspace_.basis, active_nodes_[static_cast<std::size_t>(a)]); it; ++it)
+  for (SparseRowMatrix::InnerIterator it(subspace.basis, inertia.active_nodes()[sa]); it; ++it)
     u += it.value() * q.segment<3>(3 * it.col());
-  return inertia.posed_prescribed().row(a).transpose() + inertia.frame().A[static_cast<std::size_t>(a)] * u;
+  return inertia.posed_prescribed().row(a).transpose() + inertia.frame().A[sa] * u;
+}
+
+Eigen::Vector3d ReducedPotentials::posed(const Eigen::VectorXd& q, const ReducedInertia& inertia, int a) const {
+  return posed_node(subspace_, inertia, q, a);
 }
 
 bool ReducedPotentials::begin(double t0, double dt, const meshing::RowMatrixX3d& p_start, const ReducedInertia& inertia,

@@ -59,9 +59,11 @@ ReducedSolver::ReducedSolver(const model::Problem& problem, const Subspace& subs
   }
   for (int id : problem.dirichlet.drive) has_drives_ = has_drives_ || id >= 0;
   q_ = Eigen::VectorXd::Zero(subspace.num_dofs());
-  q_rate_ = Eigen::VectorXd::Zero(subspace.num_dofs() + (options.root.enabled ? 6 : 0));
+  q_rate_ = Eigen::VectorXd::Zero(subspace.num_dofs() + (options.root.enabled ? 6 : 0) +
+                                  (options.coupled ? options.coupled->size() : 0));
   q_rate_previous_ = q_rate_;
   if (options.root.enabled) setup_root();
+  if (options.coupled) setup_coupled();
 }
 
 Eigen::VectorXd ReducedSolver::prescribed_state(double t) const {
@@ -190,6 +192,10 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
     x_start.resize(offset + 6);
     x_start << q_, root_;
   }
+  if (coupled_term_) {  // y = 0: the coupled system's own state at t0
+    x_start.resize(offset + options_.coupled->size());
+    x_start << q_, Eigen::VectorXd::Zero(options_.coupled->size());
+  }
   stats.inertia_seconds += seconds_since(clock);
   clock = Clock::now();
   if (has_drives_) {
@@ -211,6 +217,12 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
     }
     stats.potential_seconds += seconds_since(clock);
   }
+  if (coupled_term_) {
+    clock = Clock::now();
+    const auto inertia_nodes = static_cast<Eigen::Index>(inertia_.inertia_nodes().size());
+    coupled_term_->begin(t0, dt, Eigen::Map<const meshing::RowMatrixX3d>(history_.p.data(), inertia_nodes, 3));
+    stats.potential_seconds += seconds_since(clock);
+  }
 
   // Φ = Σ of the substep's terms (reduced_terms.hpp).
   std::array<TimedTerm, 5> terms_storage;
@@ -221,6 +233,12 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
     terms_storage[num_terms++] = {gravity_head_.get(), &stats.inertia_seconds};
     terms_storage[num_terms++] = {elastic_head_.get(), &stats.elastic_seconds};
     if (contact) terms_storage[num_terms++] = {root_potential_term_.get(), &stats.potential_seconds};
+  } else if (coupled_term_) {
+    if (inertia_on) terms_storage[num_terms++] = {inertia_head_.get(), &stats.inertia_seconds};
+    terms_storage[num_terms++] = {gravity_head_.get(), &stats.inertia_seconds};
+    terms_storage[num_terms++] = {elastic_head_.get(), &stats.elastic_seconds};
+    if (contact) terms_storage[num_terms++] = {potential_head_.get(), &stats.potential_seconds};
+    terms_storage[num_terms++] = {coupled_term_.get(), &stats.potential_seconds};
   } else {
     if (inertia_on) terms_storage[num_terms++] = {&inertia_term_, &stats.inertia_seconds};
     terms_storage[num_terms++] = {&gravity_term_, &stats.inertia_seconds};
@@ -269,7 +287,8 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
     // candidates), is not reused. ĥ is compared to 1e-12 relative: the ladder's substeps end on t0 + h exactly, so
     // equal steps differ in their last bits (and so do BDF2's coefficients), which must not force a new factor.
     const bool same_h = std::abs(factor_h_ - target.h_eff) <= 1e-12 * target.h_eff;
-    if (!factor_valid_ || !same_h || factor_projection_ != projection || !options_.reuse_factorization || contact)
+    if (!factor_valid_ || !same_h || factor_projection_ != projection || !options_.reuse_factorization || contact ||
+        coupled_term_)
       factor_valid_ = false;
     bool fresh = false;  // the factor was computed at this step's current iterate
     bool refresh = !factor_valid_;
@@ -395,7 +414,7 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
     if (guard_) {  // the tets outside the cubature: over the limit → into the cubature, and solve again
       clock = Clock::now();
       const std::vector<GuardViolation> over =
-          track ? guard_->check(Eigen::VectorXd(q.head(offset))) : guard_->check(q);
+          q.size() > offset ? guard_->check(Eigen::VectorXd(q.head(offset))) : guard_->check(q);
       stats.elastic_seconds += seconds_since(clock);
       if (!over.empty()) {
         if (enlargements >= options_.max_enlargements) {
@@ -413,19 +432,22 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
         continue;
       }
     }
-    if (!contact) break;
+    if (!contact && !coupled_term_) break;
     clock = Clock::now();
-    bool accepted = false;
-    if (track) {
+    bool accepted = true;
+    if (track && contact) {
       const RootFrame end_frame = root_frame(q, offset, pivot);
       accepted = potentials_.accept(q, inertia_, &end_frame);
-    } else {
+    } else if (contact) {
       accepted = potentials_.accept(q, inertia_);
     }
+    if (coupled_term_) accepted = coupled_term_->accept(q) && accepted;
     stats.potential_seconds += seconds_since(clock);
     factor_valid_ = false;  // the factor holds this substep's contact Hessian
     if (accepted) break;
-    if (refinement >= potentials_.max_refinements()) {
+    const int most_refinements =
+        std::max(contact ? potentials_.max_refinements() : 0, coupled_term_ ? options_.coupled->max_refinements() : 0);
+    if (refinement >= most_refinements) {
       logger()->warn(
           "reduced: t = {:.6g}: contact still over its tolerance after {} refinement(s); the substep is kept", t1,
           refinement);
@@ -446,8 +468,9 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
       carried_new.segment<3>(3 * k) = end_frame.apply(carried_end.row(k).transpose());
     model::advance_history(carried_target, carried_history_, carried_new);
   } else {
-    inertia_.posed(q, p_new);
+    inertia_.posed(Eigen::VectorXd(q.head(offset)), p_new);
   }
+  if (coupled_term_) coupled_term_->commit(q);
   model::advance_history(target, history_, p_new);
   if (target.integrator != options_.integrator) ++startup;  // BDF2 started (or restarted) as backward Euler
   q_rate_previous_ = q_rate_;
@@ -457,10 +480,8 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
   if (track) {
     root_ = q.tail<6>();
     pivot_ = pivot;
-    q_ = q.head(offset);
-  } else {
-    q_ = q;
   }
+  q_ = q.head(offset);
   t_ = t1;
   if (options_.record_substeps) substeps_.push_back({t0, dt, q_});
   stats.inertia_seconds += seconds_since(clock);
@@ -486,6 +507,7 @@ class ReducedSolver::Ladder final : public model::LadderSolver {
     pivot_ = solver_.pivot_;
     history_saved_ = false;
     solver_.substeps_.clear();
+    if (solver_.options_.coupled) solver_.options_.coupled->save();
   }
   void restore() override {
     solver_.t_ = t_;
@@ -501,6 +523,7 @@ class ReducedSolver::Ladder final : public model::LadderSolver {
       solver_.carried_history_ = carried_history_;
     }
     solver_.substeps_.clear();
+    if (solver_.options_.coupled) solver_.options_.coupled->restore();
   }
   bool attempt(double dt, material::HessianProjection hessian, model::StepStats& stats, std::string& reason) override {
     if (!history_saved_ && solver_.t_ == t_ && dt < 0.75 * h_) {  // the first substep of a split rung

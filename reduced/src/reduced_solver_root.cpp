@@ -27,6 +27,17 @@ void ReducedSolver::setup_root() {
   root_potential_term_ = std::make_unique<RootPotentialTerm>(potentials_, inertia_, offset);
 }
 
+void ReducedSolver::setup_coupled() {
+  require(!options_.root.enabled,
+          "reduced: objects in the body's solve need a prescribed skeleton (skeleton = \"prescribed\")");
+  const auto offset = static_cast<Eigen::Index>(subspace_.num_dofs());
+  coupled_term_ = std::make_unique<CoupledTerm>(*options_.coupled, subspace_, inertia_, offset);
+  inertia_head_ = std::make_unique<HeadTerm>(inertia_term_, offset);
+  gravity_head_ = std::make_unique<HeadTerm>(gravity_term_, offset);
+  elastic_head_ = std::make_unique<HeadTerm>(elastic_term_, offset);
+  potential_head_ = std::make_unique<HeadTerm>(potential_term_, offset);
+}
+
 void ReducedSolver::carried_posed(double t, const Eigen::VectorXd& x_prescribed, meshing::RowMatrixX3d& p) const {
   p.resize(static_cast<Eigen::Index>(carried_.size()), 3);
   model::NodeFrame frame;

@@ -132,24 +132,9 @@ void FreeObjects::step(double t0, double h, const std::vector<BodySurfaceStep>& 
       surface_vertex.push_back(std::move(vertex));
     }
     const RigidStepReport r = f.rigid->step(h, obstacles, surfaces);
-    f.motion->set(to_pose(f.rigid->state().placement));
-    objects_[f.object].world_shape->set_pose(f.motion->pose(t1));
-    ++f.steps;
-    f.newton_iterations += r.newton_iterations;
-    f.refinements += r.refinements;
-    f.halvings += r.halvings;
-    f.unresolved += r.unresolved ? 1 : 0;
-    f.last_contact_energy = r.contact_energy;
-    f.friction_work += r.friction_work;
-    f.max_obstacle_force = std::max(f.max_obstacle_force, r.obstacle_force.norm());
-    f.max_surface_force = std::max(f.max_surface_force, r.surface_force.norm());
-    f.max_skeleton_force = std::max(f.max_skeleton_force, r.rigid_surface_force.norm());
-    f.last_surface_force = r.surface_force;
-    f.last_skeleton_force = r.rigid_surface_force;
+    account(f, r, t1);
     // Friction: the bodies' soft skins take the opposite of what each of their vertices exerted.
-    f.last_friction = r.surface_friction_force;
     f.last_soft_friction.setZero();
-    f.max_friction = std::max(f.max_friction, r.surface_friction_force.norm());
     for (std::size_t s = 0; s < r.surface_friction.size(); ++s)
       for (std::size_t i = 0; i < r.surface_friction[s].size(); ++i) {
         const Eigen::Vector3d& force = r.surface_friction[s][i];
@@ -157,16 +142,53 @@ void FreeObjects::step(double t0, double h, const std::vector<BodySurfaceStep>& 
         f.last_soft_friction += force;
         friction_on_bodies_[surface_body[s]].emplace_back(surface_vertex[s][i], -force);
       }
-    f.max_penetration = std::max(f.max_penetration, r.max_penetration);
-    f.last_penetration = r.max_penetration;
-    f.last_time = t1;
-    f.penetration_history.emplace_back(t1, r.max_penetration);
-    while (!f.penetration_history.empty() && f.penetration_history.front().first < t1 - 1.0)
-      f.penetration_history.erase(f.penetration_history.begin());
-    const double energy = f.rigid->kinetic() + f.rigid->potential() + r.contact_energy;
-    f.max_energy_gain = std::max(f.max_energy_gain, energy - f.initial_energy);
   }
   seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - clock).count();
+}
+
+void FreeObjects::account(Free& f, const RigidStepReport& r, double t1) {
+  f.motion->set(to_pose(f.rigid->state().placement));
+  objects_[f.object].world_shape->set_pose(f.motion->pose(t1));
+  ++f.steps;
+  f.newton_iterations += r.newton_iterations;
+  f.refinements += r.refinements;
+  f.halvings += r.halvings;
+  f.unresolved += r.unresolved ? 1 : 0;
+  f.last_contact_energy = r.contact_energy;
+  f.friction_work += r.friction_work;
+  f.max_obstacle_force = std::max(f.max_obstacle_force, r.obstacle_force.norm());
+  f.max_surface_force = std::max(f.max_surface_force, r.surface_force.norm());
+  f.max_skeleton_force = std::max(f.max_skeleton_force, r.rigid_surface_force.norm());
+  f.last_surface_force = r.surface_force;
+  f.last_skeleton_force = r.rigid_surface_force;
+  f.last_friction = r.surface_friction_force;
+  f.max_friction = std::max(f.max_friction, r.surface_friction_force.norm());
+  f.max_penetration = std::max(f.max_penetration, r.max_penetration);
+  f.last_penetration = r.max_penetration;
+  f.last_time = t1;
+  f.penetration_history.emplace_back(t1, r.max_penetration);
+  while (!f.penetration_history.empty() && f.penetration_history.front().first < t1 - 1.0)
+    f.penetration_history.erase(f.penetration_history.begin());
+  const double energy = f.rigid->kinetic() + f.rigid->potential() + r.contact_energy;
+  f.max_energy_gain = std::max(f.max_energy_gain, energy - f.initial_energy);
+}
+
+std::vector<FreeObjects::Member> FreeObjects::members() {
+  std::vector<Member> out;
+  for (Free& f : free_) out.push_back({f.object, f.rigid.get(), objects_[f.object].spec.friction});
+  return out;
+}
+
+void FreeObjects::account_coupled(const std::vector<RigidStepReport>& reports, double t1) {
+  require(reports.size() == free_.size(), "free objects: {} reports for {} objects", reports.size(), free_.size());
+  for (std::size_t k = 0; k < free_.size(); ++k) {
+    Free& f = free_[k];
+    const RigidStepReport& r = reports[k];
+    account(f, r, t1);
+    // One solve: the soft layer felt exactly the opposite of its penalty and friction on the object.
+    f.last_soft_friction = r.surface_friction_force;
+    add_body_reaction(f.object, r.surface_force - r.rigid_surface_force);
+  }
 }
 
 void FreeObjects::add_body_reaction(std::size_t object, const Eigen::Vector3d& force) {
@@ -204,6 +226,7 @@ nlohmann::json FreeObjects::summary() const {
     const SceneObject& o = objects_[f.object];
     out.push_back({{"name", o.spec.name},
                    {"shape", shape_name(o.spec.shape)},
+                   {"coupling", coupled_ ? "monolithic" : "staggered"},
                    {"mass_kg", r.properties().mass},
                    {"inertia_kg_m2", vec(inertia)},
                    {"friction", o.spec.friction},

@@ -63,6 +63,18 @@ class FreeObjects {
 
   /// Steps every free object over [t0, t0 + h] (see above); errors name the object.
   void step(double t0, double h, const std::vector<BodySurfaceStep>& bodies);
+  /// The free objects (scene object index, rigid body, friction coefficient), in order.
+  struct Member {
+    std::size_t object = 0;
+    RigidObject* rigid = nullptr;
+    double friction = 0.0;
+  };
+  std::vector<Member> members();
+  /// The objects are stepped in a body's solve (coupled_objects.hpp): step() is not called; after each step the
+  /// runner passes what the solve did per member (in members() order) with the step's end time.
+  void set_coupled() { coupled_ = true; }
+  bool coupled() const { return coupled_; }
+  void account_coupled(const std::vector<RigidStepReport>& reports, double t1);
   /// Per body: (vertex, friction force [N], world) the objects exerted on the body's skin vertices in the last
   /// step (the opposite of what they felt), for the bodies' own solves of the step; rigid vertices omitted.
   const std::vector<std::vector<std::pair<int, Eigen::Vector3d>>>& friction_on_bodies() const {
@@ -100,7 +112,11 @@ class FreeObjects {
     nlohmann::json frames = nlohmann::json::array();  ///< per written frame: t, energies
   };
 
+  /// The step's bookkeeping of one object (energies, forces, penetration), its pose to the scene's object.
+  void account(Free& f, const RigidStepReport& r, double t1);
+
   std::vector<SceneObject>& objects_;
+  bool coupled_ = false;
   std::vector<Free> free_;
   std::vector<std::pair<std::size_t, std::shared_ptr<Obstacle>>> obstacles_;  ///< the other objects' shapes
   std::vector<std::vector<std::pair<int, Eigen::Vector3d>>> friction_on_bodies_;

@@ -250,4 +250,11 @@ RigidStepReport RigidObject::solve(double h, const std::vector<const Obstacle*>&
   return report;
 }
 
+void RigidObject::set_state(const RigidState& state) {
+  require(state.placement.x.allFinite() && state.placement.R.allFinite() && state.velocity.allFinite() &&
+              state.angular_velocity.allFinite(),
+          "free object '{}': its new state is not finite", name_);
+  state_ = state;
+}
+
 }  // namespace sflsh::scene

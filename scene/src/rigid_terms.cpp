@@ -173,30 +173,37 @@ RigidFrictionTerm::RigidFrictionTerm(std::vector<FrictionContact> contacts, cons
           "friction: smoothing length must be positive (got {} m)", smoothing_length);
 }
 
-double RigidFrictionTerm::slip(const FrictionContact& c, const RigidPlacement& at, Eigen::Vector3d& w, double* f0,
-                               Eigen::Matrix3d* Hp) const {
-  const double eps = epsilon_;
-  const double scale = coefficient_ * c.normal_force;  // μ λ [N]
-  const Eigen::Vector3d u = (at.R * c.point + at.x) - start_.to_world(c.point) - c.other_displacement;
-  const Eigen::Matrix3d P = Eigen::Matrix3d::Identity() - c.normal * c.normal.transpose();
+double smoothed_slip(double scale, double epsilon, const Eigen::Vector3d& normal, const Eigen::Vector3d& u,
+                     Eigen::Vector3d& w, double* value, Eigen::Matrix3d* hessian) {
+  const double eps = epsilon;
+  const Eigen::Matrix3d P = Eigen::Matrix3d::Identity() - normal * normal.transpose();
   w = P * u;  // tangential slip over the step
   const double y = w.norm();
   double f1_over_y;
   if (y < eps) {
-    if (f0) *f0 = -y * y * y / (3.0 * eps * eps) + y * y / eps + eps / 3.0;  // f0(y) = −y³/(3ε²) + y²/ε + ε/3
-    f1_over_y = 2.0 / eps - y / eps / eps;                                   // f0'(y)/y
+    if (value) *value = scale * (-y * y * y / (3.0 * eps * eps) + y * y / eps + eps / 3.0);  // f0(y)
+    f1_over_y = 2.0 / eps - y / eps / eps;                                                   // f0'(y)/y
     // ∇² = μλ [(f1/y) P + (f0'' − f1/y) ŵŵᵀ], f0'' − f1/y = −y/ε², so −w wᵀ/(ε² y).
-    if (Hp) {
-      *Hp = f1_over_y * P;
-      if (y > 0.0) *Hp -= w * w.transpose() / (eps * eps * y);
+    if (hessian) {
+      *hessian = f1_over_y * P;
+      if (y > 0.0) *hessian -= w * w.transpose() / (eps * eps * y);
     }
   } else {
-    if (f0) *f0 = y;
+    if (value) *value = scale * y;
     f1_over_y = 1.0 / y;
-    if (Hp) *Hp = (P - w * w.transpose() / (y * y)) / y;
+    if (hessian) *hessian = (P - w * w.transpose() / (y * y)) / y;
   }
-  if (Hp) *Hp *= scale;
+  if (hessian) *hessian *= scale;
   return scale * f1_over_y;
+}
+
+double RigidFrictionTerm::slip(const FrictionContact& c, const RigidPlacement& at, Eigen::Vector3d& w, double* f0,
+                               Eigen::Matrix3d* Hp) const {
+  const double scale = coefficient_ * c.normal_force;  // μ λ [N]
+  const Eigen::Vector3d u = (at.R * c.point + at.x) - start_.to_world(c.point) - c.other_displacement;
+  const double g = smoothed_slip(scale, epsilon_, c.normal, u, w, f0, Hp);
+  if (f0 && scale > 0.0) *f0 /= scale;
+  return g;
 }
 
 double RigidFrictionTerm::evaluate(const RigidPlacement& at, Vector6d* gradient, Matrix6d* hessian) const {

@@ -103,6 +103,7 @@ void SceneBody::start(bool inertia) {
     reduced::ReducedOptions options;
     options.quasi_static = quasi_static_;
     options.integrator = spec_.integrator;
+    options.coupled = coupled_;
     if (spec_.tracking) {
       require(!quasi_static_, "scene body '{}': skeleton = \"tracking\" needs inertia ([effects] inertia = true)",
               name());
@@ -151,7 +152,7 @@ double SceneBody::max_elastic_displacement() const {
 // the equilibrium is the rest state, which needs no solve.
 bool SceneBody::at_rest_this_step(double t0, double h) const {
   const model::Problem& problem = layer_->problem;
-  if (!quasi_static_ || problem.gravity.squaredNorm() > 0.0) return false;
+  if (!quasi_static_ || problem.gravity.squaredNorm() > 0.0 || coupled_) return false;
   if (problem.potentials.empty()) return true;
   const model::State s = state();
   Eigen::VectorXd rest_end = Eigen::Map<const Eigen::VectorXd>(problem.rest.data(), problem.num_dofs());

@@ -198,10 +198,10 @@ class SceneReader : public TomlReader {
 
   void read_contact(const toml::node& node, ContactSpec& contact) const {
     const toml::table& t = table(node, "contact");
-    check_keys(
-        t,
-        {"stiffness", "tolerance", "margin", "max_refinements", "max_exchanges", "exchange_tolerance", "body_exchange"},
-        " in [contact]");
+    check_keys(t,
+               {"stiffness", "tolerance", "margin", "max_refinements", "max_exchanges", "exchange_tolerance",
+                "body_exchange", "object_coupling"},
+               " in [contact]");
     if (const toml::node* n = t.get("stiffness")) contact.stiffness = non_negative(*n, "stiffness", " in [contact]");
     if (const toml::node* n = t.get("tolerance")) contact.tolerance = positive(*n, "tolerance", " in [contact]");
     if (const toml::node* n = t.get("margin")) contact.margin = non_negative(*n, "margin", " in [contact]");
@@ -213,6 +213,8 @@ class SceneReader : public TomlReader {
       contact.body_exchange = boolean(*n, "body_exchange", " in [contact]");
     if (const toml::node* n = t.get("exchange_tolerance"))
       contact.exchange_tolerance = positive(*n, "exchange_tolerance", " in [contact]");
+    if (const toml::node* n = t.get("object_coupling"))
+      contact.object_coupling = choice(*n, "object_coupling", {"monolithic", "staggered"}, " in [contact]");
   }
 
   void read_output(const toml::node& node, OutputSpec& output) const {

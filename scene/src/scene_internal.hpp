@@ -78,6 +78,9 @@ class SceneBody {
   /// Per body vertex: the layer node its skin vertex sits on (−1 outside the region or when embedded).
   const std::vector<int>& vertex_node() const { return vertex_node_; }
 
+  /// Unknowns to solve with the body's own (free objects, coupled_objects.hpp); reduced bodies with a prescribed
+  /// skeleton only, set before start(). Not owned.
+  void set_coupled(reduced::CoupledSystem* coupled) { coupled_ = coupled; }
   /// Builds the solver (after the potentials are in layer().problem.potentials).
   void start(bool inertia);
   /// Advances from t0 by h. A quasi-static body without gravity whose potentials have no candidates is at
@@ -129,6 +132,7 @@ class SceneBody {
   std::unique_ptr<reduced::ReducedSolver> fast_;
   std::vector<int> vertex_node_;
   bool quasi_static_ = false;
+  reduced::CoupledSystem* coupled_ = nullptr;
   double t_ = 0.0;
   // The tracking root's largest deviation so far: |τ| [m], |θ| [rad] and their times [s].
   double root_max_displacement_ = 0.0, root_max_rotation_ = 0.0;

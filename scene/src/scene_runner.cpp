@@ -4,6 +4,7 @@
 #include "crowd.hpp"
 #include "free_objects.hpp"
 #include "group_step.hpp"
+#include "object_coupling_setup.hpp"
 #include "scene_contact.hpp"
 #include "scene_internal.hpp"
 #include "scene_objects.hpp"
@@ -174,6 +175,11 @@ class SceneRun {
     contact_.resize(bodies_.size());
     if (!scene_.effects.object_contact && !scene_.effects.body_contact) return;
     const ContactParameters parameters = contact_parameters(scene_.contact);
+    // Free objects in the body's own Newton solve where the scene allows it (object_coupling_setup.hpp).
+    const bool monolithic = !free_->empty() && detail::monolithic_blocker(scene_, bodies_).empty();
+    if (!free_->empty() && !monolithic)
+      logger()->info("scene: free objects are solved before the bodies (staggered): {}",
+                     detail::monolithic_blocker(scene_, bodies_));
     for (std::size_t b = 0; b < bodies_.size(); ++b) {
       SceneBody& body = *bodies_[b];
       if (!body.soft()) continue;
@@ -193,11 +199,20 @@ class SceneRun {
         for (const SceneObject& o : objects_) {
           auto placed = std::make_shared<detail::PlacedMotion>(o.motion, body_from_world);
           c.placed.push_back(placed);
-          obstacles.push_back({detail::make_shape(o.spec), placed});
+          // A coupled free object is in the body's solve through coupled_ instead.
+          if (!monolithic || o.spec.motion != ObjectMotionKind::free)
+            obstacles.push_back({detail::make_shape(o.spec), placed});
         }
         c.objects = std::make_shared<ContactPotential>(nodes, areas, std::move(obstacles), parameters);
         body.layer().problem.potentials.push_back(c.objects);
-        if (!free_->empty()) {
+        if (monolithic) {
+          coupled_ = detail::make_coupled_objects(
+              scene_, body, c, *free_, objects_,
+              scene_.effects.gravity ? gravity_vector(scene_.effects) : Eigen::Vector3d::Zero());
+          body.set_coupled(coupled_.get());
+          free_->set_coupled();
+          logger()->info("scene: free objects are solved in body '{}''s Newton solve (monolithic)", body.name());
+        } else if (!free_->empty()) {
           c.friction = std::make_shared<NodeLoads>(nodes);
           body.layer().problem.potentials.push_back(c.friction);
         }
@@ -228,7 +243,7 @@ class SceneRun {
   // step's end (free_objects.cpp); the bodies then feel them as obstacles where they now are.
   void step(double t0, double h) {
     const double t1 = t0 + h;
-    if (!free_->empty()) {
+    if (!free_->empty() && !free_->coupled()) {
       free_->step(t0, h, detail::body_surfaces(bodies_, contact_, scene_.contact, t1, surface_cache_));
       apply_object_friction();
     }
@@ -278,6 +293,7 @@ class SceneRun {
       for (auto& r : group_records) exchanges_.push_back(std::move(r));
     ++steps_;
     groups_ += static_cast<long>(groups.size());
+    if (coupled_) free_->account_coupled(coupled_->finish_step(), t1);
     commit_objects(t1);
   }
 
@@ -334,7 +350,7 @@ class SceneRun {
         }
         if (auto* free = dynamic_cast<FreeMotion*>(o.motion.get())) free->set_contact_stiffness(stiffness);
         o.motion->commit(t1, force);
-      } else if (o.spec.motion == ObjectMotionKind::free) {
+      } else if (o.spec.motion == ObjectMotionKind::free && !coupled_) {
         Eigen::Vector3d force = Eigen::Vector3d::Zero();  // the bodies' reaction on the rigid object (summary)
         for (BodyContact& c : contact_)
           if (c.objects) force += c.placed[j]->take_force();
@@ -549,8 +565,9 @@ class SceneRun {
   detail::Crowd crowd_;
   std::vector<std::unique_ptr<SceneBody>> bodies_;
   std::vector<SceneObject> objects_;
-  std::optional<detail::FreeObjects> free_;  ///< the free rigid objects among objects_
-  detail::BodySurfaceCache surface_cache_;   ///< per body and vertex, for the free objects
+  std::optional<detail::FreeObjects> free_;          ///< the free rigid objects among objects_
+  std::unique_ptr<detail::CoupledObjects> coupled_;  ///< them in the body's solve (null: staggered)
+  detail::BodySurfaceCache surface_cache_;           ///< per body and vertex, for the free objects
   std::vector<BodyContact> contact_;
   std::optional<detail::SceneOutput> output_;  ///< the files of run() (its jobs are run()'s)
   int every_ = 1;

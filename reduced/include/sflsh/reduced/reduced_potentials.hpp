@@ -16,6 +16,10 @@
 
 namespace sflsh::reduced {
 
+/// The posed position z_a + A_a Σ_s b_as t_s of active node a (an index into inertia.active_nodes()) at the
+/// inertia's current time; q may be longer than 3S (extra coordinates after it are ignored).
+Eigen::Vector3d posed_node(const Subspace& subspace, const ReducedInertia& inertia, const Eigen::VectorXd& q, int a);
+
 class ReducedPotentials {
  public:
   /// Throws when a potential acts on a node without basis functions (it could not respond).

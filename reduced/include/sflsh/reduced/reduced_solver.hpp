@@ -18,6 +18,7 @@
 #include <sflsh/model/problem.hpp>
 #include <sflsh/model/step_stats.hpp>
 #include <sflsh/model/time_integrator.hpp>
+#include <sflsh/reduced/coupled_term.hpp>
 #include <sflsh/reduced/cubature.hpp>
 #include <sflsh/reduced/cubature_elastic.hpp>
 #include <sflsh/reduced/cubature_guard.hpp>
@@ -66,6 +67,9 @@ struct ReducedOptions {
   /// A tracking root (root_tracking.hpp): the six root coordinates join q in the Newton solve. Off: the skeleton
   /// follows its motion exactly (prescribed), bit for bit as before.
   RootTrackingOptions root;
+  /// Unknowns solved in the same Newton solve (coupled_system.hpp: e.g. free rigid objects on the skin), not
+  /// owned; x = [q; y]. Needs a prescribed skeleton (root.enabled = false). Null: none.
+  CoupledSystem* coupled = nullptr;
 };
 
 /// One converged substep of an accepted step: from t0 over dt to coordinates q.
@@ -159,6 +163,7 @@ class ReducedSolver final : public model::BodySolver {
   void carried_posed(double t, const Eigen::VectorXd& x_prescribed, meshing::RowMatrixX3d& p) const;
   Eigen::Vector3d root_pivot(double t, const meshing::RowMatrixX3d& carried) const;
   void setup_root();
+  void setup_coupled();
 
   const model::Problem& problem_;
   const Subspace& subspace_;
@@ -198,6 +203,9 @@ class ReducedSolver final : public model::BodySolver {
   std::unique_ptr<RootInertiaTerm> root_inertia_term_;
   std::unique_ptr<RootTrackingTerm> root_tracking_term_;
   std::unique_ptr<RootPotentialTerm> root_potential_term_;
+  // Coupled system (options.coupled): x = [q; y], y at offset 3S; the q terms on the head of x.
+  std::unique_ptr<CoupledTerm> coupled_term_;
+  std::unique_ptr<HeadTerm> inertia_head_, potential_head_;
 };
 
 }  // namespace sflsh::reduced

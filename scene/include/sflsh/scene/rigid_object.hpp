@@ -67,6 +67,9 @@ class RigidObject {
                        const std::vector<SurfacePoints>& surfaces);
 
   const RigidState& state() const { return state_; }
+  /// Sets the state when another solver stepped the object (a body's solve, docs/contact.md); throws when it is
+  /// not finite.
+  void set_state(const RigidState& state);
   const RigidProperties& properties() const { return properties_; }
   const Obstacle& shape() const { return *shape_; }
   const std::string& name() const { return name_; }

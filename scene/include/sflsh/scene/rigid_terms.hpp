@@ -100,6 +100,12 @@ struct FrictionContact {
   int source = -1;  ///< the caller's index of the other side's point (−1: an obstacle)
 };
 
+/// The smoothed Coulomb friction of one contact (below) as a function of its displacement u over the step [m]:
+/// w = P u (the slip, P = Id − n nᵀ); returns μλ f0'(|w|)/|w| (∇_u D = that · w), with μλ f0(|w|) and ∇²_u D when
+/// not null. scale = μ λ [N], ε [m].
+double smoothed_slip(double scale, double epsilon, const Eigen::Vector3d& normal, const Eigen::Vector3d& u,
+                     Eigen::Vector3d& w, double* value, Eigen::Matrix3d* hessian);
+
 /// Smoothed Coulomb friction with lagged normal force and tangent plane (IPC, Li et al. 2020):
 ///   D = Σ_c μ λ_c f0(|P_c u_c|),  u_c = (R q_c + x) − (R_n q_c + x_n) − Δp_c,  P_c = Id − n_c n_cᵀ,
 ///   f0(y) = −y³/(3ε²) + y²/ε + ε/3 for y < ε, y otherwise,

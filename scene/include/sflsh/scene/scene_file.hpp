@@ -123,6 +123,10 @@ struct ContactSpec {
   bool body_exchange = true;
   /// [m] the exchange has converged when no surface moved more than this from the surface it was solved against.
   double exchange_tolerance = 1e-4;
+  /// Free objects and the body they touch: "monolithic" (default) solves the objects' six coordinates in the body's
+  /// Newton solve where the scene allows it (one soft reduced body with a prescribed skeleton, docs/contact.md),
+  /// else staggered; "staggered" always solves the objects first against the body's predicted skin.
+  std::string object_coupling = "monolithic";
 };
 
 /// The paper's Fig. 1: `count` avatars with random shapes, each with its own shape-dependent material.
