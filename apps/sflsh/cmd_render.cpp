@@ -28,7 +28,10 @@ struct RenderRunOptions {
   std::string view = "three_quarter";
   int width = 900;
   int height = 1000;
-  int strip = 0;  ///< > 0: a strip of that many frames of a scene run
+  int strip = 0;                    ///< > 0: a strip of that many frames of a scene run
+  std::string map;                  ///< a .vtp surface whose point arrays are drawn side by side
+  std::vector<std::string> fields;  ///< with map: the arrays, one panel each
+  std::string label = "sigma";      ///< with map: what the arrays are, for the title
   std::string out;
 };
 
@@ -211,13 +214,63 @@ void run_render_strip(const RenderRunOptions& opt) {
   logger()->info("render: {} of {} written frames of {} → {}", panels.size(), frames.size(), pvd.string(), opt.out);
 }
 
+/// Point arrays of one surface side by side (e.g. `sflsh validate`'s dynamics.vtp: σ of the truth and of each fit
+/// per subject, the paper's Figs. 3, 4, 6, 8), one colour scale over every panel, each captioned with its array.
+void run_render_map(const RenderRunOptions& opt) {
+  const fs::path file = opt.map;
+  require(fs::exists(file) && file.extension() == ".vtp", "--map {}: expected an existing .vtp surface", opt.map);
+  require(!opt.fields.empty(), "--map {}: --fields is required (the point arrays to draw)", opt.map);
+  require(fs::path(opt.out).extension() == ".png", "--out {}: expected a .png file", opt.out);
+  const std::vector<std::string> arrays = vtk::read_point_array_names(file);
+  render::Surface base;
+  base.points = vtk::read_points(file);
+  base.triangles = vtk::read_cells(file);
+  require(base.triangles.cols() == 3, "{}: expected a triangle surface", file.string());
+  std::vector<render::Panel> panels;
+  double peak = 0.0;
+  for (const std::string& name : opt.fields) {
+    if (std::find(arrays.begin(), arrays.end(), name) == arrays.end()) {
+      std::string list;
+      for (const std::string& a : arrays) list += (list.empty() ? "" : ", ") + a;
+      throw_error("--fields {}: {} has no such point array (it has {})", name, file.string(), list);
+    }
+    const Eigen::MatrixXd values = vtk::read_point_array(file, name);
+    require(values.rows() == base.points.rows(), "{}: {} has {} values for {} points", file.string(), name,
+            values.rows(), base.points.rows());
+    render::Surface surface = base;
+    surface.scalars = values.cols() == 1 ? Eigen::VectorXd(values.col(0)) : Eigen::VectorXd(values.rowwise().norm());
+    // NaN marks vertices a field does not cover (outside the soft region): drawn at zero.
+    surface.scalars = surface.scalars->unaryExpr([](double v) { return std::isfinite(v) ? v : 0.0; });
+    peak = std::max(peak, surface.scalars->maxCoeff());
+    render::Panel panel;
+    panel.caption = name;
+    panel.surfaces.push_back(std::move(surface));
+    panels.push_back(std::move(panel));
+  }
+  render::View view;
+  view.name = opt.view;
+  view.width = opt.width;
+  view.height = opt.height;
+  view.scalar_range = std::make_pair(0.0, std::max(peak, 1e-9));
+  view.title = fmt::format("{} 0-{:.2f} (blue-red)", opt.label, peak);
+  render::render_strip_png(opt.out, panels, view);
+  logger()->info("render: {} arrays of {} → {}", panels.size(), file.string(), opt.out);
+}
+
 }  // namespace
 
 void register_render_commands(CLI::App& app, const Invocation& /*invocation*/) {
   auto opt = std::make_shared<RenderRunOptions>();
   CLI::App* cmd = app.add_subcommand(
       "render", "A picture of a simulation: the posed body of one frame coloured by its soft-tissue motion (PNG)");
-  cmd->add_option("--run", opt->run, "The --out folder of `sflsh simulate` (vtk format)")->required();
+  CLI::Option* run = cmd->add_option("--run", opt->run, "The --out folder of `sflsh simulate` (vtk format)");
+  CLI::Option* map =
+      cmd->add_option("--map", opt->map,
+                      "A .vtp surface (e.g. `sflsh validate`'s dynamics.vtp): its --fields side by side, one colour "
+                      "scale (the paper's σ maps)");
+  cmd->add_option("--fields", opt->fields, "With --map: the point arrays to draw, one panel each (comma-separated)")
+      ->delimiter(',');
+  cmd->add_option("--label", opt->label, "With --map: what the arrays are, for the title (default sigma)");
   cmd->add_option("--color", opt->color, "sigma (σ of the whole run, mm) | displacement (the frame's, mm)")
       ->check(CLI::IsMember({"sigma", "displacement"}));
   cmd->add_option("--frame", opt->frame, "peak (largest soft-tissue displacement) or a frame index");
@@ -234,7 +287,15 @@ void register_render_commands(CLI::App& app, const Invocation& /*invocation*/) {
                       "object, coloured by soft-tissue displacement (mm)")
           ->check(CLI::Range(1, 24));
   cmd->add_option("--out", opt->out, "The PNG to write")->required();
-  cmd->callback([opt, width, height, strip, cmd] {
+  cmd->callback([opt, width, height, strip, run, map, cmd] {
+    require((run->count() > 0) != (map->count() > 0), "render: give either --run (a simulation) or --map (a surface)");
+    if (map->count() > 0) {
+      require(strip->count() == 0 && cmd->count("--frame") == 0 && cmd->count("--color") == 0,
+              "--map: draws the --fields of one surface; leave out --strip, --frame and --color");
+      if (width->count() == 0) opt->width = 360;
+      if (height->count() == 0) opt->height = 560;
+      return run_render_map(*opt);
+    }
     if (strip->count() == 0) return run_render(*opt);
     require(cmd->count("--frame") == 0 && cmd->count("--color") == 0,
             "--strip: draws evenly spaced frames coloured by soft-tissue displacement; leave out --frame and --color");

@@ -35,6 +35,28 @@ TEST(CliRender, DrawsTheRunsPosedBodyColouredBySigmaWithoutADisplay) {
                 dir);
   ASSERT_EQ(result.exit_code, 0) << result.err;
   sflsh::testing::expect_drawn_png(dir / "frame6.png", 400, 500, 50);
+
+  // Point arrays of one surface side by side (validate's σ maps use this on its dynamics.vtp).
+  const auto dynamics = run / "dynamics.vtp";
+  result = run_sflsh(fmt::format("-q render --map {} --fields sigma,sigma_normal,sigma_tangent --view front --out {}",
+                                 dynamics.string(), (dir / "maps.png").string()),
+                     dir);
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  sflsh::testing::expect_drawn_png(dir / "maps.png", 3 * 360, 560, 200);
+  // An array the file lacks: one line naming it and what the file has, nothing written.
+  result = run_sflsh(
+      fmt::format("render --map {} --fields sigma,nope --out {}", dynamics.string(), (dir / "none.png").string()), dir);
+  EXPECT_EQ(result.exit_code, 1);
+  EXPECT_THAT(result.err, HasSubstr("nope"));
+  EXPECT_THAT(result.err, HasSubstr("sigma_normal"));
+  EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "none.png"));
+  // --run and --map together are refused.
+  result = run_sflsh(fmt::format("render --run {} --map {} --fields sigma --out {}", run.string(), dynamics.string(),
+                                 (dir / "none.png").string()),
+                     dir);
+  EXPECT_EQ(result.exit_code, 1);
+  EXPECT_THAT(result.err, HasSubstr("--map"));
 }
 
 TEST(CliRender, BadRunOrFrameGivesOneLineAndWritesNothing) {
