@@ -56,6 +56,9 @@ class CoupledObjects final : public reduced::CoupledSystem {
   /// After the body's step: sets every object's world state and returns what its step did (forces on the
   /// object [N] and penetration [m] at the step's end, refinements, energies).
   std::vector<RigidStepReport> finish_step();
+  /// Time spent in the objects' part of the body's solve since the last call [s] (the chain rule to the
+  /// body's coordinates excluded).
+  double take_seconds();
 
  private:
   /// A lagged friction contact: on node entry `id` (kind node), rigid vertex `id` (kind rigid) or an obstacle.
@@ -96,6 +99,7 @@ class CoupledObjects final : public reduced::CoupledSystem {
   RowMatrixX3d rigid_start_, rigid_end_;  ///< the rigid skin vertices at t0 and t0 + dt (body frame) [m]
   std::vector<Near> near_;                ///< per object
   std::vector<const Obstacle*> posed_;    ///< the obstacles at t0 + dt in the body's frame
+  mutable double seconds_ = 0.0;          ///< in this system's part of the solve [s]
 };
 
 }  // namespace sflsh::scene::detail

@@ -179,7 +179,8 @@ std::vector<FreeObjects::Member> FreeObjects::members() {
   return out;
 }
 
-void FreeObjects::account_coupled(const std::vector<RigidStepReport>& reports, double t1) {
+void FreeObjects::account_coupled(const std::vector<RigidStepReport>& reports, double t1, double seconds) {
+  seconds_ += seconds;
   require(reports.size() == free_.size(), "free objects: {} reports for {} objects", reports.size(), free_.size());
   for (std::size_t k = 0; k < free_.size(); ++k) {
     Free& f = free_[k];

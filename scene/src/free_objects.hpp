@@ -74,7 +74,7 @@ class FreeObjects {
   /// runner passes what the solve did per member (in members() order) with the step's end time.
   void set_coupled() { coupled_ = true; }
   bool coupled() const { return coupled_; }
-  void account_coupled(const std::vector<RigidStepReport>& reports, double t1);
+  void account_coupled(const std::vector<RigidStepReport>& reports, double t1, double seconds);
   /// Per body: (vertex, friction force [N], world) the objects exerted on the body's skin vertices in the last
   /// step (the opposite of what they felt), for the bodies' own solves of the step; rigid vertices omitted.
   const std::vector<std::vector<std::pair<int, Eigen::Vector3d>>>& friction_on_bodies() const {

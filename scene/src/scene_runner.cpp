@@ -293,7 +293,7 @@ class SceneRun {
       for (auto& r : group_records) exchanges_.push_back(std::move(r));
     ++steps_;
     groups_ += static_cast<long>(groups.size());
-    if (coupled_) free_->account_coupled(coupled_->finish_step(), t1);
+    if (coupled_) free_->account_coupled(coupled_->finish_step(), t1, coupled_->take_seconds());
     commit_objects(t1);
   }
 
@@ -517,7 +517,9 @@ class SceneRun {
     }
     if (e.object_contact && potentials > 0)
       entry("object_contact", object_seconds, "broad phase, penalty terms, acceptance");
-    if (!free_->empty()) entry("free_objects", free_->seconds(), "the rigid objects' implicit solves");
+    if (!free_->empty())
+      entry("free_objects", free_->seconds(),
+            free_->coupled() ? "the rigid objects' terms in the body's solve" : "the rigid objects' implicit solves");
     if (e.body_contact && potentials > 0)
       entry("body_contact", body_seconds, "other bodies' surfaces (trees), penalty terms");
     s["effects"] = ran;
