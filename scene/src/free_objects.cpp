@@ -31,9 +31,15 @@ RigidProperties free_object_properties(const ObjectSpec& spec) {
     case ShapeKind::capsule:
       p = capsule_properties(spec.radius, 0.5 * spec.length, density);
       break;
+    case ShapeKind::mesh: {
+      const std::shared_ptr<Obstacle> shape = make_shape(spec);  // centred on its centre of mass
+      const auto& mesh = dynamic_cast<const TriangleMesh&>(*shape);
+      Eigen::Vector3d centre;
+      p = mesh_properties(mesh.vertices(), mesh.triangles(), density, centre);
+      break;
+    }
     case ShapeKind::plane:
-    case ShapeKind::mesh:
-      throw_error("a free object must be a sphere, box or capsule (got a {})", shape_name(spec.shape));
+      throw_error("a free object must be a sphere, box, capsule or closed mesh (got a {})", shape_name(spec.shape));
   }
   return spec.density > 0.0 ? p : p.with_mass(spec.mass);
 }
@@ -80,7 +86,7 @@ FreeObjects::FreeObjects(std::vector<SceneObject>& objects, const ContactSpec& c
     }
     parameters.friction = o.spec.friction;
     RigidState initial;
-    const Pose start = spec_pose(o.spec.position, o.spec.rotation);
+    const Pose start = free_start_pose(o.spec);
     initial.placement = {start.translation, start.rotation};
     initial.velocity = o.spec.velocity;
     initial.angular_velocity = o.spec.angular_velocity;

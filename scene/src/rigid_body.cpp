@@ -38,6 +38,34 @@ RigidProperties box_properties(const Eigen::Vector3d& half_extent, double densit
   return p;
 }
 
+RigidProperties mesh_properties(const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>& vertices,
+                                const Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor>& triangles, double density,
+                                Eigen::Vector3d& centre) {
+  require(std::isfinite(density) && density > 0.0, "mesh: density must be positive (got {} kg/m³)", density);
+  double volume = 0.0, area = 0.0;
+  Eigen::Vector3d first = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d second = Eigen::Matrix3d::Zero();  // ∫ q qᵀ dV about the mesh's origin
+  for (Eigen::Index f = 0; f < triangles.rows(); ++f) {
+    const Eigen::Vector3d a = vertices.row(triangles(f, 0)).transpose(), b = vertices.row(triangles(f, 1)).transpose(),
+                          c = vertices.row(triangles(f, 2)).transpose();
+    const double det = a.dot(b.cross(c));  // 6 × the signed volume of (origin, a, b, c)
+    const Eigen::Vector3d sum = a + b + c;
+    volume += det / 6.0;
+    first += det / 24.0 * sum;
+    second += det / 120.0 * (a * a.transpose() + b * b.transpose() + c * c.transpose() + sum * sum.transpose());
+    area += 0.5 * (b - a).cross(c - a).norm();
+  }
+  require(std::isfinite(volume) && volume > 0.0,
+          "mesh: the enclosed volume is {} m³, expected a closed, outward-oriented surface", volume);
+  RigidProperties p;
+  p.volume = volume;
+  p.area = area;
+  p.mass = density * volume;
+  centre = first / volume;
+  p.second_moment = density * second - p.mass * centre * centre.transpose();  // parallel axes: J_c = J_o − m c cᵀ
+  return p;
+}
+
 RigidProperties capsule_properties(double radius, double half_length, double density) {
   require(std::isfinite(radius) && radius > 0.0, "capsule: radius must be positive (got {} m)", radius);
   require(std::isfinite(half_length) && half_length >= 0.0, "capsule: length must be ≥ 0 (got {} m)", 2 * half_length);

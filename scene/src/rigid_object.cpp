@@ -40,8 +40,13 @@ std::vector<RigidSample> contact_samples(const Obstacle& shape, double area, dou
         for (int k = -1; k <= 1; ++k)
           if (i != 0 || j != 0 || k != 0)
             samples.push_back({box->half_extent().cwiseProduct(Eigen::Vector3d(i, j, k)), 0.0, 0.0});
+  } else if (const auto* mesh = dynamic_cast<const TriangleMesh*>(&shape)) {
+    // Its vertices, at most 256 of them evenly by index (a flat face between them rests on its corners).
+    const Eigen::Index n = mesh->vertices().rows();
+    const Eigen::Index stride = std::max<Eigen::Index>(1, (n + 255) / 256);
+    for (Eigen::Index v = 0; v < n; v += stride) samples.push_back({mesh->vertices().row(v).transpose(), 0.0, 0.0});
   } else {
-    throw_error("free object: only spheres, boxes and capsules can be free");
+    throw_error("free object: only spheres, boxes, capsules and meshes can be free");
   }
   for (RigidSample& s : samples) s.stiffness = stiffness * area / static_cast<double>(samples.size());
   return samples;

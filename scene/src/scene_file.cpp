@@ -454,8 +454,6 @@ class SceneReader : public TomlReader {
       require(o.friction >= 0.0 && o.friction <= 10.0, "{}: 'friction'{} = {} must be in [0, 10] (Coulomb μ)", at(*n),
               context, o.friction);
     }
-    require(o.motion != ObjectMotionKind::free || o.shape != ShapeKind::mesh,
-            "{}: a free object must be a sphere, box or capsule (a free mesh is not supported){}", at(node), context);
     require(o.motion != ObjectMotionKind::free || o.shape != ShapeKind::plane, "{}: a plane cannot be free{}", at(node),
             context);
     return o;

@@ -2,6 +2,7 @@
 #include "scene_objects.hpp"
 
 #include <sflsh/core/error.hpp>
+#include <sflsh/scene/rigid_body.hpp>
 
 namespace sflsh::scene::detail {
 
@@ -10,6 +11,31 @@ Pose spec_pose(const Eigen::Vector3d& position, const Eigen::Vector3d& rotation_
   pose.translation = position;
   const double angle = rotation_degrees.norm() * EIGEN_PI / 180.0;
   if (angle > 0.0) pose.rotation = Eigen::AngleAxisd(angle, rotation_degrees.normalized()).toRotationMatrix();
+  return pose;
+}
+
+namespace {
+
+/// A free mesh object's file, moved so that its local origin is its centre of mass (the rigid body's frame,
+/// rigid_body.hpp); `centre` [m] is that point in the file's frame.
+std::shared_ptr<TriangleMesh> centred_mesh(const ObjectSpec& spec, Eigen::Vector3d& centre) {
+  const std::unique_ptr<TriangleMesh> file = TriangleMesh::load(spec.mesh_path, spec.scale);
+  require(file->closed(), "object '{}': {} is not a closed surface; a free mesh needs one (its volume gives its mass)",
+          spec.name, spec.mesh_path);
+  mesh_properties(file->vertices(), file->triangles(), 1.0, centre);
+  return std::make_shared<TriangleMesh>(RowMatrixX3d(file->vertices().rowwise() - centre.transpose()),
+                                        file->triangles());
+}
+
+}  // namespace
+
+Pose free_start_pose(const ObjectSpec& spec) {
+  Pose pose = spec_pose(spec.position, spec.rotation);
+  if (spec.shape == ShapeKind::mesh) {  // `position` places the file's origin; the body's frame is its centre
+    Eigen::Vector3d centre;
+    centred_mesh(spec, centre);
+    pose.translation += pose.rotation * centre;
+  }
   return pose;
 }
 
@@ -24,6 +50,10 @@ std::shared_ptr<Obstacle> make_shape(const ObjectSpec& spec) {
     case ShapeKind::capsule:
       return std::make_shared<Capsule>(spec.radius, 0.5 * spec.length);
     case ShapeKind::mesh: {
+      if (spec.motion == ObjectMotionKind::free) {
+        Eigen::Vector3d centre;
+        return centred_mesh(spec, centre);
+      }
       std::unique_ptr<TriangleMesh> mesh = TriangleMesh::load(spec.mesh_path, spec.scale);
       return std::shared_ptr<Obstacle>(std::move(mesh));
     }
@@ -36,7 +66,10 @@ SceneObject make_object(const ObjectSpec& spec) {
   object.spec = spec;
   object.world_shape = make_shape(spec);
   // A plane's normal is given in the world: its rotation would turn it.
-  const Pose start = spec_pose(spec.position, spec.shape == ShapeKind::plane ? Eigen::Vector3d::Zero() : spec.rotation);
+  const Pose start =
+      spec.motion == ObjectMotionKind::free
+          ? free_start_pose(spec)
+          : spec_pose(spec.position, spec.shape == ShapeKind::plane ? Eigen::Vector3d::Zero() : spec.rotation);
   switch (spec.motion) {
     case ObjectMotionKind::fixed:
       object.motion = std::make_shared<FixedMotion>(start);

@@ -19,7 +19,9 @@ struct SceneObject {
   std::shared_ptr<Obstacle> world_shape;
 };
 
-/// The shape of an object spec in its local frame (a new instance each call).
+/// The shape of an object spec in its local frame (a new instance each call); a free mesh is moved so that its
+/// local origin is its centre of mass.
+
 std::shared_ptr<Obstacle> make_shape(const ObjectSpec& spec);
 /// The object with its world motion (a free object is held at its start until FreeObjects takes it over).
 SceneObject make_object(const ObjectSpec& spec);
@@ -27,6 +29,8 @@ SceneObject make_object(const ObjectSpec& spec);
 Surface merged_object_surfaces(const std::vector<SceneObject>& objects, Eigen::MatrixXd& ids);
 /// The world pose of a spec's position and axis-angle rotation [degrees].
 Pose spec_pose(const Eigen::Vector3d& position, const Eigen::Vector3d& rotation_degrees);
+/// The start of a free object: its centre of mass and rotation (a mesh's `position` places the file's origin).
+Pose free_start_pose(const ObjectSpec& spec);
 
 /// An object's world motion seen from a body's frame (body_from_world ∘ world pose). The reaction force a
 /// body commits is kept (rotated to the world) for the runner, which commits the sum over bodies once per

@@ -49,6 +49,28 @@ RigidPlacement tilted(const Eigen::Vector3d& x) {
   return {x, Eigen::AngleAxisd(0.5, Eigen::Vector3d(0.2, 1.0, -0.4).normalized()).toRotationMatrix()};
 }
 
+TEST(RigidBody, MassPropertiesOfAClosedMeshMatchTheBox) {
+  // A box of half extents (0.1, 0.2, 0.3) as 12 outward triangles, its corner at the origin: the same mass and
+  // second moment as box_properties, the centre at the half extents; exact up to round-off.
+  const Eigen::Vector3d a(0.1, 0.2, 0.3);
+  RowMatrixX3d V(8, 3);
+  for (int i = 0; i < 8; ++i) V.row(i) << 2 * a.x() * (i & 1), 2 * a.y() * ((i >> 1) & 1), 2 * a.z() * ((i >> 2) & 1);
+  RowMatrixX3i F(12, 3);
+  F << 0, 4, 6, 0, 6, 2, 1, 3, 7, 1, 7, 5, 0, 1, 5, 0, 5, 4, 2, 6, 7, 2, 7, 3, 0, 2, 3, 0, 3, 1, 4, 5, 7, 4, 7, 6;
+  Eigen::Vector3d centre;
+  const RigidProperties m = mesh_properties(V, F, 700.0, centre);
+  const RigidProperties b = box_properties(a, 700.0);
+  EXPECT_NEAR(m.mass, b.mass, 1e-12);
+  EXPECT_NEAR(m.volume, b.volume, 1e-14);
+  EXPECT_NEAR(m.area, b.area, 1e-13);
+  EXPECT_LT((centre - a).norm(), 1e-14);
+  EXPECT_LT((m.second_moment - b.second_moment).norm(), 1e-12 * b.second_moment.norm());
+  // Inward triangles enclose a negative volume: refused.
+  RowMatrixX3i inward = F;
+  inward.col(1).swap(inward.col(2));
+  EXPECT_THROW(mesh_properties(V, inward, 700.0, centre), Error);
+}
+
 TEST(RigidBody, MassPropertiesOfTheShapes) {
   // Sphere: I = 2/5 m r²; box: I_xx = m (b² + c²)/3 with half extents; capsule without length = sphere.
   const RigidProperties s = sphere_properties(0.1, 1000.0);

@@ -29,6 +29,14 @@ RigidProperties sphere_properties(double radius, double density);
 RigidProperties box_properties(const Eigen::Vector3d& half_extent, double density);
 /// Capsule about the local z axis (segment ±half_length, radius r): a cylinder and two hemispheres.
 RigidProperties capsule_properties(double radius, double half_length, double density);
+/// A closed, outward-oriented triangle mesh (vertices V×3 [m], triangles F×3) of uniform density, by the
+/// divergence theorem over the tetrahedra (origin, a, b, c) of its triangles: V = Σ det/6, the first moment
+/// Σ det/24 (a + b + c), ∫ q qᵀ = Σ det/120 (a aᵀ + b bᵀ + c cᵀ + s sᵀ) with s = a + b + c. J is about the
+/// centre of mass, which `centre` receives [m] (in the mesh's frame). Throws sflsh::Error when the enclosed
+/// volume is not positive (an open or inward mesh).
+RigidProperties mesh_properties(const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>& vertices,
+                                const Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor>& triangles, double density,
+                                Eigen::Vector3d& centre);
 
 /// [a]× with [a]× b = a × b.
 Eigen::Matrix3d hat(const Eigen::Vector3d& a);
