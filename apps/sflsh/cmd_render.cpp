@@ -32,6 +32,7 @@ struct RenderRunOptions {
   std::string map;                  ///< a .vtp surface whose point arrays are drawn side by side
   std::vector<std::string> fields;  ///< with map: the arrays, one panel each
   std::string label = "sigma";      ///< with map: what the arrays are, for the title
+  double max = 0.0;                 ///< with map: top of the colour scale (0: the 99th percentile of all panels)
   std::string out;
 };
 
@@ -227,7 +228,7 @@ void run_render_map(const RenderRunOptions& opt) {
   base.triangles = vtk::read_cells(file);
   require(base.triangles.cols() == 3, "{}: expected a triangle surface", file.string());
   std::vector<render::Panel> panels;
-  double peak = 0.0;
+  std::vector<double> all;  // every panel's values, for the colour scale
   for (const std::string& name : opt.fields) {
     if (std::find(arrays.begin(), arrays.end(), name) == arrays.end()) {
       std::string list;
@@ -241,7 +242,7 @@ void run_render_map(const RenderRunOptions& opt) {
     surface.scalars = values.cols() == 1 ? Eigen::VectorXd(values.col(0)) : Eigen::VectorXd(values.rowwise().norm());
     // NaN marks vertices a field does not cover (outside the soft region): drawn at zero.
     surface.scalars = surface.scalars->unaryExpr([](double v) { return std::isfinite(v) ? v : 0.0; });
-    peak = std::max(peak, surface.scalars->maxCoeff());
+    all.insert(all.end(), surface.scalars->data(), surface.scalars->data() + surface.scalars->size());
     render::Panel panel;
     panel.caption = name;
     panel.surfaces.push_back(std::move(surface));
@@ -251,8 +252,14 @@ void run_render_map(const RenderRunOptions& opt) {
   view.name = opt.view;
   view.width = opt.width;
   view.height = opt.height;
-  view.scalar_range = std::make_pair(0.0, std::max(peak, 1e-9));
-  view.title = fmt::format("{} 0-{:.2f} (blue-red)", opt.label, peak);
+  // A few extreme vertices would wash out the maps: by default the scale ends at the 99th percentile (above
+  // saturates red), or at --max.
+  const auto rank = static_cast<std::ptrdiff_t>(0.99 * static_cast<double>(all.size() - 1));
+  std::nth_element(all.begin(), all.begin() + rank, all.end());
+  const double top = opt.max > 0.0 ? opt.max : all[static_cast<std::size_t>(rank)];
+  view.scalar_range = std::make_pair(0.0, std::max(top, 1e-9));
+  view.title = fmt::format("{} 0-{:.2f} (blue-red; {} saturates)", opt.label, top,
+                           opt.max > 0.0 ? "above --max" : "above the 99th percentile");
   render::render_strip_png(opt.out, panels, view);
   logger()->info("render: {} arrays of {} → {}", panels.size(), file.string(), opt.out);
 }
@@ -271,6 +278,8 @@ void register_render_commands(CLI::App& app, const Invocation& /*invocation*/) {
   cmd->add_option("--fields", opt->fields, "With --map: the point arrays to draw, one panel each (comma-separated)")
       ->delimiter(',');
   cmd->add_option("--label", opt->label, "With --map: what the arrays are, for the title (default sigma)");
+  cmd->add_option("--max", opt->max, "With --map: top of the colour scale (default: the 99th percentile of all panels)")
+      ->check(CLI::PositiveNumber);
   cmd->add_option("--color", opt->color, "sigma (σ of the whole run, mm) | displacement (the frame's, mm)")
       ->check(CLI::IsMember({"sigma", "displacement"}));
   cmd->add_option("--frame", opt->frame, "peak (largest soft-tissue displacement) or a frame index");
