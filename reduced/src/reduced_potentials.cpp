@@ -22,9 +22,9 @@ ReducedPotentials::ReducedPotentials(const model::Problem& problem, const Subspa
   }
 }
 
-void ReducedPotentials::add_root_blocks(const RootFrame& root, int node, const Eigen::Matrix3d& A,
-                                        const Eigen::Vector3d& p, const Eigen::Vector3d& g, const Eigen::Matrix3d& H,
-                                        Eigen::MatrixXd& hessian) const {
+void add_root_node_blocks(const Subspace& subspace, const RootFrame& root, int node, const Eigen::Matrix3d& A,
+                          const Eigen::Vector3d& p, const Eigen::Vector3d& g, const Eigen::Matrix3d& H,
+                          Eigen::MatrixXd& hessian) {
   // y = R(p − c) + c + τ: ∂y/∂τ = I, ∂y/∂θ_k = ∂_kR d (d = p − c), ∂y/∂t_s = b_s R A;
   // ∂²u = Jᵀ∇²u J + ∇uᵀ∂²y, with ∂²y/∂θ_k∂θ_l = ∂²_klR d and ∂²y/∂θ_k∂t_s = b_s ∂_kR A.
   const Eigen::Vector3d d = p - root.pivot;
@@ -45,8 +45,11 @@ void ReducedPotentials::add_root_blocks(const RootFrame& root, int node, const E
   Eigen::Matrix3d q_theta = RA.transpose() * H * Y;
   for (int k = 0; k < 3; ++k) q_theta.col(k) += (root.rotation.dR[static_cast<std::size_t>(k)] * A).transpose() * g;
   const Eigen::Matrix3d q_tau = RA.transpose() * H;
-  for (SparseRowMatrix::InnerIterator it(subspace_.basis, node); it; ++it) {
+  const Eigen::Matrix3d block = RA.transpose() * H * RA;  // A_kᵀ Rᵀ ∇²u_k R A_k
+  for (SparseRowMatrix::InnerIterator it(subspace.basis, node); it; ++it) {
     const Eigen::Index s = 3 * it.col();
+    for (SparseRowMatrix::InnerIterator ri(subspace.basis, node); ri; ++ri)
+      hessian.block<3, 3>(s, 3 * ri.col()) += it.value() * ri.value() * block;
     hessian.block<3, 3>(s, o) += it.value() * q_theta;
     hessian.block<3, 3>(o, s) += it.value() * q_theta.transpose();
     hessian.block<3, 3>(s, o + 3) += it.value() * q_tau;
@@ -130,10 +133,12 @@ void ReducedPotentials::add_hessian(const Eigen::VectorXd& q, const ReducedInert
       const Eigen::Vector3d p = posed(q, inertia, a);
       term.potential->evaluate(static_cast<int>(c), root ? root->apply(p) : p, &g, &H);
       const int node = active_nodes_[sa];
-      if (root) add_root_blocks(*root, node, inertia.frame().A[sa], p, g, H, hessian);
-      const Eigen::Matrix3d RA =
-          root ? Eigen::Matrix3d(root->rotation.R * inertia.frame().A[sa]) : Eigen::Matrix3d(inertia.frame().A[sa]);
-      const Eigen::Matrix3d block = RA.transpose() * H * RA;  // A_kᵀ Rᵀ ∇²u_k R A_k
+      if (root) {
+        add_root_node_blocks(subspace_, *root, node, inertia.frame().A[sa], p, g, H, hessian);
+        continue;
+      }
+      const Eigen::Matrix3d& A = inertia.frame().A[sa];
+      const Eigen::Matrix3d block = A.transpose() * H * A;  // A_kᵀ ∇²u_k A_k
       for (SparseRowMatrix::InnerIterator si(subspace_.basis, node); si; ++si)
         for (SparseRowMatrix::InnerIterator ri(subspace_.basis, node); ri; ++ri)
           hessian.block<3, 3>(3 * si.col(), 3 * ri.col()) += si.value() * ri.value() * block;

@@ -192,9 +192,10 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
     x_start.resize(offset + 6);
     x_start << q_, root_;
   }
-  if (coupled_term_) {  // y = 0: the coupled system's own state at t0
-    x_start.resize(offset + options_.coupled->size());
-    x_start << q_, Eigen::VectorXd::Zero(options_.coupled->size());
+  if (coupled_term_) {  // y = 0: the coupled system's own state at t0, after the root's coordinates
+    const Eigen::VectorXd head = x_start;
+    x_start.resize(head.size() + options_.coupled->size());
+    x_start << head, Eigen::VectorXd::Zero(options_.coupled->size());
   }
   stats.inertia_seconds += seconds_since(clock);
   clock = Clock::now();
@@ -220,12 +221,18 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
   if (coupled_term_) {
     clock = Clock::now();
     const auto inertia_nodes = static_cast<Eigen::Index>(inertia_.inertia_nodes().size());
-    coupled_term_->begin(t0, dt, Eigen::Map<const meshing::RowMatrixX3d>(history_.p.data(), inertia_nodes, 3));
+    const Eigen::Map<const meshing::RowMatrixX3d> p_start(history_.p.data(), inertia_nodes, 3);
+    if (track) {
+      const RootFrame start_frame = root_frame(x_start, offset, pivot);
+      coupled_term_->begin(t0, dt, p_start, &start_frame, pivot);
+    } else {
+      coupled_term_->begin(t0, dt, p_start);
+    }
     stats.potential_seconds += seconds_since(clock);
   }
 
   // Φ = Σ of the substep's terms (reduced_terms.hpp).
-  std::array<TimedTerm, 5> terms_storage;
+  std::array<TimedTerm, 6> terms_storage;
   std::size_t num_terms = 0;
   if (track) {
     terms_storage[num_terms++] = {root_inertia_term_.get(), &stats.inertia_seconds};
@@ -233,6 +240,7 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
     terms_storage[num_terms++] = {gravity_head_.get(), &stats.inertia_seconds};
     terms_storage[num_terms++] = {elastic_head_.get(), &stats.elastic_seconds};
     if (contact) terms_storage[num_terms++] = {root_potential_term_.get(), &stats.potential_seconds};
+    if (coupled_term_) terms_storage[num_terms++] = {coupled_term_.get(), &stats.potential_seconds};
   } else if (coupled_term_) {
     if (inertia_on) terms_storage[num_terms++] = {inertia_head_.get(), &stats.inertia_seconds};
     terms_storage[num_terms++] = {gravity_head_.get(), &stats.inertia_seconds};
@@ -478,7 +486,7 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
   rate_dt_ = dt;
   ++rate_steps_;
   if (track) {
-    root_ = q.tail<6>();
+    root_ = q.segment<6>(offset);
     pivot_ = pivot;
   }
   q_ = q.head(offset);

@@ -28,10 +28,13 @@ void ReducedSolver::setup_root() {
 }
 
 void ReducedSolver::setup_coupled() {
-  require(!options_.root.enabled,
-          "reduced: objects in the body's solve need a prescribed skeleton (skeleton = \"prescribed\")");
   const auto offset = static_cast<Eigen::Index>(subspace_.num_dofs());
-  coupled_term_ = std::make_unique<CoupledTerm>(*options_.coupled, subspace_, inertia_, offset);
+  const Eigen::Index root = options_.root.enabled ? 6 : 0;  // the root's coordinates come first
+  coupled_term_ = std::make_unique<CoupledTerm>(*options_.coupled, subspace_, inertia_, offset + root);
+  if (options_.root.enabled) {
+    coupled_term_->set_root(offset);
+    return;  // setup_root() made the head terms
+  }
   inertia_head_ = std::make_unique<HeadTerm>(inertia_term_, offset);
   gravity_head_ = std::make_unique<HeadTerm>(gravity_term_, offset);
   elastic_head_ = std::make_unique<HeadTerm>(elastic_term_, offset);

@@ -15,7 +15,6 @@ std::string monolithic_blocker(const Scene& scene, const std::vector<std::unique
   if (body.solver() != SolverKind::reduced)
     return fmt::format("body '{}' is solved {} (only the reduced solver takes objects in)", body.name(),
                        solver_name(body.solver()));
-  if (body.spec().tracking) return fmt::format("body '{}' has a tracking skeleton", body.name());
   if (!scene.effects.inertia) return "inertia is off";
   return {};
 }

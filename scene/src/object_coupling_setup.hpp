@@ -14,7 +14,7 @@
 namespace sflsh::scene::detail {
 
 /// Empty when the free objects of the scene can share the body's solve ([contact] object_coupling =
-/// "monolithic", one body, soft and reduced, with a prescribed skeleton and inertia, object contact on); else why not.
+/// "monolithic", one body, soft and reduced, with inertia, object contact on); else why not.
 std::string monolithic_blocker(const Scene& scene, const std::vector<std::unique_ptr<SceneBody>>& bodies);
 
 /// The coupled objects of `free` for `body`, whose object-contact potential (`contact.objects`) leaves the free

@@ -11,6 +11,7 @@
 #include <sflsh/body/body_io.hpp>
 #include <sflsh/body/motion.hpp>
 #include <sflsh/model/body_layer.hpp>
+#include <sflsh/reduced/coupled_term.hpp>
 #include <sflsh/reduced/reduced_history.hpp>
 #include <sflsh/reduced/reduced_model.hpp>
 #include <sflsh/reduced/reduced_terms.hpp>
@@ -354,6 +355,91 @@ TEST_F(RootTermsFixture, NodePotentialAtTheDeviatedPositionsMatchesFiniteDiffere
   Eigen::VectorXd at = x(1e-3, 111);
   at.tail<6>().setZero();
   EXPECT_NEAR(term.value(at), plain.value(at.head(offset)), 1e-12 * std::abs(plain.value(at.head(offset))));
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// A coupled system (coupled_term.hpp): x = [q; y] and, with a tracking root, [q; θ; τ; y].
+
+/// Springs with a rest length from every listed node to a free point y (3 coordinates):
+/// u = k/4 (|d|² − ℓ²)², d = p − y − a_c, so the node, node × y and y blocks are all non-trivial.
+class SpringsToAPoint final : public CoupledSystem {
+ public:
+  SpringsToAPoint(std::vector<int> nodes, double stiffness, double rest)
+      : nodes_(std::move(nodes)), k_(stiffness), l_(rest) {
+    for (std::size_t c = 0; c < nodes_.size(); ++c) {
+      candidates_.push_back(static_cast<int>(c));
+      offsets_.push_back(Eigen::Vector3d(0.01 * (c % 3), -0.02 * (c % 5), 0.015 * (c % 2)));
+    }
+  }
+  Eigen::Index size() const override { return 3; }
+  const std::vector<int>& nodes() const override { return nodes_; }
+  void begin_substep(double, double, const meshing::RowMatrixX3d&, const meshing::RowMatrixX3d&) override {}
+  const std::vector<int>& candidates() const override { return candidates_; }
+  double evaluate(const meshing::RowMatrixX3d& P, const Eigen::VectorXd& y, CoupledDerivatives* d,
+                  bool with_hessian) const override {
+    if (d) d->reset(P.rows(), 3, with_hessian);
+    double value = 0.0;
+    for (Eigen::Index c = 0; c < P.rows(); ++c) {
+      const Eigen::Vector3d r = P.row(c).transpose() - y - offsets_[static_cast<std::size_t>(c)] - origin_;
+      const double e = r.squaredNorm() - l_ * l_;
+      value += 0.25 * k_ * e * e;
+      if (!d) continue;
+      const Eigen::Vector3d g = k_ * e * r;  // ∂u/∂p = −∂u/∂y
+      d->node_gradient.row(c) += g.transpose();
+      d->gradient -= g;
+      if (!with_hessian) continue;
+      const Eigen::Matrix3d H = k_ * (e * Eigen::Matrix3d::Identity() + 2.0 * r * r.transpose());
+      d->node_hessian[static_cast<std::size_t>(c)] += H;
+      d->node_mixed.middleRows<3>(3 * c) -= H;
+      d->hessian += H;
+    }
+    return value;
+  }
+  bool accept_substep(const meshing::RowMatrixX3d&, const Eigen::VectorXd&) override { return true; }
+  void commit_substep(const meshing::RowMatrixX3d&, const Eigen::VectorXd&) override {}
+  void save() override {}
+  void restore() override {}
+  Eigen::Vector3d origin_ = Eigen::Vector3d(0.05, 0.04, 0.02);
+
+ private:
+  std::vector<int> nodes_, candidates_;
+  std::vector<Eigen::Vector3d> offsets_;
+  double k_, l_;
+};
+
+TEST_F(RootTermsFixture, CoupledSystemMatchesFiniteDifferencesWithAndWithoutARoot) {
+  const model::Problem& p = box.problem;
+  ReducedInertia inertia(p, subspace);
+  inertia.set_time(t, x_prescribed);
+  meshing::RowMatrixX3d p_start;
+  inertia.posed(Eigen::VectorXd::Zero(subspace.num_dofs()), p_start);
+  std::vector<int> some;  // every other moving node
+  const std::vector<int> active = subspace.active_nodes();
+  for (std::size_t k = 0; k < active.size(); k += 2) some.push_back(active[k]);
+  SpringsToAPoint springs(some, 1e5, 0.03);
+  unsigned seed = 121;
+  {  // x = [q; y]
+    CoupledTerm term(springs, subspace, inertia, offset);
+    term.begin(t - 0.01, 0.01, p_start);
+    for (double amplitude : kAmplitudes) {
+      Eigen::VectorXd v(offset + 3);
+      v << q(amplitude, seed), testing::random_q(3, amplitude, seed + 50);
+      ++seed;
+      check_derivatives(term, v);
+    }
+  }
+  {  // x = [q; θ; τ; y]: the springs pull the deviated nodes
+    CoupledTerm term(springs, subspace, inertia, offset + 6);
+    term.set_root(offset);
+    const RootFrame start = root_frame(Eigen::VectorXd::Zero(offset + 6), offset, pivot);
+    term.begin(t - 0.01, 0.01, p_start, &start, pivot);
+    for (double amplitude : kAmplitudes) {
+      Eigen::VectorXd v(offset + 9);
+      v << x(amplitude, seed), testing::random_q(3, amplitude, seed + 50);
+      ++seed;
+      check_derivatives(term, v);
+    }
+  }
 }
 
 // ---------------------------------------------------------------------------------------------------------

@@ -20,6 +20,14 @@ namespace sflsh::reduced {
 /// inertia's current time; q may be longer than 3S (extra coordinates after it are ignored).
 Eigen::Vector3d posed_node(const Subspace& subspace, const ReducedInertia& inertia, const Eigen::VectorXd& q, int a);
 
+/// Adds the root's rows and columns of one node's contribution to a Hessian over x = [q; θ; τ; …] (the root at
+/// root.offset): u of the deviated position y = R(p − c) + c + τ, with p the node's posed position before the
+/// deviation, ∇u = g and ∇²u = H at y, A the node's map and `node` its mesh index (its basis row). Also adds the
+/// soft-tissue block (R A)ᵀ H (R A) b_s b_r.
+void add_root_node_blocks(const Subspace& subspace, const RootFrame& root, int node, const Eigen::Matrix3d& A,
+                          const Eigen::Vector3d& p, const Eigen::Vector3d& g, const Eigen::Matrix3d& H,
+                          Eigen::MatrixXd& hessian);
+
 class ReducedPotentials {
  public:
   /// Throws when a potential acts on a node without basis functions (it could not respond).
@@ -49,9 +57,6 @@ class ReducedPotentials {
   };
   /// Posed position of active node a (before the root deviation).
   Eigen::Vector3d posed(const Eigen::VectorXd& q, const ReducedInertia& inertia, int a) const;
-  /// The root's rows and columns of one candidate's Hessian (at unrotated position p, ∇u = g, ∇²u = H).
-  void add_root_blocks(const RootFrame& root, int node, const Eigen::Matrix3d& A, const Eigen::Vector3d& p,
-                       const Eigen::Vector3d& g, const Eigen::Matrix3d& H, Eigen::MatrixXd& hessian) const;
 
   const Subspace& subspace_;
   const std::vector<int>& active_nodes_;

@@ -68,7 +68,7 @@ struct ReducedOptions {
   /// follows its motion exactly (prescribed), bit for bit as before.
   RootTrackingOptions root;
   /// Unknowns solved in the same Newton solve (coupled_system.hpp: e.g. free rigid objects on the skin), not
-  /// owned; x = [q; y]. Needs a prescribed skeleton (root.enabled = false). Null: none.
+  /// owned; x = [q; y], or [q; θ; τ; y] with a tracking root. Null: none.
   CoupledSystem* coupled = nullptr;
 };
 
