@@ -7,6 +7,7 @@
 #include <sflsh/core/error.hpp>
 #include <sflsh/material/orthotropic_fung.hpp>
 #include <sflsh/reduced/cubature_guard.hpp>
+#include <sflsh/reduced/reduced_sensitivity.hpp>
 #include <sflsh/reduced/reduced_solver.hpp>
 
 #include <gtest/gtest.h>
@@ -100,6 +101,39 @@ model::State thrown(const model::Problem& p, double speed) {
   for (int i = 0; i < p.num_nodes(); ++i)
     if (!fixed[static_cast<std::size_t>(3 * i)]) state.w[3 * i + 2] = speed;
   return state;
+}
+
+// dq/dY is defined on the cubature a differentiated run starts with, so a run whose guard grows the cubature stops
+// with one line; the fit then repeats it with the grown cubature from the start (DynamicsCase, dynamics_case.cpp),
+// which must run through: the same case as below, differentiated, at most 4 attempts.
+TEST(CubatureGuard, ADifferentiatedRunRepeatedOnTheGrownCubatureRunsThrough) {
+  const auto c = testing::box_case({5, 4, 3});
+  const Subspace s = testing::box_subspace(c);
+  Cubature cubature;
+  cubature.tets = {farthest_point_tets(c.problem, 1, {}).front()};
+  cubature.weights = voronoi_weights(c.problem, cubature.tets);
+  cubature.method = "voronoi";
+  const auto uniform = [](const Cubature& cub) { return Eigen::MatrixXd::Ones(cub.size(), 1); };  // Y_c = Y_1
+  int attempts = 0;
+  bool grown_once = false;
+  for (;; ++attempts) {
+    ASSERT_LT(attempts, 4) << "the cubature kept growing";
+    SensitivityIntegrator integrator(c.problem, s, cubature, uniform(cubature));
+    integrator.initialize(thrown(c.problem, 3.0));
+    try {
+      for (int k = 0; k < 6; ++k) integrator.step(1.0 / 60.0);
+    } catch (const Error& e) {
+      ASSERT_GT(integrator.integrator().cubature_added(), 0) << e.what();
+      EXPECT_NE(std::string(e.what()).find("cubature"), std::string::npos) << e.what();
+      cubature = integrator.integrator().cubature();
+      grown_once = true;
+      continue;
+    }
+    EXPECT_TRUE(integrator.dq_dyoung().allFinite());
+    EXPECT_GT(integrator.dq_dyoung().norm(), 0.0);
+    break;
+  }
+  EXPECT_TRUE(grown_once) << "the one-tet cubature must need the guard here";
 }
 
 TEST(CubatureGuard, TheSolverRepairsAStateThatLeavesTheMaterialOutsideTheCubature) {

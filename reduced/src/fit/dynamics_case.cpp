@@ -7,6 +7,7 @@
 #include <sflsh/reduced/young_map.hpp>
 
 #include <chrono>
+#include <optional>
 
 namespace sflsh::reduced {
 
@@ -96,27 +97,49 @@ CaseDynamics DynamicsCase::simulate_with_sensitivity(const LayerParameterization
         rest.directions.push_back(parameterization.retargeter().node_derivative(shaped, parameterization.phi().col(i)));
       rest.depth = parameterization.retargeter().depth();
     }
-    SensitivityIntegrator integrator(problem, model.subspace, model.cubature, young_map,
-                                     sensitivity_solver_options(options), thickness ? &rest : nullptr);
-    integrator.initialize(model::initial_state(problem, 0.0));
+    // dq/dY is defined on the cubature the run starts with. When the guard has to grow it (a tet outside it
+    // leaves the material's range, reduced_solver.hpp), the run is repeated with the grown cubature from the
+    // start (its weights as the guard left them, the Young map extended to the new tets), at most 4 times.
     const double setup_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    const int columns = static_cast<int>(integrator.dq_dyoung().cols());
-    DynamicsAmplitudeSensitivity amplitude(normals_, columns);
-    const SkinDisplacementMap& skin = skin_map(model);
-    auto add_frame = [&] {
-      amplitude.add(skin.displacement_of(integrator.q()), skin.derivative(integrator.dq_dyoung()));
-    };
-    add_frame();
-    for (int f = 1; f < frames_; ++f) {
-      integrator.step(1.0 / fps_);
-      add_frame();
+    Cubature cubature = model.cubature;
+    Eigen::MatrixXd map = young_map;
+    std::optional<DynamicsAmplitudeSensitivity> amplitude;
+    int columns = 0;
+    for (int attempt = 0;; ++attempt) {
+      SensitivityIntegrator integrator(problem, model.subspace, cubature, map, sensitivity_solver_options(options),
+                                       thickness ? &rest : nullptr);
+      integrator.initialize(model::initial_state(problem, 0.0));
+      columns = static_cast<int>(integrator.dq_dyoung().cols());
+      amplitude.emplace(normals_, columns);
+      const SkinDisplacementMap& skin = skin_map(model);
+      auto add_frame = [&] {
+        amplitude->add(skin.displacement_of(integrator.q()), skin.derivative(integrator.dq_dyoung()));
+      };
+      try {
+        add_frame();
+        for (int f = 1; f < frames_; ++f) {
+          integrator.step(1.0 / fps_);
+          add_frame();
+        }
+        break;
+      } catch (const Error&) {
+        const ReducedSolver& solver = integrator.integrator();
+        if (solver.cubature_added() == 0 || attempt >= 3) throw;
+        logger()->info(
+            "{} / {}: the guard grew the cubature by {} tet(s) at t = {:.4g} s; the differentiated run is "
+            "repeated with them from the start",
+            subject_, motion_, solver.cubature_added(), solver.time());
+        cubature = solver.cubature();
+        map = young_tet_map(parameterization.retargeter(), parameterization.phi(), cubature.tets,
+                            options_.stiffness_scale);
+      }
     }
     CaseDynamics out;
-    out.sigma_normal = 1e3 * amplitude.sigma_normal();
-    out.sigma_tangent = 1e3 * amplitude.sigma_tangent();
+    out.sigma_normal = 1e3 * amplitude->sigma_normal();
+    out.sigma_tangent = 1e3 * amplitude->sigma_tangent();
     dsigma.resize(2 * out.sigma_normal.size(), columns);
-    dsigma.topRows(out.sigma_normal.size()) = 1e3 * amplitude.sigma_normal_derivative();
-    dsigma.bottomRows(out.sigma_normal.size()) = 1e3 * amplitude.sigma_tangent_derivative();
+    dsigma.topRows(out.sigma_normal.size()) = 1e3 * amplitude->sigma_normal_derivative();
+    dsigma.bottomRows(out.sigma_normal.size()) = 1e3 * amplitude->sigma_tangent_derivative();
     require(out.sigma_normal.allFinite() && out.sigma_tangent.allFinite() && dsigma.allFinite(),
             "non-finite dynamics amplitude or derivative");
     out.frames = frames_;
