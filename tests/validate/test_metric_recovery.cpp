@@ -136,10 +136,10 @@ TEST(MetricRecovery, BetaFitted) {
 }
 
 TEST(MetricRecovery, ThighsAloneKeepTheStillSoftVerticesStill) {
-  // One region alone has a small mean over the soft region (0.13 mm here), so what the fit leaves on the ~3 000
+  // One region alone has a small mean over the soft region (0.13 mm here), so what the fit leaves on its ~3 800
   // still soft vertices weighs in it. The thighs were the worst case: +5.5 % (correlation 0.99977) at these 90
   // frames with a fixed σ_0 = 0.2 mm and a reweighting floor of 0.02 (the blobs' fringe and their floored centres
-  // steered the pelvis and the hips by 0.15–0.2 mrad, which left 0.01 mm on the still vertices around them);
+  // steered the pelvis and the hips by 0.15–0.2 mrad, which left 0.01–0.02 mm on the still vertices around them);
   // +0.10 % (correlation 1 − 1e-7) with σ_0 measured off the soft region and the prior scaled with it. The data
   // are noise-free, so 1 % is 10× the present error and fails the old fit 5×; 0.9999 fails its correlation too.
   expect_recovery({"running_on_spot", 0.006, 3.0, {"thighs"}}, true, 90, 0.01, 0.9999);
