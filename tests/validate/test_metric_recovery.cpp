@@ -12,6 +12,9 @@
 
 #include <gtest/gtest.h>
 
+#include <string>
+#include <vector>
+
 namespace sflsh::validate {
 namespace {
 
@@ -86,30 +89,36 @@ TEST(RigidityWeights, FollowTheDistanceToTheBones) {
 struct RecoveryCase {
   const char* motion;
   double amplitude, frequency;
+  std::vector<std::string> regions = soft_motion_region_names();
 };
 
+/// The acceptance: the mean σ over the soft region within 5 % and σ per vertex correlated at ≥ 0.95.
+/// Measured (docs/validate.md table): errors ≤ 0.11 % and correlations ≥ 0.9999 on every row; the earlier
+/// soft-weight fit is 21 % off with every region moving (correlation 0.957), so the 5 % bound separates a fit that
+/// keeps the dynamics from one that absorbs them into the joints.
+constexpr double kAcceptedError = 0.05;
+constexpr double kAcceptedCorrelation = 0.95;
+
 /// Fits the sequence with the default options and checks the recovery of the mean σ and of σ per vertex.
-void expect_recovery(const RecoveryCase& c, bool beta_given, int frames) {
+void expect_recovery(const RecoveryCase& c, bool beta_given, int frames, double max_error = kAcceptedError,
+                     double min_correlation = kAcceptedCorrelation) {
   SyntheticSoftMotion spec;
   spec.motion = c.motion;
   spec.frames = frames;
   spec.amplitude = c.amplitude;
   spec.frequency = c.frequency;
+  spec.regions = c.regions;
   const SyntheticSoftSequence s = synthetic_soft_motion(open_body(), spec);
   const RegistrationMetrics m = registration_metrics(
       open_body(), s.frames, spec.fps, beta_given ? std::optional<body::Betas>(s.beta) : std::nullopt, {});
   const double truth = s.truth.mean_sigma_soft();
   const double error = m.dynamics.mean_sigma_soft() / truth - 1.0;
   const double r = sigma_correlation(s.truth.sigma, m.dynamics.sigma, s.truth.soft_vertices);
-  SCOPED_TRACE(::testing::Message() << c.motion << " A " << c.amplitude << " m, f " << c.frequency << " Hz, β "
-                                    << (beta_given ? "given" : "fitted") << ": error " << 100 * error
-                                    << " %, correlation " << r);
-  // The acceptance: the mean σ over the soft region within 5 % and σ per vertex correlated at ≥ 0.95.
-  // Measured (docs/validate.md table): errors 0.6–2.3 % and correlations ≥ 0.999 with every region moving; the
-  // earlier soft-weight fit is 21 % off on these cases (correlation 0.957), so the 5 % bound separates a fit that
-  // keeps the dynamics from one that absorbs them into the joints, with room for the remaining ~2 %.
-  EXPECT_LT(std::abs(error), 0.05);
-  EXPECT_GE(r, 0.95);
+  SCOPED_TRACE(::testing::Message() << c.motion << " A " << c.amplitude << " m, f " << c.frequency << " Hz, "
+                                    << c.regions.size() << " region(s), β " << (beta_given ? "given" : "fitted")
+                                    << ": error " << 100 * error << " %, correlation " << r);
+  EXPECT_LT(std::abs(error), max_error);
+  EXPECT_GE(r, min_correlation);
   EXPECT_EQ(m.fit.unconverged_frames, 0);
 }
 
@@ -124,6 +133,16 @@ TEST(MetricRecovery, BetaFitted) {
   for (const RecoveryCase& c :
        {RecoveryCase{"jiggle_on_toes", 0.006, 4.0}, RecoveryCase{"shake_shoulders", 0.004, 2.0}})
     expect_recovery(c, false, 90);
+}
+
+TEST(MetricRecovery, ThighsAloneKeepTheStillSoftVerticesStill) {
+  // One region alone has a small mean over the soft region (0.13 mm here), so what the fit leaves on its ~3 800
+  // still soft vertices weighs in it. The thighs were the worst case: +5.5 % (correlation 0.99977) at these 90
+  // frames with a fixed σ_0 = 0.2 mm and a reweighting floor of 0.02 (the blobs' fringe and their floored centres
+  // steered the pelvis and the hips by 0.15–0.2 mrad, which left 0.01–0.02 mm on the still vertices around them);
+  // +0.10 % (correlation 1 − 1e-7) with σ_0 measured off the soft region and the prior scaled with it. The data
+  // are noise-free, so 1 % is 10× the present error and fails the old fit 5×; 0.9999 fails its correlation too.
+  expect_recovery({"running_on_spot", 0.006, 3.0, {"thighs"}}, true, 90, 0.01, 0.9999);
 }
 
 }  // namespace

@@ -284,6 +284,38 @@ FrameFitReport fit_frame(const body::BodyModel& model, const RowMatrixX3d& shape
 
 namespace {
 
+/// σ_0 of the measured rigidity: the RMS dynamics amplitude that the last fit leaves on the vertices outside
+/// the soft region, σ_0² = mean_{i ∉ soft} σ_i², at least `least`. Those vertices carry no soft tissue, so
+/// their σ is what registration noise and the fit's own pose error alone leave on a vertex.
+double rigid_motion_scale(const Eigen::VectorXd& sigma, const std::vector<int>& soft_vertices, double least) {
+  std::vector<char> soft(static_cast<std::size_t>(sigma.size()), 0);
+  for (int v : soft_vertices) soft[static_cast<std::size_t>(v)] = 1;
+  double sum_of_squares = 0.0;
+  Eigen::Index count = 0;
+  for (Eigen::Index i = 0; i < sigma.size(); ++i) {
+    if (soft[static_cast<std::size_t>(i)]) continue;
+    sum_of_squares += sigma[i] * sigma[i];
+    ++count;
+  }
+  return count ? std::max(least, std::sqrt(sum_of_squares / static_cast<double>(count))) : least;
+}
+
+/// The reweighting factor per vertex, the share of vertex i's variance that the rigid vertices also show,
+/// f_i = max(f_min, σ_0² / (σ_0² + σ_i²)) = max(f_min, 1 / (1 + (σ_i / σ_0)²)).
+Eigen::VectorXd measured_rigidity(const Eigen::VectorXd& sigma, double scale, double floor) {
+  return (1.0 + (sigma / scale).array().square()).inverse().max(floor).matrix();
+}
+
+/// λ_θ of a reweighted fit. Each vertex's weight is the inverse of its variance in units of the noise variance
+/// σ_0², so the data term is Σ w_i r_i² / σ_0² up to the factor σ_0², and the prior on θ keeps its own angular scale
+/// σ_θ: λ_θ = σ_0² / σ_θ². The first fit sets σ_θ (λ_θ given, σ_0 = `first_scale` measured after it), so a later
+/// pass whose fit leaves σ_0 = `scale` weighs the prior by λ_θ (σ_0 / σ_0,first)². Without that the prior would
+/// grow against the data as the fit improves and σ_0 shrinks, and steer the joints that only soft vertices observe.
+double scaled_temporal_weight(double temporal_weight, double scale, double first_scale) {
+  const double ratio = scale / first_scale;
+  return temporal_weight * ratio * ratio;
+}
+
 /// One fit of every frame with the vertex weights `weights`; β fitted (from `initial_beta`) when `beta` is empty.
 PoseFitResult fit_motion_weighted(const body::BodyModel& model, const std::vector<RowMatrixX3d>& registered, double fps,
                                   const std::optional<body::Betas>& beta, const body::Betas& initial_beta,
@@ -415,9 +447,9 @@ PoseFitResult fit_motion(const body::BodyModel& model, const std::vector<RowMatr
               options.vertex_stride >= 1,
           "pose fit: iteration limits and the vertex stride must be positive");
   require(options.rigid_depth > 0.0 && options.min_weight >= 0.0 && options.min_weight <= 1.0 &&
-              options.temporal_weight >= 0.0 && options.reweighting_passes >= 0 && options.motion_scale > 0.0 &&
+              options.temporal_weight >= 0.0 && options.reweighting_passes >= 0 && options.min_motion_scale > 0.0 &&
               options.min_reweight > 0.0 && options.min_reweight <= 1.0,
-          "pose fit: rigid_depth and motion_scale must be positive, min_weight in [0, 1], temporal_weight and "
+          "pose fit: rigid_depth and min_motion_scale must be positive, min_weight in [0, 1], temporal_weight and "
           "reweighting_passes non-negative");
   const Eigen::Index n = model.num_vertices();
   for (std::size_t t = 0; t < registered.size(); ++t) {
@@ -428,15 +460,20 @@ PoseFitResult fit_motion(const body::BodyModel& model, const std::vector<RowMatr
   const Eigen::VectorXd prior_weight = vertex_weights(model, options);
   PoseFitResult result = fit_motion_weighted(model, registered, fps, beta, body::Betas::Zero(), options, prior_weight);
   if (options.weighting == PoseFitWeighting::rigidity && registered.size() >= 2) {
+    double first_scale = 0.0;  // σ_0 after the first fit
     for (int pass = 0; pass < options.reweighting_passes; ++pass) {
       // Measured rigidity: the σ_i this fit leaves (docs/physics.md §4) down-weighs the vertices that move on
-      // their own, w_i ← w_i max(f_min, 1 / (1 + (σ_i / σ_0)²)), and the fit is repeated (β from the last one). The
-      // floor f_min keeps joints that only soft vertices observe (the spine's) determined when all of them move.
+      // their own, w_i ← w_i max(f_min, σ_0² / (σ_0² + σ_i²)), σ_0 what the vertices off the soft region show,
+      // and the fit is repeated (β from the last one).
       const Eigen::VectorXd sigma = dynamics_metrics(model, result.beta, result.motion, registered, {}).sigma;
-      const Eigen::VectorXd factor =
-          (1.0 + (sigma / options.motion_scale).array().square()).inverse().max(options.min_reweight).matrix();
-      const Eigen::VectorXd weight = prior_weight.cwiseProduct(factor);
-      result = fit_motion_weighted(model, registered, fps, beta, result.beta, options, weight);
+      const double scale = rigid_motion_scale(sigma, options.soft_vertices, options.min_motion_scale);
+      if (pass == 0) first_scale = scale;
+      PoseFitOptions pass_options = options;
+      pass_options.temporal_weight = scaled_temporal_weight(options.temporal_weight, scale, first_scale);
+      logger()->debug("pose fit: reweighting pass {}, σ_0 = {:.4f} mm, λ_θ = {:.3g} m²/rad²", pass + 1, 1e3 * scale,
+                      pass_options.temporal_weight);
+      const Eigen::VectorXd weight = prior_weight.cwiseProduct(measured_rigidity(sigma, scale, options.min_reweight));
+      result = fit_motion_weighted(model, registered, fps, beta, result.beta, pass_options, weight);
     }
   }
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

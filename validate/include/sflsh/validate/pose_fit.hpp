@@ -43,12 +43,13 @@ struct PoseFitOptions {
   double soft_weight = 0.05;      ///< soft_weight: w_i of the soft vertices (squared-residual weight; 1 elsewhere)
   double rigid_depth = 0.05;      ///< rigidity: D_0 [m], soft vertices nearer the bones count as rigid
   double min_weight = 1e-3;       ///< rigidity: vertices weighing less are left out of the fit
-  double temporal_weight = 1e-5;  ///< rigidity: λ_θ [m²/rad²] of the second-difference prior on θ
-  int reweighting_passes = 2;     ///< rigidity: refits with w_i max(f_min, 1/(1 + (σ_i/σ_0)²)), σ_i of the last fit
-  double motion_scale = 0.2e-3;   ///< rigidity: σ_0 [m] of that reweighting
-  double min_reweight = 0.02;     ///< rigidity: f_min, the reweighting factor's floor
-  int max_evaluations = 100;      ///< per Levenberg–Marquardt solve (residual evaluations)
-  double tolerance = 1e-7;        ///< relative tolerance on the step and on the reduction of the sum of squares
+  double temporal_weight = 1e-5;  ///< rigidity: λ_θ [m²/rad²] of the second-difference prior on θ (first fit;
+                                  ///< a reweighted fit scales it by (σ_0 / σ_0 after the first fit)²)
+  int reweighting_passes = 2;  ///< rigidity: refits with w_i max(f_min, σ_0² / (σ_0² + σ_i²)), σ_i of the last fit
+  double min_motion_scale = 1e-6;  ///< rigidity: least σ_0 [m] (σ_0: the RMS σ the last fit leaves off the soft region)
+  double min_reweight = 1e-6;      ///< rigidity: f_min, the reweighting factor's floor (a guard only)
+  int max_evaluations = 100;       ///< per Levenberg–Marquardt solve (residual evaluations)
+  double tolerance = 1e-7;         ///< relative tolerance on the step and on the reduction of the sum of squares
   double absolute_tolerance = 1e-10;  ///< [m] a fit whose weighted RMS residual falls below this is exact
   int vertex_stride = 2;              ///< fit on vertices 0, s, 2s, … (1: every vertex)
   int shape_frames = 4;               ///< frames used for the β fit (evenly spaced, first and last included)
