@@ -239,7 +239,8 @@ void register_metrics_commands(CLI::App& app, const Invocation& invocation) {
   cmd->add_option("--rigid-depth", opt->rigid_depth,
                   "rigidity: D_0 [m], soft vertices nearer the bones count as rigid (w = (D_0/D)^4 beyond)");
   cmd->add_option("--temporal-weight", opt->temporal_weight,
-                  "rigidity: weight [m²/rad²] of the prior on θ's second difference (0: none)");
+                  "rigidity: weight [m²/rad²] of the prior on θ's second difference in the first fit (0: none); the "
+                  "reweighting passes scale it with the measured noise σ_0² (docs/validate.md)");
   cmd->add_option("--synthesize", opt->synthesize,
                   "Write a synthetic DYNA file with known soft-tissue motion over this procedural motion to --out "
                   "(soft_motion.h5, truth.csv, summary.json) instead of measuring one");
