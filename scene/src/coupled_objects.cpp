@@ -67,6 +67,8 @@ CoupledObjects::CoupledObjects(CoupledSetup setup) : setup_(std::move(setup)) {
     objects_.push_back(std::move(o));
   }
   candidate_of_entry_.assign(setup_.nodes.size(), -1);
+  node_force_.assign(setup_.nodes.size(), Eigen::Vector3d::Zero());
+  node_depth_.assign(setup_.nodes.size(), 0.0);
   near_.resize(objects_.size());
 }
 
@@ -280,6 +282,8 @@ bool CoupledObjects::accept_substep(const RowMatrixX3d& P_end, const Eigen::Vect
 void CoupledObjects::commit_substep(const RowMatrixX3d& P_end, const Eigen::VectorXd& y) {
   const Timer timer(seconds_);
   const RigidObjectParameters& prm = setup_.parameters;
+  std::fill(node_force_.begin(), node_force_.end(), Eigen::Vector3d::Zero());
+  std::fill(node_depth_.begin(), node_depth_.end(), 0.0);
   for (std::size_t o = 0; o < objects_.size(); ++o) {
     Object& object = objects_[o];
     const RigidObject& rigid = *setup_.objects[o];
@@ -325,6 +329,10 @@ void CoupledObjects::commit_substep(const RowMatrixX3d& P_end, const Eigen::Vect
       if (!soft) r.rigid_surface_force += f;
       const PointGap gap = point_gap(shape, p, frame);
       penetration = std::max(penetration, -gap.phi);
+      if (kind == Kind::node) {
+        node_force_[static_cast<std::size_t>(id)] -= g.head<3>();
+        node_depth_[static_cast<std::size_t>(id)] = std::max(node_depth_[static_cast<std::size_t>(id)], -gap.phi);
+      }
       Lagged l;
       l.kind = kind;
       l.id = id;
@@ -358,6 +366,7 @@ void CoupledObjects::commit_substep(const RowMatrixX3d& P_end, const Eigen::Vect
         Vector9d g = Vector9d::Zero();
         r.friction_work += point_friction(l.contact, p, p0, mu, epsilon_, frame, &g, nullptr);
         r.surface_friction_force -= g.segment<3>(3);
+        if (l.kind == Kind::node) node_force_[static_cast<std::size_t>(l.id)] -= g.head<3>();
       }
     r.max_penetration = std::max(r.max_penetration, penetration);
     r.unresolved = r.unresolved || penetration > prm.tolerance;

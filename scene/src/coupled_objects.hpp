@@ -56,6 +56,10 @@ class CoupledObjects final : public reduced::CoupledSystem {
   /// After the body's step: sets every object's world state and returns what its step did (forces on the
   /// object [N] and penetration [m] at the step's end, refinements, energies).
   std::vector<RigidStepReport> finish_step();
+  /// What the objects did to the body's contact node `entry` (an index into nodes()) at the last committed
+  /// substep: the force on the node [N] (body frame: penalty and friction) and its depth inside an object [m].
+  const Eigen::Vector3d& node_force(int entry) const { return node_force_[static_cast<std::size_t>(entry)]; }
+  double node_penetration(int entry) const { return node_depth_[static_cast<std::size_t>(entry)]; }
   /// Time spent in the objects' part of the body's solve since the last call [s] (the chain rule to the
   /// body's coordinates excluded).
   double take_seconds();
@@ -93,13 +97,15 @@ class CoupledObjects final : public reduced::CoupledSystem {
   CoupledSetup setup_;
   std::vector<Object> objects_, saved_;
   double t0_ = 0.0, dt_ = 0.0, epsilon_ = 0.0;
-  std::vector<int> candidates_;           ///< entries of nodes() near an object in this substep
-  std::vector<int> candidate_of_entry_;   ///< per entry of nodes(): its candidate, or −1
-  RowMatrixX3d p_start_;                  ///< per candidate: its posed position at t0 [m]
-  RowMatrixX3d rigid_start_, rigid_end_;  ///< the rigid skin vertices at t0 and t0 + dt (body frame) [m]
-  std::vector<Near> near_;                ///< per object
-  std::vector<const Obstacle*> posed_;    ///< the obstacles at t0 + dt in the body's frame
-  mutable double seconds_ = 0.0;          ///< in this system's part of the solve [s]
+  std::vector<int> candidates_;              ///< entries of nodes() near an object in this substep
+  std::vector<int> candidate_of_entry_;      ///< per entry of nodes(): its candidate, or −1
+  RowMatrixX3d p_start_;                     ///< per candidate: its posed position at t0 [m]
+  RowMatrixX3d rigid_start_, rigid_end_;     ///< the rigid skin vertices at t0 and t0 + dt (body frame) [m]
+  std::vector<Near> near_;                   ///< per object
+  std::vector<Eigen::Vector3d> node_force_;  ///< per entry of nodes(), at the last commit [N]
+  std::vector<double> node_depth_;           ///< per entry of nodes(), at the last commit [m]
+  std::vector<const Obstacle*> posed_;       ///< the obstacles at t0 + dt in the body's frame
+  mutable double seconds_ = 0.0;             ///< in this system's part of the solve [s]
 };
 
 }  // namespace sflsh::scene::detail

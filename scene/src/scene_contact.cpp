@@ -1,6 +1,8 @@
 // A soft body's contact in a scene (scene_contact.hpp).
 #include "scene_contact.hpp"
 
+#include "coupled_objects.hpp"
+
 #include <algorithm>
 #include <map>
 
@@ -55,6 +57,10 @@ std::vector<vtk::Field> contact_fields(const BodyContact& c, const SceneBody& bo
       if (!p) continue;
       force.row(v) += p->contact_force().row(k) * body.placement().R.transpose();
       depth(v, 0) = std::max(depth(v, 0), p->penetration()[k]);
+    }
+    if (c.coupled) {  // entries of the object potential are the coupled objects' nodes too
+      force.row(v) += (body.placement().R * c.coupled->node_force(k)).transpose();
+      depth(v, 0) = std::max(depth(v, 0), c.coupled->node_penetration(k));
     }
   }
   return {{"contact_force", force, false}, {"penetration", depth, false}};

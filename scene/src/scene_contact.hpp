@@ -15,6 +15,8 @@
 namespace sflsh::scene::detail {
 
 /// A soft body's contact: its potentials against the objects and against the other bodies.
+class CoupledObjects;
+
 struct BodyContact {
   std::shared_ptr<ContactPotential> objects;                  ///< null without object contact
   std::vector<std::shared_ptr<detail::PlacedMotion>> placed;  ///< per scene object (object potential)
@@ -27,6 +29,7 @@ struct BodyContact {
   double surface_seconds = 0.0;      ///< updating the other bodies' surfaces
   double max_penetration = 0.0;      ///< measured at the written frames on the skin [m]
   ContactPotential::Checkpoint objects_start, bodies_start;  ///< the potentials at the start of the step
+  const CoupledObjects* coupled = nullptr;  ///< free objects in this body's solve (their push on the nodes), or null
 };
 
 /// Lumped skin area per contact node: the region vertex's (lumped_vertex_areas) on the node it sits on;

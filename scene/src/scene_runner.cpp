@@ -210,6 +210,7 @@ class SceneRun {
               scene_, body, c, *free_, objects_,
               scene_.effects.gravity ? gravity_vector(scene_.effects) : Eigen::Vector3d::Zero());
           body.set_coupled(coupled_.get());
+          c.coupled = coupled_.get();
           free_->set_coupled();
           logger()->info("scene: free objects are solved in body '{}''s Newton solve (monolithic)", body.name());
         } else if (!free_->empty()) {

@@ -4,6 +4,7 @@
 #include "scratch_dir.hpp"
 
 #include <sflsh/core/error.hpp>
+#include <sflsh/core/vtk_io.hpp>
 #include <sflsh/scene/scene_file.hpp>
 #include <sflsh/scene/scene_runner.hpp>
 
@@ -261,6 +262,34 @@ TEST(SceneFreeObjects, ABallThrownAtATrackingBodyMovesItsRoot) {
   EXPECT_LE(tracking["free_objects"][0]["energy"]["max_gain_J"].get<double>(), 1e-6);
   EXPECT_LE(tracking["contact"]["measured_max_penetration_mm"].get<double>(), 1.0 + 1e-6);
   EXPECT_EQ(prescribed["bodies"][0]["skeleton"]["skeleton"], "prescribed");
+}
+
+// The skin's contact_force output includes the free objects solved in the body's solve: at the last frame of the
+// box on the lap the nodes' forces sum to minus the push and friction the box felt (the same terms; 1 %: the
+// frame's float output and the vertex-to-node map).
+TEST(SceneFreeObjects, TheSkinsContactForceOutputCarriesTheCoupledObjects) {
+  const auto dir = testing::scratch_dir();
+  SceneRunOptions options;
+  options.cache_dir = SFLSH_TEST_CACHE;
+  options.threads = 1;
+  options.out = dir / "run";
+  options.every = 1000;  // the first and the last frame
+  const nlohmann::json s =
+      run_scene(load_scene(std::filesystem::path(SFLSH_DATA_DIR) / "scenes" / "box_on_lap.toml"), options);
+  const nlohmann::json& c = s["free_objects"][0]["contact"];
+  const Eigen::Vector3d on_box =
+      Eigen::Vector3d(c["final_body_force_N"][0], c["final_body_force_N"][1], c["final_body_force_N"][2]) +
+      Eigen::Vector3d(c["final_friction_force_N"][0], c["final_friction_force_N"][1], c["final_friction_force_N"][2]);
+  std::filesystem::path last;
+  for (const auto& e : std::filesystem::directory_iterator(dir / "run"))
+    if (e.path().extension() == ".vtp" && e.path().filename().string().rfind("subject_0", 0) == 0 &&
+        (last.empty() || e.path().filename() > last.filename()))
+      last = e.path();
+  ASSERT_FALSE(last.empty());
+  const Eigen::MatrixXd force = vtk::read_point_array(last, "contact_force");
+  const Eigen::Vector3d on_skin = force.colwise().sum().transpose();
+  EXPECT_GT(on_box.norm(), 19.0);
+  EXPECT_LT((on_skin + on_box).norm(), 0.01 * on_box.norm()) << on_skin.transpose() << " vs " << on_box.transpose();
 }
 
 // The former coupling stays available: the ball solved first against the skin predicted for the step's end.
