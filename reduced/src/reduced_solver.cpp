@@ -1,6 +1,5 @@
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
-#include <sflsh/model/step_ladder.hpp>
 #include <sflsh/reduced/reduced_history.hpp>
 #include <sflsh/reduced/reduced_solver.hpp>
 
@@ -494,82 +493,6 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
   if (options_.record_substeps) substeps_.push_back({t0, dt, q_});
   stats.inertia_seconds += seconds_since(clock);
   return true;
-}
-
-/// One substep per attempt from the current state; the ladder saves and restores the whole state, the posed
-/// history and the recorded substeps included. A substep advances the history only when it converges, so a failed
-/// single-substep rung leaves it as saved: the history (several vectors per inertia node) is copied only before the
-/// first substep of a split rung, not on every step.
-class ReducedSolver::Ladder final : public model::LadderSolver {
- public:
-  Ladder(ReducedSolver& solver, double h) : solver_(solver), h_(h) {}
-  double time() const override { return solver_.t_; }
-  void save() override {
-    t_ = solver_.t_;
-    q_ = solver_.q_;
-    rate_ = solver_.q_rate_;
-    rate_previous_ = solver_.q_rate_previous_;
-    rate_dt_ = solver_.rate_dt_;
-    rate_steps_ = solver_.rate_steps_;
-    root_ = solver_.root_;
-    pivot_ = solver_.pivot_;
-    history_saved_ = false;
-    solver_.substeps_.clear();
-    if (solver_.options_.coupled) solver_.options_.coupled->save();
-  }
-  void restore() override {
-    solver_.t_ = t_;
-    solver_.q_ = q_;
-    solver_.q_rate_ = rate_;
-    solver_.q_rate_previous_ = rate_previous_;
-    solver_.rate_dt_ = rate_dt_;
-    solver_.rate_steps_ = rate_steps_;
-    solver_.root_ = root_;
-    solver_.pivot_ = pivot_;
-    if (history_saved_) {
-      solver_.history_ = history_;
-      solver_.carried_history_ = carried_history_;
-    }
-    solver_.substeps_.clear();
-    if (solver_.options_.coupled) solver_.options_.coupled->restore();
-  }
-  bool attempt(double dt, material::HessianProjection hessian, model::StepStats& stats, std::string& reason) override {
-    if (!history_saved_ && solver_.t_ == t_ && dt < 0.75 * h_) {  // the first substep of a split rung
-      history_ = solver_.history_;
-      carried_history_ = solver_.carried_history_;
-      history_saved_ = true;
-    }
-    int startup = 0;
-    const bool ok = solver_.solve_substep(solver_.t_, dt, hessian, stats, reason, startup);
-    stats.startup_steps += startup;
-    return ok;
-  }
-
- private:
-  ReducedSolver& solver_;
-  double h_;
-  double t_ = 0.0;
-  Eigen::VectorXd q_, rate_, rate_previous_;
-  double rate_dt_ = 0.0;
-  int rate_steps_ = 0;
-  model::PosedHistory history_, carried_history_;
-  Vector6d root_ = Vector6d::Zero();
-  Eigen::Vector3d pivot_ = Eigen::Vector3d::Zero();
-  bool history_saved_ = false;
-};
-
-model::StepStats ReducedSolver::step(double h) {
-  require(h > 0.0 && std::isfinite(h), "reduced: step must be positive, got {}", h);
-  require(history_.p.size() == 3 * static_cast<Eigen::Index>(inertia_.inertia_nodes().size()),
-          "reduced: the solver has no state; call initialize() before step()");
-  model::LadderOptions ladder_options;
-  ladder_options.exact_hessian_first = options_.exact_hessian_first && !options_.quasi_static;
-  ladder_options.projection = problem_.projection == material::HessianProjection::kNone
-                                  ? material::HessianProjection::kStressDerivative
-                                  : problem_.projection;
-  ladder_options.max_halvings = options_.max_halvings;
-  Ladder ladder(*this, h);
-  return model::step_with_ladder(ladder, h, ladder_options, "reduced model");
 }
 
 model::State ReducedSolver::full_state() const {

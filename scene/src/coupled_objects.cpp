@@ -2,27 +2,14 @@
 #include "coupled_objects.hpp"
 
 #include <sflsh/core/error.hpp>
+#include <sflsh/core/scoped_seconds.hpp>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 
 namespace sflsh::scene::detail {
 
 namespace {
-
-/// Adds the time from construction to destruction to a counter [s].
-class Timer {
- public:
-  explicit Timer(double& seconds) : seconds_(seconds), start_(std::chrono::steady_clock::now()) {}
-  ~Timer() { seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count(); }
-  Timer(const Timer&) = delete;
-  Timer& operator=(const Timer&) = delete;
-
- private:
-  double& seconds_;
-  std::chrono::steady_clock::time_point start_;
-};
 
 /// The state in the frame p' = Rᵀ(p − t) of a placement world = R p + t.
 RigidState to_frame(const Rigid& world_from_frame, const RigidState& world) {
@@ -85,7 +72,7 @@ double CoupledObjects::rigid_stiffness(const Object& object, int vertex) const {
 
 void CoupledObjects::begin_substep(double t0, double dt, const RowMatrixX3d& p_start,
                                    const RowMatrixX3d& p_skinned_end) {
-  const Timer timer(seconds_);
+  const ScopedSeconds timer(seconds_);
   t0_ = t0;
   dt_ = dt;
   epsilon_ = setup_.parameters.slip_velocity * dt;
@@ -238,7 +225,7 @@ double CoupledObjects::object_energy(std::size_t o, const ObjectFrame& frame, co
 
 double CoupledObjects::evaluate(const RowMatrixX3d& P, const Eigen::VectorXd& y, reduced::CoupledDerivatives* d,
                                 bool with_hessian) const {
-  const Timer timer(seconds_);
+  const ScopedSeconds timer(seconds_);
   if (d) d->reset(P.rows(), size(), with_hessian);
   double value = 0.0;
   for (std::size_t o = 0; o < objects_.size(); ++o) {
@@ -249,7 +236,7 @@ double CoupledObjects::evaluate(const RowMatrixX3d& P, const Eigen::VectorXd& y,
 }
 
 bool CoupledObjects::accept_substep(const RowMatrixX3d& P_end, const Eigen::VectorXd& y) {
-  const Timer timer(seconds_);
+  const ScopedSeconds timer(seconds_);
   const RigidObjectParameters& prm = setup_.parameters;
   bool accepted = true;
   for (std::size_t o = 0; o < objects_.size(); ++o) {
@@ -280,7 +267,7 @@ bool CoupledObjects::accept_substep(const RowMatrixX3d& P_end, const Eigen::Vect
 }
 
 void CoupledObjects::commit_substep(const RowMatrixX3d& P_end, const Eigen::VectorXd& y) {
-  const Timer timer(seconds_);
+  const ScopedSeconds timer(seconds_);
   const RigidObjectParameters& prm = setup_.parameters;
   std::fill(node_force_.begin(), node_force_.end(), Eigen::Vector3d::Zero());
   std::fill(node_depth_.begin(), node_depth_.end(), 0.0);

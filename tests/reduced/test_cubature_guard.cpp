@@ -103,16 +103,22 @@ model::State thrown(const model::Problem& p, double speed) {
   return state;
 }
 
+/// One cubature tet carrying the whole volume: most of the layer is invisible to the reduced energy.
+Cubature one_tet_cubature(const model::Problem& problem) {
+  Cubature cubature;
+  cubature.tets = {farthest_point_tets(problem, 1, {}).front()};
+  cubature.weights = voronoi_weights(problem, cubature.tets);
+  cubature.method = "voronoi";
+  return cubature;
+}
+
 // dq/dY is defined on the cubature a differentiated run starts with, so a run whose guard grows the cubature stops
 // with one line; the fit then repeats it with the grown cubature from the start (DynamicsCase, dynamics_case.cpp),
 // which must run through: the same case as below, differentiated, at most 4 attempts.
 TEST(CubatureGuard, ADifferentiatedRunRepeatedOnTheGrownCubatureRunsThrough) {
   const auto c = testing::box_case({5, 4, 3});
   const Subspace s = testing::box_subspace(c);
-  Cubature cubature;
-  cubature.tets = {farthest_point_tets(c.problem, 1, {}).front()};
-  cubature.weights = voronoi_weights(c.problem, cubature.tets);
-  cubature.method = "voronoi";
+  Cubature cubature = one_tet_cubature(c.problem);
   const auto uniform = [](const Cubature& cub) { return Eigen::MatrixXd::Ones(cub.size(), 1); };  // Y_c = Y_1
   int attempts = 0;
   bool grown_once = false;
@@ -139,11 +145,7 @@ TEST(CubatureGuard, ADifferentiatedRunRepeatedOnTheGrownCubatureRunsThrough) {
 TEST(CubatureGuard, TheSolverRepairsAStateThatLeavesTheMaterialOutsideTheCubature) {
   const auto c = testing::box_case({5, 4, 3});
   const Subspace s = testing::box_subspace(c);
-  // One cubature tet carrying the whole volume: most of the layer is invisible to the reduced energy.
-  Cubature cubature;
-  cubature.tets = {farthest_point_tets(c.problem, 1, {}).front()};
-  cubature.weights = voronoi_weights(c.problem, cubature.tets);
-  cubature.method = "voronoi";
+  const Cubature cubature = one_tet_cubature(c.problem);
   constexpr double kSpeed =
       3.0;  // [m/s] against a 6 cm tall box: strains far beyond the material's range unless resisted
   constexpr double kStep = 1.0 / 60.0;

@@ -1,6 +1,7 @@
 #include <sflsh/core/atomic_file.hpp>
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
+#include <sflsh/core/scoped_seconds.hpp>
 #include <sflsh/material/layer_material.hpp>
 #include <sflsh/material/surface_operators.hpp>
 #include <sflsh/reduced/elasticity_fit.hpp>
@@ -27,19 +28,6 @@ material::KappaMatrix independent_kappa(const Eigen::VectorXd& p) {
 Eigen::VectorXd flatten(const material::KappaMatrix& k) {
   return Eigen::Map<const Eigen::VectorXd>(k.data(), k.size());
 }
-
-/// Adds the wall time of its scope to `total` [s].
-class ScopedSeconds {
- public:
-  explicit ScopedSeconds(double& total) : total_(total), start_(std::chrono::steady_clock::now()) {}
-  ~ScopedSeconds() { total_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count(); }
-  ScopedSeconds(const ScopedSeconds&) = delete;
-  ScopedSeconds& operator=(const ScopedSeconds&) = delete;
-
- private:
-  double& total_;
-  std::chrono::steady_clock::time_point start_;
-};
 
 /// Everything one stage needs, fixed while TAO iterates.
 struct Stage {

@@ -1,0 +1,20 @@
+#pragma once
+// A scope's wall time added to a counter: `const ScopedSeconds timer(total);` adds the seconds until the end of
+// the scope to `total` [s].
+#include <chrono>
+
+namespace sflsh {
+
+class ScopedSeconds {
+ public:
+  explicit ScopedSeconds(double& total) : total_(total), start_(std::chrono::steady_clock::now()) {}
+  ~ScopedSeconds() { total_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count(); }
+  ScopedSeconds(const ScopedSeconds&) = delete;
+  ScopedSeconds& operator=(const ScopedSeconds&) = delete;
+
+ private:
+  double& total_;
+  std::chrono::steady_clock::time_point start_;
+};
+
+}  // namespace sflsh
