@@ -28,15 +28,17 @@ CoupledTerm::CoupledTerm(CoupledSystem& system, const Subspace& subspace, const 
   }
 }
 
-void CoupledTerm::begin(double t0, double dt, const meshing::RowMatrixX3d& p_start, const RootFrame* start_frame,
-                        const Eigen::Vector3d& pivot) {
-  pivot_ = pivot;
+void CoupledTerm::begin(double t0, double dt, const meshing::RowMatrixX3d& p_start, const DeviationFrame* start_frame,
+                        const DeviationPose& pose) {
+  pose_ = pose;
   const auto n = static_cast<Eigen::Index>(active_of_.size());
   meshing::RowMatrixX3d start(n, 3), skinned(n, 3);
   for (Eigen::Index e = 0; e < n; ++e) {
     start.row(e) = p_start.row(active_of_[static_cast<std::size_t>(e)]);
-    const Eigen::Vector3d z = inertia_.posed_prescribed().row(active_of_[static_cast<std::size_t>(e)]).transpose();
-    skinned.row(e) = (start_frame ? start_frame->apply(z) : z).transpose();
+    const int a = active_of_[static_cast<std::size_t>(e)];
+    const Eigen::Vector3d z = inertia_.posed_prescribed().row(a).transpose();
+    const int node = inertia_.active_nodes()[static_cast<std::size_t>(a)];
+    skinned.row(e) = (start_frame ? start_frame->apply(node, z) : z).transpose();
   }
   system_.begin_substep(t0, dt, start, skinned);
   candidate_active_.clear();
@@ -51,8 +53,12 @@ meshing::RowMatrixX3d CoupledTerm::candidate_positions(const Eigen::VectorXd& x,
                    .transpose();  // q is the head of x
   if (posed) *posed = P;
   if (root_offset_ >= 0) {
-    const RootFrame frame = root_frame(x, root_offset_, pivot_);
-    for (Eigen::Index c = 0; c < n; ++c) P.row(c) = frame.apply(P.row(c).transpose()).transpose();
+    const DeviationFrame frame = skeleton_->frame(x, root_offset_, pose_.pivot, pose_.centres, false);
+    for (Eigen::Index c = 0; c < n; ++c) {
+      const int node =
+          inertia_.active_nodes()[static_cast<std::size_t>(candidate_active_[static_cast<std::size_t>(c)])];
+      P.row(c) = frame.apply(node, P.row(c).transpose()).transpose();
+    }
   }
   return P;
 }
@@ -66,21 +72,20 @@ void CoupledTerm::add_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& gradie
   meshing::RowMatrixX3d posed;
   system_.evaluate(candidate_positions(x, &posed), x.segment(offset_, system_.size()), &d, false);
   gradient.segment(offset_, system_.size()) += d.gradient;
-  std::optional<RootFrame> root;
-  if (root_offset_ >= 0) root = root_frame(x, root_offset_, pivot_);
+  std::optional<DeviationFrame> root;
+  if (root_offset_ >= 0) root = skeleton_->frame(x, root_offset_, pose_.pivot, pose_.centres, false);
   for (std::size_t c = 0; c < candidate_active_.size(); ++c) {
     const auto a = static_cast<std::size_t>(candidate_active_[c]);
-    if (root) {  // ∂u/∂τ = g, ∂u/∂θ_k = gᵀ ∂_kR (p − c); the soft tissue sees Rᵀg
-      const auto row = static_cast<Eigen::Index>(c);
-      const Eigen::Vector3d g = d.node_gradient.row(row).transpose(), dp = posed.row(row).transpose() - pivot_;
-      for (int k = 0; k < 3; ++k)
-        gradient[root_offset_ + k] += g.dot(root->rotation.dR[static_cast<std::size_t>(k)] * dp);
-      gradient.segment<3>(root_offset_ + 3) += g;
-      d.node_gradient.row(row) = (root->rotation.R.transpose() * g).transpose();
+    const int node = inertia_.active_nodes()[a];
+    const auto row = static_cast<Eigen::Index>(c);
+    const Eigen::Vector3d g = d.node_gradient.row(row).transpose();
+    if (root) {
+      add_deviation_node_gradient(subspace_, *root, node, inertia_.frame().A[a], posed.row(row).transpose(), g,
+                                  gradient);
+      continue;
     }
-    const Eigen::Vector3d pulled =
-        inertia_.frame().A[a].transpose() * d.node_gradient.row(static_cast<Eigen::Index>(c)).transpose();
-    for (SparseRowMatrix::InnerIterator it(subspace_.basis, inertia_.active_nodes()[a]); it; ++it)
+    const Eigen::Vector3d pulled = inertia_.frame().A[a].transpose() * g;
+    for (SparseRowMatrix::InnerIterator it(subspace_.basis, node); it; ++it)
       gradient.segment<3>(3 * it.col()) += it.value() * pulled;
   }
 }
@@ -91,8 +96,9 @@ void CoupledTerm::add_hessian(const Eigen::VectorXd& x, Eigen::MatrixXd& hessian
   meshing::RowMatrixX3d posed;
   system_.evaluate(candidate_positions(x, &posed), x.segment(offset_, size), &d, true);
   hessian.block(offset_, offset_, size, size) += d.hessian;
-  std::optional<RootFrame> root;
-  if (root_offset_ >= 0) root = root_frame(x, root_offset_, pivot_);
+  std::optional<DeviationFrame> root;
+  if (root_offset_ >= 0) root = skeleton_->frame(x, root_offset_, pose_.pivot, pose_.centres, true);
+  Eigen::Matrix<double, 3, Eigen::Dynamic> J;
   for (std::size_t c = 0; c < candidate_active_.size(); ++c) {
     const auto a = static_cast<std::size_t>(candidate_active_[c]);
     if (root) {
@@ -100,17 +106,14 @@ void CoupledTerm::add_hessian(const Eigen::VectorXd& x, Eigen::MatrixXd& hessian
       const Eigen::Vector3d p = posed.row(row).transpose(), g = d.node_gradient.row(row).transpose();
       const Eigen::Matrix3d& A = inertia_.frame().A[a];
       const int node = inertia_.active_nodes()[a];
-      add_root_node_blocks(subspace_, *root, node, A, p, g, d.node_hessian[c], hessian);
-      // Node × y: ∂p/∂x ᵀ M_c, with ∂p/∂θ_k = ∂_kR (p − c), ∂p/∂τ = I and ∂p/∂t_s = b_s R A.
+      add_deviation_node_blocks(subspace_, *root, node, A, p, g, d.node_hessian[c], hessian);
+      // Node × y: ∂y/∂xᵀ M_c, with ∂y/∂r = J and ∂y/∂t_s = b_s L A.
       const Eigen::MatrixXd M = d.node_mixed.middleRows(3 * row, 3);
-      Eigen::Matrix3d Y;
-      for (int k = 0; k < 3; ++k) Y.col(k) = root->rotation.dR[static_cast<std::size_t>(k)] * (p - pivot_);
-      const Eigen::MatrixXd theta_y = Y.transpose() * M;
-      hessian.block(root_offset_, offset_, 3, size) += theta_y;
-      hessian.block(offset_, root_offset_, size, 3) += theta_y.transpose();
-      hessian.block(root_offset_ + 3, offset_, 3, size) += M;
-      hessian.block(offset_, root_offset_ + 3, size, 3) += M.transpose();
-      const Eigen::MatrixXd mixed = (root->rotation.R * A).transpose() * M;
+      root->jacobian(node, p, J);
+      const Eigen::MatrixXd r_y = J.transpose() * M;
+      hessian.block(root_offset_, offset_, root->size, size) += r_y;
+      hessian.block(offset_, root_offset_, size, root->size) += r_y.transpose();
+      const Eigen::MatrixXd mixed = (root->linear(node) * A).transpose() * M;
       for (SparseRowMatrix::InnerIterator si(subspace_.basis, node); si; ++si) {
         hessian.block(3 * si.col(), offset_, 3, size) += si.value() * mixed;
         hessian.block(offset_, 3 * si.col(), size, 3) += si.value() * mixed.transpose();

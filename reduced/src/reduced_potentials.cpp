@@ -22,38 +22,41 @@ ReducedPotentials::ReducedPotentials(const model::Problem& problem, const Subspa
   }
 }
 
-void add_root_node_blocks(const Subspace& subspace, const RootFrame& root, int node, const Eigen::Matrix3d& A,
-                          const Eigen::Vector3d& p, const Eigen::Vector3d& g, const Eigen::Matrix3d& H,
-                          Eigen::MatrixXd& hessian) {
-  // y = R(p − c) + c + τ: ∂y/∂τ = I, ∂y/∂θ_k = ∂_kR d (d = p − c), ∂y/∂t_s = b_s R A;
-  // ∂²u = Jᵀ∇²u J + ∇uᵀ∂²y, with ∂²y/∂θ_k∂θ_l = ∂²_klR d and ∂²y/∂θ_k∂t_s = b_s ∂_kR A.
-  const Eigen::Vector3d d = p - root.pivot;
-  Eigen::Matrix3d Y;  // columns ∂y/∂θ_k
-  for (int k = 0; k < 3; ++k) Y.col(k) = root.rotation.dR[static_cast<std::size_t>(k)] * d;
-  const Eigen::Index o = root.offset;
-  Eigen::Matrix3d theta_theta = Y.transpose() * H * Y;
-  for (int k = 0; k < 3; ++k)
-    for (int l = 0; l < 3; ++l)
-      theta_theta(k, l) += g.dot(root.rotation.d2R[static_cast<std::size_t>(k)][static_cast<std::size_t>(l)] * d);
-  hessian.block<3, 3>(o, o) += theta_theta;
-  const Eigen::Matrix3d theta_tau = Y.transpose() * H;
-  hessian.block<3, 3>(o, o + 3) += theta_tau;
-  hessian.block<3, 3>(o + 3, o) += theta_tau.transpose();
-  hessian.block<3, 3>(o + 3, o + 3) += H;
-  // Soft tissue × root: per basis function s, b_s [(R A)ᵀ H Y + (∂_kR A)ᵀ g] (θ columns) and b_s (R A)ᵀ H (τ columns).
-  const Eigen::Matrix3d RA = root.rotation.R * A;
-  Eigen::Matrix3d q_theta = RA.transpose() * H * Y;
-  for (int k = 0; k < 3; ++k) q_theta.col(k) += (root.rotation.dR[static_cast<std::size_t>(k)] * A).transpose() * g;
-  const Eigen::Matrix3d q_tau = RA.transpose() * H;
-  const Eigen::Matrix3d block = RA.transpose() * H * RA;  // A_kᵀ Rᵀ ∇²u_k R A_k
+void add_deviation_node_gradient(const Subspace& subspace, const DeviationFrame& frame, int node,
+                                 const Eigen::Matrix3d& A, const Eigen::Vector3d& p, const Eigen::Vector3d& g,
+                                 Eigen::VectorXd& gradient) {
+  // ∂u/∂r = (∂y/∂r)ᵀ g; the soft tissue sees (L A)ᵀ g.
+  Eigen::Matrix<double, 3, Eigen::Dynamic> J;
+  frame.jacobian(node, p, J);
+  gradient.segment(frame.offset, frame.size) += J.transpose() * g;
+  const Eigen::Vector3d pulled = (frame.linear(node) * A).transpose() * g;
+  for (SparseRowMatrix::InnerIterator it(subspace.basis, node); it; ++it)
+    gradient.segment<3>(3 * it.col()) += it.value() * pulled;
+}
+
+void add_deviation_node_blocks(const Subspace& subspace, const DeviationFrame& frame, int node,
+                               const Eigen::Matrix3d& A, const Eigen::Vector3d& p, const Eigen::Vector3d& g,
+                               const Eigen::Matrix3d& H, Eigen::MatrixXd& hessian) {
+  // y = D(p), p = z + A Σ_s b_s t_s: ∂y/∂r = J, ∂y/∂t_s = b_s L A;
+  // ∂²u = Jᵀ∇²u J + ∇uᵀ∂²y, with ∂²y/∂r∂r from the frame and ∂²y/∂r_k∂t_s = b_s ∂_kL A.
+  Eigen::Matrix<double, 3, Eigen::Dynamic> J;
+  frame.jacobian(node, p, J);
+  const Eigen::Index o = frame.offset, n = frame.size;
+  hessian.block(o, o, n, n) += J.transpose() * H * J;
+  frame.add_second(node, p, g, 1.0, hessian.block(o, o, n, n));
+  // Soft tissue × deviation: per basis function s, b_s [(L A)ᵀ H J + (∂_kL A)ᵀ g].
+  const Eigen::Matrix3d LA = frame.linear(node) * A;
+  std::vector<Eigen::Matrix3d> dL;
+  frame.linear_derivatives(node, dL);
+  Eigen::Matrix<double, 3, Eigen::Dynamic> q_r = LA.transpose() * H * J;
+  for (Eigen::Index k = 0; k < n; ++k) q_r.col(k) += (dL[static_cast<std::size_t>(k)] * A).transpose() * g;
+  const Eigen::Matrix3d block = LA.transpose() * H * LA;  // A_kᵀ Lᵀ ∇²u_k L A_k
   for (SparseRowMatrix::InnerIterator it(subspace.basis, node); it; ++it) {
     const Eigen::Index s = 3 * it.col();
     for (SparseRowMatrix::InnerIterator ri(subspace.basis, node); ri; ++ri)
       hessian.block<3, 3>(s, 3 * ri.col()) += it.value() * ri.value() * block;
-    hessian.block<3, 3>(s, o) += it.value() * q_theta;
-    hessian.block<3, 3>(o, s) += it.value() * q_theta.transpose();
-    hessian.block<3, 3>(s, o + 3) += it.value() * q_tau;
-    hessian.block<3, 3>(o + 3, s) += it.value() * q_tau.transpose();
+    hessian.block(s, o, 3, n) += it.value() * q_r;
+    hessian.block(o, s, n, 3) += it.value() * q_r.transpose();
   }
 }
 
@@ -70,7 +73,7 @@ Eigen::Vector3d ReducedPotentials::posed(const Eigen::VectorXd& q, const Reduced
 }
 
 bool ReducedPotentials::begin(double t0, double dt, const meshing::RowMatrixX3d& p_start, const ReducedInertia& inertia,
-                              const RootFrame* root) {
+                              const DeviationFrame* root) {
   terms_.clear();
   for (std::size_t k = 0; k < potentials_.size(); ++k) {
     const std::vector<int>& active_of = active_of_[k];
@@ -79,7 +82,8 @@ bool ReducedPotentials::begin(double t0, double dt, const meshing::RowMatrixX3d&
     for (std::size_t e = 0; e < active_of.size(); ++e) {
       start.row(static_cast<Eigen::Index>(e)) = p_start.row(active_of[e]);
       const Eigen::Vector3d z = inertia.posed_prescribed().row(active_of[e]).transpose();
-      skinned.row(static_cast<Eigen::Index>(e)) = (root ? root->apply(z) : z).transpose();
+      const int node = active_nodes_[static_cast<std::size_t>(active_of[e])];
+      skinned.row(static_cast<Eigen::Index>(e)) = (root ? root->apply(node, z) : z).transpose();
     }
     if (!potentials_[k]->begin_substep(t0, dt, start, skinned)) continue;
     Term term;
@@ -90,51 +94,53 @@ bool ReducedPotentials::begin(double t0, double dt, const meshing::RowMatrixX3d&
   return active();
 }
 
-double ReducedPotentials::energy(const Eigen::VectorXd& q, const ReducedInertia& inertia, const RootFrame* root) const {
+double ReducedPotentials::energy(const Eigen::VectorXd& q, const ReducedInertia& inertia,
+                                 const DeviationFrame* root) const {
   double sum = 0.0;
   for (const Term& term : terms_)
     for (std::size_t c = 0; c < term.active.size(); ++c) {
-      const Eigen::Vector3d p = posed(q, inertia, term.active[c]);
-      sum += term.potential->evaluate(static_cast<int>(c), root ? root->apply(p) : p, nullptr, nullptr);
+      const int a = term.active[c];
+      const Eigen::Vector3d p = posed(q, inertia, a);
+      const int node = active_nodes_[static_cast<std::size_t>(a)];
+      sum += term.potential->evaluate(static_cast<int>(c), root ? root->apply(node, p) : p, nullptr, nullptr);
     }
   return sum;
 }
 
 void ReducedPotentials::add_gradient(const Eigen::VectorXd& q, const ReducedInertia& inertia, Eigen::VectorXd& gradient,
-                                     const RootFrame* root) const {
+                                     const DeviationFrame* root) const {
   for (const Term& term : terms_) {
     for (std::size_t c = 0; c < term.active.size(); ++c) {
       const int a = term.active[c];
+      const auto sa = static_cast<std::size_t>(a);
+      const int node = active_nodes_[sa];
       Eigen::Vector3d g;
       const Eigen::Vector3d p = posed(q, inertia, a);
-      term.potential->evaluate(static_cast<int>(c), root ? root->apply(p) : p, &g, nullptr);
-      if (root) {  // ∂u/∂τ = ∇u, ∂u/∂θ_k = ∇uᵀ ∂_kR (p − c); the soft tissue sees Rᵀ∇u
-        const Eigen::Vector3d d = p - root->pivot;
-        for (int k = 0; k < 3; ++k)
-          gradient[root->offset + k] += g.dot(root->rotation.dR[static_cast<std::size_t>(k)] * d);
-        gradient.segment<3>(root->offset + 3) += g;
-        g = root->rotation.R.transpose() * g;
+      term.potential->evaluate(static_cast<int>(c), root ? root->apply(node, p) : p, &g, nullptr);
+      if (root) {
+        add_deviation_node_gradient(subspace_, *root, node, inertia.frame().A[sa], p, g, gradient);
+        continue;
       }
-      const Eigen::Vector3d pulled = inertia.frame().A[static_cast<std::size_t>(a)].transpose() * g;  // A_kᵀ ∇u_k
-      for (SparseRowMatrix::InnerIterator it(subspace_.basis, active_nodes_[static_cast<std::size_t>(a)]); it; ++it)
+      const Eigen::Vector3d pulled = inertia.frame().A[sa].transpose() * g;  // A_kᵀ ∇u_k
+      for (SparseRowMatrix::InnerIterator it(subspace_.basis, node); it; ++it)
         gradient.segment<3>(3 * it.col()) += it.value() * pulled;
     }
   }
 }
 
 void ReducedPotentials::add_hessian(const Eigen::VectorXd& q, const ReducedInertia& inertia, Eigen::MatrixXd& hessian,
-                                    const RootFrame* root) const {
+                                    const DeviationFrame* root) const {
   for (const Term& term : terms_) {
     for (std::size_t c = 0; c < term.active.size(); ++c) {
       const int a = term.active[c];
       const auto sa = static_cast<std::size_t>(a);
+      const int node = active_nodes_[sa];
       Eigen::Vector3d g;
       Eigen::Matrix3d H;
       const Eigen::Vector3d p = posed(q, inertia, a);
-      term.potential->evaluate(static_cast<int>(c), root ? root->apply(p) : p, &g, &H);
-      const int node = active_nodes_[sa];
+      term.potential->evaluate(static_cast<int>(c), root ? root->apply(node, p) : p, &g, &H);
       if (root) {
-        add_root_node_blocks(subspace_, *root, node, inertia.frame().A[sa], p, g, H, hessian);
+        add_deviation_node_blocks(subspace_, *root, node, inertia.frame().A[sa], p, g, H, hessian);
         continue;
       }
       const Eigen::Matrix3d& A = inertia.frame().A[sa];
@@ -146,13 +152,15 @@ void ReducedPotentials::add_hessian(const Eigen::VectorXd& q, const ReducedInert
   }
 }
 
-bool ReducedPotentials::accept(const Eigen::VectorXd& q, const ReducedInertia& inertia, const RootFrame* root) {
+bool ReducedPotentials::accept(const Eigen::VectorXd& q, const ReducedInertia& inertia, const DeviationFrame* root) {
   bool accepted = true;
   for (const Term& term : terms_) {
     meshing::RowMatrixX3d p_end(static_cast<Eigen::Index>(term.active.size()), 3);
     for (std::size_t c = 0; c < term.active.size(); ++c) {
-      const Eigen::Vector3d p = posed(q, inertia, term.active[c]);
-      p_end.row(static_cast<Eigen::Index>(c)) = (root ? root->apply(p) : p).transpose();
+      const int a = term.active[c];
+      const Eigen::Vector3d p = posed(q, inertia, a);
+      const int node = active_nodes_[static_cast<std::size_t>(a)];
+      p_end.row(static_cast<Eigen::Index>(c)) = (root ? root->apply(node, p) : p).transpose();
     }
     accepted = term.potential->accept_substep(p_end) && accepted;
   }

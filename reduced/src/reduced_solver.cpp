@@ -58,7 +58,10 @@ ReducedSolver::ReducedSolver(const model::Problem& problem, const Subspace& subs
   }
   for (int id : problem.dirichlet.drive) has_drives_ = has_drives_ || id >= 0;
   q_ = Eigen::VectorXd::Zero(subspace.num_dofs());
-  q_rate_ = Eigen::VectorXd::Zero(subspace.num_dofs() + (options.root.enabled ? 6 : 0) +
+  if (options.root.enabled && !options.root.joints.setup.joints.empty())
+    skeleton_ = SkeletonDeviation(options.root.joints.setup);
+  deviation_ = Eigen::VectorXd::Zero(skeleton_.size());
+  q_rate_ = Eigen::VectorXd::Zero(subspace.num_dofs() + (options.root.enabled ? skeleton_.size() : 0) +
                                   (options.coupled ? options.coupled->size() : 0));
   q_rate_previous_ = q_rate_;
   if (options.root.enabled) setup_root();
@@ -111,7 +114,7 @@ void ReducedSolver::initialize(const model::State& state) {
   q_rate_.setZero();
   q_rate_previous_.setZero();
   rate_steps_ = 0;
-  root_.setZero();  // a state carries no root deviation: the root starts on its motion
+  deviation_.setZero();  // a state carries no deviation: the skeleton starts on its motion
   factor_valid_ = false;
   if (has_drives_) {
     elastic_.set_prescribed_state(x_prescribed);
@@ -138,26 +141,7 @@ void ReducedSolver::initialize(const model::State& state) {
     carried_history_ = model::PosedHistory{};
     carried_history_.p = node_major(carried);
     carried_history_.v = gather_nodes(state.w, carried_);
-    // The tracking spring and damper: translation k, d; rotation k ρ², d ρ² with ρ² = ⅔ Σ m|p − c|²/Σ m (the mean
-    // over axes of the layer's moment of inertia per unit mass), so that both swing with one period.
-    const Eigen::Vector3d c = root_pivot(t_, carried);
-    pivot_ = c;
-    double inertia_sum = 0.0, mass = 0.0;
-    const std::vector<double>& m = inertia_.lumped_mass();
-    for (Eigen::Index i = 0; i < inertia_.posed_prescribed().rows(); ++i) {
-      inertia_sum +=
-          m[static_cast<std::size_t>(i)] * (inertia_.posed_prescribed().row(i).transpose() - c).squaredNorm();
-      mass += m[static_cast<std::size_t>(i)];
-    }
-    for (Eigen::Index k = 0; k < carried.rows(); ++k) {
-      inertia_sum += carried_mass_[static_cast<std::size_t>(k)] * (carried.row(k).transpose() - c).squaredNorm();
-      mass += carried_mass_[static_cast<std::size_t>(k)];
-    }
-    const double rho2 = 2.0 / 3.0 * inertia_sum / mass;
-    const RootTrackingOptions& o = options_.root;
-    root_stiffness_ << o.stiffness * rho2 * Eigen::Vector3d::Ones(), o.stiffness * Eigen::Vector3d::Ones();
-    root_damping_ << o.damping * rho2 * Eigen::Vector3d::Ones(), o.damping * Eigen::Vector3d::Ones();
-    if (o.free_translation) root_stiffness_[3] = root_stiffness_[5] = 0.0;  // x and z: the horizontal plane (Y up)
+    setup_tracking_springs(carried);
   }
 }
 
@@ -173,23 +157,24 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
   const auto offset = static_cast<Eigen::Index>(subspace_.num_dofs());
   model::InertiaTarget carried_target;
   meshing::RowMatrixX3d carried_end;
-  Eigen::Vector3d pivot = Eigen::Vector3d::Zero();
-  if (track) {  // the root's inertia over every node, its tracking spring and damper
+  DeviationPose pose;
+  if (track) {  // the skeleton's inertia over every node, its tracking springs and dampers
     carried_posed(t1, x_prescribed, carried_end);
-    pivot = root_pivot(t1, carried_end);
+    pose = deviation_pose(t1, carried_end);
     carried_target = model::inertia_target(options_.integrator, carried_history_, dt);
-    root_inertia_term_->set_step(target.p_tilde, carried_target.p_tilde, carried_end, pivot, target.h_eff);
-    root_tracking_term_->set_step(root_stiffness_, root_damping_, root_, dt);
-    root_potential_term_->set_pivot(pivot);
+    root_inertia_term_->set_step(target.p_tilde, carried_target.p_tilde, carried_end, pose, target.h_eff);
+    root_tracking_term_->set_step(tracking_stiffness_, tracking_damping_, deviation_, dt, joint_limit_,
+                                  joint_limit_stiffness_);
+    root_potential_term_->set_pose(pose);
   } else if (inertia_on) {
     inertia_term_.set_step(target.p_tilde, target.h_eff);
   }
   gravity_term_.update();
-  // x = [q; θ; τ] with a tracking root, else q.
+  // x = [q; r] with a tracking skeleton, else q.
   Eigen::VectorXd x_start = q_;
   if (track) {
-    x_start.resize(offset + 6);
-    x_start << q_, root_;
+    x_start.resize(offset + skeleton_.size());
+    x_start << q_, deviation_;
   }
   if (coupled_term_) {  // y = 0: the coupled system's own state at t0, after the root's coordinates
     const Eigen::VectorXd head = x_start;
@@ -210,7 +195,7 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
     const auto inertia_nodes = static_cast<Eigen::Index>(inertia_.inertia_nodes().size());
     const meshing::RowMatrixX3d p_start = Eigen::Map<const meshing::RowMatrixX3d>(history_.p.data(), inertia_nodes, 3);
     if (track) {
-      const RootFrame start_frame = root_frame(x_start, offset, pivot);
+      const DeviationFrame start_frame = skeleton_.frame(x_start, offset, pose.pivot, pose.centres, false);
       contact = potentials_.begin(t0, dt, p_start, inertia_, &start_frame);
     } else {
       contact = potentials_.begin(t0, dt, p_start, inertia_);
@@ -222,8 +207,8 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
     const auto inertia_nodes = static_cast<Eigen::Index>(inertia_.inertia_nodes().size());
     const Eigen::Map<const meshing::RowMatrixX3d> p_start(history_.p.data(), inertia_nodes, 3);
     if (track) {
-      const RootFrame start_frame = root_frame(x_start, offset, pivot);
-      coupled_term_->begin(t0, dt, p_start, &start_frame, pivot);
+      const DeviationFrame start_frame = skeleton_.frame(x_start, offset, pose.pivot, pose.centres, false);
+      coupled_term_->begin(t0, dt, p_start, &start_frame, pose);
     } else {
       coupled_term_->begin(t0, dt, p_start);
     }
@@ -443,7 +428,7 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
     clock = Clock::now();
     bool accepted = true;
     if (track && contact) {
-      const RootFrame end_frame = root_frame(q, offset, pivot);
+      const DeviationFrame end_frame = skeleton_.frame(q, offset, pose.pivot, pose.centres, false);
       accepted = potentials_.accept(q, inertia_, &end_frame);
     } else if (contact) {
       accepted = potentials_.accept(q, inertia_);
@@ -467,12 +452,14 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
   Eigen::VectorXd p_new;
   if (track) {  // the history holds the deviated (world) positions
     inertia_.posed(Eigen::VectorXd(q.head(offset)), p_new);
-    const RootFrame end_frame = root_frame(q, offset, pivot);
+    const DeviationFrame end_frame = skeleton_.frame(q, offset, pose.pivot, pose.centres, false);
+    const std::vector<int>& nodes = inertia_.inertia_nodes();
     for (Eigen::Index i = 0; i < p_new.size() / 3; ++i)
-      p_new.segment<3>(3 * i) = end_frame.apply(p_new.segment<3>(3 * i));
+      p_new.segment<3>(3 * i) = end_frame.apply(nodes[static_cast<std::size_t>(i)], p_new.segment<3>(3 * i));
     Eigen::VectorXd carried_new(3 * carried_end.rows());
     for (Eigen::Index k = 0; k < carried_end.rows(); ++k)
-      carried_new.segment<3>(3 * k) = end_frame.apply(carried_end.row(k).transpose());
+      carried_new.segment<3>(3 * k) =
+          end_frame.apply(carried_[static_cast<std::size_t>(k)], carried_end.row(k).transpose());
     model::advance_history(carried_target, carried_history_, carried_new);
   } else {
     inertia_.posed(Eigen::VectorXd(q.head(offset)), p_new);
@@ -485,8 +472,8 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
   rate_dt_ = dt;
   ++rate_steps_;
   if (track) {
-    root_ = q.segment<6>(offset);
-    pivot_ = pivot;
+    deviation_ = q.segment(offset, skeleton_.size());
+    pose_ = pose;
   }
   q_ = q.head(offset);
   t_ = t1;

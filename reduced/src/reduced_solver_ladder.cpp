@@ -22,8 +22,8 @@ class ReducedSolver::Ladder final : public model::LadderSolver {
     rate_previous_ = solver_.q_rate_previous_;
     rate_dt_ = solver_.rate_dt_;
     rate_steps_ = solver_.rate_steps_;
-    root_ = solver_.root_;
-    pivot_ = solver_.pivot_;
+    deviation_ = solver_.deviation_;
+    pose_ = solver_.pose_;
     history_saved_ = false;
     solver_.substeps_.clear();
     if (solver_.options_.coupled) solver_.options_.coupled->save();
@@ -35,8 +35,8 @@ class ReducedSolver::Ladder final : public model::LadderSolver {
     solver_.q_rate_previous_ = rate_previous_;
     solver_.rate_dt_ = rate_dt_;
     solver_.rate_steps_ = rate_steps_;
-    solver_.root_ = root_;
-    solver_.pivot_ = pivot_;
+    solver_.deviation_ = deviation_;
+    solver_.pose_ = pose_;
     if (history_saved_) {
       solver_.history_ = history_;
       solver_.carried_history_ = carried_history_;
@@ -64,8 +64,8 @@ class ReducedSolver::Ladder final : public model::LadderSolver {
   double rate_dt_ = 0.0;
   int rate_steps_ = 0;
   model::PosedHistory history_, carried_history_;
-  Vector6d root_ = Vector6d::Zero();
-  Eigen::Vector3d pivot_ = Eigen::Vector3d::Zero();
+  Eigen::VectorXd deviation_;
+  DeviationPose pose_;
   bool history_saved_ = false;
 };
 

@@ -26,14 +26,23 @@ void HeadTerm::add_hessian(const Eigen::VectorXd& x, Eigen::MatrixXd& hessian) c
   hessian.topLeftCorner(size_, size_) += head;
 }
 
-RootInertiaTerm::RootInertiaTerm(const ReducedInertia& inertia, std::vector<double> carried_mass, Eigen::Index offset)
-    : inertia_(inertia), carried_mass_(std::move(carried_mass)), offset_(offset) {
+RootInertiaTerm::RootInertiaTerm(const ReducedInertia& inertia, const Subspace& subspace,
+                                 const SkeletonDeviation& skeleton, std::vector<int> carried,
+                                 std::vector<double> carried_mass, Eigen::Index offset)
+    : inertia_(inertia),
+      subspace_(subspace),
+      skeleton_(skeleton),
+      carried_(std::move(carried)),
+      carried_mass_(std::move(carried_mass)),
+      offset_(offset) {
   require(inertia.mass_kind() == model::MassKind::lumped,
           "reduced: a tracking skeleton needs the lumped mass (mass = \"lumped\")");
+  require(carried_.size() == carried_mass_.size(), "reduced: root inertia: {} carried nodes, {} masses",
+          carried_.size(), carried_mass_.size());
 }
 
 void RootInertiaTerm::set_step(const Eigen::VectorXd& p_tilde, const Eigen::VectorXd& carried_tilde,
-                               const meshing::RowMatrixX3d& carried_posed, const Eigen::Vector3d& pivot, double h_eff) {
+                               const meshing::RowMatrixX3d& carried_posed, const DeviationPose& pose, double h_eff) {
   const auto inertia_nodes = static_cast<Eigen::Index>(inertia_.inertia_nodes().size());
   const auto carried = static_cast<Eigen::Index>(carried_mass_.size());
   require(p_tilde.size() == 3 * inertia_nodes && carried_tilde.size() == 3 * carried && carried_posed.rows() == carried,
@@ -46,7 +55,7 @@ void RootInertiaTerm::set_step(const Eigen::VectorXd& p_tilde, const Eigen::Vect
   carried_posed_ = carried_posed;
   mass_ = inertia_.lumped_mass();
   mass_.insert(mass_.end(), carried_mass_.begin(), carried_mass_.end());
-  pivot_ = pivot;
+  pose_ = pose;
   h_eff_ = h_eff;
 }
 
@@ -58,115 +67,187 @@ void RootInertiaTerm::gather(const Eigen::VectorXd& x, meshing::RowMatrixX3d& p)
   p.bottomRows(carried_posed_.rows()) = carried_posed_;
 }
 
-// 1/(2ĥ²) Σ_i m_i |y_i|², y_i = R(p_i − c) + c + τ − p̃_i.
+int RootInertiaTerm::node(Eigen::Index i) const {
+  const auto moved = static_cast<Eigen::Index>(inertia_.inertia_nodes().size());
+  return i < moved ? inertia_.inertia_nodes()[static_cast<std::size_t>(i)]
+                   : carried_[static_cast<std::size_t>(i - moved)];
+}
+
+// 1/(2ĥ²) Σ_i m_i |y_i|², y_i = D_i(p_i) − p̃_i.
 double RootInertiaTerm::value(const Eigen::VectorXd& x) const {
   if (!x.allFinite()) return kInfinity;
-  const RootFrame frame = root_frame(x, offset_, pivot_);
+  const DeviationFrame frame = skeleton_.frame(x, offset_, pose_.pivot, pose_.centres, false);
   meshing::RowMatrixX3d p;
   gather(x, p);
   double sum = 0.0;
   for (Eigen::Index i = 0; i < p.rows(); ++i)
     sum += mass_[static_cast<std::size_t>(i)] *
-           (frame.apply(p.row(i).transpose()) - target_.row(i).transpose()).squaredNorm();
+           (frame.apply(node(i), p.row(i).transpose()) - target_.row(i).transpose()).squaredNorm();
   return 0.5 * sum / (h_eff_ * h_eff_);
 }
 
 void RootInertiaTerm::add_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& gradient) const {
-  const RootFrame frame = root_frame(x, offset_, pivot_);
+  const DeviationFrame frame = skeleton_.frame(x, offset_, pose_.pivot, pose_.centres, false);
   meshing::RowMatrixX3d p;
   gather(x, p);
   const double w = 1.0 / (h_eff_ * h_eff_);
   const auto moved = static_cast<Eigen::Index>(inertia_.inertia_nodes().size());
-  Eigen::VectorXd pulled(3 * moved);  // Rᵀy on the inertia nodes; pull_back_mass multiplies by m_i
-  Vector6d root = Vector6d::Zero();
+  Eigen::VectorXd pulled(3 * moved);  // Lᵀy on the inertia nodes; pull_back_mass multiplies by m_i
+  Eigen::VectorXd deviation = Eigen::VectorXd::Zero(frame.size);
+  Eigen::Matrix<double, 3, Eigen::Dynamic> J;
   for (Eigen::Index i = 0; i < p.rows(); ++i) {
-    const Eigen::Vector3d d = p.row(i).transpose() - pivot_;
-    const Eigen::Vector3d y = frame.apply(p.row(i).transpose()) - target_.row(i).transpose();
-    const double m = mass_[static_cast<std::size_t>(i)];
-    for (int k = 0; k < 3; ++k) root[k] += m * y.dot(frame.rotation.dR[static_cast<std::size_t>(k)] * d);
-    root.tail<3>() += m * y;
-    if (i < moved) pulled.segment<3>(3 * i) = frame.rotation.R.transpose() * y;
+    const int n = node(i);
+    const Eigen::Vector3d pi = p.row(i).transpose();
+    const Eigen::Vector3d y = frame.apply(n, pi) - target_.row(i).transpose();
+    frame.jacobian(n, pi, J);
+    deviation.noalias() += mass_[static_cast<std::size_t>(i)] * J.transpose() * y;
+    if (i < moved) pulled.segment<3>(3 * i) = frame.linear(n).transpose() * y;
   }
   gradient.head(offset_) += w * inertia_.pull_back_mass(pulled);
-  gradient.segment<6>(offset_) += w * root;
+  gradient.segment(offset_, frame.size) += w * deviation;
 }
 
 void RootInertiaTerm::add_hessian(const Eigen::VectorXd& x, Eigen::MatrixXd& hessian) const {
-  const RootFrame frame = root_frame(x, offset_, pivot_);
+  const DeviationFrame frame = skeleton_.frame(x, offset_, pose_.pivot, pose_.centres, true);
   meshing::RowMatrixX3d p;
   gather(x, p);
   const double w = 1.0 / (h_eff_ * h_eff_);
   const auto moved = static_cast<Eigen::Index>(inertia_.inertia_nodes().size());
-  hessian.topLeftCorner(offset_, offset_) += mass_hessian_;  // JᵀRᵀMRJ/ĥ² = JᵀMJ/ĥ² for a lumped M
-  // Columns of the soft tissue × root block: ∂(Rᵀy_i)/∂r pulled back, per root coordinate.
-  std::array<Eigen::VectorXd, 6> fields;
-  for (auto& f : fields) f.resize(3 * moved);
-  Eigen::Matrix<double, 6, 6> root = Eigen::Matrix<double, 6, 6>::Zero();
+  const Eigen::Index size = frame.size;
+  const auto bones = frame.bones.size();
+  hessian.topLeftCorner(offset_, offset_) += mass_hessian_;  // JᵀMJ/ĥ²; blended nodes add Jᵀ M (LᵀL − I) J below
+  // The deviation block Σ m (∂y/∂r)ᵀ(∂y/∂r) + m yᵀ∂²y/∂r²: both affine in [p; 1] per bone, so they are summed as
+  // moments per bone pair, S_bc = Σ m ω_b ω_c [p; 1][p; 1]ᵀ, and per bone, W_b = Σ m ω_b y [p; 1]ᵀ.
+  std::vector<Eigen::Matrix4d> moments(bones * bones, Eigen::Matrix4d::Zero());
+  std::vector<char> touched(bones * bones, 0);
+  std::vector<Matrix34d> weighted(bones, Matrix34d::Zero());
+  std::vector<Eigen::VectorXd> fields(static_cast<std::size_t>(size), Eigen::VectorXd::Zero(3 * moved));
+  Eigen::Matrix<double, 3, Eigen::Dynamic> J;
+  std::vector<Eigen::Matrix3d> dL;
   for (Eigen::Index i = 0; i < p.rows(); ++i) {
-    const Eigen::Vector3d d = p.row(i).transpose() - pivot_;
-    const Eigen::Vector3d y = frame.apply(p.row(i).transpose()) - target_.row(i).transpose();
+    const int n = node(i);
     const double m = mass_[static_cast<std::size_t>(i)];
-    Eigen::Matrix<double, 3, 6> Jr;  // ∂y/∂(θ, τ)
-    for (int k = 0; k < 3; ++k) Jr.col(k) = frame.rotation.dR[static_cast<std::size_t>(k)] * d;
-    Jr.rightCols<3>().setIdentity();
-    root.noalias() += m * Jr.transpose() * Jr;
-    for (int k = 0; k < 3; ++k)
-      for (int l = 0; l < 3; ++l)
-        root(k, l) += m * y.dot(frame.rotation.d2R[static_cast<std::size_t>(k)][static_cast<std::size_t>(l)] * d);
-    if (i < moved) {
-      // ∂(Rᵀy)/∂θ_k = ∂_kRᵀ y + Rᵀ ∂_kR d,   ∂(Rᵀy)/∂τ = Rᵀ.
-      for (int k = 0; k < 3; ++k) {
-        const Eigen::Matrix3d& dR = frame.rotation.dR[static_cast<std::size_t>(k)];
-        fields[static_cast<std::size_t>(k)].segment<3>(3 * i) =
-            dR.transpose() * y + frame.rotation.R.transpose() * dR * d;
-        fields[static_cast<std::size_t>(k + 3)].segment<3>(3 * i) = frame.rotation.R.row(k).transpose();
+    const Eigen::Vector3d pi = p.row(i).transpose();
+    const Eigen::Vector4d ph(pi.x(), pi.y(), pi.z(), 1.0);
+    const Eigen::Vector3d y = frame.apply(n, pi) - target_.row(i).transpose();
+    const JointBlend& blend = frame.blend(n);
+    const Eigen::Matrix4d outer = m * ph * ph.transpose();
+    for (const auto& [b, wb] : blend) {
+      weighted[static_cast<std::size_t>(b)].noalias() += (m * wb) * y * ph.transpose();
+      for (const auto& [c, wc] : blend) {
+        const std::size_t bc = static_cast<std::size_t>(b) * bones + static_cast<std::size_t>(c);
+        moments[bc] += (wb * wc) * outer;
+        touched[bc] = 1;
       }
     }
+    if (i >= moved) continue;
+    // ∂(Lᵀy)/∂r_k = ∂_kLᵀ y + Lᵀ ∂y/∂r_k, pulled back per coordinate below.
+    const Eigen::Matrix3d L = frame.linear(n);
+    frame.jacobian(n, pi, J);
+    frame.linear_derivatives(n, dL);
+    const Eigen::Matrix<double, 3, Eigen::Dynamic> LtJ = L.transpose() * J;
+    for (Eigen::Index k = 0; k < size; ++k) {
+      const Eigen::Matrix3d& d = dL[static_cast<std::size_t>(k)];
+      fields[static_cast<std::size_t>(k)].segment<3>(3 * i) = d.transpose() * y + LtJ.col(k);
+    }
+    // Jᵀ M (LᵀL − I) J on a blended node (the blend of rotations is not one).
+    const Eigen::Matrix3d excess = L.transpose() * L - Eigen::Matrix3d::Identity();
+    if (excess.cwiseAbs().maxCoeff() < 1e-15) continue;
+    const Eigen::Matrix3d& A = inertia_.frame().A[static_cast<std::size_t>(i)];
+    const Eigen::Matrix3d block = (w * m) * A.transpose() * excess * A;
+    for (SparseRowMatrix::InnerIterator si(subspace_.basis, n); si; ++si)
+      for (SparseRowMatrix::InnerIterator ri(subspace_.basis, n); ri; ++ri)
+        hessian.block<3, 3>(3 * si.col(), 3 * ri.col()) += si.value() * ri.value() * block;
   }
-  for (int c = 0; c < 6; ++c) {
+  Eigen::MatrixXd deviation = Eigen::MatrixXd::Zero(size, size);
+  for (std::size_t b = 0; b < bones; ++b) {
+    const BoneDeviation& bone = frame.bones[b];
+    const std::size_t nb = bone.coordinates.size();
+    for (std::size_t c = 0; c < bones; ++c) {
+      if (!touched[b * bones + c]) continue;
+      const BoneDeviation& other = frame.bones[c];
+      const Eigen::Matrix4d& S = moments[b * bones + c];
+      for (std::size_t k = 0; k < nb; ++k) {
+        const Matrix34d FS = bone.first[k] * S;
+        for (std::size_t l = 0; l < other.coordinates.size(); ++l)
+          deviation(bone.coordinates[k], other.coordinates[l]) += FS.cwiseProduct(other.first[l]).sum();
+      }
+    }
+    for (std::size_t k = 0; k < nb; ++k)
+      for (std::size_t l = 0; l < nb; ++l)
+        deviation(bone.coordinates[k], bone.coordinates[l]) += bone.second[k * nb + l].cwiseProduct(weighted[b]).sum();
+  }
+  for (Eigen::Index c = 0; c < size; ++c) {
     const Eigen::VectorXd column = w * inertia_.pull_back_mass(fields[static_cast<std::size_t>(c)]);
     hessian.col(offset_ + c).head(offset_) += column;
     hessian.row(offset_ + c).head(offset_) += column.transpose();
   }
-  hessian.block<6, 6>(offset_, offset_) += w * root;
+  hessian.block(offset_, offset_, size, size) += w * deviation;
 }
 
-void RootTrackingTerm::set_step(const Vector6d& stiffness, const Vector6d& damping, const Vector6d& previous,
-                                double h) {
+void RootTrackingTerm::set_step(const Eigen::VectorXd& stiffness, const Eigen::VectorXd& damping,
+                                const Eigen::VectorXd& previous, double h, const Eigen::VectorXd& limit,
+                                const Eigen::VectorXd& limit_stiffness) {
   require(h > 0.0, "reduced: root tracking: step must be positive, got {}", h);
+  require(stiffness.size() == size_ && damping.size() == size_ && previous.size() == size_,
+          "reduced: root tracking: {} / {} / {} values for {} coordinates", stiffness.size(), damping.size(),
+          previous.size(), size_);
+  require(limit.size() == limit_stiffness.size() && (limit.size() == 0 || 6 + 3 * limit.size() == size_),
+          "reduced: root tracking: {} joint limits for {} coordinates", limit.size(), size_);
   stiffness_ = stiffness;
   damping_rate_ = damping / h;
   previous_ = previous;
+  limit_ = limit;
+  limit_stiffness_ = limit_stiffness;
 }
 
-// ½ rᵀK r + 1/(2h)(r − r_n)ᵀD(r − r_n).
+// ½ rᵀK r + 1/(2h)(r − r_n)ᵀD(r − r_n) + Σ_j ½ k_j max(0, |φ_j| − a_j)².
 double RootTrackingTerm::value(const Eigen::VectorXd& x) const {
-  const Vector6d r = x.segment<6>(offset_), dr = r - previous_;
-  return 0.5 * (r.cwiseProduct(stiffness_).dot(r) + dr.cwiseProduct(damping_rate_).dot(dr));
+  const Eigen::VectorXd r = x.segment(offset_, size_), dr = r - previous_;
+  double value = 0.5 * (r.cwiseProduct(stiffness_).dot(r) + dr.cwiseProduct(damping_rate_).dot(dr));
+  for (Eigen::Index j = 0; j < limit_.size(); ++j) {
+    const double over = r.segment<3>(6 + 3 * j).norm() - limit_[j];
+    if (over > 0.0) value += 0.5 * limit_stiffness_[j] * over * over;
+  }
+  return value;
 }
 
 void RootTrackingTerm::add_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& gradient) const {
-  const Vector6d r = x.segment<6>(offset_);
-  gradient.segment<6>(offset_) += stiffness_.cwiseProduct(r) + damping_rate_.cwiseProduct(r - previous_);
+  const Eigen::VectorXd r = x.segment(offset_, size_);
+  gradient.segment(offset_, size_) += stiffness_.cwiseProduct(r) + damping_rate_.cwiseProduct(r - previous_);
+  for (Eigen::Index j = 0; j < limit_.size(); ++j) {
+    const Eigen::Vector3d phi = r.segment<3>(6 + 3 * j);
+    const double n = phi.norm(), over = n - limit_[j];
+    if (over > 0.0) gradient.segment<3>(offset_ + 6 + 3 * j) += limit_stiffness_[j] * over / n * phi;
+  }
 }
 
-void RootTrackingTerm::add_hessian(const Eigen::VectorXd&, Eigen::MatrixXd& hessian) const {
-  hessian.block<6, 6>(offset_, offset_).diagonal() += stiffness_ + damping_rate_;
+// The limit's Hessian k[(1 − a/n) I + (a/n) φφᵀ/n²] for n = |φ| > a.
+void RootTrackingTerm::add_hessian(const Eigen::VectorXd& x, Eigen::MatrixXd& hessian) const {
+  hessian.block(offset_, offset_, size_, size_).diagonal() += stiffness_ + damping_rate_;
+  for (Eigen::Index j = 0; j < limit_.size(); ++j) {
+    const Eigen::Vector3d phi = x.segment<3>(offset_ + 6 + 3 * j);
+    const double n = phi.norm();
+    if (n <= limit_[j]) continue;
+    const double ratio = limit_[j] / n;
+    hessian.block<3, 3>(offset_ + 6 + 3 * j, offset_ + 6 + 3 * j) +=
+        limit_stiffness_[j] * ((1.0 - ratio) * Eigen::Matrix3d::Identity() + ratio * phi * phi.transpose() / (n * n));
+  }
 }
 
 double RootPotentialTerm::value(const Eigen::VectorXd& x) const {
-  const RootFrame frame = root_frame(x, offset_, pivot_);
+  const DeviationFrame frame = skeleton_.frame(x, offset_, pose_.pivot, pose_.centres, false);
   const double energy = potentials_.energy(x, inertia_, &frame);
   return std::isfinite(energy) ? energy : kInfinity;
 }
 
 void RootPotentialTerm::add_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& gradient) const {
-  const RootFrame frame = root_frame(x, offset_, pivot_);
+  const DeviationFrame frame = skeleton_.frame(x, offset_, pose_.pivot, pose_.centres, false);
   potentials_.add_gradient(x, inertia_, gradient, &frame);
 }
 
 void RootPotentialTerm::add_hessian(const Eigen::VectorXd& x, Eigen::MatrixXd& hessian) const {
-  const RootFrame frame = root_frame(x, offset_, pivot_);
+  const DeviationFrame frame = skeleton_.frame(x, offset_, pose_.pivot, pose_.centres, true);
   potentials_.add_hessian(x, inertia_, hessian, &frame);
 }
 

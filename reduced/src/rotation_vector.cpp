@@ -78,16 +78,3 @@ RotationVectorDerivatives rotation_vector_derivatives(const Eigen::Vector3d& the
 }
 
 }  // namespace sflsh::reduced
-
-namespace sflsh::reduced {
-
-RootFrame root_frame(const Eigen::VectorXd& x, Eigen::Index offset, const Eigen::Vector3d& pivot) {
-  RootFrame frame;
-  frame.rotation = rotation_vector_derivatives(x.segment<3>(offset));
-  frame.translation = x.segment<3>(offset + 3);
-  frame.pivot = pivot;
-  frame.offset = offset;
-  return frame;
-}
-
-}  // namespace sflsh::reduced

@@ -3,13 +3,13 @@
 // candidates' posed positions p_c(q) = z_c + A_c Σ_s b_cs t_s, and the chain rule
 //   ∂Φ_c/∂t_s = Σ_c b_cs A_cᵀ ∂Φ_c/∂p_c,   ∂²Φ_c/∂t_s∂t_r = Σ_c b_cs b_cr A_cᵀ (∂²Φ_c/∂p_c²) A_c,
 //   ∂²Φ_c/∂t_s∂y = Σ_c b_cs A_cᵀ ∂²Φ_c/∂p_c∂y,
-// with y at x[offset, offset + size). With a tracking root (root_tracking.hpp) at x[root, root + 6) the candidates
-// sit at the deviated positions R(θ)(p_c(q) − c) + c + τ, and the root's rows and columns follow by the chain rule
-// (add_root_node_blocks; the node × y blocks through ∂p/∂θ_k = ∂_kR (p − c), ∂p/∂τ = I, ∂p/∂t_s = b_s R A).
+// with y at x[offset, offset + size). With a tracking skeleton (root_tracking.hpp) at x[root, root + size) the
+// candidates sit at the deviated positions D_c(p_c(q)) (skeleton_deviation.hpp), and the deviation's rows and columns
+// follow by the chain rule (add_deviation_node_blocks; the node × y blocks through ∂y/∂r and ∂y/∂t_s = b_s L A).
 #include <sflsh/reduced/coupled_system.hpp>
 #include <sflsh/reduced/reduced_inertia.hpp>
 #include <sflsh/reduced/reduced_terms.hpp>
-#include <sflsh/reduced/rotation_vector.hpp>
+#include <sflsh/reduced/root_tracking.hpp>
 #include <sflsh/reduced/subspace.hpp>
 
 namespace sflsh::reduced {
@@ -20,14 +20,17 @@ class CoupledTerm final : public ReducedTerm {
   CoupledTerm(CoupledSystem& system, const Subspace& subspace, const ReducedInertia& inertia, Eigen::Index offset);
   std::string_view name() const override { return "coupled"; }
   Eigen::Index offset() const { return offset_; }
-  /// A tracking root's coordinates at x[offset, offset + 6) (before this term's y), deviating the positions about
-  /// the pivot set by begin().
-  void set_root(Eigen::Index offset) { root_offset_ = offset; }
+  /// A tracking skeleton's coordinates at x[offset, offset + skeleton.size()) (before this term's y), deviating the
+  /// positions about the centres set by begin().
+  void set_root(Eigen::Index offset, const SkeletonDeviation& skeleton) {
+    root_offset_ = offset;
+    skeleton_ = &skeleton;
+  }
   /// begin_substep of the system; `inertia` must be at the substep's end, p_start the active nodes' posed
-  /// positions at t0 (deviated by the root at t0 when there is one); `start` the root's frame at t0 and `pivot`
-  /// the pivot at the substep's end (with a root).
-  void begin(double t0, double dt, const meshing::RowMatrixX3d& p_start, const RootFrame* start = nullptr,
-             const Eigen::Vector3d& pivot = Eigen::Vector3d::Zero());
+  /// positions at t0 (deviated by the skeleton at t0 when it tracks); `start` the deviation's frame at t0 and
+  /// `pose` the centres at the substep's end (with a tracking skeleton).
+  void begin(double t0, double dt, const meshing::RowMatrixX3d& p_start, const DeviationFrame* start = nullptr,
+             const DeviationPose& pose = {});
   double value(const Eigen::VectorXd& x) const override;
   void add_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& gradient) const override;
   void add_hessian(const Eigen::VectorXd& x, Eigen::MatrixXd& hessian) const override;
@@ -46,8 +49,9 @@ class CoupledTerm final : public ReducedTerm {
   Eigen::Index offset_;
   std::vector<int> active_of_;         ///< per entry of system.nodes(): its active index
   std::vector<int> candidate_active_;  ///< per candidate of the substep: its active index
-  Eigen::Index root_offset_ = -1;      ///< the root's coordinates in x, or −1 (prescribed skeleton)
-  Eigen::Vector3d pivot_ = Eigen::Vector3d::Zero();
+  Eigen::Index root_offset_ = -1;      ///< the deviation's coordinates in x, or −1 (prescribed skeleton)
+  const SkeletonDeviation* skeleton_ = nullptr;
+  DeviationPose pose_;
 };
 
 }  // namespace sflsh::reduced

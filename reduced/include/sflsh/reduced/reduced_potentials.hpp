@@ -3,11 +3,11 @@
 // with p_i(q) = z_i + A_i Σ_s b_is t_s (z_i: posed at q = 0),
 //   U(q) = Σ_k u_k(p_{n_k}(q)),   ∂U/∂t_s = Σ_k b_{n_k s} A_kᵀ ∇u_k,   ∂²U/∂t_s∂t_r = Σ_k b_ks b_kr A_kᵀ ∇²u_k A_k,
 // summed over each potential's candidates of the substep only, so an idle or absent potential costs nothing.
-// With a tracking root (root_tracking.hpp) every position is carried by the root deviation, p ↦ R(θ)(p − c) + c + τ,
-// and the gradient and Hessian gain the root's rows: ∂p/∂t_s = b_s R A, ∂p/∂τ = I, ∂p/∂θ_k = ∂_kR (p − c).
+// With a tracking skeleton (skeleton_deviation.hpp) every position is carried by the skeleton's deviation y = D(p),
+// and the gradient and Hessian gain the deviation's rows: ∂y/∂t_s = b_s L A, ∂y/∂r from the frame.
 #include <sflsh/model/problem.hpp>
 #include <sflsh/reduced/reduced_inertia.hpp>
-#include <sflsh/reduced/rotation_vector.hpp>
+#include <sflsh/reduced/skeleton_deviation.hpp>
 #include <sflsh/reduced/subspace.hpp>
 
 #include <Eigen/Core>
@@ -20,13 +20,17 @@ namespace sflsh::reduced {
 /// inertia's current time; q may be longer than 3S (extra coordinates after it are ignored).
 Eigen::Vector3d posed_node(const Subspace& subspace, const ReducedInertia& inertia, const Eigen::VectorXd& q, int a);
 
-/// Adds the root's rows and columns of one node's contribution to a Hessian over x = [q; θ; τ; …] (the root at
-/// root.offset): u of the deviated position y = R(p − c) + c + τ, with p the node's posed position before the
-/// deviation, ∇u = g and ∇²u = H at y, A the node's map and `node` its mesh index (its basis row). Also adds the
-/// soft-tissue block (R A)ᵀ H (R A) b_s b_r.
-void add_root_node_blocks(const Subspace& subspace, const RootFrame& root, int node, const Eigen::Matrix3d& A,
-                          const Eigen::Vector3d& p, const Eigen::Vector3d& g, const Eigen::Matrix3d& H,
-                          Eigen::MatrixXd& hessian);
+/// Adds the deviation's rows of one node's contribution to a gradient over x = [q; r; …] (r at frame.offset): u of
+/// the deviated position y = D(p), with p the node's posed position before the deviation, ∇u = g at y, A the
+/// node's map and `node` its mesh index (its basis row).
+void add_deviation_node_gradient(const Subspace& subspace, const DeviationFrame& frame, int node,
+                                 const Eigen::Matrix3d& A, const Eigen::Vector3d& p, const Eigen::Vector3d& g,
+                                 Eigen::VectorXd& gradient);
+/// The same for the Hessian, with ∇²u = H at y: the deviation block, the soft tissue × deviation blocks and the
+/// soft-tissue block (L A)ᵀ H (L A) b_s b_r.
+void add_deviation_node_blocks(const Subspace& subspace, const DeviationFrame& frame, int node,
+                               const Eigen::Matrix3d& A, const Eigen::Vector3d& p, const Eigen::Vector3d& g,
+                               const Eigen::Matrix3d& H, Eigen::MatrixXd& hessian);
 
 class ReducedPotentials {
  public:
@@ -38,16 +42,16 @@ class ReducedPotentials {
   /// posed positions at t0. Returns whether any potential has candidates.
   /// `root` (may be null) carries the skinned end positions (the root at the start of the substep).
   bool begin(double t0, double dt, const meshing::RowMatrixX3d& p_start, const ReducedInertia& inertia,
-             const RootFrame* root = nullptr);
+             const DeviationFrame* root = nullptr);
   bool active() const { return !terms_.empty(); }
   /// With `root`, q is x = [q; θ; τ] and the gradient and Hessian also fill the root's rows and columns.
-  double energy(const Eigen::VectorXd& q, const ReducedInertia& inertia, const RootFrame* root = nullptr) const;
+  double energy(const Eigen::VectorXd& q, const ReducedInertia& inertia, const DeviationFrame* root = nullptr) const;
   void add_gradient(const Eigen::VectorXd& q, const ReducedInertia& inertia, Eigen::VectorXd& gradient,
-                    const RootFrame* root = nullptr) const;
+                    const DeviationFrame* root = nullptr) const;
   void add_hessian(const Eigen::VectorXd& q, const ReducedInertia& inertia, Eigen::MatrixXd& hessian,
-                   const RootFrame* root = nullptr) const;
+                   const DeviationFrame* root = nullptr) const;
   /// accept_substep of the active potentials at q; false when one refused (and stiffened).
-  bool accept(const Eigen::VectorXd& q, const ReducedInertia& inertia, const RootFrame* root = nullptr);
+  bool accept(const Eigen::VectorXd& q, const ReducedInertia& inertia, const DeviationFrame* root = nullptr);
   int max_refinements() const;
 
  private:

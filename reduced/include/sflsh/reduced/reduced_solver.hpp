@@ -122,12 +122,24 @@ class ReducedSolver final : public model::BodySolver {
   /// Whether the root tracks its motion (options.root.enabled), and its deviation r = (θ [rad], τ [m]) from the
   /// motion's pose now (zero with a prescribed skeleton).
   bool tracking() const { return options_.root.enabled; }
-  const Vector6d& root() const { return root_; }
+  Vector6d root() const { return deviation_.head<6>(); }
+  /// The whole deviation r = (θ, τ, φ_1, …, φ_J) [rad, m, rad] now; the tracked joints' φ_j follow the root's six.
+  const Eigen::VectorXd& deviation() const { return deviation_; }
+  /// The skeleton (its tracked joints and bones) and the deviation's frame now, to deviate any blended point.
+  const SkeletonDeviation& skeleton() const { return skeleton_; }
+  DeviationFrame deviation_frame() const;
   /// The root deviation now as p ↦ R p + t in the problem's posed frame (identity with a prescribed skeleton).
   void root_transform(Eigen::Matrix3d& R, Eigen::Vector3d& t) const;
   /// The root's tracking spring and damper per coordinate (θ then τ) [N·m/rad, N/m; N·m·s/rad, N·s/m].
-  const Vector6d& root_stiffness() const { return root_stiffness_; }
-  const Vector6d& root_damping() const { return root_damping_; }
+  Vector6d root_stiffness() const { return tracking_stiffness_.head<6>(); }
+  Vector6d root_damping() const { return tracking_damping_.head<6>(); }
+  /// Per coordinate of the deviation: spring [N·m/rad | N/m] and damper; per tracked joint: the limit φ_max [rad],
+  /// its stiffness [N·m/rad] and the moment of inertia I_j of what the joint carries [kg·m²].
+  const Eigen::VectorXd& tracking_stiffness() const { return tracking_stiffness_; }
+  const Eigen::VectorXd& tracking_damping() const { return tracking_damping_; }
+  const Eigen::VectorXd& joint_limits() const { return joint_limit_; }
+  const Eigen::VectorXd& joint_limit_stiffness() const { return joint_limit_stiffness_; }
+  const Eigen::VectorXd& joint_inertia() const { return joint_inertia_; }
   /// The substeps of the last successful step(), in order (empty unless options.record_substeps).
   const std::vector<ReducedSubstep>& last_substeps() const { return substeps_; }
 
@@ -162,6 +174,10 @@ class ReducedSolver final : public model::BodySolver {
   /// Tracking root: the attached nodes' skinned positions at t (x_D the prescribed state) and the pivot c(t).
   void carried_posed(double t, const Eigen::VectorXd& x_prescribed, meshing::RowMatrixX3d& p) const;
   Eigen::Vector3d root_pivot(double t, const meshing::RowMatrixX3d& carried) const;
+  /// The pivot and the tracked joints' centres at t.
+  DeviationPose deviation_pose(double t, const meshing::RowMatrixX3d& carried) const;
+  /// The springs, dampers and limits of the deviation from the layer at the start (carried: the attached nodes).
+  void setup_tracking_springs(const meshing::RowMatrixX3d& carried);
   void setup_root();
   void setup_coupled();
 
@@ -192,13 +208,15 @@ class ReducedSolver final : public model::BodySolver {
   int rate_steps_ = 0;               ///< substeps behind q_rate_ (0, 1, ≥ 2)
   model::PosedHistory history_;      ///< posed kinematics of the inertia nodes
   std::vector<ReducedSubstep> substeps_;
-  // Tracking root (options.root.enabled): x = [q; θ; τ], the root's coordinates at offset 3S.
+  // Tracking skeleton (options.root.enabled): x = [q; r], r = (θ, τ, φ_1, …) at offset 3S.
   std::vector<int> carried_;          ///< nodes with mass that only the root moves (not inertia nodes)
   std::vector<double> carried_mass_;  ///< their lumped masses [kg]
   model::PosedHistory carried_history_;
-  Vector6d root_ = Vector6d::Zero();
-  Eigen::Vector3d pivot_ = Eigen::Vector3d::Zero();  ///< c at t_
-  Vector6d root_stiffness_ = Vector6d::Zero(), root_damping_ = Vector6d::Zero();
+  SkeletonDeviation skeleton_;
+  Eigen::VectorXd deviation_ = Vector6d::Zero();  ///< r = (θ, τ, φ_1, …, φ_J)
+  DeviationPose pose_;                            ///< the centres at t_
+  Eigen::VectorXd tracking_stiffness_ = Vector6d::Zero(), tracking_damping_ = Vector6d::Zero();
+  Eigen::VectorXd joint_limit_, joint_limit_stiffness_, joint_inertia_;
   std::unique_ptr<HeadTerm> elastic_head_, gravity_head_;
   std::unique_ptr<RootInertiaTerm> root_inertia_term_;
   std::unique_ptr<RootTrackingTerm> root_tracking_term_;

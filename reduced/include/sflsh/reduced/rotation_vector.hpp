@@ -22,20 +22,3 @@ RotationVectorDerivatives rotation_vector_derivatives(const Eigen::Vector3d& the
 Eigen::Matrix3d rotation_of_vector(const Eigen::Vector3d& theta);
 
 }  // namespace sflsh::reduced
-
-namespace sflsh::reduced {
-
-/// A rigid deviation of a whole posed layer about a pivot c: p ↦ R(θ)(p − c) + c + τ, with the derivatives of R
-/// at θ; `offset` is where (θ, τ) sit in the solver's coordinates x = [q; θ; τ].
-struct RootFrame {
-  RotationVectorDerivatives rotation;
-  Eigen::Vector3d pivot = Eigen::Vector3d::Zero();
-  Eigen::Vector3d translation = Eigen::Vector3d::Zero();
-  Eigen::Index offset = 0;
-  Eigen::Vector3d apply(const Eigen::Vector3d& p) const { return rotation.R * (p - pivot) + pivot + translation; }
-};
-
-/// The frame of x's root coordinates x[offset..offset+6) = (θ, τ) about `pivot`.
-RootFrame root_frame(const Eigen::VectorXd& x, Eigen::Index offset, const Eigen::Vector3d& pivot);
-
-}  // namespace sflsh::reduced
