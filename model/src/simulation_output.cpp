@@ -89,6 +89,24 @@ namespace sflsh::model {
 
 namespace {
 
+/// Deviates the points by per-row affine maps and turns the first `vector_fields` three-column float arrays by their
+/// linear parts (a tracking skeleton's deviation, before the placement).
+void deviate(const std::vector<Eigen::Matrix<double, 3, 4>>& maps, RowMatrixX3d& points,
+             std::vector<vtk::Field>& fields, std::size_t vector_fields) {
+  require(maps.size() == static_cast<std::size_t>(points.rows()), "output: {} deviation maps for {} points",
+          maps.size(), points.rows());
+  for (Eigen::Index i = 0; i < points.rows(); ++i) {
+    const Eigen::Matrix<double, 3, 4>& M = maps[static_cast<std::size_t>(i)];
+    points.row(i) = (M.leftCols<3>() * points.row(i).transpose() + M.col(3)).transpose();
+  }
+  for (std::size_t k = 0; k < vector_fields && k < fields.size(); ++k) {
+    vtk::Field& f = fields[k];
+    if (f.values.cols() != 3 || f.integer || f.values.rows() != points.rows()) continue;
+    for (Eigen::Index i = 0; i < f.values.rows(); ++i)
+      f.values.row(i) = (maps[static_cast<std::size_t>(i)].leftCols<3>() * f.values.row(i).transpose()).transpose();
+  }
+}
+
 /// Scatters region rows (R×k) into a body-sized array (n×k), zero elsewhere.
 Eigen::MatrixXd scatter(const BodyLayer& layer, const Eigen::MatrixXd& region_values) {
   const std::vector<int>& region = layer.mesh->region_surface.vertices;
@@ -279,13 +297,14 @@ void SimulationWriter::add(int index, double t, const Eigen::VectorXd& x_state, 
     path = run_->stage(name);
   }
   run_job([this, path, t, posed, own_fields, fields = std::move(fields), R = frame_rotation_, T = frame_translation_,
-           x = energy ? x_state : Eigen::VectorXd()]() mutable {
+           deviation = vertex_deviation_, x = energy ? x_state : Eigen::VectorXd()]() mutable {
     if (x.size() > 0) {
       // Only the tets under the skin's vertices (a sixth of the layer's on the coarse mesh).
       const Eigen::VectorXd vertex_psi = strain_energy_density(layer_.problem, x, layer_.mesh->skin.tet);
       for (vtk::Field& f : fields.point_data)
         if (f.name == "strain_energy_density" && f.values.size() == 0) f.values = scatter(layer_, vertex_psi);
     }
+    if (deviation) deviate(*deviation, posed, fields.point_data, own_fields);
     if (!R.isIdentity(0.0) || !T.isZero(0.0)) {
       for (std::size_t k = 0; k < own_fields; ++k) {
         vtk::Field& f = fields.point_data[k];
@@ -320,7 +339,8 @@ void SimulationWriter::write_layer_frame(int index, double t, const State& state
     path = run_->stage(name);
   }
   run_job([this, &problem, path, t, nodes = std::move(nodes), x = Eigen::VectorXd(state.x),
-           w = Eigen::VectorXd(state.w), R = frame_rotation_, T = frame_translation_]() mutable {
+           w = Eigen::VectorXd(state.w), R = frame_rotation_, T = frame_translation_,
+           deviation = node_deviation_]() mutable {
     const Eigen::Map<const RowMatrixX3d> elastic(x.data(), problem.num_nodes(), 3);
     const Eigen::Map<const RowMatrixX3d> velocity(w.data(), problem.num_nodes(), 3);
     vtk::Fields fields;
@@ -328,6 +348,7 @@ void SimulationWriter::write_layer_frame(int index, double t, const State& state
     if (wants("elastic_displacement"))
       fields.point_data.push_back({"elastic_displacement", elastic - problem.rest, false});
     if (wants("velocity")) fields.point_data.push_back({"velocity", velocity, false});
+    if (deviation) deviate(*deviation, nodes, fields.point_data, fields.point_data.size());
     if (!R.isIdentity(0.0) || !T.isZero(0.0)) {  // as the body frames: vectors turn with the body, positions move
       for (vtk::Field& f : fields.point_data) f.values = (f.values * R.transpose()).eval();
       nodes = (nodes * R.transpose()).rowwise() + T.transpose();
@@ -365,6 +386,14 @@ void SimulationWriter::finish() {
 
 std::string SimulationWriter::dynamics_file() const {
   return options_.prefix == "body" ? "dynamics.vtp" : options_.prefix + "_dynamics.vtp";
+}
+
+void SimulationWriter::set_frame_deviation(std::vector<Eigen::Matrix<double, 3, 4>> vertex,
+                                           std::vector<Eigen::Matrix<double, 3, 4>> node) {
+  vertex_deviation_ =
+      vertex.empty() ? nullptr : std::make_shared<const std::vector<Eigen::Matrix<double, 3, 4>>>(std::move(vertex));
+  node_deviation_ =
+      node.empty() ? nullptr : std::make_shared<const std::vector<Eigen::Matrix<double, 3, 4>>>(std::move(node));
 }
 
 void SimulationWriter::set_frame_placement(const Eigen::Matrix3d& rotation, const Eigen::Vector3d& translation) {

@@ -1,6 +1,6 @@
-// The tracking skeleton's part of the reduced solver (reduced_solver.hpp, docs/reduced.md "Tracking skeleton
-// (root first)"): the checks and terms set up once, the nodes only the root carries, the pivot and the root's
-// rigid transform p ↦ R(θ)(p − c) + c + τ. The Newton step itself is in reduced_solver.cpp.
+// The tracking skeleton's part of the reduced solver (reduced_solver.hpp, docs/reduced.md "Tracking skeleton"): the
+// checks and terms set up once, the nodes only the deviation carries, the pivot and the joint centres, the springs
+// per coordinate and the root's rigid transform p ↦ R(θ)(p − c) + c + τ. The Newton step is in reduced_solver.cpp.
 #include <sflsh/core/error.hpp>
 #include <sflsh/reduced/reduced_solver.hpp>
 #include <sflsh/reduced/rotation_vector.hpp>

@@ -1,4 +1,5 @@
 // One body of a scene (scene_internal.hpp).
+#include "body_skeleton.hpp"
 #include "scene_internal.hpp"
 
 #include <sflsh/body/subjects.hpp>
@@ -118,6 +119,7 @@ void SceneBody::start(bool inertia) {
         curve->transforms(t, m);
         return Eigen::Vector3d(m[0].leftCols<3>() * pelvis + m[0].col(3));
       };
+      options.root.joints = joint_tracking_options(spec_, *layer_);
     }
     fast_ =
         std::make_unique<reduced::ReducedSolver>(problem, reduced_model_->subspace, reduced_model_->cubature, options);
@@ -243,7 +245,16 @@ void SceneBody::step(double t0, double h, EffectSeconds& seconds) {
   t_ = t0 + h;
   solve_seconds += seconds_since(clock);
   if (tracking()) {
-    const reduced::Vector6d& r = fast_->root();
+    const reduced::Vector6d r = fast_->root();
+    const Eigen::VectorXd& deviation = fast_->deviation();
+    joint_max_rotation_.resize(fast_->skeleton().num_joints(), 0.0);
+    joint_max_rotation_time_.resize(fast_->skeleton().num_joints(), 0.0);
+    for (std::size_t j = 0; j < joint_max_rotation_.size(); ++j) {
+      const double angle = deviation.segment<3>(6 + 3 * static_cast<Eigen::Index>(j)).norm();
+      if (angle <= joint_max_rotation_[j]) continue;
+      joint_max_rotation_[j] = angle;
+      joint_max_rotation_time_[j] = t_;
+    }
     if (r.tail<3>().norm() > root_max_displacement_) {
       root_max_displacement_ = r.tail<3>().norm();
       root_max_displacement_time_ = t_;
@@ -256,15 +267,34 @@ void SceneBody::step(double t0, double h, EffectSeconds& seconds) {
   }
 }
 
-Rigid SceneBody::root_deviation() const {
-  Rigid root;
-  if (tracking()) fast_->root_transform(root.R, root.t);
-  return root;
+std::vector<reduced::Matrix34d> SceneBody::surface_deviation() const {
+  if (!tracking()) return {};
+  return surface_deviation_maps(*fast_, *layer_);
+}
+
+std::vector<reduced::Matrix34d> SceneBody::node_deviation() const {
+  if (!tracking()) return {};
+  return node_deviation_maps(*fast_, *layer_);
 }
 
 nlohmann::json SceneBody::skeleton_summary() const {
   if (!tracking()) return {{"skeleton", "prescribed"}};
-  const reduced::Vector6d& r = fast_->root();
+  const reduced::Vector6d r = fast_->root();
+  nlohmann::json joints = nlohmann::json::array();
+  const reduced::SkeletonDeviation& skeleton = fast_->skeleton();
+  for (int j = 0; j < skeleton.num_joints(); ++j) {
+    const auto sj = static_cast<std::size_t>(j);
+    const Eigen::Index c = 6 + 3 * j;
+    joints.push_back(
+        {{"joint", body::kJointNames[static_cast<std::size_t>(skeleton.tracked()[sj])]},
+         {"stiffness_n_m_per_rad", fast_->tracking_stiffness()[c]},
+         {"damping_n_m_s_per_rad", fast_->tracking_damping()[c]},
+         {"limit_rad", fast_->joint_limits()[j]},
+         {"moment_of_inertia_kg_m2", fast_->joint_inertia()[j]},
+         {"max_rotation_rad", sj < joint_max_rotation_.size() ? joint_max_rotation_[sj] : 0.0},
+         {"max_rotation_time_s", sj < joint_max_rotation_time_.size() ? joint_max_rotation_time_[sj] : 0.0},
+         {"final_rotation_rad", fast_->deviation().segment<3>(c).norm()}});
+  }
   return {
       {"skeleton", "tracking"},
       {"root", spec_.free_root ? "free" : "tracked"},
@@ -279,7 +309,10 @@ nlohmann::json SceneBody::skeleton_summary() const {
       {"max_root_rotation_rad", root_max_rotation_},
       {"max_root_rotation_time_s", root_max_rotation_time_},
       {"final_root_displacement_m", r.tail<3>().norm()},
-      {"final_root_rotation_rad", r.head<3>().norm()}};
+      {"final_root_rotation_rad", r.head<3>().norm()},
+      {"joint_frequency_hz", spec_.joint_frequency},
+      {"joint_damping_ratio", spec_.joint_damping_ratio},
+      {"joints", joints}};
 }
 
 // The skinned pose at time t, interpolated between the motion's frames (slerp per joint).
@@ -296,14 +329,14 @@ RowMatrixX3d SceneBody::skinned_world_surface(double t) const {
 
 RowMatrixX3d SceneBody::world_surface() const {
   if (!soft()) return skinned_world_surface(t_);
-  if (tracking()) return (placement_ * root_deviation()).apply(layer_->posed_surface(positions(), t_));
+  if (tracking()) return placement_.apply(apply_maps(surface_deviation(), layer_->posed_surface(positions(), t_)));
   return placement_.apply(layer_->posed_surface(positions(), t_));
 }
 
-// A tracking root is carried at its current deviation.
+// A tracking skeleton is carried at its current deviation.
 RowMatrixX3d SceneBody::predicted_world_surface(double t) const {
   if (!soft()) return skinned_world_surface(t);
-  if (tracking()) return (placement_ * root_deviation()).apply(layer_->posed_surface(positions(), t));
+  if (tracking()) return placement_.apply(apply_maps(surface_deviation(), layer_->posed_surface(positions(), t)));
   return placement_.apply(layer_->posed_surface(positions(), t));
 }
 

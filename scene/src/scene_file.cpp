@@ -1,9 +1,11 @@
 // Reading scene files (scene_file.hpp, docs/scenes.md), errors as "<file>:<line>: …".
+#include <sflsh/body/body_model.hpp>
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/toml_reader.hpp>
 #include <sflsh/model/simulation_output.hpp>
 #include <sflsh/scene/scene_file.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <set>
 #include <utility>
@@ -278,7 +280,8 @@ class SceneReader : public TomlReader {
   void read_skeleton(const toml::table& t, const std::string& context, BodySpec& b) const {
     if (const toml::node* n = t.get("skeleton"))
       b.tracking = choice(*n, "skeleton", {"prescribed", "tracking"}, context) == "tracking";
-    for (const char* key : {"tracking_stiffness", "tracking_damping", "root"}) {
+    for (const char* key : {"tracking_stiffness", "tracking_damping", "root", "tracked_joints", "joint_frequency",
+                            "joint_damping_ratio", "joint_limit", "joint_stiffness", "joint_damping", "joint_limits"}) {
       const toml::node* n = t.get(key);
       require(n == nullptr || b.tracking, "{}: '{}'{} needs skeleton = \"tracking\"", n ? at(*n) : std::string(), key,
               context);
@@ -288,6 +291,7 @@ class SceneReader : public TomlReader {
     if (const toml::node* n = t.get("tracking_damping"))
       b.tracking_damping = number_in(*n, "tracking_damping", context, 0.0, 1e5, "N·s/m");
     if (const toml::node* n = t.get("root")) b.free_root = choice(*n, "root", {"tracked", "free"}, context) == "free";
+    read_joints(t, context, b);
     if (!b.tracking) return;
     const toml::node& at_node = *t.get("skeleton");
     require(b.solver == SolverKind::reduced,
@@ -297,6 +301,55 @@ class SceneReader : public TomlReader {
             context);
     require(b.integrator == model::Integrator::backward_euler,
             "{}: skeleton = \"tracking\"{} needs integrator = \"backward_euler\"", at(at_node), context);
+  }
+
+  /// tracked_joints = "all" | "root" | [names], joint_frequency [Hz], joint_damping_ratio, joint_limit [rad] and the
+  /// per-joint tables joint_stiffness [N·m/rad], joint_damping [N·m·s/rad], joint_limits [rad].
+  void read_joints(const toml::table& t, const std::string& context, BodySpec& b) const {
+    if (const toml::node* n = t.get("tracked_joints")) {
+      if (const toml::array* list = n->as_array()) {
+        b.all_joints = false;
+        for (const toml::node& item : *list) b.tracked_joints.push_back(joint_name(item, "tracked_joints", context));
+      } else {
+        b.all_joints = choice(*n, "tracked_joints", {"all", "root"}, context) == "all";
+      }
+    }
+    if (const toml::node* n = t.get("joint_frequency"))
+      b.joint_frequency = number_in(*n, "joint_frequency", context, 0.05, 50.0, "Hz");
+    if (const toml::node* n = t.get("joint_damping_ratio"))
+      b.joint_damping_ratio = number_in(*n, "joint_damping_ratio", context, 0.0, 10.0, "");
+    if (const toml::node* n = t.get("joint_limit")) b.joint_limit = number_in(*n, "joint_limit", context, 0.01, 3.0, "rad");
+    const auto per_joint = [&](const char* key, double low, double high, const char* unit,
+                               std::map<std::string, double>& out) {
+      const toml::node* n = t.get(key);
+      if (!n) return;
+      const toml::table* entries = n->as_table();
+      require(entries != nullptr, "{}: '{}'{} must be a table {{ joint_name = value, … }}", at(*n), key, context);
+      for (const auto& [name, value] : *entries) {
+        const std::string joint(name.str());
+        require(below_the_root(joint),
+                "{}: '{}'{}: '{}' is not a joint below the root (spine1, left_hip, …: docs/scenes.md)", at(value),
+                key, context, joint);
+        out[joint] = number_in(value, key, context, low, high, unit);
+      }
+    };
+    per_joint("joint_stiffness", 0.0, 1e6, "N·m/rad", b.joint_stiffness);
+    per_joint("joint_damping", 0.0, 1e5, "N·m·s/rad", b.joint_damping);
+    per_joint("joint_limits", 0.01, 3.0, "rad", b.joint_limits);
+  }
+
+  /// One of SMPL's joint names other than the root's.
+  static bool below_the_root(const std::string& name) {
+    return name != body::kJointNames[0] &&
+           std::find(body::kJointNames.begin(), body::kJointNames.end(), name) != body::kJointNames.end();
+  }
+
+  std::string joint_name(const toml::node& node, std::string_view key, const std::string& context) const {
+    const std::string name = string_value(node, key, context);
+    require(below_the_root(name),
+            "{}: '{}'{}: '{}' is not a joint below the root (spine1, left_hip, …: docs/scenes.md)", at(node), key,
+            context, name);
+    return name;
   }
 
   BodySpec read_body(const toml::node& node, std::size_t index) const {
@@ -325,7 +378,14 @@ class SceneReader : public TomlReader {
                 "skeleton",
                 "tracking_stiffness",
                 "tracking_damping",
-                "root"},
+                "root",
+                "tracked_joints",
+                "joint_frequency",
+                "joint_damping_ratio",
+                "joint_limit",
+                "joint_stiffness",
+                "joint_damping",
+                "joint_limits"},
                context);
     BodySpec b;
     b.line = static_cast<int>(t->source().begin.line);

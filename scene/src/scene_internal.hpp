@@ -102,10 +102,11 @@ class SceneBody {
   Eigen::VectorXd positions() const;
   /// The largest elastic displacement of the skin now [m] (0 for a skinned body).
   double max_elastic_displacement() const;
-  /// Whether the skeleton tracks its motion (skeleton = "tracking"), and its root's deviation from the motion now,
-  /// p ↦ R p + t in the body's own (posed) frame (identity otherwise).
+  /// Whether the skeleton tracks its motion (skeleton = "tracking"), and its deviation from the motion now as affine
+  /// maps in the body's own (posed) frame, per body vertex and per layer node (empty otherwise).
   bool tracking() const { return fast_ && fast_->tracking(); }
-  Rigid root_deviation() const;
+  std::vector<reduced::Matrix34d> surface_deviation() const;
+  std::vector<reduced::Matrix34d> node_deviation() const;
   /// summary.json "skeleton" of a tracking body: the largest root displacement and rotation and when.
   nlohmann::json skeleton_summary() const;
 
@@ -138,6 +139,7 @@ class SceneBody {
   double root_max_displacement_ = 0.0, root_max_rotation_ = 0.0;
   double root_max_displacement_time_ = 0.0, root_max_rotation_time_ = 0.0;
   Eigen::Vector3d root_max_direction_ = Eigen::Vector3d::Zero();  ///< τ at its largest (body frame) [m]
+  std::vector<double> joint_max_rotation_, joint_max_rotation_time_;  ///< per tracked joint: max |φ_j| [rad], when [s]
   struct StepStart;                                               ///< save_step_start()'s state (scene_body.cpp)
   std::shared_ptr<const StepStart> start_;                        ///< null until saved
 };

@@ -114,6 +114,27 @@ TEST(SceneFile, BadInputNamesFileAndLine) {
        "needs integrator = \"backward_euler\""},
       {"[scene]\n" + std::string(kBody) + "skeleton = \"tracking\"\n",
        "body 'a' has skeleton = \"tracking\", which needs [effects] inertia = true"},
+      {"[scene]\n[effects]\ninertia = true\n" + std::string(kBody) + "tracked_joints = \"all\"\n",
+       "scene.toml:7: 'tracked_joints' in body #0 needs skeleton = \"tracking\""},
+      {"[scene]\n[effects]\ninertia = true\n" + std::string(kBody) +
+           "skeleton = \"tracking\"\ntracked_joints = \"some\"\n",
+       "scene.toml:8: 'tracked_joints' in body #0 = 'some' is not one of all | root"},
+      {"[scene]\n[effects]\ninertia = true\n" + std::string(kBody) +
+           "skeleton = \"tracking\"\ntracked_joints = [\"spine1\", \"tail\"]\n",
+       "scene.toml:8: 'tracked_joints' in body #0: 'tail' is not a joint below the root"},
+      {"[scene]\n[effects]\ninertia = true\n" + std::string(kBody) +
+           "skeleton = \"tracking\"\ntracked_joints = [\"pelvis\"]\n",
+       "'pelvis' is not a joint below the root"},
+      {"[scene]\n[effects]\ninertia = true\n" + std::string(kBody) +
+           "skeleton = \"tracking\"\njoint_stiffness = { left_knee = 10.0, nose = 5.0 }\n",
+       "scene.toml:8: 'joint_stiffness' in body #0: 'nose' is not a joint below the root"},
+      {"[scene]\n[effects]\ninertia = true\n" + std::string(kBody) + "skeleton = \"tracking\"\njoint_damping = 5.0\n",
+       "scene.toml:8: 'joint_damping' in body #0 must be a table { joint_name = value, … }"},
+      {"[scene]\n[effects]\ninertia = true\n" + std::string(kBody) +
+           "skeleton = \"tracking\"\njoint_limits = { spine1 = 4.0 }\n",
+       "joint_limits in body #0: 4 rad is outside"},
+      {"[scene]\n[effects]\ninertia = true\n" + std::string(kBody) + "skeleton = \"tracking\"\njoint_frequency = 0\n",
+       "joint_frequency in body #0: 0 Hz is outside"},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.text);
@@ -123,6 +144,32 @@ TEST(SceneFile, BadInputNamesFileAndLine) {
   }
   EXPECT_NE(error_of(dir / "missing.toml").find("missing.toml: not found, expected a scene TOML file"),
             std::string::npos);
+}
+
+TEST(SceneFile, TrackedJointsAndTheirSprings) {
+  const auto dir = testing::scratch_dir();
+  const auto all = load_scene(write_scene(
+      dir, "[scene]\n[effects]\ninertia = true\n" + std::string(kBody) + "skeleton = \"tracking\"\n"));
+  EXPECT_TRUE(all.bodies[0].all_joints);  // the default: every joint carrying the layer
+  EXPECT_DOUBLE_EQ(all.bodies[0].joint_frequency, 2.0);
+  const auto root = load_scene(write_scene(dir, "[scene]\n[effects]\ninertia = true\n" + std::string(kBody) +
+                                                    "skeleton = \"tracking\"\ntracked_joints = \"root\"\n"));
+  EXPECT_FALSE(root.bodies[0].all_joints);
+  EXPECT_TRUE(root.bodies[0].tracked_joints.empty());
+  const auto named = load_scene(write_scene(
+      dir, "[scene]\n[effects]\ninertia = true\n" + std::string(kBody) +
+               "skeleton = \"tracking\"\ntracked_joints = [\"spine1\", \"left_hip\"]\njoint_frequency = 3.0\n"
+               "joint_damping_ratio = 0.5\njoint_limit = 0.3\njoint_stiffness = { spine1 = 80.0 }\n"
+               "joint_damping = { left_hip = 4.0 }\njoint_limits = { spine1 = 0.2 }\n"));
+  const BodySpec& b = named.bodies[0];
+  EXPECT_FALSE(b.all_joints);
+  EXPECT_EQ(b.tracked_joints, (std::vector<std::string>{"spine1", "left_hip"}));
+  EXPECT_DOUBLE_EQ(b.joint_frequency, 3.0);
+  EXPECT_DOUBLE_EQ(b.joint_damping_ratio, 0.5);
+  EXPECT_DOUBLE_EQ(b.joint_limit, 0.3);
+  EXPECT_DOUBLE_EQ(b.joint_stiffness.at("spine1"), 80.0);
+  EXPECT_DOUBLE_EQ(b.joint_damping.at("left_hip"), 4.0);
+  EXPECT_DOUBLE_EQ(b.joint_limits.at("spine1"), 0.2);
 }
 
 TEST(SceneFile, IntegratorAndMassPerBodyAndCrowd) {

@@ -115,6 +115,9 @@ class SimulationWriter {
   /// The placement of the frames added from now on (p_world = rotation p + translation), instead of the options':
   /// a scene body whose skeleton tracks its motion moves frame by frame. dynamics.vtp keeps the options' placement.
   void set_frame_placement(const Eigen::Matrix3d& rotation, const Eigen::Vector3d& translation);
+  /// Per body vertex and per layer node an affine map [L | t] applied to the posed positions before the placement,
+  /// and L to the frame's vector arrays: a tracking skeleton's deviation from its motion (empty: none).
+  void set_frame_deviation(std::vector<Eigen::Matrix<double, 3, 4>> vertex, std::vector<Eigen::Matrix<double, 3, 4>> node);
   /// Whether a frame array is requested (SimulationWriterOptions::fields).
   bool wants(const std::string& field) const;
   /// Writes the .pvd collections and dynamics.vtp.
@@ -153,6 +156,7 @@ class SimulationWriter {
   double posing_seconds_ = 0.0;
   Eigen::Matrix3d frame_rotation_;  ///< the placement of the next frames (options' unless set_frame_placement)
   Eigen::Vector3d frame_translation_;
+  std::shared_ptr<const std::vector<Eigen::Matrix<double, 3, 4>>> vertex_deviation_, node_deviation_;
 
   void write_layer_frame(int index, double t, const State& state);
   /// Whether the options place the body (a rotation or translation other than the identity).

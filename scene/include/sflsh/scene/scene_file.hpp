@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <optional>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -79,6 +80,17 @@ struct BodySpec {
   double tracking_stiffness = 600.0;  ///< [N/m] the root's translation; the rotation gets k ρ² (docs/scenes.md)
   double tracking_damping = 120.0;    ///< [N·s/m]; the rotation gets d ρ²
   bool free_root = false;             ///< `root = "free"`: no spring on the horizontal translation
+  /// `tracked_joints`: the joints below the root that answer too ("all", the default, every joint carrying part of
+  /// the layer; "root": none; or a list of joint names). Per joint a spring K_j = (2π joint_frequency)² I_j and a
+  /// damper 2 joint_damping_ratio √(K_j I_j) (I_j: the moment of inertia of what it carries), overridden by name in
+  /// joint_stiffness [N·m/rad] / joint_damping [N·m·s/rad]; a soft limit on the deviation at joint_limit [rad]
+  /// (joint_limits by name).
+  bool all_joints = true;
+  std::vector<std::string> tracked_joints;  ///< when !all_joints: the names (empty: the root alone)
+  double joint_frequency = 2.0;             ///< [Hz]
+  double joint_damping_ratio = 0.7;
+  double joint_limit = 0.5;  ///< [rad]
+  std::map<std::string, double> joint_stiffness, joint_damping, joint_limits;
 };
 
 enum class ShapeKind { plane, sphere, box, capsule, mesh };
