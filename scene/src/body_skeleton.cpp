@@ -3,23 +3,23 @@
 #include <sflsh/body/body_model.hpp>
 #include <sflsh/body/skinning.hpp>
 #include <sflsh/core/error.hpp>
+#include <sflsh/core/log.hpp>
+
+#include <fmt/format.h>
 
 #include <algorithm>
 
 namespace sflsh::scene::detail {
 
-std::vector<int> joints_carrying_the_layer(const model::BodyLayer& layer) {
+std::vector<double> carried_mass(const model::BodyLayer& layer) {
   const std::array<int, body::kNumJoints>& parents = layer.model->parents;
-  std::vector<char> carries(body::kNumJoints, 0);
+  std::vector<double> mass(body::kNumJoints, 0.0);
   for (int i = 0; i < layer.trajectory->num_nodes(); ++i)
     for (const auto& [joint, weight] : layer.trajectory->node_weights(i))
-      if (weight > 0.0) carries[static_cast<std::size_t>(joint)] = 1;
+      mass[static_cast<std::size_t>(joint)] += layer.problem.mass[i] * weight;
   for (int k = body::kNumJoints - 1; k > 0; --k)  // children come after their parents
-    if (carries[static_cast<std::size_t>(k)]) carries[static_cast<std::size_t>(parents[static_cast<std::size_t>(k)])] = 1;
-  std::vector<int> joints;
-  for (int k = 1; k < body::kNumJoints; ++k)
-    if (carries[static_cast<std::size_t>(k)]) joints.push_back(k);
-  return joints;
+    mass[static_cast<std::size_t>(parents[static_cast<std::size_t>(k)])] += mass[static_cast<std::size_t>(k)];
+  return mass;
 }
 
 reduced::JointTrackingOptions joint_tracking_options(const BodySpec& spec, const model::BodyLayer& layer) {
@@ -27,18 +27,35 @@ reduced::JointTrackingOptions joint_tracking_options(const BodySpec& spec, const
   o.frequency = spec.joint_frequency;
   o.damping_ratio = spec.joint_damping_ratio;
   o.limit = spec.joint_limit;
-  const std::vector<int> carrying = joints_carrying_the_layer(layer);
+  const std::vector<double> mass = carried_mass(layer);
   std::vector<int> joints;
+  std::string skipped;
   if (spec.all_joints) {
-    joints = carrying;
+    for (int k = 1; k < body::kNumJoints; ++k) {
+      const double m = mass[static_cast<std::size_t>(k)];
+      if (m >= kMinCarriedShare * mass[0]) {
+        joints.push_back(k);
+      } else if (m > 0.0) {
+        skipped += fmt::format("{}{} {:.2f} kg", skipped.empty() ? "" : ", ", body::kJointNames[static_cast<std::size_t>(k)], m);
+      }
+    }
   } else {
     for (const std::string& name : spec.tracked_joints) {
       const int j = body::joint_index(name);
-      if (std::find(carrying.begin(), carrying.end(), j) != carrying.end()) joints.push_back(j);
+      if (mass[static_cast<std::size_t>(j)] > 0.0) joints.push_back(j);
+      else skipped += fmt::format("{}{} (carries nothing of the layer)", skipped.empty() ? "" : ", ", name);
     }
     std::sort(joints.begin(), joints.end());
     joints.erase(std::unique(joints.begin(), joints.end()), joints.end());
   }
+  std::string tracked;
+  for (int j : joints)
+    tracked += fmt::format("{}{} {:.2f} kg", tracked.empty() ? "" : ", ", body::kJointNames[static_cast<std::size_t>(j)],
+                           mass[static_cast<std::size_t>(j)]);
+  logger()->info("scene: body '{}' tracks its root ({:.2f} kg) and {} joint(s){}{}{}", spec.name, mass[0],
+                 joints.size(), tracked.empty() ? "" : ": " + tracked,
+                 skipped.empty() ? "" : fmt::format("; not tracked (under {:.0f} % of the layer's mass): ", 100.0 * kMinCarriedShare),
+                 skipped);
   if (joints.empty()) return o;  // the root alone
   o.setup.parents.assign(layer.model->parents.begin(), layer.model->parents.end());
   o.setup.joints = joints;

@@ -11,10 +11,15 @@
 
 namespace sflsh::scene::detail {
 
-/// The joints below the root that carry part of the layer (a node weighted on the joint or below it), ascending.
-std::vector<int> joints_carrying_the_layer(const model::BodyLayer& layer);
+/// Per skeleton joint, the mass of the layer it carries [kg]: Σ_i m_i Σ_k w_ik over the joints k at or below it (the
+/// root: the whole layer's mass).
+std::vector<double> carried_mass(const model::BodyLayer& layer);
 
-/// The reduced solver's joint options for `spec` (tracked_joints "root" or a list without carrying joints: none).
+/// `tracked_joints = "all"` tracks the joints carrying at least this share of the layer's mass: a joint carrying less
+/// (a knee or an elbow at the layer's edge, whose limb the layer does not hold) would swing on a few grams.
+constexpr double kMinCarriedShare = 0.02;
+
+/// The reduced solver's joint options for `spec` (tracked_joints "root", or nothing carried: none), logged once.
 reduced::JointTrackingOptions joint_tracking_options(const BodySpec& spec, const model::BodyLayer& layer);
 
 /// Per body vertex the deviation's affine map [L | y(0)] in the body's posed frame (one per row of the surface).
