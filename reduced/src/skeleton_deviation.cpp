@@ -85,9 +85,9 @@ void compose(const std::vector<const Level*>& levels, const std::vector<int>& fi
       Matrix34d value = Matrix34d::Zero();
       if (lb == la) {
         if (ka < 3 && kb < 3)  // second derivatives in τ vanish
-          value = (prefix[la] * levels[la]->second[static_cast<std::size_t>(ka)][static_cast<std::size_t>(kb)] *
-                   suffix[la])
-                      .topRows<3>();
+          value =
+              (prefix[la] * levels[la]->second[static_cast<std::size_t>(ka)][static_cast<std::size_t>(kb)] * suffix[la])
+                  .topRows<3>();
       } else {
         while (level_of_middle < lb) middle = middle * levels[level_of_middle++]->map;
         value = (left * middle * levels[lb]->first[static_cast<std::size_t>(kb)] * suffix[lb]).topRows<3>();
@@ -165,8 +165,8 @@ DeviationFrame SkeletonDeviation::frame(const Eigen::VectorXd& x, Eigen::Index o
   levels.reserve(tracked_.size() + 1);
   levels.push_back(make_level(x.segment<3>(offset), pivot, &translation, second));
   for (std::size_t j = 0; j < tracked_.size(); ++j)
-    levels.push_back(make_level(x.segment<3>(offset + 6 + 3 * static_cast<Eigen::Index>(j)), centres[j], nullptr,
-                                second));
+    levels.push_back(
+        make_level(x.segment<3>(offset + 6 + 3 * static_cast<Eigen::Index>(j)), centres[j], nullptr, second));
   frame.bones.resize(chains_.size());
   for (std::size_t b = 0; b < chains_.size(); ++b) {
     std::vector<const Level*> chain{&levels[0]};

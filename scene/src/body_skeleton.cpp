@@ -36,31 +36,37 @@ reduced::JointTrackingOptions joint_tracking_options(const BodySpec& spec, const
       if (m >= kMinCarriedShare * mass[0]) {
         joints.push_back(k);
       } else if (m > 0.0) {
-        skipped += fmt::format("{}{} {:.2f} kg", skipped.empty() ? "" : ", ", body::kJointNames[static_cast<std::size_t>(k)], m);
+        skipped += fmt::format("{}{} {:.2f} kg", skipped.empty() ? "" : ", ",
+                               body::kJointNames[static_cast<std::size_t>(k)], m);
       }
     }
   } else {
     for (const std::string& name : spec.tracked_joints) {
       const int j = body::joint_index(name);
-      if (mass[static_cast<std::size_t>(j)] > 0.0) joints.push_back(j);
-      else skipped += fmt::format("{}{} (carries nothing of the layer)", skipped.empty() ? "" : ", ", name);
+      if (mass[static_cast<std::size_t>(j)] > 0.0)
+        joints.push_back(j);
+      else
+        skipped += fmt::format("{}{} (carries nothing of the layer)", skipped.empty() ? "" : ", ", name);
     }
     std::sort(joints.begin(), joints.end());
     joints.erase(std::unique(joints.begin(), joints.end()), joints.end());
   }
   std::string tracked;
   for (int j : joints)
-    tracked += fmt::format("{}{} {:.2f} kg", tracked.empty() ? "" : ", ", body::kJointNames[static_cast<std::size_t>(j)],
-                           mass[static_cast<std::size_t>(j)]);
+    tracked += fmt::format("{}{} {:.2f} kg", tracked.empty() ? "" : ", ",
+                           body::kJointNames[static_cast<std::size_t>(j)], mass[static_cast<std::size_t>(j)]);
   logger()->info("scene: body '{}' tracks its root ({:.2f} kg) and {} joint(s){}{}{}", spec.name, mass[0],
                  joints.size(), tracked.empty() ? "" : ": " + tracked,
-                 skipped.empty() ? "" : fmt::format("; not tracked (under {:.0f} % of the layer's mass): ", 100.0 * kMinCarriedShare),
+                 skipped.empty()
+                     ? ""
+                     : fmt::format("; not tracked (under {:.0f} % of the layer's mass): ", 100.0 * kMinCarriedShare),
                  skipped);
   if (joints.empty()) return o;  // the root alone
   o.setup.parents.assign(layer.model->parents.begin(), layer.model->parents.end());
   o.setup.joints = joints;
   o.setup.node_weights.reserve(static_cast<std::size_t>(layer.trajectory->num_nodes()));
-  for (int i = 0; i < layer.trajectory->num_nodes(); ++i) o.setup.node_weights.push_back(layer.trajectory->node_weights(i));
+  for (int i = 0; i < layer.trajectory->num_nodes(); ++i)
+    o.setup.node_weights.push_back(layer.trajectory->node_weights(i));
   const auto value_of = [](const std::map<std::string, double>& table, int joint) {
     const auto it = table.find(body::kJointNames[static_cast<std::size_t>(joint)]);
     return it == table.end() ? 0.0 : it->second;

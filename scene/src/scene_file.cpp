@@ -318,7 +318,8 @@ class SceneReader : public TomlReader {
       b.joint_frequency = number_in(*n, "joint_frequency", context, 0.05, 50.0, "Hz");
     if (const toml::node* n = t.get("joint_damping_ratio"))
       b.joint_damping_ratio = number_in(*n, "joint_damping_ratio", context, 0.0, 10.0, "");
-    if (const toml::node* n = t.get("joint_limit")) b.joint_limit = number_in(*n, "joint_limit", context, 0.01, 3.0, "rad");
+    if (const toml::node* n = t.get("joint_limit"))
+      b.joint_limit = number_in(*n, "joint_limit", context, 0.01, 3.0, "rad");
     const auto per_joint = [&](const char* key, double low, double high, const char* unit,
                                std::map<std::string, double>& out) {
       const toml::node* n = t.get(key);
@@ -328,8 +329,8 @@ class SceneReader : public TomlReader {
       for (const auto& [name, value] : *entries) {
         const std::string joint(name.str());
         require(below_the_root(joint),
-                "{}: '{}'{}: '{}' is not a joint below the root (spine1, left_hip, …: docs/scenes.md)", at(value),
-                key, context, joint);
+                "{}: '{}'{}: '{}' is not a joint below the root (spine1, left_hip, …: docs/scenes.md)", at(value), key,
+                context, joint);
         out[joint] = number_in(value, key, context, low, high, unit);
       }
     };

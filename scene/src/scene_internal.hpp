@@ -138,10 +138,10 @@ class SceneBody {
   // The tracking root's largest deviation so far: |τ| [m], |θ| [rad] and their times [s].
   double root_max_displacement_ = 0.0, root_max_rotation_ = 0.0;
   double root_max_displacement_time_ = 0.0, root_max_rotation_time_ = 0.0;
-  Eigen::Vector3d root_max_direction_ = Eigen::Vector3d::Zero();  ///< τ at its largest (body frame) [m]
+  Eigen::Vector3d root_max_direction_ = Eigen::Vector3d::Zero();      ///< τ at its largest (body frame) [m]
   std::vector<double> joint_max_rotation_, joint_max_rotation_time_;  ///< per tracked joint: max |φ_j| [rad], when [s]
-  struct StepStart;                                               ///< save_step_start()'s state (scene_body.cpp)
-  std::shared_ptr<const StepStart> start_;                        ///< null until saved
+  struct StepStart;                                                   ///< save_step_start()'s state (scene_body.cpp)
+  std::shared_ptr<const StepStart> start_;                            ///< null until saved
 };
 
 }  // namespace sflsh::scene::detail

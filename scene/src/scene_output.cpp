@@ -78,9 +78,8 @@ void SceneOutput::frame(int f, double t, bool write) {
     if (body.soft()) {
       const std::vector<vtk::Field> extra = contact_fields(contact_[b], body);
       if (body.tracking())  // the frame moves with the skeleton: its deviation per vertex, then the placement
-        writers_[b]->set_frame_deviation(body.surface_deviation(),
-                                         scene_.output.layer ? body.node_deviation()
-                                                             : std::vector<reduced::Matrix34d>{});
+        writers_[b]->set_frame_deviation(
+            body.surface_deviation(), scene_.output.layer ? body.node_deviation() : std::vector<reduced::Matrix34d>{});
       if (scene_.output.layer)
         writers_[b]->add_frame(f, t, body.state(), true, extra);  // layer frames need the full state
       else

@@ -3,6 +3,7 @@
 // share (test_reduced_terms.cpp, test_skeleton_deviation.cpp).
 #include "integrator_fixtures.hpp"
 #include "reduced_fixtures.hpp"
+
 #include <sflsh/reduced/coupled_term.hpp>
 #include <sflsh/reduced/reduced_terms.hpp>
 #include <sflsh/reduced/root_tracking.hpp>
@@ -14,7 +15,6 @@
 #include <vector>
 
 namespace sflsh::reduced::testing_terms {
-
 
 /// Gradient and Hessian of `term` at q against central differences of its value and gradient. The step is 1e-7 m
 /// against coordinates of up to 1e-2 m on a 0.1 m box: truncation (h²|f'''|/6) and rounding (ε|f|/h) are both
@@ -189,6 +189,5 @@ class SpringsToAPoint final : public CoupledSystem {
   std::vector<Eigen::Vector3d> offsets_;
   double k_, l_;
 };
-
 
 }  // namespace sflsh::reduced::testing_terms

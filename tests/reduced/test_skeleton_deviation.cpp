@@ -257,8 +257,8 @@ TEST_F(JointTermsFixture, ZeroJointRotationsGiveTheRootsRigidMotion) {
   v.segment<3>(offset + 9) = Eigen::Vector3d(0.0, 0.0, 0.2);
   const DeviationFrame turned = skeleton->frame(v, offset, pose.pivot, pose.centres, false);
   const Eigen::Vector3d p(0.09, 0.01, 0.0), c3 = pose.centres[1];
-  const Eigen::Vector3d expected = R * (rotation_of_vector(v.segment<3>(offset + 9)) * (p - c3) + c3 - pivot) + pivot +
-                                   v.segment<3>(offset + 3);
+  const Eigen::Vector3d expected =
+      R * (rotation_of_vector(v.segment<3>(offset + 9)) * (p - c3) + c3 - pivot) + pivot + v.segment<3>(offset + 3);
   EXPECT_LE((turned.apply_blend({{2, 1.0}}, p) - expected).norm(), 1e-15);
 }
 

@@ -148,8 +148,8 @@ TEST(SceneFile, BadInputNamesFileAndLine) {
 
 TEST(SceneFile, TrackedJointsAndTheirSprings) {
   const auto dir = testing::scratch_dir();
-  const auto all = load_scene(write_scene(
-      dir, "[scene]\n[effects]\ninertia = true\n" + std::string(kBody) + "skeleton = \"tracking\"\n"));
+  const auto all = load_scene(
+      write_scene(dir, "[scene]\n[effects]\ninertia = true\n" + std::string(kBody) + "skeleton = \"tracking\"\n"));
   EXPECT_TRUE(all.bodies[0].all_joints);  // the default: every joint carrying the layer
   EXPECT_DOUBLE_EQ(all.bodies[0].joint_frequency, 2.0);
   const auto root = load_scene(write_scene(dir, "[scene]\n[effects]\ninertia = true\n" + std::string(kBody) +

@@ -109,7 +109,8 @@ TEST(SceneTracking, PushedTrackingRootSwaysInThePushDirectionAndComesBack) {
     EXPECT_LT(j["final_rotation_rad"].get<double>(), 0.3 * j["max_rotation_rad"].get<double>()) << hip;
     EXPECT_GT(j["moment_of_inertia_kg_m2"].get<double>(), 0.0) << hip;
     EXPECT_NEAR(j["stiffness_n_m_per_rad"].get<double>(),
-                std::pow(2.0 * M_PI * 2.0, 2) * j["moment_of_inertia_kg_m2"].get<double>(), 1e-9) << hip;
+                std::pow(2.0 * M_PI * 2.0, 2) * j["moment_of_inertia_kg_m2"].get<double>(), 1e-9)
+        << hip;
   }
   // Every joint stays within its soft limit (0.5 rad): the push bends the body, it does not fold it.
   for (const auto& [name, j] : joints) EXPECT_LT(j["max_rotation_rad"].get<double>(), 0.5) << name;

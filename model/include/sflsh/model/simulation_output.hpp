@@ -117,7 +117,8 @@ class SimulationWriter {
   void set_frame_placement(const Eigen::Matrix3d& rotation, const Eigen::Vector3d& translation);
   /// Per body vertex and per layer node an affine map [L | t] applied to the posed positions before the placement,
   /// and L to the frame's vector arrays: a tracking skeleton's deviation from its motion (empty: none).
-  void set_frame_deviation(std::vector<Eigen::Matrix<double, 3, 4>> vertex, std::vector<Eigen::Matrix<double, 3, 4>> node);
+  void set_frame_deviation(std::vector<Eigen::Matrix<double, 3, 4>> vertex,
+                           std::vector<Eigen::Matrix<double, 3, 4>> node);
   /// Whether a frame array is requested (SimulationWriterOptions::fields).
   bool wants(const std::string& field) const;
   /// Writes the .pvd collections and dynamics.vtp.

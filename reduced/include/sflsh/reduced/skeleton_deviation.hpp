@@ -2,8 +2,9 @@
 // The tracking skeleton's deviation from its motion (docs/reduced.md "Tracking skeleton"): the root and, per tracked
 // joint j, a rotation φ_j about the motion's posed joint centre c_j(t), blended over the layer like the skinning.
 //   root:   D_0(p) = R(θ)(p − c_0) + c_0 + τ                      (c_0 the posed pelvis)
-//   joint:  S_j(p) = R(φ_j)(p − c_j) + c_j,   D_j = D_parent(j) ∘ S_j  (parent: the nearest tracked ancestor, else root)
-//   node:   y_i(p) = Σ_b ω_ib D_b(p),  ω_ib = Σ of the node's skinning weights w_ik over the joints k whose nearest
+//   joint:  S_j(p) = R(φ_j)(p − c_j) + c_j,   D_j = D_parent(j) ∘ S_j  (parent: the nearest tracked ancestor, else
+//   root) node:   y_i(p) = Σ_b ω_ib D_b(p),  ω_ib = Σ of the node's skinning weights w_ik over the joints k whose
+//   nearest
 //           tracked ancestor-or-self is b (the root when none is)
 // applied to the motion-posed position p = z_i + A_i u_i(q). The coordinates r = (θ, τ, φ_1, …, φ_J) follow q in the
 // solver's unknowns. Each D_b is affine in p, so its value and its first and second derivatives in r are 3×4 maps of
@@ -22,8 +23,8 @@ using JointBlend = std::vector<std::pair<int, double>>;  ///< (joint or bone, we
 /// derivatives in the coordinates it depends on (the root's six, then three per tracked joint on its chain).
 struct BoneDeviation {
   Matrix34d map = Matrix34d::Zero();
-  std::vector<int> coordinates;  ///< indices into r
-  std::vector<Matrix34d> first;  ///< ∂D_b/∂r_coordinates[k]
+  std::vector<int> coordinates;   ///< indices into r
+  std::vector<Matrix34d> first;   ///< ∂D_b/∂r_coordinates[k]
   std::vector<Matrix34d> second;  ///< ∂²D_b/∂r_k∂r_l, row-major n_b × n_b (only when asked for)
 };
 
@@ -89,9 +90,10 @@ class SkeletonDeviation {
 
  private:
   std::vector<int> tracked_;
-  std::vector<int> bone_of_joint_;          ///< per skeleton joint: its bone
-  std::vector<std::vector<int>> chains_{std::vector<int>{}};  ///< per bone: its tracked joints (into tracked_), outermost first
-  std::vector<JointBlend> node_blends_;     ///< per mesh node (empty: every node on the root)
+  std::vector<int> bone_of_joint_;  ///< per skeleton joint: its bone
+  std::vector<std::vector<int>> chains_{
+      std::vector<int>{}};               ///< per bone: its tracked joints (into tracked_), outermost first
+  std::vector<JointBlend> node_blends_;  ///< per mesh node (empty: every node on the root)
   JointBlend root_blend_{{0, 1.0}};
 };
 
