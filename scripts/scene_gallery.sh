@@ -3,7 +3,7 @@
 # and tabulates what each summary.json reports: seconds per frame, the share of each effect, contact penetration,
 # body exchanges, the free objects' energy balance and the tracking skeletons' deviation.
 # Usage: scripts/scene_gallery.sh [OUT_DIR] [SCENE…]   (default docs/results/scenes, every scene; build first)
-# The runs go to a temporary folder; OUT_DIR gets <scene>.png and scenes.md.
+# The runs go to a temporary folder; OUT_DIR gets <scene>.png and scenes.md (the rows of scenes not named are kept).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 sflsh=build/release/apps/sflsh/sflsh
@@ -56,19 +56,33 @@ for scene in scenes:
     for b in s["bodies"]:
         k = b.get("skeleton")
         if isinstance(k, dict) and k.get("skeleton") == "tracking":
-            extra.append(f"{b['name']} root: max {1e3 * k.get('max_root_displacement_m', 0):.1f} mm, "
-                         f"{k.get('max_root_rotation_rad', 0):.3f} rad, final {1e3 * k.get('final_root_displacement_m', 0):.1f} mm")
-    rows.append(f"| {name} | {1e3 * spf:.0f} | {effects} | {pen} | {sig} | {'; '.join(extra) or '–'} |")
-with open(os.path.join(out, "scenes.md"), "w") as f:
+            text = (f"{b['name']} root: max {1e3 * k.get('max_root_displacement_m', 0):.1f} mm, "
+                    f"{k.get('max_root_rotation_rad', 0):.3f} rad, final {1e3 * k.get('final_root_displacement_m', 0):.1f} mm")
+            joints = sorted(k.get("joints", []), key=lambda j: -j["max_rotation_rad"])
+            if joints:
+                text += (f"; {len(joints)} joints, most bent " + ", ".join(
+                    f"{j['joint']} {j['max_rotation_rad']:.3f} rad" for j in joints[:2]))
+            extra.append(text)
+    rows.append(f"| {name} | {1e3 * spf:.0f} | {effects} | {pen} | {sig} | {'; '.join(extra) or '–'} | {commit} |")
+# Rows of scenes not run this time are kept from the existing table (each row says its commit).
+path = os.path.join(out, "scenes.md")
+run = {r.split("|")[1].strip() for r in rows}
+if os.path.exists(path):
+    for line in open(path):
+        cells = line.split("|")
+        if line.startswith("| ") and len(cells) == 9 and cells[1].strip() not in run and cells[1].strip() != "scene":
+            rows.append(line.rstrip("\n"))
+rows.sort(key=lambda r: r.split("|")[1].strip())
+with open(path, "w") as f:
     f.write("# The shipped scenes: what each does and costs\n\n")
-    f.write(f"`scripts/scene_gallery.sh` at commit {commit} on {cores} cores, one run per scene (seconds vary with the "
+    f.write(f"`scripts/scene_gallery.sh` on {cores} cores, one run per scene at the commit in the last column (seconds vary with the "
             "machine's load). Seconds per frame: the scene loop (steps, penetration check, posing) over the frames; "
             "effects: share of the step time (summary.json → effects); penetration: the independent check of the "
             "skin against objects and other bodies (mm, tolerance 1 mm); σ_max per body (mm). Each scene's strip is "
             "`<scene>.png` beside this file: six evenly spaced frames, bodies coloured by soft-tissue displacement "
             "(mm).\n\n")
-    f.write("| scene | ms per frame | effects | penetration [mm] | σ_max [mm] | contact, objects, skeleton |\n")
-    f.write("|---|---|---|---|---|---|\n")
+    f.write("| scene | ms per frame | effects | penetration [mm] | σ_max [mm] | contact, objects, skeleton | commit |\n")
+    f.write("|---|---|---|---|---|---|---|\n")
     f.write("\n".join(rows) + "\n")
 print(open(os.path.join(out, "scenes.md")).read())
 PY

@@ -5,6 +5,7 @@
 #include "reduced_fixtures.hpp"
 
 #include <sflsh/reduced/coupled_term.hpp>
+#include <sflsh/reduced/reduced_history.hpp>
 #include <sflsh/reduced/reduced_terms.hpp>
 #include <sflsh/reduced/root_tracking.hpp>
 
@@ -130,6 +131,16 @@ struct RootTermsFixture : ReducedTermsFixture {
     carried_tilde = Eigen::Map<const Eigen::VectorXd>(carried_posed.data(), carried_posed.size()) +
                     testing::random_q(static_cast<int>(carried_posed.size()), 0.02, 3);
     offset = subspace.num_dofs();
+  }
+  /// Inertia targets p̃ on the inertia nodes: the skinned positions at t, perturbed by 2 cm.
+  Eigen::VectorXd inertia_targets(const ReducedInertia& inertia) const {
+    const model::Problem& p = box.problem;
+    model::NodeFrame frame;
+    p.frame(t, frame);
+    const model::RowMatrixX3d skinned = model::posed_positions(frame, x_prescribed);
+    const Eigen::VectorXd all =
+        Eigen::Map<const Eigen::VectorXd>(skinned.data(), skinned.size()) + testing::random_q(p.num_dofs(), 0.02, 7);
+    return gather_nodes(all, inertia.inertia_nodes());
   }
   /// x = [q; θ; τ] with q of `amplitude` [m], θ up to 10·amplitude [rad] (0.001–0.04 rad), τ of `amplitude`.
   Eigen::VectorXd x(double amplitude, unsigned seed) const {

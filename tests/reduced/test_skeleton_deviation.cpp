@@ -50,15 +50,9 @@ TEST(RotationVector, DerivativesMatchFiniteDifferencesAndRIsARotation) {
 }
 
 TEST_F(RootTermsFixture, RootInertiaMatchesFiniteDifferencesAndTheInertiaAtZeroDeviation) {
-  const model::Problem& p = box.problem;
-  ReducedInertia inertia(p, subspace);
+  ReducedInertia inertia(box.problem, subspace);
   inertia.set_time(t, x_prescribed);
-  model::NodeFrame frame;
-  p.frame(t, frame);
-  const model::RowMatrixX3d skinned = model::posed_positions(frame, x_prescribed);
-  const Eigen::VectorXd p_tilde_all =
-      Eigen::Map<const Eigen::VectorXd>(skinned.data(), skinned.size()) + testing::random_q(p.num_dofs(), 0.02, 7);
-  const Eigen::VectorXd p_tilde = gather_nodes(p_tilde_all, inertia.inertia_nodes());
+  const Eigen::VectorXd p_tilde = inertia_targets(inertia);
   const double h_eff = 1.0 / 240.0;
   const SkeletonDeviation root_only;
   RootInertiaTerm term(inertia, subspace, root_only, carried, carried_mass, offset);
@@ -263,15 +257,9 @@ TEST_F(JointTermsFixture, ZeroJointRotationsGiveTheRootsRigidMotion) {
 }
 
 TEST_F(JointTermsFixture, InertiaOverTheDeviatedNodesMatchesFiniteDifferences) {
-  const model::Problem& p = box.problem;
-  ReducedInertia inertia(p, subspace);
+  ReducedInertia inertia(box.problem, subspace);
   inertia.set_time(t, x_prescribed);
-  model::NodeFrame frame;
-  p.frame(t, frame);
-  const model::RowMatrixX3d skinned = model::posed_positions(frame, x_prescribed);
-  const Eigen::VectorXd p_tilde_all =
-      Eigen::Map<const Eigen::VectorXd>(skinned.data(), skinned.size()) + testing::random_q(p.num_dofs(), 0.02, 7);
-  const Eigen::VectorXd p_tilde = gather_nodes(p_tilde_all, inertia.inertia_nodes());
+  const Eigen::VectorXd p_tilde = inertia_targets(inertia);
   RootInertiaTerm term(inertia, subspace, *skeleton, carried, carried_mass, offset);
   term.set_step(p_tilde, carried_tilde, carried_posed, pose, 1.0 / 240.0);
   unsigned seed = 401;
