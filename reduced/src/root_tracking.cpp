@@ -86,6 +86,7 @@ double RootInertiaTerm::value(const Eigen::VectorXd& x) const {
   return 0.5 * sum / (h_eff_ * h_eff_);
 }
 
+// Σ_i m (∂y/∂r)ᵀ y over the nodes is Σ_b Σ_k ∂D_b/∂r_k : W_b with the per-bone moments W_b = Σ_i m ω_ib y [p; 1]ᵀ.
 void RootInertiaTerm::add_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& gradient) const {
   const DeviationFrame frame = skeleton_.frame(x, offset_, pose_.pivot, pose_.centres, false);
   meshing::RowMatrixX3d p;
@@ -93,18 +94,23 @@ void RootInertiaTerm::add_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& gr
   const double w = 1.0 / (h_eff_ * h_eff_);
   const auto moved = static_cast<Eigen::Index>(inertia_.inertia_nodes().size());
   Eigen::VectorXd pulled(3 * moved);  // Lᵀy on the inertia nodes; pull_back_mass multiplies by m_i
-  Eigen::VectorXd deviation = Eigen::VectorXd::Zero(frame.size);
-  Eigen::Matrix<double, 3, Eigen::Dynamic> J;
+  std::vector<Matrix34d> weighted(frame.bones.size(), Matrix34d::Zero());
   for (Eigen::Index i = 0; i < p.rows(); ++i) {
     const int n = node(i);
     const Eigen::Vector3d pi = p.row(i).transpose();
     const Eigen::Vector3d y = frame.apply(n, pi) - target_.row(i).transpose();
-    frame.jacobian(n, pi, J);
-    deviation.noalias() += mass_[static_cast<std::size_t>(i)] * J.transpose() * y;
+    const Eigen::Vector4d ph(pi.x(), pi.y(), pi.z(), 1.0);
+    const double m = mass_[static_cast<std::size_t>(i)];
+    for (const auto& [b, wb] : frame.blend(n))
+      weighted[static_cast<std::size_t>(b)].noalias() += (m * wb) * y * ph.transpose();
     if (i < moved) pulled.segment<3>(3 * i) = frame.linear(n).transpose() * y;
   }
   gradient.head(offset_) += w * inertia_.pull_back_mass(pulled);
-  gradient.segment(offset_, frame.size) += w * deviation;
+  for (std::size_t b = 0; b < frame.bones.size(); ++b) {
+    const BoneDeviation& bone = frame.bones[b];
+    for (std::size_t k = 0; k < bone.coordinates.size(); ++k)
+      gradient[offset_ + bone.coordinates[k]] += w * bone.first[k].cwiseProduct(weighted[b]).sum();
+  }
 }
 
 void RootInertiaTerm::add_hessian(const Eigen::VectorXd& x, Eigen::MatrixXd& hessian) const {
@@ -121,9 +127,12 @@ void RootInertiaTerm::add_hessian(const Eigen::VectorXd& x, Eigen::MatrixXd& hes
   std::vector<Eigen::Matrix4d> moments(bones * bones, Eigen::Matrix4d::Zero());
   std::vector<char> touched(bones * bones, 0);
   std::vector<Matrix34d> weighted(bones, Matrix34d::Zero());
-  std::vector<Eigen::VectorXd> fields(static_cast<std::size_t>(size), Eigen::VectorXd::Zero(3 * moved));
-  Eigen::Matrix<double, 3, Eigen::Dynamic> J;
-  std::vector<Eigen::Matrix3d> dL;
+  // The q × r block, Σ_i m B_iᵀ A_iᵀ ∂(Lᵀy)/∂r with ∂(Lᵀy)/∂r_k = ∂_kLᵀ y + Lᵀ ∂y/∂r_k, accumulated node by node over
+  // the coordinates the node depends on (its bones' chains).
+  Eigen::MatrixXd mixed = Eigen::MatrixXd::Zero(offset_, size);
+  std::vector<int> slot(static_cast<std::size_t>(size), -1);
+  std::vector<int> coordinates;
+  Eigen::Matrix<double, 3, Eigen::Dynamic> field(3, size);
   for (Eigen::Index i = 0; i < p.rows(); ++i) {
     const int n = node(i);
     const double m = mass_[static_cast<std::size_t>(i)];
@@ -140,20 +149,33 @@ void RootInertiaTerm::add_hessian(const Eigen::VectorXd& x, Eigen::MatrixXd& hes
         touched[bc] = 1;
       }
     }
-    if (i >= moved) continue;
-    // ∂(Lᵀy)/∂r_k = ∂_kLᵀ y + Lᵀ ∂y/∂r_k, pulled back per coordinate below.
+    if (i >= moved || m == 0.0) continue;
     const Eigen::Matrix3d L = frame.linear(n);
-    frame.jacobian(n, pi, J);
-    frame.linear_derivatives(n, dL);
-    const Eigen::Matrix<double, 3, Eigen::Dynamic> LtJ = L.transpose() * J;
-    for (Eigen::Index k = 0; k < size; ++k) {
-      const Eigen::Matrix3d& d = dL[static_cast<std::size_t>(k)];
-      fields[static_cast<std::size_t>(k)].segment<3>(3 * i) = d.transpose() * y + LtJ.col(k);
+    coordinates.clear();
+    for (const auto& [b, wb] : blend) {
+      const BoneDeviation& bone = frame.bones[static_cast<std::size_t>(b)];
+      for (std::size_t k = 0; k < bone.coordinates.size(); ++k) {
+        const int c = bone.coordinates[k];
+        int& at = slot[static_cast<std::size_t>(c)];
+        if (at < 0) {
+          at = static_cast<int>(coordinates.size());
+          coordinates.push_back(c);
+          field.col(at).setZero();
+        }
+        const Matrix34d& d = bone.first[k];
+        field.col(at).noalias() += wb * (d.leftCols<3>().transpose() * y + L.transpose() * (d * ph));
+      }
     }
+    const auto count = static_cast<Eigen::Index>(coordinates.size());
+    const Eigen::Matrix3d& A = inertia_.frame().A[static_cast<std::size_t>(i)];
+    const Eigen::Matrix<double, 3, Eigen::Dynamic> pulled = (w * m) * A.transpose() * field.leftCols(count);
+    for (SparseRowMatrix::InnerIterator si(subspace_.basis, n); si; ++si)
+      for (Eigen::Index j = 0; j < count; ++j)
+        mixed.block<3, 1>(3 * si.col(), coordinates[static_cast<std::size_t>(j)]) += si.value() * pulled.col(j);
+    for (int c : coordinates) slot[static_cast<std::size_t>(c)] = -1;
     // Jᵀ M (LᵀL − I) J on a blended node (the blend of rotations is not one).
     const Eigen::Matrix3d excess = L.transpose() * L - Eigen::Matrix3d::Identity();
     if (excess.cwiseAbs().maxCoeff() < 1e-15) continue;
-    const Eigen::Matrix3d& A = inertia_.frame().A[static_cast<std::size_t>(i)];
     const Eigen::Matrix3d block = (w * m) * A.transpose() * excess * A;
     for (SparseRowMatrix::InnerIterator si(subspace_.basis, n); si; ++si)
       for (SparseRowMatrix::InnerIterator ri(subspace_.basis, n); ri; ++ri)
@@ -177,11 +199,8 @@ void RootInertiaTerm::add_hessian(const Eigen::VectorXd& x, Eigen::MatrixXd& hes
       for (std::size_t l = 0; l < nb; ++l)
         deviation(bone.coordinates[k], bone.coordinates[l]) += bone.second[k * nb + l].cwiseProduct(weighted[b]).sum();
   }
-  for (Eigen::Index c = 0; c < size; ++c) {
-    const Eigen::VectorXd column = w * inertia_.pull_back_mass(fields[static_cast<std::size_t>(c)]);
-    hessian.col(offset_ + c).head(offset_) += column;
-    hessian.row(offset_ + c).head(offset_) += column.transpose();
-  }
+  hessian.block(0, offset_, offset_, size) += mixed;
+  hessian.block(offset_, 0, size, offset_) += mixed.transpose();
   hessian.block(offset_, offset_, size, size) += w * deviation;
 }
 
