@@ -244,6 +244,11 @@ bool ContactPotential::accept_substep(const meshing::RowMatrixX3d& p_end) {
   for (std::size_t j = 0; j < obstacles_.size(); ++j)
     if (obstacles_[j].motion) obstacles_[j].motion->commit(t_end_, obstacle_force_[j]);
   stats_.max_penetration = std::max(stats_.max_penetration, depth.size() > 0 ? depth.maxCoeff() : 0.0);
+  const double total = force_.colwise().sum().norm();
+  if (total > stats_.max_force) {
+    stats_.max_force = total;
+    stats_.max_force_time = t_end_;
+  }
   ++stats_.accepted;
   substep_refinements_ = 0;
   last_accepted_ = true;

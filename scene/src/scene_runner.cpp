@@ -473,6 +473,8 @@ class SceneRun {
                           {"refinements", st.refinements},
                           {"unresolved", st.unresolved},
                           {"max_penetration_mm", 1e3 * st.max_penetration},
+                          {"max_force_n", st.max_force},
+                          {"max_force_time_s", st.max_force_time},
                           {"seconds", st.seconds}};
         (std::string(label) == "objects" ? object_seconds : body_seconds) += st.seconds;
         total.broad_phase_passes += st.broad_phase_passes;

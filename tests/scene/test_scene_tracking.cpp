@@ -92,6 +92,11 @@ TEST(SceneTracking, PushedTrackingRootSwaysInThePushDirectionAndComesBack) {
   // The written frames move with the root: the head (outside the soft layer) moves with it. It lags backwards
   // (measured −4.9 mm in z): the push at the hips carries the pelvis forward and tilts the upper body back.
   EXPECT_GT(head_motion(dir / "out", 9).first, 2e-3);
+  // The contact force is reported: the root spring (600 N/m) held 2–3 cm back gives tens of newtons (measured 37 N
+  // on the pushed body); 5 N and 500 N bound it by an order of magnitude either way.
+  const double force = standing["contact"]["bodies"]["max_force_n"].get<double>();
+  EXPECT_GT(force, 5.0);
+  EXPECT_LT(force, 500.0);
   // The pusher keeps its prescribed skeleton.
   EXPECT_EQ(s["bodies"][1]["skeleton"]["skeleton"], "prescribed");
   // The joints answer too (tracked_joints = "all"): the ones carrying at least 2 % of the layer's mass, so the

@@ -53,7 +53,9 @@ struct ContactStats {
   std::int64_t unresolved = 0;                ///< substeps accepted deeper than the tolerance
   std::int64_t accepted = 0;                  ///< accepted substeps
   double max_penetration = 0.0;               ///< [m] over accepted substeps
-  double seconds = 0.0;                       ///< wall time inside the potential
+  double max_force = 0.0;       ///< [N] the largest |Σ of the nodes' contact forces| of an accepted substep
+  double max_force_time = 0.0;  ///< [s] its substep's end
+  double seconds = 0.0;         ///< wall time inside the potential
 };
 
 /// An obstacle the potential acts against, with how it moves. `motion` null: the caller sets the pose
