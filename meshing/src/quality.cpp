@@ -93,8 +93,10 @@ TetQuality tet_quality(const RowMatrixX3d& nodes, const RowMatrixX4i& tets) {
   quality.volume.resize(count);
   quality.min_dihedral_deg.resize(count);
   quality.radius_edge.resize(count);
+  quality.degenerate.resize(static_cast<std::size_t>(count));
   for (Eigen::Index e = 0; e < count; ++e) {
     const TetMeasures m = measure_tet(nodes, tets, e);
+    quality.degenerate[static_cast<std::size_t>(e)] = is_degenerate(m) ? 1 : 0;
     quality.volume(e) = m.volume;
     quality.min_dihedral_deg(e) = *std::min_element(m.dihedral_deg.begin(), m.dihedral_deg.end());
     quality.radius_edge(e) = m.radius_edge;

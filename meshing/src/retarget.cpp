@@ -204,20 +204,29 @@ RetargetedLayer Retargeter::retarget(const ShapedLayer& shaped, const Eigen::Vec
 
   if (result.quality.inverted > 0 || result.quality.degenerate > 0) {
     const TetQuality per_tet = tet_quality(result.nodes, mesh_.tets);
-    std::map<std::string, long> by_part;
+    std::map<std::string, long> inverted_by_part, degenerate_by_part;
     Eigen::Index worst = 0;
     per_tet.volume.minCoeff(&worst);
-    for (Eigen::Index e = 0; e < per_tet.volume.size(); ++e)
-      if (per_tet.volume(e) <= 0.0) ++by_part[part_name(mesh_.tet_part[static_cast<std::size_t>(e)])];
-    std::string parts;
-    for (const auto& [name, count] : by_part) parts += fmt::format("{}{}: {}", parts.empty() ? "" : ", ", name, count);
+    for (Eigen::Index e = 0; e < per_tet.volume.size(); ++e) {
+      const std::string part = part_name(mesh_.tet_part[static_cast<std::size_t>(e)]);
+      if (per_tet.volume(e) <= 0.0)
+        ++inverted_by_part[part];
+      else if (per_tet.degenerate[static_cast<std::size_t>(e)])
+        ++degenerate_by_part[part];
+    }
+    const auto listed = [](const std::map<std::string, long>& by_part) {
+      std::string parts;
+      for (const auto& [name, count] : by_part)
+        parts += fmt::format("{}{}: {}", parts.empty() ? "" : ", ", name, count);
+      return parts.empty() ? std::string("none") : parts;
+    };
     Eigen::Vector3d centre = Eigen::Vector3d::Zero();
     for (int c = 0; c < 4; ++c) centre += 0.25 * result.nodes.row(mesh_.tets(worst, c)).transpose();
     throw_error(
-        "retarget: shape β = [{:.2f}] with h in [{:.2f}, {:.2f}] inverts {} tets ({}) and leaves {} degenerate; worst "
-        "tet {} ({}) at ({:.3f}, {:.3f}, {:.3f}) m",
+        "retarget: shape β = [{:.2f}] with h in [{:.2f}, {:.2f}] inverts {} tets ({}) and leaves {} degenerate ({}); "
+        "worst tet {} ({}) at ({:.3f}, {:.3f}, {:.3f}) m",
         fmt::join(beta.data(), beta.data() + beta.size(), ", "), thickness.minCoeff(), thickness.maxCoeff(),
-        result.quality.inverted, parts.empty() ? "none" : parts, result.quality.degenerate, worst,
+        result.quality.inverted, listed(inverted_by_part), result.quality.degenerate, listed(degenerate_by_part), worst,
         part_name(mesh_.tet_part[static_cast<std::size_t>(worst)]), centre(0), centre(1), centre(2));
   }
   return result;

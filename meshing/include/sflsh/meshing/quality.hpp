@@ -4,6 +4,8 @@
 
 #include <nlohmann/json_fwd.hpp>
 
+#include <vector>
+
 namespace sflsh::meshing {
 
 struct QualityReport {
@@ -30,6 +32,7 @@ struct TetQuality {
   Eigen::VectorXd volume;  ///< signed
   Eigen::VectorXd min_dihedral_deg;
   Eigen::VectorXd radius_edge;
+  std::vector<char> degenerate;  ///< per tet, by QualityReport's degenerate criterion
 };
 
 TetQuality tet_quality(const RowMatrixX3d& nodes, const RowMatrixX4i& tets);
