@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <fstream>
 
 namespace sflsh::scene::detail {
 
@@ -107,6 +108,25 @@ std::vector<reduced::Matrix34d> node_deviation_maps(const reduced::ReducedSolver
   maps.reserve(static_cast<std::size_t>(layer.problem.num_nodes()));
   for (int i = 0; i < layer.problem.num_nodes(); ++i) maps.push_back(frame.map_blend(frame.blend(i)));
   return maps;
+}
+
+void write_deviation_csv(const std::filesystem::path& path, const reduced::SkeletonDeviation& skeleton,
+                         const std::vector<std::pair<double, Eigen::VectorXd>>& history) {
+  std::ofstream out(path);
+  require(static_cast<bool>(out), "{}: cannot write", path.string());
+  out << "t_s,root_theta_x_rad,root_theta_y_rad,root_theta_z_rad,root_tau_x_m,root_tau_y_m,root_tau_z_m";
+  for (int joint : skeleton.tracked())
+    for (const char* axis : {"x", "y", "z"})
+      out << ',' << body::kJointNames[static_cast<std::size_t>(joint)] << "_phi_" << axis << "_rad";
+  out << '\n';
+  for (const auto& [t, r] : history) {
+    require(r.size() == skeleton.size(), "{}: a deviation of {} coordinates for {}", path.string(), r.size(),
+            skeleton.size());
+    out << fmt::format("{:.9g}", t);
+    for (Eigen::Index k = 0; k < r.size(); ++k) out << fmt::format(",{:.9g}", r[k]);
+    out << '\n';
+  }
+  require(static_cast<bool>(out), "{}: write failed", path.string());
 }
 
 meshing::RowMatrixX3d apply_maps(const std::vector<reduced::Matrix34d>& maps, const meshing::RowMatrixX3d& points) {

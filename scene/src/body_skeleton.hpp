@@ -6,7 +6,9 @@
 #include <sflsh/reduced/reduced_solver.hpp>
 #include <sflsh/scene/scene_file.hpp>
 
+#include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace sflsh::scene::detail {
@@ -28,6 +30,10 @@ std::vector<reduced::Matrix34d> surface_deviation_maps(const reduced::ReducedSol
 /// Per layer node the same.
 std::vector<reduced::Matrix34d> node_deviation_maps(const reduced::ReducedSolver& solver,
                                                     const model::BodyLayer& layer);
+/// `<body>_skeleton.csv`: per step t_s, the root's rotation vector θ [rad] and translation τ [m] and each tracked
+/// joint's rotation vector φ [rad] (the body's posed frame), one column per component, named by joint.
+void write_deviation_csv(const std::filesystem::path& path, const reduced::SkeletonDeviation& skeleton,
+                         const std::vector<std::pair<double, Eigen::VectorXd>>& history);
 /// Points deviated by per-row maps.
 meshing::RowMatrixX3d apply_maps(const std::vector<reduced::Matrix34d>& maps, const meshing::RowMatrixX3d& points);
 

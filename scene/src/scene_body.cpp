@@ -245,25 +245,12 @@ void SceneBody::step(double t0, double h, EffectSeconds& seconds) {
   t_ = t0 + h;
   solve_seconds += seconds_since(clock);
   if (tracking()) {
-    const reduced::Vector6d r = fast_->root();
+    // A step solved again (the body exchange restarts it from its start) replaces its row.
     const Eigen::VectorXd& deviation = fast_->deviation();
-    joint_max_rotation_.resize(fast_->skeleton().num_joints(), 0.0);
-    joint_max_rotation_time_.resize(fast_->skeleton().num_joints(), 0.0);
-    for (std::size_t j = 0; j < joint_max_rotation_.size(); ++j) {
-      const double angle = deviation.segment<3>(6 + 3 * static_cast<Eigen::Index>(j)).norm();
-      if (angle <= joint_max_rotation_[j]) continue;
-      joint_max_rotation_[j] = angle;
-      joint_max_rotation_time_[j] = t_;
-    }
-    if (r.tail<3>().norm() > root_max_displacement_) {
-      root_max_displacement_ = r.tail<3>().norm();
-      root_max_displacement_time_ = t_;
-      root_max_direction_ = r.tail<3>();
-    }
-    if (r.head<3>().norm() > root_max_rotation_) {
-      root_max_rotation_ = r.head<3>().norm();
-      root_max_rotation_time_ = t_;
-    }
+    if (!deviation_history_.empty() && std::abs(deviation_history_.back().first - t_) < 1e-12)
+      deviation_history_.back().second = deviation;
+    else
+      deviation_history_.emplace_back(t_, deviation);
   }
 }
 
@@ -277,6 +264,19 @@ std::vector<reduced::Matrix34d> SceneBody::node_deviation() const {
   return node_deviation_maps(*fast_, *layer_);
 }
 
+namespace {
+
+/// The largest |r.segment<3>(c)| over the committed steps and its time [s].
+std::pair<double, double> largest(const std::vector<std::pair<double, Eigen::VectorXd>>& history, Eigen::Index c) {
+  std::pair<double, double> best{0.0, 0.0};
+  for (const auto& [t, r] : history)
+    if (r.segment<3>(c).norm() > best.first) best = {r.segment<3>(c).norm(), t};
+  return best;
+}
+
+}  // namespace
+
+// Over the steps as committed (deviation_history(): a step the body exchange solved again counts once).
 nlohmann::json SceneBody::skeleton_summary() const {
   if (!tracking()) return {{"skeleton", "prescribed"}};
   const reduced::Vector6d r = fast_->root();
@@ -285,34 +285,38 @@ nlohmann::json SceneBody::skeleton_summary() const {
   for (int j = 0; j < skeleton.num_joints(); ++j) {
     const auto sj = static_cast<std::size_t>(j);
     const Eigen::Index c = 6 + 3 * j;
-    joints.push_back(
-        {{"joint", body::kJointNames[static_cast<std::size_t>(skeleton.tracked()[sj])]},
-         {"stiffness_n_m_per_rad", fast_->tracking_stiffness()[c]},
-         {"damping_n_m_s_per_rad", fast_->tracking_damping()[c]},
-         {"limit_rad", fast_->joint_limits()[j]},
-         {"moment_of_inertia_kg_m2", fast_->joint_inertia()[j]},
-         {"max_rotation_rad", sj < joint_max_rotation_.size() ? joint_max_rotation_[sj] : 0.0},
-         {"max_rotation_time_s", sj < joint_max_rotation_time_.size() ? joint_max_rotation_time_[sj] : 0.0},
-         {"final_rotation_rad", fast_->deviation().segment<3>(c).norm()}});
+    const auto [max_rotation, max_rotation_time] = largest(deviation_history_, c);
+    joints.push_back({{"joint", body::kJointNames[static_cast<std::size_t>(skeleton.tracked()[sj])]},
+                      {"stiffness_n_m_per_rad", fast_->tracking_stiffness()[c]},
+                      {"damping_n_m_s_per_rad", fast_->tracking_damping()[c]},
+                      {"limit_rad", fast_->joint_limits()[j]},
+                      {"moment_of_inertia_kg_m2", fast_->joint_inertia()[j]},
+                      {"max_rotation_rad", max_rotation},
+                      {"max_rotation_time_s", max_rotation_time},
+                      {"final_rotation_rad", fast_->deviation().segment<3>(c).norm()}});
   }
-  return {
-      {"skeleton", "tracking"},
-      {"root", spec_.free_root ? "free" : "tracked"},
-      {"tracking_stiffness_n_per_m", spec_.tracking_stiffness},
-      {"tracking_damping_n_s_per_m", spec_.tracking_damping},
-      {"root_stiffness", std::vector<double>(fast_->root_stiffness().data(), fast_->root_stiffness().data() + 6)},
-      {"root_damping", std::vector<double>(fast_->root_damping().data(), fast_->root_damping().data() + 6)},
-      {"root_coordinates_units", "rotation x, y, z [N·m/rad | N·m·s/rad], translation x, y, z [N/m | N·s/m]"},
-      {"max_root_displacement_m", root_max_displacement_},
-      {"max_root_displacement_time_s", root_max_displacement_time_},
-      {"max_root_displacement_vector_m", {root_max_direction_.x(), root_max_direction_.y(), root_max_direction_.z()}},
-      {"max_root_rotation_rad", root_max_rotation_},
-      {"max_root_rotation_time_s", root_max_rotation_time_},
-      {"final_root_displacement_m", r.tail<3>().norm()},
-      {"final_root_rotation_rad", r.head<3>().norm()},
-      {"joint_frequency_hz", spec_.joint_frequency},
-      {"joint_damping_ratio", spec_.joint_damping_ratio},
-      {"joints", joints}};
+  const auto [max_rotation, max_rotation_time] = largest(deviation_history_, 0);
+  const auto [max_displacement, max_displacement_time] = largest(deviation_history_, 3);
+  Eigen::Vector3d direction = Eigen::Vector3d::Zero();  // τ at its largest (the body's frame) [m]
+  for (const auto& [t, d] : deviation_history_)
+    if (t == max_displacement_time) direction = d.segment<3>(3);
+  return {{"skeleton", "tracking"},
+          {"root", spec_.free_root ? "free" : "tracked"},
+          {"tracking_stiffness_n_per_m", spec_.tracking_stiffness},
+          {"tracking_damping_n_s_per_m", spec_.tracking_damping},
+          {"root_stiffness", std::vector<double>(fast_->root_stiffness().data(), fast_->root_stiffness().data() + 6)},
+          {"root_damping", std::vector<double>(fast_->root_damping().data(), fast_->root_damping().data() + 6)},
+          {"root_coordinates_units", "rotation x, y, z [N·m/rad | N·m·s/rad], translation x, y, z [N/m | N·s/m]"},
+          {"max_root_displacement_m", max_displacement},
+          {"max_root_displacement_time_s", max_displacement_time},
+          {"max_root_displacement_vector_m", {direction.x(), direction.y(), direction.z()}},
+          {"max_root_rotation_rad", max_rotation},
+          {"max_root_rotation_time_s", max_rotation_time},
+          {"final_root_displacement_m", r.tail<3>().norm()},
+          {"final_root_rotation_rad", r.head<3>().norm()},
+          {"joint_frequency_hz", spec_.joint_frequency},
+          {"joint_damping_ratio", spec_.joint_damping_ratio},
+          {"joints", joints}};
 }
 
 // The skinned pose at time t, interpolated between the motion's frames (slerp per joint).

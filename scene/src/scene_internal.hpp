@@ -105,10 +105,13 @@ class SceneBody {
   /// Whether the skeleton tracks its motion (skeleton = "tracking"), and its deviation from the motion now as affine
   /// maps in the body's own (posed) frame, per body vertex and per layer node (empty otherwise).
   bool tracking() const { return fast_ && fast_->tracking(); }
+  const reduced::SkeletonDeviation& skeleton() const { return fast_->skeleton(); }  ///< tracking() only
   std::vector<reduced::Matrix34d> surface_deviation() const;
   std::vector<reduced::Matrix34d> node_deviation() const;
   /// summary.json "skeleton" of a tracking body: the largest root displacement and rotation and when.
   nlohmann::json skeleton_summary() const;
+  /// A tracking body's deviation r = (θ, τ, φ_1 … φ_J) at the end of every step, with its time [s].
+  const std::vector<std::pair<double, Eigen::VectorXd>>& deviation_history() const { return deviation_history_; }
 
   // Counters for summary.json.
   long steps = 0, idle_steps = 0, newton_iterations = 0, refinements = 0, failed_attempts = 0;
@@ -136,12 +139,9 @@ class SceneBody {
   reduced::CoupledSystem* coupled_ = nullptr;
   double t_ = 0.0;
   // The tracking root's largest deviation so far: |τ| [m], |θ| [rad] and their times [s].
-  double root_max_displacement_ = 0.0, root_max_rotation_ = 0.0;
-  double root_max_displacement_time_ = 0.0, root_max_rotation_time_ = 0.0;
-  Eigen::Vector3d root_max_direction_ = Eigen::Vector3d::Zero();      ///< τ at its largest (body frame) [m]
-  std::vector<double> joint_max_rotation_, joint_max_rotation_time_;  ///< per tracked joint: max |φ_j| [rad], when [s]
-  struct StepStart;                                                   ///< save_step_start()'s state (scene_body.cpp)
-  std::shared_ptr<const StepStart> start_;                            ///< null until saved
+  std::vector<std::pair<double, Eigen::VectorXd>> deviation_history_;
+  struct StepStart;                         ///< save_step_start()'s state (scene_body.cpp)
+  std::shared_ptr<const StepStart> start_;  ///< null until saved
 };
 
 }  // namespace sflsh::scene::detail

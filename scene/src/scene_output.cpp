@@ -1,6 +1,8 @@
 // What a scene writes (scene_output.hpp).
 #include "scene_output.hpp"
 
+#include "body_skeleton.hpp"
+
 #include <sflsh/core/error.hpp>
 
 #include <fmt/format.h>
@@ -151,6 +153,9 @@ void SceneOutput::finish() {
       writers_[b]->finish();
       maps.add_untimed(writers_[b]->dynamics_file(), static_cast<int>(maps.size()), bodies_[b]->name());
     }
+    if (bodies_[b]->tracking())
+      write_deviation_csv(folder_->stage(bodies_[b]->name() + "_skeleton.csv"), bodies_[b]->skeleton(),
+                          bodies_[b]->deviation_history());
     if (skinned_series_[b]) skinned_series_[b]->write();
     if (skinned_xdmf_[b]) skinned_xdmf_[b]->close();
   }

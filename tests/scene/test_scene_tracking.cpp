@@ -13,6 +13,8 @@
 #include <cmath>
 #include <fstream>
 #include <map>
+#include <sstream>
+#include <vector>
 
 namespace sflsh::scene {
 namespace {
@@ -92,6 +94,27 @@ TEST(SceneTracking, PushedTrackingRootSwaysInThePushDirectionAndComesBack) {
   // The written frames move with the root: the head (outside the soft layer) moves with it. It lags backwards
   // (measured −4.9 mm in z): the push at the hips carries the pelvis forward and tilts the upper body back.
   EXPECT_GT(head_motion(dir / "out", 9).first, 2e-3);
+  // standing_skeleton.csv: one row per step (46 frames at 30 fps, one substep: 45 steps, each step once even though
+  // the body exchange solved it several times), whose largest |τ| is the summary's (printed with 9 digits).
+  std::ifstream csv(dir / "out" / "standing_skeleton.csv");
+  std::string header, line;
+  ASSERT_TRUE(std::getline(csv, header));
+  EXPECT_EQ(header.rfind("t_s,root_theta_x_rad,root_theta_y_rad,root_theta_z_rad,root_tau_x_m,", 0), 0u) << header;
+  EXPECT_NE(header.find(",left_hip_phi_x_rad,"), std::string::npos) << header;
+  int rows = 0;
+  double largest_tau = 0.0, last_t = 0.0;
+  while (std::getline(csv, line)) {
+    std::vector<double> v;
+    std::stringstream cells(line);
+    for (std::string cell; std::getline(cells, cell, ',');) v.push_back(std::stod(cell));
+    ASSERT_EQ(v.size(), 7u + 3u * k["joints"].size()) << line;
+    EXPECT_GT(v[0], last_t);
+    last_t = v[0];
+    largest_tau = std::max(largest_tau, Eigen::Vector3d(v[4], v[5], v[6]).norm());
+    ++rows;
+  }
+  EXPECT_EQ(rows, 45);
+  EXPECT_NEAR(largest_tau, largest, 1e-8);
   // The contact force is reported: the root spring (600 N/m) held 2–3 cm back gives tens of newtons (measured 37 N
   // on the pushed body); 5 N and 500 N bound it by an order of magnitude either way.
   const double force = standing["contact"]["bodies"]["max_force_n"].get<double>();
