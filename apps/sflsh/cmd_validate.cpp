@@ -28,6 +28,7 @@ struct ValidateOptions {
   std::vector<double> lambdas;
   std::vector<std::string> train_subjects, test_subjects, train_motions, test_motions;
   bool no_cross_validation = false;
+  bool no_lambda_warm_start = false;
   std::string jacobian = "exact";
   std::vector<std::string> dyna;
   std::string body;
@@ -54,6 +55,7 @@ void run_validate(const ValidateOptions& o, const Invocation& invocation) {
   if (!o.train_motions.empty()) config.train_motions = o.train_motions;
   if (!o.test_motions.empty()) config.test_motions = o.test_motions;
   if (o.no_cross_validation) config.cross_validation = false;
+  if (o.no_lambda_warm_start) config.lambda_warm_start = false;
   config.jacobian = o.jacobian;
   config.progress = !o.quiet;
   const nlohmann::json summary =
@@ -111,6 +113,9 @@ void register_validate_commands(CLI::App& app, const Invocation& invocation) {
       ->check(CLI::IsMember({"exact", "hybrid", "fd"}));
   cmd->add_flag("--no-cross-validation", o->no_cross_validation,
                 "Skip the leave-one-out fits (λ = the first of --lambdas)");
+  cmd->add_flag("--no-lambda-warm-start", o->no_lambda_warm_start,
+                "Fit every λ of the leave-one-out sweep through every stage from the neutral start (default: the "
+                "largest λ does, each smaller λ continues at the last stage from the previous one)");
   cmd->add_flag("--quiet", o->quiet, "No progress lines");
   cmd->callback([o, invocation] { with_petsc(invocation, [&](int, int) { run_validate(*o, invocation); }); });
 }

@@ -132,9 +132,9 @@ RestGeometryDerivative::RestGeometryDerivative(const model::Problem& problem, co
   }
 }
 
-Eigen::MatrixXd RestGeometryDerivative::posed_directions() const {
+RestGeometryDerivative::RowMatrix RestGeometryDerivative::posed_directions() const {
   const model::NodeFrame& frame = inertia_.frame();
-  Eigen::MatrixXd out(node_directions_.rows(), columns_);
+  RowMatrix out(node_directions_.rows(), columns_);
   for (std::size_t a = 0; a < frame.A.size(); ++a)
     out.middleRows<3>(3 * static_cast<Eigen::Index>(a)).noalias() =
         frame.A[a] * node_directions_.middleRows<3>(3 * static_cast<Eigen::Index>(a));
@@ -165,33 +165,32 @@ Eigen::MatrixXd RestGeometryDerivative::gradient_derivative(const Eigen::VectorX
   require(dt > 0.0 && p_.size() == node_directions_.rows(),
           "rest-geometry derivative: not initialized, or a substep of {} s", dt);
   const int C = columns_;
-  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(q.size(), C);
+  RowMatrix inertial = RowMatrix::Zero(q.size(), C);  // row-major: one function's 3 × C block per scatter
 
   // Inertia and gravity: Σ_i b_i ⊗ A_iᵀ [m_i (dz_i − dp̃_i) + dm_i (p_i − p̃_i)]/h² − Σ_i b_i ⊗ dm_i A_iᵀ g.
   Eigen::VectorXd p;
   inertia_.posed(q, p);
   const Eigen::VectorXd p_tilde = p_ + dt * w_;  // backward Euler
-  const Eigen::MatrixXd dz = posed_directions();
-  const Eigen::MatrixXd dp_tilde = dp_ + dt * dw_;
+  const RowMatrix dz = posed_directions();
   const double inv_h2 = 1.0 / (dt * dt);
   const model::NodeFrame& frame = inertia_.frame();
   const std::vector<double>& mass = inertia_.lumped_mass();
   const std::vector<int>& active = inertia_.active_nodes();
+  Eigen::Matrix<double, 3, Eigen::Dynamic, Eigen::RowMajor> y(3, C), r(3, C);
   for (std::size_t a = 0; a < active.size(); ++a) {
     const Eigen::Index row = 3 * static_cast<Eigen::Index>(a);
-    Eigen::Matrix3Xd y(3, C);
-    for (int j = 0; j < C; ++j) {
-      Eigen::Vector3d v = -mass_derivative_(static_cast<Eigen::Index>(a), j) * problem_.gravity;
-      if (inertia_on_)
-        v += inv_h2 *
-             (mass[a] * (dz.block<3, 1>(row, j) - dp_tilde.block<3, 1>(row, j)) +
-              mass_derivative_(static_cast<Eigen::Index>(a), j) * (p.segment<3>(row) - p_tilde.segment<3>(row)));
-      y.col(j) = v;
+    const auto dm = mass_derivative_.row(static_cast<Eigen::Index>(a));
+    y.noalias() = -problem_.gravity * dm;
+    if (inertia_on_) {
+      y.noalias() +=
+          (inv_h2 * mass[a]) * (dz.middleRows<3>(row) - dp_.middleRows<3>(row) - dt * dw_.middleRows<3>(row));
+      y.noalias() += (inv_h2 * (p.segment<3>(row) - p_tilde.segment<3>(row))) * dm;
     }
-    const Eigen::Matrix3Xd r = frame.A[a].transpose() * y;
+    r.noalias() = frame.A[a].transpose() * y;
     for (SparseRowMatrix::InnerIterator it(subspace_.basis, active[a]); it; ++it)
-      out.middleRows<3>(3 * it.col()).noalias() += it.value() * r;
+      inertial.middleRows<3>(3 * it.col()).noalias() += it.value() * r;
   }
+  Eigen::MatrixXd out = inertial;
 
   // Elasticity: Σ_c [dω P c_s + ω (∂P/∂F : dF + ∂P/∂n dn) c_s + ω P dc_s], dF = Σ_s t_s dc_sᵀ.
   for (int pt = 0; pt < elastic_.num_points(); ++pt) {
@@ -229,7 +228,7 @@ void RestGeometryDerivative::advance(const Eigen::VectorXd& q, double dt) {
   inertia_.posed(q, p);
   w_ = (p - p_) / dt;  // model::advance_history, backward Euler
   p_ = std::move(p);
-  Eigen::MatrixXd dp = posed_directions();
+  RowMatrix dp = posed_directions();
   dw_ = (dp - dp_) / dt;
   dp_ = std::move(dp);
 }

@@ -160,6 +160,61 @@ TEST(ElasticityFit, ShapeFitRecoversSubjectParametersAndResumes) {
   EXPECT_EQ(again.stages.back().iterations, r.stages.back().iterations);
 }
 
+// Continuation (the λ sweep's warm start): a warm-started fit runs only the last stage, from the given parameters;
+// the trust region only accepts decreases, so it ends no higher than the loss at its start under the new λ. Its
+// checkpoint remembers the start: the same warm start resumes, another one starts over.
+TEST(ElasticityFit, WarmStartRunsOnlyTheLastStageFromTheGivenParameters) {
+  body::Betas b1 = body::Betas::Zero(), b2 = body::Betas::Zero();
+  b2[0] = 1.5;
+  FitFixture f({b1, b2}, 15);
+  material::KappaMatrix truth(1, 3);
+  truth << 0.55, 8000.0, 3000.0;
+  std::vector<FitTarget> targets;
+  for (int s = 0; s < 2; ++s) targets.push_back({f.cases[static_cast<std::size_t>(s)].get(), s, f.simulate(s, truth)});
+  const std::filesystem::path dir = sflsh::testing::scratch_dir();
+  FitSpec cold;
+  cold.name = "cold";
+  cold.kind = FitKind::shape;
+  cold.regularizer = Regularizer::l2;
+  cold.lambda = 1e-2;
+  cold.betas = {b1, b2};
+  cold.stages = {1, 2};
+  cold.iterations = 3;
+  const long before_cold = f.pool.simulations();
+  const FitResult r = fit_elasticity(f.context, targets, cold);
+  const long cold_simulations = f.pool.simulations() - before_cold;
+  ASSERT_EQ(r.stages.size(), 2u);
+
+  FitSpec warm = cold;
+  warm.name = "warm";
+  warm.lambda = 1e-3;
+  warm.warm_start = r.p;
+  warm.warm_start_from = r.name;
+  warm.checkpoint = dir / "warm.json";
+  const long before_warm = f.pool.simulations();
+  const FitResult w = fit_elasticity(f.context, targets, warm);
+  ASSERT_EQ(w.stages.size(), 1u);
+  EXPECT_EQ(w.stages[0].controls, 2);
+  EXPECT_LT(f.pool.simulations() - before_warm, cold_simulations);
+  // Loss at the start under λ' = the cold fit's data term + (λ'/λ) its regularizer.
+  const double start_loss = r.stages.back().loss_fit + (warm.lambda / cold.lambda) * r.stages.back().loss_reg;
+  EXPECT_LE(w.stages[0].loss_fit + w.stages[0].loss_reg, start_loss * (1.0 + 1e-12));
+
+  const long before_resume = f.pool.simulations();
+  const FitResult again = fit_elasticity(f.context, targets, warm);
+  EXPECT_EQ(f.pool.simulations(), before_resume);  // finished: nothing simulated
+  EXPECT_LT((again.p - w.p).norm(), 1e-12);
+  FitSpec other = warm;
+  other.warm_start = r.p * 0.999;  // another start: the checkpoint is not this fit's
+  const FitResult restarted = fit_elasticity(f.context, targets, other);
+  EXPECT_FALSE(restarted.stages.back().resumed);
+
+  FitSpec bad = warm;
+  bad.checkpoint.clear();
+  bad.warm_start = Eigen::VectorXd::Zero(5);
+  EXPECT_THROW(fit_elasticity(f.context, targets, bad), Error);
+}
+
 // The fit's normal equations with the Young-modulus columns from forward sensitivities agree with the
 // paper's one-sided finite differences (the thickness columns are finite differences in both).
 TEST(ElasticityFit, SensitivityJacobianMatchesFiniteDifferences) {

@@ -451,6 +451,19 @@ TEST(YoungSensitivity, BodyLayerTrajectoryMatchesFiniteDifferencesOfCompleteSimu
   }
   Eigen::MatrixXd dsigma(2 * normals.rows(), 2 * N);
   dsigma << dynamics.sigma_normal_derivative(), dynamics.sigma_tangent_derivative();
+  {  // The reduced form of add() (the fit's: du never formed) sums the same terms in another order.
+    DynamicsAmplitudeSensitivity reduced_sums(normals, 2 * N);
+    for (std::size_t f = 0; f < result.q.size(); ++f) {
+      const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> dq = result.dq_dyoung[f];
+      reduced_sums.add(skin.displacement(result.q[f], result.t[f]), skin.skin_basis(), dq);
+    }
+    Eigen::MatrixXd reduced_dsigma(2 * normals.rows(), 2 * N);
+    reduced_dsigma << reduced_sums.sigma_normal_derivative(), reduced_sums.sigma_tangent_derivative();
+    EXPECT_LE((reduced_dsigma - dsigma).norm(), 1e-12 * dsigma.norm());
+    EXPECT_LE((reduced_sums.sigma_tangent() - dynamics.sigma_tangent()).cwiseAbs().maxCoeff(), 1e-15);
+    const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> dq = result.dq_dyoung.back();
+    EXPECT_THROW(dynamics.add(skin.displacement(result.q.back(), result.t.back()), skin.skin_basis(), dq), Error);
+  }
   // Y_t of control 0 and Y_n of control 3 (torso and limb sites of the 6-point material).
   for (const auto& [control, modulus] : {std::pair{0, 0}, std::pair{3, 1}}) {
     const double delta = 1e-4 * base(control, modulus);

@@ -112,8 +112,10 @@ CaseDynamics DynamicsCase::simulate_with_sensitivity(const LayerParameterization
       columns = static_cast<int>(integrator.dq_dyoung().cols());
       amplitude.emplace(normals_, columns);
       const SkinDisplacementMap& skin = skin_map(model);
+      Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> dq;  // rows contiguous per function
       auto add_frame = [&] {
-        amplitude->add(skin.displacement_of(integrator.q()), skin.derivative(integrator.dq_dyoung()));
+        dq = integrator.dq_dyoung();
+        amplitude->add(skin.displacement_of(integrator.q()), skin.skin_basis(), dq);
       };
       try {
         add_frame();

@@ -180,10 +180,11 @@ struct Stage {
         gq.noalias() += G.transpose() * rt;
       }
       // Chain rule through the clamp and dq/dp (eq. 8).
+      // dq/dp stays sparse (11 entries per row for a shape fit): JqᵀHqJq costs P²·11 instead of P²·3N.
       const Eigen::SparseMatrix<double> Jq = active.asDiagonal() * dq_dp[static_cast<std::size_t>(j)];
-      const Eigen::MatrixXd JqD = Jq;
-      ne.JtJ.noalias() += JqD.transpose() * Hq * JqD;
-      ne.Jtr.noalias() += JqD.transpose() * gq;
+      const Eigen::MatrixXd HqJq = Hq * Jq;
+      ne.JtJ.noalias() += Jq.transpose() * HqJq;
+      ne.Jtr.noalias() += Jq.transpose() * gq;
     }
     if (spec->kind == FitKind::shape) {
       const Eigen::MatrixXd LtL = Eigen::MatrixXd(L.transpose() * L);
@@ -246,6 +247,10 @@ std::string spec_fingerprint(const FitSpec& spec, const std::vector<FitTarget>& 
   j["stages"] = spec.stages;
   j["fd_step"] = spec.fd_step;
   j["a_max"] = spec.a_max;
+  if (spec.warm_start.size() > 0) {  // a warm-started fit depends on where it started
+    j["warm_start_from"] = spec.warm_start_from;
+    j["warm_start"] = std::vector<double>(spec.warm_start.data(), spec.warm_start.data() + spec.warm_start.size());
+  }
   std::vector<std::vector<double>> betas;
   for (const auto& b : spec.betas) betas.emplace_back(b.data(), b.data() + b.size());
   j["betas"] = betas;
@@ -424,6 +429,16 @@ FitResult fit_elasticity(const FitContext& context, const std::vector<FitTarget>
   Eigen::VectorXd p;
   const LayerParameterization* previous = nullptr;
   std::size_t first_stage = 0;
+  const bool warm = spec.warm_start.size() > 0;
+  if (warm) {  // continuation: only the last stage, from the given parameters
+    require(spec.warm_start.size() == k * spec.stages.back() && spec.warm_start.allFinite(),
+            "fit {}: warm start has {} parameters, expected {} finite (N = {})", spec.name, spec.warm_start.size(),
+            k * spec.stages.back(), spec.stages.back());
+    first_stage = spec.stages.size() - 1;
+    p = spec.warm_start;
+    logger()->info("fit {}: warm start at N = {} from {}", spec.name, spec.stages.back(),
+                   spec.warm_start_from.empty() ? std::string("given parameters") : spec.warm_start_from);
+  }
   if (checkpoint) {
     first_stage = static_cast<std::size_t>(checkpoint->stage);
     result.stages = checkpoint->done;
@@ -438,7 +453,8 @@ FitResult fit_elasticity(const FitContext& context, const std::vector<FitTarget>
     const LayerParameterization& parameterization = context.parameterization(N);
     // Warm start: the previous stage's field at the new control points; the first stage starts neutral.
     const bool resumed_here = checkpoint && s == first_stage;
-    if (!resumed_here) {
+    const bool warm_here = warm && !checkpoint && s == first_stage;
+    if (!resumed_here && !warm_here) {
       if (previous) {
         p = from_rows(transfer_control_values(*previous, parameterization, rows_of(p, k)));
       } else {

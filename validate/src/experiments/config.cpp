@@ -46,6 +46,7 @@ nlohmann::json ValidateConfig::to_json() const {
   j["iterations"] = iterations;
   j["lambdas"] = lambdas;
   j["cross_validation"] = cross_validation;
+  j["lambda_warm_start"] = lambda_warm_start;
   j["jacobian"] = jacobian;
   j["threads"] = threads;
   j["thickness_max"] = thickness_max;

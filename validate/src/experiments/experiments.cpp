@@ -17,6 +17,7 @@
 #include <sflsh/validate/ground_truth.hpp>
 #include <sflsh/validate/pose_fit.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <map>
 #include <set>
@@ -314,38 +315,59 @@ nlohmann::json run_validation(const ValidateConfig& requested, const std::filesy
   report.saturation = first.layer().material.saturation;
   report.region = first.layer().mesh->region;
 
+  // Every fit of the study, with a rate and an ETA (a finished fit resumed from state/fits counts at once).
+  const std::size_t cv_fits = config.cross_validation ? 2 * config.lambdas.size() * config.train_subjects.size() : 0;
+  Progress fit_progress("fits", config.train_subjects.size() + cv_fits + 2, config.progress && pool.rank() == 0);
   // Independent fits: the optimal targets (SFLSH §3).
-  for (const std::string& s : config.train_subjects)
+  for (const std::string& s : config.train_subjects) {
     report.fits.emplace("independent/" + s, reduced::fit_elasticity(context, targets_of({s}, config.train_motions),
                                                                     spec_of("independent_" + s, FitKind::independent,
                                                                             Regularizer::l2, 0.0, {s})));
+    fit_progress.advance();
+  }
   // Leave-one-out cross-validation and the λ sweep (SFLSH §6.2, Fig. 5).
   const std::vector<std::pair<Regularizer, std::string>> regs{{Regularizer::l2, "l2"}, {Regularizer::local, "ours"}};
   std::map<std::string, double> best_lambda;
   for (const auto& [reg, tag] : regs) {
     best_lambda[tag] = config.lambdas.front();
     if (!config.cross_validation) continue;
-    for (double lambda : config.lambdas)
-      for (const std::string& left_out : config.train_subjects) {
-        std::vector<std::string> rest;
-        for (const std::string& s : config.train_subjects)
-          if (s != left_out) rest.push_back(s);
+    // Per fold, λ from the largest down: with the warm start each smaller λ continues from the previous one's
+    // result at the last stage (a regularization path) instead of going through every stage again.
+    std::vector<double> sweep = config.lambdas;
+    std::sort(sweep.begin(), sweep.end(), std::greater<>());
+    for (const std::string& left_out : config.train_subjects) {
+      std::vector<std::string> rest;
+      for (const std::string& s : config.train_subjects)
+        if (s != left_out) rest.push_back(s);
+      const reduced::FitResult* previous = nullptr;
+      for (double lambda : sweep) {
         const std::string name = fmt::format("cv_{}_lambda{:g}_without_{}", tag, lambda, left_out);
-        report.fits.emplace(fmt::format("cv/{}/{:g}/{}", tag, lambda, left_out),
-                            reduced::fit_elasticity(context, targets_of(rest, config.train_motions),
-                                                    spec_of(name, FitKind::shape, reg, lambda, rest)));
+        reduced::FitSpec spec = spec_of(name, FitKind::shape, reg, lambda, rest);
+        if (config.lambda_warm_start && previous) {
+          spec.warm_start = previous->p;
+          spec.warm_start_from = previous->name;
+        }
+        const std::string key = fmt::format("cv/{}/{:g}/{}", tag, lambda, left_out);
+        report.fits.insert_or_assign(key,
+                                     reduced::fit_elasticity(context, targets_of(rest, config.train_motions), spec));
+        previous = &report.fits.at(key);
+        fit_progress.advance();
       }
+    }
   }
   // Evaluate everything fitted so far, then pick λ per regularizer by the cross-validation error.
   report.evaluate(pool, reduced_model, context.reduced, cases);
   if (config.cross_validation)
     for (const auto& [reg, tag] : regs) best_lambda[tag] = report.best_lambda(tag);
   // Full optimizations on every train subject (SFLSH §6.3) and their generalization (§6.4).
-  for (const auto& [reg, tag] : regs)
+  for (const auto& [reg, tag] : regs) {
     report.fits.emplace("full/" + tag,
                         reduced::fit_elasticity(
                             context, targets_of(config.train_subjects, config.train_motions),
                             spec_of("full_" + tag, FitKind::shape, reg, best_lambda.at(tag), config.train_subjects)));
+    fit_progress.advance();
+  }
+  fit_progress.finish();
   report.evaluate(pool, reduced_model, context.reduced, cases);
   report.best = best_lambda;
 

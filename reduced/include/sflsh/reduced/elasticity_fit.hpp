@@ -57,6 +57,10 @@ struct FitSpec {
   /// checked to ~2e-6 against central differences); true keeps one-sided differences, for checking.
   bool thickness_differences = false;
   std::filesystem::path checkpoint;  ///< empty: none
+  /// Continuation: when set (p at N = stages.back()), only the last stage runs, starting here (e.g. the same fit
+  /// at a neighbouring λ); part of the checkpoint's fingerprint, with `warm_start_from` naming where it came from.
+  Eigen::VectorXd warm_start;
+  std::string warm_start_from;
 };
 
 /// Shared by every fit of an experiment.

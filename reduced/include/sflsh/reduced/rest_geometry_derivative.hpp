@@ -54,7 +54,8 @@ class RestGeometryDerivative {
 
  private:
   /// A_i(t) dX_j at the inertia nodes, for the frame the inertia holds now (3 per node × columns).
-  Eigen::MatrixXd posed_directions() const;
+  using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  RowMatrix posed_directions() const;
 
   const model::Problem& problem_;
   const Subspace& subspace_;
@@ -62,8 +63,9 @@ class RestGeometryDerivative {
   const ReducedInertia& inertia_;
   int columns_ = 0;
   bool inertia_on_ = true;
-  Eigen::MatrixXd node_directions_;  ///< dX_j at the inertia nodes (3 per node × columns)
-  Eigen::MatrixXd mass_derivative_;  ///< dm_i per active node × columns [kg]
+  // Row-major: the loops read one node's 3 × columns block at a time.
+  RowMatrix node_directions_;  ///< dX_j at the inertia nodes (3 per node × columns)
+  RowMatrix mass_derivative_;  ///< dm_i per active node × columns [kg]
   // Per cubature point p and column j (index p · columns + j): dV/V, and dc_s of its functions (parallel to
   // elastic.point_functions(p), at offset point_offset_[p] · columns + j · count), and dn.
   std::vector<double> volume_rate_;
@@ -72,7 +74,7 @@ class RestGeometryDerivative {
   std::vector<Eigen::Vector3d> dn_;
   // The posed history of the rest geometry: p, w (3 per inertia node) and their explicit derivatives.
   Eigen::VectorXd p_, w_;
-  Eigen::MatrixXd dp_, dw_;
+  RowMatrix dp_, dw_;
 };
 
 }  // namespace sflsh::reduced

@@ -61,6 +61,8 @@ class SkinDisplacementMap {
   meshing::RowMatrixX3d displacement_of(const Eigen::VectorXd& q) const;
   /// du/dp (3R × m, row 3r + axis) for dq/dp (3S × m).
   Eigen::MatrixXd derivative(const Eigen::MatrixXd& dq) const;
+  /// K B (R × S): skin vertex r moves by Σ_s (K B)_rs q_s (q_s the three coordinates of function s).
+  const SparseRowMatrix& skin_basis() const { return skin_basis_; }
 
  private:
   const model::BodyLayer& layer_;

@@ -28,6 +28,9 @@ struct ValidateConfig {
   int iterations = 8;                           ///< per stage
   std::vector<double> lambdas{0.01, 0.1, 1.0};  ///< cross-validation sweep (Fig. 5)
   bool cross_validation = true;
+  /// Leave-one-out λ sweep as a continuation: per (regularizer, left-out subject) the largest λ is fitted through
+  /// every stage, each smaller λ only at the last stage from the previous λ's result (docs/fit.md).
+  bool lambda_warm_start = true;
   /// dσ/dq: "exact" (forward sensitivities, thickness columns through the retarget), "hybrid" (sensitivities,
   /// thickness columns by one-sided differences) or "fd" (one-sided differences of every column, the paper's).
   std::string jacobian = "exact";
