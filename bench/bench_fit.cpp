@@ -7,18 +7,24 @@
 // projects one Jacobian by finite differences (3N columns, the paper) and by sensitivities + thickness
 // differences (N columns), and the whole fit N = 1 → 12 → 24 → 84 with --iterations per stage, each
 // iteration one Jacobian and two residuals (TAO's trial and the accepted point).
+// With --fit λ it also runs whole shape fits (local regularizer) on these cases, the way a leave-one-out fold of
+// `sflsh validate` does: cold through the stages 1, 12, 24, … ≤ N at λ, then warm-started at λ/10 at the last
+// stage only (the λ sweep's continuation), against targets made by a heterogeneous shape-dependent field.
 //   bench_fit [--subjects 5] [--controls 84] [--frames 60] [--handles 86] [--threads 0] [--fd-columns 6]
-//             [--iterations 8] [--out bench_fit.json]
+//             [--iterations 8] [--fit λ] [--out bench_fit.json]
 #include <sflsh/body/body_io.hpp>
 #include <sflsh/body/subjects.hpp>
 #include <sflsh/core/summary.hpp>
+#include <sflsh/fullspace/petsc_session.hpp>
 #include <sflsh/reduced/elasticity_fit.hpp>
 #include <sflsh/reduced/young_map.hpp>
 
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstring>
 #include <iostream>
 
@@ -30,6 +36,7 @@ double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::
 
 int main(int argc, char** argv) {
   int subjects = 5, controls = 84, frames = 60, handles = 86, threads = 0, fd_columns = 6, iterations = 8;
+  double fit_lambda = 0.0;
   std::string out = "bench_fit.json";
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string a = argv[i];
@@ -47,6 +54,8 @@ int main(int argc, char** argv) {
       fd_columns = std::stoi(argv[i + 1]);
     else if (a == "--iterations")
       iterations = std::stoi(argv[i + 1]);
+    else if (a == "--fit")
+      fit_lambda = std::stod(argv[i + 1]);
     else if (a == "--out")
       out = argv[i + 1];
     else {
@@ -55,6 +64,7 @@ int main(int argc, char** argv) {
     }
   }
   try {
+    const fullspace::PetscSession petsc;  // the fit's trust region is PETSc TAO
     const auto t_setup = Clock::now();
     const body::BodyModel model = body::load_body(std::filesystem::path(SFLSH_DATA_DIR) / "open_body.npz");
     const std::vector<body::Subject> all = body::default_subjects();
@@ -181,7 +191,70 @@ int main(int argc, char** argv) {
         fit_hybrid);
     row(fmt::format("whole fit N = 1/12/24/84 × {} iterations, sensitivities with thickness (projected)", iterations),
         fit_exact);
+    nlohmann::json fits = nlohmann::json::array();
+    if (fit_lambda > 0.0) {
+      // Targets: each subject's dynamics under a field that varies over the control points and with β.
+      std::vector<reduced::FitTarget> fit_targets;
+      std::vector<reduced::SimulationJob> truth_jobs;
+      for (std::size_t c = 0; c < cases.size(); ++c) {
+        const double s = static_cast<double>(c / 3) / std::max(1, subjects - 1);
+        material::KappaMatrix k(controls, 3);
+        for (int i = 0; i < controls; ++i)
+          k.row(i) << 0.25 + 0.25 * (0.5 + 0.5 * std::sin(1.3 * i + s)),
+              4000.0 + 6000.0 * ((i * 7) % 11) / 10.0 * (1.0 - 0.3 * s), 2000.0 + 2000.0 * ((i * 5) % 7) / 6.0;
+        truth_jobs.push_back({static_cast<int>(c), k});
+      }
+      const std::vector<Eigen::VectorXd> truth = pool.run(case_list, truth_jobs, param, rm, context.reduced);
+      for (std::size_t c = 0; c < cases.size(); ++c)
+        fit_targets.push_back({cases[c].get(), static_cast<int>(c / 3), truth[c]});
+      reduced::FitSpec spec;
+      spec.kind = reduced::FitKind::shape;
+      spec.regularizer = reduced::Regularizer::local;
+      spec.betas = betas;
+      spec.iterations = iterations;
+      spec.stages.clear();
+      for (int n : {1, 12, 24, 84})
+        if (n < controls) spec.stages.push_back(n);
+      spec.stages.push_back(controls);
+      auto run_fit = [&](const std::string& name, double lambda, const reduced::FitResult* from) {
+        spec.name = name;
+        spec.lambda = lambda;
+        if (from) {
+          spec.warm_start = from->p;
+          spec.warm_start_from = from->name;
+        }
+        const long before = pool.simulations();
+        const auto t0 = Clock::now();
+        reduced::FitResult r = reduced::fit_elasticity(context, fit_targets, spec);
+        const double seconds = since(t0);
+        int its = 0, jacobians = 0;
+        for (const auto& st : r.stages) {
+          its += st.iterations;
+          jacobians += st.jacobians;
+        }
+        fits.push_back({{"fit", name},
+                        {"lambda", lambda},
+                        {"warm_start", from != nullptr},
+                        {"seconds", seconds},
+                        {"stages", r.stages.size()},
+                        {"iterations", its},
+                        {"jacobians", jacobians},
+                        {"simulations", pool.simulations() - before},
+                        {"loss_fit_mm2", r.stages.back().loss_fit}});
+        return r;
+      };
+      const reduced::FitResult cold = run_fit("cold", fit_lambda, nullptr);
+      run_fit("warm", 0.1 * fit_lambda, &cold);
+      std::cout << fmt::format("\n{:<6} {:>8} {:>9} {:>7} {:>11} {:>10} {:>12} {:>12}\n", "fit", "lambda", "stages",
+                               "iters", "jacobians", "sims", "loss [mm2]", "seconds");
+      for (const auto& f : fits)
+        std::cout << fmt::format("{:<6} {:>8g} {:>9} {:>7} {:>11} {:>10} {:>12.5g} {:>12.1f}\n",
+                                 f["fit"].get<std::string>(), f["lambda"].get<double>(), f["stages"].get<int>(),
+                                 f["iterations"].get<int>(), f["jacobians"].get<int>(), f["simulations"].get<long>(),
+                                 f["loss_fit_mm2"].get<double>(), f["seconds"].get<double>());
+    }
     write_json(out, {{"benchmark", "fit"},
+                     {"fits", fits},
                      {"subjects", subjects},
                      {"cases", cases.size()},
                      {"controls", controls},

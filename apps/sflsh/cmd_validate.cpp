@@ -29,6 +29,7 @@ struct ValidateOptions {
   std::vector<std::string> train_subjects, test_subjects, train_motions, test_motions;
   bool no_cross_validation = false;
   bool no_lambda_warm_start = false;
+  int fit_groups = 1;
   std::string jacobian = "exact";
   std::vector<std::string> dyna;
   std::string body;
@@ -56,6 +57,7 @@ void run_validate(const ValidateOptions& o, const Invocation& invocation) {
   if (!o.test_motions.empty()) config.test_motions = o.test_motions;
   if (o.no_cross_validation) config.cross_validation = false;
   if (o.no_lambda_warm_start) config.lambda_warm_start = false;
+  config.fit_groups = o.fit_groups;
   config.jacobian = o.jacobian;
   config.progress = !o.quiet;
   const nlohmann::json summary =
@@ -113,6 +115,10 @@ void register_validate_commands(CLI::App& app, const Invocation& invocation) {
       ->check(CLI::IsMember({"exact", "hybrid", "fd"}));
   cmd->add_flag("--no-cross-validation", o->no_cross_validation,
                 "Skip the leave-one-out fits (λ = the first of --lambdas)");
+  cmd->add_option("--fit-groups", o->fit_groups,
+                  "With mpirun -n P: split the ranks into G groups that run whole fits side by side (each fit's "
+                  "simulations shared by its group's ranks); DIR/state must be visible to every rank")
+      ->check(CLI::PositiveNumber);
   cmd->add_flag("--no-lambda-warm-start", o->no_lambda_warm_start,
                 "Fit every λ of the leave-one-out sweep through every stage from the neutral start (default: the "
                 "largest λ does, each smaller λ continues at the last stage from the previous one)");

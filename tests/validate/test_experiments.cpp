@@ -205,3 +205,41 @@ TEST(Experiments, TwoMpiProcessesGiveTheSameTable) {
   EXPECT_EQ(s2.at("ranks").get<int>(), 2);
   EXPECT_EQ(s1.at("simulations"), s2.at("simulations"));
 }
+
+// Fit groups (--fit-groups): with two ranks in two groups each rank runs whole fits (the independent fits and the
+// leave-one-out chains round robin, each λ after the first warm-started from the previous one), then reads the
+// other group's fits back from their checkpoints. One rank per group and one thread do the arithmetic of a single
+// one-thread process, so the tables are identical, and so is the number of simulations.
+TEST(Experiments, FitGroupsGiveTheTableOfOneProcess) {
+  SFLSH_LONG_TEST();  // about a minute on 2 cores: label long
+  if (std::system("command -v mpiexec >/dev/null 2>&1") != 0) GTEST_SKIP() << "mpiexec not found";
+  const std::filesystem::path dir = sflsh::testing::scratch_dir();
+  const std::string args =
+      " validate --train-subjects OPEN_TRAIN_1,OPEN_TRAIN_2 --test-subjects OPEN_TEST_1 --frames 10 "
+      "--stages 1 --iterations 2 --lambdas 1,0.1 --threads 1 -q --out ";
+  const std::string clean = "for v in $(env | sed -n 's/^\\(OMPI_[^=]*\\|PMIX_[^=]*\\)=.*/\\1/p'); do unset $v; done; ";
+  const std::string one =
+      clean + std::string(SFLSH_CLI) + args + (dir / "one").string() + " >" + (dir / "one.log").string() + " 2>&1";
+  ASSERT_EQ(std::system(one.c_str()), 0) << "see " << (dir / "one.log");
+  const std::string two =
+      clean +
+      "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 "
+      "mpiexec -n 2 " +
+      std::string(SFLSH_CLI) + args + (dir / "two").string() + " --fit-groups 2 >" + (dir / "two.log").string() +
+      " 2>&1";
+  ASSERT_EQ(std::system(two.c_str()), 0) << "mpiexec -n 2 failed; see " << (dir / "two.log");
+  auto slurp = [](const std::filesystem::path& p) {
+    std::ifstream in(p);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  for (const char* file : {"table2.csv", "table2_error.csv", "cross_validation.csv", "lambda_sweep.csv"}) {
+    EXPECT_FALSE(slurp(dir / "one" / file).empty()) << file;
+    EXPECT_EQ(slurp(dir / "one" / file), slurp(dir / "two" / file)) << file;
+  }
+  const nlohmann::json s1 = read_json(dir / "one" / "summary.json"), s2 = read_json(dir / "two" / "summary.json");
+  EXPECT_EQ(s2.at("config").at("fit_groups").get<int>(), 2);
+  EXPECT_EQ(s1.at("simulations"), s2.at("simulations"));
+  // The warm start: each fold's smaller λ continued from the larger one's result.
+  const nlohmann::json cp = read_json(dir / "two" / "state" / "fits" / "cv_ours_lambda0.1_without_OPEN_TRAIN_1.json");
+  EXPECT_NE(cp.at("fingerprint").get<std::string>().find("cv_ours_lambda1_without_OPEN_TRAIN_1"), std::string::npos);
+}

@@ -123,61 +123,60 @@ struct Stage {
         for (int t : mine) jobs.push_back({t, kappa});
       }
       const std::vector<Eigen::VectorXd> sigma = jobs.empty() ? std::vector<Eigen::VectorXd>{} : simulate(jobs);
-      // Sensitivity runs: one per target, dσ/dY (2R × 2N) [mm/Pa].
-      std::vector<Eigen::MatrixXd> dsigma_dyoung(mine.size());
-      if (sensitive) {
-        const material::KappaMatrix kappa0 = material::denormalize(q0, context->bounds);
-        const std::vector<Eigen::VectorXd> packed = context->pool->run_tasks(
-            static_cast<int>(mine.size()),
-            [&](int m) {
-              return Eigen::Index{2} *
-                     (*targets)[static_cast<std::size_t>(mine[static_cast<std::size_t>(m)])]
-                         .simulation->num_region_vertices() *
-                     (1 + sensitivity_columns);
-            },
-            [&](int m) {
-              const DynamicsCase& c =
-                  *(*targets)[static_cast<std::size_t>(mine[static_cast<std::size_t>(m)])].simulation;
-              Eigen::MatrixXd d;
-              const CaseDynamics base = c.simulate_with_sensitivity(*parameterization, kappa0, *context->model,
-                                                                    young_map, d, context->reduced, exact_thickness);
-              Eigen::VectorXd out(d.rows() * (1 + d.cols()));
-              out.head(d.rows()) << base.sigma_normal, base.sigma_tangent;
-              out.tail(d.size()) = Eigen::Map<const Eigen::VectorXd>(d.data(), d.size());
-              return out;
-            });
-        simulations += static_cast<long>(mine.size());
-        for (std::size_t m = 0; m < mine.size(); ++m) {
-          const Eigen::Index rows = packed[m].size() / (1 + sensitivity_columns);
-          dsigma_dyoung[m] = Eigen::Map<const Eigen::MatrixXd>(packed[m].data() + rows, rows, sensitivity_columns);
-        }
-      }
-      // G_t = dσ_t/dq_j; accumulate H_q = Σ w² G_tᵀG_t and g_q = Σ w G_tᵀ r_t.
-      Eigen::MatrixXd Hq = Eigen::MatrixXd::Zero(3 * controls, 3 * controls);
-      Eigen::VectorXd gq = Eigen::VectorXd::Zero(3 * controls);
-      for (std::size_t m = 0; m < mine.size(); ++m) {
+      // Per target t: G_t = dσ_t/dq_j and its terms w² G_tᵀG_t, w G_tᵀ r_t (packed: 9N², then 3N), from the
+      // difference columns and, with sensitivities, dσ/dY (2R × 2N or 3N) [mm/Pa] of the target's run.
+      const int Q = 3 * controls;
+      auto normal_terms = [&](std::size_t m, const Eigen::MatrixXd* dsigma_dyoung) {
         const int t = mine[m];
         const Eigen::VectorXd rt =
             r.segment(offset[static_cast<std::size_t>(t)],
                       offset[static_cast<std::size_t>(t) + 1] - offset[static_cast<std::size_t>(t)]);
         const Eigen::VectorXd sigma_t = rt / weight + (*targets)[static_cast<std::size_t>(t)].sigma;
-        Eigen::MatrixXd G(sigma_t.size(), 3 * controls);
+        Eigen::MatrixXd G(sigma_t.size(), Q);
         for (std::size_t f = 0; f < fd_columns.size(); ++f) {
           const int k = fd_columns[f];
           G.col(k) = (sigma[f * mine.size() + m] - sigma_t) / h[static_cast<std::size_t>(k)];
         }
-        if (sensitive)  // dσ/dq̂ = dσ/dY · Y_max (q̂ = Y / Y_max)
+        if (dsigma_dyoung)  // dσ/dq̂ = dσ/dY · Y_max (q̂ = Y / Y_max)
           for (int i = 0; i < controls; ++i) {
-            G.col(kK * i + material::kYoungTangent) = dsigma_dyoung[m].col(i) * context->bounds.young_tangent.max;
+            G.col(kK * i + material::kYoungTangent) = dsigma_dyoung->col(i) * context->bounds.young_tangent.max;
             G.col(kK * i + material::kYoungNormal) =
-                dsigma_dyoung[m].col(controls + i) * context->bounds.young_normal.max;
+                dsigma_dyoung->col(controls + i) * context->bounds.young_normal.max;
             if (exact_thickness)  // dσ/dĥ = dσ/dh · h_max
               G.col(kK * i + material::kThickness) =
-                  dsigma_dyoung[m].col(2 * controls + i) * context->bounds.thickness.max;
+                  dsigma_dyoung->col(2 * controls + i) * context->bounds.thickness.max;
           }
         G *= weight;
-        Hq.noalias() += G.transpose() * G;
-        gq.noalias() += G.transpose() * rt;
+        Eigen::VectorXd out(Q * Q + Q);
+        Eigen::Map<Eigen::MatrixXd>(out.data(), Q, Q).noalias() = G.transpose() * G;
+        out.tail(Q).noalias() = G.transpose() * rt;
+        return out;
+      };
+      std::vector<Eigen::VectorXd> terms;
+      if (sensitive) {  // one differentiated run per target, its G_tᵀG_t made where it ran (in parallel)
+        const material::KappaMatrix kappa0 = material::denormalize(q0, context->bounds);
+        terms = context->pool->run_tasks(
+            static_cast<int>(mine.size()), [&](int) { return Eigen::Index{Q} * Q + Q; },
+            [&](int m) {
+              const DynamicsCase& c =
+                  *(*targets)[static_cast<std::size_t>(mine[static_cast<std::size_t>(m)])].simulation;
+              Eigen::MatrixXd d;
+              c.simulate_with_sensitivity(*parameterization, kappa0, *context->model, young_map, d, context->reduced,
+                                          exact_thickness);
+              require(d.cols() == sensitivity_columns, "fit: a differentiated run gave {} columns, expected {}",
+                      d.cols(), sensitivity_columns);
+              return normal_terms(static_cast<std::size_t>(m), &d);
+            });
+        simulations += static_cast<long>(mine.size());
+      } else {
+        for (std::size_t m = 0; m < mine.size(); ++m) terms.push_back(normal_terms(m, nullptr));
+      }
+      // H_q = Σ_t w² G_tᵀG_t, g_q = Σ_t w G_tᵀ r_t, summed in target order (the same on every rank).
+      Eigen::MatrixXd Hq = Eigen::MatrixXd::Zero(Q, Q);
+      Eigen::VectorXd gq = Eigen::VectorXd::Zero(Q);
+      for (const Eigen::VectorXd& term : terms) {
+        Hq += Eigen::Map<const Eigen::MatrixXd>(term.data(), Q, Q);
+        gq += term.tail(Q);
       }
       // Chain rule through the clamp and dq/dp (eq. 8).
       // dq/dp stays sparse (11 entries per row for a shape fit): JqᵀHqJq costs P²·11 instead of P²·3N.

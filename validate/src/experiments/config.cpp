@@ -47,6 +47,7 @@ nlohmann::json ValidateConfig::to_json() const {
   j["lambdas"] = lambdas;
   j["cross_validation"] = cross_validation;
   j["lambda_warm_start"] = lambda_warm_start;
+  j["fit_groups"] = fit_groups;
   j["jacobian"] = jacobian;
   j["threads"] = threads;
   j["thickness_max"] = thickness_max;

@@ -1,5 +1,6 @@
 // The experiment pipeline of `sflsh validate` (experiments.hpp): ground truth → reduced cases → fits →
 // evaluations → reports (report.cpp).
+#include "fit_chains.hpp"
 #include "report.hpp"
 
 #include <sflsh/body/body_io.hpp>
@@ -315,59 +316,48 @@ nlohmann::json run_validation(const ValidateConfig& requested, const std::filesy
   report.saturation = first.layer().material.saturation;
   report.region = first.layer().mesh->region;
 
-  // Every fit of the study, with a rate and an ETA (a finished fit resumed from state/fits counts at once).
-  const std::size_t cv_fits = config.cross_validation ? 2 * config.lambdas.size() * config.train_subjects.size() : 0;
-  Progress fit_progress("fits", config.train_subjects.size() + cv_fits + 2, config.progress && pool.rank() == 0);
+  // The fits run as chains (fit_chains.hpp), shared among fit groups of MPI ranks with --fit-groups.
+  const FitRunner runner(context, config.fit_groups, config.threads);
   // Independent fits: the optimal targets (SFLSH §3).
-  for (const std::string& s : config.train_subjects) {
-    report.fits.emplace("independent/" + s, reduced::fit_elasticity(context, targets_of({s}, config.train_motions),
-                                                                    spec_of("independent_" + s, FitKind::independent,
-                                                                            Regularizer::l2, 0.0, {s})));
-    fit_progress.advance();
-  }
-  // Leave-one-out cross-validation and the λ sweep (SFLSH §6.2, Fig. 5).
+  std::vector<FitChain> chains;
+  for (const std::string& s : config.train_subjects)
+    chains.push_back({{"independent/" + s, spec_of("independent_" + s, FitKind::independent, Regularizer::l2, 0.0, {s}),
+                       targets_of({s}, config.train_motions), false}});
+  // Leave-one-out cross-validation and the λ sweep (SFLSH §6.2, Fig. 5): one chain per (regularizer, left-out
+  // subject), λ from the largest down; with the warm start each smaller λ continues from the previous one's
+  // result at the last stage (a regularization path) instead of going through every stage again.
   const std::vector<std::pair<Regularizer, std::string>> regs{{Regularizer::l2, "l2"}, {Regularizer::local, "ours"}};
   std::map<std::string, double> best_lambda;
+  std::vector<double> sweep = config.lambdas;
+  std::sort(sweep.begin(), sweep.end(), std::greater<>());
   for (const auto& [reg, tag] : regs) {
     best_lambda[tag] = config.lambdas.front();
     if (!config.cross_validation) continue;
-    // Per fold, λ from the largest down: with the warm start each smaller λ continues from the previous one's
-    // result at the last stage (a regularization path) instead of going through every stage again.
-    std::vector<double> sweep = config.lambdas;
-    std::sort(sweep.begin(), sweep.end(), std::greater<>());
     for (const std::string& left_out : config.train_subjects) {
       std::vector<std::string> rest;
       for (const std::string& s : config.train_subjects)
         if (s != left_out) rest.push_back(s);
-      const reduced::FitResult* previous = nullptr;
-      for (double lambda : sweep) {
-        const std::string name = fmt::format("cv_{}_lambda{:g}_without_{}", tag, lambda, left_out);
-        reduced::FitSpec spec = spec_of(name, FitKind::shape, reg, lambda, rest);
-        if (config.lambda_warm_start && previous) {
-          spec.warm_start = previous->p;
-          spec.warm_start_from = previous->name;
-        }
-        const std::string key = fmt::format("cv/{}/{:g}/{}", tag, lambda, left_out);
-        report.fits.insert_or_assign(key,
-                                     reduced::fit_elasticity(context, targets_of(rest, config.train_motions), spec));
-        previous = &report.fits.at(key);
-        fit_progress.advance();
-      }
+      FitChain chain;
+      for (double lambda : sweep)
+        chain.push_back({fmt::format("cv/{}/{:g}/{}", tag, lambda, left_out),
+                         spec_of(fmt::format("cv_{}_lambda{:g}_without_{}", tag, lambda, left_out), FitKind::shape, reg,
+                                 lambda, rest),
+                         targets_of(rest, config.train_motions), config.lambda_warm_start});
+      chains.push_back(std::move(chain));
     }
   }
+  runner.run("independent and leave-one-out fits", chains, report.fits);
   // Evaluate everything fitted so far, then pick λ per regularizer by the cross-validation error.
   report.evaluate(pool, reduced_model, context.reduced, cases);
   if (config.cross_validation)
     for (const auto& [reg, tag] : regs) best_lambda[tag] = report.best_lambda(tag);
   // Full optimizations on every train subject (SFLSH §6.3) and their generalization (§6.4).
-  for (const auto& [reg, tag] : regs) {
-    report.fits.emplace("full/" + tag,
-                        reduced::fit_elasticity(
-                            context, targets_of(config.train_subjects, config.train_motions),
-                            spec_of("full_" + tag, FitKind::shape, reg, best_lambda.at(tag), config.train_subjects)));
-    fit_progress.advance();
-  }
-  fit_progress.finish();
+  chains.clear();
+  for (const auto& [reg, tag] : regs)
+    chains.push_back(
+        {{"full/" + tag, spec_of("full_" + tag, FitKind::shape, reg, best_lambda.at(tag), config.train_subjects),
+          targets_of(config.train_subjects, config.train_motions), false}});
+  runner.run("full fits", chains, report.fits);
   report.evaluate(pool, reduced_model, context.reduced, cases);
   report.best = best_lambda;
 
@@ -386,7 +376,7 @@ nlohmann::json run_validation(const ValidateConfig& requested, const std::filesy
     }
     for (const auto& [key, rms] : dyna.mean_rms) summary["dyna"]["pose_fit_mean_rms_mm"][key] = 1e3 * rms;
   }
-  summary["simulations"] = pool.simulations();
+  summary["simulations"] = pool.simulations() + runner.group_simulations();
   summary["simulation_seconds"] = pool.seconds();
   summary["ranks"] = pool.ranks();
   summary["threads"] = pool.threads();

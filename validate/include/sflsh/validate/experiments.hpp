@@ -31,6 +31,9 @@ struct ValidateConfig {
   /// Leave-one-out λ sweep as a continuation: per (regularizer, left-out subject) the largest λ is fitted through
   /// every stage, each smaller λ only at the last stage from the previous λ's result (docs/fit.md).
   bool lambda_warm_start = true;
+  /// MPI ranks split into this many groups, each running whole fits (its ranks sharing each fit's simulations);
+  /// 1: every rank works on every fit (fit_chains.hpp).
+  int fit_groups = 1;
   /// dσ/dq: "exact" (forward sensitivities, thickness columns through the retarget), "hybrid" (sensitivities,
   /// thickness columns by one-sided differences) or "fd" (one-sided differences of every column, the paper's).
   std::string jacobian = "exact";
