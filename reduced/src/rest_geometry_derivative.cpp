@@ -92,17 +92,16 @@ RestGeometryDerivative::RestGeometryDerivative(const model::Problem& problem, co
 
   // Per cubature point: dV/V, dc_s = Σ_a B_as dg_a, dn.
   const int P = elastic.num_points();
-  volume_rate_.assign(static_cast<std::size_t>(P) * C, 0.0);
-  dn_.assign(static_cast<std::size_t>(P) * C, Eigen::Vector3d::Zero());
+  volume_rate_ = RowMatrix::Zero(P, C);
+  dn_ = RowMatrix::Zero(3 * static_cast<Eigen::Index>(P), C);
   point_offset_.assign(1, 0);
   for (int p = 0; p < P; ++p)
     point_offset_.push_back(point_offset_.back() + static_cast<int>(elastic.point_functions(p).size()));
-  dc_.assign(static_cast<std::size_t>(point_offset_.back()) * C, Eigen::Vector3d::Zero());
+  dc_ = RowMatrix::Zero(3 * static_cast<Eigen::Index>(point_offset_.back()), C);
   for (int p = 0; p < P; ++p) {
     const int e = elastic.point_tet(p);
     const material::TetRest& rest = problem.tet_rest[static_cast<std::size_t>(e)];
     const std::span<const int> functions = elastic.point_functions(p);
-    const int count = static_cast<int>(functions.size());
     const Eigen::Vector3d axis = problem.tet_material[static_cast<std::size_t>(e)].normal;
     Eigen::Vector3d dd;
     for (int k = 0; k < 3; ++k) dd(k) = depth(problem.tets(e, k + 1)) - depth(problem.tets(e, 0));
@@ -110,23 +109,21 @@ RestGeometryDerivative::RestGeometryDerivative(const model::Problem& problem, co
     const double length = gradient.norm();
     const bool own_axis = length > 0.0 && (-gradient / length - axis).norm() < 1e-6;
     for (int j = 0; j < C; ++j) {
-      const auto at = static_cast<std::size_t>(p) * C + static_cast<std::size_t>(j);
       const Eigen::Matrix3d M = rest.dm_inv * dm_of(e, j);  // D_m⁻¹ dD_m
-      volume_rate_[at] = M.trace();
+      volume_rate_(p, j) = M.trace();
       const Eigen::Matrix3d dDm_inv = -M * rest.dm_inv;
       Eigen::Matrix<double, 4, 3> dg;
       dg.bottomRows<3>() = dDm_inv;
       dg.row(0) = -dDm_inv.colwise().sum();
-      Eigen::Vector3d* dc = dc_.data() + static_cast<std::size_t>(point_offset_[static_cast<std::size_t>(p)]) * C +
-                            static_cast<std::size_t>(j) * count;
+      const Eigen::Index first = 3 * static_cast<Eigen::Index>(point_offset_[static_cast<std::size_t>(p)]);
       for (int a = 0; a < 4; ++a)
         for (SparseRowMatrix::InnerIterator it(subspace.basis, problem.tets(e, a)); it; ++it) {
           const auto slot = std::lower_bound(functions.begin(), functions.end(), static_cast<int>(it.col()));
-          dc[slot - functions.begin()] += it.value() * dg.row(a).transpose();
+          dc_.block<3, 1>(first + 3 * (slot - functions.begin()), j) += it.value() * dg.row(a).transpose();
         }
       if (own_axis) {  // n = −∇δ/|∇δ|: dn = −(I − nnᵀ) d∇δ/|∇δ|, d∇δ = dD_m⁻ᵀ dd
         const Eigen::Vector3d dgradient = dDm_inv.transpose() * dd;
-        dn_[at] = -(dgradient - axis * axis.dot(dgradient)) / length;
+        dn_.block<3, 1>(3 * static_cast<Eigen::Index>(p), j) = -(dgradient - axis * axis.dot(dgradient)) / length;
       }
     }
   }
@@ -190,9 +187,11 @@ Eigen::MatrixXd RestGeometryDerivative::gradient_derivative(const Eigen::VectorX
     for (SparseRowMatrix::InnerIterator it(subspace_.basis, active[a]); it; ++it)
       inertial.middleRows<3>(3 * it.col()).noalias() += it.value() * r;
   }
-  Eigen::MatrixXd out = inertial;
-
-  // Elasticity: Σ_c [dω P c_s + ω (∂P/∂F : dF + ∂P/∂n dn) c_s + ω P dc_s], dF = Σ_s t_s dc_sᵀ.
+  // Elasticity: Σ_c [dω P c_s + ω (∂P/∂F : dF + ∂P/∂n dn) c_s + ω P dc_s], dF = Σ_s t_s dc_sᵀ, for every
+  // column at once: rows of 9 (vec(dF), vec(dP), vec of the stress, column-major entry a + 3b) × C columns.
+  RowMatrix& out = inertial;
+  Eigen::Matrix<double, 9, Eigen::Dynamic, Eigen::RowMajor> dF(9, C), stress(9, C);
+  Eigen::Matrix<double, 3, Eigen::Dynamic, Eigen::RowMajor> block(3, C);
   for (int pt = 0; pt < elastic_.num_points(); ++pt) {
     const double w = elastic_.point_weight(pt);
     if (w == 0.0) continue;
@@ -203,21 +202,23 @@ Eigen::MatrixXd RestGeometryDerivative::gradient_derivative(const Eigen::VectorX
     const std::span<const int> functions = elastic_.point_functions(pt);
     const std::span<const Eigen::Vector3d> c = elastic_.point_vectors(pt);
     const int count = static_cast<int>(functions.size());
-    for (int j = 0; j < C; ++j) {
-      const auto at = static_cast<std::size_t>(pt) * C + static_cast<std::size_t>(j);
-      const Eigen::Vector3d* dc = dc_.data() +
-                                  static_cast<std::size_t>(point_offset_[static_cast<std::size_t>(pt)]) * C +
-                                  static_cast<std::size_t>(j) * count;
-      Eigen::Matrix3d dF = Eigen::Matrix3d::Zero();
-      for (int s = 0; s < count; ++s)
-        dF.noalias() += q.segment<3>(3 * functions[static_cast<std::size_t>(s)]) * dc[s].transpose();
-      const Vector9d dP_vec = values.dPdF * Eigen::Map<const Vector9d>(dF.data()) + axis * dn_[at];
-      const Eigen::Matrix3d dP = Eigen::Map<const Eigen::Matrix3d>(dP_vec.data());
-      const Eigen::Matrix3d stress = w * (volume_rate_[at] * values.P + dP);
-      const Eigen::Matrix3d P = w * values.P;
-      for (int s = 0; s < count; ++s)
-        out.block<3, 1>(3 * functions[static_cast<std::size_t>(s)], j).noalias() +=
-            stress * c[static_cast<std::size_t>(s)] + P * dc[s];
+    const Eigen::Index first = 3 * static_cast<Eigen::Index>(point_offset_[static_cast<std::size_t>(pt)]);
+    dF.setZero();  // dF(a, b) = Σ_s t_s(a) dc_s(b): rows 3b..3b+2 hold column b
+    for (int s = 0; s < count; ++s) {
+      const Eigen::Vector3d t = q.segment<3>(3 * functions[static_cast<std::size_t>(s)]);
+      for (int b = 0; b < 3; ++b) dF.middleRows<3>(3 * b).noalias() += t * dc_.row(first + 3 * s + b);
+    }
+    stress.noalias() = values.dPdF * dF;
+    stress.noalias() += axis * dn_.middleRows<3>(3 * static_cast<Eigen::Index>(pt));
+    stress.noalias() += Eigen::Map<const Vector9d>(values.P.data()) * volume_rate_.row(pt);
+    stress *= w;
+    const Eigen::Matrix3d P = w * values.P;
+    for (int s = 0; s < count; ++s) {
+      const Eigen::Vector3d& cs = c[static_cast<std::size_t>(s)];
+      block.noalias() =
+          cs(0) * stress.middleRows<3>(0) + cs(1) * stress.middleRows<3>(3) + cs(2) * stress.middleRows<3>(6);
+      block.noalias() += P * dc_.middleRows<3>(first + 3 * s);
+      out.middleRows<3>(3 * functions[static_cast<std::size_t>(s)]) += block;
     }
   }
   return out;

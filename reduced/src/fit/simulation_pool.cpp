@@ -8,6 +8,7 @@
 #include <tbb/task_arena.h>
 
 #include <chrono>
+#include <ctime>
 #include <mutex>
 #include <thread>
 
@@ -71,7 +72,15 @@ std::vector<Eigen::VectorXd> SimulationPool::run_tasks(int count, const std::fun
           for (int k = range.begin(); k < range.end(); ++k) {
             const int j = mine[static_cast<std::size_t>(k)];
             try {
+              timespec cpu_start{}, cpu_end{};
+              clock_gettime(CLOCK_THREAD_CPUTIME_ID, &cpu_start);
               const Eigen::VectorXd r = task(j);
+              clock_gettime(CLOCK_THREAD_CPUTIME_ID, &cpu_end);
+              {
+                const std::lock_guard<std::mutex> lock(mutex);
+                task_cpu_seconds_ += static_cast<double>(cpu_end.tv_sec - cpu_start.tv_sec) +
+                                     1e-9 * static_cast<double>(cpu_end.tv_nsec - cpu_start.tv_nsec);
+              }
               const Eigen::Index n = offset[static_cast<std::size_t>(j) + 1] - offset[static_cast<std::size_t>(j)];
               require(r.size() == n, "simulation pool: task {} returned {} values, expected {}", j, r.size(), n);
               buffer.segment(offset[static_cast<std::size_t>(j)], n) = r;

@@ -377,6 +377,8 @@ nlohmann::json run_validation(const ValidateConfig& requested, const std::filesy
     for (const auto& [key, rms] : dyna.mean_rms) summary["dyna"]["pose_fit_mean_rms_mm"][key] = 1e3 * rms;
   }
   summary["simulations"] = pool.simulations() + runner.group_simulations();
+  // The work per rank: Σ / max is the speed-up P ranks on P free cores would see (docs/fit.md, fit groups).
+  summary["rank_task_cpu_seconds"] = runner.rank_task_cpu_seconds();
   summary["simulation_seconds"] = pool.seconds();
   summary["ranks"] = pool.ranks();
   summary["threads"] = pool.threads();

@@ -40,6 +40,17 @@ long FitRunner::group_simulations() const {
   return total;
 }
 
+std::vector<double> FitRunner::rank_task_cpu_seconds() const {
+  double mine = context_.pool->task_cpu_seconds() + (group_pool_ ? group_pool_->task_cpu_seconds() : 0.0);
+  int initialized = 0;
+  MPI_Initialized(&initialized);
+  if (!initialized || context_.pool->ranks() <= 1) return {mine};
+  std::vector<double> all(static_cast<std::size_t>(context_.pool->ranks()), 0.0);
+  MPI_Gather(&mine, 1, MPI_DOUBLE, all.data(), 1, MPI_DOUBLE, 0, MPI_COMM_WORLD);
+  if (context_.pool->rank() != 0) all.clear();
+  return all;
+}
+
 void FitRunner::run(const std::string& label, const std::vector<FitChain>& chains,
                     std::map<std::string, reduced::FitResult>& fits) const {
   auto run_chain = [&](const FitChain& chain, const reduced::FitContext& context, Progress* progress) {

@@ -37,6 +37,9 @@ class FitRunner {
   int groups() const { return groups_; }
   /// Simulations the groups ran (all ranks; 0 with one group, whose fits count in the world's pool). Collective.
   long group_simulations() const;
+  /// Per world rank (on rank 0; empty elsewhere): CPU seconds its threads spent in simulation tasks, the world's
+  /// pool and its group's together. Collective.
+  std::vector<double> rank_task_cpu_seconds() const;
   /// Runs the chains; on return `fits` holds every chain's fits on every rank.
   void run(const std::string& label, const std::vector<FitChain>& chains,
            std::map<std::string, reduced::FitResult>& fits) const;

@@ -66,12 +66,12 @@ class RestGeometryDerivative {
   // Row-major: the loops read one node's 3 × columns block at a time.
   RowMatrix node_directions_;  ///< dX_j at the inertia nodes (3 per node × columns)
   RowMatrix mass_derivative_;  ///< dm_i per active node × columns [kg]
-  // Per cubature point p and column j (index p · columns + j): dV/V, and dc_s of its functions (parallel to
-  // elastic.point_functions(p), at offset point_offset_[p] · columns + j · count), and dn.
-  std::vector<double> volume_rate_;
+  // Per cubature point p, one column per direction j: dV/V (row p), dc_s of its functions (parallel to
+  // elastic.point_functions(p); rows 3 (point_offset_[p] + s) + axis) and dn (rows 3p + axis).
+  RowMatrix volume_rate_;
   std::vector<int> point_offset_;
-  std::vector<Eigen::Vector3d> dc_;
-  std::vector<Eigen::Vector3d> dn_;
+  RowMatrix dc_;
+  RowMatrix dn_;
   // The posed history of the rest geometry: p, w (3 per inertia node) and their explicit derivatives.
   Eigen::VectorXd p_, w_;
   RowMatrix dp_, dw_;

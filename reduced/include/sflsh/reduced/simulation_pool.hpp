@@ -38,6 +38,9 @@ class SimulationPool {
   int rank() const { return rank_; }
   long simulations() const { return simulations_; }  ///< jobs run so far (all ranks)
   double seconds() const { return seconds_; }        ///< wall time spent in run()
+  /// CPU time of this rank's threads inside tasks [s]: the work this rank did, whatever the waits between batches
+  /// (with more ranks than cores, Σ over ranks / max over ranks bounds the speed-up of P real cores).
+  double task_cpu_seconds() const { return task_cpu_seconds_; }
 
  private:
   int threads_ = 1;
@@ -45,6 +48,7 @@ class SimulationPool {
   int rank_ = 0, size_ = 1;
   long simulations_ = 0;
   double seconds_ = 0.0;
+  double task_cpu_seconds_ = 0.0;
 };
 
 }  // namespace sflsh::reduced
