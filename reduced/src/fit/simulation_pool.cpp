@@ -58,7 +58,11 @@ std::vector<Eigen::VectorXd> SimulationPool::run_tasks(int count, const std::fun
     offset[static_cast<std::size_t>(j) + 1] = offset[static_cast<std::size_t>(j)] + length(j);
   Eigen::VectorXd buffer = Eigen::VectorXd::Zero(offset.back());
   std::vector<int> mine;
-  for (int j = rank_; j < count; j += size_) mine.push_back(j);
+  // Job j runs on rank (first_ + j) mod size: the start rotates from batch to batch, so small batches (a fit
+  // with one or two cases) do not all land on rank 0. Every rank counts the same batches.
+  for (int j = 0; j < count; ++j)
+    if ((first_ + j) % size_ == rank_) mine.push_back(j);
+  first_ = (first_ + count) % size_;
 
   std::mutex mutex;
   std::string error;

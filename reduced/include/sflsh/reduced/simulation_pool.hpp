@@ -1,6 +1,7 @@
 #pragma once
 // Batches of independent reduced simulations (the fit's (1 + 3N)·M finite-difference runs, SFLSH §5),
-// shared among MPI ranks (job k runs on rank k mod size) and, within a rank, among threads (TBB).
+// shared among MPI ranks (job k of a batch runs on rank (s + k) mod size, s rotating from batch to batch) and,
+// within a rank, among threads (TBB).
 // Every rank returns the same results: each entry is computed by exactly one rank and summed with zeros.
 #include <sflsh/reduced/dynamics_case.hpp>
 
@@ -49,6 +50,7 @@ class SimulationPool {
   long simulations_ = 0;
   double seconds_ = 0.0;
   double task_cpu_seconds_ = 0.0;
+  int first_ = 0;  ///< the rank of the next batch's first job
 };
 
 }  // namespace sflsh::reduced
