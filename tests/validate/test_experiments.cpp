@@ -176,30 +176,41 @@ TEST(Experiments, DynaFilesAreTheGroundTruthWhenGiven) {
   EXPECT_TRUE(std::filesystem::exists(dir / "validate" / "table2.csv"));
 }
 
+namespace {
+
+/// Runs `sflsh ARGS --out DIR/one` as one process and `mpiexec -n 2 sflsh ARGS --out DIR/two EXTRA` (logs beside).
+/// The test process is an MPI singleton: its OMPI_*/PMIX_* variables must not reach the nested mpiexec.
+void run_one_and_two_processes(const std::filesystem::path& dir, const std::string& args,
+                               const std::string& two_extra = "") {
+  const std::string clean = "for v in $(env | sed -n 's/^\\(OMPI_[^=]*\\|PMIX_[^=]*\\)=.*/\\1/p'); do unset $v; done; ";
+  const std::string one = clean + std::string(SFLSH_CLI) + args + " --out " + (dir / "one").string() + " >" +
+                          (dir / "one.log").string() + " 2>&1";
+  ASSERT_EQ(std::system(one.c_str()), 0) << "see " << (dir / "one.log");
+  const std::string two = clean +
+                          "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "
+                          "OMPI_MCA_rmaps_base_oversubscribe=1 mpiexec -n 2 " +
+                          std::string(SFLSH_CLI) + args + " --out " + (dir / "two").string() + two_extra + " >" +
+                          (dir / "two.log").string() + " 2>&1";
+  ASSERT_EQ(std::system(two.c_str()), 0) << "mpiexec -n 2 failed; see " << (dir / "two.log");
+}
+
+std::string slurp(const std::filesystem::path& p) {
+  std::ifstream in(p);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+}  // namespace
+
 // The fit shares its simulations among MPI ranks: two processes give exactly the table of one (every result
 // is computed by one rank and summed with zeros, so each rank takes the same trust-region steps).
 TEST(Experiments, TwoMpiProcessesGiveTheSameTable) {
   SFLSH_LONG_TEST();  // tens of seconds on 2 cores: label long
   if (std::system("command -v mpiexec >/dev/null 2>&1") != 0) GTEST_SKIP() << "mpiexec not found";
   const std::filesystem::path dir = sflsh::testing::scratch_dir();
-  const std::string args =
-      " validate --train-subjects OPEN_TRAIN_1,OPEN_TRAIN_2 --test-subjects OPEN_TEST_1 --frames 10 "
-      "--stages 1 --iterations 2 --lambdas 1 --no-cross-validation --threads 1 -q --out ";
-  // The test process is an MPI singleton: its OMPI_*/PMIX_* variables must not reach the nested mpiexec.
-  const std::string clean = "for v in $(env | sed -n 's/^\\(OMPI_[^=]*\\|PMIX_[^=]*\\)=.*/\\1/p'); do unset $v; done; ";
-  const std::string one =
-      clean + std::string(SFLSH_CLI) + args + (dir / "one").string() + " >" + (dir / "one.log").string() + " 2>&1";
-  ASSERT_EQ(std::system(one.c_str()), 0) << "see " << (dir / "one.log");
-  const std::string two =
-      clean +
-      "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 "
-      "mpiexec -n 2 " +
-      std::string(SFLSH_CLI) + args + (dir / "two").string() + " >" + (dir / "two.log").string() + " 2>&1";
-  ASSERT_EQ(std::system(two.c_str()), 0) << "mpiexec -n 2 failed; see " << (dir / "two.log");
-  auto slurp = [](const std::filesystem::path& p) {
-    std::ifstream in(p);
-    return std::string(std::istreambuf_iterator<char>(in), {});
-  };
+  run_one_and_two_processes(dir,
+                            " validate --train-subjects OPEN_TRAIN_1,OPEN_TRAIN_2 --test-subjects OPEN_TEST_1 "
+                            "--frames 10 --stages 1 --iterations 2 --lambdas 1 --no-cross-validation --threads 1 -q");
+  if (HasFatalFailure()) return;
   EXPECT_EQ(slurp(dir / "one" / "table2.csv"), slurp(dir / "two" / "table2.csv"));
   const nlohmann::json s1 = read_json(dir / "one" / "summary.json"), s2 = read_json(dir / "two" / "summary.json");
   EXPECT_EQ(s2.at("ranks").get<int>(), 2);
@@ -214,24 +225,11 @@ TEST(Experiments, FitGroupsGiveTheTableOfOneProcess) {
   SFLSH_LONG_TEST();  // about a minute on 2 cores: label long
   if (std::system("command -v mpiexec >/dev/null 2>&1") != 0) GTEST_SKIP() << "mpiexec not found";
   const std::filesystem::path dir = sflsh::testing::scratch_dir();
-  const std::string args =
-      " validate --train-subjects OPEN_TRAIN_1,OPEN_TRAIN_2 --test-subjects OPEN_TEST_1 --frames 10 "
-      "--stages 1 --iterations 2 --lambdas 1,0.1 --threads 1 -q --out ";
-  const std::string clean = "for v in $(env | sed -n 's/^\\(OMPI_[^=]*\\|PMIX_[^=]*\\)=.*/\\1/p'); do unset $v; done; ";
-  const std::string one =
-      clean + std::string(SFLSH_CLI) + args + (dir / "one").string() + " >" + (dir / "one.log").string() + " 2>&1";
-  ASSERT_EQ(std::system(one.c_str()), 0) << "see " << (dir / "one.log");
-  const std::string two =
-      clean +
-      "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 "
-      "mpiexec -n 2 " +
-      std::string(SFLSH_CLI) + args + (dir / "two").string() + " --fit-groups 2 >" + (dir / "two.log").string() +
-      " 2>&1";
-  ASSERT_EQ(std::system(two.c_str()), 0) << "mpiexec -n 2 failed; see " << (dir / "two.log");
-  auto slurp = [](const std::filesystem::path& p) {
-    std::ifstream in(p);
-    return std::string(std::istreambuf_iterator<char>(in), {});
-  };
+  run_one_and_two_processes(dir,
+                            " validate --train-subjects OPEN_TRAIN_1,OPEN_TRAIN_2 --test-subjects OPEN_TEST_1 "
+                            "--frames 10 --stages 1 --iterations 2 --lambdas 1,0.1 --threads 1 -q",
+                            " --fit-groups 2");
+  if (HasFatalFailure()) return;
   for (const char* file : {"table2.csv", "table2_error.csv", "cross_validation.csv", "lambda_sweep.csv"}) {
     EXPECT_FALSE(slurp(dir / "one" / file).empty()) << file;
     EXPECT_EQ(slurp(dir / "one" / file), slurp(dir / "two" / file)) << file;
