@@ -59,7 +59,8 @@ SensitivityIntegrator::SensitivityIntegrator(const model::Problem& problem, cons
                   }()),
       elastic_(problem, subspace, cubature),
       inertia_(problem, subspace),
-      young_map_(std::move(young_map)) {
+      young_map_(std::move(young_map)),
+      weights_(cubature.weights) {
   require(options.integrator == model::Integrator::backward_euler,
           "sensitivity: forward sensitivities are derived for backward Euler only, not for integrator '{}'",
           model::to_string(options.integrator));
@@ -146,18 +147,44 @@ void SensitivityIntegrator::substep_sensitivity(const ReducedSubstep& substep, S
   has_previous_ = true;
 }
 
+void SensitivityIntegrator::follow_cubature(const std::vector<double>& weights, double t) {
+  if (weights == weights_) return;
+  const Cubature& cubature = integrator_.cubature();
+  const std::size_t known = weights_.size();
+  require(weights.size() >= known && weights.size() <= cubature.tets.size(),
+          "sensitivity: a substep solved with {} cubature points, {} known and {} in the solver", weights.size(), known,
+          cubature.tets.size());
+  if (weights.size() > known && !young_rows_)
+    throw_error(
+        "sensitivity: at t = {:.6f} s the guard added {} tet(s) to the cubature (tets outside it left the material's "
+        "range) and the integrator has no Young-map rows for them: use a larger --cubature for this case",
+        t, weights.size() - known);
+  for (std::size_t p = 0; p < known; ++p)  // the donors gave up volume (reduced_solver_guard.cpp)
+    if (weights[p] != weights_[p]) elastic_.set_point_weight(static_cast<int>(p), weights[p]);
+  const std::vector<int> added(cubature.tets.begin() + static_cast<std::ptrdiff_t>(known),
+                               cubature.tets.begin() + static_cast<std::ptrdiff_t>(weights.size()));
+  for (std::size_t p = known; p < weights.size(); ++p) elastic_.add_point(cubature.tets[p], weights[p]);
+  if (!added.empty()) {
+    const Eigen::MatrixXd rows = young_rows_(added);
+    require(
+        rows.rows() == static_cast<Eigen::Index>(added.size()) && rows.cols() == young_map_.cols() && rows.allFinite(),
+        "sensitivity: the Young-map rows for {} added tets are {} × {}, expected {} × {} finite", added.size(),
+        rows.rows(), rows.cols(), added.size(), young_map_.cols());
+    young_map_.conservativeResize(young_map_.rows() + rows.rows(), Eigen::NoChange);
+    young_map_.bottomRows(rows.rows()) = rows;
+    if (rest_) rest_->add_points();
+  }
+  weights_ = weights;
+}
+
 SensitivityStepStats SensitivityIntegrator::step(double h) {
   require(valid_, "sensitivity: the integrator is not initialized or an earlier step failed; call initialize()");
   SensitivityStepStats stats;
   stats.step = integrator_.step(h);  // on failure the state (and S) are unchanged
-  if (integrator_.cubature_added() > 0)
-    throw_error(
-        "sensitivity: at t = {:.6f} s the guard added {} tet(s) to the cubature (tets outside it left the material's "
-        "range); dq/dY is defined on the model's cubature only: use a larger --cubature for this case",
-        integrator_.time(), integrator_.cubature_added());
   const auto start = Clock::now();
   valid_ = false;
   for (const ReducedSubstep& substep : integrator_.last_substeps()) {
+    follow_cubature(substep.cubature_weights, substep.t0 + substep.dt);
     substep_sensitivity(substep, stats);
     ++stats.factorizations;
   }

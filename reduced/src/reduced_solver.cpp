@@ -477,7 +477,7 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
   }
   q_ = q.head(offset);
   t_ = t1;
-  if (options_.record_substeps) substeps_.push_back({t0, dt, q_});
+  if (options_.record_substeps) substeps_.push_back({t0, dt, q_, cubature_.weights});
   stats.inertia_seconds += seconds_since(clock);
   return true;
 }

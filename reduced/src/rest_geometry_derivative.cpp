@@ -51,6 +51,8 @@ RestGeometryDerivative::RestGeometryDerivative(const model::Problem& problem, co
       subspace_(subspace),
       elastic_(elastic),
       inertia_(inertia),
+      directions_(directions),
+      depth_(depth),
       columns_(static_cast<int>(directions.size())),
       inertia_on_(inertia_on) {
   require(inertia.mass_kind() == model::MassKind::lumped,
@@ -72,17 +74,11 @@ RestGeometryDerivative::RestGeometryDerivative(const model::Problem& problem, co
       node_directions_.block<3, 1>(3 * a, j) = directions[static_cast<std::size_t>(j)].row(nodes[a]).transpose();
 
   // dm_i = ρ Σ_{e ∋ i} dV_e / 4, dV_e = V_e tr(D_m⁻¹ dD_m), over every tet (model::lumped_masses).
-  auto dm_of = [&](int e, int j) {
-    const auto& d = directions[static_cast<std::size_t>(j)];
-    Eigen::Matrix3d dDm;
-    for (int k = 0; k < 3; ++k) dDm.col(k) = (d.row(problem.tets(e, k + 1)) - d.row(problem.tets(e, 0))).transpose();
-    return dDm;
-  };
   Eigen::MatrixXd node_dm = Eigen::MatrixXd::Zero(problem.num_nodes(), C);
   for (int e = 0; e < problem.num_tets(); ++e) {
     const material::TetRest& rest = problem.tet_rest[static_cast<std::size_t>(e)];
     for (int j = 0; j < C; ++j) {
-      const double dV = rest.volume * (rest.dm_inv * dm_of(e, j)).trace();
+      const double dV = rest.volume * (rest.dm_inv * rest_shape_derivative(e, j)).trace();
       for (int k = 0; k < 4; ++k) node_dm(problem.tets(e, k), j) += problem.density * dV / 4.0;
     }
   }
@@ -90,36 +86,57 @@ RestGeometryDerivative::RestGeometryDerivative(const model::Problem& problem, co
   for (int a = 0; a < inertia.num_active(); ++a)
     mass_derivative_.row(a) = node_dm.row(nodes[static_cast<std::size_t>(a)]);
 
-  // Per cubature point: dV/V, dc_s = Σ_a B_as dg_a, dn.
-  const int P = elastic.num_points();
-  volume_rate_ = RowMatrix::Zero(P, C);
-  dn_ = RowMatrix::Zero(3 * static_cast<Eigen::Index>(P), C);
+  // Per cubature point: dV/V, dc_s = Σ_a B_as dg_a, dn (add_points).
+  volume_rate_.resize(0, C);
+  dn_.resize(0, C);
+  dc_.resize(0, C);
   point_offset_.assign(1, 0);
-  for (int p = 0; p < P; ++p)
-    point_offset_.push_back(point_offset_.back() + static_cast<int>(elastic.point_functions(p).size()));
-  dc_ = RowMatrix::Zero(3 * static_cast<Eigen::Index>(point_offset_.back()), C);
-  for (int p = 0; p < P; ++p) {
-    const int e = elastic.point_tet(p);
-    const material::TetRest& rest = problem.tet_rest[static_cast<std::size_t>(e)];
-    const std::span<const int> functions = elastic.point_functions(p);
-    const Eigen::Vector3d axis = problem.tet_material[static_cast<std::size_t>(e)].normal;
+  add_points();
+}
+
+Eigen::Matrix3d RestGeometryDerivative::rest_shape_derivative(int e, int j) const {
+  const meshing::RowMatrixX3d& d = directions_[static_cast<std::size_t>(j)];
+  Eigen::Matrix3d dDm;
+  for (int k = 0; k < 3; ++k) dDm.col(k) = (d.row(problem_.tets(e, k + 1)) - d.row(problem_.tets(e, 0))).transpose();
+  return dDm;
+}
+
+void RestGeometryDerivative::add_points() {
+  const int C = columns_;
+  const int first = static_cast<int>(point_offset_.size()) - 1, P = elastic_.num_points();
+  if (first >= P) return;
+  for (int p = first; p < P; ++p)
+    point_offset_.push_back(point_offset_.back() + static_cast<int>(elastic_.point_functions(p).size()));
+  const auto grow = [C](RowMatrix& m, Eigen::Index rows) {
+    const Eigen::Index old = m.rows();
+    m.conservativeResize(rows, C);
+    m.bottomRows(rows - old).setZero();
+  };
+  grow(volume_rate_, P);
+  grow(dn_, 3 * static_cast<Eigen::Index>(P));
+  grow(dc_, 3 * static_cast<Eigen::Index>(point_offset_.back()));
+  for (int p = first; p < P; ++p) {
+    const int e = elastic_.point_tet(p);
+    const material::TetRest& rest = problem_.tet_rest[static_cast<std::size_t>(e)];
+    const std::span<const int> functions = elastic_.point_functions(p);
+    const Eigen::Vector3d axis = problem_.tet_material[static_cast<std::size_t>(e)].normal;
     Eigen::Vector3d dd;
-    for (int k = 0; k < 3; ++k) dd(k) = depth(problem.tets(e, k + 1)) - depth(problem.tets(e, 0));
+    for (int k = 0; k < 3; ++k) dd(k) = depth_(problem_.tets(e, k + 1)) - depth_(problem_.tets(e, 0));
     const Eigen::Vector3d gradient = rest.dm_inv.transpose() * dd;  // ∇δ (through_thickness.hpp)
     const double length = gradient.norm();
     const bool own_axis = length > 0.0 && (-gradient / length - axis).norm() < 1e-6;
     for (int j = 0; j < C; ++j) {
-      const Eigen::Matrix3d M = rest.dm_inv * dm_of(e, j);  // D_m⁻¹ dD_m
+      const Eigen::Matrix3d M = rest.dm_inv * rest_shape_derivative(e, j);  // D_m⁻¹ dD_m
       volume_rate_(p, j) = M.trace();
       const Eigen::Matrix3d dDm_inv = -M * rest.dm_inv;
       Eigen::Matrix<double, 4, 3> dg;
       dg.bottomRows<3>() = dDm_inv;
       dg.row(0) = -dDm_inv.colwise().sum();
-      const Eigen::Index first = 3 * static_cast<Eigen::Index>(point_offset_[static_cast<std::size_t>(p)]);
+      const Eigen::Index first_row = 3 * static_cast<Eigen::Index>(point_offset_[static_cast<std::size_t>(p)]);
       for (int a = 0; a < 4; ++a)
-        for (SparseRowMatrix::InnerIterator it(subspace.basis, problem.tets(e, a)); it; ++it) {
+        for (SparseRowMatrix::InnerIterator it(subspace_.basis, problem_.tets(e, a)); it; ++it) {
           const auto slot = std::lower_bound(functions.begin(), functions.end(), static_cast<int>(it.col()));
-          dc_.block<3, 1>(first + 3 * (slot - functions.begin()), j) += it.value() * dg.row(a).transpose();
+          dc_.block<3, 1>(first_row + 3 * (slot - functions.begin()), j) += it.value() * dg.row(a).transpose();
         }
       if (own_axis) {  // n = −∇δ/|∇δ|: dn = −(I − nnᵀ) d∇δ/|∇δ|, d∇δ = dD_m⁻ᵀ dd
         const Eigen::Vector3d dgradient = dDm_inv.transpose() * dd;

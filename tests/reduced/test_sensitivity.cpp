@@ -91,34 +91,9 @@ INSTANTIATE_TEST_SUITE_P(
     });
 
 // ---------------------------------------------------------------------------------------------------------
-// A box with a two-control material: Y of tet e = (1 − ξ_e) Y_0 + ξ_e Y_1, ξ_e its centroid's x / length.
-
-Eigen::MatrixXd box_young_map(const model::Problem& p, const std::vector<int>& tets) {
-  Eigen::MatrixXd W(static_cast<Eigen::Index>(tets.size()), 2);
-  for (std::size_t k = 0; k < tets.size(); ++k) {
-    double x = 0.0;
-    for (int c = 0; c < 4; ++c) x += 0.25 * p.rest(p.tets(tets[k], c), 0);
-    const double xi = x / 0.12;
-    W(static_cast<Eigen::Index>(k), 0) = 1.0 - xi;
-    W(static_cast<Eigen::Index>(k), 1) = xi;
-  }
-  return W;
-}
-
-std::vector<int> all_tets(const model::Problem& p) {
-  std::vector<int> tets(static_cast<std::size_t>(p.num_tets()));
-  for (int e = 0; e < p.num_tets(); ++e) tets[static_cast<std::size_t>(e)] = e;
-  return tets;
-}
-
-/// young: controls × (Y_t, Y_n) [Pa].
-void set_box_young(model::Problem& p, const Eigen::MatrixX2d& young) {
-  const Eigen::MatrixXd W = box_young_map(p, all_tets(p));
-  const Eigen::MatrixX2d tet = W * young;
-  for (int e = 0; e < p.num_tets(); ++e)
-    p.tet_material[static_cast<std::size_t>(e)] =
-        material::make_orthotropic_fung(testing::skin(tet(e, 0), tet(e, 1)), Eigen::Vector3d::UnitZ());
-}
+using testing::all_tets;
+using testing::box_young_map;
+using testing::set_box_young;
 
 Eigen::MatrixX2d box_control_young() {
   Eigen::MatrixX2d young(2, 2);

@@ -7,7 +7,6 @@
 #include <sflsh/reduced/young_map.hpp>
 
 #include <chrono>
-#include <optional>
 
 namespace sflsh::reduced {
 
@@ -97,59 +96,38 @@ CaseDynamics DynamicsCase::simulate_with_sensitivity(const LayerParameterization
         rest.directions.push_back(parameterization.retargeter().node_derivative(shaped, parameterization.phi().col(i)));
       rest.depth = parameterization.retargeter().depth();
     }
-    // dq/dY is defined on the cubature the run starts with. When the guard has to grow it (a tet outside it
-    // leaves the material's range, reduced_solver.hpp), the run is repeated with the grown cubature from the
-    // start (its weights as the guard left them, the Young map extended to the new tets). Each repeat adds at least
-    // one tet, so this ends; neighbouring tets often leave the range in successive frames (OPEN_TRAIN_5 /
-    // shake_hips of the paper preset needed 5 repeats at N = 1), hence a generous bound of 32 repeats.
+    // When the guard grows the cubature (a tet outside it leaves the material's range, reduced_solver.hpp), the
+    // integrator takes the new tets' rows of the Young map and differentiates each substep on the cubature it was
+    // solved with: the run simulate() makes, in one pass.
     const double setup_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    Cubature cubature = model.cubature;
-    Eigen::MatrixXd map = young_map;
-    std::optional<DynamicsAmplitudeSensitivity> amplitude;
-    int columns = 0;
-    constexpr int kMaxRepeats = 32;
-    for (int attempt = 0;; ++attempt) {
-      SensitivityIntegrator integrator(problem, model.subspace, cubature, map, sensitivity_solver_options(options),
-                                       thickness ? &rest : nullptr);
-      integrator.initialize(model::initial_state(problem, 0.0));
-      columns = static_cast<int>(integrator.dq_dyoung().cols());
-      amplitude.emplace(normals_, columns);
-      const SkinDisplacementMap& skin = skin_map(model);
-      Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> dq;  // rows contiguous per function
-      auto add_frame = [&] {
-        dq = integrator.dq_dyoung();
-        amplitude->add(skin.displacement_of(integrator.q()), skin.skin_basis(), dq);
-      };
-      try {
-        add_frame();
-        for (int f = 1; f < frames_; ++f) {
-          integrator.step(1.0 / fps_);
-          add_frame();
-        }
-        break;
-      } catch (const Error&) {
-        const ReducedSolver& solver = integrator.integrator();
-        if (solver.cubature_added() == 0) throw;
-        if (attempt >= kMaxRepeats)
-          throw_error(
-              "the guard grew the cubature in {} differentiated runs in a row (now {} tets); use a larger "
-              "--cubature for this case",
-              attempt + 1, solver.cubature().size());
-        logger()->info(
-            "{} / {}: the guard grew the cubature by {} tet(s) at t = {:.4g} s; the differentiated run is "
-            "repeated with them from the start",
-            subject_, motion_, solver.cubature_added(), solver.time());
-        cubature = solver.cubature();
-        map = young_tet_map(parameterization.retargeter(), parameterization.phi(), cubature.tets,
-                            options_.stiffness_scale);
-      }
+    SensitivityIntegrator integrator(problem, model.subspace, model.cubature, young_map,
+                                     sensitivity_solver_options(options), thickness ? &rest : nullptr);
+    integrator.set_young_rows([&](const std::vector<int>& tets) {
+      return young_tet_map(parameterization.retargeter(), parameterization.phi(), tets, options_.stiffness_scale);
+    });
+    integrator.initialize(model::initial_state(problem, 0.0));
+    const int columns = static_cast<int>(integrator.dq_dyoung().cols());
+    DynamicsAmplitudeSensitivity amplitude(normals_, columns);
+    const SkinDisplacementMap& skin = skin_map(model);
+    Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> dq;  // rows contiguous per function
+    auto add_frame = [&] {
+      dq = integrator.dq_dyoung();
+      amplitude.add(skin.displacement_of(integrator.q()), skin.skin_basis(), dq);
+    };
+    add_frame();
+    for (int f = 1; f < frames_; ++f) {
+      integrator.step(1.0 / fps_);
+      add_frame();
     }
+    if (integrator.integrator().cubature_added() > 0)
+      logger()->debug("{} / {}: the guard grew the cubature by {} tet(s) in the differentiated run", subject_, motion_,
+                      integrator.integrator().cubature_added());
     CaseDynamics out;
-    out.sigma_normal = 1e3 * amplitude->sigma_normal();
-    out.sigma_tangent = 1e3 * amplitude->sigma_tangent();
+    out.sigma_normal = 1e3 * amplitude.sigma_normal();
+    out.sigma_tangent = 1e3 * amplitude.sigma_tangent();
     dsigma.resize(2 * out.sigma_normal.size(), columns);
-    dsigma.topRows(out.sigma_normal.size()) = 1e3 * amplitude->sigma_normal_derivative();
-    dsigma.bottomRows(out.sigma_normal.size()) = 1e3 * amplitude->sigma_tangent_derivative();
+    dsigma.topRows(out.sigma_normal.size()) = 1e3 * amplitude.sigma_normal_derivative();
+    dsigma.bottomRows(out.sigma_normal.size()) = 1e3 * amplitude.sigma_tangent_derivative();
     require(out.sigma_normal.allFinite() && out.sigma_tangent.allFinite() && dsigma.allFinite(),
             "non-finite dynamics amplitude or derivative");
     out.frames = frames_;

@@ -20,6 +20,7 @@
 
 #include <Eigen/Core>
 
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -58,16 +59,23 @@ class SensitivityIntegrator {
   /// The problem, subspace and cubature must outlive the integrator. `options` are used as given (pass
   /// sensitivity_solver_options() for derivatives that a finite-difference check can reproduce);
   /// record_substeps is switched on.
-  /// With `rest` (not null; it must outlive the constructor only) H columns dq/dX·dX_j follow the 2N Young ones.
+  /// With `rest` (not null; it must outlive the integrator) H columns dq/dX·dX_j follow the 2N Young ones.
   SensitivityIntegrator(const model::Problem& problem, const Subspace& subspace, const Cubature& cubature,
                         Eigen::MatrixXd young_map, const ReducedOptions& options = sensitivity_solver_options(),
                         const RestDirections* rest = nullptr);
 
   /// The state (as ReducedSolver::initialize) and S = 0.
   void initialize(const model::State& state);
+  /// W rows for tets the guard adds to the cubature during the run (reduced_solver_guard.cpp): each substep's
+  /// sensitivity is then taken on the cubature that substep was solved with, so dq/dY is the derivative of the
+  /// run the plain solver makes (its cubature grows at the same states). Without them a grown cubature throws.
+  using YoungRows = std::function<Eigen::MatrixXd(const std::vector<int>& tets)>;
+  void set_young_rows(YoungRows rows) { young_rows_ = std::move(rows); }
+
   /// One step of ReducedSolver followed by the sensitivity solves of its substeps. Throws sflsh::Error
-  /// (naming the time) when the step fails, when H is not positive definite at a converged state, or when a
-  /// sensitivity is not finite; the sensitivities are then invalid until initialize().
+  /// (naming the time) when the step fails, when H is not positive definite at a converged state, when a
+  /// sensitivity is not finite, or when the guard grew the cubature and there are no young rows; the
+  /// sensitivities are then invalid until initialize().
   SensitivityStepStats step(double h);
 
   double time() const { return integrator_.time(); }
@@ -83,12 +91,16 @@ class SensitivityIntegrator {
 
  private:
   void substep_sensitivity(const ReducedSubstep& substep, SensitivityStepStats& stats);
+  /// Brings the cubature points, their weights, W and the rest-geometry points to the substep's cubature.
+  void follow_cubature(const std::vector<double>& weights, double t);
 
   const model::Problem& problem_;
   ReducedSolver integrator_;
   CubatureElastic elastic_;
   ReducedInertia inertia_;
   Eigen::MatrixXd young_map_;
+  YoungRows young_rows_;
+  std::vector<double> weights_;                   ///< the cubature weights elastic_ holds
   std::unique_ptr<RestGeometryDerivative> rest_;  ///< rest-geometry columns (null without)
   bool inertia_on_ = false;
   bool has_drives_ = false;

@@ -77,6 +77,9 @@ struct ReducedSubstep {
   double t0 = 0.0;
   double dt = 0.0;
   Eigen::VectorXd q;
+  /// The cubature weights the substep was solved with, one per tet of cubature() in order (the guard appends tets
+  /// and moves weight, so a substep may see fewer points than the cubature has later).
+  std::vector<double> cubature_weights;
 };
 
 class ReducedSolver final : public model::BodySolver {

@@ -38,7 +38,7 @@ class RestGeometryDerivative {
   /// @param[in] directions  dX_j per column (N × 3 each) [m per unit of the column's parameter]
   /// @param[in] depth       the retargeter's harmonic depth per node (meshing::Retargeter::depth)
   /// @param[in] inertia_on  whether the step has inertia (false: quasi-static, gravity alone)
-  /// The problem, subspace, elastic term and inertia must outlive this object.
+  /// The problem, subspace, elastic term, inertia and directions must outlive this object.
   RestGeometryDerivative(const model::Problem& problem, const Subspace& subspace, const CubatureElastic& elastic,
                          const ReducedInertia& inertia, const std::vector<meshing::RowMatrixX3d>& directions,
                          const Eigen::VectorXd& depth, bool inertia_on);
@@ -51,16 +51,22 @@ class RestGeometryDerivative {
   Eigen::MatrixXd gradient_derivative(const Eigen::VectorXd& q, double dt) const;
   /// Moves the history on by the converged substep (after gradient_derivative).
   void advance(const Eigen::VectorXd& q, double dt);
+  /// Takes in the cubature points the elastic term gained since (the guard's, reduced_solver_guard.cpp).
+  void add_points();
 
  private:
   /// A_i(t) dX_j at the inertia nodes, for the frame the inertia holds now (3 per node × columns).
   using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
   RowMatrix posed_directions() const;
+  /// dD_m of tet e along direction j (its edge vectors' derivatives, columns 1..3 minus 0).
+  Eigen::Matrix3d rest_shape_derivative(int e, int j) const;
 
   const model::Problem& problem_;
   const Subspace& subspace_;
   const CubatureElastic& elastic_;
   const ReducedInertia& inertia_;
+  const std::vector<meshing::RowMatrixX3d>& directions_;
+  Eigen::VectorXd depth_;  ///< the harmonic depth per node
   int columns_ = 0;
   bool inertia_on_ = true;
   // Row-major: the loops read one node's 3 × columns block at a time.
