@@ -1,9 +1,11 @@
 #include <sflsh/core/log.hpp>
 #include <sflsh/core/progress.hpp>
 
+#include <fmt/format.h>
 #include <unistd.h>
 
 #include <cstdio>
+#include <string>
 
 namespace sflsh {
 
@@ -19,21 +21,37 @@ Progress::~Progress() { finish(); }
 
 void Progress::advance(std::size_t count) {
   done_ += count;
+  draw();
+}
+
+void Progress::skip(std::size_t count) {
+  if (done_ == skipped_) start_ = std::chrono::steady_clock::now();  // the rate starts with the first real item
+  done_ += count;
+  skipped_ += count;
+  draw();
+}
+
+void Progress::draw() {
   if (!enabled_ || total_ == 0) return;
   const auto now = std::chrono::steady_clock::now();
   const double elapsed = std::chrono::duration<double>(now - start_).count();
-  const double rate = elapsed > 0 ? static_cast<double>(done_) / elapsed : 0.0;
-  const double eta = rate > 0 ? static_cast<double>(total_ - std::min(done_, total_)) / rate : 0.0;
+  const std::size_t worked = done_ - skipped_;
+  const double rate = elapsed > 0 ? static_cast<double>(worked) / elapsed : 0.0;
+  const std::string eta = rate > 0
+                              ? fmt::format("{:.0f}s", static_cast<double>(total_ - std::min(done_, total_)) / rate)
+                              : std::string(done_ < total_ ? "unknown" : "0s");
+  const std::string skipped = skipped_ > 0 ? fmt::format(", {} done earlier", skipped_) : std::string();
   if (terminal_) {
     if (now - last_draw_ < std::chrono::milliseconds(100) && done_ < total_) return;
     last_draw_ = now;
-    std::fprintf(stderr, "\r%s %zu/%zu  %.1f/s  ETA %.0fs   ", label_.c_str(), done_, total_, rate, eta);
+    std::fprintf(stderr, "\r%s %zu/%zu%s  %.1f/s  ETA %s   ", label_.c_str(), done_, total_, skipped.c_str(), rate,
+                 eta.c_str());
     std::fflush(stderr);
   } else {
     const int decile = static_cast<int>(10 * done_ / total_);
     if (decile != last_decile_) {
       last_decile_ = decile;
-      logger()->info("{} {}/{} ({:.1f}/s, ETA {:.0f}s)", label_, done_, total_, rate, eta);
+      logger()->info("{} {}/{}{} ({:.1f}/s, ETA {})", label_, done_, total_, skipped, rate, eta);
     }
   }
 }

@@ -420,6 +420,7 @@ FitResult fit_elasticity(const FitContext& context, const std::vector<FitTarget>
             spec.name, spec.checkpoint.string());
     logger()->info("fit {}: finished earlier (checkpoint {})", spec.name, spec.checkpoint.string());
     result.p = checkpoint->p;
+    result.finished_earlier = true;
     result.controls = spec.stages.back();
     result.stages = checkpoint->done;
     return result;

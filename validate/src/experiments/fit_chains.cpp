@@ -63,7 +63,10 @@ void FitRunner::run(const std::string& label, const std::vector<FitChain>& chain
       }
       fits.insert_or_assign(fit.key, reduced::fit_elasticity(context, fit.targets, spec));
       previous = &fits.at(fit.key);
-      if (progress) progress->advance();
+      if (progress && previous->finished_earlier)
+        progress->skip();
+      else if (progress)
+        progress->advance();
     }
   };
   std::size_t mine = 0;

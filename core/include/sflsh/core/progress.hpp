@@ -16,6 +16,9 @@ class Progress {
   Progress& operator=(const Progress&) = delete;
   /// Marks `count` more items done (call from one thread).
   void advance(std::size_t count = 1);
+  /// Marks `count` items done that took no work (e.g. read back from a checkpoint): they count toward k/n but
+  /// not toward the rate, so a resumed loop's ETA comes from the items it runs.
+  void skip(std::size_t count = 1);
   /// Ends the line (called by the destructor too).
   void finish();
 
@@ -23,12 +26,15 @@ class Progress {
   std::string label_;
   std::size_t total_ = 0;
   std::size_t done_ = 0;
+  std::size_t skipped_ = 0;
   bool enabled_ = true;
   bool terminal_ = false;
   bool finished_ = false;
   int last_decile_ = -1;
   std::chrono::steady_clock::time_point start_;
   std::chrono::steady_clock::time_point last_draw_;
+
+  void draw();
 };
 
 }  // namespace sflsh

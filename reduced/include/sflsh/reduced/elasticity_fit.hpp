@@ -93,6 +93,7 @@ struct FitResult {
   int controls = 0;
   Eigen::VectorXd p;  ///< final parameters (layout of the kind)
   std::vector<FitStageReport> stages;
+  bool finished_earlier = false;  ///< read back from a finished checkpoint: nothing was run
   /// κ̂ (N × 3, clamped) the fit gives a subject of shape β (independent fits ignore β).
   material::KappaMatrix kappa_normalized(const body::Betas& beta, const material::ParameterBounds& bounds) const;
   material::KappaMatrix kappa(const body::Betas& beta, const material::ParameterBounds& bounds) const;  ///< physical
