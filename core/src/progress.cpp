@@ -34,6 +34,15 @@ void Progress::skip(std::size_t count) {
 void Progress::draw() {
   if (!enabled_ || total_ == 0) return;
   const auto now = std::chrono::steady_clock::now();
+  int decile = last_decile_;
+  if (terminal_) {
+    if (now - last_draw_ < std::chrono::milliseconds(100) && done_ < total_) return;
+    last_draw_ = now;
+  } else {
+    decile = static_cast<int>(10 * done_ / total_);
+    if (decile == last_decile_) return;
+  }
+  last_decile_ = decile;
   const double elapsed = std::chrono::duration<double>(now - start_).count();
   const std::size_t worked = done_ - skipped_;
   const double rate = elapsed > 0 ? static_cast<double>(worked) / elapsed : 0.0;
@@ -42,17 +51,11 @@ void Progress::draw() {
                               : std::string(done_ < total_ ? "unknown" : "0s");
   const std::string skipped = skipped_ > 0 ? fmt::format(", {} done earlier", skipped_) : std::string();
   if (terminal_) {
-    if (now - last_draw_ < std::chrono::milliseconds(100) && done_ < total_) return;
-    last_draw_ = now;
     std::fprintf(stderr, "\r%s %zu/%zu%s  %.1f/s  ETA %s   ", label_.c_str(), done_, total_, skipped.c_str(), rate,
                  eta.c_str());
     std::fflush(stderr);
   } else {
-    const int decile = static_cast<int>(10 * done_ / total_);
-    if (decile != last_decile_) {
-      last_decile_ = decile;
-      logger()->info("{} {}/{}{} ({:.1f}/s, ETA {})", label_, done_, total_, skipped, rate, eta);
-    }
+    logger()->info("{} {}/{}{} ({:.1f}/s, ETA {})", label_, done_, total_, skipped, rate, eta);
   }
 }
 
