@@ -23,6 +23,7 @@ struct ValidateOptions {
   int cubature = -2;
   int frames = -1;
   int iterations = 0;
+  int warm_iterations = -1;
   int threads = 0;
   std::vector<int> stages;
   std::vector<double> lambdas;
@@ -43,6 +44,7 @@ void run_validate(const ValidateOptions& o, const Invocation& invocation) {
   if (o.cubature >= -1) config.cubature = o.cubature;
   if (o.frames >= 0) config.frames = o.frames;
   if (o.iterations > 0) config.iterations = o.iterations;
+  if (o.warm_iterations >= 0) config.warm_iterations = o.warm_iterations;
   config.threads = o.threads;
   if (!o.stages.empty()) config.stages = o.stages;
   if (!o.lambdas.empty()) config.lambdas = o.lambdas;
@@ -94,6 +96,9 @@ void register_validate_commands(CLI::App& app, const Invocation& invocation) {
       ->delimiter(',')
       ->check(CLI::PositiveNumber);
   cmd->add_option("--iterations", o->iterations, "Trust-region iterations per stage")->check(CLI::PositiveNumber);
+  cmd->add_option("--warm-iterations", o->warm_iterations,
+                  "Trust-region iterations of each warm-started fit of the λ sweep (0 = --iterations; paper preset: 3)")
+      ->check(CLI::NonNegativeNumber);
   cmd->add_option("--lambdas", o->lambdas, "λ values of the cross-validation sweep, e.g. 0.01,0.1,1")
       ->delimiter(',')
       ->check(CLI::PositiveNumber);

@@ -23,6 +23,9 @@ ValidateConfig ValidateConfig::from_preset(const std::string& name) {
     c.frames = 60;
     c.stages = {1, 12, 24, 84};
     c.iterations = 8;
+    // The λ sweep's warm fits refine a neighbouring λ's result: measured at this scale, their later iterations
+    // lower the loss by < 1 % each and the sweep's CV error stays within 1 % over λ (docs/fit.md).
+    c.warm_iterations = 3;
     c.lambdas = {0.001, 0.01, 0.1, 1.0, 10.0};
     c.point_handles = 86;
   } else {
@@ -47,6 +50,7 @@ nlohmann::json ValidateConfig::to_json() const {
   j["lambdas"] = lambdas;
   j["cross_validation"] = cross_validation;
   j["lambda_warm_start"] = lambda_warm_start;
+  j["warm_iterations"] = warm_iterations;
   j["fit_groups"] = fit_groups;
   j["jacobian"] = jacobian;
   j["threads"] = threads;

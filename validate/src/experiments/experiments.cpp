@@ -338,11 +338,14 @@ nlohmann::json run_validation(const ValidateConfig& requested, const std::filesy
       for (const std::string& s : config.train_subjects)
         if (s != left_out) rest.push_back(s);
       FitChain chain;
-      for (double lambda : sweep)
-        chain.push_back({fmt::format("cv/{}/{:g}/{}", tag, lambda, left_out),
-                         spec_of(fmt::format("cv_{}_lambda{:g}_without_{}", tag, lambda, left_out), FitKind::shape, reg,
-                                 lambda, rest),
-                         targets_of(rest, config.train_motions), config.lambda_warm_start});
+      for (double lambda : sweep) {
+        reduced::FitSpec spec = spec_of(fmt::format("cv_{}_lambda{:g}_without_{}", tag, lambda, left_out),
+                                        FitKind::shape, reg, lambda, rest);
+        const bool warm = config.lambda_warm_start && !chain.empty();
+        if (warm && config.warm_iterations > 0) spec.iterations = config.warm_iterations;
+        chain.push_back({fmt::format("cv/{}/{:g}/{}", tag, lambda, left_out), std::move(spec),
+                         targets_of(rest, config.train_motions), warm});
+      }
       chains.push_back(std::move(chain));
     }
   }

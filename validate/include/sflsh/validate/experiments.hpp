@@ -31,6 +31,8 @@ struct ValidateConfig {
   /// Leave-one-out λ sweep as a continuation: per (regularizer, left-out subject) the largest λ is fitted through
   /// every stage, each smaller λ only at the last stage from the previous λ's result (docs/fit.md).
   bool lambda_warm_start = true;
+  /// Trust-region iterations of each warm-started fit of the continuation (0: `iterations`).
+  int warm_iterations = 0;
   /// MPI ranks split into this many groups, each running whole fits (its ranks sharing each fit's simulations);
   /// 1: every rank works on every fit (fit_chains.hpp).
   int fit_groups = 1;
@@ -51,7 +53,7 @@ struct ValidateConfig {
 
   /// The presets: "quick" (coarse mesh, 3 train + 2 test subjects, one train and one test motion, 40
   /// frames, N = 1 → 4, 30 handles) and "paper" (coarse mesh, 5 + 5 subjects, 3 + 2 motions, 60 frames,
-  /// N = 1 → 12 → 24 → 84, 86 handles). Throws for an unknown name.
+  /// N = 1 → 12 → 24 → 84, 86 handles, 3 iterations per warm fit). Throws for an unknown name.
   static ValidateConfig from_preset(const std::string& name);
   nlohmann::json to_json() const;
 };
