@@ -66,6 +66,7 @@ CaseDynamics DynamicsCase::simulate(const LayerParameterization& parameterizatio
     out.sigma_tangent = 1e3 * amplitude.sigma_tangent();
     require(out.sigma_normal.allFinite() && out.sigma_tangent.allFinite(), "non-finite dynamics amplitude");
     out.frames = frames_;
+    out.cubature_added = integrator.cubature_added();
     out.setup_seconds = setup_seconds;
     out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return out;
@@ -131,6 +132,7 @@ CaseDynamics DynamicsCase::simulate_with_sensitivity(const LayerParameterization
     require(out.sigma_normal.allFinite() && out.sigma_tangent.allFinite() && dsigma.allFinite(),
             "non-finite dynamics amplitude or derivative");
     out.frames = frames_;
+    out.cubature_added = integrator.integrator().cubature_added();
     out.setup_seconds = setup_seconds;
     out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return out;

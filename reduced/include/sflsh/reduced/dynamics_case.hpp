@@ -25,6 +25,7 @@ struct CaseDynamics {
   double seconds = 0.0;           ///< wall time of the whole simulation [s]
   double setup_seconds = 0.0;     ///< of which the set-up: problem for κ, integrator, initial state [s]
   int frames = 0;
+  int cubature_added = 0;  ///< tets the cubature guard added during the run (reduced_solver.hpp)
 };
 
 class DynamicsCase {
