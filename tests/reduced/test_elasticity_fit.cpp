@@ -7,7 +7,6 @@
 #include <sflsh/reduced/elasticity_fit.hpp>
 
 #include <gtest/gtest.h>
-#include <petscsys.h>
 
 using namespace sflsh;
 using namespace sflsh::reduced;
@@ -31,39 +30,6 @@ TEST(BoundedLeastSquares, SolvesWithAnActiveBound) {
   EXPECT_NEAR(r.p[0], 1.5, 1e-8);
   EXPECT_NEAR(r.p[1], 2.25, 1e-6);
   EXPECT_LE(r.jacobian_evaluations, r.residual_evaluations);
-}
-
-TEST(BoundedLeastSquares, TheRadiusFloorEndsARunOfRejectedSteps) {
-  // r = x − 1 with a Jacobian of the wrong sign: every Gauss–Newton step goes uphill and is rejected, so the solve
-  // shrinks the radius until it cannot. Each trial is a residual evaluation (a whole set of simulations in a fit).
-  LeastSquaresProblem problem;
-  problem.residual = [](const Eigen::VectorXd& x) { return Eigen::VectorXd(x.array() - 1.0); };
-  problem.normal_equations = [](const Eigen::VectorXd& x, const Eigen::VectorXd& r) {
-    const Eigen::MatrixXd J = -Eigen::MatrixXd::Identity(x.size(), x.size());
-    return NormalEquations{J.transpose() * J, J.transpose() * r};
-  };
-  problem.lower = Eigen::VectorXd::Constant(3, -10.0);
-  problem.upper = Eigen::VectorXd::Constant(3, 10.0);
-  const Eigen::Vector3d start(0.0, 0.5, -0.5);
-  LeastSquaresOptions options;
-  options.max_iterations = 5;
-  options.initial_radius = 1.0;
-  const LeastSquaresResult tao_default = solve_bounded_least_squares(problem, start, options);
-  options.min_radius = 1e-3;
-  const LeastSquaresResult floored = solve_bounded_least_squares(problem, start, options);
-  for (const LeastSquaresResult* r : {&tao_default, &floored}) {
-    EXPECT_EQ(r->reason, "DIVERGED_TR_REDUCTION");
-    EXPECT_EQ(r->iterations, 1);
-    EXPECT_EQ(r->p, Eigen::VectorXd(start)) << "no step was accepted";
-  }
-  // From radius 1 with TAO's shrink factor 0.25: 1e-3 is reached after 5 rejections, 1e-10 after 17.
-  EXPECT_LE(floored.residual_evaluations + 8, tao_default.residual_evaluations)
-      << floored.residual_evaluations << " against " << tao_default.residual_evaluations;
-  PetscBool left = PETSC_TRUE;
-  PetscOptionsHasName(nullptr, "fit_", "-tao_bnk_min_radius", &left);
-  EXPECT_FALSE(left) << "the floor must not stay in PETSc's options after the solve";
-  options.min_radius = -1.0;
-  EXPECT_THROW(solve_bounded_least_squares(problem, start, options), Error);
 }
 
 TEST(BoundedLeastSquares, RejectsBadInput) {

@@ -2,7 +2,6 @@
 #include <sflsh/core/log.hpp>
 #include <sflsh/reduced/bounded_least_squares.hpp>
 
-#include <fmt/format.h>
 #include <petsctao.h>
 
 #include <cmath>
@@ -137,8 +136,6 @@ LeastSquaresResult solve_bounded_least_squares(const LeastSquaresProblem& proble
   require((problem.lower.array() <= problem.upper.array()).all(),
           "least squares: a lower bound exceeds its upper bound");
   require(start.allFinite(), "least squares: the start has non-finite entries");
-  require(std::isfinite(options.min_radius) && options.min_radius >= 0.0,
-          "least squares: min_radius must be finite and ≥ 0, got {}", options.min_radius);
   const Eigen::VectorXd x0 = start.cwiseMax(problem.lower).cwiseMin(problem.upper);
   if ((x0 - start).lpNorm<Eigen::Infinity>() > 1e-12)
     logger()->debug("least squares: start projected onto the bounds (moved {:.3g})",
@@ -185,19 +182,7 @@ LeastSquaresResult solve_bounded_least_squares(const LeastSquaresProblem& proble
   SFLSH_TAO(TaoSetTolerances(tao, options.gradient_atol, options.gradient_rtol, options.gradient_ttol));
   if (options.initial_radius > 0.0) SFLSH_TAO(TaoSetInitialTrustRegionRadius(tao, options.initial_radius));
   SFLSH_TAO(TaoSetMonitor(tao, monitor, &context, nullptr));
-  {
-    // TAOBNTR's radius floor has no setter, only an option: set it under our prefix for this call (unless the user
-    // gave it), read it with the other options, and take it out again.
-    PetscBool user_floor = PETSC_FALSE;
-    SFLSH_TAO(PetscOptionsHasName(nullptr, "fit_", "-tao_bnk_min_radius", &user_floor));
-    const bool set_floor = options.min_radius > 0.0 && !user_floor;
-    if (set_floor)
-      SFLSH_TAO(
-          PetscOptionsSetValue(nullptr, "-fit_tao_bnk_min_radius", fmt::format("{:.17g}", options.min_radius).c_str()));
-    const PetscErrorCode from_options = TaoSetFromOptions(tao);  // -fit_tao_* options override
-    if (set_floor) SFLSH_TAO(PetscOptionsClearValue(nullptr, "-fit_tao_bnk_min_radius"));
-    SFLSH_TAO(from_options);
-  }
+  SFLSH_TAO(TaoSetFromOptions(tao));  // -fit_tao_* options override
   // A callback's exception comes back as a PETSc error code; keep PETSc from printing a traceback for it.
   PetscPushErrorHandler(PetscReturnErrorHandler, nullptr);
   const PetscErrorCode solved = TaoSolve(tao);

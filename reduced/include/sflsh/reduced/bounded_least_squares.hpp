@@ -33,10 +33,6 @@ struct LeastSquaresOptions {
   double gradient_rtol = 1e-6;  ///< … or ≤ rtol · loss
   double gradient_ttol = 1e-4;  ///< … or ≤ ttol · initial ‖gradient‖
   double initial_radius = 0.0;  ///< 0: TAO's default
-  /// The trust radius never shrinks below this (‖step‖₂ in the parameters' units); a step rejected at this radius
-  /// ends the solve with DIVERGED_TR_REDUCTION. 0: TAO's default (1e-10, i.e. ~17 rejected trials from radius 1,
-  /// each a residual evaluation). `-fit_tao_bnk_min_radius` on the command line overrides it.
-  double min_radius = 0.0;
   /// Called after every accepted iteration (and at iteration 0) with the current point and loss ½‖r‖².
   std::function<void(int iteration, const Eigen::VectorXd& p, double loss, double gradient_norm)> monitor;
 };
