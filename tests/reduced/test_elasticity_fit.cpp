@@ -14,7 +14,11 @@ using namespace sflsh::reduced;
 TEST(BoundedLeastSquares, SolvesWithAnActiveBound) {
   // r = (x0 − 2, 10 (x1 − x0²)) with x0 ≤ 1.5: the minimizer is x = (1.5, 2.25).
   LeastSquaresProblem problem;
-  problem.residual = [](const Eigen::VectorXd& x) { return Eigen::Vector2d(x[0] - 2.0, 10.0 * (x[1] - x[0] * x[0])); };
+  int calls = 0;
+  problem.residual = [&calls](const Eigen::VectorXd& x) {
+    ++calls;
+    return Eigen::Vector2d(x[0] - 2.0, 10.0 * (x[1] - x[0] * x[0]));
+  };
   problem.normal_equations = [](const Eigen::VectorXd& x, const Eigen::VectorXd& r) {
     Eigen::Matrix2d J;
     J << 1.0, 0.0, -20.0 * x[0], 10.0;
@@ -30,6 +34,12 @@ TEST(BoundedLeastSquares, SolvesWithAnActiveBound) {
   EXPECT_NEAR(r.p[0], 1.5, 1e-8);
   EXPECT_NEAR(r.p[1], 2.25, 1e-6);
   EXPECT_LE(r.jacobian_evaluations, r.residual_evaluations);
+  // The residual at the solution comes with the result, from the solver's own evaluations (the fit splits it into
+  // its fit and regularizer parts without another simulation).
+  EXPECT_EQ(calls, r.residual_evaluations);
+  ASSERT_EQ(r.residual.size(), 2);
+  EXPECT_EQ(r.residual, problem.residual(r.p));
+  EXPECT_DOUBLE_EQ(r.loss, 0.5 * r.residual.squaredNorm());
 }
 
 TEST(BoundedLeastSquares, RejectsBadInput) {
@@ -160,26 +170,47 @@ TEST(ElasticityFit, ShapeFitRecoversSubjectParametersAndResumes) {
   EXPECT_EQ(again.stages.back().iterations, r.stages.back().iterations);
 }
 
+namespace {
+
+/// The continuation tests' set-up: two subjects (β = 0 and β₁ = 1.5) of one_leg_jump over 15 frames, targets from
+/// a constant truth, and an L² shape fit over N = 1, 2 at λ = 0.01.
+struct ContinuationSetup {
+  body::Betas b1 = body::Betas::Zero(), b2 = shifted();
+  FitFixture f{{b1, b2}, 15};
+  std::vector<FitTarget> targets;
+  FitSpec cold;
+
+  static body::Betas shifted() {
+    body::Betas b = body::Betas::Zero();
+    b[0] = 1.5;
+    return b;
+  }
+  explicit ContinuationSetup(int iterations) {
+    material::KappaMatrix truth(1, 3);
+    truth << 0.55, 8000.0, 3000.0;
+    for (int s = 0; s < 2; ++s)
+      targets.push_back({f.cases[static_cast<std::size_t>(s)].get(), s, f.simulate(s, truth)});
+    cold.name = "cold";
+    cold.kind = FitKind::shape;
+    cold.regularizer = Regularizer::l2;
+    cold.lambda = 1e-2;
+    cold.betas = {b1, b2};
+    cold.stages = {1, 2};
+    cold.iterations = iterations;
+  }
+};
+
+}  // namespace
+
 // Continuation (the λ sweep's warm start): a warm-started fit runs only the last stage, from the given parameters;
 // the trust region only accepts decreases, so it ends no higher than the loss at its start under the new λ. Its
 // checkpoint remembers the start: the same warm start resumes, another one starts over.
 TEST(ElasticityFit, WarmStartRunsOnlyTheLastStageFromTheGivenParameters) {
-  body::Betas b1 = body::Betas::Zero(), b2 = body::Betas::Zero();
-  b2[0] = 1.5;
-  FitFixture f({b1, b2}, 15);
-  material::KappaMatrix truth(1, 3);
-  truth << 0.55, 8000.0, 3000.0;
-  std::vector<FitTarget> targets;
-  for (int s = 0; s < 2; ++s) targets.push_back({f.cases[static_cast<std::size_t>(s)].get(), s, f.simulate(s, truth)});
+  ContinuationSetup setup(3);
+  FitFixture& f = setup.f;
+  const std::vector<FitTarget>& targets = setup.targets;
+  const FitSpec& cold = setup.cold;
   const std::filesystem::path dir = sflsh::testing::scratch_dir();
-  FitSpec cold;
-  cold.name = "cold";
-  cold.kind = FitKind::shape;
-  cold.regularizer = Regularizer::l2;
-  cold.lambda = 1e-2;
-  cold.betas = {b1, b2};
-  cold.stages = {1, 2};
-  cold.iterations = 3;
   const long before_cold = f.pool.simulations();
   const FitResult r = fit_elasticity(f.context, targets, cold);
   const long cold_simulations = f.pool.simulations() - before_cold;
@@ -213,6 +244,44 @@ TEST(ElasticityFit, WarmStartRunsOnlyTheLastStageFromTheGivenParameters) {
   bad.checkpoint.clear();
   bad.warm_start = Eigen::VectorXd::Zero(5);
   EXPECT_THROW(fit_elasticity(f.context, targets, bad), Error);
+}
+
+// A warm start given the previous fit's final point (FitResult::final_point) does not simulate that point again:
+// one plain and one differentiated run per target fewer, and bit for bit the same fit. A point recorded for other
+// targets (σ* changed) gives its σ but not its terms, whose residual differs.
+TEST(ElasticityFit, WarmStartReusesThePreviousFitsFinalPoint) {
+  ContinuationSetup setup(2);
+  FitFixture& f = setup.f;
+  const std::vector<FitTarget>& targets = setup.targets;
+  const FitSpec& cold = setup.cold;
+  const FitResult r = fit_elasticity(f.context, targets, cold);
+  ASSERT_TRUE(r.final_point);
+  ASSERT_EQ(r.final_point->targets.size(), targets.size());
+
+  FitSpec warm = cold;
+  warm.name = "warm";
+  warm.lambda = 1e-3;
+  warm.warm_start = r.p;
+  warm.warm_start_from = r.name;
+  const FitResult plain = fit_elasticity(f.context, targets, warm);
+  warm.warm_start_point = r.final_point;
+  const FitResult reused = fit_elasticity(f.context, targets, warm);
+  ASSERT_EQ(plain.stages.size(), 1u);
+  ASSERT_EQ(reused.stages.size(), 1u);
+  EXPECT_TRUE(reused.p == plain.p);  // exactly: the reused values are what the runs would give
+  EXPECT_EQ(reused.stages[0].loss_fit, plain.stages[0].loss_fit);
+  EXPECT_EQ(reused.stages[0].iterations, plain.stages[0].iterations);
+  EXPECT_EQ(reused.stages[0].simulations, plain.stages[0].simulations - 2 * static_cast<long>(targets.size()));
+  EXPECT_EQ(reused.stages[0].jacobians, plain.stages[0].jacobians);  // evaluated, one of them from the point
+
+  std::vector<FitTarget> other = targets;
+  for (FitTarget& t : other) t.sigma *= 1.1;
+  warm.warm_start_point.reset();
+  const FitResult other_plain = fit_elasticity(f.context, other, warm);
+  warm.warm_start_point = r.final_point;
+  const FitResult other_reused = fit_elasticity(f.context, other, warm);
+  EXPECT_TRUE(other_reused.p == other_plain.p);
+  EXPECT_EQ(other_reused.stages[0].simulations, other_plain.stages[0].simulations - static_cast<long>(targets.size()));
 }
 
 // The fit's normal equations with the Young-modulus columns from forward sensitivities agree with the

@@ -198,7 +198,8 @@ LeastSquaresResult solve_bounded_least_squares(const LeastSquaresProblem& proble
   Vec solution;
   SFLSH_TAO(TaoGetSolution(tao, &solution));
   result.p = to_eigen(solution);
-  result.loss = 0.5 * residual_at(context, result.p).squaredNorm();
+  result.residual = residual_at(context, result.p);
+  result.loss = 0.5 * result.residual.squaredNorm();
   result.gradient_norm = gnorm;
   result.iterations = static_cast<int>(it);
   result.reason = TaoConvergedReasons[reason];

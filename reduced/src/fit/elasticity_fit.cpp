@@ -1,4 +1,5 @@
-#include <sflsh/core/atomic_file.hpp>
+#include "fit_checkpoint.hpp"
+
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
 #include <sflsh/core/scoped_seconds.hpp>
@@ -10,7 +11,6 @@
 #include <nlohmann/json.hpp>
 
 #include <chrono>
-#include <fstream>
 
 namespace sflsh::reduced {
 
@@ -46,6 +46,11 @@ struct Stage {
   long simulations = 0;
   int jacobians = 0;
   double residual_seconds = 0.0, jacobian_seconds = 0.0;
+  const FitPoint* reuse = nullptr;  ///< a warm start's point: what matches is not simulated again
+  FitPoint last_residual;           ///< σ per target of the last residual, evaluated at last_residual_p
+  Eigen::VectorXd last_residual_p;
+  FitPoint last_jacobian;  ///< σ and terms per target at last_jacobian_p (the stage's result's FitPoint)
+  Eigen::VectorXd last_jacobian_p;
 
   int num_subjects() const { return static_cast<int>(spec->betas.size()); }
 
@@ -72,9 +77,27 @@ struct Stage {
     std::vector<material::KappaMatrix> kappa(static_cast<std::size_t>(num_subjects()));
     for (int j = 0; j < num_subjects(); ++j)
       kappa[static_cast<std::size_t>(j)] = material::denormalize(q(j, p), context->bounds);
-    for (std::size_t t = 0; t < targets->size(); ++t)
-      jobs.push_back({static_cast<int>(t), kappa[static_cast<std::size_t>((*targets)[t].subject)]});
-    const std::vector<Eigen::VectorXd> sigma = simulate(jobs);
+    std::vector<Eigen::VectorXd> sigma(targets->size());
+    for (std::size_t t = 0; t < targets->size(); ++t) {
+      const material::KappaMatrix& kappa_t = kappa[static_cast<std::size_t>((*targets)[t].subject)];
+      if (const Eigen::VectorXd* known = reuse ? reuse->sigma((*targets)[t].simulation, kappa_t) : nullptr)
+        sigma[t] = *known;
+      else
+        jobs.push_back({static_cast<int>(t), kappa_t});
+    }
+    if (!jobs.empty()) {
+      std::vector<Eigen::VectorXd> run = simulate(jobs);
+      for (std::size_t i = 0; i < jobs.size(); ++i)
+        sigma[static_cast<std::size_t>(jobs[i].case_index)] = std::move(run[i]);
+    }
+    last_residual.targets.resize(targets->size());
+    for (std::size_t t = 0; t < targets->size(); ++t) {
+      FitPoint::Target& entry = last_residual.targets[t];
+      entry.simulation = (*targets)[t].simulation;
+      entry.kappa = kappa[static_cast<std::size_t>((*targets)[t].subject)];
+      entry.sigma = sigma[t];
+    }
+    last_residual_p = p;
     Eigen::VectorXd r(fit_rows + (spec->kind == FitKind::shape ? L.rows() : 0));
     int at = 0;
     for (std::size_t t = 0; t < targets->size(); ++t) {
@@ -84,6 +107,30 @@ struct Stage {
     }
     if (spec->kind == FitKind::shape) r.tail(L.rows()) = std::sqrt(spec->lambda) * (L * p);  // eq. 7
     return r;
+  }
+
+  /// Keeps σ (when the last residual was at p) and, with `with_terms`, the terms of the targets `mine` at p.
+  void record_jacobian_point(const Eigen::VectorXd& p, const std::vector<int>& mine,
+                             const material::KappaMatrix& kappa0, bool with_terms, bool exact_thickness,
+                             const std::vector<Eigen::VectorXd>& terms) {
+    if (last_jacobian_p.size() != p.size() || last_jacobian_p != p) {
+      last_jacobian.targets.assign(targets->size(), FitPoint::Target{});
+      last_jacobian_p = p;
+    }
+    const bool sigma_here = last_residual_p.size() == p.size() && last_residual_p == p;
+    for (std::size_t m = 0; m < mine.size(); ++m) {
+      const auto t = static_cast<std::size_t>(mine[m]);
+      FitPoint::Target& entry = last_jacobian.targets[t];
+      entry.simulation = (*targets)[t].simulation;
+      entry.kappa = kappa0;
+      if (sigma_here) entry.sigma = last_residual.targets[t].sigma;
+      if (!with_terms) continue;
+      entry.parameterization = parameterization;
+      entry.exact_thickness = exact_thickness;
+      entry.weight = weight;
+      entry.target_sigma = (*targets)[t].sigma;
+      entry.terms = terms[m];
+    }
   }
 
   NormalEquations normal_equations(const Eigen::VectorXd& p, const Eigen::VectorXd& r) {
@@ -152,25 +199,41 @@ struct Stage {
         out.tail(Q).noalias() = G.transpose() * rt;
         return out;
       };
-      std::vector<Eigen::VectorXd> terms;
+      std::vector<Eigen::VectorXd> terms(mine.size());
+      const material::KappaMatrix kappa0 = material::denormalize(q0, context->bounds);
       if (sensitive) {  // one differentiated run per target, its G_tᵀG_t made where it ran (in parallel)
-        const material::KappaMatrix kappa0 = material::denormalize(q0, context->bounds);
-        terms = context->pool->run_tasks(
-            static_cast<int>(mine.size()), [&](int) { return Eigen::Index{Q} * Q + Q; },
-            [&](int m) {
-              const DynamicsCase& c =
-                  *(*targets)[static_cast<std::size_t>(mine[static_cast<std::size_t>(m)])].simulation;
-              Eigen::MatrixXd d;
-              c.simulate_with_sensitivity(*parameterization, kappa0, *context->model, young_map, d, context->reduced,
-                                          exact_thickness);
-              require(d.cols() == sensitivity_columns, "fit: a differentiated run gave {} columns, expected {}",
-                      d.cols(), sensitivity_columns);
-              return normal_terms(static_cast<std::size_t>(m), &d);
-            });
-        simulations += static_cast<long>(mine.size());
+        std::vector<std::size_t> missing;  // into mine: the targets whose terms the warm start's point lacks
+        for (std::size_t m = 0; m < mine.size(); ++m) {
+          const FitTarget& target = (*targets)[static_cast<std::size_t>(mine[m])];
+          const Eigen::VectorXd* known =
+              reuse && fd_columns.empty()
+                  ? reuse->terms(target.simulation, kappa0, parameterization, exact_thickness, weight, target.sigma)
+                  : nullptr;
+          if (known)
+            terms[m] = *known;
+          else
+            missing.push_back(m);
+        }
+        std::vector<Eigen::VectorXd> made;
+        if (!missing.empty())
+          made = context->pool->run_tasks(
+              static_cast<int>(missing.size()), [&](int) { return Eigen::Index{Q} * Q + Q; },
+              [&](int i) {
+                const std::size_t m = missing[static_cast<std::size_t>(i)];
+                const DynamicsCase& c = *(*targets)[static_cast<std::size_t>(mine[m])].simulation;
+                Eigen::MatrixXd d;
+                c.simulate_with_sensitivity(*parameterization, kappa0, *context->model, young_map, d, context->reduced,
+                                            exact_thickness);
+                require(d.cols() == sensitivity_columns, "fit: a differentiated run gave {} columns, expected {}",
+                        d.cols(), sensitivity_columns);
+                return normal_terms(m, &d);
+              });
+        for (std::size_t i = 0; i < missing.size(); ++i) terms[missing[i]] = std::move(made[i]);
+        simulations += static_cast<long>(missing.size());
       } else {
-        for (std::size_t m = 0; m < mine.size(); ++m) terms.push_back(normal_terms(m, nullptr));
+        for (std::size_t m = 0; m < mine.size(); ++m) terms[m] = normal_terms(m, nullptr);
       }
+      record_jacobian_point(p, mine, kappa0, sensitive && fd_columns.empty(), exact_thickness, terms);
       // H_q = Σ_t w² G_tᵀG_t, g_q = Σ_t w G_tᵀ r_t, summed in target order (the same on every rank).
       Eigen::MatrixXd Hq = Eigen::MatrixXd::Zero(Q, Q);
       Eigen::VectorXd gq = Eigen::VectorXd::Zero(Q);
@@ -262,69 +325,6 @@ std::string spec_fingerprint(const FitSpec& spec, const std::vector<FitTarget>& 
   j["cases"] = cases;
   j["target_sum"] = target_sum;
   return j.dump();
-}
-
-struct Checkpoint {
-  bool finished = false;  ///< the whole fit is done: p is the result, `done` has every stage
-  int stage = 0;
-  int iteration = 0;
-  Eigen::VectorXd p;
-  std::vector<FitStageReport> done;
-};
-
-void save_checkpoint(const std::filesystem::path& path, const std::string& fingerprint, const Checkpoint& c) {
-  nlohmann::json j;
-  j["fingerprint"] = fingerprint;
-  j["finished"] = c.finished;
-  j["stage"] = c.stage;
-  j["iteration"] = c.iteration;
-  j["p"] = std::vector<double>(c.p.data(), c.p.data() + c.p.size());
-  for (const FitStageReport& s : c.done)
-    j["done"].push_back({{"controls", s.controls},
-                         {"iterations", s.iterations},
-                         {"loss_fit", s.loss_fit},
-                         {"loss_reg", s.loss_reg},
-                         {"seconds", s.seconds},
-                         {"simulations", s.simulations},
-                         {"jacobians", s.jacobians},
-                         {"reason", s.reason}});
-  write_text_atomically(path, j.dump(1));
-}
-
-std::optional<Checkpoint> load_checkpoint(const std::filesystem::path& path, const std::string& fingerprint) {
-  if (path.empty() || !std::filesystem::exists(path)) return std::nullopt;
-  try {
-    std::ifstream in(path);
-    const nlohmann::json j = nlohmann::json::parse(in);
-    if (j.at("fingerprint").get<std::string>() != fingerprint) {
-      logger()->warn("fit: checkpoint {} belongs to a different fit; starting over", path.string());
-      return std::nullopt;
-    }
-    Checkpoint c;
-    c.finished = j.value("finished", false);
-    c.stage = j.at("stage").get<int>();
-    c.iteration = j.at("iteration").get<int>();
-    const auto p = j.at("p").get<std::vector<double>>();
-    c.p = Eigen::Map<const Eigen::VectorXd>(p.data(), static_cast<Eigen::Index>(p.size()));
-    if (j.contains("done"))
-      for (const auto& s : j["done"]) {
-        FitStageReport r;
-        r.controls = s.at("controls");
-        r.iterations = s.at("iterations");
-        r.loss_fit = s.at("loss_fit");
-        r.loss_reg = s.at("loss_reg");
-        r.seconds = s.at("seconds");
-        r.simulations = s.at("simulations");
-        r.jacobians = s.at("jacobians");
-        r.reason = s.at("reason");
-        r.resumed = true;
-        c.done.push_back(r);
-      }
-    return c;
-  } catch (const std::exception& e) {
-    logger()->warn("fit: checkpoint {} is unreadable ({}); starting over", path.string(), e.what());
-    return std::nullopt;
-  }
 }
 
 /// Per-control parameter rows (N × k) of p, and back.
@@ -468,6 +468,7 @@ FitResult fit_elasticity(const FitContext& context, const std::vector<FitTarget>
 
     Stage stage;
     setup_stage(stage, context, targets, spec, parameterization, N);
+    if (warm_here) stage.reuse = spec.warm_start_point.get();
 
     LeastSquaresProblem problem;
     problem.residual = [&](const Eigen::VectorXd& x) { return stage.residual(x); };
@@ -511,12 +512,18 @@ FitResult fit_elasticity(const FitContext& context, const std::vector<FitTarget>
         save_checkpoint(spec.checkpoint, fingerprint, c);
       }
     };
-    const LeastSquaresResult ls =
-        lso.max_iterations > 0
-            ? solve_bounded_least_squares(problem, p, lso)
-            : LeastSquaresResult{p, 0.5 * stage.residual(p).squaredNorm(), 0, 0, 0, 0, "resumed", true};
+    LeastSquaresResult ls;
+    if (lso.max_iterations > 0) {
+      ls = solve_bounded_least_squares(problem, p, lso);
+    } else {
+      ls.p = p;
+      ls.residual = stage.residual(p);
+      ls.reason = "resumed";
+      ls.converged = true;
+    }
     p = ls.p;
-    const Eigen::VectorXd r = stage.residual(p);
+    // The solver's residual at its solution: the loss split below costs no further simulation.
+    const Eigen::VectorXd& r = ls.residual;
     FitStageReport report;
     report.controls = N;
     report.iterations = done_before + ls.iterations;
@@ -541,6 +548,8 @@ FitResult fit_elasticity(const FitContext& context, const std::vector<FitTarget>
     }
     checkpoint.reset();
     result.controls = N;
+    if (s + 1 == spec.stages.size() && stage.last_jacobian_p.size() == p.size() && stage.last_jacobian_p == p)
+      result.final_point = std::make_shared<const FitPoint>(std::move(stage.last_jacobian));
   }
   if (!spec.checkpoint.empty() && context.pool->rank() == 0) {
     Checkpoint c;

@@ -55,13 +55,17 @@ void FitRunner::run(const std::string& label, const std::vector<FitChain>& chain
                     std::map<std::string, reduced::FitResult>& fits) const {
   auto run_chain = [&](const FitChain& chain, const reduced::FitContext& context, Progress* progress) {
     const reduced::FitResult* previous = nullptr;
+    std::shared_ptr<const reduced::FitPoint> previous_point;  // only the last fit's: a few MB each
     for (const ChainFit& fit : chain) {
       reduced::FitSpec spec = fit.spec;
       if (fit.warm_from_previous && previous) {
         spec.warm_start = previous->p;
         spec.warm_start_from = previous->name;
+        spec.warm_start_point = previous_point;  // its start is not simulated again
       }
-      fits.insert_or_assign(fit.key, reduced::fit_elasticity(context, fit.targets, spec));
+      reduced::FitResult result = reduced::fit_elasticity(context, fit.targets, spec);
+      previous_point = std::move(result.final_point);
+      fits.insert_or_assign(fit.key, std::move(result));
       previous = &fits.at(fit.key);
       if (progress && previous->finished_earlier)
         progress->skip();

@@ -39,7 +39,8 @@ struct LeastSquaresOptions {
 
 struct LeastSquaresResult {
   Eigen::VectorXd p;
-  double loss = 0.0;  ///< ½‖r(p)‖²
+  Eigen::VectorXd residual;  ///< r(p), from the solver's cache (no extra evaluation when p was accepted)
+  double loss = 0.0;         ///< ½‖r(p)‖²
   double gradient_norm = 0.0;
   int iterations = 0;
   int residual_evaluations = 0;

@@ -12,6 +12,7 @@
 // each warm-started from the previous one's field; a checkpoint after every iteration lets an interrupted
 // fit resume where it stopped.
 #include <sflsh/reduced/bounded_least_squares.hpp>
+#include <sflsh/reduced/fit_point.hpp>
 #include <sflsh/reduced/shape_elasticity.hpp>
 #include <sflsh/reduced/simulation_pool.hpp>
 
@@ -61,6 +62,9 @@ struct FitSpec {
   /// at a neighbouring λ); part of the checkpoint's fingerprint, with `warm_start_from` naming where it came from.
   Eigen::VectorXd warm_start;
   std::string warm_start_from;
+  /// What the fit that ended at `warm_start` computed there (its FitResult::final_point): used where it matches,
+  /// so the start is not simulated again. Not part of the fingerprint: it changes the cost, never the result.
+  std::shared_ptr<const FitPoint> warm_start_point;
 };
 
 /// Shared by every fit of an experiment.
@@ -94,6 +98,9 @@ struct FitResult {
   Eigen::VectorXd p;  ///< final parameters (layout of the kind)
   std::vector<FitStageReport> stages;
   bool finished_earlier = false;  ///< read back from a finished checkpoint: nothing was run
+  /// σ and the normal-equation terms at p, per target (null when not computed there, e.g. finished earlier): a
+  /// warm start from p passes it as FitSpec::warm_start_point. A few MB; drop it when no fit continues from p.
+  std::shared_ptr<const FitPoint> final_point;
   /// κ̂ (N × 3, clamped) the fit gives a subject of shape β (independent fits ignore β).
   material::KappaMatrix kappa_normalized(const body::Betas& beta, const material::ParameterBounds& bounds) const;
   material::KappaMatrix kappa(const body::Betas& beta, const material::ParameterBounds& bounds) const;  ///< physical
