@@ -1,10 +1,11 @@
+#include "deterministic_reduce.hpp"
+
 #include <sflsh/core/error.hpp>
 #include <sflsh/model/kinematics.hpp>
 #include <sflsh/model/problem.hpp>
 
 #include <Eigen/Geometry>
 #include <tbb/blocked_range.h>
-#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <cmath>
@@ -206,10 +207,9 @@ ElasticEvaluation evaluate_elastic(const Problem& problem, const Eigen::VectorXd
   };
   const int m = problem.num_tets();
   const Eigen::Index dofs = with_gradient ? problem.num_dofs() : 0;
-  Partial total = tbb::parallel_reduce(
-      tbb::blocked_range<int>(0, m, 512), Partial{0.0, Eigen::VectorXd::Zero(dofs)},
+  Partial total = deterministic_reduce(
+      m, Partial{0.0, Eigen::VectorXd::Zero(dofs)},
       [&](const tbb::blocked_range<int>& range, Partial acc) {
-        if (acc.gradient.size() != dofs) acc.gradient = Eigen::VectorXd::Zero(dofs);
         for (int e = range.begin(); e < range.end(); ++e) {
           const auto se = static_cast<std::size_t>(e);
           const material::TetNodes nodes = gather(problem, x, e);
@@ -228,13 +228,10 @@ ElasticEvaluation evaluate_elastic(const Problem& problem, const Eigen::VectorXd
       },
       [](Partial a, const Partial& b) {
         a.energy += b.energy;
-        if (a.gradient.size() == b.gradient.size()) {
-          a.gradient += b.gradient;
-        } else if (a.gradient.size() == 0) {
-          a.gradient = b.gradient;
-        }
+        a.gradient += b.gradient;
         return a;
-      });
+      },
+      512);
   ElasticEvaluation out;
   out.energy = total.energy;
   out.gradient = with_gradient ? std::move(total.gradient) : Eigen::VectorXd();

@@ -1,3 +1,5 @@
+#include "deterministic_reduce.hpp"
+
 #include <sflsh/core/error.hpp>
 #include <sflsh/model/terms.hpp>
 
@@ -52,46 +54,56 @@ ElasticTerm::ElasticTerm(const Problem& problem, std::shared_ptr<const TermSubse
 
 double ElasticTerm::value(const Eigen::VectorXd& x) const {
   const std::vector<int>& tets = subset_->value_tets;
-  tbb::enumerable_thread_specific<double> partial(0.0);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tets.size(), 256), [&](const auto& range) {
-    double& acc = partial.local();
-    for (std::size_t k = range.begin(); k < range.end(); ++k) {
-      const int e = tets[k];
-      try {
-        acc += energy_scale(problem_, e) *
-               material::tet_elastic_energy(problem_.tet_rest[static_cast<std::size_t>(e)], tet_nodes(problem_, x, e),
-                                            problem_.tet_material[static_cast<std::size_t>(e)]);
-      } catch (const Error&) {
-        acc = kInfinity;  // the Fung exponent overflowed: this state is out of reach
-      }
-    }
-  });
-  const double total = partial.combine(std::plus<double>());
+  const double total = deterministic_reduce(
+      tets.size(), 0.0,
+      [&](const tbb::blocked_range<std::size_t>& range, double acc) {
+        for (std::size_t k = range.begin(); k < range.end(); ++k) {
+          const int e = tets[k];
+          try {
+            acc +=
+                energy_scale(problem_, e) *
+                material::tet_elastic_energy(problem_.tet_rest[static_cast<std::size_t>(e)], tet_nodes(problem_, x, e),
+                                             problem_.tet_material[static_cast<std::size_t>(e)]);
+          } catch (const Error&) {
+            acc = kInfinity;  // the Fung exponent overflowed: this state is out of reach
+          }
+        }
+        return acc;
+      },
+      [](double a, double b) { return a + b; });
   return std::isfinite(total) ? total : kInfinity;
 }
 
 bool ElasticTerm::add_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& g) const {
   const std::vector<int>& tets = subset_->row_tets;
-  const Eigen::Index dofs = x.size();
-  tbb::enumerable_thread_specific<Eigen::VectorXd> partial([dofs] { return Eigen::VectorXd::Zero(dofs); });
-  tbb::enumerable_thread_specific<int> failed(0);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tets.size(), 256), [&](const auto& range) {
-    Eigen::VectorXd& local = partial.local();
-    for (std::size_t k = range.begin(); k < range.end(); ++k) {
-      const int e = tets[k];
-      const auto se = static_cast<std::size_t>(e);
-      try {
-        const material::Vector12d ge =
-            energy_scale(problem_, e) *
-            material::tet_elastic_dq(problem_.tet_rest[se], tet_nodes(problem_, x, e), problem_.tet_material[se]);
-        for (int a = 0; a < 4; ++a) local.segment<3>(3 * problem_.tets(e, a)) += ge.segment<3>(3 * a);
-      } catch (const Error&) {
-        ++failed.local();
-      }
-    }
-  });
-  for (const Eigen::VectorXd& part : partial) g += part;
-  return failed.combine(std::plus<int>()) == 0 && g.allFinite();
+  struct Partial {
+    Eigen::VectorXd gradient;
+    int failed = 0;
+  };
+  const Partial total = deterministic_reduce(
+      tets.size(), Partial{Eigen::VectorXd::Zero(x.size()), 0},
+      [&](const tbb::blocked_range<std::size_t>& range, Partial acc) {
+        for (std::size_t k = range.begin(); k < range.end(); ++k) {
+          const int e = tets[k];
+          const auto se = static_cast<std::size_t>(e);
+          try {
+            const material::Vector12d ge =
+                energy_scale(problem_, e) *
+                material::tet_elastic_dq(problem_.tet_rest[se], tet_nodes(problem_, x, e), problem_.tet_material[se]);
+            for (int a = 0; a < 4; ++a) acc.gradient.segment<3>(3 * problem_.tets(e, a)) += ge.segment<3>(3 * a);
+          } catch (const Error&) {
+            ++acc.failed;
+          }
+        }
+        return acc;
+      },
+      [](Partial a, const Partial& b) {
+        a.gradient += b.gradient;
+        a.failed += b.failed;
+        return a;
+      });
+  g += total.gradient;
+  return total.failed == 0 && g.allFinite();
 }
 
 bool ElasticTerm::add_hessian(const Eigen::VectorXd& x, HessianSink& sink) const {
