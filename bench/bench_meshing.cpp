@@ -5,6 +5,7 @@
 #include <sflsh/body/body_io.hpp>
 #include <sflsh/body/subjects.hpp>
 #include <sflsh/core/log.hpp>
+#include <sflsh/core/scoped_seconds.hpp>
 #include <sflsh/core/summary.hpp>
 #include <sflsh/meshing/layer_mesh.hpp>
 #include <sflsh/meshing/retarget.hpp>
@@ -23,10 +24,6 @@
 namespace {
 
 using namespace sflsh;
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 nlohmann::json run_one(const body::BodyModel& model, meshing::Mesher mesher, meshing::SizePreset size, int threads) {
   meshing::LayerMeshOptions options;

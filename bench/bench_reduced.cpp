@@ -15,6 +15,7 @@
 #include <sflsh/body/motion.hpp>
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
+#include <sflsh/core/scoped_seconds.hpp>
 #include <sflsh/core/summary.hpp>
 #include <sflsh/model/body_layer.hpp>
 #include <sflsh/reduced/reduced_model.hpp>
@@ -35,7 +36,6 @@ namespace {
 
 using namespace sflsh;
 using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 struct Body {
   model::BodyLayer layer;

@@ -7,6 +7,7 @@
 #include <sflsh/body/body_io.hpp>
 #include <sflsh/body/motion.hpp>
 #include <sflsh/core/log.hpp>
+#include <sflsh/core/scoped_seconds.hpp>
 #include <sflsh/core/summary.hpp>
 #include <sflsh/fullspace/reference_integrator.hpp>
 #include <sflsh/model/body_layer.hpp>
@@ -24,7 +25,6 @@ namespace {
 
 using namespace sflsh;
 using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 struct PlainRun {
   double seconds = 0.0;

@@ -16,7 +16,7 @@ namespace sflsh::app {
 
 namespace {
 
-struct ExportOptions {
+struct MotionExportOptions {
   SubjectOptions subject;
   std::string motion;
   int frames = 0;
@@ -24,7 +24,7 @@ struct ExportOptions {
   std::string out;
 };
 
-void run_export(const ExportOptions& opt, const Invocation& invocation) {
+void run_motion_export(const MotionExportOptions& opt, const Invocation& invocation) {
   const auto t0 = std::chrono::steady_clock::now();
   require(opt.fps > 0.0, "--fps must be positive, got {}", opt.fps);
   require(opt.frames >= 0, "--frames must be non-negative, got {}", opt.frames);
@@ -107,7 +107,7 @@ void register_motion_commands(CLI::App& app, const Invocation& invocation) {
       std::cout << fmt::format("{:<18} {}\n", name, body::procedural_motion_description(name));
   });
 
-  auto opt = std::make_shared<ExportOptions>();
+  auto opt = std::make_shared<MotionExportOptions>();
   CLI::App* exp = motion->add_subcommand(
       "export", "Pose a body along a motion and write a ParaView series (one .vtp per frame + body.pvd)");
   add_body_option(*exp, opt->subject);
@@ -116,7 +116,7 @@ void register_motion_commands(CLI::App& app, const Invocation& invocation) {
   exp->add_option("--frames", opt->frames, "Number of frames (default: the motion's own length)");
   exp->add_option("--fps", opt->fps, "Frame rate of the output [1/s]")->capture_default_str();
   exp->add_option("--out", opt->out, "Output folder")->required();
-  exp->callback([opt, invocation] { run_export(*opt, invocation); });
+  exp->callback([opt, invocation] { run_motion_export(*opt, invocation); });
 }
 
 }  // namespace sflsh::app

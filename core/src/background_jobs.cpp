@@ -1,6 +1,7 @@
 // A worker thread with a bounded job queue (background_jobs.hpp).
 #include <sflsh/core/background_jobs.hpp>
 #include <sflsh/core/error.hpp>
+#include <sflsh/core/scoped_seconds.hpp>
 
 #include <chrono>
 
@@ -8,7 +9,6 @@ namespace sflsh {
 
 namespace {
 using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 }  // namespace
 
 BackgroundJobs::BackgroundJobs(std::size_t capacity, int workers) : capacity_(capacity) {

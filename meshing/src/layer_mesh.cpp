@@ -18,18 +18,6 @@
 namespace sflsh::meshing {
 namespace {
 
-// Signed volume enclosed by a closed, outward-oriented surface.
-double enclosed_volume(const ClosedSurface& surface) {
-  double volume = 0.0;
-  for (Eigen::Index t = 0; t < surface.triangles.rows(); ++t) {
-    const Eigen::Vector3d a = surface.vertices.row(surface.triangles(t, 0)).transpose();
-    const Eigen::Vector3d b = surface.vertices.row(surface.triangles(t, 1)).transpose();
-    const Eigen::Vector3d c = surface.vertices.row(surface.triangles(t, 2)).transpose();
-    volume += a.dot(b.cross(c)) / 6.0;
-  }
-  return volume;
-}
-
 // The anchor of a point on a layer-surface triangle: the barycentric blend of its corners' anchors,
 // merged per region vertex (side triangles touch two region vertices, skin/inner triangles three).
 SurfaceAnchor blend_anchor(const LayerSurface& layer, int triangle, const Eigen::Vector3d& bary) {

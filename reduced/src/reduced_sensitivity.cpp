@@ -1,6 +1,7 @@
 // Forward sensitivities of the reduced backward Euler with respect to the control points' Young moduli
 // (reduced_sensitivity.hpp has the derivation; docs/reduced.md, "Sensitivities").
 #include <sflsh/core/error.hpp>
+#include <sflsh/core/scoped_seconds.hpp>
 #include <sflsh/reduced/reduced_sensitivity.hpp>
 #include <sflsh/reduced/young_derivative.hpp>
 
@@ -14,7 +15,6 @@ namespace sflsh::reduced {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 }  // namespace
 

@@ -6,18 +6,15 @@
 
 namespace sflsh::reduced {
 
-namespace {
-
-constexpr double kInfinity = std::numeric_limits<double>::infinity();
-
-}  // namespace
+namespace {}  // namespace
 
 double ReducedElasticTerm::value(const Eigen::VectorXd& q) const {
   try {
     const double energy = elastic_.energy(q);
-    return std::isfinite(energy) ? energy : kInfinity;
+    return std::isfinite(energy) ? energy : std::numeric_limits<double>::infinity();
   } catch (const Error&) {
-    return kInfinity;  // a non-finite F or a Fung exponent over its cap: this state is out of reach
+    return std::numeric_limits<double>::infinity();  // a non-finite F or a Fung exponent over its cap: this state is
+                                                     // out of reach
   }
 }
 
@@ -45,7 +42,7 @@ void ReducedInertiaTerm::add_hessian(const Eigen::VectorXd&, Eigen::MatrixXd& he
 
 double ReducedPotentialTerm::value(const Eigen::VectorXd& q) const {
   const double energy = potentials_.energy(q, inertia_);
-  return std::isfinite(energy) ? energy : kInfinity;
+  return std::isfinite(energy) ? energy : std::numeric_limits<double>::infinity();
 }
 
 }  // namespace sflsh::reduced

@@ -6,11 +6,7 @@
 
 namespace sflsh::reduced {
 
-namespace {
-
-constexpr double kInfinity = std::numeric_limits<double>::infinity();
-
-}  // namespace
+namespace {}  // namespace
 
 double HeadTerm::value(const Eigen::VectorXd& x) const { return inner_.value(x.head(size_)); }
 
@@ -75,7 +71,7 @@ int RootInertiaTerm::node(Eigen::Index i) const {
 
 // 1/(2ĥ²) Σ_i m_i |y_i|², y_i = D_i(p_i) − p̃_i.
 double RootInertiaTerm::value(const Eigen::VectorXd& x) const {
-  if (!x.allFinite()) return kInfinity;
+  if (!x.allFinite()) return std::numeric_limits<double>::infinity();
   const DeviationFrame frame = skeleton_.frame(x, offset_, pose_.pivot, pose_.centres, false);
   meshing::RowMatrixX3d p;
   gather(x, p);
@@ -257,7 +253,7 @@ void RootTrackingTerm::add_hessian(const Eigen::VectorXd& x, Eigen::MatrixXd& he
 double RootPotentialTerm::value(const Eigen::VectorXd& x) const {
   const DeviationFrame frame = skeleton_.frame(x, offset_, pose_.pivot, pose_.centres, false);
   const double energy = potentials_.energy(x, inertia_, &frame);
-  return std::isfinite(energy) ? energy : kInfinity;
+  return std::isfinite(energy) ? energy : std::numeric_limits<double>::infinity();
 }
 
 void RootPotentialTerm::add_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& gradient) const {

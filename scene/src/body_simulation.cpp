@@ -3,6 +3,7 @@
 // writer; step() runs one output frame through the shared frame loop and records it.
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
+#include <sflsh/core/scoped_seconds.hpp>
 #include <sflsh/core/work_limit.hpp>
 #include <sflsh/core/xdmf_series.hpp>
 #include <sflsh/fullspace/fullspace_solver.hpp>
@@ -18,10 +19,6 @@
 namespace sflsh::scene {
 
 namespace {
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 /// One body's steps (frames × substeps), frames and per-frame records (motion sample, summary entry: ~1 kB).
 void check_body_run_work(const BodyRunSettings& opt, double frames) {

@@ -2,6 +2,7 @@
 // whole run of `sflsh simulate --solver full|reduced` and `sflsh sweep` (run_body_simulation).
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/progress.hpp>
+#include <sflsh/core/scoped_seconds.hpp>
 #include <sflsh/core/vtk_io.hpp>
 #include <sflsh/model/time_integrator.hpp>
 #include <sflsh/reduced/reduced_model.hpp>
@@ -10,13 +11,7 @@
 
 namespace sflsh::scene {
 
-namespace {
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-
-}  // namespace
+namespace {}  // namespace
 
 nlohmann::json BodySimulation::summary() const {
   const model::Integrator integrator = model::parse_integrator(settings_.integrator, "--integrator");

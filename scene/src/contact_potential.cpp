@@ -13,6 +13,7 @@
 // features, flat faces), and reduces to Gauss–Newton k g gᵀ at convex ones: the tangential softening of
 // a convex obstacle is what would make Newton's model non-convex.
 #include <sflsh/core/error.hpp>
+#include <sflsh/core/scoped_seconds.hpp>
 #include <sflsh/scene/contact_potential.hpp>
 
 #include <Eigen/Eigenvalues>
@@ -27,8 +28,6 @@ namespace sflsh::scene {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
 }  // namespace
 

@@ -5,6 +5,7 @@
 
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
+#include <sflsh/core/scoped_seconds.hpp>
 
 #include <tbb/parallel_for.h>
 
@@ -18,7 +19,6 @@ namespace sflsh::scene::detail {
 
 namespace {
 using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 }  // namespace
 
 // A group's step. First every body is solved against the others predicted (their current elastic displacement

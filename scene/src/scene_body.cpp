@@ -5,6 +5,7 @@
 #include <sflsh/body/subjects.hpp>
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
+#include <sflsh/core/scoped_seconds.hpp>
 #include <sflsh/fullspace/reference_integrator.hpp>
 #include <sflsh/meshing/layer_cache.hpp>
 
@@ -16,7 +17,6 @@ namespace sflsh::scene::detail {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 }  // namespace
 

@@ -4,6 +4,7 @@
 #include "body_skeleton.hpp"
 
 #include <sflsh/core/error.hpp>
+#include <sflsh/core/scoped_seconds.hpp>
 
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
@@ -16,7 +17,6 @@ namespace sflsh::scene::detail {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 }  // namespace
 

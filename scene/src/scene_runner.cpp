@@ -16,6 +16,7 @@
 #include <sflsh/core/log.hpp>
 #include <sflsh/core/progress.hpp>
 #include <sflsh/core/run_folder.hpp>
+#include <sflsh/core/scoped_seconds.hpp>
 #include <sflsh/core/summary.hpp>
 #include <sflsh/core/vtk_io.hpp>
 #include <sflsh/scene/scene_runner.hpp>
@@ -45,7 +46,6 @@ using detail::SceneBody;
 using detail::SceneObject;
 using meshing::RowMatrixX3d;
 using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 /// g [m/s²] in the world: 9.81 along the scene's gravity direction.
 Eigen::Vector3d gravity_vector(const Effects& effects) { return 9.81 * effects.gravity_direction; }

@@ -23,8 +23,8 @@ struct Sums {
 
 TEST(DeterministicSums, ElasticSumsAreTheSameOnAnyThreadCount) {
   // 12³ cells, 10 368 tets: a few hundred tets per block, so several threads get work.
-  Problem problem = testing::box_problem({0.24, 0.24, 0.24}, {12, 12, 12}, 1000.0, MassKind::lumped,
-                                         testing::box_material(5e3, 2e3));
+  Problem problem =
+      testing::box_problem({0.24, 0.24, 0.24}, {12, 12, 12}, 1000.0, MassKind::lumped, testing::box_material(5e3, 2e3));
   problem.validate();
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> u(-1.0, 1.0);

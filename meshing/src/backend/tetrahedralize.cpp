@@ -63,17 +63,6 @@ void check_surface(const ClosedSurface& surface, const char* backend) {
   require(unused == 0, "{}: {} input vertices are used by no triangle", backend, unused);
 }
 
-double enclosed_volume(const ClosedSurface& surface) {
-  double volume = 0.0;
-  for (Eigen::Index t = 0; t < surface.triangles.rows(); ++t) {
-    const Eigen::Vector3d a = surface.vertices.row(surface.triangles(t, 0)).transpose();
-    const Eigen::Vector3d b = surface.vertices.row(surface.triangles(t, 1)).transpose();
-    const Eigen::Vector3d c = surface.vertices.row(surface.triangles(t, 2)).transpose();
-    volume += a.dot(b.cross(c)) / 6.0;
-  }
-  return volume;
-}
-
 double signed_volume(const TetMesh& mesh, Eigen::Index e) {
   const Eigen::Vector3d x0 = mesh.nodes.row(mesh.tets(e, 0)).transpose();
   return (mesh.nodes.row(mesh.tets(e, 1)).transpose() - x0)
@@ -145,6 +134,17 @@ void validate(const TetMesh& mesh, const ClosedSurface& surface, Mesher mesher) 
 }
 
 }  // namespace
+
+double enclosed_volume(const ClosedSurface& surface) {
+  double volume = 0.0;
+  for (Eigen::Index t = 0; t < surface.triangles.rows(); ++t) {
+    const Eigen::Vector3d a = surface.vertices.row(surface.triangles(t, 0)).transpose();
+    const Eigen::Vector3d b = surface.vertices.row(surface.triangles(t, 1)).transpose();
+    const Eigen::Vector3d c = surface.vertices.row(surface.triangles(t, 2)).transpose();
+    volume += a.dot(b.cross(c)) / 6.0;
+  }
+  return volume;
+}
 
 Mesher parse_mesher(const std::string& name) {
   if (name == "cgal") return Mesher::cgal;

@@ -1,9 +1,14 @@
 #pragma once
-// A scope's wall time added to a counter: `const ScopedSeconds timer(total);` adds the seconds until the end of
-// the scope to `total` [s].
+// Wall time: `seconds_since(t0)` [s], and a scope's wall time added to a counter (`const ScopedSeconds
+// timer(total);` adds the seconds until the end of the scope to `total` [s]).
 #include <chrono>
 
 namespace sflsh {
+
+/// Seconds of wall time since t0 (steady clock) [s].
+inline double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
 
 class ScopedSeconds {
  public:

@@ -28,6 +28,9 @@ struct ClosedSurface {
   std::vector<std::vector<Eigen::Vector3d>> features;
 };
 
+/// Signed volume enclosed by a closed, outward-oriented surface [m³] (negative when oriented inward).
+double enclosed_volume(const ClosedSurface& surface);
+
 /// Target element size. `edge_length` is the target tet edge [m]; the surface approximation error
 /// of resampling backends is bounded by `surface_distance` [m].
 struct SizeControl {
