@@ -16,8 +16,6 @@ namespace sflsh::model {
 
 namespace {
 
-constexpr double kInfinity = std::numeric_limits<double>::infinity();
-
 material::TetNodes tet_nodes(const Problem& problem, const Eigen::VectorXd& x, int e) {
   material::TetNodes nodes;
   for (int a = 0; a < 4; ++a) nodes.col(a) = x.segment<3>(3 * problem.tets(e, a));

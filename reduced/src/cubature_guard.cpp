@@ -1,6 +1,7 @@
 #include <sflsh/core/error.hpp>
 #include <sflsh/material/fung_strain.hpp>
 #include <sflsh/material/orthotropic_fung.hpp>
+#include <sflsh/model/terms.hpp>
 #include <sflsh/reduced/cubature_guard.hpp>
 
 #include <Eigen/Eigenvalues>
@@ -13,6 +14,8 @@
 namespace sflsh::reduced {
 
 namespace {
+
+using model::kInfinity;
 
 Cubature unguarded_tets(const model::Problem& problem, const Cubature& cubature) {
   std::vector<char> weighted(static_cast<std::size_t>(problem.num_tets()), 0);
@@ -55,10 +58,9 @@ CubatureGuard::CubatureGuard(const model::Problem& problem, const Subspace& subs
     spectral_[k] = p_norm * p_norm;
     // x = 2Ψ₀/c ≤ (2/c)(μ₀ + 3/2 λ₀⁺)‖Ê‖² ≤ limit  ⇐  ‖Ê‖ ≤ √(limit c / (2(μ₀ + 3/2 λ₀⁺)))
     const double modulus = m.mu0 + 1.5 * std::max(m.lambda0, 0.0);
-    allowed_[k] = m.inv_c == 0.0 || modulus <= 0.0 ? std::numeric_limits<double>::infinity()
-                                                   : std::sqrt(limit_ * m.c / (2.0 * modulus));
+    allowed_[k] = m.inv_c == 0.0 || modulus <= 0.0 ? kInfinity : std::sqrt(limit_ * m.c / (2.0 * modulus));
   }
-  scaled_.assign(static_cast<std::size_t>(offset_.back()), std::numeric_limits<double>::infinity());
+  scaled_.assign(static_cast<std::size_t>(offset_.back()), kInfinity);
   moved_.assign(static_cast<std::size_t>(subspace.num_functions()), 0.0);
   budget_.assign(static_cast<std::size_t>(subspace.num_functions()), 0.0);
   // The guarded points touching each function (CSR).
@@ -91,13 +93,13 @@ void CubatureGuard::release(int tet) {
 double CubatureGuard::exponent(int p, const Eigen::VectorXd& q, double* radius) const {
   const auto k = static_cast<std::size_t>(p);
   const Eigen::Matrix3d F = tets_.point_deformation_gradient(p, q);
-  if (!F.allFinite()) return std::numeric_limits<double>::infinity();
+  if (!F.allFinite()) return kInfinity;
   const material::OrthotropicFung& m = problem_.tet_material[static_cast<std::size_t>(tets_.point_tet(p))];
   material::FungStrain strain;
   try {
     strain = material::fung_strain(F, m);  // x = 2Ψ₀/c and ‖Ê‖ (the material's own definitions)
   } catch (const Error&) {
-    return std::numeric_limits<double>::infinity();  // the StVK energy overflows: far outside the range
+    return kInfinity;  // the StVK energy overflows: far outside the range
   }
   const double x = strain.exponent;
   if (radius) {
@@ -106,11 +108,9 @@ double CubatureGuard::exponent(int p, const Eigen::VectorXd& q, double* radius) 
     const double d = (allowed_[k] - e_hat) / spectral_[k];
     const double f = std::sqrt(F.cwiseAbs().colwise().sum().maxCoeff() *
                                F.cwiseAbs().rowwise().sum().maxCoeff());  // ‖F‖₂ ≤ √(‖F‖₁‖F‖∞)
-    *radius = !std::isfinite(allowed_[k]) ? std::numeric_limits<double>::infinity()
-              : d > 0.0                   ? -f + std::sqrt(f * f + 2.0 * d)
-                                          : 0.0;
+    *radius = !std::isfinite(allowed_[k]) ? kInfinity : d > 0.0 ? -f + std::sqrt(f * f + 2.0 * d) : 0.0;
   }
-  return std::isfinite(x) ? x : std::numeric_limits<double>::infinity();
+  return std::isfinite(x) ? x : kInfinity;
 }
 
 std::vector<GuardViolation> CubatureGuard::check(const Eigen::VectorXd& q) {
@@ -185,11 +185,10 @@ std::vector<GuardViolation> CubatureGuard::renew(const Eigen::VectorXd& q) {
     if (!(x <= limit_)) over.push_back({tets_.point_tet(p), x});
     const std::span<const Eigen::Vector3d> vectors = tets_.point_vectors(p);
     double* scaled = scaled_.data() + offset_[k];
-    for (std::size_t j = 0; j < vectors.size(); ++j)
-      scaled[j] = radius > 0.0 ? vectors[j].norm() / radius : std::numeric_limits<double>::infinity();
+    for (std::size_t j = 0; j < vectors.size(); ++j) scaled[j] = radius > 0.0 ? vectors[j].norm() / radius : kInfinity;
   }
   // β_s = min over the tets touching s of r_e / L_e: while every ‖Δt_s‖ ≤ β_s, Σ_s ‖Δt_s‖ ‖c_s‖ ≤ r_e for every tet.
-  std::fill(budget_.begin(), budget_.end(), std::numeric_limits<double>::infinity());
+  std::fill(budget_.begin(), budget_.end(), kInfinity);
   for (int p = 0; p < tets_.num_points(); ++p) {
     const auto k = static_cast<std::size_t>(p);
     if (!active_[k]) continue;

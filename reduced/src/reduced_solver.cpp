@@ -1,6 +1,7 @@
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
 #include <sflsh/core/scoped_seconds.hpp>
+#include <sflsh/model/terms.hpp>
 #include <sflsh/reduced/reduced_history.hpp>
 #include <sflsh/reduced/reduced_solver.hpp>
 
@@ -18,6 +19,7 @@ namespace sflsh::reduced {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+using model::kInfinity;
 
 /// A term of the substep and the StepStats timer its evaluations count towards.
 struct TimedTerm {
@@ -246,7 +248,7 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
       value += term.term->value(q);
       *term.seconds += seconds_since(t);
     }
-    return std::isfinite(value) ? value : std::numeric_limits<double>::infinity();
+    return std::isfinite(value) ? value : kInfinity;
   };
 
   // Solved again from the same start when a node potential refuses the result (penetration over its
@@ -283,7 +285,7 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
       factor_valid_ = false;
     bool fresh = false;  // the factor was computed at this step's current iterate
     bool refresh = !factor_valid_;
-    double g0 = 0.0, g_previous = std::numeric_limits<double>::infinity();
+    double g0 = 0.0, g_previous = kInfinity;
     double previous_move = 0.0;  // ‖Δ‖∞ of the last full step [m]
     bool converged = false;
     for (int it = 0; it < options_.max_newton && !converged; ++it) {

@@ -1,4 +1,5 @@
 #include <sflsh/core/error.hpp>
+#include <sflsh/model/terms.hpp>
 #include <sflsh/reduced/reduced_terms.hpp>
 
 #include <cmath>
@@ -6,15 +7,18 @@
 
 namespace sflsh::reduced {
 
-namespace {}  // namespace
+namespace {
+
+using model::kInfinity;
+
+}  // namespace
 
 double ReducedElasticTerm::value(const Eigen::VectorXd& q) const {
   try {
     const double energy = elastic_.energy(q);
-    return std::isfinite(energy) ? energy : std::numeric_limits<double>::infinity();
+    return std::isfinite(energy) ? energy : kInfinity;
   } catch (const Error&) {
-    return std::numeric_limits<double>::infinity();  // a non-finite F or a Fung exponent over its cap: this state is
-                                                     // out of reach
+    return kInfinity;  // a non-finite F or a Fung exponent over its cap: this state is out of reach
   }
 }
 
@@ -42,7 +46,7 @@ void ReducedInertiaTerm::add_hessian(const Eigen::VectorXd&, Eigen::MatrixXd& he
 
 double ReducedPotentialTerm::value(const Eigen::VectorXd& q) const {
   const double energy = potentials_.energy(q, inertia_);
-  return std::isfinite(energy) ? energy : std::numeric_limits<double>::infinity();
+  return std::isfinite(energy) ? energy : kInfinity;
 }
 
 }  // namespace sflsh::reduced

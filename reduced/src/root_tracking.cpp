@@ -1,4 +1,5 @@
 #include <sflsh/core/error.hpp>
+#include <sflsh/model/terms.hpp>
 #include <sflsh/reduced/root_tracking.hpp>
 
 #include <cmath>
@@ -6,7 +7,11 @@
 
 namespace sflsh::reduced {
 
-namespace {}  // namespace
+namespace {
+
+using model::kInfinity;
+
+}  // namespace
 
 double HeadTerm::value(const Eigen::VectorXd& x) const { return inner_.value(x.head(size_)); }
 
@@ -71,7 +76,7 @@ int RootInertiaTerm::node(Eigen::Index i) const {
 
 // 1/(2ĥ²) Σ_i m_i |y_i|², y_i = D_i(p_i) − p̃_i.
 double RootInertiaTerm::value(const Eigen::VectorXd& x) const {
-  if (!x.allFinite()) return std::numeric_limits<double>::infinity();
+  if (!x.allFinite()) return kInfinity;
   const DeviationFrame frame = skeleton_.frame(x, offset_, pose_.pivot, pose_.centres, false);
   meshing::RowMatrixX3d p;
   gather(x, p);
@@ -253,7 +258,7 @@ void RootTrackingTerm::add_hessian(const Eigen::VectorXd& x, Eigen::MatrixXd& he
 double RootPotentialTerm::value(const Eigen::VectorXd& x) const {
   const DeviationFrame frame = skeleton_.frame(x, offset_, pose_.pivot, pose_.centres, false);
   const double energy = potentials_.energy(x, inertia_, &frame);
-  return std::isfinite(energy) ? energy : std::numeric_limits<double>::infinity();
+  return std::isfinite(energy) ? energy : kInfinity;
 }
 
 void RootPotentialTerm::add_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& gradient) const {

@@ -19,6 +19,7 @@
 #include <Eigen/Core>
 
 #include <functional>
+#include <limits>
 #include <memory>
 #include <string_view>
 #include <vector>
@@ -43,6 +44,9 @@ struct TermSubset {
   /// Every tet and node.
   static std::shared_ptr<const TermSubset> whole(const Problem& problem);
 };
+
+/// The value of a term at a state out of reach (a Fung exponent over its cap, an inverted or non-finite state).
+inline constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
 class Term {
  public:
