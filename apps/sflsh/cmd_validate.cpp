@@ -30,6 +30,7 @@ struct ValidateOptions {
   std::vector<std::string> train_subjects, test_subjects, train_motions, test_motions;
   bool no_cross_validation = false;
   bool no_lambda_warm_start = false;
+  std::string lambda_rule = "one-se";
   int fit_groups = 1;
   std::string jacobian = "exact";
   std::vector<std::string> dyna;
@@ -59,6 +60,7 @@ void run_validate(const ValidateOptions& o, const Invocation& invocation) {
   if (!o.test_motions.empty()) config.test_motions = o.test_motions;
   if (o.no_cross_validation) config.cross_validation = false;
   if (o.no_lambda_warm_start) config.lambda_warm_start = false;
+  config.lambda_rule = validate::parse_lambda_rule(o.lambda_rule, "validate: --lambda-rule");
   config.fit_groups = o.fit_groups;
   config.jacobian = o.jacobian;
   config.progress = !o.quiet;
@@ -118,6 +120,10 @@ void register_validate_commands(CLI::App& app, const Invocation& invocation) {
                   "dσ/dq: exact (sensitivities, thickness through the retarget; default), hybrid (thickness columns "
                   "by differences) or fd (differences of every column, the paper's method)")
       ->check(CLI::IsMember({"exact", "hybrid", "fd"}));
+  cmd->add_option("--lambda-rule", o->lambda_rule,
+                  "How λ is chosen from the sweep: one-se (the largest λ whose mean CV error is within one standard "
+                  "error of the least; default) or min (the least CV error, the paper's)")
+      ->check(CLI::IsMember({"one-se", "one-standard-error", "min", "minimum"}));
   cmd->add_flag("--no-cross-validation", o->no_cross_validation,
                 "Skip the leave-one-out fits (λ = the first of --lambdas)");
   cmd->add_option("--fit-groups", o->fit_groups,

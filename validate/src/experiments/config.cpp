@@ -49,6 +49,7 @@ nlohmann::json ValidateConfig::to_json() const {
   j["iterations"] = iterations;
   j["lambdas"] = lambdas;
   j["cross_validation"] = cross_validation;
+  j["lambda_rule"] = lambda_rule_name(lambda_rule);
   j["lambda_warm_start"] = lambda_warm_start;
   j["warm_iterations"] = warm_iterations;
   j["fit_groups"] = fit_groups;

@@ -350,10 +350,17 @@ nlohmann::json run_validation(const ValidateConfig& requested, const std::filesy
     }
   }
   runner.run("independent and leave-one-out fits", chains, report.fits);
-  // Evaluate everything fitted so far, then pick λ per regularizer by the cross-validation error.
+  // Evaluate everything fitted so far, then pick λ per regularizer from the cross-validation errors.
   report.evaluate(pool, reduced_model, context.reduced, cases);
   if (config.cross_validation)
-    for (const auto& [reg, tag] : regs) best_lambda[tag] = report.best_lambda(tag);
+    for (const auto& [reg, tag] : regs) {
+      const LambdaChoice choice = report.choose_lambda(tag);
+      best_lambda[tag] = choice.lambda;
+      report.choices[tag] = choice;
+      logger()->info("validate: λ ({}) = {:g} by the {} rule (least CV error {:.3f} ± {:.3f} mm at λ = {:g})", tag,
+                     choice.lambda, lambda_rule_name(config.lambda_rule), choice.least_error, choice.standard_error,
+                     choice.least_lambda);
+    }
   // Full optimizations on every train subject (SFLSH §6.3) and their generalization (§6.4).
   chains.clear();
   for (const auto& [reg, tag] : regs)

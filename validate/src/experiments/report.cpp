@@ -134,19 +134,15 @@ double Report::truth_entry(const std::string& subject, const std::vector<std::st
   return mean_of(v);
 }
 
-double Report::best_lambda(const std::string& tag) const {
-  double chosen = config.lambdas.front(), best_error = std::numeric_limits<double>::infinity();
+LambdaChoice Report::choose_lambda(const std::string& tag) const {
+  std::vector<LambdaScore> sweep;
   for (double lambda : config.lambdas) {
-    std::vector<double> errors;
+    LambdaScore score{lambda, {}};
     for (const std::string& s : config.train_subjects)
-      errors.push_back(table_error(fmt::format("cv/{}/{:g}/{}", tag, lambda, s), s, config.train_motions));
-    const double e = mean_of(errors);
-    if (std::isfinite(e) && e < best_error) {
-      best_error = e;
-      chosen = lambda;
-    }
+      score.fold_errors.push_back(table_error(fmt::format("cv/{}/{:g}/{}", tag, lambda, s), s, config.train_motions));
+    sweep.push_back(std::move(score));
   }
-  return chosen;
+  return validate::choose_lambda(sweep, config.lambda_rule, fmt::format("validate: regularizer {}", tag));
 }
 
 void Report::write(RunFolder& run, nlohmann::json& summary) const {
@@ -267,7 +263,9 @@ void Report::write(RunFolder& run, nlohmann::json& summary) const {
     cv << "regularizer,lambda,left_out,train_motions_rms_error_mm,test_motions_rms_error_mm,train_motions_mean_sigma_"
           "mm,"
           "test_motions_mean_sigma_mm\n";
-    sweep << "regularizer,lambda,cv_train_motions_rms_error_mm,cv_test_motions_rms_error_mm\n";
+    // cv_train_motions_standard_error_mm: over the left-out subjects, of the mean; chosen: 1 for the λ the rule took.
+    sweep << "regularizer,lambda,cv_train_motions_rms_error_mm,cv_test_motions_rms_error_mm,"
+             "cv_train_motions_standard_error_mm,chosen\n";
     chart::Chart chart;
     chart.title = "Cross-validation error vs lambda";
     chart.x_label = "lambda";
@@ -290,7 +288,9 @@ void Report::write(RunFolder& run, nlohmann::json& summary) const {
              << cell(table_entry(fit, s, config.train_motions)) << "," << cell(table_entry(fit, s, config.test_motions))
              << "\n";
         }
-        sweep << tag << "," << lambda << "," << cell(mean_of(tr)) << "," << cell(mean_of(te)) << "\n";
+        const bool chosen = best.count(tag) && best.at(tag) == lambda;
+        sweep << tag << "," << lambda << "," << cell(mean_of(tr)) << "," << cell(mean_of(te)) << ","
+              << cell(standard_error_of_mean(tr)) << "," << (chosen ? 1 : 0) << "\n";
         series.x.push_back(lambda);
         series.y.push_back(mean_of(tr));
         sweep_json.push_back(
@@ -302,6 +302,15 @@ void Report::write(RunFolder& run, nlohmann::json& summary) const {
     write_text_atomically(run.stage("lambda_sweep.csv"), sweep.str());
     summary["lambda_sweep"] = sweep_json;
     summary["lambda"] = best;
+    summary["lambda_rule"] = lambda_rule_name(config.lambda_rule);
+    nlohmann::json choice_json = nlohmann::json::object();
+    for (const auto& [tag, c] : choices)
+      choice_json[tag] = {{"lambda", c.lambda},
+                          {"least_lambda", c.least_lambda},
+                          {"least_error_mm", c.least_error},
+                          {"standard_error_mm", c.standard_error},
+                          {"threshold_mm", c.threshold}};
+    summary["lambda_choice"] = choice_json;
     try {
       chart::write_chart_png(run.stage("lambda_sweep.png"), chart);
     } catch (const Error& e) {

@@ -26,6 +26,7 @@ struct Report {
   const std::map<std::string, GroundTruthCase>* truth = nullptr;     ///< key "<subject>_<motion>"
   std::map<std::string, reduced::FitResult> fits;  ///< "independent/S", "cv/<reg>/<λ>/S", "full/<reg>"
   std::map<std::string, double> best;              ///< λ chosen per regularizer tag
+  std::map<std::string, LambdaChoice> choices;     ///< how it was chosen (cross-validation runs only)
   std::map<std::string, body::Betas> betas;        ///< every subject's β
   bool true_parameters = true;                     ///< the truth carries κ (synthetic); DYNA does not
   double poisson = 0.2, saturation = 4.0;          ///< uniform ν and s of the layers (SFLSH §3)
@@ -38,8 +39,9 @@ struct Report {
   void evaluate(reduced::SimulationPool& pool, const reduced::ReducedModel& reduced_model,
                 const reduced::ReducedOptions& options,
                 const std::map<std::string, std::unique_ptr<reduced::DynamicsCase>>& cases);
-  /// λ with the least cross-validation error (train motions of the left-out subjects) for "l2" / "ours".
-  double best_lambda(const std::string& tag) const;
+  /// λ for "l2" / "ours" by config.lambda_rule from the cross-validation errors (train motions of the left-out
+  /// subjects), one fold per train subject.
+  LambdaChoice choose_lambda(const std::string& tag) const;
   /// Writes every report file into the run folder and adds their key numbers to `summary`.
   void write(RunFolder& run, nlohmann::json& summary) const;
 

@@ -5,6 +5,7 @@
 // fitted parameters per control point (Fig. 7) and — what the paper could not measure — the error of the
 // recovered parameters against the true ones. `sflsh validate` is a thin front end.
 #include <sflsh/meshing/layer_mesh.hpp>
+#include <sflsh/validate/lambda_choice.hpp>
 
 #include <nlohmann/json.hpp>
 
@@ -28,6 +29,9 @@ struct ValidateConfig {
   int iterations = 8;                           ///< per stage
   std::vector<double> lambdas{0.01, 0.1, 1.0};  ///< cross-validation sweep (Fig. 5)
   bool cross_validation = true;
+  /// How λ is chosen from the sweep: the largest within one standard error of the least error (default), or the
+  /// least error (the paper's; lambda_choice.hpp).
+  LambdaRule lambda_rule = LambdaRule::one_standard_error;
   /// Leave-one-out λ sweep as a continuation: per (regularizer, left-out subject) the largest λ is fitted through
   /// every stage, each smaller λ only at the last stage from the previous λ's result (docs/fit.md).
   bool lambda_warm_start = true;

@@ -1,0 +1,63 @@
+#include <sflsh/core/error.hpp>
+#include <sflsh/validate/lambda_choice.hpp>
+
+#include <cmath>
+#include <limits>
+
+namespace sflsh::validate {
+
+LambdaRule parse_lambda_rule(const std::string& text, const std::string& what) {
+  if (text == "one-se" || text == "one-standard-error") return LambdaRule::one_standard_error;
+  if (text == "min" || text == "minimum") return LambdaRule::minimum;
+  throw_error("{}: unknown λ rule '{}' (expected one-se or min)", what, text);
+}
+
+std::string lambda_rule_name(LambdaRule rule) { return rule == LambdaRule::minimum ? "min" : "one-se"; }
+
+double standard_error_of_mean(const std::vector<double>& values) {
+  double sum = 0.0, squares = 0.0;
+  int n = 0;
+  for (double v : values)
+    if (std::isfinite(v)) {
+      sum += v;
+      ++n;
+    }
+  if (n == 0) return std::numeric_limits<double>::quiet_NaN();
+  const double mean = sum / n;
+  for (double v : values)
+    if (std::isfinite(v)) squares += (v - mean) * (v - mean);
+  return n > 1 ? std::sqrt(squares / (n - 1)) / std::sqrt(static_cast<double>(n)) : 0.0;
+}
+
+LambdaChoice choose_lambda(const std::vector<LambdaScore>& sweep, LambdaRule rule, const std::string& what) {
+  LambdaChoice choice;
+  std::size_t least = sweep.size();
+  for (const LambdaScore& score : sweep) {
+    double sum = 0.0;
+    int n = 0;
+    for (double e : score.fold_errors)
+      if (std::isfinite(e)) {
+        sum += e;
+        ++n;
+      }
+    const double mean = n ? sum / n : std::numeric_limits<double>::quiet_NaN();
+    const std::size_t i = choice.mean_errors.size();
+    choice.mean_errors.push_back(mean);
+    if (std::isfinite(mean) && (least == sweep.size() || mean < choice.mean_errors[least])) least = i;
+  }
+  require(least < sweep.size(), "{}: no λ of the sweep has a finite cross-validation error", what);
+  choice.least_lambda = sweep[least].lambda;
+  choice.least_error = choice.mean_errors[least];
+  choice.standard_error = standard_error_of_mean(sweep[least].fold_errors);  // the folds' spread at the least error
+  choice.lambda = choice.least_lambda;
+  choice.threshold = choice.least_error;
+  if (rule == LambdaRule::minimum) return choice;
+  choice.threshold = choice.least_error + choice.standard_error;
+  for (std::size_t i = 0; i < sweep.size(); ++i)
+    if (std::isfinite(choice.mean_errors[i]) && choice.mean_errors[i] <= choice.threshold &&
+        sweep[i].lambda > choice.lambda)
+      choice.lambda = sweep[i].lambda;
+  return choice;
+}
+
+}  // namespace sflsh::validate
