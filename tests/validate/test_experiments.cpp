@@ -17,7 +17,7 @@
 #include <filesystem>
 #include <fstream>
 
-using namespace sflsh;
+namespace sflsh {
 
 namespace {
 
@@ -66,6 +66,24 @@ TEST(Experiments, SmallConfigurationReproducesPinnedTable2) {
                                             "Cross-val. ours", "Full opt. L2",    "Full opt. ours",
                                             "Generaliz. L2",   "Generaliz. ours", "Ground truth (test subjects)"};
     EXPECT_EQ(labels, expected);
+  }
+  {
+    // The sweep says how λ was chosen: one λ, so the one-standard-error rule (the default) takes it.
+    std::ifstream in(dir / "lambda_sweep.csv");
+    std::string header;
+    std::getline(in, header);
+    EXPECT_EQ(header,
+              "regularizer,lambda,cv_train_motions_rms_error_mm,cv_test_motions_rms_error_mm,"
+              "cv_train_motions_standard_error_mm,chosen");
+    std::string row;
+    while (std::getline(in, row)) EXPECT_EQ(row.substr(row.rfind(',') + 1), "1") << row;
+    EXPECT_EQ(summary.at("lambda_rule"), "one-se");
+    for (const char* tag : {"l2", "ours"}) {
+      const nlohmann::json& choice = summary.at("lambda_choice").at(tag);
+      EXPECT_EQ(choice.at("lambda").get<double>(), 1.0) << tag;
+      EXPECT_GE(choice.at("standard_error_mm").get<double>(), 0.0) << tag;  // two folds
+      EXPECT_GE(choice.at("threshold_mm").get<double>(), choice.at("least_error_mm").get<double>()) << tag;
+    }
   }
   // Pinned values (this machine kind, measured when the pipeline landed), in mm.
   // Ground truth: a deterministic full-space run (Newton to ‖∇Φ‖ ≤ 1e-8 relative); 1 % covers compiler and
@@ -257,3 +275,5 @@ TEST(Experiments, FitGroupsGiveTheTableOfOneProcess) {
   const nlohmann::json cp = read_json(dir / "two" / "state" / "fits" / "cv_ours_lambda0.1_without_OPEN_TRAIN_1.json");
   EXPECT_NE(cp.at("fingerprint").get<std::string>().find("cv_ours_lambda1_without_OPEN_TRAIN_1"), std::string::npos);
 }
+
+}  // namespace sflsh

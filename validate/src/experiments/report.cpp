@@ -249,7 +249,12 @@ void Report::write(RunFolder& run, nlohmann::json& summary) const {
     for (const auto& m : config.train_motions) doc << m << " ";
     doc << "· test motions: ";
     for (const auto& m : config.test_motions) doc << m << " ";
-    doc << "· λ (L2) = " << l2 << ", λ (ours) = " << ours << " (chosen by cross-validation).\n\n" << md;
+    doc << "· λ (L2) = " << l2 << ", λ (ours) = " << ours
+        << (config.cross_validation
+                ? fmt::format(" (chosen by cross-validation, rule {}: docs/fit.md, \"Choosing λ\").\n\n",
+                              lambda_rule_name(config.lambda_rule))
+                : std::string(" (the first of the λ values: no cross-validation).\n\n"))
+        << md;
     const auto [csv_e, md_e, js_e] = table(true);
     doc << "\n## RMS error of the per-vertex σ against the ground truth [mm]\n\n" << md_e;
     write_text_atomically(run.stage("table2.md"), doc.str());
@@ -458,14 +463,9 @@ void Report::write(RunFolder& run, nlohmann::json& summary) const {
       for (const reduced::FitStageReport& s : fit.stages) {
         fc << name << "," << s.controls << "," << s.iterations << fmt::format(",{:.6g},{:.6g},", s.loss_fit, s.loss_reg)
            << s.simulations << "," << s.jacobians << fmt::format(",{:.2f},", s.seconds) << s.reason << "\n";
-        fj.push_back({{"fit", name},
-                      {"controls", s.controls},
-                      {"iterations", s.iterations},
-                      {"loss_fit", s.loss_fit},
-                      {"loss_reg", s.loss_reg},
-                      {"simulations", s.simulations},
-                      {"seconds", s.seconds},
-                      {"reason", s.reason}});
+        nlohmann::json stage = reduced::stage_report_json(s);
+        stage["fit"] = name;
+        fj.push_back(std::move(stage));
       }
     write_text_atomically(run.stage("fits.csv"), fc.str());
     summary["fits"] = fj;

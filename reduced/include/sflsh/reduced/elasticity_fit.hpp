@@ -16,6 +16,8 @@
 #include <sflsh/reduced/shape_elasticity.hpp>
 #include <sflsh/reduced/simulation_pool.hpp>
 
+#include <nlohmann/json_fwd.hpp>
+
 #include <filesystem>
 #include <functional>
 #include <map>
@@ -90,6 +92,10 @@ struct FitStageReport {
   std::string reason;
   bool resumed = false;
 };
+
+/// A stage report as JSON (every field but `resumed`; checkpoints and validate's summary.json) and back.
+nlohmann::json stage_report_json(const FitStageReport& stage);
+FitStageReport stage_report_from_json(const nlohmann::json& json);
 
 struct FitResult {
   std::string name;

@@ -23,11 +23,11 @@ struct LambdaScore {
 };
 
 struct LambdaChoice {
-  double lambda = 0.0;           ///< chosen
-  double least_lambda = 0.0;     ///< λ with the least mean error
-  double least_error = 0.0;      ///< its mean error over folds [mm]
-  double standard_error = 0.0;   ///< of that mean: sample standard deviation / √folds [mm] (0 with one fold)
-  double threshold = 0.0;        ///< the largest mean error the rule accepts [mm]
+  double lambda = 0.0;              ///< chosen
+  double least_lambda = 0.0;        ///< λ with the least mean error
+  double least_error = 0.0;         ///< its mean error over folds [mm]
+  double standard_error = 0.0;      ///< of that mean: sample standard deviation / √folds [mm] (0 with one fold)
+  double threshold = 0.0;           ///< the largest mean error the rule accepts [mm]
   std::vector<double> mean_errors;  ///< per score, in the order given [mm] (NaN: no finite fold)
 };
 
