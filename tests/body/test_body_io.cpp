@@ -11,7 +11,8 @@
 #include <functional>
 #include <limits>
 
-using namespace sflsh;
+namespace sflsh {
+
 using ::testing::HasSubstr;
 
 namespace {
@@ -248,3 +249,5 @@ TEST(BodyIo, EveryMalformedKeyNamesTheKeyAndTheExpectedShape) {
     }
   }
 }
+
+}  // namespace sflsh

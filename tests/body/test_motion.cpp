@@ -9,6 +9,7 @@
 // White-box: the private curve and rig helpers of the procedural motions.
 #include "../../body/src/motion/curves.hpp"
 #include "../../body/src/motion/rig.hpp"
+#include "angles.hpp"
 #include "error_of.hpp"
 
 #include <Eigen/Geometry>
@@ -30,7 +31,7 @@ namespace {
 
 namespace md = motion_detail;
 constexpr double kG = 9.81;
-constexpr double kDeg = 3.14159265358979323846 / 180.0;
+using sflsh::testing::kDeg;
 
 // ---------------------------------------------------------------------------------------------
 // Helpers

@@ -1,6 +1,7 @@
 // The dance showcase motion (validity, periodicity, C¹ smoothness, joint ranges, planted feet) and
 // time-offset motions (offset_motion, make_procedural_motion / load_motion with a time offset).
 #include "../../body/src/motion/rig.hpp"
+#include "angles.hpp"
 
 #include <sflsh/body/body_model.hpp>
 #include <sflsh/body/motion.hpp>
@@ -16,7 +17,7 @@ namespace sflsh::body {
 namespace {
 
 namespace md = motion_detail;
-constexpr double kDeg = 3.14159265358979323846 / 180.0;
+using sflsh::testing::kDeg;
 
 double max_abs_difference(const Motion& a, std::size_t fa, const Motion& b, std::size_t fb) {
   return std::max((a.poses[fa] - b.poses[fb]).cwiseAbs().maxCoeff(), (a.trans[fa] - b.trans[fb]).cwiseAbs().maxCoeff());

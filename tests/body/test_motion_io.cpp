@@ -10,6 +10,7 @@
 // White-box: the private curve and rig helpers of the procedural motions.
 #include "../../body/src/motion/curves.hpp"
 #include "../../body/src/motion/rig.hpp"
+#include "angles.hpp"
 #include "error_of.hpp"
 
 #include <Eigen/Geometry>
@@ -31,7 +32,7 @@ namespace sflsh::body {
 namespace {
 
 namespace md = motion_detail;
-constexpr double kDeg = 3.14159265358979323846 / 180.0;
+using sflsh::testing::kDeg;
 
 std::filesystem::path temp_dir() {
   const auto dir = std::filesystem::temp_directory_path() / ("sflsh_test_motion_io_" + std::to_string(::getpid()));

@@ -8,7 +8,8 @@
 
 #include <fstream>
 
-using namespace sflsh;
+namespace sflsh {
+
 using ::testing::HasSubstr;
 
 TEST(Subjects, PaperTableOneIsShipped) {
@@ -62,3 +63,5 @@ TEST(Subjects, ParseBetas) {
   EXPECT_THAT([] { body::parse_betas("nan"); }, ::testing::ThrowsMessage<Error>(HasSubstr("not a number")));
   EXPECT_THROW(body::parse_betas(""), Error);
 }
+
+}  // namespace sflsh

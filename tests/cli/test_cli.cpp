@@ -17,7 +17,8 @@
 #include <fstream>
 #include <regex>
 
-using namespace sflsh;
+namespace sflsh {
+
 using sflsh::testing::count_entries;
 using sflsh::testing::run_sflsh;
 using ::testing::HasSubstr;
@@ -57,10 +58,10 @@ TEST_F(Cli, MotionExportWritesOneFramePerStepInVertexOrder) {
   const body::BodyModel model = body::load_body(dir_ / "synthetic.npz");
   const body::Motion motion = body::make_procedural_motion("shake_hips", 60.0, 6);
   const body::Poser poser(model, body::parse_betas("0.5 -1"));
-  const vtk::Points frame3 = vtk::read_points(out / "body_000003.vtp");
+  const sflsh::vtk::Points frame3 = sflsh::vtk::read_points(out / "body_000003.vtp");
   const body::RowMatrixX3d expected = poser.pose(motion.poses[3], motion.trans[3]);
   EXPECT_LT((frame3 - expected).cwiseAbs().maxCoeff(), 1e-9);
-  EXPECT_THAT(vtk::read_point_array_names(out / "body_000003.vtp"),
+  EXPECT_THAT(sflsh::vtk::read_point_array_names(out / "body_000003.vtp"),
               ::testing::IsSupersetOf({"displacement", "skin_weights_argmax", "Normals"}));
   sflsh::testing::expect_self_described(out / "body_000003.vtp");
 
@@ -93,7 +94,7 @@ TEST_F(Cli, AmassAtTheOutputRateIsUsedFrameForFrame) {
   const body::Poser poser(model, body::Betas::Zero());
   const body::Motion loaded = body::load_amass(dir_ / "clip.npz", 60.0);
   const body::RowMatrixX3d expected = poser.pose(m.poses[4], m.trans[4]) * loaded.world_from_body.transpose();
-  EXPECT_LT((vtk::read_points(out / "body_000004.vtp") - expected).cwiseAbs().maxCoeff(), 1e-9);
+  EXPECT_LT((sflsh::vtk::read_points(out / "body_000004.vtp") - expected).cwiseAbs().maxCoeff(), 1e-9);
 }
 
 TEST_F(Cli, HelpOnEverySubcommand) {
@@ -149,7 +150,7 @@ TEST_F(Cli, BodyExportAndInfo) {
   const auto out = dir_ / "export";
   const auto r = run_sflsh("-q body export " + body_arg() + " --subject DYNA_2 --out " + out.string(), dir_);
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_EQ(vtk::read_points(out / "body.vtp").rows(), 24 * 5);
+  EXPECT_EQ(sflsh::vtk::read_points(out / "body.vtp").rows(), 24 * 5);
   EXPECT_EQ(read_json(out / "summary.json")["subject"], "DYNA_2");
   const auto info = run_sflsh("body info " + body_arg() + " --json", dir_);
   ASSERT_EQ(info.exit_code, 0) << info.err;
@@ -158,3 +159,5 @@ TEST_F(Cli, BodyExportAndInfo) {
   EXPECT_EQ(json["joints"].size(), 24u);
   EXPECT_EQ(json["pose_correctives"], true);
 }
+
+}  // namespace sflsh

@@ -4,6 +4,7 @@
 #include "run_command.hpp"
 #include "scratch_dir.hpp"
 #include "self_described.hpp"
+#include "text_lines.hpp"
 
 #include <sflsh/core/summary.hpp>
 #include <sflsh/core/vtk_io.hpp>
@@ -17,7 +18,8 @@
 #include <optional>
 #include <sstream>
 
-using namespace sflsh;
+namespace sflsh {
+
 using sflsh::testing::count_entries;
 using sflsh::testing::run_sflsh;
 using ::testing::HasSubstr;
@@ -26,7 +28,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr const char* kHeader =
+constexpr const char* kCompareHeader =
     "model,handles,cubature,coordinates,seconds_per_frame,frames_per_second,sigma_mean_mm,recovered_fraction,rms_error_"
     "mm,"
     "relative_rms_error,sigma_correlation,trajectory_rms_mm,trajectory_max_mm";
@@ -46,12 +48,7 @@ std::vector<std::string> split(const std::string& line, char sep) {
   return out;
 }
 
-std::vector<std::string> lines_of(const fs::path& path) {
-  std::ifstream in(path);
-  std::vector<std::string> lines;
-  for (std::string line; std::getline(in, line);) lines.push_back(line);
-  return lines;
-}
+using sflsh::testing::lines_of;
 
 }  // namespace
 
@@ -74,7 +71,7 @@ TEST(CliCompare, WritesTheTradeoffTableAndErrorMapsForEveryConfiguration) {
   const std::vector<std::string> lines = lines_of(out / "tradeoff.csv");
   const long tets = summary["mesh"]["tets"].get<long>();
   ASSERT_EQ(lines.size(), 6u);
-  EXPECT_EQ(lines[0], kHeader);
+  EXPECT_EQ(lines[0], kCompareHeader);
   // K = 200 cubature tets for both: with 86 handles (258 coordinates) K = 100 under-samples the subspace and the
   // tets outside the cubature leave the material's range (compare reports it as out_of_range). Exact cubature
   // integrates every tet.
@@ -204,3 +201,5 @@ TEST(CliCompare, BadInputGivesOneLineAndWritesNothing) {
     EXPECT_FALSE(fs::exists(out)) << c.args;
   }
 }
+
+}  // namespace sflsh

@@ -11,7 +11,8 @@
 
 #include <fstream>
 
-using namespace sflsh;
+namespace sflsh {
+
 using sflsh::testing::count_entries;
 using sflsh::testing::run_sflsh;
 using ::testing::HasSubstr;
@@ -19,7 +20,7 @@ using ::testing::HasSubstr;
 namespace {
 
 // The coarse gmsh layer of the open body, cached in the build tree (shared with the meshing tests).
-std::string common_args() { return fmt::format("--mesher gmsh --mesh coarse --cache {}", SFLSH_TEST_CACHE); }
+std::string gmsh_coarse_args() { return fmt::format("--mesher gmsh --mesh coarse --cache {}", SFLSH_TEST_CACHE); }
 
 }  // namespace
 
@@ -27,14 +28,14 @@ TEST(CliMesh, WritesTheLayerSurfacesAndSummary) {
   const auto dir = sflsh::testing::scratch_dir();
   const auto out = dir / "layer";
   const auto result = run_sflsh(
-      fmt::format("-q mesh --subject OPEN_TRAIN_2 --thickness 0.4 {} --out {}", common_args(), out.string()), dir);
+      fmt::format("-q mesh --subject OPEN_TRAIN_2 --thickness 0.4 {} --out {}", gmsh_coarse_args(), out.string()), dir);
   ASSERT_EQ(result.exit_code, 0) << result.err;
   for (const char* file : {"layer.vtu", "outer.vtp", "inner.vtp", "summary.json"})
     EXPECT_TRUE(std::filesystem::exists(out / file)) << file;
-  const auto names = vtk::read_point_array_names(out / "layer.vtu");
+  const auto names = sflsh::vtk::read_point_array_names(out / "layer.vtu");
   for (const char* field : {"node_kind", "part", "thickness_fraction", "local_thickness"})
     EXPECT_THAT(names, ::testing::Contains(std::string(field)));
-  const auto h = vtk::read_point_array(out / "layer.vtu", "thickness_fraction");
+  const auto h = sflsh::vtk::read_point_array(out / "layer.vtu", "thickness_fraction");
   EXPECT_NEAR(h.minCoeff(), 0.4, 1e-9);
   EXPECT_NEAR(h.maxCoeff(), 0.4, 1e-9);
   const auto summary = read_json(out / "summary.json");
@@ -47,18 +48,19 @@ TEST(CliMesh, WritesTheLayerSurfacesAndSummary) {
   EXPECT_GT(summary["quality"]["thickness_max_m"].get<double>(), summary["quality"]["thickness_min_m"].get<double>());
   EXPECT_TRUE(summary["timings_s"].contains("retarget"));
   // The outer surface has one point per skin vertex of the region.
-  EXPECT_EQ(vtk::read_points(out / "outer.vtp").rows(), summary["skin_vertices"].get<long>());
+  EXPECT_EQ(sflsh::vtk::read_points(out / "outer.vtp").rows(), summary["skin_vertices"].get<long>());
   // Every array says its unit; part and node_kind come with the names of their values.
   for (const char* file : {"layer.vtu", "outer.vtp", "inner.vtp"}) sflsh::testing::expect_self_described(out / file);
-  sflsh::testing::expect_labels_named(out / "layer.vtu", vtk::read_point_array(out / "layer.vtu", "part"),
+  sflsh::testing::expect_labels_named(out / "layer.vtu", sflsh::vtk::read_point_array(out / "layer.vtu", "part"),
                                       "part_names");
-  sflsh::testing::expect_labels_named(out / "layer.vtu", vtk::read_cell_array(out / "layer.vtu", "part"), "part_names");
-  sflsh::testing::expect_labels_named(out / "layer.vtu", vtk::read_point_array(out / "layer.vtu", "node_kind"),
+  sflsh::testing::expect_labels_named(out / "layer.vtu", sflsh::vtk::read_cell_array(out / "layer.vtu", "part"),
+                                      "part_names");
+  sflsh::testing::expect_labels_named(out / "layer.vtu", sflsh::vtk::read_point_array(out / "layer.vtu", "node_kind"),
                                       "node_kind_names");
-  sflsh::testing::expect_labels_named(out / "outer.vtp", vtk::read_point_array(out / "outer.vtp", "part"),
+  sflsh::testing::expect_labels_named(out / "outer.vtp", sflsh::vtk::read_point_array(out / "outer.vtp", "part"),
                                       "part_names");
-  EXPECT_EQ(vtk::read_field_strings(out / "layer.vtu", "part_names").size(), 5u);
-  EXPECT_THAT(vtk::read_field_strings(out / "layer.vtu", "node_kind_names"),
+  EXPECT_EQ(sflsh::vtk::read_field_strings(out / "layer.vtu", "part_names").size(), 5u);
+  EXPECT_THAT(sflsh::vtk::read_field_strings(out / "layer.vtu", "node_kind_names"),
               ::testing::ElementsAre("interior", "outer", "inner", "side"));
 }
 
@@ -76,7 +78,7 @@ TEST(CliMesh, BadInputGivesOneLineAndWritesNothing) {
       {"--subject NOBODY", "NOBODY"},
   };
   for (const auto& c : cases) {
-    const auto result = run_sflsh(fmt::format("mesh {} {} --out {}", common_args(), c.args, out.string()), dir);
+    const auto result = run_sflsh(fmt::format("mesh {} {} --out {}", gmsh_coarse_args(), c.args, out.string()), dir);
     EXPECT_NE(result.exit_code, 0) << c.args;
     EXPECT_THAT(result.err, HasSubstr(c.message)) << c.args;
     EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
@@ -108,3 +110,5 @@ TEST(CliMesh, CorruptCacheIsReportedWithTheFile) {
       dir);
   EXPECT_EQ(result.exit_code, 0) << result.err;
 }
+
+}  // namespace sflsh

@@ -3,6 +3,7 @@
 // while the report is still written; bad lists fail at once with one line and write nothing.
 #include "run_command.hpp"
 #include "scratch_dir.hpp"
+#include "text_lines.hpp"
 
 #include <sflsh/core/summary.hpp>
 
@@ -23,7 +24,7 @@ namespace {
 namespace fs = std::filesystem;
 using sflsh::testing::text_of;
 
-constexpr const char* kHeader =
+constexpr const char* kSweepHeader =
     "mesh,subject,motion,status,error,frames,sigma_mm,newton_per_frame,seconds,fps,sigma_max_mm,solve_seconds,"
     "failed_attempts,factorizations,tets,coordinates,cubature_tets";
 
@@ -49,12 +50,7 @@ std::vector<std::string> cells_of(const std::string& line) {
   return cells;
 }
 
-std::vector<std::string> lines_of(const fs::path& path) {
-  std::ifstream in(path);
-  std::vector<std::string> lines;
-  for (std::string line; std::getline(in, line);) lines.push_back(line);
-  return lines;
-}
+using sflsh::testing::lines_of;
 
 /// The report files and nothing else (no staging folder left behind).
 void expect_report(const fs::path& out) {
@@ -77,7 +73,7 @@ TEST(CliSweep, ARepresentativeSliceRunsWithoutFailures) {
 
   const std::vector<std::string> lines = lines_of(out / "sweep.csv");
   ASSERT_EQ(lines.size(), 5u);
-  EXPECT_EQ(lines[0], kHeader);
+  EXPECT_EQ(lines[0], kSweepHeader);
   const std::vector<std::pair<std::string, std::string>> cases = {
       {"DYNA_1", "shake_hips"}, {"DYNA_1", "dance"}, {"OPEN_TEST_3", "shake_hips"}, {"OPEN_TEST_3", "dance"}};
   for (std::size_t i = 1; i < lines.size(); ++i) {

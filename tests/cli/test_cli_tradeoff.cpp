@@ -24,7 +24,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr const char* kHeader =
+constexpr const char* kTradeoffHeader =
     "model,integrator,mesh,handles,cubature,substeps,step_s,setup_seconds,seconds_per_frame,rms_error_mm,relative_"
     "error,"
     "sigma_ratio,valid,pareto,mass";
@@ -75,7 +75,7 @@ TEST(CliTradeoff, ScoresEveryModelAgainstTheReferenceAndRecommendsTheCheapestWit
   sflsh::testing::expect_drawn_png(out / "tradeoff.png", 900, 600);  // the error–time chart, drawn
 
   const Table t = read_table(out / "tradeoff.csv");
-  EXPECT_EQ(t.header, kHeader);
+  EXPECT_EQ(t.header, kTradeoffHeader);
   ASSERT_EQ(t.rows.size(), 4u);  // reference, full 1/30, full 1/60, reduced
   for (const auto& r : t.rows) ASSERT_EQ(r.size(), 15u);
   // The reference scores itself: exactly zero error, σ ratio 1, and it is on the front.
@@ -158,7 +158,7 @@ TEST(CliTradeoff, SweepsIntegratorsAndMassesAndChecksTheReference) {
   EXPECT_LT(check_mm, 0.25 * error["newmark/consistent"])
       << "the reference is not converged in time against the rows it scores";
   const Table t = read_table(out / "tradeoff.csv");
-  EXPECT_EQ(t.header, kHeader);
+  EXPECT_EQ(t.header, kTradeoffHeader);
   for (std::size_t i = 0; i < t.rows.size(); ++i)
     EXPECT_THAT(t.rows[i].back(), ::testing::AnyOf("lumped", "consistent")) << i;
 }

@@ -11,7 +11,8 @@
 #include <iterator>
 #include <limits>
 
-using namespace sflsh;
+namespace sflsh {
+
 using ::testing::HasSubstr;
 
 TEST(Npz, RoundTripOfEveryKind) {
@@ -219,3 +220,5 @@ TEST(Npz, MembersWithAWrongCrcAreRefused) {
               ::testing::ThrowsMessage<Error>(::testing::AllOf(HasSubstr(path.string() + ": trans: "), HasSubstr("CRC"),
                                                                HasSubstr("corrupt archive"))));
 }
+
+}  // namespace sflsh

@@ -13,7 +13,7 @@
 
 #include <fstream>
 
-using namespace sflsh;
+namespace sflsh {
 
 TEST(AtomicFile, FailedWriterLeavesTargetUntouched) {
   const auto dir = sflsh::testing::scratch_dir();
@@ -142,25 +142,27 @@ TEST(InterruptCleanup, RemovesATreeWithSignalSafeCalls) {
 
 TEST(VtkOutput, SurfaceAndTetsReadBackWithVtkReaders) {
   const auto dir = sflsh::testing::scratch_dir();
-  vtk::Points points(4, 3);
+  sflsh::vtk::Points points(4, 3);
   points << 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1;
-  vtk::Cells triangles(4, 3);
+  sflsh::vtk::Cells triangles(4, 3);
   triangles << 0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3;
-  vtk::Fields fields;
+  sflsh::vtk::Fields fields;
   fields.point_data.push_back({"displacement", Eigen::MatrixXd::Constant(4, 3, 0.5), false});
   fields.point_data.push_back({"label", (Eigen::MatrixXd(4, 1) << 0, 1, 2, 3).finished(), true});
-  vtk::write_surface(dir / "s.vtp", points, triangles, fields);
-  EXPECT_TRUE(vtk::read_points(dir / "s.vtp").isApprox(points));
-  EXPECT_THAT(vtk::read_point_array_names(dir / "s.vtp"), ::testing::ElementsAre("displacement", "label", "Normals"));
-  EXPECT_EQ(vtk::read_point_array(dir / "s.vtp", "label")(3, 0), 3.0);
+  sflsh::vtk::write_surface(dir / "s.vtp", points, triangles, fields);
+  EXPECT_TRUE(sflsh::vtk::read_points(dir / "s.vtp").isApprox(points));
+  EXPECT_THAT(sflsh::vtk::read_point_array_names(dir / "s.vtp"),
+              ::testing::ElementsAre("displacement", "label", "Normals"));
+  EXPECT_EQ(sflsh::vtk::read_point_array(dir / "s.vtp", "label")(3, 0), 3.0);
 
-  vtk::Cells tet(1, 4);
+  sflsh::vtk::Cells tet(1, 4);
   tet << 0, 1, 2, 3;
-  vtk::write_unstructured(dir / "t.vtu", points, tet, fields);
-  EXPECT_TRUE(vtk::read_points(dir / "t.vtu").isApprox(points));
-  EXPECT_TRUE(vtk::read_point_array(dir / "t.vtu", "displacement").isApprox(Eigen::MatrixXd::Constant(4, 3, 0.5)));
+  sflsh::vtk::write_unstructured(dir / "t.vtu", points, tet, fields);
+  EXPECT_TRUE(sflsh::vtk::read_points(dir / "t.vtu").isApprox(points));
+  EXPECT_TRUE(
+      sflsh::vtk::read_point_array(dir / "t.vtu", "displacement").isApprox(Eigen::MatrixXd::Constant(4, 3, 0.5)));
 
-  vtk::PvdSeries series(dir / "series.pvd");
+  sflsh::vtk::PvdSeries series(dir / "series.pvd");
   series.add(0.0, "s.vtp");
   series.add(1.0 / 60.0, "t.vtu");
   series.write();
@@ -172,17 +174,17 @@ TEST(VtkOutput, SurfaceAndTetsReadBackWithVtkReaders) {
 
 TEST(VtkOutput, RefusesNonFiniteDataAndWritesNothing) {
   const auto dir = sflsh::testing::scratch_dir();
-  vtk::Points points = vtk::Points::Zero(3, 3);
+  sflsh::vtk::Points points = sflsh::vtk::Points::Zero(3, 3);
   points(1, 0) = std::nan("");
-  vtk::Cells tri(1, 3);
+  sflsh::vtk::Cells tri(1, 3);
   tri << 0, 1, 2;
-  EXPECT_THROW(vtk::write_surface(dir / "bad.vtp", points, tri), Error);
-  vtk::Points ok = vtk::Points::Identity(3, 3);
-  vtk::Fields fields;
+  EXPECT_THROW(sflsh::vtk::write_surface(dir / "bad.vtp", points, tri), Error);
+  sflsh::vtk::Points ok = sflsh::vtk::Points::Identity(3, 3);
+  sflsh::vtk::Fields fields;
   fields.point_data.push_back({"short", Eigen::MatrixXd::Zero(2, 1), false});
-  EXPECT_THROW(vtk::write_surface(dir / "bad.vtp", ok, tri, fields), Error);
+  EXPECT_THROW(sflsh::vtk::write_surface(dir / "bad.vtp", ok, tri, fields), Error);
   tri(0, 2) = 7;
-  EXPECT_THROW(vtk::write_surface(dir / "bad.vtp", ok, tri), Error);
+  EXPECT_THROW(sflsh::vtk::write_surface(dir / "bad.vtp", ok, tri), Error);
   EXPECT_EQ(sflsh::testing::count_entries(dir), 0u);
 }
 
@@ -198,3 +200,5 @@ TEST(Summary, JsonRoundTripAndParseErrors) {
   EXPECT_THAT([&] { read_json(dir / "bad.json"); },
               ::testing::ThrowsMessage<Error>(::testing::HasSubstr("bad.json: invalid JSON")));
 }
+
+}  // namespace sflsh

@@ -12,7 +12,7 @@
 #include <sstream>
 #include <thread>
 
-using namespace sflsh;
+namespace sflsh {
 
 namespace {
 
@@ -56,3 +56,5 @@ TEST(Progress, ItemsDoneEarlierDoNotCountTowardTheRate) {
   EXPECT_LE(std::stod(match[1].str()), 20.5);
   EXPECT_GT(std::stod(match[1].str()), 0.0);
 }
+
+}  // namespace sflsh

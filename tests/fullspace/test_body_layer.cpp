@@ -1,5 +1,7 @@
 // The body layer of the full-space solver: posing that reproduces `sflsh motion export`, a C¹ skinning
 // trajectory whose rates are its derivatives, the attachment of inner and side nodes, and a short run.
+#include "open_body.hpp"
+
 #include <sflsh/body/body_io.hpp>
 #include <sflsh/body/motion.hpp>
 #include <sflsh/body/skinning.hpp>
@@ -17,10 +19,7 @@ namespace {
 
 using namespace sflsh::model;  // the body layer, its trajectory and writer moved to the model library
 
-const body::BodyModel& open_body() {
-  static const body::BodyModel model = body::load_body(std::filesystem::path(SFLSH_DATA_DIR) / "open_body.npz");
-  return model;
-}
+using sflsh::testing::open_body;
 
 body::Betas some_beta() {
   body::Betas beta = body::Betas::Zero();

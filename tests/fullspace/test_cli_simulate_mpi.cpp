@@ -24,7 +24,7 @@ using model::MassKind;
 using sflsh::testing::run_sflsh;
 using sflsh::testing::scratch_dir;
 
-bool have_mpiexec() { return std::system("command -v mpiexec >/dev/null 2>&1") == 0; }
+using sflsh::testing::have_mpiexec;
 
 class CliSimulateMpi : public ::testing::TestWithParam<std::tuple<Integrator, MassKind>> {};
 

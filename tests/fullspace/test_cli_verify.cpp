@@ -2,6 +2,7 @@
 // check, backward Euler vs the SUNDIALS reference on a free oscillation, and bad input.
 #include "run_command.hpp"
 #include "scratch_dir.hpp"
+#include "text_file.hpp"
 
 #include <sflsh/core/summary.hpp>
 #include <sflsh/fullspace/msh_reader.hpp>
@@ -30,10 +31,7 @@ fs::path write_bar(const fs::path& dir, MshVersion version = MshVersion::v41, st
   return path;
 }
 
-void write_text(const fs::path& path, const std::string& text) {
-  std::ofstream out(path);
-  out << text;
-}
+using sflsh::testing::write_text;
 
 /// The bar clamped at x = 0, its far end pulled along y by a smooth drive; records the far end.
 std::string bar_problem(const std::string& extra_time = "", const std::string& extra = "") {
@@ -114,7 +112,7 @@ TEST(CliVerify, WritesHistoryWithTheContractHeaderAndDrivenValues) {
   EXPECT_TRUE(fs::exists(dir / "out" / "solution.pvd"));
 }
 
-bool have_mpiexec() { return std::system("command -v mpiexec >/dev/null 2>&1") == 0; }
+using sflsh::testing::have_mpiexec;
 
 TEST(CliVerify, TwoMpiProcessesMatchOneWithinSolverTolerance) {
   if (!have_mpiexec()) GTEST_SKIP() << "mpiexec not found";

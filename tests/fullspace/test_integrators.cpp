@@ -2,6 +2,7 @@
 // blocks: Newmark keeps the energy of an undamped oscillation, BDF2 and backward Euler converge at their
 // orders, and consistent mass stays finite and close to lumped for every integrator.
 #include "dense_hessian.hpp"
+#include "total_energy.hpp"
 
 #include <sflsh/fullspace/fullspace_solver.hpp>
 #include <sflsh/fullspace/msh_reader.hpp>
@@ -94,10 +95,7 @@ State released(const Problem& p, const Mode& mode, double v0) {
   return s;
 }
 
-double total_energy(const Problem& p, const State& s) {
-  const Energies e = energies(p, s);
-  return e.kinetic + e.elastic + e.gravity;
-}
+using sflsh::testing::total_energy;
 
 class NewmarkEnergy : public ::testing::TestWithParam<MassKind> {};
 

@@ -2,6 +2,7 @@
 // a flipped tet), exact round trips, the structured box mesh, and one-line errors for malformed files.
 #include "error_of.hpp"
 #include "scratch_dir.hpp"
+#include "text_file.hpp"
 
 #include <sflsh/core/error.hpp>
 #include <sflsh/fullspace/msh_reader.hpp>
@@ -21,11 +22,7 @@ namespace fs = std::filesystem;
 using sflsh::testing::error_of;
 using sflsh::testing::scratch_dir;
 
-fs::path write_text(const fs::path& path, const std::string& text) {
-  std::ofstream out(path);
-  out << text;
-  return path;
-}
+using sflsh::testing::write_text;
 
 double signed_volume(const MshMesh& mesh, int e) {
   Eigen::Matrix3d dm;

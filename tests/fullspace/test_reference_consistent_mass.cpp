@@ -2,6 +2,7 @@
 // matrix against the equations of motion, agreement with the lumped path where the two coincide (rigid motion,
 // mesh refinement), energy conservation of a free oscillation, and one-line errors for bad configurations.
 #include "error_of.hpp"
+#include "total_energy.hpp"
 
 #include <sflsh/core/error.hpp>
 #include <sflsh/fullspace/msh_reader.hpp>
@@ -73,10 +74,7 @@ class SpinningFrame : public NodeTrajectory {
   Eigen::Vector3d acceleration_;
 };
 
-double total_energy(const Problem& p, const State& s) {
-  const Energies e = energies(p, s);
-  return e.kinetic + e.elastic + e.gravity;
-}
+using sflsh::testing::total_energy;
 
 const Eigen::Vector3d kBar(0.1, 0.02, 0.02);  // [m]
 constexpr std::array<int, 3> kBarCells{4, 1, 1};

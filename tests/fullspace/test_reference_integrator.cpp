@@ -1,6 +1,8 @@
 // The SUNDIALS reference integrator on hand-built bars: its Jacobian against finite differences, energy
 // conservation of a free oscillation, convergence in rtol, exact rigid motions (a translating frame,
 // free fall), and clean failures (non-finite forcing, bad input).
+#include "total_energy.hpp"
+
 #include <sflsh/core/error.hpp>
 #include <sflsh/fullspace/reference_integrator.hpp>
 #include <sflsh/material/skin_material.hpp>
@@ -103,10 +105,7 @@ Eigen::Matrix3d some_rotation() {
   return Eigen::AngleAxisd(0.7, Eigen::Vector3d(1.0, -2.0, 0.5).normalized()).toRotationMatrix();
 }
 
-double total_energy(const Problem& p, const State& s) {
-  const Energies e = energies(p, s);
-  return e.kinetic + e.elastic + e.gravity;
-}
+using sflsh::testing::total_energy;
 
 TEST(ReferenceIntegrator, JacobianMatchesFiniteDifferences) {
   // A deformed, moving state under a spinning frame with a clamped end, exact Hessian: every block of

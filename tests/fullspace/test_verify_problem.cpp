@@ -26,7 +26,7 @@ using sflsh::testing::scratch_dir;
 constexpr double kPi = std::numbers::pi;
 
 /// A 10 cm × 2 cm × 2 cm bar of 4 × 1 × 1 cells, its faces as node groups, in dir/mesh/bar.msh.
-void write_bar(const fs::path& dir) {
+void write_small_bar(const fs::path& dir) {
   const MshMesh mesh = box_tet_mesh(Eigen::Vector3d(0.1, 0.02, 0.02), {4, 1, 1});
   fs::create_directories(dir / "mesh");
   write_msh(dir / "mesh" / "bar.msh", mesh.nodes, mesh.tets, mesh.node_groups, MshVersion::v22);
@@ -80,7 +80,7 @@ std::string edited(const std::string& from, const std::string& to) {
 /// The error of loading `text`; checks that it is one line naming problem.toml.
 std::string load_error(const std::string& text) {
   const fs::path dir = scratch_dir();
-  write_bar(dir);
+  write_small_bar(dir);
   const fs::path path = write_problem(dir, text);
   const std::string message = error_of([&] { load_verify_problem(path); });
   EXPECT_NE(message.find(path.string()), std::string::npos) << message;
@@ -90,7 +90,7 @@ std::string load_error(const std::string& text) {
 
 TEST(VerifyProblem, FullExampleParses) {
   const fs::path dir = scratch_dir();
-  write_bar(dir);
+  write_small_bar(dir);
   const VerifyProblem p = load_verify_problem(write_problem(dir, kFull));
   EXPECT_EQ(p.mesh_path, dir / "mesh" / "bar.msh");
   EXPECT_EQ(p.mesh.nodes.rows(), 5 * 2 * 2);
@@ -139,7 +139,7 @@ TEST(VerifyProblem, FullExampleParses) {
 
 TEST(VerifyProblem, MinimalStaticProblemUsesDefaults) {
   const fs::path dir = scratch_dir();
-  write_bar(dir);
+  write_small_bar(dir);
   const VerifyProblem p = load_verify_problem(write_problem(dir, R"(mesh = "mesh/bar.msh"
 [material]
 young_tangent = 5000
@@ -205,7 +205,7 @@ TEST(VerifyProblem, BadValuesAreOneLineErrors) {
 
 TEST(VerifyProblem, MassAndIntegratorSpellings) {
   const fs::path dir = scratch_dir();
-  write_bar(dir);
+  write_small_bar(dir);
   for (const std::string integrator : {"backward_euler", "bdf2", "newmark", "reference"}) {
     for (const std::string mass : {"lumped", "consistent"}) {
       const std::string text = edited("density = 1000.0\n", "density = 1000.0\nmass = \"" + mass + "\"\n");
@@ -287,7 +287,7 @@ TEST(VerifyProblem, FixedAndDrivenComponentIsAnErrorButFixingTwiceIsNot) {
   EXPECT_NE(twice.find("drive[2].component"), std::string::npos) << twice;
 
   const fs::path dir = scratch_dir();
-  write_bar(dir);
+  write_small_bar(dir);
   const VerifyProblem p = load_verify_problem(
       write_problem(dir, edited("[[drive]]", "[[fix]]\ngroup = \"ymin\"\ncomponents = \"yx\"\n[[drive]]")));
   ASSERT_EQ(p.fixes.size(), 2u);

@@ -3,6 +3,7 @@
 #include "png_check.hpp"
 #include "run_command.hpp"
 #include "scratch_dir.hpp"
+#include "text_lines.hpp"
 
 #include <sflsh/core/summary.hpp>
 
@@ -25,12 +26,7 @@ std::size_t count_lines(const std::string& text) {
   return static_cast<std::size_t>(std::count(text.begin(), text.end(), '\n'));
 }
 
-std::vector<std::string> lines_of(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  std::vector<std::string> lines;
-  for (std::string line; std::getline(in, line);) lines.push_back(line);
-  return lines;
-}
+using sflsh::testing::lines_of;
 
 }  // namespace
 

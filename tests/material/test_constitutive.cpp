@@ -15,7 +15,8 @@
 #include <string>
 #include <tuple>
 
-using namespace sflsh;
+namespace sflsh {
+
 using namespace sflsh::material;
 using sflsh::testing::central_gradient;
 using sflsh::testing::central_jacobian;
@@ -83,7 +84,7 @@ SkinMaterial skin(double yt, double yn, double nu = 0.2, double s = 4.0) {
 
 // Materials: SFLSH's defaults with a softer normal, a stiff normal with auxetic ν and strong saturation,
 // the other reading of c, and the Fung factor off (plain orthotropic StVK).
-SkinMaterial material_case(int k) {
+SkinMaterial constitutive_case(int k) {
   if (k == 0) return skin(5000.0, 2000.0);
   if (k == 1) return skin(1000.0, 20000.0, -0.3, 8.0);
   SkinMaterial m = skin(3000.0, 3000.0 * 0.4, 0.45, 4.0);
@@ -109,7 +110,7 @@ class Derivatives : public ::testing::TestWithParam<std::tuple<Regime, int, int>
 // that still catches any wrong term (those are O(1) relative).
 TEST_P(Derivatives, GradientAndHessianMatchFiniteDifferences) {
   const auto [regime, mat, nrm] = GetParam();
-  const OrthotropicFung m = make_orthotropic_fung(material_case(mat), normal_case(nrm));
+  const OrthotropicFung m = make_orthotropic_fung(constitutive_case(mat), normal_case(nrm));
   std::mt19937 rng(1000 + 100 * static_cast<int>(regime) + 10 * mat + nrm);
   for (int sample = 0; sample < 4; ++sample) {
     const Eigen::Matrix3d F = random_F(regime, rng);
@@ -136,7 +137,7 @@ TEST_P(Derivatives, GradientAndHessianMatchFiniteDifferences) {
 // by the compliance inversion (condition ≲ 1e2 here), so 1e-11 relative.
 TEST_P(Derivatives, AgreesWithIndependentlyWrittenEnergy) {
   const auto [regime, mat, nrm] = GetParam();
-  const SkinMaterial sm = material_case(mat);
+  const SkinMaterial sm = constitutive_case(mat);
   const OrthotropicFung m = make_orthotropic_fung(sm, normal_case(nrm));
   const auto ref = sflsh::testing::reference_material(sm, normal_case(nrm));
   std::mt19937 rng(2000 + 100 * static_cast<int>(regime) + 10 * mat + nrm);
@@ -160,8 +161,8 @@ INSTANTIATE_TEST_SUITE_P(Regimes, Derivatives,
 
 // Ψ₀ and its derivatives are the Fung-off energy, bit for bit apart from the factor 1 (g = 1).
 TEST(OrthotropicFung, StvkPartIsTheEnergyWithTheFungFactorOff) {
-  const OrthotropicFung with = make_orthotropic_fung(material_case(2), normal_case(1));
-  SkinMaterial off_material = material_case(2);
+  const OrthotropicFung with = make_orthotropic_fung(constitutive_case(2), normal_case(1));
+  SkinMaterial off_material = constitutive_case(2);
   off_material.fung_scale = FungScale::kNone;
   const OrthotropicFung off = make_orthotropic_fung(off_material, normal_case(1));
   std::mt19937 rng(9);
@@ -175,7 +176,7 @@ TEST(OrthotropicFung, StvkPartIsTheEnergyWithTheFungFactorOff) {
 }
 
 TEST(OrthotropicFung, ZeroEnergyAndStressAtRestAndUnderRotation) {
-  const OrthotropicFung m = make_orthotropic_fung(material_case(0), normal_case(1));
+  const OrthotropicFung m = make_orthotropic_fung(constitutive_case(0), normal_case(1));
   EXPECT_EQ(psi_ortho_fung(Eigen::Matrix3d::Identity(), m), 0.0);
   EXPECT_EQ(dpsi_ortho_fung_dF(Eigen::Matrix3d::Identity(), m), Eigen::Matrix3d::Zero());
   std::mt19937 rng(7);
@@ -191,7 +192,7 @@ TEST(OrthotropicFung, ZeroEnergyAndStressAtRestAndUnderRotation) {
 // frame covariance Ψ(Q F Qᵀ; Q n) = Ψ(F; n). Rounding only: 1e-12 relative.
 TEST(OrthotropicFung, RotationInvariance) {
   const Eigen::Vector3d n = normal_case(1);
-  const SkinMaterial sm = material_case(0);
+  const SkinMaterial sm = constitutive_case(0);
   const OrthotropicFung m = make_orthotropic_fung(sm, n);
   std::mt19937 rng(11);
   for (int k = 0; k < 10; ++k) {
@@ -360,3 +361,5 @@ TEST(SkinMaterial, ValidationNamesTheBadField) {
   EXPECT_THAT(error_of([] { make_orthotropic_fung(skin(5000.0, 0.0), Eigen::Vector3d::UnitZ()); }),
               HasSubstr("young_normal"));
 }
+
+}  // namespace sflsh

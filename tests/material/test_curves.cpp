@@ -18,12 +18,13 @@
 #include <sstream>
 #include <tuple>
 
-using namespace sflsh;
+namespace sflsh {
+
 using namespace sflsh::material;
 
 namespace {
 
-SkinMaterial material_case(int k) {
+SkinMaterial curve_case(int k) {
   SkinMaterial m;
   if (k == 0) {  // SFLSH's ν and saturation, softer through the thickness
     m.young_tangent = 5000.0;
@@ -57,7 +58,7 @@ class Curves : public ::testing::TestWithParam<std::tuple<CurveTest, int>> {};
 // and is still ~1e-6 Pa: any wrong lateral stretch or stress formula misses it by far.
 TEST_P(Curves, EverySampleAgreesWithTheIndependentEnergy) {
   const auto [test, mat] = GetParam();
-  const SkinMaterial sm = material_case(mat);
+  const SkinMaterial sm = curve_case(mat);
   const auto ref = sflsh::testing::reference_material(sm, Eigen::Vector3d::UnitZ());
   const MaterialCurve curve = material_curve(sm, test);
   ASSERT_EQ(curve.test, test);
@@ -87,7 +88,7 @@ TEST_P(Curves, EverySampleAgreesWithTheIndependentEnergy) {
 
 TEST_P(Curves, StressIsZeroAtZeroStrainAndIncreasing) {
   const auto [test, mat] = GetParam();
-  const MaterialCurve curve = material_curve(material_case(mat), test);
+  const MaterialCurve curve = material_curve(curve_case(mat), test);
   for (std::size_t i = 0; i < curve.points.size(); ++i) {
     if (curve.points[i].strain == 0.0) {
       EXPECT_EQ(curve.points[i].stress, 0.0);
@@ -110,7 +111,7 @@ INSTANTIATE_TEST_SUITE_P(AllTests, Curves,
 // the lateral solve's 1e-11·Y residual over 2e-5 ≈ 1e-6·Y: 1e-5 relative.
 TEST(Curves, SmallStrainSlopesAreTheEngineeringConstants) {
   for (int mat : {0, 1, 2}) {
-    const SkinMaterial sm = material_case(mat);
+    const SkinMaterial sm = curve_case(mat);
     auto slope = [&](CurveTest t) {
       return (curve_point(sm, t, 1e-5).stress - curve_point(sm, t, -1e-5).stress) / 2e-5;
     };
@@ -124,7 +125,7 @@ TEST(Curves, SmallStrainSlopesAreTheEngineeringConstants) {
 // Loading along i gives lateral strain ε_j = −ν_ij ε_i at small strain (ν_ij = ν√(E_i/E_j), FEBio's convention);
 // contraction in tension, expansion in compression.
 TEST(Curves, LateralStretchesFollowTheOrthotropicPoissonRatios) {
-  const SkinMaterial sm = material_case(0);
+  const SkinMaterial sm = curve_case(0);
   const double eps = 1e-4;  // second-order terms ~ε² = 1e-8 against ε·ν ~ 1e-5: 1e-3 relative
   const CurvePoint t = curve_point(sm, CurveTest::kUniaxialTangent, eps);
   EXPECT_NEAR((1.0 - t.F(1, 1)) / eps, sm.poisson, 1e-3 * sm.poisson);  // ν₁₂ = ν
@@ -145,7 +146,7 @@ TEST(Curves, LateralStretchesFollowTheOrthotropicPoissonRatios) {
 // Fung exponent is (E_load/c)·E_LL² — a closed form for the solved lateral state (1e-9: the lateral
 // residual bound of 1e-11·scale perturbs Ψ₀ at that level at most).
 TEST(Curves, UniaxialFungExponentIsTheClosedForm) {
-  const SkinMaterial sm = material_case(0);
+  const SkinMaterial sm = curve_case(0);
   const OrthotropicFung m = make_orthotropic_fung(sm, Eigen::Vector3d::UnitZ());
   for (CurveTest test : {CurveTest::kUniaxialTangent, CurveTest::kUniaxialNormal}) {
     const double young = test == CurveTest::kUniaxialNormal ? sm.young_normal : sm.young_tangent;
@@ -159,7 +160,7 @@ TEST(Curves, UniaxialFungExponentIsTheClosedForm) {
 
 TEST(Curves, CsvHasTheDocumentedLayout) {
   const auto dir = sflsh::testing::scratch_dir();
-  const std::vector<MaterialCurve> curves = material_curves(material_case(0));
+  const std::vector<MaterialCurve> curves = material_curves(curve_case(0));
   ASSERT_EQ(curves.size(), 3u);
   write_curves_csv(dir / "curves.csv", curves);
   std::ifstream in(dir / "curves.csv");
@@ -192,11 +193,13 @@ TEST(Curves, CsvHasTheDocumentedLayout) {
 }
 
 TEST(Curves, BadInputThrows) {
-  SkinMaterial sm = material_case(0);
+  SkinMaterial sm = curve_case(0);
   EXPECT_THAT(sflsh::testing::error_of([&] { material_curve(sm, CurveTest::kShear, 0.0); }),
               ::testing::HasSubstr("strain step"));
   sm.young_normal = -5.0;
   EXPECT_THAT(sflsh::testing::error_of([&] { material_curves(sm); }), ::testing::HasSubstr("young_normal"));
-  EXPECT_THAT(sflsh::testing::error_of([&] { curve_point(material_case(0), CurveTest::kUniaxialTangent, -1.5); }),
+  EXPECT_THAT(sflsh::testing::error_of([&] { curve_point(curve_case(0), CurveTest::kUniaxialTangent, -1.5); }),
               ::testing::HasSubstr("non-positive stretch"));
 }
+
+}  // namespace sflsh

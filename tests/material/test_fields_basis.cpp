@@ -16,7 +16,8 @@
 
 #include <random>
 
-using namespace sflsh;
+namespace sflsh {
+
 using namespace sflsh::material;
 using sflsh::testing::error_of;
 using sflsh::testing::FieldMesh;
@@ -305,3 +306,5 @@ TEST(BiharmonicBasis, SavesAndLoadsTheCache) {
   npz::write(path, {{"phi", npz::make_f64(basis.phi)}});
   EXPECT_THAT(error_of([&] { load_basis(path); }), HasSubstr("control_vertices"));
 }
+
+}  // namespace sflsh

@@ -10,7 +10,8 @@
 
 #include <set>
 
-using namespace sflsh;
+namespace sflsh {
+
 using namespace sflsh::material;
 using sflsh::testing::error_of;
 using sflsh::testing::FieldMesh;
@@ -204,3 +205,5 @@ TEST(ControlPoints, BadInputGivesClearErrors) {
   options.part[2] = -1;
   EXPECT_THAT(error_of([&] { place_control_points(patch.V, patch.F, 4, options); }), HasSubstr("part id of vertex 2"));
 }
+
+}  // namespace sflsh

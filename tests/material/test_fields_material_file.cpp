@@ -13,7 +13,8 @@
 #include <fstream>
 #include <random>
 
-using namespace sflsh;
+namespace sflsh {
+
 using namespace sflsh::material;
 using sflsh::testing::error_of;
 using ::testing::HasSubstr;
@@ -175,3 +176,5 @@ TEST(MaterialFile, RefusesToWriteAnInvalidFile) {
   EXPECT_THAT(error_of([&] { save_material_file(path, m); }), HasSubstr("young_tangent = 1000000000 is outside"));
   EXPECT_FALSE(std::filesystem::exists(path));
 }
+
+}  // namespace sflsh

@@ -11,7 +11,8 @@
 
 #include <random>
 
-using namespace sflsh;
+namespace sflsh {
+
 using namespace sflsh::material;
 using sflsh::testing::error_of;
 using ::testing::HasSubstr;
@@ -95,3 +96,5 @@ TEST(FieldParameters, FieldStaysWithinTheBoundsAndInterpolates) {
   EXPECT_THAT(error_of([&] { evaluate_field(basis.phi, kappa.topRows(12)); }),
               HasSubstr("basis has 24 functions but 12 control values"));
 }
+
+}  // namespace sflsh

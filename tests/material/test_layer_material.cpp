@@ -10,7 +10,8 @@
 
 #include <random>
 
-using namespace sflsh;
+namespace sflsh {
+
 using sflsh::testing::error_of;
 using ::testing::HasSubstr;
 
@@ -116,3 +117,5 @@ TEST(ThroughThickness, LinearDepthGivesTheExactNormal) {
   EXPECT_THAT(error_of([&] { material::through_thickness_normals(nodes, tets, Eigen::VectorXd::Zero(4)); }),
               HasSubstr("no depth gradient"));
 }
+
+}  // namespace sflsh

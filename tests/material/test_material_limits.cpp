@@ -12,7 +12,8 @@
 
 #include <fstream>
 
-using namespace sflsh;
+namespace sflsh {
+
 using namespace sflsh::material;
 using sflsh::testing::error_of;
 using ::testing::HasSubstr;
@@ -96,3 +97,5 @@ TEST(MaterialLimits, BodyChecksNameTheFileAndLineNotABareMaterial) {
 }
 
 }  // namespace
+
+}  // namespace sflsh

@@ -10,7 +10,8 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-using namespace sflsh;
+namespace sflsh {
+
 using namespace sflsh::material;
 using sflsh::testing::random_rotation;
 using sflsh::testing::relative_error;
@@ -174,3 +175,5 @@ TEST(TetElement, RejectsInvertedAndDegenerateRestTets) {
   nan(0, 0) = std::nan("");
   EXPECT_THROW(make_tet_rest(nan), Error);
 }
+
+}  // namespace sflsh

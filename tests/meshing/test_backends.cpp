@@ -17,7 +17,8 @@
 #include <map>
 #include <set>
 
-using namespace sflsh;
+namespace sflsh {
+
 using meshing::Mesher;
 using sflsh::testing::error_of;
 using sflsh::testing::Shell;
@@ -347,3 +348,5 @@ TEST(SizeCalibration, DISABLED_PresetsOnLayerLikeShells) {
         std::fflush(stdout);
       }
 }
+
+}  // namespace sflsh

@@ -9,7 +9,8 @@
 
 #include <fstream>
 
-using namespace sflsh;
+namespace sflsh {
+
 using sflsh::testing::error_of;
 using sflsh::testing::open_body;
 using ::testing::HasSubstr;
@@ -98,3 +99,5 @@ TEST(LayerCache, KeyNamesEverythingTheMeshDependsOn) {
   options.template_thickness = 0.4;
   EXPECT_NE(meshing::layer_cache_key(open_body(), options), key);
 }
+
+}  // namespace sflsh

@@ -8,7 +8,8 @@
 
 #include <map>
 
-using namespace sflsh;
+namespace sflsh {
+
 using sflsh::testing::coarse_layer;
 using sflsh::testing::open_body;
 
@@ -173,3 +174,5 @@ TEST_P(LayerMeshTest, NodeKindsAnchorsAndParts) {
 INSTANTIATE_TEST_SUITE_P(Backends, LayerMeshTest,
                          ::testing::Values(meshing::Mesher::cgal, meshing::Mesher::gmsh, meshing::Mesher::layered),
                          [](const auto& param_info) { return std::string(meshing::mesher_name(param_info.param)); });
+
+}  // namespace sflsh

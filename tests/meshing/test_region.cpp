@@ -12,7 +12,8 @@
 #include <map>
 #include <set>
 
-using namespace sflsh;
+namespace sflsh {
+
 using sflsh::testing::error_of;
 using sflsh::testing::open_body;
 using ::testing::HasSubstr;
@@ -182,3 +183,5 @@ TEST(Correspondence, ThicknessFieldIsValidated) {
       error_of([&] { meshing::layer_geometry(model, region, corr, body::Betas::Zero(), Eigen::VectorXd::Ones(2)); }),
       HasSubstr("expected one per region vertex"));
 }
+
+}  // namespace sflsh

@@ -7,7 +7,8 @@
 
 #include <gmock/gmock.h>
 
-using namespace sflsh;
+namespace sflsh {
+
 using sflsh::testing::coarse_layer;
 using sflsh::testing::error_of;
 using sflsh::testing::open_body;
@@ -159,3 +160,5 @@ TEST(RetargetLayered, FinePresetTakesEverySubjectAndEveryThicknessFromTenToNinet
 INSTANTIATE_TEST_SUITE_P(Backends, RetargetTest,
                          ::testing::Values(meshing::Mesher::cgal, meshing::Mesher::gmsh, meshing::Mesher::layered),
                          [](const auto& param_info) { return std::string(meshing::mesher_name(param_info.param)); });
+
+}  // namespace sflsh

@@ -9,7 +9,8 @@
 
 #include <gmock/gmock.h>
 
-using namespace sflsh;
+namespace sflsh {
+
 using sflsh::testing::coarse_layer;
 using sflsh::testing::error_of;
 using sflsh::testing::open_body;
@@ -120,3 +121,5 @@ TEST(RetargetShaped, HarmonicExtensionIsColumnByColumn) {
   EXPECT_EQ(both.leftCols<3>(), retargeter.interpolator().extend(values.leftCols<3>()));
   EXPECT_EQ(both.rightCols<3>(), retargeter.interpolator().extend(values.rightCols<3>()));
 }
+
+}  // namespace sflsh

@@ -8,6 +8,7 @@
 #include <sflsh/reduced/weights.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <random>
 
 namespace sflsh::reduced::testing {
@@ -25,6 +26,13 @@ struct BoxCase {
   std::vector<int> attached;       ///< the zmin face
   std::vector<int> point_handles;  ///< interior nodes
 };
+
+/// z(t) = amplitude · sin(2π · frequency · t) [m] and its rate, for a driven face.
+inline model::ScalarDrive shake(double amplitude, double frequency) {
+  const double w = 2.0 * M_PI * frequency;
+  return {[=](double t) { return amplitude * std::sin(w * t); },
+          [=](double t) { return amplitude * w * std::cos(w * t); }};
+}
 
 /// A box of size (0.12, 0.1, 0.06) m with `cells`, density ρ, zmin attached (zero displacement, or driven
 /// in z by `drive` when given), point handles at the interior nodes nearest to a few fixed sites.

@@ -8,7 +8,8 @@
 
 #include <gtest/gtest.h>
 
-using namespace sflsh;
+namespace sflsh {
+
 using namespace sflsh::reduced;
 
 TEST(BoundedLeastSquares, SolvesWithAnActiveBound) {
@@ -323,3 +324,5 @@ TEST(ElasticityFit, SensitivityJacobianMatchesFiniteDifferences) {
   for (int i = 0; i < 4; ++i) EXPECT_NEAR(exact.Jtr[3 * i], fd.Jtr[3 * i], 0.02 * fd.Jtr.norm()) << "control " << i;
   EXPECT_LT((exact.JtJ - se.JtJ).norm(), 0.05 * se.JtJ.norm());
 }
+
+}  // namespace sflsh

@@ -8,7 +8,8 @@
 
 #include <gtest/gtest.h>
 
-using namespace sflsh;
+namespace sflsh {
+
 using namespace sflsh::reduced;
 
 TEST(FitSetup, PreparedShapeGivesTheSameProblemBitForBit) {
@@ -41,3 +42,5 @@ TEST(FitSetup, PreparedShapeGivesTheSameProblemBitForBit) {
   const meshing::ShapedLayer other = parameterization.retargeter().shape(body::Betas::Zero());
   EXPECT_THROW(parameterization.problem(c.layer(), kappa, c.layer_options(), nullptr, &other), Error);
 }
+
+}  // namespace sflsh

@@ -1,6 +1,7 @@
 // The reduced potential's derivatives by finite differences: cubature elasticity (gradient and Hessian of
 // E(q), exact and projected), and the inertia quadratic (its closed-form linear term and mass Hessian
 // against the node-by-node definition, with the joint-pair decomposition of skinned node maps).
+#include "open_body.hpp"
 #include "reduced_fixtures.hpp"
 
 #include <sflsh/body/body_io.hpp>
@@ -63,10 +64,7 @@ TEST_P(ReducedElasticFd, GradientAndHessianMatchCentralDifferences) {
 
 INSTANTIATE_TEST_SUITE_P(Amplitudes, ReducedElasticFd, ::testing::Values(1e-4, 3e-3, 1e-2));
 
-const body::BodyModel& open_body() {
-  static const body::BodyModel model = body::load_body(std::filesystem::path(SFLSH_DATA_DIR) / "open_body.npz");
-  return model;
-}
+using sflsh::testing::open_body;
 
 TEST(ReducedInertia, ClosedFormMatchesTheNodeByNodePotential) {
   model::BodyLayerOptions options;

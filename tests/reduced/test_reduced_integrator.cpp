@@ -1,6 +1,7 @@
 // The reduced backward-Euler integrator: with every tet as cubature and a basis spanning the free space it
 // is the full-space solver; a free oscillation in the handle subspace decays; failures are loud and leave
 // the state untouched; the body model is cached and rebuilt when the cache entry is corrupt.
+#include "open_body.hpp"
 #include "reduced_fixtures.hpp"
 
 #include <sflsh/body/body_io.hpp>
@@ -21,11 +22,7 @@
 namespace sflsh::reduced {
 namespace {
 
-model::ScalarDrive shake(double amplitude, double frequency) {
-  const double w = 2.0 * M_PI * frequency;
-  return {[=](double t) { return amplitude * std::sin(w * t); },
-          [=](double t) { return amplitude * w * std::cos(w * t); }};
-}
+using testing::shake;
 
 TEST(ReducedIntegrator, FullBasisAndExactCubatureReproduceTheFullSpaceSolver) {
   const model::ScalarDrive drive = shake(0.006, 4.0);
@@ -136,10 +133,7 @@ TEST(ReducedIntegrator, PartiallyAttachedNodesAreRefused) {
   EXPECT_THROW(ReducedSolver(p, s, all), Error);
 }
 
-const body::BodyModel& open_body() {
-  static const body::BodyModel model = body::load_body(std::filesystem::path(SFLSH_DATA_DIR) / "open_body.npz");
-  return model;
-}
+using sflsh::testing::open_body;
 
 TEST(ReducedModel, CachedModelEqualsTheBuiltOneAndACorruptEntryIsRebuilt) {
   model::BodyLayerOptions options;

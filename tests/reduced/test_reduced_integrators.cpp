@@ -24,11 +24,7 @@
 namespace sflsh::reduced {
 namespace {
 
-model::ScalarDrive shake(double amplitude, double frequency) {
-  const double w = 2.0 * M_PI * frequency;
-  return {[=](double t) { return amplitude * std::sin(w * t); },
-          [=](double t) { return amplitude * w * std::cos(w * t); }};
-}
+using testing::shake;
 
 enum class Motion { drive, swing };
 

@@ -4,6 +4,7 @@
 // potential (the tracking skeleton's terms are in test_skeleton_deviation.cpp); the inertia and gravity values against
 // their node-by-node definitions; and the consistent joint-pair
 // precompute and cross-time mass of a skinned body layer against node-by-node sums.
+#include "open_body.hpp"
 #include "term_fixtures.hpp"
 
 #include <sflsh/body/body_io.hpp>
@@ -140,10 +141,7 @@ TEST_F(ReducedTermsFixture, NodePotentialMatchesFiniteDifferences) {
 // ---------------------------------------------------------------------------------------------------------
 // The consistent mass of a skinned layer by joint pairs.
 
-const body::BodyModel& open_body() {
-  static const body::BodyModel model = body::load_body(std::filesystem::path(SFLSH_DATA_DIR) / "open_body.npz");
-  return model;
-}
+using sflsh::testing::open_body;
 
 TEST(ReducedInertiaConsistent, JointPairsMatchTheNodeByNodeSumsOfASkinnedLayer) {
   model::BodyLayerOptions options;

@@ -2,6 +2,8 @@
 // (the skin's rim is attached like the side wall), and neither solver stretches the skin against the plainly
 // posed body by more than the tissue itself does — at the rim and around every point handle, where a handle
 // on a free rim or one the cubature did not see once produced a 61 mm, 4× kink at the right elbow.
+#include "open_body.hpp"
+
 #include <sflsh/body/body_io.hpp>
 #include <sflsh/body/motion.hpp>
 #include <sflsh/fullspace/fullspace_solver.hpp>
@@ -18,10 +20,7 @@
 namespace sflsh::reduced {
 namespace {
 
-const body::BodyModel& open_body() {
-  static const body::BodyModel model = body::load_body(std::filesystem::path(SFLSH_DATA_DIR) / "open_body.npz");
-  return model;
-}
+using sflsh::testing::open_body;
 
 model::BodyLayer coarse_layer(const body::Motion& motion) {
   model::BodyLayerOptions options;

@@ -3,6 +3,7 @@
 // the cross-time mass against a node-by-node sum, whole trajectories against finite differences of complete
 // simulations (box and body layer), and the failures that must be reported rather than returned.
 #include "error_of.hpp"
+#include "open_body.hpp"
 #include "reduced_fixtures.hpp"
 
 #include <sflsh/body/body_io.hpp>
@@ -101,11 +102,7 @@ Eigen::MatrixX2d box_control_young() {
   return young;
 }
 
-model::ScalarDrive shake(double amplitude, double frequency) {
-  const double w = 2.0 * M_PI * frequency;
-  return {[=](double t) { return amplitude * std::sin(w * t); },
-          [=](double t) { return amplitude * w * std::cos(w * t); }};
-}
+using testing::shake;
 
 TEST(YoungSensitivity, ElementForceDerivativeMatchesCentralDifferences) {
   auto c = testing::box_case({4, 4, 3});
@@ -145,10 +142,7 @@ TEST(YoungSensitivity, ElementForceDerivativeMatchesCentralDifferences) {
 // ---------------------------------------------------------------------------------------------------------
 // The cross-time mass.
 
-const body::BodyModel& open_body() {
-  static const body::BodyModel model = body::load_body(std::filesystem::path(SFLSH_DATA_DIR) / "open_body.npz");
-  return model;
-}
+using sflsh::testing::open_body;
 
 model::BodyLayerOptions coarse_layer_options() {
   model::BodyLayerOptions options;

@@ -1,5 +1,7 @@
 // Shape-dependent elasticity (SFLSH §4, eqs. 1, 4, 7): the linear model, its Jacobian, the local shape
 // metric Q_i and the regularizer matrix L.
+#include "open_body.hpp"
+
 #include <sflsh/body/body_io.hpp>
 #include <sflsh/core/error.hpp>
 #include <sflsh/material/layer_material.hpp>
@@ -13,7 +15,8 @@
 
 #include <random>
 
-using namespace sflsh;
+namespace sflsh {
+
 using namespace sflsh::reduced;
 
 namespace {
@@ -28,10 +31,7 @@ ShapeElasticity random_model(int N, unsigned seed) {
   return s;
 }
 
-const body::BodyModel& open_body() {
-  static const body::BodyModel model = body::load_body(std::filesystem::path(SFLSH_DATA_DIR) / "open_body.npz");
-  return model;
-}
+using sflsh::testing::open_body;
 
 const model::BodyLayer& coarse_layer() {
   static const model::BodyLayer layer = [] {
@@ -142,3 +142,5 @@ TEST(ShapeElasticity, BoundsAndClamp) {
   EXPECT_DOUBLE_EQ(c(0, 1), 0.01);
   EXPECT_DOUBLE_EQ(c(0, 2), 0.5);
 }
+
+}  // namespace sflsh

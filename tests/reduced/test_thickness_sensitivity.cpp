@@ -11,7 +11,8 @@
 #include <iostream>
 #include <string>
 
-using namespace sflsh;
+namespace sflsh {
+
 using namespace sflsh::reduced;
 
 namespace {
@@ -99,3 +100,5 @@ TEST(ThicknessSensitivity, FollowsTheCubatureTheGuardGrows) {
   // 20× from either.
   EXPECT_EQ(expect_exact_thickness_columns(1.87e-3, 5, 1e-3), 1) << "the guard must add one tet in this run";
 }
+
+}  // namespace sflsh

@@ -2,6 +2,8 @@
 // Central differences for the scene tests (docs/style.md §4). With h = 1e-6 m on distances of order 0.1 m
 // the truncation error h²/6·|φ'''| (|φ'''| ~ 1/ρ² with ρ ≳ 0.05 m) and the rounding error ε/h are
 // both ≲ 1e-8, far below the 1e-6 tolerances used.
+#include "../material/finite_difference.hpp"  // relative_error
+
 #include <Eigen/Core>
 
 #include <algorithm>
@@ -31,12 +33,6 @@ inline Eigen::Matrix3d central_jacobian(const std::function<Eigen::Vector3d(cons
     J.col(k) = (f(xp) - f(xm)) / (2.0 * h);
   }
   return J;
-}
-
-/// max |a − b| / max(max |b|, floor).
-template <typename A, typename B>
-double relative_error(const A& a, const B& b, double floor = 1.0) {
-  return (a - b).cwiseAbs().maxCoeff() / std::max(b.cwiseAbs().maxCoeff(), floor);
 }
 
 }  // namespace sflsh::testing

@@ -96,7 +96,7 @@ body_exchange = true
                      contact, pushing_first ? pushing : standing, pushing_first ? standing : pushing);
 }
 
-nlohmann::json run(const std::filesystem::path& dir, const std::string& text) {
+nlohmann::json run_on_two_threads(const std::filesystem::path& dir, const std::string& text) {
   std::filesystem::create_directories(dir);
   std::ofstream(dir / "scene.toml") << text;
   SceneRunOptions options;
@@ -114,8 +114,8 @@ const nlohmann::json& body(const nlohmann::json& summary, const std::string& nam
 
 TEST(BodyExchange, SwappingTheBodiesInTheFileChangesLessThanTheContactTolerance) {
   const auto dir = testing::scratch_dir();
-  const nlohmann::json a = run(dir / "standing_first", push_scene(false, ""));
-  const nlohmann::json b = run(dir / "pushing_first", push_scene(true, ""));
+  const nlohmann::json a = run_on_two_threads(dir / "standing_first", push_scene(false, ""));
+  const nlohmann::json b = run_on_two_threads(dir / "pushing_first", push_scene(true, ""));
   // The contact tolerance: the deepest accepted penetration, 1 mm.
   constexpr double kTolerance = 1e-3;
   for (const std::string name : {"standing", "pushing"}) {
@@ -150,7 +150,7 @@ TEST(BodyExchange, SwappingTheBodiesInTheFileChangesLessThanTheContactTolerance)
 
 TEST(BodyExchange, ACapOnExchangesIsReportedAsNotConverged) {
   const auto dir = testing::scratch_dir();
-  const nlohmann::json s = run(dir, push_scene(false, "max_exchanges = 1"));
+  const nlohmann::json s = run_on_two_threads(dir, push_scene(false, "max_exchanges = 1"));
   const nlohmann::json& e = s["body_exchange"];
   EXPECT_EQ(e["max_exchanges"], 1);
   EXPECT_EQ(e["exchanges_max"], 1);

@@ -26,7 +26,7 @@ RowMatrixX3d rows(std::initializer_list<Eigen::Vector3d> points) {
   return m;
 }
 
-Pose tilted_pose() {
+Pose tilted_contact_pose() {
   Pose pose;
   pose.rotation = Eigen::AngleAxisd(0.4, Eigen::Vector3d(0.3, 1.0, 0.2).normalized()).toRotationMatrix();
   pose.translation = Eigen::Vector3d(0.05, 0.0, -0.02);
@@ -65,18 +65,18 @@ void expect_potential_derivatives(const std::shared_ptr<Obstacle>& shape, const 
 
 TEST(ContactPotential, GradientAndHessianMatchFiniteDifferences) {
   auto plane = std::make_shared<HalfSpace>(Eigen::Vector3d(0.2, 0.1, 1.0), 0.0);
-  plane->set_pose(tilted_pose());
+  plane->set_pose(tilted_contact_pose());
   expect_potential_derivatives(plane, {plane->pose().to_world({0.1, 0.0, -0.024})});
   auto sphere = std::make_shared<Sphere>(0.1);
-  sphere->set_pose(tilted_pose());
+  sphere->set_pose(tilted_contact_pose());
   expect_potential_derivatives(sphere, {sphere->pose().to_world({0.0, 0.0995, 0.0}),
                                         sphere->pose().to_world(Eigen::Vector3d(1, 1, 1).normalized() * 0.095)});
   auto box = std::make_shared<Box>(Eigen::Vector3d(0.1, 0.05, 0.08));
-  box->set_pose(tilted_pose());
+  box->set_pose(tilted_contact_pose());
   expect_potential_derivatives(box, {box->pose().to_world({0.1006, 0.0, 0.0804}),  // edge region, outside
                                      box->pose().to_world({0.02, 0.047, 0.0})});   // inside
   auto capsule = std::make_shared<Capsule>(0.05, 0.1);
-  capsule->set_pose(tilted_pose());
+  capsule->set_pose(tilted_contact_pose());
   expect_potential_derivatives(
       capsule, {capsule->pose().to_world({0.0498, 0.0, 0.02}), capsule->pose().to_world({0.0, 0.0, 0.1499})});
 }

@@ -24,7 +24,7 @@ using testing::central_gradient;
 using testing::central_jacobian;
 using testing::relative_error;
 
-Pose tilted_pose() {
+Pose tilted_obstacle_pose() {
   Pose pose;
   pose.rotation = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1.0, 2.0, 0.5).normalized()).toRotationMatrix();
   pose.translation = Eigen::Vector3d(0.3, -0.2, 0.1);
@@ -48,8 +48,10 @@ void expect_derivatives(const Obstacle& shape, const std::vector<Eigen::Vector3d
           return gx;
         },
         p);
-    EXPECT_LT(relative_error(g, g_fd), 1e-6) << "gradient at local " << q.transpose();
-    EXPECT_LT(relative_error(H, H_fd), 1e-6) << "Hessian at local " << q.transpose() << "\n" << H << "\nfd\n" << H_fd;
+    EXPECT_LT(relative_error(g, g_fd, 1.0), 1e-6) << "gradient at local " << q.transpose();
+    EXPECT_LT(relative_error(H, H_fd, 1.0), 1e-6) << "Hessian at local " << q.transpose() << "\n"
+                                                  << H << "\nfd\n"
+                                                  << H_fd;
     EXPECT_NEAR(g.norm(), 1.0, 1e-12);                   // a distance has |∇φ| = 1
     EXPECT_LT((H * g).norm(), 1e-9 * (1.0 + H.norm()));  // and ∇²φ ∇φ = 0
     EXPECT_LT((H - H.transpose()).norm(), 1e-12);
@@ -58,14 +60,14 @@ void expect_derivatives(const Obstacle& shape, const std::vector<Eigen::Vector3d
 
 TEST(ObstacleDerivatives, HalfSpace) {
   HalfSpace plane(Eigen::Vector3d(0.0, 0.0, 2.0), 0.1);
-  plane.set_pose(tilted_pose());
+  plane.set_pose(tilted_obstacle_pose());
   expect_derivatives(plane, {{0.2, 0.3, 0.5}, {-1.0, 0.4, -0.3}});
   EXPECT_NEAR(plane.distance(plane.pose().to_world({0.4, -0.7, 0.35})), 0.25, 1e-14);
 }
 
 TEST(ObstacleDerivatives, Sphere) {
   Sphere sphere(0.2);
-  sphere.set_pose(tilted_pose());
+  sphere.set_pose(tilted_obstacle_pose());
   expect_derivatives(sphere, {{0.3, 0.1, -0.2}, {0.05, -0.08, 0.06}, {0.0, 0.0, 0.15}});
   EXPECT_NEAR(sphere.distance(sphere.pose().to_world({0.0, 0.3, 0.4})), 0.3, 1e-14);
   EXPECT_NEAR(sphere.distance(sphere.pose().translation), -0.2, 1e-14);
@@ -73,7 +75,7 @@ TEST(ObstacleDerivatives, Sphere) {
 
 TEST(ObstacleDerivatives, BoxInEveryRegion) {
   Box box(Eigen::Vector3d(0.3, 0.2, 0.1));
-  box.set_pose(tilted_pose());
+  box.set_pose(tilted_obstacle_pose());
   expect_derivatives(box, {
                               {0.1, 0.05, 0.4},    // face region (+z)
                               {0.5, 0.05, -0.3},   // edge region (x, z outside)
@@ -87,7 +89,7 @@ TEST(ObstacleDerivatives, BoxInEveryRegion) {
 
 TEST(ObstacleDerivatives, CapsuleSideCapsAndInside) {
   Capsule capsule(0.1, 0.25);
-  capsule.set_pose(tilted_pose());
+  capsule.set_pose(tilted_obstacle_pose());
   expect_derivatives(capsule, {
                                   {0.2, 0.1, 0.1},    // beside the segment
                                   {0.1, -0.1, 0.45},  // beyond +z end
@@ -108,12 +110,12 @@ TEST(ObstacleDerivatives, TriangleMeshMatchesBoxInEveryRegion) {
   const std::vector<Eigen::Vector3d> points = {{0.1, 0.05, 0.4},  {0.5, 0.05, -0.3}, {-0.45, 0.35, 0.3},
                                                {0.1, 0.02, 0.03}, {-0.25, 0.0, 0.0}, {0.25, -0.15, 0.06}};
   for (const auto& q : points) EXPECT_NEAR(mesh.distance(q), box.distance(q), 1e-12) << q.transpose();
-  mesh.set_pose(tilted_pose());
+  mesh.set_pose(tilted_obstacle_pose());
   expect_derivatives(mesh, points);
 }
 
 TEST(ObstacleSurface, ShapesGiveClosedOutwardSurfacesOnTheirZeroSet) {
-  const Pose pose = tilted_pose();
+  const Pose pose = tilted_obstacle_pose();
   std::vector<std::unique_ptr<Obstacle>> shapes;
   shapes.push_back(std::make_unique<Sphere>(0.2));
   shapes.push_back(std::make_unique<Box>(Eigen::Vector3d(0.3, 0.2, 0.1)));
@@ -151,7 +153,7 @@ TEST(ObstacleSign, InsideNegativeOutsidePositiveForEveryShape) {
   shapes.push_back(std::make_unique<Capsule>(0.2, 0.1));
   shapes.push_back(std::make_unique<HalfSpace>(Eigen::Vector3d::UnitX(), 0.0));
   shapes.push_back(std::make_unique<TriangleMesh>(sphere_surface.vertices, sphere_surface.triangles));
-  const Pose pose = tilted_pose();
+  const Pose pose = tilted_obstacle_pose();
   for (auto& shape : shapes) {
     shape->set_pose(pose);
     EXPECT_LT(shape->distance(pose.to_world({-0.05, 0.03, 0.02})), 0.0);

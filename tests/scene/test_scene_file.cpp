@@ -1,4 +1,5 @@
 // Scene files: the shipped examples parse, bad input is one error naming the file and line.
+#include "scene_files.hpp"
 #include "scratch_dir.hpp"
 
 #include <sflsh/core/error.hpp>
@@ -11,21 +12,8 @@
 namespace sflsh::scene {
 namespace {
 
-std::filesystem::path write_scene(const std::filesystem::path& dir, const std::string& text) {
-  const auto path = dir / "scene.toml";
-  std::ofstream(path) << text;
-  return path;
-}
-
-/// The message of load_scene's error ("" when it loads).
-std::string error_of(const std::filesystem::path& path) {
-  try {
-    load_scene(path);
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "";
-}
+using sflsh::testing::load_error;
+using sflsh::testing::write_scene;
 
 constexpr const char* kBody = "[[body]]\nname = \"a\"\nmotion = \"rest\"\n";
 
@@ -138,11 +126,11 @@ TEST(SceneFile, BadInputNamesFileAndLine) {
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.text);
-    const std::string message = error_of(write_scene(dir, c.text));
+    const std::string message = load_error(write_scene(dir, c.text));
     EXPECT_NE(message.find(c.expected), std::string::npos) << message;
     EXPECT_EQ(message.find('\n'), std::string::npos) << "one line: " << message;
   }
-  EXPECT_NE(error_of(dir / "missing.toml").find("missing.toml: not found, expected a scene TOML file"),
+  EXPECT_NE(load_error(dir / "missing.toml").find("missing.toml: not found, expected a scene TOML file"),
             std::string::npos);
 }
 

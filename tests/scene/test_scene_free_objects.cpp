@@ -1,6 +1,7 @@
 // Free rigid objects in scenes: the shipped free-object scenes parse, bad free-object keys are one line
 // naming the file and line, and a ball dropped on the belly of a reduced body (lying on its back) lands,
 // never gains energy and rests within the contact tolerance.
+#include "scene_files.hpp"
 #include "scratch_dir.hpp"
 
 #include <sflsh/core/error.hpp>
@@ -17,21 +18,8 @@
 namespace sflsh::scene {
 namespace {
 
-std::filesystem::path write_scene(const std::filesystem::path& dir, const std::string& text) {
-  std::filesystem::create_directories(dir);
-  const auto path = dir / "scene.toml";
-  std::ofstream(path) << text;
-  return path;
-}
-
-std::string error_of(const std::filesystem::path& path) {
-  try {
-    load_scene(path);
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "";
-}
+using sflsh::testing::load_error;
+using sflsh::testing::write_scene;
 
 TEST(SceneFreeObjects, ShippedScenesParse) {
   for (const char* name : {"ball_drop_belly", "ball_roll_thigh", "box_on_lap"}) {
@@ -64,18 +52,18 @@ TEST(SceneFreeObjects, BadFreeObjectKeysAreOneLineWithTheLine) {
   };
   for (const auto& [text, expected] : cases) {
     SCOPED_TRACE(text);
-    const std::string what = error_of(write_scene(dir, head + text));
+    const std::string what = load_error(write_scene(dir, head + text));
     EXPECT_NE(what.find(expected), std::string::npos) << what;
     EXPECT_NE(what.find("scene.toml:"), std::string::npos) << what;
     EXPECT_EQ(what.find('\n'), std::string::npos) << what;
   }
   // The old keys (mass, velocity) of a free object still load.
-  EXPECT_EQ(error_of(write_scene(dir, head + "shape = \"box\"\nhalf_extents = [0.1, 0.1, 0.1]\nmotion = \"free\"\n"
-                                             "mass = 2.0\nvelocity = [0, 0, 0]\n")),
+  EXPECT_EQ(load_error(write_scene(dir, head + "shape = \"box\"\nhalf_extents = [0.1, 0.1, 0.1]\nmotion = \"free\"\n"
+                                               "mass = 2.0\nvelocity = [0, 0, 0]\n")),
             "");
 }
 
-nlohmann::json run(const std::filesystem::path& dir, const std::string& text) {
+nlohmann::json run_in_memory(const std::filesystem::path& dir, const std::string& text) {
   SceneRunOptions options;
   options.cache_dir = SFLSH_TEST_CACHE;
   options.threads = 1;
@@ -155,14 +143,14 @@ void expect_landed_and_resting(const nlohmann::json& s, double resting_seconds) 
 // the spine) and rocks in its dent with a period of ~1 s before it settles, so rest is asked for after 2 s.
 TEST(SceneFreeObjects, BallDroppedOnTheBellyNeverGainsEnergyAndRests) {
   const auto dir = testing::scratch_dir();
-  const nlohmann::json s = run(dir, belly_drop(0.01, 2.5));
+  const nlohmann::json s = run_in_memory(dir, belly_drop(0.01, 2.5));
   EXPECT_EQ(s["free_objects"][0]["coupling"], "monolithic");
   expect_landed_and_resting(s, 2.4);
 }
 
 TEST(SceneFreeObjects, BallRestsOnTheBellyWithinToleranceForTwoSeconds) {
   const auto dir = testing::scratch_dir();
-  const nlohmann::json s = run(dir, belly_drop(0.10, 2.5));
+  const nlohmann::json s = run_in_memory(dir, belly_drop(0.10, 2.5));
   expect_landed_and_resting(s, 2.2);
   // Every written frame after the landing (t ≥ 0.5 s) within the tolerance of the skin.
   for (const auto& f : s["free_objects"][0]["frames"])
@@ -190,7 +178,7 @@ TEST(SceneFreeObjects, FreeMeshCubeRestsOnTheBelly) {
   text = text.substr(0, text.find("[[object]]")) +
          "[[object]]\nname = \"cube\"\nshape = \"mesh\"\nfile = \"cube.obj\"\nmotion = \"free\"\ndensity = 500.0\n"
          "friction = 0.5\nposition = [-0.08, -0.02, 0.200]\n";
-  const nlohmann::json s = run(dir, text);
+  const nlohmann::json s = run_in_memory(dir, text);
   const nlohmann::json& cube = s["free_objects"][0];
   EXPECT_NEAR(cube["mass_kg"].get<double>(), 500.0 * 0.16 * 0.16 * 0.16, 1e-9);
   // I = m (2a)²/6 per axis for a cube of side 2a.
@@ -226,12 +214,13 @@ object_contact = true
   const std::string box =
       "[[object]]\nname = \"box\"\nshape = \"box\"\nhalf_extents = [0.15, 0.08, 0.03]\nmotion = "
       "\"free\"\nmass = 2.0\nfriction = 0.6\n";
-  const nlohmann::json plain =
-      run(dir / "plain", common + "gravity_direction = [0, 0, -1]\n" + body + box + "position = [0.0, -0.3, 0.108]\n");
+  const nlohmann::json plain = run_in_memory(
+      dir / "plain", common + "gravity_direction = [0, 0, -1]\n" + body + box + "position = [0.0, -0.3, 0.108]\n");
   // R_y(90°): (x, y, z) ↦ (z, y, −x); t = (1, 0, 0.5).
-  const nlohmann::json placed = run(dir / "placed", common + "gravity_direction = [-1, 0, 0]\n" + body +
-                                                        "placement = { position = [1.0, 0.0, 0.5], yaw = 90.0 }\n" +
-                                                        box + "position = [1.108, -0.3, 0.5]\nrotation = [0, 90, 0]\n");
+  const nlohmann::json placed =
+      run_in_memory(dir / "placed", common + "gravity_direction = [-1, 0, 0]\n" + body +
+                                        "placement = { position = [1.0, 0.0, 0.5], yaw = 90.0 }\n" + box +
+                                        "position = [1.108, -0.3, 0.5]\nrotation = [0, 90, 0]\n");
   const auto as_vector = [](const nlohmann::json& a) { return Eigen::Vector3d(a[0], a[1], a[2]); };
   const Eigen::Vector3d a = as_vector(plain["free_objects"][0]["final_position_m"]);
   const Eigen::Vector3d w = as_vector(placed["free_objects"][0]["final_position_m"]) - Eigen::Vector3d(1.0, 0.0, 0.5);
@@ -251,8 +240,8 @@ TEST(SceneFreeObjects, ABallThrownAtATrackingBodyMovesItsRoot) {
     return ball_scene(0.5, "", fmt::format("skeleton = \"{}\"\n", skeleton),
                       "position = [0.0, 0.06, 0.26]\nvelocity = [0.0, 0.0, -2.0]\n");
   };
-  const nlohmann::json tracking = run(dir / "tracking", scene("tracking"));
-  const nlohmann::json prescribed = run(dir / "prescribed", scene("prescribed"));
+  const nlohmann::json tracking = run_in_memory(dir / "tracking", scene("tracking"));
+  const nlohmann::json prescribed = run_in_memory(dir / "prescribed", scene("prescribed"));
   ASSERT_EQ(tracking["free_objects"][0]["coupling"], "monolithic");
   const nlohmann::json& root = tracking["bodies"][0]["skeleton"];
   EXPECT_EQ(root["skeleton"], "tracking");
@@ -297,7 +286,7 @@ TEST(SceneFreeObjects, StaggeredCouplingIsKeptOnRequest) {
   const auto dir = testing::scratch_dir();
   std::string text = belly_drop(0.01, 0.4);
   text.insert(text.find("[[body]]"), "[contact]\nobject_coupling = \"staggered\"\n");
-  const nlohmann::json s = run(dir, text);
+  const nlohmann::json s = run_in_memory(dir, text);
   const nlohmann::json& ball = s["free_objects"][0];
   EXPECT_EQ(ball["coupling"], "staggered");
   EXPECT_LE(ball["energy"]["max_gain_J"].get<double>(), 1e-6);

@@ -19,7 +19,7 @@
 namespace sflsh::scene {
 namespace {
 
-std::filesystem::path write_scene(const std::filesystem::path& dir, const std::string& output) {
+std::filesystem::path write_output_scene(const std::filesystem::path& dir, const std::string& output) {
   std::filesystem::create_directories(dir);
   const auto path = dir / "scene.toml";
   std::ofstream(path) << fmt::format(R"([scene]
@@ -51,7 +51,7 @@ nlohmann::json run_in(const std::filesystem::path& dir, const std::string& outpu
   options.cache_dir = SFLSH_TEST_CACHE;
   options.out = dir / "out";
   options.threads = 1;
-  return run_scene(load_scene(write_scene(dir, output)), options);
+  return run_scene(load_scene(write_output_scene(dir, output)), options);
 }
 
 /// The (time, file) entries of a .pvd, in order.
@@ -134,7 +134,7 @@ TEST(SceneOutput, BadOutputValuesAreOneLineNamingTheKey) {
             "scene.toml:8: 'compression' in [output] = 'gzip' is not one of lz4 | zlib | none"},
        }) {
     SCOPED_TRACE(c.output);
-    const auto path = write_scene(dir, c.output);
+    const auto path = write_output_scene(dir, c.output);
     const std::string message = testing::error_of([&] { load_scene(path); });
     EXPECT_NE(message.find(c.expected), std::string::npos) << message;
     EXPECT_EQ(message.find('\n'), std::string::npos) << message;

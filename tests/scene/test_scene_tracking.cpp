@@ -19,7 +19,7 @@
 namespace sflsh::scene {
 namespace {
 
-nlohmann::json run(const std::filesystem::path& dir, const std::string& text) {
+nlohmann::json run_writing(const std::filesystem::path& dir, const std::string& text) {
   std::filesystem::create_directories(dir);
   const auto path = dir / "scene.toml";
   std::ofstream(path) << text;
@@ -79,7 +79,7 @@ std::pair<double, double> head_motion(const std::filesystem::path& out, int f) {
 
 TEST(SceneTracking, PushedTrackingRootSwaysInThePushDirectionAndComesBack) {
   const auto dir = testing::scratch_dir();
-  const nlohmann::json s = run(dir, push_scene("tracking"));
+  const nlohmann::json s = run_writing(dir, push_scene("tracking"));
   EXPECT_EQ(s["contact"]["skeleton_response"], true);
   const nlohmann::json& standing = s["bodies"][0];
   ASSERT_EQ(standing["skeleton"]["skeleton"], "tracking");
@@ -148,7 +148,7 @@ TEST(SceneTracking, PushedTrackingRootSwaysInThePushDirectionAndComesBack) {
 // Two bodies apart, two frames: only the set-up is checked.
 TEST(SceneTracking, TrackedJointsSelectTheSkeletonsCoordinates) {
   const auto dir = testing::scratch_dir();
-  const nlohmann::json s = run(dir, R"([scene]
+  const nlohmann::json s = run_writing(dir, R"([scene]
 fps = 30
 frames = 2
 [effects]
@@ -187,7 +187,7 @@ joint_limits = { left_knee = 0.2 }
 
 TEST(SceneTracking, PushedPrescribedRootStaysOnItsMotion) {
   const auto dir = testing::scratch_dir();
-  const nlohmann::json s = run(dir, push_scene("prescribed"));
+  const nlohmann::json s = run_writing(dir, push_scene("prescribed"));
   EXPECT_EQ(s["contact"]["skeleton_response"], false);
   EXPECT_EQ(s["bodies"][0]["skeleton"]["skeleton"], "prescribed");
   EXPECT_GT(s["bodies"][0]["dynamics"]["sigma_max_mm"].get<double>(), 1.0);  // the push did reach it

@@ -4,6 +4,7 @@
 
 #include <array>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -37,5 +38,8 @@ inline CommandResult run_sflsh(const std::string& args, const std::filesystem::p
   std::filesystem::remove(err_file);
   return result;
 }
+
+/// Whether `mpiexec` is on the PATH (tests of several MPI processes skip without it).
+inline bool have_mpiexec() { return std::system("command -v mpiexec >/dev/null 2>&1") == 0; }
 
 }  // namespace sflsh::testing

@@ -10,7 +10,7 @@
 
 #include <gtest/gtest.h>
 
-using namespace sflsh;
+namespace sflsh {
 
 TEST(GroundTruthCommand, WritesDynaLayoutAndTrueParameters) {
   const std::filesystem::path dir = sflsh::testing::scratch_dir();
@@ -61,3 +61,5 @@ TEST(GroundTruthCommand, UnknownSubjectFailsWithoutOutput) {
   EXPECT_NE(r.err.find("NOBODY"), std::string::npos) << r.err;
   EXPECT_FALSE(std::filesystem::exists(dir / "gt" / "groundtruth.h5"));
 }
+
+}  // namespace sflsh
