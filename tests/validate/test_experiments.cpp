@@ -4,6 +4,7 @@
 #include "png_check.hpp"
 #include "run_command.hpp"
 #include "scratch_dir.hpp"
+#include "text_lines.hpp"
 
 #include <sflsh/body/body_io.hpp>
 #include <sflsh/body/subjects.hpp>
@@ -69,14 +70,12 @@ TEST(Experiments, SmallConfigurationReproducesPinnedTable2) {
   }
   {
     // The sweep says how λ was chosen: one λ, so the one-standard-error rule (the default) takes it.
-    std::ifstream in(dir / "lambda_sweep.csv");
-    std::string header;
-    std::getline(in, header);
-    EXPECT_EQ(header,
+    const std::vector<std::string> sweep = sflsh::testing::lines_of(dir / "lambda_sweep.csv");
+    ASSERT_EQ(sweep.size(), 3u);  // header, l2, ours
+    EXPECT_EQ(sweep[0],
               "regularizer,lambda,cv_train_motions_rms_error_mm,cv_test_motions_rms_error_mm,"
               "cv_train_motions_standard_error_mm,chosen");
-    std::string row;
-    while (std::getline(in, row)) EXPECT_EQ(row.substr(row.rfind(',') + 1), "1") << row;
+    for (std::size_t i = 1; i < sweep.size(); ++i) EXPECT_EQ(sweep[i].substr(sweep[i].rfind(',') + 1), "1") << sweep[i];
     EXPECT_EQ(summary.at("lambda_rule"), "one-se");
     for (const char* tag : {"l2", "ours"}) {
       const nlohmann::json& choice = summary.at("lambda_choice").at(tag);

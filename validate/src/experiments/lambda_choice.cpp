@@ -14,34 +14,35 @@ LambdaRule parse_lambda_rule(const std::string& text, const std::string& what) {
 
 std::string lambda_rule_name(LambdaRule rule) { return rule == LambdaRule::minimum ? "min" : "one-se"; }
 
-double standard_error_of_mean(const std::vector<double>& values) {
-  double sum = 0.0, squares = 0.0;
+double mean_of_finite(const std::vector<double>& values) {
+  double sum = 0.0;
   int n = 0;
   for (double v : values)
     if (std::isfinite(v)) {
       sum += v;
       ++n;
     }
-  if (n == 0) return std::numeric_limits<double>::quiet_NaN();
-  const double mean = sum / n;
+  return n ? sum / n : std::numeric_limits<double>::quiet_NaN();
+}
+
+double standard_error_of_mean(const std::vector<double>& values) {
+  const double mean = mean_of_finite(values);
+  if (!std::isfinite(mean)) return std::numeric_limits<double>::quiet_NaN();
+  double squares = 0.0;
+  int n = 0;
   for (double v : values)
-    if (std::isfinite(v)) squares += (v - mean) * (v - mean);
+    if (std::isfinite(v)) {
+      squares += (v - mean) * (v - mean);
+      ++n;
+    }
   return n > 1 ? std::sqrt(squares / (n - 1)) / std::sqrt(static_cast<double>(n)) : 0.0;
 }
 
 LambdaChoice choose_lambda(const std::vector<LambdaScore>& sweep, LambdaRule rule, const std::string& what) {
   LambdaChoice choice;
   std::size_t least = sweep.size();
-  for (const LambdaScore& score : sweep) {
-    double sum = 0.0;
-    int n = 0;
-    for (double e : score.fold_errors)
-      if (std::isfinite(e)) {
-        sum += e;
-        ++n;
-      }
-    const double mean = n ? sum / n : std::numeric_limits<double>::quiet_NaN();
-    const std::size_t i = choice.mean_errors.size();
+  for (std::size_t i = 0; i < sweep.size(); ++i) {
+    const double mean = mean_of_finite(sweep[i].fold_errors);
     choice.mean_errors.push_back(mean);
     if (std::isfinite(mean) && (least == sweep.size() || mean < choice.mean_errors[least])) least = i;
   }

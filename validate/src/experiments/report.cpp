@@ -27,17 +27,6 @@ std::string key_of(const std::string& fit, const std::string& subject, const std
 
 std::string cell(double v) { return std::isfinite(v) ? fmt::format("{:.3f}", v) : ""; }
 
-double mean_of(const std::vector<double>& v) {
-  double s = 0.0;
-  int n = 0;
-  for (double x : v)
-    if (std::isfinite(x)) {
-      s += x;
-      ++n;
-    }
-  return n ? s / n : kNaN;
-}
-
 /// Region field (R) → one value per body vertex (0 outside the region).
 Eigen::MatrixXd on_body(const body::BodyModel& model, const meshing::LayerMesh& mesh,
                         const Eigen::VectorXd& region_values) {
@@ -112,7 +101,7 @@ double Report::motion_mean(const std::string& fit, const std::string& subject, c
     const auto it = evaluations.find(key_of(fit, subject, m));
     v.push_back(it == evaluations.end() ? kNaN : it->second.*value);
   }
-  return mean_of(v);
+  return mean_of_finite(v);
 }
 
 double Report::table_entry(const std::string& fit, const std::string& subject,
@@ -131,7 +120,7 @@ double Report::truth_entry(const std::string& subject, const std::vector<std::st
     const GroundTruthCase* t = truth_of(subject, m);
     v.push_back(t ? t->mean_sigma() : kNaN);
   }
-  return mean_of(v);
+  return mean_of_finite(v);
 }
 
 LambdaChoice Report::choose_lambda(const std::string& tag) const {
@@ -227,7 +216,7 @@ void Report::write(RunFolder& run, nlohmann::json& summary) const {
           csv << "," << cell(v);
           md << " " << cell(v) << " |";
         }
-        const double avg = mean_of(values);
+        const double avg = mean_of_finite(values);
         csv << "," << cell(avg);
         md << " **" << cell(avg) << "** |";
         rj[motions == &config.train_motions ? "train_motions" : "test_motions"] = {{"values", values}, {"avg", avg}};
@@ -294,12 +283,14 @@ void Report::write(RunFolder& run, nlohmann::json& summary) const {
              << "\n";
         }
         const bool chosen = best.count(tag) && best.at(tag) == lambda;
-        sweep << tag << "," << lambda << "," << cell(mean_of(tr)) << "," << cell(mean_of(te)) << ","
+        sweep << tag << "," << lambda << "," << cell(mean_of_finite(tr)) << "," << cell(mean_of_finite(te)) << ","
               << cell(standard_error_of_mean(tr)) << "," << (chosen ? 1 : 0) << "\n";
         series.x.push_back(lambda);
-        series.y.push_back(mean_of(tr));
-        sweep_json.push_back(
-            {{"regularizer", tag}, {"lambda", lambda}, {"train_motions", mean_of(tr)}, {"test_motions", mean_of(te)}});
+        series.y.push_back(mean_of_finite(tr));
+        sweep_json.push_back({{"regularizer", tag},
+                              {"lambda", lambda},
+                              {"train_motions", mean_of_finite(tr)},
+                              {"test_motions", mean_of_finite(te)}});
       }
       chart.series.push_back(series);
     }

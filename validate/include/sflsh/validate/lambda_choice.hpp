@@ -31,6 +31,8 @@ struct LambdaChoice {
   std::vector<double> mean_errors;  ///< per score, in the order given [mm] (NaN: no finite fold)
 };
 
+/// Mean of the finite entries; NaN for none.
+double mean_of_finite(const std::vector<double>& values);
 /// Standard error of the mean of the finite entries: sample standard deviation / √n; 0 for one entry, NaN for none.
 double standard_error_of_mean(const std::vector<double>& values);
 
