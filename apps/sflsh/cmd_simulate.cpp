@@ -9,6 +9,7 @@
 #include <sflsh/core/log.hpp>
 #include <sflsh/core/run_folder.hpp>
 #include <sflsh/core/summary.hpp>
+#include <sflsh/model/simulation_output.hpp>
 #include <sflsh/scene/scene_file.hpp>
 #include <sflsh/scene/scene_runner.hpp>
 
@@ -30,8 +31,10 @@ struct SimulateOptions {
   // Scene files.
   std::string scene;
   int threads = 0;
-  bool every_given = false;   ///< --every overrides the scene's [output] every
-  bool format_given = false;  ///< --format overrides the scene's [output] format
+  bool every_given = false;         ///< --every overrides the scene's [output] every
+  bool format_given = false;        ///< --format overrides the scene's [output] format
+  std::vector<std::string> fields;  ///< --fields: the arrays of the frames (when given)
+  bool fields_given = false;
 };
 
 // sflsh simulate --scene FILE: bodies, objects and the effects the scene calls for (scene_runner.hpp).
@@ -68,19 +71,17 @@ void run_simulate(const SimulateOptions& opt, const Invocation& invocation, int 
   nlohmann::json summary = summary_header("simulate", invocation.argc, invocation.argv);
   BodyRunSettings settings = opt.body;
   settings.every = opt.every;
+  if (opt.fields_given) {
+    model::check_frame_field_names(opt.fields, "--fields");
+    settings.fields = opt.fields;
+  }
   const nlohmann::json body = run_body_simulation(settings, write ? &*run : nullptr, rank, size);
   if (rank != 0) return;
   summary.update(body);
-  const bool xdmf = opt.body.format == "xdmf";
   summary["output"] =
-      opt.no_output ? nlohmann::json("summary.json only")
-                    : nlohmann::json({{"format", opt.body.format},
-                                      {"series", xdmf ? "body.xmf" : "body.pvd"},
-                                      {"layer", opt.body.write_layer ? (xdmf ? "layer.xmf" : "layer.pvd") : ""},
-                                      {"every", opt.every},
-                                      {"compression", xdmf ? "none" : body.value("compression", std::string("lz4"))},
-                                      {"precision", xdmf ? opt.body.precision : "float64"}});
+      opt.no_output ? nlohmann::json("summary.json only") : scene::simulate_output_summary(settings, body);
   summary.erase("compression");
+  summary.erase("layer_compression");
   write_json(run->stage("summary.json"), summary);
   run->commit();
   logger()->info("simulated {} frames in {:.1f} s ({:.3f} s per frame); mean σ = {:.2f} mm",
@@ -130,6 +131,15 @@ void register_simulate_commands(CLI::App& app, const Invocation& invocation) {
   cmd->add_option("--precision", opt->body.precision, "Floating-point precision of an xdmf series: float64 | float32")
       ->check(CLI::IsMember({"float64", "float32"}))
       ->capture_default_str();
+  cmd->add_option("--fields", opt->fields,
+                  "The arrays of the body and layer frames, comma-separated (default: all; names in docs/output.md), "
+                  "as a scene's [output] fields")
+      ->delimiter(',')
+      ->each([opt](const std::string&) { opt->fields_given = true; });
+  cmd->add_option("--compression", opt->body.compression,
+                  "Compression of every vtk frame file: lz4 | zlib | none (default: LZ4 for the body's .vtp frames, "
+                  "zlib for the layer's .vtu frames, which meshio reads)")
+      ->check(CLI::IsMember({"lz4", "zlib", "none"}));
   cmd->add_flag("--no-output", opt->no_output, "Write only summary.json");
   cmd->add_option(
          "--every", opt->every,

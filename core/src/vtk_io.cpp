@@ -20,6 +20,7 @@
 #include <vtkPolyData.h>
 #include <vtkSmartPointer.h>
 #include <vtkStringArray.h>
+#include <vtkUnsignedCharArray.h>
 #include <vtkUnstructuredGrid.h>
 #include <vtkXMLPolyDataReader.h>
 #include <vtkXMLPolyDataWriter.h>
@@ -84,21 +85,31 @@ vtkSmartPointer<vtkCellArray> make_cells(const Eigen::Ref<const Cells>& cells, E
   return out;
 }
 
-vtkSmartPointer<vtkStringArray> make_strings(const std::string& name, const std::vector<std::string>& values) {
-  auto array = vtkSmartPointer<vtkStringArray>::New();
+/// A text array of field data (`units`, `part_names`, …): the values as UTF-8 text, one line each, in a UInt8
+/// array. Not a string array: meshio's VTU reader refuses the type "String" (docs/output.md, "Units in the files").
+vtkSmartPointer<vtkUnsignedCharArray> make_text(const std::string& name, const std::vector<std::string>& values) {
+  std::string text;
+  for (std::size_t k = 0; k < values.size(); ++k) {
+    require(values[k].find('\n') == std::string::npos, "field data '{}': entry '{}' holds a line break", name,
+            values[k]);
+    text += (k == 0 ? "" : "\n") + values[k];
+  }
+  auto array = vtkSmartPointer<vtkUnsignedCharArray>::New();
   array->SetName(name.c_str());
-  array->SetNumberOfValues(static_cast<vtkIdType>(values.size()));
-  for (std::size_t k = 0; k < values.size(); ++k) array->SetValue(static_cast<vtkIdType>(k), values[k]);
+  array->SetNumberOfComponents(1);
+  array->SetNumberOfTuples(static_cast<vtkIdType>(text.size()));
+  std::copy(text.begin(), text.end(), array->GetPointer(0));
   return array;
 }
 
-/// The `units` entries of every numeric array of the dataset, one per distinct name, in the order written.
+/// The `units` entries of every numeric array of the dataset, one per distinct name, in the order written
+/// (before the text arrays are attached).
 std::vector<std::string> unit_entries(vtkDataSet* data) {
   std::vector<std::string> names;
   for (vtkFieldData* group : {static_cast<vtkFieldData*>(data->GetPointData()),
                               static_cast<vtkFieldData*>(data->GetCellData()), data->GetFieldData()}) {
     for (int i = 0; i < group->GetNumberOfArrays(); ++i) {
-      if (!group->GetArray(i) || !group->GetArrayName(i)) continue;  // string arrays carry no unit
+      if (!group->GetArray(i) || !group->GetArrayName(i)) continue;
       const std::string name = group->GetArrayName(i);
       if (std::find(names.begin(), names.end(), name) == names.end()) names.push_back(name);
     }
@@ -112,16 +123,16 @@ void attach_fields(vtkDataSet* data, const Fields& fields, Eigen::Index num_poin
   for (const Field& f : fields.point_data) data->GetPointData()->AddArray(make_array(f, num_points, "point-data"));
   for (const Field& f : fields.cell_data) data->GetCellData()->AddArray(make_array(f, num_cells, "cell-data"));
   for (const Field& f : fields.field_data) data->GetFieldData()->AddArray(make_array(f, 1, "field-data"));
-  for (const Labels& l : fields.labels) data->GetFieldData()->AddArray(make_strings(l.name, l.values));
   if (vtkDataArray* normals = data->GetPointData()->GetArray("Normals");
       normals && normals->GetNumberOfComponents() == 3)
     data->GetPointData()->SetNormals(normals);
 }
 
-/// The `units` field data, after every numeric array is attached.
-void attach_units(vtkDataSet* data) {
+/// The `units` field data, after every numeric array is attached, then the label names.
+void attach_units_and_labels(vtkDataSet* data, const Fields& fields) {
   const std::vector<std::string> entries = unit_entries(data);
-  if (!entries.empty()) data->GetFieldData()->AddArray(make_strings("units", entries));
+  if (!entries.empty()) data->GetFieldData()->AddArray(make_text("units", entries));
+  for (const Labels& l : fields.labels) data->GetFieldData()->AddArray(make_text(l.name, l.values));
 }
 
 vtkSmartPointer<vtkFloatArray> make_normals(const Eigen::Ref<const Points>& points,
@@ -212,7 +223,7 @@ void write_surface(const std::filesystem::path& path, const Eigen::Ref<const Poi
     poly->GetPointData()->AddArray(make_normals(points, triangles));
     poly->GetPointData()->SetNormals(poly->GetPointData()->GetArray("Normals"));
   }
-  attach_units(poly);
+  attach_units_and_labels(poly, fields);
   vtkNew<vtkXMLPolyDataWriter> writer;
   write_with(writer.Get(), poly, path, compression);
 }
@@ -225,7 +236,7 @@ void write_unstructured(const std::filesystem::path& path, const Eigen::Ref<cons
   grid->SetPoints(make_points(points));
   grid->SetCells(cells.cols() == 4 ? VTK_TETRA : VTK_TRIANGLE, make_cells(cells, points.rows()));
   attach_fields(grid, fields, points.rows(), cells.rows());
-  attach_units(grid);
+  attach_units_and_labels(grid, fields);
   vtkNew<vtkXMLUnstructuredGridWriter> writer;
   write_with(writer.Get(), grid, path, compression);
 }
@@ -324,10 +335,23 @@ std::vector<std::string> read_field_array_names(const std::filesystem::path& pat
 
 std::vector<std::string> read_field_strings(const std::filesystem::path& path, const std::string& name) {
   auto data = read_any(path);
-  auto* array = vtkStringArray::SafeDownCast(data->GetFieldData()->GetAbstractArray(name.c_str()));
-  require(array != nullptr, "{}: no field-data string array '{}'", path.string(), name);
+  vtkAbstractArray* array = data->GetFieldData()->GetAbstractArray(name.c_str());
   std::vector<std::string> out;
-  for (vtkIdType k = 0; k < array->GetNumberOfValues(); ++k) out.push_back(array->GetValue(k));
+  if (auto* text = vtkUnsignedCharArray::SafeDownCast(array)) {  // UTF-8 text, one line per value
+    const unsigned char* bytes = text->GetPointer(0);
+    const std::string all(bytes, bytes + text->GetNumberOfValues());
+    std::size_t start = 0;
+    while (!all.empty()) {
+      const std::size_t end = all.find('\n', start);
+      out.push_back(all.substr(start, end == std::string::npos ? std::string::npos : end - start));
+      if (end == std::string::npos) break;
+      start = end + 1;
+    }
+    return out;
+  }
+  auto* strings = vtkStringArray::SafeDownCast(array);  // older sflsh files: a string array
+  require(strings != nullptr, "{}: no field-data text array '{}'", path.string(), name);
+  for (vtkIdType k = 0; k < strings->GetNumberOfValues(); ++k) out.push_back(strings->GetValue(k));
   return out;
 }
 

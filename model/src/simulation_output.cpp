@@ -363,7 +363,7 @@ void SimulationWriter::write_layer_frame(int index, double t, const State& state
     if (layer_xdmf_)
       layer_xdmf_->write(t, nodes, fields);
     else
-      vtk::write_unstructured(path, nodes, problem.tets, fields, options_.compression);
+      vtk::write_unstructured(path, nodes, problem.tets, fields, options_.layer_compression);
   });
 }
 

@@ -18,6 +18,7 @@ nlohmann::json BodySimulation::summary() const {
   const double h = 1.0 / (motion_.fps * settings_.substeps);
   nlohmann::json summary = nlohmann::json::object();
   summary["compression"] = vtk::to_string(writer_options_.compression);
+  summary["layer_compression"] = vtk::to_string(writer_options_.layer_compression);
   summary["integrator"] = model::to_string(integrator);
   summary["mass"] = model::to_string(layer_->problem.mass_kind);
   summary["solver"] = {{"name", settings_.solver},
@@ -111,6 +112,20 @@ nlohmann::json run_body_simulation(const BodyRunSettings& settings, RunFolder* f
   progress.finish();
   if (rank != 0) return {};
   return simulation.finish();
+}
+
+nlohmann::json simulate_output_summary(const BodyRunSettings& settings, const nlohmann::json& body_summary) {
+  const bool xdmf = settings.format == "xdmf";
+  nlohmann::json output = {{"format", settings.format},
+                           {"series", xdmf ? "body.xmf" : "body.pvd"},
+                           {"layer", settings.write_layer ? (xdmf ? "layer.xmf" : "layer.pvd") : ""},
+                           {"every", settings.every},
+                           {"compression", xdmf ? "none" : body_summary.value("compression", std::string("lz4"))},
+                           {"precision", xdmf ? settings.precision : "float64"}};
+  if (!xdmf && settings.write_layer)
+    output["layer_compression"] = body_summary.value("layer_compression", std::string("zlib"));
+  if (settings.fields) output["fields"] = *settings.fields;
+  return output;
 }
 
 }  // namespace sflsh::scene

@@ -233,9 +233,11 @@ class SceneReader : public TomlReader {
       model::check_frame_field_names(names, at(*n), " in 'fields' of [output]");
       output.fields = names;
     }
-    if (const toml::node* n = t.get("compression"))
+    if (const toml::node* n = t.get("compression")) {  // asked for: every frame file, the layer's too
       output.compression =
           vtk::parse_compression(choice(*n, "compression", {"lz4", "zlib", "none"}, " in [output]"), "compression");
+      output.layer_compression = output.compression;
+    }
     if (const toml::node* n = t.get("format")) output.format = choice(*n, "format", {"vtk", "xdmf"}, " in [output]");
   }
 

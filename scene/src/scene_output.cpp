@@ -38,6 +38,7 @@ SceneOutput::SceneOutput(const Scene& scene, const std::vector<std::unique_ptr<S
       o.translation = body.placement().t;
       o.fields = scene_.output.fields;
       o.compression = scene_.output.compression;
+      o.layer_compression = scene_.output.layer_compression;
       o.format = scene_.output.format;
       o.jobs = jobs_;
       writers_[b] = std::make_unique<model::SimulationWriter>(body.layer(), folder_, o);

@@ -550,6 +550,7 @@ class SceneRun {
                     {"total_seconds", total_seconds}};
     s["output"] = {{"every", every_},
                    {"compression", vtk::to_string(scene_.output.compression)},
+                   {"layer_compression", vtk::to_string(scene_.output.layer_compression)},
                    {"frames", scene_.output.frames},
                    {"format", scene_.output.format},
                    {"collections", output_->collections()}};

@@ -1,6 +1,7 @@
-// Self-describing output: the `units` field data names every array's unit, label names travel as string field
-// data, surfaces carry unit outward normals, a .pvd lists parts with names, an xdmf series says its units,
-// and every name of the units table (core/array_units.cpp) has its row in docs/output.md.
+// Self-describing output: the `units` field data names every array's unit, label names travel as text field
+// data (UTF-8 in UInt8 arrays, which meshio reads, not VTK string arrays), surfaces carry unit outward normals, a .pvd
+// lists parts with names, an xdmf series says its units, and every name of the units table (core/array_units.cpp) has
+// its row in docs/output.md.
 #include "scratch_dir.hpp"
 #include "self_described.hpp"
 
@@ -68,6 +69,15 @@ TEST(VtkOutput, UnitsLabelsAndNormalsAreWrittenBesideTheArrays) {
   EXPECT_THAT(vtk::read_field_strings(dir / "s.vtp", "units"),
               ::testing::ElementsAre("displacement: m", "part: label", "Normals: 1", "volume: m^3", "TimeValue: s"));
   testing::expect_labels_named(dir / "s.vtp", vtk::read_point_array(dir / "s.vtp", "part"), "part_names");
+  // Text as UInt8 (meshio 7's VTU reader refuses the type "String"), one line per value.
+  const std::string xml = text_of(dir / "s.vtp");
+  EXPECT_THAT(xml, ::testing::HasSubstr(R"(<DataArray type="UInt8" Name="units")"));
+  EXPECT_THAT(xml, ::testing::HasSubstr(R"(<DataArray type="UInt8" Name="part_names")"));
+  EXPECT_THAT(xml, ::testing::Not(::testing::HasSubstr(R"(type="String")")));
+  const Eigen::MatrixXd names = vtk::read_field_array(dir / "s.vtp", "part_names");
+  std::string joined;
+  for (Eigen::Index k = 0; k < names.rows(); ++k) joined += static_cast<char>(names(k, 0));
+  EXPECT_EQ(joined, "torso\nleft_upper_arm\nright_upper_arm");
 
   // Unit normals pointing away from the centre, computed from the written triangles.
   const Eigen::MatrixXd normals = vtk::read_point_array(dir / "s.vtp", "Normals");

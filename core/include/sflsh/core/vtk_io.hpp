@@ -1,9 +1,12 @@
 #pragma once
-// VTK XML output for ParaView: surfaces (.vtp), volume meshes (.vtu), and .pvd time series.
-// Every file is written atomically (temp file + rename). Binary appended data, zlib-compressed by default
-// (frame series may choose LZ4, about 8× faster to write and ~1.3× larger, or no compression).
-// Every file says the unit of each of its arrays: a string array `units` in its field data, one entry
-// "<name>: <unit>" per array name (core/array_units.hpp; docs/output.md). Surfaces carry unit point normals.
+// VTK XML output for ParaView, VTK and meshio: surfaces (.vtp), volume meshes (.vtu), and .pvd time series.
+// Every file is written atomically (temp file + rename). Inline binary data, zlib-compressed by default
+// (surface frame series may choose LZ4, about 8× faster to write and ~1.3× larger, or no compression; meshio
+// reads zlib but not LZ4).
+// Every file says the unit of each of its arrays: a text array `units` in its field data, one line
+// "<name>: <unit>" per array name (core/array_units.hpp; docs/output.md). Text arrays (`units`, label names)
+// are UTF-8 text in a UInt8 array, one line per value: meshio's VTU reader refuses VTK's string arrays.
+// Surfaces carry unit point normals.
 #include <Eigen/Core>
 
 #include <filesystem>
@@ -22,7 +25,8 @@ struct Field {
   bool integer = false;    ///< store as Int32 instead of Float64 (e.g. labels)
 };
 
-/// A string array of field data: the names of the values of a label array (`part_names`, `node_kind_names`).
+/// A text array of field data: the names of the values of a label array (`part_names`, `node_kind_names`),
+/// written as UTF-8 text in a UInt8 array, one line per value.
 struct Labels {
   std::string name;
   std::vector<std::string> values;  ///< values[k] names the label value k
@@ -101,9 +105,10 @@ std::vector<std::string> read_cell_array_names(const std::filesystem::path& path
 Eigen::MatrixXd read_cell_array(const std::filesystem::path& path, const std::string& name);
 /// Reads one numeric field-data array (e.g. `TimeValue`, rows = tuples).
 Eigen::MatrixXd read_field_array(const std::filesystem::path& path, const std::string& name);
-/// Reads the names of the field-data arrays (numbers and strings).
+/// Reads the names of the field-data arrays (numbers and text).
 std::vector<std::string> read_field_array_names(const std::filesystem::path& path);
-/// Reads a string array of the field data (`units`, `part_names`, …); throws when there is none of that name.
+/// Reads a text array of the field data (`units`, `part_names`, …: UInt8 text, one value per line, or a string
+/// array as older files hold); throws when there is none of that name.
 std::vector<std::string> read_field_strings(const std::filesystem::path& path, const std::string& name);
 /// Reads the cells (triangles or tetrahedra) of a .vtp or .vtu file, one row each.
 Cells read_cells(const std::filesystem::path& path);

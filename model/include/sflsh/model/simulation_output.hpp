@@ -73,8 +73,10 @@ struct SimulationWriterOptions {
   /// The arrays written into the frames (names of frame_field_names()); nullopt: all of them. Only the
   /// requested ones are computed.
   std::optional<std::vector<std::string>> fields;
-  /// Compression of the frame files (dynamics.vtp stays zlib).
+  /// Compression of the body's .vtp frames (dynamics.vtp stays zlib): LZ4 writes them about 8× faster.
   vtk::Compression compression = vtk::Compression::lz4;
+  /// Compression of the layer's .vtu frames: zlib, which meshio reads (it reads no LZ4).
+  vtk::Compression layer_compression = vtk::Compression::zlib;
   /// The time series: "vtk" (.pvd of one .vtp/.vtu per frame) or "xdmf" (<prefix>.xmf + <prefix>.h5: the
   /// triangles and the fields that do not change stored once, one dataset per field and frame).
   std::string format = "vtk";

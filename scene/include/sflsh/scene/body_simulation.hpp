@@ -52,6 +52,11 @@ struct BodyRunSettings {
   int every = 1;                              ///< write every N-th frame (frame 0 and the last always)
   std::string format = "vtk";                 ///< vtk (.pvd of .vtp/.vtu) | xdmf (.xmf + .h5), docs/output.md
   std::string precision = "float64";          ///< float64 | float32 (xdmf datasets)
+  /// lz4 | zlib | none: of every vtk frame file; empty: LZ4 for the body's .vtp, zlib for the layer's .vtu
+  std::string compression;
+  /// The arrays of the body and layer frames (names of model::frame_field_names(), as a scene's [output] fields);
+  /// nullopt: all of them.
+  std::optional<std::vector<std::string>> fields;
   // Reduced model.
   int handles = 86;
   int cubature = -1;                      ///< −1 auto, 0 every tet, else a tet count
@@ -95,7 +100,8 @@ class BodySimulation {
   const model::StepStats& step();
 
   /// summary.json's body entries (solver, integrator, mass, subject, beta, motion, mesh, material, reduced,
-  /// dynamics, frames, timings) over the frames solved so far, with "compression" (which the caller moves).
+  /// dynamics, frames, timings) over the frames solved so far, with "compression" and "layer_compression" (which the
+  /// caller moves).
   nlohmann::json summary() const;
   /// Waits for the frame files, writes the .pvd collections and dynamics.vtp (when writing) and returns
   /// summary(). Call once, after the last step.
@@ -161,5 +167,10 @@ class BodySimulation {
 /// than 0). Throws sflsh::Error with a one-line message on bad settings or when a step fails.
 nlohmann::json run_body_simulation(const BodyRunSettings& settings, RunFolder* frames_to, int rank, int size,
                                    const BodyRunReporting& reporting = {});
+
+/// summary.json's "output" entry of `sflsh simulate` (and of the Python Simulation.write): format, series, layer,
+/// every, the compressions and precision, the fields when chosen, from the settings and the body's summary() (its
+/// "compression" and "layer_compression").
+nlohmann::json simulate_output_summary(const BodyRunSettings& settings, const nlohmann::json& body_summary);
 
 }  // namespace sflsh::scene

@@ -166,7 +166,9 @@ struct OutputSpec {
   int every = 1;       ///< write every N-th frame (frame 0 and the last frame always)
   /// The arrays of the body (and layer) frames, names of model::frame_field_names(); nullopt: all.
   std::optional<std::vector<std::string>> fields;
-  vtk::Compression compression = vtk::Compression::lz4;  ///< of the frame files: lz4 | zlib | none
+  vtk::Compression compression = vtk::Compression::lz4;  ///< of the .vtp frame files: lz4 | zlib | none
+  /// of the layers' .vtu frames: zlib (meshio reads no LZ4) unless `compression` is given, which sets both
+  vtk::Compression layer_compression = vtk::Compression::zlib;
   /// "vtk": a .pvd of .vtp frames per body and object, and scene.pvd over all of them; "xdmf": <name>.xmf +
   /// <name>.h5 per body and for the objects (docs/output.md), no collection.
   std::string format = "vtk";
