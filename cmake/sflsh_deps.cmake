@@ -38,10 +38,11 @@ if(NOT VTK_FOUND)
 endif()
 message(STATUS "VTK ${VTK_VERSION} from ${VTK_DIR}")
 # The mesh-file readers of the scene stage (.obj/.stl: IOGeometry, .ply: IOPLY) are linked by sflsh_scene
-# only: found here, at the top level, so that their own dependencies (JsonCpp) are visible to every
-# directory, but kept out of VTK_LIBRARIES so that the other targets' link and compile lines do not change.
+# only, and the pictures' colour bar (RenderingAnnotation: vtkScalarBarActor) by sflsh_core: found here, at the
+# top level, so that their own dependencies (JsonCpp) are visible to every directory, but kept out of
+# VTK_LIBRARIES so that the other targets' link and compile lines do not change.
 set(SFLSH_VTK_LIBRARIES_CORE ${VTK_LIBRARIES})
-find_package(VTK 9 REQUIRED COMPONENTS IOGeometry IOPLY FiltersCore)
+find_package(VTK 9 REQUIRED COMPONENTS IOGeometry IOPLY FiltersCore RenderingAnnotation)
 set(VTK_LIBRARIES ${SFLSH_VTK_LIBRARIES_CORE})
 find_package(HDF5 REQUIRED COMPONENTS C CXX)   # serial flavour: /usr/include/hdf5/serial
 

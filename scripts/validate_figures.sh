@@ -30,7 +30,7 @@ draw() {
   done
   [[ ${#list[@]} -gt 0 ]] || return 0
   local IFS=,
-  "$sflsh" -q render --map "$vtp" --fields "${list[*]}" --view front --out "$out/$file"
+  "$sflsh" -q render --map "$vtp" --fields "${list[*]}" --label "${label:-sigma}" --view front --out "$out/$file"
   echo "validate_figures: wrote $out/$file (${#list[@]} panels)"
 }
 # shellcheck disable=SC2086  # subject lists split on newlines on purpose
@@ -39,6 +39,6 @@ draw fig3_truth_vs_independent.png "sigma_truth_@ sigma_independent_@" $train
 if grep -q '^sigma_cv_' <<<"$fields"; then draw fig4_leave_one_out.png "sigma_independent_@ sigma_cv_l2_@ sigma_cv_ours_@" $train; fi
 # shellcheck disable=SC2086
 draw fig6_full_optimization.png "sigma_independent_@ sigma_full_l2_@ sigma_full_ours_@" $train
-draw fig7_covariance.png "covariance_truth covariance_independent covariance_ours covariance_l2" x
+label=covariance draw fig7_covariance.png "covariance_truth covariance_independent covariance_ours covariance_l2" x
 # shellcheck disable=SC2086
 [[ -z $test_subjects ]] || draw fig8_generalization.png "sigma_truth_@ sigma_full_l2_@ sigma_full_ours_@" $test_subjects

@@ -1,8 +1,11 @@
 // sflsh render --run DIR --out FILE.png: a picture of a simulation's result, the posed body of one frame coloured
 // by its soft-tissue motion (σ per vertex, or the frame's soft-tissue displacement), drawn offscreen; with
-// --strip N, evenly spaced frames of a scene run side by side (every body and object of scene.pvd).
+// --strip N, evenly spaced frames of a scene run side by side (every body and object of scene.pvd). Every picture
+// has a colour bar with the quantity and its unit, a perceptually uniform map (viridis by default, cividis; rainbow
+// on request: --colormap) and the subject, motion and time in its title (from the run's summary.json).
 #include "commands.hpp"
 
+#include <sflsh/core/array_units.hpp>
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
 #include <sflsh/core/render.hpp>
@@ -28,13 +31,60 @@ struct RenderRunOptions {
   std::string view = "three_quarter";
   int width = 900;
   int height = 1000;
-  int strip = 0;                    ///< > 0: a strip of that many frames of a scene run
-  std::string map;                  ///< a .vtp surface whose point arrays are drawn side by side
-  std::vector<std::string> fields;  ///< with map: the arrays, one panel each
-  std::string label = "sigma";      ///< with map: what the arrays are, for the title
-  double max = 0.0;                 ///< with map: top of the colour scale (0: the 99th percentile of all panels)
+  int strip = 0;                     ///< > 0: a strip of that many frames of a scene run
+  std::string map;                   ///< a .vtp surface whose point arrays are drawn side by side
+  std::vector<std::string> fields;   ///< with map: the arrays, one panel each
+  std::string label = "sigma";       ///< with map: what the arrays are, for the title
+  double max = 0.0;                  ///< with map: top of the colour scale (0: the 99th percentile of all panels)
+  std::string colormap = "viridis";  ///< viridis | cividis | rainbow
   std::string out;
 };
+
+/// "t = 0 to 2.00 s" over `frames` frames at `fps`.
+std::string time_span(double frames, double fps) {
+  return fps > 0.0 && frames > 1.0 ? fmt::format("t = 0 to {:.2f} s", (frames - 1.0) / fps) : std::string("t = 0 s");
+}
+
+/// What a run folder's summary.json says about its subjects, motions and time, for a picture's title:
+/// "OPEN_TRAIN_1 | jiggle_on_toes | t = 0 to 2.00 s" (`sflsh simulate`, `compare`), the bodies of a scene, or
+/// `sflsh validate`'s subjects and motions; empty without a summary.
+std::string run_description(const fs::path& folder) {
+  if (!fs::exists(folder / "summary.json")) return "";
+  const nlohmann::json s = read_json(folder / "summary.json");
+  const auto text = [](const nlohmann::json& j, const char* key) {
+    return j.contains(key) && j[key].is_string() ? j[key].get<std::string>() : std::string();
+  };
+  const auto join = [](const nlohmann::json& list) {
+    std::string out;
+    if (list.is_array())
+      for (const auto& item : list)
+        if (item.is_string()) out += (out.empty() ? "" : ", ") + item.get<std::string>();
+    return out;
+  };
+  if (s.contains("scene") && s["scene"].is_object() && s.contains("bodies") && s["bodies"].is_array()) {
+    std::string bodies;
+    for (const auto& b : s["bodies"])
+      bodies +=
+          fmt::format("{}{}: {} ({})", bodies.empty() ? "" : ", ", text(b, "name"),
+                      text(b, "subject").empty() ? std::string("mean shape") : text(b, "subject"), text(b, "motion"));
+    return bodies;
+  }
+  if (s.contains("config") && s["config"].is_object()) {  // sflsh validate
+    const nlohmann::json& c = s["config"];
+    return fmt::format("subjects {} | mean over the motions {} | {} frames each",
+                       join(c.value("train_subjects", nlohmann::json())),
+                       join(c.value("train_motions", nlohmann::json())), c.value("frames", 0));
+  }
+  std::string motion = text(s, "motion");
+  double frames = 0.0, fps = 0.0;
+  if (s.contains("motion") && s["motion"].is_object()) {
+    motion = text(s["motion"], "name");
+    frames = s["motion"].value("frames", 0.0);
+    fps = s["motion"].value("fps", 0.0);
+  }
+  if (motion.empty() && text(s, "subject").empty()) return "";
+  return fmt::format("{} | {} | {}", text(s, "subject"), motion, time_span(frames, fps));
+}
 
 /// The body frames of a run folder (body_000000.vtp, …), in frame order.
 std::vector<fs::path> body_frames(const fs::path& run) {
@@ -88,7 +138,7 @@ void run_render(const RenderRunOptions& opt) {
   const std::vector<std::string> field_names = vtk::read_field_array_names(frames[index]);
   const bool timed = std::find(field_names.begin(), field_names.end(), "TimeValue") != field_names.end();
   const double time = timed ? vtk::read_field_array(frames[index], "TimeValue")(0, 0) : 0.0;
-  std::string legend;
+  std::string legend, quantity;
   if (opt.color == "sigma") {
     const fs::path dynamics = run / "dynamics.vtp";
     require(fs::exists(dynamics), "--run {}: no dynamics.vtp, expected the σ map `sflsh simulate` writes", opt.run);
@@ -96,11 +146,13 @@ void run_render(const RenderRunOptions& opt) {
     require(sigma.rows() == surface.points.rows(), "{}: {} σ values for {} body vertices", dynamics.string(),
             sigma.rows(), surface.points.rows());
     surface.scalars = sigma.col(0);
-    legend = "sigma";
+    legend = "sigma [mm]";
+    quantity = "coloured by sigma over the run (dynamics.vtp)";
   } else {
     const Eigen::MatrixXd u = vtk::read_point_array(frames[index], "soft_tissue_displacement");
     surface.scalars = 1e3 * u.rowwise().norm();
-    legend = "|soft-tissue displacement|";
+    legend = "soft-tissue\ndisplacement\n[mm]";
+    quantity = "coloured by the frame's |soft-tissue displacement|";
   }
   require(surface.scalars->allFinite(), "{}: non-finite {} values", frames[index].string(), opt.color);
 
@@ -114,9 +166,11 @@ void run_render(const RenderRunOptions& opt) {
   view.name = opt.view;
   view.width = opt.width;
   view.height = opt.height;
+  view.colormap = opt.colormap;
   view.scalar_range = std::make_pair(0.0, std::max(surface.scalars->maxCoeff(), 1e-9));
-  view.title = fmt::format("{} {} t={:.2f}s  {} 0-{:.2f} mm (blue-red)", subject, motion, time, legend,
-                           view.scalar_range->second);
+  view.scalar_title = legend;
+  view.title = fmt::format("{} | {} | t = {:.2f} s (frame {}{})\n{}", subject, motion, time, index,
+                           opt.frame == "peak" ? ", the largest soft-tissue displacement" : "", quantity);
   render::render_png(opt.out, {surface}, view);
   logger()->info("render: frame {} of {} coloured by {} → {}", index, frames.size(), opt.color, opt.out);
 }
@@ -209,8 +263,12 @@ void run_render_strip(const RenderRunOptions& opt) {
   view.name = opt.view;
   view.width = opt.width;
   view.height = opt.height;
+  view.colormap = opt.colormap;
   view.scalar_range = std::make_pair(0.0, std::max(peak, 1e-9));
-  view.title = fmt::format("{}: |soft-tissue displacement| 0-{:.1f} mm (blue-red)", scene, peak);
+  view.scalar_title = "soft-tissue\ndisplacement\n[mm]";
+  const std::string bodies = run_description(run);
+  view.title = fmt::format("{}{}{}\n|soft-tissue displacement|, the time under each panel", scene,
+                           bodies.empty() ? "" : " | ", bodies);
   render::render_strip_png(opt.out, panels, view);
   logger()->info("render: {} of {} written frames of {} → {}", panels.size(), frames.size(), pvd.string(), opt.out);
 }
@@ -252,14 +310,19 @@ void run_render_map(const RenderRunOptions& opt) {
   view.name = opt.view;
   view.width = opt.width;
   view.height = opt.height;
+  view.colormap = opt.colormap;
   // A few extreme vertices would wash out the maps: by default the scale ends at the 99th percentile (above
-  // saturates red), or at --max.
+  // saturates: the top colour), or at --max.
   const auto rank = static_cast<std::ptrdiff_t>(0.99 * static_cast<double>(all.size() - 1));
   std::nth_element(all.begin(), all.begin() + rank, all.end());
   const double top = opt.max > 0.0 ? opt.max : all[static_cast<std::size_t>(rank)];
   view.scalar_range = std::make_pair(0.0, std::max(top, 1e-9));
-  view.title = fmt::format("{} 0-{:.2f} (blue-red; {} saturates)", opt.label, top,
-                           opt.max > 0.0 ? "above --max" : "above the 99th percentile");
+  const std::string unit(units::of(opt.fields.front()));
+  view.scalar_title = unit.empty() ? opt.label : fmt::format("{} [{}]", opt.label, unit);
+  const std::string description = run_description(file.parent_path());
+  view.title = fmt::format("{} of {}{}{}\nthe scale ends at {:.3g} {}: above it the colour saturates", opt.label,
+                           file.filename().string(), description.empty() ? "" : " | ", description, top,
+                           opt.max > 0.0 ? "(--max)" : "(the 99th percentile of all panels)");
   render::render_strip_png(opt.out, panels, view);
   logger()->info("render: {} arrays of {} → {}", panels.size(), file.string(), opt.out);
 }
@@ -280,6 +343,9 @@ void register_render_commands(CLI::App& app, const Invocation& /*invocation*/) {
   cmd->add_option("--label", opt->label, "With --map: what the arrays are, for the title (default sigma)");
   cmd->add_option("--max", opt->max, "With --map: top of the colour scale (default: the 99th percentile of all panels)")
       ->check(CLI::PositiveNumber);
+  cmd->add_option("--colormap", opt->colormap,
+                  "Colour map: viridis (default) | cividis (both perceptually uniform) | rainbow (blue to red)")
+      ->check(CLI::IsMember({"viridis", "cividis", "rainbow"}));
   cmd->add_option("--color", opt->color, "sigma (σ of the whole run, mm) | displacement (the frame's, mm)")
       ->check(CLI::IsMember({"sigma", "displacement"}));
   cmd->add_option("--frame", opt->frame, "peak (largest soft-tissue displacement) or a frame index");

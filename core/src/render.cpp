@@ -1,4 +1,5 @@
 #include <sflsh/core/atomic_file.hpp>
+#include <sflsh/core/colormap.hpp>
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/render.hpp>
 #include <sflsh/core/virtual_display.hpp>
@@ -6,6 +7,7 @@
 #include <vtkActor.h>
 #include <vtkCamera.h>
 #include <vtkCellArray.h>
+#include <vtkCoordinate.h>
 #include <vtkDoubleArray.h>
 #include <vtkLight.h>
 #include <vtkLookupTable.h>
@@ -19,6 +21,7 @@
 #include <vtkProperty.h>
 #include <vtkRenderWindow.h>
 #include <vtkRenderer.h>
+#include <vtkScalarBarActor.h>
 #include <vtkTextActor.h>
 #include <vtkTextProperty.h>
 #include <vtkWindowToImageFilter.h>
@@ -59,9 +62,11 @@ vtkSmartPointer<vtkPolyData> to_polydata(const Surface& s) {
   return poly;
 }
 
-/// The lookup table (blue to red) over [lo, hi] of the surfaces' scalars, or over view.scalar_range.
+/// The lookup table of view.colormap (256 colours) over [lo, hi] of the surfaces' scalars, or over
+/// view.scalar_range.
 vtkSmartPointer<vtkLookupTable> make_lookup_table(const std::vector<const Surface*>& surfaces, const View& view,
                                                   double& lo, double& hi) {
+  check_colormap(view.colormap, "render: colour map");
   lo = 0.0;
   hi = 1.0;
   if (view.scalar_range) {
@@ -78,10 +83,47 @@ vtkSmartPointer<vtkLookupTable> make_lookup_table(const std::vector<const Surfac
   }
   if (!(hi > lo)) hi = lo + 1.0;
   auto lut = vtkSmartPointer<vtkLookupTable>::New();
-  lut->SetHueRange(0.667, 0.0);
+  constexpr int kColors = 256;
+  lut->SetNumberOfTableValues(kColors);
+  for (int k = 0; k < kColors; ++k) {
+    const std::array<double, 3> c = colormap_color(view.colormap, k / static_cast<double>(kColors - 1));
+    lut->SetTableValue(k, c[0], c[1], c[2], 1.0);
+  }
   lut->SetTableRange(lo, hi);
-  lut->Build();
   return lut;
+}
+
+bool any_scalars(const std::vector<const Surface*>& surfaces) {
+  return std::any_of(surfaces.begin(), surfaces.end(), [](const Surface* s) { return s->scalars.has_value(); });
+}
+
+/// The colour bar of `lut` in the column [x0, x1] (normalized viewport of `renderer`) between heights y0 and y1:
+/// the bar, its ticks and its title (the quantity and its unit).
+void add_color_bar(vtkRenderer* renderer, vtkLookupTable* lut, const std::string& title, double x0, double x1,
+                   double y0, double y1) {
+  vtkNew<vtkScalarBarActor> bar;
+  bar->SetLookupTable(lut);
+  bar->SetMaximumNumberOfColors(256);
+  bar->SetOrientationToVertical();
+  bar->SetNumberOfLabels(5);
+  bar->SetLabelFormat("%-#6.3g");
+  bar->SetTitle(title.c_str());
+  bar->UnconstrainedFontSizeOn();
+  bar->SetBarRatio(0.28);
+  bar->SetTextPad(4);
+  bar->SetVerticalTitleSeparation(10);
+  for (vtkTextProperty* text : {bar->GetTitleTextProperty(), bar->GetLabelTextProperty()}) {
+    text->SetColor(0.1, 0.1, 0.1);
+    text->SetFontSize(16);
+    text->ShadowOff();
+    text->ItalicOff();
+    text->BoldOff();
+  }
+  bar->GetPositionCoordinate()->SetCoordinateSystemToNormalizedViewport();
+  bar->GetPositionCoordinate()->SetValue(x0, y0);
+  bar->SetWidth(x1 - x0);
+  bar->SetHeight(y1 - y0);
+  renderer->AddActor2D(bar);
 }
 
 void add_surfaces(vtkRenderer* renderer, const std::vector<Surface>& surfaces, vtkLookupTable* lut, double lo,
@@ -182,34 +224,10 @@ void surface_bounds(const std::vector<const Surface*>& surfaces, double b[6]) {
   }
 }
 
-}  // namespace
-
-void render_png(const std::filesystem::path& path, const std::vector<Surface>& surfaces, const View& view) {
-  require_display("render");  // $DISPLAY, or a virtual display started for this process
-  require(!surfaces.empty(), "render: nothing to draw");
-
-  vtkNew<vtkRenderer> renderer;
-  renderer->SetBackground(1.0, 1.0, 1.0);
-  std::vector<const Surface*> all;
-  for (const Surface& s : surfaces) all.push_back(&s);
-  double lo = 0.0, hi = 1.0;
-  const auto lut = make_lookup_table(all, view, lo, hi);
-  add_surfaces(renderer, surfaces, lut, lo, hi);
-  if (!view.title.empty()) add_text(renderer, view.title, 10, view.height - 34, 20);
-  double b[6];
-  surface_bounds(all, b);
-  frame_camera(renderer, view.name, b, static_cast<double>(view.width) / view.height);
-
-  vtkNew<vtkRenderWindow> window;
-  window->AddRenderer(renderer);
-  window->SetSize(view.width, view.height);
-  write_window_png(path, window);
-}
-
-void render_strip_png(const std::filesystem::path& path, const std::vector<Panel>& panels, const View& view) {
-  require_display("render");
-  require(!panels.empty(), "render: no panels to draw");
-  // One colour scale and one camera for every panel: the panels compare like with like.
+/// Draws the panels side by side into the window: a white background renderer holds the title, the captions and
+/// the colour bar (in its column right of the panels); each panel has its renderer over the same camera box.
+void draw(const std::filesystem::path& path, const std::vector<Panel>& panels, const View& view, int window_width,
+          int panel_width, int caption_height) {
   std::vector<const Surface*> all, framed;
   for (const Panel& p : panels)
     for (const Surface& s : p.surfaces) {
@@ -218,39 +236,70 @@ void render_strip_png(const std::filesystem::path& path, const std::vector<Panel
     }
   require(!all.empty(), "render: nothing to draw");
   if (framed.empty()) framed = all;
+  // One colour scale and one camera for every panel: the panels compare like with like.
   double lo = 0.0, hi = 1.0;
   const auto lut = make_lookup_table(all, view, lo, hi);
   double b[6];
   surface_bounds(framed, b);
-  const int title_height = view.title.empty() ? 0 : 40;
-  const int caption_height = 36;
+  const auto title_lines = static_cast<int>(std::count(view.title.begin(), view.title.end(), '\n')) + 1;
+  // The title's font shrinks with a narrow picture (20 px at 900 px and wider, 12 px at most).
+  const int title_font = std::clamp(window_width / 45, 12, 20);
+  const int title_height = view.title.empty() ? 0 : 12 + (title_font + 6) * title_lines;
   const int panel_height = view.height - title_height - caption_height;
-  require(panel_height > 16, "render: a strip panel of height {} px leaves no room for the picture", view.height);
-  const auto n = static_cast<double>(panels.size());
-  const int width = view.width * static_cast<int>(panels.size());
+  require(panel_height > 16, "render: a picture of height {} px leaves no room for the surfaces", view.height);
   vtkNew<vtkRenderWindow> window;
-  window->SetSize(width, view.height);
-  // A white background renderer under the panels holds the title and the captions.
+  window->SetSize(window_width, view.height);
   vtkNew<vtkRenderer> back;
   back->SetBackground(1.0, 1.0, 1.0);
   back->SetViewport(0.0, 0.0, 1.0, 1.0);
   back->SetLayer(0);
-  if (!view.title.empty()) add_text(back, view.title, 10, view.height - 30, 20);
+  if (!view.title.empty()) add_text(back, view.title, 10, view.height - title_height + 8, title_font);
+  const double width = window_width;
   for (std::size_t i = 0; i < panels.size(); ++i)
-    add_text(back, panels[i].caption, static_cast<int>(i) * view.width + view.width / 2 - 50, 8, 18);
-  window->SetNumberOfLayers(2);
-  window->AddRenderer(back);
+    if (!panels[i].caption.empty())
+      add_text(back, panels[i].caption, static_cast<int>(i) * panel_width + panel_width / 2 - 50, 8, 18);
   const double y0 = static_cast<double>(caption_height) / view.height;
   const double y1 = 1.0 - static_cast<double>(title_height) / view.height;
+  const double panels_right = static_cast<double>(panel_width) * static_cast<double>(panels.size()) / width;
+  if (any_scalars(all))
+    add_color_bar(back, lut, view.scalar_title, panels_right + 14.0 / width, 1.0 - 10.0 / width, y0 + 0.12 * (y1 - y0),
+                  y0 + 0.82 * (y1 - y0));
+  window->SetNumberOfLayers(2);
+  window->AddRenderer(back);
   for (std::size_t i = 0; i < panels.size(); ++i) {
     vtkNew<vtkRenderer> renderer;
     renderer->SetLayer(1);
-    renderer->SetViewport(static_cast<double>(i) / n, y0, static_cast<double>(i + 1) / n, y1);
+    renderer->SetViewport(static_cast<double>(i) * panel_width / width, y0,
+                          static_cast<double>(i + 1) * panel_width / width, y1);
     add_surfaces(renderer, panels[i].surfaces, lut, lo, hi);
-    frame_camera(renderer, view.name, b, static_cast<double>(view.width) / panel_height);
+    frame_camera(renderer, view.name, b, static_cast<double>(panel_width) / panel_height);
     window->AddRenderer(renderer);
   }
   write_window_png(path, window);
+}
+
+}  // namespace
+
+void render_png(const std::filesystem::path& path, const std::vector<Surface>& surfaces, const View& view) {
+  require_display("render");  // $DISPLAY, or a virtual display started for this process
+  require(!surfaces.empty(), "render: nothing to draw");
+  Panel panel;
+  panel.surfaces = surfaces;
+  bool scalars = false;
+  for (const Surface& s : surfaces) scalars = scalars || s.scalars.has_value();
+  const int bar = scalars ? kColorBarWidth : 0;
+  require(view.width > bar + 16, "render: a picture of width {} px leaves no room beside the colour bar", view.width);
+  draw(path, {panel}, view, view.width, view.width - bar, 0);
+}
+
+void render_strip_png(const std::filesystem::path& path, const std::vector<Panel>& panels, const View& view) {
+  require_display("render");
+  require(!panels.empty(), "render: no panels to draw");
+  bool scalars = false;
+  for (const Panel& p : panels)
+    for (const Surface& s : p.surfaces) scalars = scalars || s.scalars.has_value();
+  const int width = view.width * static_cast<int>(panels.size()) + (scalars ? kColorBarWidth : 0);
+  draw(path, panels, view, width, view.width, 36);
 }
 
 }  // namespace sflsh::render

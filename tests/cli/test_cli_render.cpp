@@ -1,7 +1,11 @@
-// `sflsh render`: a picture of a simulation's result on a headless machine, and its one-line errors.
+// `sflsh render`: a picture of a simulation's result on a headless machine with its colour bar (viridis by
+// default, rainbow on request), and its one-line errors.
 #include "png_check.hpp"
 #include "run_command.hpp"
 #include "scratch_dir.hpp"
+
+#include <sflsh/core/colormap.hpp>
+#include <sflsh/core/render.hpp>
 
 #include <fmt/format.h>
 #include <gmock/gmock.h>
@@ -11,6 +15,27 @@
 using sflsh::testing::count_entries;
 using sflsh::testing::run_sflsh;
 using ::testing::HasSubstr;
+
+namespace {
+
+/// Nine colours of the map, from 10 % to 90 % of its range (the bar's ends meet its frame and labels).
+std::vector<sflsh::testing::Rgb8> map_colors(const std::string& colormap) {
+  std::vector<sflsh::testing::Rgb8> out;
+  for (int k = 1; k <= 9; ++k) {
+    const std::array<double, 3> c = sflsh::render::colormap_color(colormap, k / 10.0);
+    out.push_back({static_cast<int>(std::lround(255 * c[0])), static_cast<int>(std::lround(255 * c[1])),
+                   static_cast<int>(std::lround(255 * c[2]))});
+  }
+  return out;
+}
+
+/// The picture has a vertical colour bar of `colormap` in its right-hand `bar_width` pixels (of `width`).
+void expect_color_bar(const std::filesystem::path& png, const std::string& colormap, int width, int bar_width) {
+  const int column = sflsh::testing::color_strip_column(png, map_colors(colormap));
+  EXPECT_GE(column, width - bar_width) << png << ": no " << colormap << " colour bar on the right";
+}
+
+}  // namespace
 
 TEST(CliRender, DrawsTheRunsPosedBodyColouredBySigmaWithoutADisplay) {
   const auto dir = sflsh::testing::scratch_dir();
@@ -25,16 +50,20 @@ TEST(CliRender, DrawsTheRunsPosedBodyColouredBySigmaWithoutADisplay) {
   result = run_sflsh(fmt::format("-q render --run {} --out {}", run.string(), (dir / "sigma.png").string()), dir);
   ASSERT_EQ(result.exit_code, 0) << result.err;
   // A 900×1000 picture of a coloured body: a blank or one-colour image has a handful of colours, a shaded body
-  // under a rainbow map hundreds.
+  // under a colour map hundreds; its colour bar (viridis) on the right, and no rainbow in it.
   sflsh::testing::expect_drawn_png(dir / "sigma.png", 900, 1000, 200);
+  expect_color_bar(dir / "sigma.png", "viridis", 900, sflsh::render::kColorBarWidth);
+  EXPECT_EQ(sflsh::testing::color_strip_column(dir / "sigma.png", map_colors("rainbow")), -1);
 
   result =
       run_sflsh(fmt::format("-q render --run {} --color displacement --frame 6 --view front --width 400 --height 500 "
-                            "--out {}",
+                            "--colormap rainbow --out {}",
                             run.string(), (dir / "frame6.png").string()),
                 dir);
   ASSERT_EQ(result.exit_code, 0) << result.err;
   sflsh::testing::expect_drawn_png(dir / "frame6.png", 400, 500, 50);
+  expect_color_bar(dir / "frame6.png", "rainbow", 400, sflsh::render::kColorBarWidth);  // on request
+  EXPECT_EQ(sflsh::testing::color_strip_column(dir / "frame6.png", map_colors("viridis")), -1);
 
   // Point arrays of one surface side by side (validate's σ maps use this on its dynamics.vtp).
   const auto dynamics = run / "dynamics.vtp";
@@ -43,6 +72,8 @@ TEST(CliRender, DrawsTheRunsPosedBodyColouredBySigmaWithoutADisplay) {
                      dir);
   ASSERT_EQ(result.exit_code, 0) << result.err;
   sflsh::testing::expect_drawn_png(dir / "maps.png", 3 * 360, 560, 200);
+  // The colour bar in its own column right of the panels.
+  expect_color_bar(dir / "maps.png", "viridis", 3 * 360 + sflsh::render::kColorBarWidth, sflsh::render::kColorBarWidth);
   // An array the file lacks: one line naming it and what the file has, nothing written.
   result = run_sflsh(
       fmt::format("render --map {} --fields sigma,nope --out {}", dynamics.string(), (dir / "none.png").string()), dir);
@@ -109,13 +140,15 @@ keyframes = [{ t = 0.0, position = [0.0, 0.064, 0.19] }, { t = 0.2, position = [
   ASSERT_EQ(result.exit_code, 0) << result.err;
 
   const sflsh::testing::NoDisplay no_display;  // sflsh starts its own virtual display
-  result = run_sflsh(
-      fmt::format("-q render --run {} --strip 3 --view front --out {}", run.string(), (dir / "strip.png").string()),
-      dir);
+  result = run_sflsh(fmt::format("-q render --run {} --strip 3 --view front --colormap cividis --out {}", run.string(),
+                                 (dir / "strip.png").string()),
+                     dir);
   ASSERT_EQ(result.exit_code, 0) << result.err;
-  // Three 360×560 panels side by side; shaded bodies under a rainbow map, a grey ball and text give hundreds of
-  // colours, a blank picture one.
+  // Three 360×560 panels side by side; shaded bodies under a colour map, a grey ball and text give hundreds of
+  // colours, a blank picture one. The colour bar (cividis, asked for) in its column right of the panels.
   sflsh::testing::expect_drawn_png(dir / "strip.png", 3 * 360, 560, 200);
+  expect_color_bar(dir / "strip.png", "cividis", 3 * 360 + sflsh::render::kColorBarWidth,
+                   sflsh::render::kColorBarWidth);
 
   // A single-body run has no scene.pvd: one line, nothing written.
   result = run_sflsh(fmt::format("render --run {} --strip 3 --out {}", (dir / "scene.toml").parent_path().string(),

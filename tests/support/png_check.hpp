@@ -1,7 +1,7 @@
 #pragma once
 // Pictures in tests: a headless process (no $DISPLAY, as on a cluster node or in CI) and a check that a PNG the
 // CLI wrote is a real picture, decoded with VTK's PNG reader: the expected size, and enough distinct colours that
-// it is not a blank or single-colour image.
+// it is not a blank or single-colour image; and that a colour bar of a given colour map is drawn in it.
 #include <gtest/gtest.h>
 #include <vtkDataArray.h>
 #include <vtkImageData.h>
@@ -10,12 +10,14 @@
 #include <vtkPointData.h>
 
 #include <algorithm>
+#include <array>
 #include <cstdint>
 #include <cstdlib>
 #include <filesystem>
 #include <optional>
 #include <set>
 #include <string>
+#include <vector>
 
 namespace sflsh::testing {
 
@@ -78,6 +80,36 @@ inline void expect_drawn_png(const std::filesystem::path& path, int min_width, i
   EXPECT_GE(info.width, min_width) << path;
   EXPECT_GE(info.height, min_height) << path;
   EXPECT_GT(info.distinct_colors, min_colors) << path << ": a blank or nearly blank image";
+}
+
+/// An RGB colour, 0–255 per channel.
+using Rgb8 = std::array<int, 3>;
+
+/// The first column of the PNG in which, going up, pixels within `tolerance` (per channel) of every colour of
+/// `colors` appear in that order: a vertical colour bar drawn with those colours; −1 when there is none. Shaded
+/// surfaces do not trace a map's colours in order along a column, an unlit colour bar does.
+inline int color_strip_column(const std::filesystem::path& path, const std::vector<Rgb8>& colors, int tolerance = 6) {
+  vtkNew<vtkPNGReader> reader;
+  if (!reader->CanReadFile(path.c_str())) return -1;
+  reader->SetFileName(path.c_str());
+  reader->Update();
+  vtkImageData* image = reader->GetOutput();
+  int dims[3] = {0, 0, 0};
+  image->GetDimensions(dims);
+  vtkDataArray* scalars = image->GetPointData()->GetScalars();
+  if (!scalars || scalars->GetNumberOfComponents() < 3 || colors.empty()) return -1;
+  for (int x = 0; x < dims[0]; ++x) {
+    std::size_t next = 0;
+    for (int y = 0; y < dims[1] && next < colors.size(); ++y) {  // VTK's image rows go up from the bottom
+      const vtkIdType pixel = static_cast<vtkIdType>(y) * dims[0] + x;
+      bool close = true;
+      for (int c = 0; c < 3; ++c)
+        close = close && std::abs(static_cast<int>(scalars->GetComponent(pixel, c)) - colors[next][c]) <= tolerance;
+      if (close) ++next;
+    }
+    if (next == colors.size()) return x;
+  }
+  return -1;
 }
 
 }  // namespace sflsh::testing

@@ -30,15 +30,24 @@ struct View {
   std::string name = "front";  ///< front (+Z toward the camera), side (from +X), back, three_quarter, top
   int width = 800;
   int height = 1000;
-  std::string title;  ///< drawn in the top-left corner when not empty
+  std::string title;  ///< drawn across the top when not empty (lines separated by '\n')
   std::optional<std::pair<double, double>> scalar_range;
+  std::string colormap = "viridis";  ///< viridis | cividis | rainbow (colormap.hpp)
+  /// The colour bar's title, the quantity and its unit (e.g. "sigma [mm]"). A colour bar is drawn on the right
+  /// whenever a surface is coloured by scalars.
+  std::string scalar_title;
 };
 
-/// Renders the surfaces into one PNG (atomic write). Throws sflsh::Error when no X display can be had.
+/// Width [px] of the colour bar's column on the right of a picture.
+constexpr int kColorBarWidth = 150;
+
+/// Renders the surfaces into one PNG of view.width × view.height (atomic write), the colour bar inside it.
+/// Throws sflsh::Error when no X display can be had.
 void render_png(const std::filesystem::path& path, const std::vector<Surface>& surfaces, const View& view);
 
 /// Renders the panels side by side into one PNG, each view.width × view.height (title across the top, each
-/// panel's caption under it), with one colour scale and one camera over every panel. Throws like render_png.
+/// panel's caption under it), with one colour scale and one camera over every panel, and the colour bar in a
+/// column of kColorBarWidth on the right when there are scalars. Throws like render_png.
 void render_strip_png(const std::filesystem::path& path, const std::vector<Panel>& panels, const View& view);
 
 }  // namespace sflsh::render
