@@ -99,7 +99,8 @@ py::array pose_array(const std::vector<body::Pose>& poses, py::handle owner) {
 
 void bind_body(py::module_& m) {
   py::class_<PyBody, std::shared_ptr<PyBody>>(m, "Body",
-                                              "A body model in SMPL's layout: the open body (default) or an SMPL .npz")
+                                              "A body model in SMPL's layout: the open body (default) or an SMPL .npz; "
+                                              "Body.joint_names: the 24 joint names in SMPL's order")
       .def(py::init([](const py::object& path) {
              body::SubjectSelection selection;
              if (!path.is_none()) selection.body_path = py::str(path).cast<std::string>();  // str or os.PathLike
@@ -109,12 +110,16 @@ void bind_body(py::module_& m) {
              return b;
            }),
            py::arg("path") = py::none(), "Loads a body .npz (default: data/open_body.npz); errors as `--body PATH`")
-      .def_property_readonly("name", [](const PyBody& b) { return b.model.name; })
       .def_property_readonly(
-          "path", [](const PyBody& b) { return b.path.empty() ? body::default_body_path().string() : b.path; })
+          "name", [](const PyBody& b) { return b.model.name; }, "The body model's name ('open_body' for the open body)")
+      .def_property_readonly(
+          "path", [](const PyBody& b) { return b.path.empty() ? body::default_body_path().string() : b.path; },
+          "The .npz file it was loaded from")
       .def_property_readonly("_selection_path", [](const PyBody& b) { return b.path; })
-      .def_property_readonly("num_vertices", [](const PyBody& b) { return b.model.num_vertices(); })
-      .def_property_readonly("num_faces", [](const PyBody& b) { return b.model.num_faces(); })
+      .def_property_readonly(
+          "num_vertices", [](const PyBody& b) { return b.model.num_vertices(); }, "Vertices n of the surface")
+      .def_property_readonly(
+          "num_faces", [](const PyBody& b) { return b.model.num_faces(); }, "Triangles m of the surface")
       .def_property_readonly(
           "v_template", [](py::object self) { return view(self.cast<PyBody&>().model.v_template, self); },
           "n × 3 rest template [m] (read-only view)")
@@ -136,10 +141,12 @@ void bind_body(py::module_& m) {
           "joint_regressor", [](const PyBody& b) { return own(Eigen::MatrixXd(b.model.joint_regressor)); },
           "24 × n joint regressor (a dense copy of the sparse matrix)")
       .def_property_readonly(
-          "parents", [](const PyBody& b) { return std::vector<int>(b.model.parents.begin(), b.model.parents.end()); })
+          "parents", [](const PyBody& b) { return std::vector<int>(b.model.parents.begin(), b.model.parents.end()); },
+          "The parent of each of the 24 joints (-1 for the root; SMPL's kinematic tree)")
       .def_property_readonly_static(
           "joint_names",
-          [](py::object) { return std::vector<std::string>(body::kJointNames.begin(), body::kJointNames.end()); })
+          [](py::object) { return std::vector<std::string>(body::kJointNames.begin(), body::kJointNames.end()); },
+          "The 24 joint names in SMPL's order")
       .def(
           "shape",
           [](const PyBody& b, const py::object& betas) {
@@ -205,10 +212,10 @@ void bind_body(py::module_& m) {
            }),
            py::arg("motion"), py::arg("fps") = 60.0, py::arg("frames") = 0, py::arg("time_offset") = 0.0,
            "A procedural motion by name or an AMASS .npz, sampled at fps (frames 0: its own length)")
-      .def_readonly("name", &body::Motion::name)
-      .def_readonly("source", &body::Motion::source)
-      .def_readonly("fps", &body::Motion::fps)
-      .def_property_readonly("num_frames", &body::Motion::num_frames)
+      .def_readonly("name", &body::Motion::name, "The motion's name (a procedural name or the file's stem)")
+      .def_readonly("source", &body::Motion::source, "'procedural' or the AMASS file it was read from")
+      .def_readonly("fps", &body::Motion::fps, "Frame rate [Hz]")
+      .def_property_readonly("num_frames", &body::Motion::num_frames, "Frames T")
       .def_property_readonly(
           "poses", [](py::object self) { return pose_array(self.cast<body::Motion&>().poses, self); },
           "T × 72 axis-angle poses (read-only view)")
@@ -223,14 +230,16 @@ void bind_body(py::module_& m) {
           "T × 3 root translations [m] (read-only view)")
       .def_property_readonly(
           "world_from_body",
-          [](const body::Motion& mo) { return own(Eigen::Matrix<double, 3, 3, Eigen::RowMajor>(mo.world_from_body)); })
-      .def_property_readonly("times",
-                             [](const body::Motion& mo) {
-                               Eigen::VectorXd t(static_cast<Eigen::Index>(mo.num_frames()));
-                               for (std::size_t i = 0; i < mo.num_frames(); ++i)
-                                 t(static_cast<Eigen::Index>(i)) = mo.time(i);
-                               return own(std::move(t));
-                             })
+          [](const body::Motion& mo) { return own(Eigen::Matrix<double, 3, 3, Eigen::RowMajor>(mo.world_from_body)); },
+          "3 × 3 rotation from the body's frame to the world (AMASS Z-up files: to Y-up)")
+      .def_property_readonly(
+          "times",
+          [](const body::Motion& mo) {
+            Eigen::VectorXd t(static_cast<Eigen::Index>(mo.num_frames()));
+            for (std::size_t i = 0; i < mo.num_frames(); ++i) t(static_cast<Eigen::Index>(i)) = mo.time(i);
+            return own(std::move(t));
+          },
+          "The frames' times (T) [s]")
       .def(
           "save", [](const body::Motion& mo, const std::string& path) { body::save_amass(path, mo); }, py::arg("path"),
           "Writes the motion as an AMASS .npz (atomically)")

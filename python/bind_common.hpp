@@ -15,6 +15,7 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -83,5 +84,11 @@ void bind_layer(py::module_& m);
 void bind_material(py::module_& m);
 void bind_simulation(py::module_& m);
 void bind_metrics(py::module_& m);
+/// Gives every function, method and class of the module a signature inspect.signature() reads (text_signatures.cpp);
+/// called last, once every binding is defined.
+void add_text_signatures(py::module_& m);
+/// The text signature "(params)" of a pybind11 docstring "name(params) -> type…" without annotations ("self, /"
+/// first for a method); nullopt when it has none Python can read (overloads, *args, an object as a default).
+std::optional<std::string> text_signature(const std::string& doc, const std::string& name, bool method);
 
 }  // namespace sflsh::python

@@ -73,17 +73,23 @@ void bind_layer(py::module_& m) {
            py::arg("body") = py::none(), py::arg("thickness") = 0.5, py::arg("mesher") = "cgal",
            py::arg("mesh") = "default", py::arg("region") = "torso,upper_arms,thighs", py::arg("cache") = py::none(),
            py::arg("rebuild_cache") = false,
-           "Options as `sflsh mesh`: subject or betas (default β = 0), thickness fraction, mesher cgal | gmsh | "
-           "layered, mesh "
-           "coarse | default | fine, region, cache folder")
-      .def_readonly("subject", &PyLayer::subject)
-      .def_readonly("thickness", &PyLayer::thickness)
-      .def_readonly("cache_outcome", &PyLayer::cache_outcome)
-      .def_property_readonly("beta", [](const PyLayer& l) { return own(Eigen::VectorXd(l.beta)); })
-      .def_property_readonly("mesher",
-                             [](const PyLayer& l) { return std::string(meshing::mesher_name(l.mesh.mesher)); })
-      .def_property_readonly("mesh",
-                             [](const PyLayer& l) { return std::string(meshing::size_preset_name(l.mesh.size)); })
+           "Options as `sflsh mesh`: subject (a name of sflsh.subjects()) or betas (up to 10 numbers; neither: β = 0), "
+           "body (None: the open body, a path or a sflsh.Body), thickness (the layer's thickness as a fraction of the "
+           "skin-to-skeleton distance, 0 < h < 1), mesher 'cgal' | 'gmsh' | 'layered', mesh 'coarse' | 'default' | "
+           "'fine', region (comma-separated parts), cache (the template-mesh cache folder; None: $SFLSH_CACHE or "
+           "~/.cache/sflsh), rebuild_cache")
+      .def_readonly("subject", &PyLayer::subject, "The subject's name, or 'custom' for betas")
+      .def_readonly("thickness", &PyLayer::thickness, "Thickness fraction h of the skin-to-skeleton distance (1)")
+      .def_readonly("cache_outcome", &PyLayer::cache_outcome,
+                    "How the template mesh was had: read from the cache, built, or rebuilt")
+      .def_property_readonly(
+          "beta", [](const PyLayer& l) { return own(Eigen::VectorXd(l.beta)); }, "The subject's shape β (10,)")
+      .def_property_readonly(
+          "mesher", [](const PyLayer& l) { return std::string(meshing::mesher_name(l.mesh.mesher)); },
+          "The mesher of the template: cgal | gmsh | layered")
+      .def_property_readonly(
+          "mesh", [](const PyLayer& l) { return std::string(meshing::size_preset_name(l.mesh.size)); },
+          "The resolution: coarse | default | fine")
       .def_property_readonly(
           "nodes", [](py::object self) { return view(self.cast<PyLayer&>().layer.nodes, self); },
           "N × 3 node positions for (β, h), unposed [m] (read-only view)")
@@ -138,17 +144,19 @@ void bind_layer(py::module_& m) {
             return own(l.mesh.skin_positions(rows3_from(DoubleArray::ensure(nodes), "nodes")));
           },
           py::arg("nodes") = py::none(), "Skin positions (R × 3) read from node positions through the skin map")
-      .def_property_readonly("quality",
-                             [](const PyLayer& l) {
-                               const meshing::QualityReport& q = l.layer.quality;
-                               py::dict out;
-                               out["nodes"] = l.mesh.num_nodes();
-                               out["tets"] = l.mesh.num_tets();
-                               out["min_dihedral_deg"] = q.min_dihedral_deg;
-                               out["max_radius_edge"] = q.max_radius_edge;
-                               out["inverted"] = q.inverted;
-                               return out;
-                             })
+      .def_property_readonly(
+          "quality",
+          [](const PyLayer& l) {
+            const meshing::QualityReport& q = l.layer.quality;
+            py::dict out;
+            out["nodes"] = l.mesh.num_nodes();
+            out["tets"] = l.mesh.num_tets();
+            out["min_dihedral_deg"] = q.min_dihedral_deg;
+            out["max_radius_edge"] = q.max_radius_edge;
+            out["inverted"] = q.inverted;
+            return out;
+          },
+          "The retargeted layer's quality: nodes, tets, min_dihedral_deg [deg], max_radius_edge (1), inverted tets")
       .def("__repr__", [](const PyLayer& l) {
         return "<sflsh.Layer '" + l.subject + "': " + std::to_string(l.mesh.num_nodes()) + " nodes, " +
                std::to_string(l.mesh.num_tets()) + " tets>";

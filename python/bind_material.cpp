@@ -70,19 +70,23 @@ void bind_material(py::module_& m) {
              return std::make_shared<Material>(material::load_material_file(py::str(path).cast<std::string>()));
            }),
            py::arg("path"), "Reads a material file (TOML, docs/material_file.md); errors as `--material FILE`")
-      .def_static("from_shape_model", &from_shape_model, py::kw_only(), py::arg("betas") = py::none(),
-                  py::arg("subject") = py::none(), py::arg("shape_model") = py::none(), py::arg("body") = py::none(),
-                  "κ̂(β) of a shape model (default: data/shape_models/default.toml) for a subject or β")
+      .def_static(
+          "from_shape_model", &from_shape_model, py::kw_only(), py::arg("betas") = py::none(),
+          py::arg("subject") = py::none(), py::arg("shape_model") = py::none(), py::arg("body") = py::none(),
+          "κ̂(β) of a shape model (default: data/shape_models/default.toml) for a subject (a name) or β (up to 10 "
+          "numbers): thickness fraction (1), young_tangent and young_normal [Pa] per control point")
       .def_static("from_arrays", &from_arrays, py::arg("vertices"), py::arg("kappa"), py::kw_only(),
                   py::arg("body") = "open_body", py::arg("subject") = "custom", py::arg("poisson") = 0.2,
                   py::arg("saturation") = 4.0,
-                  "Control points (body vertex indices) and their κ (N × 3, physical units)")
-      .def_readonly("body", &Material::body)
-      .def_readonly("subject", &Material::subject)
-      .def_readonly("poisson", &Material::poisson)
-      .def_readonly("saturation", &Material::saturation)
-      .def_readonly("source", &Material::source)
-      .def_property_readonly("num_control_points", [](const Material& mat) { return mat.control_points.size(); })
+                  "Control points (body vertex indices, N) and their κ (N × 3: thickness fraction (1), young_tangent "
+                  "[Pa], young_normal [Pa]), Poisson's ratio (1) and the skin's saturation strain (1)")
+      .def_readonly("body", &Material::body, "The body model the control points index ('open_body', …)")
+      .def_readonly("subject", &Material::subject, "The subject the material is for")
+      .def_readonly("poisson", &Material::poisson, "Poisson's ratio ν (1)")
+      .def_readonly("saturation", &Material::saturation, "The Fung skin's saturation strain (1)")
+      .def_readonly("source", &Material::source, "Where the material came from (a file, a shape model, arrays)")
+      .def_property_readonly(
+          "num_control_points", [](const Material& mat) { return mat.control_points.size(); }, "Control points N")
       .def_property_readonly(
           "vertices",
           [](const Material& mat) {

@@ -7,6 +7,7 @@
 #include <sflsh/body/subjects.hpp>
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
+#include <sflsh/core/summary.hpp>
 
 #include <pybind11/stl.h>
 
@@ -48,8 +49,9 @@ PYBIND11_MODULE(sflsh, m) {
   namespace py = pybind11;
   using namespace sflsh::python;
   m.doc() = "sflsh: shape-dependent soft-flesh avatars (docs/python.md)";
-  m.attr("__version__") = "0.1.0";
-  py::register_exception<sflsh::Error>(m, "Error", PyExc_RuntimeError);
+  m.attr("__version__") = sflsh::version();  // the project's version (CMake), as `sflsh --version` prints it
+  py::register_exception<sflsh::Error>(m, "Error", PyExc_RuntimeError).attr("__doc__") =
+      "A refused input or a failed solve (a RuntimeError), with the one-line message the command line prints";
   // A library embedded in a Python session reports warnings and errors; sflsh.set_log_level("info") shows the
   // progress lines the CLI prints.
   sflsh::logger()->set_level(spdlog::level::warn);
@@ -70,4 +72,5 @@ PYBIND11_MODULE(sflsh, m) {
   bind_material(m);
   bind_simulation(m);
   bind_metrics(m);
+  add_text_signatures(m);
 }

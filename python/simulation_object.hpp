@@ -1,0 +1,41 @@
+#pragma once
+// The object behind sflsh.Simulation: a scene::BodySimulation stepped from Python, and the state of every frame
+// solved so far (for Simulation.write, which writes the run folder `sflsh simulate` writes from them).
+#include <sflsh/model/problem.hpp>
+#include <sflsh/scene/body_simulation.hpp>
+
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace sflsh::python {
+
+struct PythonSimulation {
+  std::unique_ptr<scene::BodySimulation> simulation;
+  bool record = true;                ///< keep every frame's state for write()
+  std::vector<model::State> states;  ///< frames 0 … frame() when recording
+
+  /// Solves the next frame and records its state.
+  void step();
+  scene::BodySimulation& operator*() { return *simulation; }
+  const scene::BodySimulation& operator*() const { return *simulation; }
+};
+
+/// How Simulation.write writes: `sflsh simulate`'s output options.
+struct WriteOptions {
+  std::string format = "vtk";  ///< vtk | xdmf
+  bool write_layer = false;
+  int every = 1;
+  std::string precision = "float64";               ///< float64 | float32 (xdmf)
+  std::string compression;                         ///< "" (LZ4 body frames, zlib layer frames) | lz4 | zlib | none
+  std::optional<std::vector<std::string>> fields;  ///< the frames' arrays; nullopt: all
+};
+
+/// Writes the run folder `sflsh simulate` writes for the frames solved so far (frame 0 … frame()): the body series,
+/// the layer series on request, dynamics.vtp and summary.json, all at once into `dir`. Throws sflsh::Error when the
+/// simulation was made with record=False or the options are bad.
+void write_run_folder(const PythonSimulation& sim, const std::filesystem::path& dir, const WriteOptions& options);
+
+}  // namespace sflsh::python
