@@ -2,8 +2,10 @@
 python3-meshio 7.0, the reader most Python FE users reach for) with all its arrays, and every .vtp/.vtu opens in
 VTK's own readers with the unit of each array in its `units` field data (docs/output.md, "Units in the files").
 
-Runs `sflsh mesh`, `sflsh material show`, `sflsh simulate` (vtk and xdmf, with the layer) and a small scene (vtk
-and xdmf, with the layer, a rigid object) at small sizes: the coarse layer, four frames, the reduced model.
+Runs `sflsh mesh`, `sflsh material show`, `sflsh simulate` (vtk and xdmf, with the layer), a small scene (vtk
+and xdmf, with the layer, a rigid object) and `sflsh compare` at small sizes: the coarse layer, four frames, the
+reduced model. `compare` writes surfaces only (compare.vtp: VTK and ParaView; meshio has no .vtp reader), as do
+`sflsh validate`'s σ maps (dynamics.vtp, the same writer; not run here: --preset quick takes minutes).
 """
 import pathlib
 import xml.etree.ElementTree as ET
@@ -199,3 +201,12 @@ def test_scene_with_the_layer_and_an_object(cli, cache, scratch, format):
     else:
         check_folder(scratch / "run", xmf=3)  # subject.xmf, subject_layer.xmf, objects.xmf
 
+
+
+def test_compare_writes_surfaces_vtk_reads_with_their_units(cli, cache, scratch):
+    # A full-space run and one reduced model over four frames; no .vtu or .xmf, compare.vtp self-described.
+    run(cli, "compare", *SUBJECT, "--motion", "jiggle_on_toes", "--mesh", "coarse", "--frames", "4", "--handles", "30",
+        "--cubature", "100", "--cache", cache, "--out", str(scratch / "compare"))
+    check_folder(scratch / "compare")
+    arrays = check_vtk_file(scratch / "compare" / "compare.vtp")
+    assert units_table(arrays["field"]["units"])["sigma_full"] == "mm"
