@@ -1,5 +1,6 @@
-// sflsh verify PROBLEM.toml --out DIR: a canonical static or dynamic problem on a given gmsh mesh with a
-// homogeneous material, for checking the full-space solver against other FEM codes.
+// sflsh verify PROBLEM.toml --out DIR [--export-febio FILE.feb]: a canonical static or dynamic problem on a given
+// gmsh mesh with a homogeneous material, for checking the full-space solver against other FEM codes, and the same
+// problem as a FEBio 4 input.
 #include "commands.hpp"
 
 #include <sflsh/core/atomic_file.hpp>
@@ -10,6 +11,7 @@
 #include <sflsh/core/summary.hpp>
 #include <sflsh/core/vtk_io.hpp>
 #include <sflsh/core/work_limit.hpp>
+#include <sflsh/fullspace/febio_export.hpp>
 #include <sflsh/fullspace/fullspace_solver.hpp>
 #include <sflsh/fullspace/reference_integrator.hpp>
 #include <sflsh/fullspace/verify_problem.hpp>
@@ -27,7 +29,8 @@ namespace {
 
 struct VerifyOptions {
   std::string problem;
-  std::string out;
+  std::string out;           ///< empty: no solve (only --export-febio)
+  std::string export_febio;  ///< the FEBio 4 input to write, or empty
   bool no_vtk = false;
   bool allow_long = false;
 };
@@ -66,6 +69,8 @@ void write_history(const std::filesystem::path& path, const model::Problem& prob
 void run_verify(const VerifyOptions& opt, const Invocation& invocation, int rank, int size) {
   const auto t_start = std::chrono::steady_clock::now();
   const fullspace::VerifyProblem spec = fullspace::load_verify_problem(opt.problem);
+  if (!opt.export_febio.empty() && rank == 0) fullspace::write_febio_input(spec, opt.export_febio);
+  if (opt.out.empty()) return;
   model::Problem problem = fullspace::make_problem(spec);
   problem.validate();
   const std::vector<int> record_nodes = fullspace::record_nodes(spec);
@@ -212,12 +217,16 @@ void register_verify_commands(CLI::App& app, const Invocation& invocation) {
       "displacement history of a node group, for comparison with other FEM codes. PETSc options "
       "(-snes_*, -ksp_*, -pc_*) may follow; run in parallel with mpirun -n P.");
   cmd->add_option("problem", opt->problem, "Problem description (.toml)")->required();
-  cmd->add_option("--out", opt->out, "Output folder (history.csv, summary.json, solution.pvd)")->required();
+  cmd->add_option("--out", opt->out,
+                  "Output folder (history.csv, summary.json, solution.pvd); required unless --export-febio is given");
+  cmd->add_option("--export-febio", opt->export_febio,
+                  "Also write the problem as a FEBio 4 input (.feb, docs/fullspace.md); without --out, only that");
   cmd->add_flag("--no-vtk", opt->no_vtk, "Skip the .vtu series of the whole mesh");
   cmd->add_flag(
       "--allow-long", opt->allow_long,
       "Run even when the work estimate (steps, recorded samples, memory) exceeds the limits of docs/fullspace.md");
   cmd->callback([opt, invocation] {
+    if (opt->out.empty() && opt->export_febio.empty()) throw CLI::RequiredError("--out DIR or --export-febio FILE.feb");
     with_petsc(invocation, [&](int rank, int size) { run_verify(*opt, invocation, rank, size); });
   });
 }
