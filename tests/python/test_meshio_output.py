@@ -3,7 +3,7 @@ python3-meshio 7.0, the reader most Python FE users reach for) with all its arra
 VTK's own readers with the unit of each array in its `units` field data (docs/output.md, "Units in the files").
 
 Runs `sflsh mesh`, `sflsh material show`, `sflsh simulate` (vtk and xdmf, with the layer), a small scene (vtk
-and xdmf, with the layer, a rigid object) and `sflsh compare` at small sizes: the coarse layer, four frames, the
+and xdmf, with the layer, a rigid object), `sflsh compare` and `sflsh verify` (the FEBio block) at small sizes: the coarse layer, four frames, the
 reduced model. `compare` writes surfaces only (compare.vtp: VTK and ParaView; meshio has no .vtp reader), as do
 `sflsh validate`'s σ maps (dynamics.vtp, the same writer; not run here: --preset quick takes minutes).
 """
@@ -210,3 +210,18 @@ def test_compare_writes_surfaces_vtk_reads_with_their_units(cli, cache, scratch)
     check_folder(scratch / "compare")
     arrays = check_vtk_file(scratch / "compare" / "compare.vtp")
     assert units_table(arrays["field"]["units"])["sigma_full"] == "mm"
+
+
+def test_verify_solution_frames(cli, scratch):
+    # `sflsh verify` on the FEBio block (docs/verification.md), four Newmark steps: solution_*.vtu, one per step.
+    example = pathlib.Path(__file__).resolve().parents[2] / "examples" / "verify" / "febio_block"
+    scratch.mkdir(parents=True, exist_ok=True)
+    (scratch / "block.msh").write_bytes((example / "block.msh").read_bytes())
+    problem = (example / "block.toml").read_text()
+    problem = problem.replace("duration = 1.0 ", "duration = 0.004166666666666667 ")  # 4 steps of 1/960 s
+    assert "duration = 0.004166666666666667" in problem
+    (scratch / "block.toml").write_text(problem)
+    run(cli, "verify", str(scratch / "block.toml"), "--out", str(scratch / "verify"))
+    check_folder(scratch / "verify", vtu=5)
+    mesh = meshio.read(scratch / "verify" / "solution_000004.vtu")
+    assert mesh.points.shape == (484, 3) and mesh.cells[0].data.shape == (1800, 4)
