@@ -127,8 +127,8 @@ class SceneReader : public TomlReader {
 
   int count(const toml::node& node, std::string_view key, std::string_view context, int minimum) const {
     const std::int64_t v = integer(node, key, context);
-    require(v >= minimum && v <= 1'000'000, "{}: '{}'{} = {} must be an integer ≥ {}", at(node), key, context, v,
-            minimum);
+    require(v >= minimum && v <= 1'000'000, "{}: '{}'{} = {} must be an integer in [{}, 10⁶]", at(node), key, context,
+            v, minimum);
     return static_cast<int>(v);
   }
 

@@ -125,7 +125,8 @@ TEST(SceneOutput, BadOutputValuesAreOneLineNamingTheKey) {
     std::string output, expected;
   };
   for (const Case& c : std::vector<Case>{
-           {"every = 0", "scene.toml:8: 'every' in [output] = 0 must be an integer ≥ 1"},
+           {"every = 0", "scene.toml:8: 'every' in [output] = 0 must be an integer in [1, 10⁶]"},
+           {"every = 1000000000", "scene.toml:8: 'every' in [output] = 1000000000 must be an integer in [1, 10⁶]"},
            {"every = 1.5", "scene.toml:8: 'every'"},
            {R"(fields = ["displacement", "sigma"])",
             "scene.toml:8: unknown field 'sigma' in 'fields' of [output] (expected some of"},
