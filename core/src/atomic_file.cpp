@@ -1,10 +1,12 @@
 #include <sflsh/core/atomic_file.hpp>
 #include <sflsh/core/error.hpp>
 
+#include <fcntl.h>
 #include <unistd.h>
 
 #include <atomic>
-#include <fstream>
+#include <cerrno>
+#include <cstring>
 #include <system_error>
 
 namespace sflsh {
@@ -24,7 +26,7 @@ void write_atomically(const fs::path& target, const std::function<void(const fs:
     if (!fs::exists(tmp)) throw_error("{}: writer produced no file", target.string());
     std::error_code ec;
     fs::rename(tmp, target, ec);
-    if (ec) throw_error("{}: cannot move finished file into place: {}", target.string(), ec.message());
+    if (ec) throw_error("{}: cannot move finished file into place ({})", target.string(), ec.message());
   } catch (...) {
     std::error_code ignored;
     fs::remove(tmp, ignored);
@@ -32,22 +34,45 @@ void write_atomically(const fs::path& target, const std::function<void(const fs:
   }
 }
 
+void throw_write_error(const fs::path& target, std::string_view what, int error_number) {
+  throw_error("{}: {} ({})", target.string(), what, std::strerror(error_number));
+}
+
+void write_file_checked(const fs::path& file, const fs::path& target, std::string_view contents) {
+  const int fd = ::open(file.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) throw_write_error(target, "cannot create file", errno);
+  const char* data = contents.data();
+  std::size_t left = contents.size();
+  while (left > 0) {
+    const ssize_t n = ::write(fd, data, left);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      const int e = n < 0 ? errno : ENOSPC;
+      ::close(fd);
+      throw_write_error(target, "write failed", e);
+    }
+    data += n;
+    left -= static_cast<std::size_t>(n);
+  }
+  // Delayed allocation (and NFS) can report a full disk only at fsync or close.
+  if (::fsync(fd) != 0 && errno != EINVAL && errno != EROFS) {
+    const int e = errno;
+    ::close(fd);
+    throw_write_error(target, "write failed", e);
+  }
+  if (::close(fd) != 0) throw_write_error(target, "write failed", errno);
+}
+
 void write_text_atomically(const fs::path& target, std::string_view contents) {
-  write_atomically(target, [&](const fs::path& tmp) {
-    std::ofstream out(tmp, std::ios::binary);
-    if (!out) throw_error("{}: cannot open for writing", target.string());
-    out.write(contents.data(), static_cast<std::streamsize>(contents.size()));
-    out.close();
-    if (!out) throw_error("{}: write failed (disk full?)", target.string());
-  });
+  write_atomically(target, [&](const fs::path& tmp) { write_file_checked(tmp, target, contents); });
 }
 
 void ensure_directory(const fs::path& dir) {
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (ec || !fs::is_directory(dir)) {
-    throw_error("{}: cannot create output directory{}", dir.string(),
-                ec ? ": " + ec.message() : std::string(" (a file is in the way)"));
+    throw_error("{}: cannot create output directory ({})", dir.string(),
+                ec ? ec.message() : std::string("a file is in the way"));
   }
 }
 

@@ -111,8 +111,11 @@ void write(const std::filesystem::path& path, const std::vector<std::pair<std::s
     }
     if (zip_close(archive) != 0) {
       const std::string msg = zip_strerror(archive);
+      const int system_errno = zip_error_code_system(zip_get_error(archive));
+      const bool is_errno = zip_error_system_type(zip_get_error(archive)) == ZIP_ET_SYS && system_errno != 0;
       zip_discard(archive);
-      throw_error("{}: cannot write archive: {}", path.string(), msg);
+      if (is_errno) throw_write_error(path, "cannot write archive", system_errno);
+      throw_error("{}: cannot write archive ({})", path.string(), msg);
     }
   });
 }

@@ -24,6 +24,7 @@
 #include <vtkScalarBarActor.h>
 #include <vtkTextActor.h>
 #include <vtkTextProperty.h>
+#include <vtkUnsignedCharArray.h>
 #include <vtkWindowToImageFilter.h>
 
 #include <algorithm>
@@ -201,11 +202,18 @@ void write_window_png(const std::filesystem::path& path, vtkRenderWindow* window
   grab->SetInput(window);
   grab->ReadFrontBufferOff();
   grab->Update();
+  // Into memory, then to the file with checked writes, so a full disk is an error naming the file (issue 45).
+  vtkNew<vtkPNGWriter> writer;
+  writer->WriteToMemoryOn();
+  writer->SetInputConnection(grab->GetOutputPort());
+  writer->Write();
+  vtkUnsignedCharArray* png = writer->GetResult();
+  require(writer->GetErrorCode() == 0 && png != nullptr && png->GetNumberOfValues() > 0, "{}: PNG encoding failed",
+          path.string());
   write_atomically(path, [&](const std::filesystem::path& tmp) {
-    vtkNew<vtkPNGWriter> writer;
-    writer->SetFileName(tmp.c_str());
-    writer->SetInputConnection(grab->GetOutputPort());
-    writer->Write();
+    write_file_checked(tmp, path,
+                       std::string_view(reinterpret_cast<const char*>(png->GetPointer(0)),
+                                        static_cast<std::size_t>(png->GetNumberOfValues())));
   });
 }
 

@@ -75,7 +75,7 @@ RunFolder::RunFolder(fs::path dir) : dir_(normalized_folder(dir)) {
   fs::remove_all(staging_, ec);
   fs::create_directory(staging_, ec);
   if (ec || !fs::is_directory(staging_))
-    throw_error("{}: cannot create the staging folder {}: {}", dir_.string(), staging_.string(),
+    throw_error("{}: cannot create the staging folder {} ({})", dir_.string(), staging_.string(),
                 ec ? ec.message() : std::string("unknown error"));
   interrupt_cleanup_ = std::make_unique<InterruptCleanup>(staging_);
 }

@@ -155,7 +155,9 @@ bool has_point_field(const Fields& fields, const char* name) {
 template <typename Writer>
 void write_with(Writer* writer, vtkDataObject* data, const std::filesystem::path& path, Compression compression) {
   write_atomically(path, [&](const std::filesystem::path& tmp) {
-    writer->SetFileName(tmp.c_str());
+    // Into memory, then to the file with checked writes: VTK 9.1's XML writers, on a write error (a full disk,
+    // a file size limit), free their position arrays twice and crash the process (issue 45).
+    writer->WriteToOutputStringOn();
     writer->SetInputData(data);
     // Inline binary (base64 per array), not raw appended data: VTK 9.1–9.2.6's XML reader loses its place in
     // appended data under expat ≥ 2.6 (Debian 12's security update), so Debian's ParaView 5.11 reads appended
@@ -171,6 +173,7 @@ void write_with(Writer* writer, vtkDataObject* data, const std::filesystem::path
     else
       writer->SetCompressorTypeToNone();
     require(writer->Write() == 1, "{}: VTK writer failed", path.string());
+    write_file_checked(tmp, path, writer->GetOutputString());
   });
 }
 

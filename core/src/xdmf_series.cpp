@@ -4,10 +4,13 @@
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/xdmf_series.hpp>
 
+#include <fcntl.h>
 #include <fmt/format.h>
 #include <hdf5.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <mutex>
 #include <optional>
@@ -103,6 +106,25 @@ struct Series::Impl {
   std::vector<std::string> unit_names;  ///< the attributes' names, each once, in the order written
   std::vector<vtk::Labels> labels;      ///< names of label values (`part_names`, …)
   bool closed = false;
+  bool failed = false;  ///< a write failed: the file was abandoned and is not finished by close()
+
+  /// After a failed write HDF5 keeps dirty metadata it can never flush; closing then fails and leaves the file in
+  /// HDF5's tables, where the library's exit handler crashes on it (HDF5 1.10). Point the file's descriptor at
+  /// /dev/null, so the close that follows succeeds; the run folder discards the partial file.
+  void abandon() {
+    failed = true;
+    if (file < 0) return;
+    void* handle = nullptr;
+    if (H5Fget_vfd_handle(file, H5P_DEFAULT, &handle) >= 0 && handle != nullptr) {
+      const int null_fd = ::open("/dev/null", O_WRONLY | O_CLOEXEC);
+      if (null_fd >= 0) {
+        ::dup2(null_fd, *static_cast<int*>(handle));
+        ::close(null_fd);
+      }
+    }
+    H5Fclose(file);
+    file = -1;
+  }
 
   Item write_dataset(const std::string& path, const double* values, hsize_t rows, hsize_t columns, bool integer,
                      const std::string& unit) {
@@ -114,6 +136,7 @@ struct Series::Impl {
     Handle set{H5Dcreate2(file, path.c_str(), stored, space.id, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Dclose};
     require(set.id >= 0, "{}: cannot create dataset {}", h5.string(), path);
     herr_t status = 0;
+    errno = 0;  // HDF5's file driver leaves the failed write's errno (a full disk, a file size limit)
     if (integer) {
       std::vector<int> v(rows * columns);
       for (std::size_t i = 0; i < v.size(); ++i) v[i] = static_cast<int>(std::lround(values[i]));
@@ -124,7 +147,12 @@ struct Series::Impl {
     } else {
       status = H5Dwrite(set.id, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, values);
     }
-    require(status >= 0, "{}: cannot write dataset {} (disk full?)", h5.string(), path);
+    if (status < 0) {
+      const int write_errno = errno;
+      abandon();
+      if (write_errno != 0) throw_write_error(h5, fmt::format("cannot write dataset {}", path), write_errno);
+      throw_error("{}: cannot write dataset {}", h5.string(), path);
+    }
     set_unit(set.id, unit);
     return {path, rows, columns, integer};
   }
@@ -199,8 +227,10 @@ Series::Series(fs::path xmf_path, const Eigen::Ref<const vtk::Cells>& cells, Pre
   require(cells.cols() == 3 || cells.cols() == 4, "xdmf: cells need 3 (triangles) or 4 (tetrahedra) nodes, got {}",
           cells.cols());
   m.topology_type = cells.cols() == 3 ? "Triangle" : "Tetrahedron";
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // failures are one sflsh error line, not HDF5's error stack
+  errno = 0;
   m.file = H5Fcreate(m.h5.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
-  require(m.file >= 0, "{}: cannot create the HDF5 file", m.h5.string());
+  if (m.file < 0) throw_write_error(m.h5, "cannot create the HDF5 file", errno != 0 ? errno : EIO);
   const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> topology = cells.cast<double>();
   m.topology = m.write_dataset("/topology", topology.data(), static_cast<hsize_t>(cells.rows()),
                                static_cast<hsize_t>(cells.cols()), true, "index");
@@ -254,9 +284,22 @@ void Series::close() {
   Impl& m = *impl_;
   if (m.closed) return;
   m.closed = true;
+  if (m.failed) return;  // the write error was reported; nothing is finished
+  errno = 0;
+  if (m.file >= 0 && H5Fflush(m.file, H5F_SCOPE_LOCAL) < 0) {
+    const int flush_errno = errno;
+    m.abandon();
+    if (flush_errno != 0) throw_write_error(m.h5, "writing the HDF5 file failed", flush_errno);
+    throw_error("{}: writing the HDF5 file failed", m.h5.string());
+  }
+  errno = 0;
   const herr_t status = m.file >= 0 ? H5Fclose(m.file) : 0;
+  const int close_errno = errno;
   m.file = -1;
-  require(status >= 0, "{}: closing the HDF5 file failed (disk full?)", m.h5.string());
+  if (status < 0) {
+    if (close_errno != 0) throw_write_error(m.h5, "closing the HDF5 file failed", close_errno);
+    throw_error("{}: closing the HDF5 file failed", m.h5.string());
+  }
   write_text_atomically(m.xmf, m.xml());
 }
 

@@ -160,7 +160,7 @@ void FullSpaceSolver::Impl::setup() {
   SFLSH_PETSC(KSPSetTolerances(ksp, options.default_ksp_rtol, PETSC_DEFAULT, PETSC_DEFAULT, PETSC_DEFAULT));
   SFLSH_PETSC(KSPGetPC(ksp, &pc));
   const bool dynamic = !options.quasi_static && problem.dynamic();
-  SFLSH_PETSC(PCSetType(pc, default_pc_type(3 * n, size, dynamic)));
+  SFLSH_PETSC(PCSetType(pc, default_pc_type(3 * n, size, dynamic, options.preconditioner)));
   SNESLineSearch linesearch = nullptr;
   SFLSH_PETSC(SNESGetLineSearch(snes, &linesearch));
   SFLSH_PETSC(SNESLineSearchSetType(linesearch, SNESLINESEARCHSHELL));

@@ -51,12 +51,30 @@ inline material::TetNodes problem_rest_nodes(const Problem& problem, int e) {
 /// Cholesky factor (one block per rank in parallel), which costs a fraction of GAMG's setup; on the default
 /// layer ICC took 0.43 s per step against GAMG's 1.2 s. Without the mass term (quasi-static and static
 /// problems) the ICC iteration count grows with the mesh and GAMG, with the rigid-body near-null space, wins.
-inline PCType default_pc_type(int dofs, int size, bool dynamic) {
-  constexpr int kDirectDofs = 6000;
-  if (dofs <= kDirectDofs) return size == 1 ? PCCHOLESKY : PCREDUNDANT;
-  if (!dynamic) return PCGAMG;
+/// On the driven block (Newmark, 1 process, docs/results/performance.md) GAMG and BoomerAMG hold the iterations
+/// per Newton step nearly flat from 1,800 to 115,200 tets where ICC's double, but their setup per Newton
+/// step costs more than ICC's extra iterations: ICC(0) stays the dynamic default at every measured size.
+/// `choice` other than automatic forces one preconditioner regardless of the size (FullSpaceOptions).
+inline PCType default_pc_type(int dofs, int size, bool dynamic, Preconditioner choice = Preconditioner::automatic) {
   // Block Jacobi's blocks default to ICC for a matrix marked symmetric (MAT_SYMMETRIC below).
-  return size == 1 ? PCICC : PCBJACOBI;
+  const PCType icc = size == 1 ? PCICC : PCBJACOBI;
+  const PCType direct = size == 1 ? PCCHOLESKY : PCREDUNDANT;
+  switch (choice) {
+    case Preconditioner::direct:
+      return direct;
+    case Preconditioner::icc:
+      return icc;
+    case Preconditioner::gamg:
+      return PCGAMG;
+    case Preconditioner::hypre:
+      return PCHYPRE;
+    case Preconditioner::automatic:
+      break;
+  }
+  constexpr int kDirectDofs = 6000;
+  if (dofs <= kDirectDofs) return direct;
+  if (!dynamic) return PCGAMG;
+  return icc;
 }
 
 }  // namespace

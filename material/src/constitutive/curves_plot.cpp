@@ -18,6 +18,7 @@
 #include <vtkRenderer.h>
 #include <vtkTable.h>
 #include <vtkTextProperty.h>
+#include <vtkUnsignedCharArray.h>
 #include <vtkWindowToImageFilter.h>
 
 #include <array>
@@ -81,12 +82,18 @@ void plot_curves_png(const std::filesystem::path& path, const std::vector<Materi
   grab->SetInput(view->GetRenderWindow());
   grab->ReadFrontBufferOff();
   grab->Update();
+  // Into memory, then to the file with checked writes, so a full disk is an error naming the file (issue 45).
+  vtkNew<vtkPNGWriter> writer;
+  writer->WriteToMemoryOn();
+  writer->SetInputConnection(grab->GetOutputPort());
+  writer->Write();
+  vtkUnsignedCharArray* png = writer->GetResult();
+  require(writer->GetErrorCode() == 0 && png != nullptr && png->GetNumberOfValues() > 0, "{}: PNG encoding failed",
+          path.string());
   write_atomically(path, [&](const std::filesystem::path& tmp) {
-    vtkNew<vtkPNGWriter> writer;
-    writer->SetFileName(tmp.string().c_str());
-    writer->SetInputConnection(grab->GetOutputPort());
-    writer->Write();
-    require(writer->GetErrorCode() == 0, "plot: could not write {}", path.string());
+    write_file_checked(tmp, path,
+                       std::string_view(reinterpret_cast<const char*>(png->GetPointer(0)),
+                                        static_cast<std::size_t>(png->GetNumberOfValues())));
   });
 }
 

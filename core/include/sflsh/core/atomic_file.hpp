@@ -16,7 +16,15 @@ std::filesystem::path temporary_sibling(const std::filesystem::path& target);
 void write_atomically(const std::filesystem::path& target,
                       const std::function<void(const std::filesystem::path& tmp)>& write);
 
-/// Writes `contents` to `target` atomically.
+/// Throws sflsh::Error "<target>: <what> (<strerror(error_number)>)", the one shape of every write failure.
+[[noreturn]] void throw_write_error(const std::filesystem::path& target, std::string_view what, int error_number);
+
+/// Writes `contents` to `file` with checked write/fsync/close (a full disk, a file size limit, an I/O error throw
+/// through throw_write_error naming `target`, the path the user knows).
+void write_file_checked(const std::filesystem::path& file, const std::filesystem::path& target,
+                        std::string_view contents);
+
+/// Writes `contents` to `target` atomically (write_file_checked on a temporary sibling, then a rename).
 void write_text_atomically(const std::filesystem::path& target, std::string_view contents);
 
 /// Creates `dir` (and parents); throws sflsh::Error naming the path when it is not a writable directory.

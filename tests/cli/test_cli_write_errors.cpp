@@ -1,0 +1,165 @@
+// Write errors (issue 45): a full file system and a file size limit while sflsh writes a run folder, a scene, a
+// layer mesh and its cache. Each is one line `sflsh: error: <path>: <what> (<strerror>)`, exit code 1, no signal,
+// and nothing left behind (no staging folder, no temporary or partial file).
+#include "run_command.hpp"
+#include "scratch_dir.hpp"
+
+#include <fmt/format.h>
+#include <gmock/gmock.h>
+#include <sys/mount.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <csignal>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+
+namespace sflsh {
+
+using sflsh::testing::count_entries;
+using sflsh::testing::run_sflsh;
+using ::testing::EndsWith;
+using ::testing::HasSubstr;
+using ::testing::StartsWith;
+
+namespace {
+
+/// A tmpfs of `size` mounted on a fresh folder, unmounted at the end; empty when mounting is not permitted.
+class SmallFileSystem {
+ public:
+  SmallFileSystem(const std::filesystem::path& at, const std::string& size) : at_(at) {
+    std::filesystem::create_directories(at_);
+    mounted_ = ::mount("tmpfs", at_.c_str(), "tmpfs", 0, ("size=" + size).c_str()) == 0;
+  }
+  ~SmallFileSystem() {
+    if (mounted_) ::umount2(at_.c_str(), MNT_DETACH);
+  }
+  SmallFileSystem(const SmallFileSystem&) = delete;
+  SmallFileSystem& operator=(const SmallFileSystem&) = delete;
+  bool mounted() const { return mounted_; }
+  const std::filesystem::path& path() const { return at_; }
+
+ private:
+  std::filesystem::path at_;
+  bool mounted_ = false;
+};
+
+/// Runs sflsh with RLIMIT_FSIZE = `limit_bytes` and SIGXFSZ ignored in the child (so write() returns EFBIG).
+sflsh::testing::CommandResult run_sflsh_with_file_size_limit(const std::string& args,
+                                                             const std::filesystem::path& scratch, rlim_t limit_bytes) {
+  const auto out_file = scratch / "cmd.stdout";
+  const auto err_file = scratch / "cmd.stderr";
+  const std::string command =
+      std::string(SFLSH_CLI) + " " + args + " >" + out_file.string() + " 2>" + err_file.string();
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    std::signal(SIGXFSZ, SIG_IGN);
+    const rlimit limit{limit_bytes, limit_bytes};
+    ::setrlimit(RLIMIT_FSIZE, &limit);
+    ::execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  sflsh::testing::CommandResult result;
+  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  result.out = sflsh::testing::text_of(out_file);
+  result.err = sflsh::testing::text_of(err_file);
+  std::filesystem::remove(out_file);
+  std::filesystem::remove(err_file);
+  return result;
+}
+
+/// One line `sflsh: error: <path under folder>…: … (<reason>)`, exit code 1.
+void expect_one_line_write_error(const sflsh::testing::CommandResult& r, const std::filesystem::path& folder,
+                                 const std::string& reason) {
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  ASSERT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  const std::string line = r.err.substr(0, r.err.size() - 1);
+  EXPECT_THAT(line, StartsWith("sflsh: error: " + folder.string() + "/")) << r.err;
+  EXPECT_THAT(line, EndsWith("(" + reason + ")")) << r.err;
+}
+
+std::string reduced_run(const std::filesystem::path& out) {
+  return fmt::format(
+      "-q simulate --solver reduced --mesh coarse --subject OPEN_TRAIN_1 --motion one_leg_jump "
+      "--frames 30 --out {}",
+      out.string());
+}
+
+}  // namespace
+
+TEST(CliWriteErrors, ReducedRunOnAFullDisk) {
+  const auto dir = sflsh::testing::scratch_dir();
+  SmallFileSystem fs(dir / "small", "2m");
+  if (!fs.mounted()) GTEST_SKIP() << "mounting a tmpfs is not permitted here (needs root)";
+  for (const char* format : {"vtk", "xdmf"}) {
+    SCOPED_TRACE(format);
+    const auto r = run_sflsh(reduced_run(fs.path() / "run") + " --format " + format, dir);
+    expect_one_line_write_error(r, fs.path(), "No space left on device");
+    EXPECT_EQ(count_entries(fs.path()), 0u) << "a staging folder or partial file was left behind";
+  }
+}
+
+TEST(CliWriteErrors, FullSpaceRunOnAFullDisk) {
+  const auto dir = sflsh::testing::scratch_dir();
+  SmallFileSystem fs(dir / "small", "2m");
+  if (!fs.mounted()) GTEST_SKIP() << "mounting a tmpfs is not permitted here (needs root)";
+  const auto r = run_sflsh(fmt::format("-q simulate --solver full --mesh coarse --subject OPEN_TRAIN_1 --motion "
+                                       "one_leg_jump --frames 30 --out {}",
+                                       (fs.path() / "run").string()),
+                           dir);
+  expect_one_line_write_error(r, fs.path(), "No space left on device");
+  EXPECT_EQ(count_entries(fs.path()), 0u);
+}
+
+TEST(CliWriteErrors, SceneOnAFullDisk) {
+  const auto dir = sflsh::testing::scratch_dir();
+  SmallFileSystem fs(dir / "small", "2m");
+  if (!fs.mounted()) GTEST_SKIP() << "mounting a tmpfs is not permitted here (needs root)";
+  const auto r = run_sflsh(fmt::format("-q simulate --scene {}/scenes/belly_press.toml --frames 10 --out {}",
+                                       SFLSH_DATA_DIR, (fs.path() / "scene").string()),
+                           dir);
+  expect_one_line_write_error(r, fs.path(), "No space left on device");
+  EXPECT_EQ(count_entries(fs.path()), 0u);
+}
+
+TEST(CliWriteErrors, MeshAndItsCacheOnAFullDisk) {
+  const auto dir = sflsh::testing::scratch_dir();
+  {  // the layer files: the cache (in the build tree) is read, the run folder does not fit
+    SmallFileSystem fs(dir / "small", "256k");
+    if (!fs.mounted()) GTEST_SKIP() << "mounting a tmpfs is not permitted here (needs root)";
+    const auto r =
+        run_sflsh(fmt::format("-q mesh --subject OPEN_TEST_3 --mesher gmsh --mesh coarse --cache {} --out {}",
+                              SFLSH_TEST_CACHE, (fs.path() / "layer").string()),
+                  dir);
+    expect_one_line_write_error(r, fs.path(), "No space left on device");
+    EXPECT_EQ(count_entries(fs.path()), 0u);
+  }
+  {  // the cache itself does not fit
+    SmallFileSystem fs(dir / "tiny", "64k");
+    ASSERT_TRUE(fs.mounted());
+    const auto r =
+        run_sflsh(fmt::format("-q mesh --subject OPEN_TEST_3 --mesher layered --mesh coarse --cache {} --out {}",
+                              (fs.path() / "cache").string(), (dir / "layer").string()),
+                  dir);
+    expect_one_line_write_error(r, fs.path() / "cache", "No space left on device");
+    EXPECT_EQ(count_entries(fs.path() / "cache"), 0u) << "a partial cache entry was left behind";
+    EXPECT_FALSE(std::filesystem::exists(dir / "layer"));
+  }
+}
+
+TEST(CliWriteErrors, FileSizeLimitInVtkAndHdf5Output) {
+  const auto dir = sflsh::testing::scratch_dir();
+  // 4 MiB: MPI starts (its shared-memory files fit), a 60-frame uncompressed body.h5 does not.
+  const auto xdmf = run_sflsh_with_file_size_limit(
+      reduced_run(dir / "xdmf") + " --frames 60 --format xdmf --compression none", dir, 4u << 20);
+  expect_one_line_write_error(xdmf, dir, "File too large");
+  EXPECT_THAT(xdmf.err, HasSubstr("body.h5"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "xdmf"));
+}
+
+}  // namespace sflsh
