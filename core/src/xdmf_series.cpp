@@ -128,6 +128,7 @@ struct Series::Impl {
 
   Item write_dataset(const std::string& path, const double* values, hsize_t rows, hsize_t columns, bool integer,
                      const std::string& unit) {
+    H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // per thread: the background writer's too
     create_groups(file, path);
     const hsize_t dims[2] = {rows, columns};
     Handle space{H5Screate_simple(columns == 1 ? 1 : 2, dims, nullptr), H5Sclose};
@@ -285,6 +286,7 @@ void Series::close() {
   if (m.closed) return;
   m.closed = true;
   if (m.failed) return;  // the write error was reported; nothing is finished
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
   errno = 0;
   if (m.file >= 0 && H5Fflush(m.file, H5F_SCOPE_LOCAL) < 0) {
     const int flush_errno = errno;

@@ -83,11 +83,11 @@ void expect_one_line_write_error(const sflsh::testing::CommandResult& r, const s
   EXPECT_THAT(line, EndsWith("(" + reason + ")")) << r.err;
 }
 
-std::string reduced_run(const std::filesystem::path& out) {
+std::string reduced_run(const std::filesystem::path& out, int frames = 30) {
   return fmt::format(
       "-q simulate --solver reduced --mesh coarse --subject OPEN_TRAIN_1 --motion one_leg_jump "
-      "--frames 30 --out {}",
-      out.string());
+      "--frames {} --out {}",
+      frames, out.string());
 }
 
 }  // namespace
@@ -155,8 +155,8 @@ TEST(CliWriteErrors, MeshAndItsCacheOnAFullDisk) {
 TEST(CliWriteErrors, FileSizeLimitInVtkAndHdf5Output) {
   const auto dir = sflsh::testing::scratch_dir();
   // 4 MiB: MPI starts (its shared-memory files fit), a 60-frame uncompressed body.h5 does not.
-  const auto xdmf = run_sflsh_with_file_size_limit(
-      reduced_run(dir / "xdmf") + " --frames 60 --format xdmf --compression none", dir, 4u << 20);
+  const auto xdmf = run_sflsh_with_file_size_limit(reduced_run(dir / "xdmf", 60) + " --format xdmf --compression none",
+                                                   dir, 4u << 20);
   expect_one_line_write_error(xdmf, dir, "File too large");
   EXPECT_THAT(xdmf.err, HasSubstr("body.h5"));
   EXPECT_FALSE(std::filesystem::exists(dir / "xdmf"));
