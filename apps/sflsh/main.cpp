@@ -9,6 +9,8 @@
 #include <mpi.h>
 
 #include <iostream>
+#include <string>
+#include <string_view>
 
 namespace {
 
@@ -21,6 +23,44 @@ namespace {
   if (initialized && !finalized) MPI_Comm_size(MPI_COMM_WORLD, &size);
   if (size > 1) MPI_Abort(MPI_COMM_WORLD, 1);
   std::exit(1);
+}
+
+/// The message with every echoed piece of input cut to 300 characters (issue 45): a quoted stretch ('…' or "…") or
+/// a run without spaces longer than that keeps its first 300 characters, then "… (N characters)".
+std::string cut_echoed_input(const std::string& message) {
+  constexpr std::size_t kKeep = 300;
+  auto cut = [&](std::string_view piece) {
+    if (piece.size() <= kKeep) return std::string(piece);
+    std::size_t keep = kKeep;
+    while (keep > 0 && (static_cast<unsigned char>(piece[keep]) & 0xC0) == 0x80) --keep;  // whole UTF-8 characters
+    return std::string(piece.substr(0, keep)) + "… (" + std::to_string(piece.size()) + " characters)";
+  };
+  std::string out;
+  std::size_t i = 0;
+  while (i < message.size()) {
+    const char c = message[i];
+    if (c == '\'' || c == '"') {
+      const std::size_t close = message.find(c, i + 1);
+      if (close != std::string::npos) {
+        out += c;
+        out += cut(std::string_view(message).substr(i + 1, close - i - 1));
+        out += c;
+        i = close + 1;
+        continue;
+      }
+    }
+    if (c != ' ') {
+      std::size_t end = message.find_first_of(" '\"", i);
+      if (end == std::string::npos) end = message.size();
+      if (end == i) end = i + 1;
+      out += cut(std::string_view(message).substr(i, end - i));
+      i = end;
+      continue;
+    }
+    out += c;
+    ++i;
+  }
+  return out;
 }
 
 }  // namespace
@@ -65,10 +105,10 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
     // A command line that cannot be used: one line, like every other refusal, and the usage-error status 2.
-    std::cerr << "sflsh: error: " << e.what() << " (see --help)" << std::endl;
+    std::cerr << "sflsh: error: " << cut_echoed_input(e.what()) << " (see --help)" << std::endl;
     return 2;
   } catch (const std::exception& e) {
-    std::cerr << "sflsh: error: " << e.what() << std::endl;
+    std::cerr << "sflsh: error: " << cut_echoed_input(e.what()) << std::endl;
     abort_other_ranks_if_parallel();
   }
   return 0;

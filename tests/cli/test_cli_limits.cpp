@@ -17,6 +17,7 @@ namespace {
 namespace fs = std::filesystem;
 using sflsh::testing::run_sflsh;
 using ::testing::HasSubstr;
+using ::testing::Not;
 
 fs::path write(const fs::path& path, const std::string& text) {
   std::ofstream(path) << text;
@@ -163,6 +164,32 @@ TEST(CliLimits, MaterialForAnotherBodyIsRefusedBeforeMeshing) {
                               SFLSH_TEST_CACHE),
                   {m.string() + ": body: the material is for body 'smpl', but the run uses body 'open_body'"}},
                  dir, dir / "out");
+}
+
+TEST(CliLimits, EchoedInputIsCutAt300Characters) {
+  const auto dir = testing::scratch_dir();
+  write(dir / "tet.msh", tet_msh());
+  // A 200 000-character drive expression that muparser refuses: the message keeps its first 300 characters.
+  std::string expression = "t";
+  while (expression.size() < 200'000) expression += "+t";
+  expression += "+(";
+  const auto problem = write(dir / "p.toml", tet_problem() +
+                                                 "[[drive]]\ngroup = \"tip\"\ncomponent = \"x\"\n"
+                                                 "expression = \"" +
+                                                 expression + "\"\n");
+  const auto r = run_sflsh("-q verify " + problem.string() + " --no-vtk --out " + (dir / "out").string(), dir);
+  EXPECT_EQ(r.exit_code, 1) << r.err.substr(0, 2000);
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1);
+  EXPECT_THAT(r.err,
+              HasSubstr("'" + expression.substr(0, 300) + "… (" + std::to_string(expression.size()) + " characters)'"));
+  EXPECT_LT(r.err.size(), 1500u) << r.err.substr(0, 2000);
+
+  // A name given on the command line: cut the same way.
+  const std::string subject(1000, 'x');
+  const auto s = run_sflsh("-q body info --subject " + subject, dir);
+  EXPECT_NE(s.exit_code, 0);
+  EXPECT_THAT(s.err, HasSubstr("'" + subject.substr(0, 300) + "… (1000 characters)'")) << s.err;
+  EXPECT_THAT(s.err, Not(HasSubstr(subject.substr(0, 301))));
 }
 
 }  // namespace

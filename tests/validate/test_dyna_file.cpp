@@ -18,6 +18,7 @@ namespace {
 
 using sflsh::testing::error_of;
 using ::testing::HasSubstr;
+using ::testing::Not;
 
 RowMatrixX3i small_faces() {
   RowMatrixX3i f(2, 3);
@@ -120,6 +121,29 @@ TEST(DynaFile, MalformedFilesGiveOneLineErrors) {
   write_raw(no_faces, RowMatrixX3i(), "50002_hips", {4, 3, 2}, std::vector<double>(24, 0.0));
   e = error_of([&] { DynaFile f(no_faces); });
   EXPECT_THAT(e, HasSubstr(no_faces.string() + ": faces: no such dataset"));
+  EXPECT_TRUE(one_line(e)) << e;
+
+  // HDF5 failures are said as what is wrong with the file, not as the library call that failed (issue 45).
+  const auto group_faces = dir / "group_faces.h5";
+  {
+    H5::H5File file(group_faces.string(), H5F_ACC_TRUNC);
+    file.createGroup("faces");
+  }
+  e = error_of([&] { DynaFile f(group_faces); });
+  EXPECT_THAT(e,
+              HasSubstr(group_faces.string() + ": faces: is a group, expected a dataset of F×3 integer face indices"));
+  EXPECT_THAT(e, Not(HasSubstr("H5")));
+  EXPECT_TRUE(one_line(e)) << e;
+
+  const auto dangling = dir / "dangling.h5";
+  write_raw(dangling, small_faces(), "50002_hips", {4, 3, 2}, std::vector<double>(24, 0.0));
+  {
+    H5::H5File file(dangling.string(), H5F_ACC_RDWR);
+    H5Lcreate_soft("/nowhere", file.getId(), "50002_knees", H5P_DEFAULT, H5P_DEFAULT);
+  }
+  e = error_of([&] { DynaFile f(dangling); });
+  EXPECT_THAT(e, HasSubstr(dangling.string() + ": 50002_knees: is a link that leads nowhere"));
+  EXPECT_THAT(e, Not(HasSubstr("H5O")));
   EXPECT_TRUE(one_line(e)) << e;
 
   const auto rank2 = dir / "rank2.h5";

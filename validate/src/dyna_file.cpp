@@ -95,12 +95,31 @@ std::vector<hsize_t> dimensions(const H5::DataSet& dataset) {
   return dims;
 }
 
-/// The dataset names at the file's root, sorted (groups and other objects are ignored).
-std::vector<std::string> root_datasets(const H5::H5File& file) {
+/// What the root entry `name` is: a dataset, a group, a named datatype, or a link that leads nowhere — said in
+/// words, not as the HDF5 call that failed on it.
+std::string kind_of_entry(const H5::H5File& file, const std::string& name) {
+  const htri_t exists = H5Oexists_by_name(file.getId(), name.c_str(), H5P_DEFAULT);
+  if (exists <= 0) return "a link that leads nowhere (a dangling soft or external link)";
+  switch (file.childObjType(name)) {
+    case H5O_TYPE_DATASET:
+      return "a dataset";
+    case H5O_TYPE_GROUP:
+      return "a group";
+    case H5O_TYPE_NAMED_DATATYPE:
+      return "a named datatype";
+    default:
+      return "an object of unknown kind";
+  }
+}
+
+/// The dataset names at the file's root, sorted (groups and other objects are ignored; a dangling link is refused).
+std::vector<std::string> root_datasets(const H5::H5File& file, const std::string& where) {
   std::vector<std::string> names;
   const hsize_t count = file.getNumObjs();
   for (hsize_t i = 0; i < count; ++i) {
     const std::string name = file.getObjnameByIdx(i);
+    if (H5Oexists_by_name(file.getId(), name.c_str(), H5P_DEFAULT) <= 0)
+      throw_error("{}: {}: is {}, expected a dataset", where, name, kind_of_entry(file, name));
     if (file.childObjType(name) == H5O_TYPE_DATASET) names.push_back(name);
   }
   std::sort(names.begin(), names.end());
@@ -109,6 +128,8 @@ std::vector<std::string> root_datasets(const H5::H5File& file) {
 
 RowMatrixX3i read_faces(const H5::H5File& file, const std::string& where) {
   if (!file.nameExists("faces")) throw_error("{}: faces: no such dataset, expected F×3 integer face indices", where);
+  if (const std::string kind = kind_of_entry(file, "faces"); kind != "a dataset")
+    throw_error("{}: faces: is {}, expected a dataset of F×3 integer face indices", where, kind);
   const H5::DataSet dataset = file.openDataSet("faces");
   const std::vector<hsize_t> dims = dimensions(dataset);
   require(dims.size() == 2 && dims[1] == 3 && dims[0] > 0, "{}: faces: shape {}, expected (F, 3) with F ≥ 1", where,
@@ -189,7 +210,7 @@ DynaFile::DynaFile(const std::filesystem::path& path) : path_(path) {
     const H5::H5File file(where, H5F_ACC_RDONLY);
     faces_ = read_faces(file, where);
     attributes_ = detail::read_attributes(file, where);
-    for (const std::string& name : root_datasets(file)) {
+    for (const std::string& name : root_datasets(file, where)) {
       if (name == "faces") continue;
       const H5::DataSet dataset = file.openDataSet(name);
       const std::vector<hsize_t> dims = dimensions(dataset);
