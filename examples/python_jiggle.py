@@ -5,8 +5,8 @@ Loads the open body, gives each of two subjects (default: OPEN_TRAIN_4, tall and
 with a large belly) the material the shipped shape model predicts for its β (data/shape_models/default.toml,
 sflsh.Material.from_shape_model), simulates `jiggle_on_toes` with the reduced model on the coarse layer, and
 plots the dynamics amplitude σ per vertex (docs/physics.md §4) on each shaped body, front view, to a PNG (viridis,
-with its colour bar). Each simulation also writes the run folder `sflsh simulate` writes (Simulation.write: body.pvd,
-dynamics.vtp, summary.json) to <out>_runs/<subject>/, for ParaView or `sflsh render --run`.
+with its colour bar). Each simulation also writes the run folder `sflsh simulate` writes (Simulation.write: body.xmf +
+body.h5, dynamics.vtp, summary.json) to <out>_runs/<subject>/, for ParaView or `sflsh render --run`.
 
     PYTHONPATH=build/release/python /usr/bin/python3 examples/python_jiggle.py --out jiggle.png
 

@@ -191,14 +191,16 @@ void bind_methods(py::class_<PythonSimulation>& c) {
             py::gil_scoped_release release;
             write_run_folder(sim, dir, {format, write_layer, every, precision, compression.value_or(""), fields});
           },
-          py::arg("dir"), py::kw_only(), py::arg("format") = "vtk", py::arg("write_layer") = false,
-          py::arg("every") = 1, py::arg("precision") = "float64", py::arg("compression") = py::none(),
+          py::arg("dir"), py::kw_only(), py::arg("format") = "xdmf", py::arg("write_layer") = false,
+          py::arg("every") = 1, py::arg("precision") = "float32", py::arg("compression") = py::none(),
           py::arg("fields") = py::none(),
           "Writes the run folder `sflsh simulate --out DIR` writes, for the frames solved so far (0 … frame): "
-          "format 'vtk' (body.pvd of .vtp frames; write_layer: layer.pvd of .vtu frames) or 'xdmf' (body.xmf + "
-          "body.h5), every N-th frame (the first and the last always), dynamics.vtp (σ in mm) and summary.json; "
-          "precision 'float64' | 'float32' (xdmf), compression None (LZ4 body frames, zlib layer frames) | 'lz4' | "
-          "'zlib' | 'none', fields None (every array) or a list of the frames' arrays (`--fields`). The folder appears "
+          "format 'xdmf' (body.xmf + body.h5: triangles and fixed fields once; write_layer: layer.xmf + layer.h5) or "
+          "'vtk' (body.pvd of .vtp frames; write_layer: layer.pvd of .vtu frames), every N-th frame (the first and "
+          "the last always), dynamics.vtp (σ in mm) and summary.json; precision 'float32' | 'float64' (xdmf), "
+          "compression None (zlib xdmf datasets; LZ4 body and zlib layer vtk frames) | 'lz4' (vtk) | 'zlib' | "
+          "'none', fields None (the format's default as `--fields`: xdmf the display arrays, vtk every one), "
+          "['all'] (every array) or a list of the frames' arrays. The folder appears "
           "all at once; positions in m (docs/output.md)");
 }
 

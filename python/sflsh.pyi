@@ -394,14 +394,16 @@ class Simulation:
         """
         (x, w): unposed elastic positions [m] and their velocities [m/s] per layer node (N × 3 each)
         """
-    def write(self, dir: os.PathLike, *, format: str = 'vtk', write_layer: bool = False, every: int = 1, precision: str = 'float64', compression: Optional[str] = None, fields: Optional[List[str]] = None) -> None:
+    def write(self, dir: os.PathLike, *, format: str = 'xdmf', write_layer: bool = False, every: int = 1, precision: str = 'float32', compression: Optional[str] = None, fields: Optional[List[str]] = None) -> None:
         """
         Writes the run folder `sflsh simulate --out DIR` writes, for the frames solved so far (0 … frame):
-        format 'vtk' (body.pvd of .vtp frames; write_layer: layer.pvd of .vtu frames) or 'xdmf' (body.xmf +
-        body.h5), every N-th frame (the first and the last always), dynamics.vtp (σ in mm) and summary.json;
-        precision 'float64' | 'float32' (xdmf), compression None (LZ4 body frames, zlib layer frames) | 'lz4'
-        | 'zlib' | 'none', fields None (every array) or a list of the frames' arrays (`--fields`). The folder
-        appears all at once; positions in m (docs/output.md)
+        format 'xdmf' (body.xmf + body.h5: triangles and fixed fields once; write_layer: layer.xmf + layer.h5)
+        or 'vtk' (body.pvd of .vtp frames; write_layer: layer.pvd of .vtu frames), every N-th frame (the first
+        and the last always), dynamics.vtp (σ in mm) and summary.json; precision 'float32' | 'float64' (xdmf),
+        compression None (zlib xdmf datasets; LZ4 body and zlib layer vtk frames) | 'lz4' (vtk) | 'zlib' |
+        'none', fields None (the format's default as `--fields`: xdmf the display arrays, vtk every one),
+        ['all'] (every array) or a list of the frames' arrays. The folder appears all at once; positions in m
+        (docs/output.md)
         """
     @property
     def frame(self) -> int:

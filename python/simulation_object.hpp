@@ -25,12 +25,13 @@ struct PythonSimulation {
 
 /// How Simulation.write writes: `sflsh simulate`'s output options.
 struct WriteOptions {
-  std::string format = "vtk";  ///< vtk | xdmf
+  std::string format = "xdmf";  ///< xdmf | vtk
   bool write_layer = false;
   int every = 1;
-  std::string precision = "float64";               ///< float64 | float32 (xdmf)
-  std::string compression;                         ///< "" (LZ4 body frames, zlib layer frames) | lz4 | zlib | none
-  std::optional<std::vector<std::string>> fields;  ///< the frames' arrays; nullopt: all
+  std::string precision = "float32";  ///< float32 | float64 (xdmf)
+  std::string compression;            ///< "" (zlib xdmf; LZ4 body, zlib layer vtk frames) | lz4 | zlib | none
+  /// The frames' arrays ("all" alone: every one); nullopt: the format's (default_frame_fields() for xdmf, all for vtk)
+  std::optional<std::vector<std::string>> fields;
 };
 
 /// Writes the run folder `sflsh simulate` writes for the frames solved so far (frame 0 … frame()): the body series,

@@ -22,7 +22,6 @@ void write_run_folder(const PythonSimulation& python, const std::filesystem::pat
   require(python.record, "write: the simulation was made with record=False and kept no frames to write");
   require(static_cast<int>(python.states.size()) == sim.frame() + 1, "write: {} recorded states for frames 0 … {}",
           python.states.size(), sim.frame());
-  model::check_output_format(options.format, "--format");
   require(options.every >= 1, "--every must be at least 1, got {}", options.every);
   scene::BodyRunSettings settings = sim.settings();
   settings.format = options.format;
@@ -30,18 +29,10 @@ void write_run_folder(const PythonSimulation& python, const std::filesystem::pat
   settings.every = options.every;
   settings.precision = options.precision;
   settings.compression = options.compression;
-  settings.fields = options.fields;
-  if (options.fields) model::check_frame_field_names(*options.fields, "fields");
-
-  model::SimulationWriterOptions writer_options;
-  writer_options.write_layer = options.write_layer;
-  writer_options.fields = options.fields;
-  writer_options.format = options.format;
-  writer_options.precision = xdmf::parse_precision(options.precision, "--precision");
-  if (!options.compression.empty()) {
-    writer_options.compression = vtk::parse_compression(options.compression, "--compression");
-    writer_options.layer_compression = writer_options.compression;
-  }
+  settings.fields = options.fields ? std::optional(model::resolve_frame_fields(*options.fields, "fields")
+                                                       .value_or(model::frame_field_names()))
+                                   : std::nullopt;  // the format's default
+  const model::SimulationWriterOptions writer_options = scene::frame_writer_options(settings);
   RunFolder run(dir);
   model::SimulationWriter writer(sim.layer(), &run, writer_options);
   const int frames = static_cast<int>(python.states.size());

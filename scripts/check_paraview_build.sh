@@ -41,7 +41,7 @@ chroot "$root" /bin/bash -euo pipefail -c '
   ctest --preset release -j"$(nproc)"
   # The main job, then pvpython reads what it wrote.
   build/release/apps/sflsh/sflsh -q simulate --subject OPEN_TRAIN_1 --motion jiggle_on_toes --frames 12 \
-    --out /tmp/pv-run
+    --format vtk --out /tmp/pv-run
   pvpython -c "
 from paraview.simple import OpenDataFile, UpdatePipeline
 reader = OpenDataFile(\"/tmp/pv-run/body.pvd\")

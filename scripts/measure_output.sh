@@ -46,8 +46,9 @@ PY
   echo
   echo "| format | MiB | KiB per frame | writer ms per frame | solver waited ms per frame | solve ms per frame |"
   echo "|---|---|---|---|---|---|"
-  run "vtk (lz4)" --format vtk
-  run "xdmf float64" --format xdmf
-  run "xdmf float32" --format xdmf --precision float32
+  run "vtk (lz4, every array)" --format vtk
+  run "xdmf float64, every array, uncompressed" --format xdmf --precision float64 --fields all --compression none
+  run "xdmf float32, every array, uncompressed" --format xdmf --precision float32 --fields all --compression none
+  run "xdmf default (float32, display arrays, zlib)" --format xdmf
 } > "$report"
 cat "$report"

@@ -11,11 +11,13 @@
 #include <sflsh/core/render.hpp>
 #include <sflsh/core/summary.hpp>
 #include <sflsh/core/vtk_io.hpp>
+#include <sflsh/core/xdmf_reader.hpp>
 
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <regex>
 
 namespace sflsh::app {
@@ -86,28 +88,47 @@ std::string run_description(const fs::path& folder) {
   return fmt::format("{} | {} | {}", text(s, "subject"), motion, time_span(frames, fps));
 }
 
-/// The body frames of a run folder (body_000000.vtp, …), in frame order.
-std::vector<fs::path> body_frames(const fs::path& run) {
-  std::vector<fs::path> frames;
-  const std::regex pattern(R"(body_\d{6}\.vtp)");
-  for (const auto& entry : fs::directory_iterator(run))
-    if (std::regex_match(entry.path().filename().string(), pattern)) frames.push_back(entry.path());
-  std::sort(frames.begin(), frames.end());
-  return frames;
-}
+/// The written body frames of a `sflsh simulate` run folder, in frame order: body.xmf + body.h5 (--format xdmf) or
+/// body_000000.vtp, … (--format vtk).
+class BodyFrames {
+ public:
+  explicit BodyFrames(const fs::path& run) {
+    const std::regex pattern(R"(body_\d{6}\.vtp)");
+    for (const auto& entry : fs::directory_iterator(run))
+      if (std::regex_match(entry.path().filename().string(), pattern)) vtp_.push_back(entry.path());
+    std::sort(vtp_.begin(), vtp_.end());
+    if (vtp_.empty() && fs::exists(run / "body.xmf")) xdmf_.emplace(run / "body.xmf");
+  }
+  std::size_t size() const { return xdmf_ ? xdmf_->steps() : vtp_.size(); }
+  /// The file frame `i` is read from (for messages).
+  std::string file(std::size_t i) const { return xdmf_ ? xdmf_->heavy_data().string() : vtp_[i].string(); }
+  vtk::Points points(std::size_t i) const { return xdmf_ ? xdmf_->points(i) : vtk::read_points(vtp_[i]); }
+  vtk::Cells triangles(std::size_t i) const { return xdmf_ ? xdmf_->cells() : vtk::read_cells(vtp_[i]); }
+  /// The frame's time [s] (0 for a .vtp without TimeValue).
+  double time(std::size_t i) const {
+    if (xdmf_) return xdmf_->time(i);
+    const std::vector<std::string> names = vtk::read_field_array_names(vtp_[i]);
+    const bool timed = std::find(names.begin(), names.end(), "TimeValue") != names.end();
+    return timed ? vtk::read_field_array(vtp_[i], "TimeValue")(0, 0) : 0.0;
+  }
+  /// posed − skinned per vertex [m].
+  Eigen::MatrixXd soft_tissue_displacement(std::size_t i) const {
+    return xdmf_ ? xdmf_->point_array(i, "soft_tissue_displacement")
+                 : vtk::read_point_array(vtp_[i], "soft_tissue_displacement");
+  }
 
-/// Largest soft-tissue displacement of a frame [m].
-double peak_displacement(const fs::path& frame) {
-  const Eigen::MatrixXd u = vtk::read_point_array(frame, "soft_tissue_displacement");
-  return u.rowwise().norm().maxCoeff();
-}
+ private:
+  std::vector<fs::path> vtp_;
+  std::optional<xdmf::SeriesReader> xdmf_;
+};
 
 void run_render(const RenderRunOptions& opt) {
   const fs::path run = opt.run;
   require(fs::is_directory(run), "--run {}: not a folder, expected the --out folder of `sflsh simulate`", opt.run);
-  const std::vector<fs::path> frames = body_frames(run);
-  require(!frames.empty(),
-          "--run {}: no body_NNNNNN.vtp frames, expected a `sflsh simulate` run written with --format vtk", opt.run);
+  const BodyFrames frames(run);
+  require(frames.size() > 0,
+          "--run {}: no body.xmf and no body_NNNNNN.vtp frames, expected the --out folder of `sflsh simulate`",
+          opt.run);
   require(fs::path(opt.out).extension() == ".png", "--out {}: expected a .png file", opt.out);
 
   // The frame: the one with the largest soft-tissue displacement, or the one asked for.
@@ -115,7 +136,7 @@ void run_render(const RenderRunOptions& opt) {
   if (opt.frame == "peak") {
     double best = -1.0;
     for (std::size_t i = 0; i < frames.size(); ++i) {
-      const double d = peak_displacement(frames[i]);
+      const double d = frames.soft_tissue_displacement(i).rowwise().norm().maxCoeff();
       if (d > best) best = d, index = i;
     }
   } else {
@@ -132,12 +153,10 @@ void run_render(const RenderRunOptions& opt) {
   }
 
   render::Surface surface;
-  surface.points = vtk::read_points(frames[index]);
-  surface.triangles = vtk::read_cells(frames[index]);
-  require(surface.triangles.cols() == 3, "{}: expected a triangle surface", frames[index].string());
-  const std::vector<std::string> field_names = vtk::read_field_array_names(frames[index]);
-  const bool timed = std::find(field_names.begin(), field_names.end(), "TimeValue") != field_names.end();
-  const double time = timed ? vtk::read_field_array(frames[index], "TimeValue")(0, 0) : 0.0;
+  surface.points = frames.points(index);
+  surface.triangles = frames.triangles(index);
+  require(surface.triangles.cols() == 3, "{}: expected a triangle surface", frames.file(index));
+  const double time = frames.time(index);
   std::string legend, quantity;
   if (opt.color == "sigma") {
     const fs::path dynamics = run / "dynamics.vtp";
@@ -149,12 +168,12 @@ void run_render(const RenderRunOptions& opt) {
     legend = "sigma [mm]";
     quantity = "coloured by sigma over the run (dynamics.vtp)";
   } else {
-    const Eigen::MatrixXd u = vtk::read_point_array(frames[index], "soft_tissue_displacement");
+    const Eigen::MatrixXd u = frames.soft_tissue_displacement(index);
     surface.scalars = 1e3 * u.rowwise().norm();
     legend = "soft-tissue\ndisplacement\n[mm]";
     quantity = "coloured by the frame's |soft-tissue displacement|";
   }
-  require(surface.scalars->allFinite(), "{}: non-finite {} values", frames[index].string(), opt.color);
+  require(surface.scalars->allFinite(), "{}: non-finite {} values", frames.file(index), opt.color);
 
   std::string subject = "body", motion;
   if (fs::exists(run / "summary.json")) {

@@ -71,10 +71,8 @@ void run_simulate(const SimulateOptions& opt, const Invocation& invocation, int 
   nlohmann::json summary = summary_header("simulate", invocation.argc, invocation.argv);
   BodyRunSettings settings = opt.body;
   settings.every = opt.every;
-  if (opt.fields_given) {
-    model::check_frame_field_names(opt.fields, "--fields");
-    settings.fields = opt.fields;
-  }
+  if (opt.fields_given)  // "all" is every array, whatever the format's default
+    settings.fields = model::resolve_frame_fields(opt.fields, "--fields").value_or(model::frame_field_names());
   const nlohmann::json body = run_body_simulation(settings, write ? &*run : nullptr, rank, size);
   if (rank != 0) return;
   summary.update(body);
@@ -119,26 +117,29 @@ void register_simulate_commands(CLI::App& app, const Invocation& invocation) {
       ->check(CLI::IsMember({"coarse", "default", "fine"}));
   add_layer_options(*cmd, opt->body.layer);
   add_mass_option(*cmd, opt->body.layer);
-  cmd->add_flag("--write-layer", opt->body.write_layer, "Also write the tet layer per frame (layer.pvd)");
+  cmd->add_flag("--write-layer", opt->body.write_layer, "Also write the tet layer per frame (layer.xmf or layer.pvd)");
   cmd->add_option(
          "--format", opt->body.format,
-         "Time series: vtk (body.pvd of one .vtp per frame, layer.pvd of .vtu) | xdmf (body.xmf + body.h5: triangles "
-         "and fixed fields once, one HDF5 dataset per field and frame; docs/output.md); with --scene it overrides "
-         "[output] format")
+         "Time series: xdmf (body.xmf + body.h5: triangles and fixed fields once, one compressed HDF5 dataset per "
+         "field and frame; ParaView, meshio) | vtk (body.pvd of one .vtp per frame, layer.pvd of .vtu; docs/output.md); "
+         "with --scene it overrides [output] format")
       ->check(CLI::IsMember({"vtk", "xdmf"}))
       ->capture_default_str()
       ->each([opt](const std::string&) { opt->format_given = true; });
-  cmd->add_option("--precision", opt->body.precision, "Floating-point precision of an xdmf series: float64 | float32")
+  cmd->add_option("--precision", opt->body.precision,
+                  "Floating-point precision of an xdmf series: float32 (display) | float64 (vtk frames are Float64)")
       ->check(CLI::IsMember({"float64", "float32"}))
       ->capture_default_str();
   cmd->add_option("--fields", opt->fields,
-                  "The arrays of the body and layer frames, comma-separated (default: all; names in docs/output.md), "
-                  "as a scene's [output] fields")
+                  "The arrays of the body and layer frames, comma-separated: default (soft_tissue_displacement, "
+                  "strain_energy_density, Normals and the fixed fields; the default for xdmf), all (the default "
+                  "for vtk), or names of docs/output.md; as a scene's [output] fields")
       ->delimiter(',')
       ->each([opt](const std::string&) { opt->fields_given = true; });
   cmd->add_option("--compression", opt->body.compression,
-                  "Compression of every vtk frame file: lz4 | zlib | none (default: LZ4 for the body's .vtp frames, "
-                  "zlib for the layer's .vtu frames, which meshio reads)")
+                  "Compression: zlib | none for xdmf (default zlib: HDF5 shuffle + deflate); lz4 | zlib | none of every "
+                  "vtk frame file (default: LZ4 for the body's .vtp frames, zlib for the layer's .vtu frames, which "
+                  "meshio reads)")
       ->check(CLI::IsMember({"lz4", "zlib", "none"}));
   cmd->add_flag("--no-output", opt->no_output, "Write only summary.json");
   cmd->add_option(

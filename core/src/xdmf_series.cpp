@@ -1,12 +1,15 @@
 // XDMF 3 + HDF5 time series (xdmf_series.hpp), written with the HDF5 C library.
 #include <sflsh/core/array_units.hpp>
 #include <sflsh/core/atomic_file.hpp>
+#include "hdf5_handle.hpp"
+
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/xdmf_series.hpp>
 
 #include <fcntl.h>
 #include <fmt/format.h>
 #include <hdf5.h>
+#include <sys/mman.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -53,15 +56,6 @@ struct Step {
   std::vector<Attribute> attributes;
 };
 
-/// Closes an HDF5 handle when it goes out of scope.
-struct Handle {
-  hid_t id;
-  herr_t (*close)(hid_t);
-  ~Handle() {
-    if (id >= 0) close(id);
-  }
-};
-
 void create_groups(hid_t file, const std::string& path) {
   for (std::size_t at = path.find('/', 1); at != std::string::npos; at = path.find('/', at + 1)) {
     const std::string group = path.substr(0, at);
@@ -97,6 +91,7 @@ struct Series::Impl {
   fs::path xmf;
   fs::path h5;
   Precision precision;
+  bool deflate = false;  ///< shuffle + deflate (zlib) filters, one chunk per dataset
   hid_t file = -1;
   Item topology;
   std::string topology_type;
@@ -109,17 +104,19 @@ struct Series::Impl {
   bool failed = false;  ///< a write failed: the file was abandoned and is not finished by close()
 
   /// After a failed write HDF5 keeps dirty metadata it can never flush; closing then fails and leaves the file in
-  /// HDF5's tables, where the library's exit handler crashes on it (HDF5 1.10). Point the file's descriptor at
-  /// /dev/null, so the close that follows succeeds; the run folder discards the partial file.
+  /// HDF5's tables, where the library's exit handler crashes on it (HDF5 1.10). Point the file's descriptor at an
+  /// anonymous in-memory file (memfd; /dev/null where there is none, which takes the writes but not the final
+  /// truncate), so the close that follows succeeds; the run folder discards the partial file.
   void abandon() {
     failed = true;
     if (file < 0) return;
     void* handle = nullptr;
     if (H5Fget_vfd_handle(file, H5P_DEFAULT, &handle) >= 0 && handle != nullptr) {
-      const int null_fd = ::open("/dev/null", O_WRONLY | O_CLOEXEC);
-      if (null_fd >= 0) {
-        ::dup2(null_fd, *static_cast<int*>(handle));
-        ::close(null_fd);
+      int sink = ::memfd_create("sflsh-abandoned-hdf5", MFD_CLOEXEC);
+      if (sink < 0) sink = ::open("/dev/null", O_WRONLY | O_CLOEXEC);
+      if (sink >= 0) {
+        ::dup2(sink, *static_cast<int*>(handle));
+        ::close(sink);
       }
     }
     H5Fclose(file);
@@ -134,7 +131,19 @@ struct Series::Impl {
     Handle space{H5Screate_simple(columns == 1 ? 1 : 2, dims, nullptr), H5Sclose};
     const bool single = precision == Precision::float32;
     const hid_t stored = integer ? H5T_STD_I32LE : single ? H5T_IEEE_F32LE : H5T_IEEE_F64LE;
-    Handle set{H5Dcreate2(file, path.c_str(), stored, space.id, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Dclose};
+    Handle create{H5Pcreate(H5P_DATASET_CREATE), H5Pclose};
+    if (deflate && rows > 0) {
+      // One chunk per dataset (a frame's array is written and read whole); the shuffle filter groups the bytes of
+      // equal significance, which lets deflate find the zeros and the shared exponents of neighbouring values.
+      require(H5Pset_chunk(create.id, columns == 1 ? 1 : 2, dims) >= 0 && H5Pset_shuffle(create.id) >= 0 &&
+                  H5Pset_deflate(create.id, 1) >= 0,
+              "{}: cannot set up compression for dataset {}", h5.string(), path);
+    }
+    // No chunk cache: a compressed chunk is written by H5Dwrite itself, so a full disk fails there (and is reported
+    // and abandoned below) instead of in a later flush, after which HDF5 1.10 cannot close the file and crashes at exit.
+    Handle access{H5Pcreate(H5P_DATASET_ACCESS), H5Pclose};
+    H5Pset_chunk_cache(access.id, H5D_CHUNK_CACHE_NSLOTS_DEFAULT, 0, H5D_CHUNK_CACHE_W0_DEFAULT);
+    Handle set{H5Dcreate2(file, path.c_str(), stored, space.id, H5P_DEFAULT, create.id, access.id), H5Dclose};
     require(set.id >= 0, "{}: cannot create dataset {}", h5.string(), path);
     herr_t status = 0;
     errno = 0;  // HDF5's file driver leaves the failed write's errno (a full disk, a file size limit)
@@ -218,13 +227,20 @@ struct Series::Impl {
   }
 };
 
-Series::Series(fs::path xmf_path, const Eigen::Ref<const vtk::Cells>& cells, Precision precision)
+Series::Series(fs::path xmf_path, const Eigen::Ref<const vtk::Cells>& cells, Precision precision,
+               vtk::Compression compression)
     : impl_(std::make_unique<Impl>()) {
   const std::lock_guard<std::mutex> lock(hdf5_mutex());
   Impl& m = *impl_;
   m.xmf = std::move(xmf_path);
   m.h5 = fs::path(m.xmf).replace_extension(".h5");
   m.precision = precision;
+  require(compression != vtk::Compression::lz4,
+          "{}: lz4 is not available for HDF5 datasets (expected zlib or none for an xdmf series)", m.xmf.string());
+  m.deflate = compression == vtk::Compression::zlib;
+  if (m.deflate)
+    require(H5Zfilter_avail(H5Z_FILTER_DEFLATE) > 0 && H5Zfilter_avail(H5Z_FILTER_SHUFFLE) > 0,
+            "{}: this HDF5 library has no deflate filter (use compression none)", m.xmf.string());
   require(cells.cols() == 3 || cells.cols() == 4, "xdmf: cells need 3 (triangles) or 4 (tetrahedra) nodes, got {}",
           cells.cols());
   m.topology_type = cells.cols() == 3 ? "Triangle" : "Tetrahedron";

@@ -153,8 +153,29 @@ void check_frame_field_names(const std::vector<std::string>& names, const std::s
     if (std::find(known.begin(), known.end(), name) != known.end()) continue;
     std::string list;
     for (const std::string& k : known) list += (list.empty() ? "" : ", ") + k;
-    throw_error("{}: unknown field '{}'{} (expected some of {})", where, name, context, list);
+    throw_error("{}: unknown field '{}'{} (expected all, default, or some of {})", where, name, context, list);
   }
+}
+
+const std::vector<std::string>& default_frame_fields() {
+  // Body frames: the soft tissue's own motion (σ's displacement), the energy density and the shading normals; layer
+  // frames: the posed nodes with the energy density per tet; the fixed fields cost nothing per frame in an xdmf
+  // series (stored once); contact arrays appear only in scenes with contact.
+  static const std::vector<std::string> names = {
+      "soft_tissue_displacement", "strain_energy_density", "Normals",      "skin_weights_argmax", "thickness_fraction",
+      "young_tangent",            "young_normal",          "soft_region", "contact_force",       "penetration"};
+  return names;
+}
+
+std::optional<std::vector<std::string>> resolve_frame_fields(const std::vector<std::string>& names,
+                                                             const std::string& where, const std::string& context) {
+  if (names.size() == 1 && names.front() == "all") return std::nullopt;
+  if (names.size() == 1 && names.front() == "default") return default_frame_fields();
+  for (const std::string& name : names)
+    require(name != "all" && name != "default", "{}: '{}'{} stands alone (not mixed with array names)", where, name,
+            context);
+  check_frame_field_names(names, where, context);
+  return names;
 }
 
 bool is_written_frame(int frame, int frames, int every) {
@@ -193,7 +214,8 @@ SimulationWriter::SimulationWriter(const BodyLayer& layer, RunFolder* run, const
     // The fields that do not change go in once; every frame then holds positions and the moving fields.
     run_->stage(options_.prefix + ".h5");
     body_xdmf_ =
-        std::make_unique<xdmf::Series>(run_->stage(options_.prefix + ".xmf"), layer.model->faces, options_.precision);
+        std::make_unique<xdmf::Series>(run_->stage(options_.prefix + ".xmf"), layer.model->faces, options_.precision,
+                                       options_.series_compression);
     vtk::Fields fixed;
     if (wants("skin_weights_argmax")) fixed.point_data.push_back({"skin_weights_argmax", dominant_joint_, true});
     add_kappa_fields(fixed.point_data, vertex_kappa_, [this](const std::string& name) { return wants(name); });
@@ -202,7 +224,8 @@ SimulationWriter::SimulationWriter(const BodyLayer& layer, RunFolder* run, const
     if (write_layer_) {
       run_->stage(layer_prefix + ".h5");
       layer_xdmf_ =
-          std::make_unique<xdmf::Series>(run_->stage(layer_prefix + ".xmf"), layer.problem.tets, options_.precision);
+          std::make_unique<xdmf::Series>(run_->stage(layer_prefix + ".xmf"), layer.problem.tets, options_.precision,
+                                         options_.series_compression);
       vtk::Fields layer_fixed;
       add_kappa_fields(layer_fixed.point_data, layer.fields.node,
                        [this](const std::string& name) { return wants(name); });

@@ -103,15 +103,8 @@ BodySimulation::BodySimulation(const BodyRunSettings& opt, RunFolder* frames_to,
 
   const bool write = rank == 0 && frames_to != nullptr;
   if (write) jobs_.emplace(8);
-  writer_options_.write_layer = opt.write_layer;
+  writer_options_ = frame_writer_options(opt);
   writer_options_.jobs = jobs_ ? &*jobs_ : nullptr;
-  writer_options_.format = opt.format;
-  writer_options_.precision = xdmf::parse_precision(opt.precision, "--precision");
-  writer_options_.fields = opt.fields;
-  if (!opt.compression.empty()) {
-    writer_options_.compression = vtk::parse_compression(opt.compression, "--compression");
-    writer_options_.layer_compression = writer_options_.compression;
-  }
   writer_ = std::make_unique<model::SimulationWriter>(*layer_, write ? frames_to : nullptr, writer_options_);
   writer_->add_frame(0, 0.0, solver_->current_state(), true);
   frames_.push_back({{"frame", 0}, {"t", 0.0}, {"newton_iterations", 0}, {"linear_iterations", 0}, {"seconds", 0.0}});

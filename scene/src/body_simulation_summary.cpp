@@ -114,17 +114,38 @@ nlohmann::json run_body_simulation(const BodyRunSettings& settings, RunFolder* f
   return simulation.finish();
 }
 
+model::SimulationWriterOptions frame_writer_options(const BodyRunSettings& settings) {
+  model::check_output_format(settings.format, "--format");
+  model::SimulationWriterOptions options;
+  options.write_layer = settings.write_layer;
+  options.format = settings.format;
+  options.precision = xdmf::parse_precision(settings.precision, "--precision");
+  if (settings.fields) model::check_frame_field_names(*settings.fields, "--fields");
+  options.fields = settings.fields;
+  if (!settings.fields && settings.format == "xdmf") options.fields = model::default_frame_fields();
+  if (!settings.compression.empty()) {
+    const vtk::Compression asked = vtk::parse_compression(settings.compression, "--compression");
+    require(settings.format != "xdmf" || asked != vtk::Compression::lz4,
+            "--compression lz4: HDF5 has no LZ4 filter here (expected zlib or none for --format xdmf)");
+    options.compression = options.layer_compression = options.series_compression = asked;
+  }
+  return options;
+}
+
 nlohmann::json simulate_output_summary(const BodyRunSettings& settings, const nlohmann::json& body_summary) {
   const bool xdmf = settings.format == "xdmf";
-  nlohmann::json output = {{"format", settings.format},
-                           {"series", xdmf ? "body.xmf" : "body.pvd"},
-                           {"layer", settings.write_layer ? (xdmf ? "layer.xmf" : "layer.pvd") : ""},
-                           {"every", settings.every},
-                           {"compression", xdmf ? "none" : body_summary.value("compression", std::string("lz4"))},
-                           {"precision", xdmf ? settings.precision : "float64"}};
+  const model::SimulationWriterOptions writer = frame_writer_options(settings);
+  nlohmann::json output = {
+      {"format", settings.format},
+      {"series", xdmf ? "body.xmf" : "body.pvd"},
+      {"layer", settings.write_layer ? (xdmf ? "layer.xmf" : "layer.pvd") : ""},
+      {"every", settings.every},
+      {"compression", xdmf ? vtk::to_string(writer.series_compression)
+                           : body_summary.value("compression", std::string("lz4"))},
+      {"precision", xdmf ? settings.precision : "float64"}};
   if (!xdmf && settings.write_layer)
     output["layer_compression"] = body_summary.value("layer_compression", std::string("zlib"));
-  if (settings.fields) output["fields"] = *settings.fields;
+  output["fields"] = writer.fields ? nlohmann::json(*writer.fields) : nlohmann::json("all");
   return output;
 }
 

@@ -230,8 +230,7 @@ class SceneReader : public TomlReader {
       const toml::array* list = n->as_array();
       require(list != nullptr, "{}: 'fields' in [output] must be an array of strings", at(*n));
       for (const toml::node& item : *list) names.push_back(string_value(item, "fields", " in [output]"));
-      model::check_frame_field_names(names, at(*n), " in 'fields' of [output]");
-      output.fields = names;
+      output.fields = model::resolve_frame_fields(names, at(*n), " in 'fields' of [output]");
     }
     if (const toml::node* n = t.get("compression")) {  // asked for: every frame file, the layer's too
       output.compression =

@@ -10,6 +10,7 @@
 #include <sflsh/body/subjects.hpp>
 #include <sflsh/core/summary.hpp>
 #include <sflsh/core/vtk_io.hpp>
+#include <sflsh/core/xdmf_reader.hpp>
 
 #include <fmt/format.h>
 #include <gmock/gmock.h>
@@ -79,6 +80,41 @@ TEST_F(Cli, MotionExportWritesOneFramePerStepInVertexOrder) {
   EXPECT_EQ(summary["motion"]["frames"], 6);
   EXPECT_EQ(summary["motion"]["fps"], 60.0);
   EXPECT_EQ(summary["command"], "motion export");
+}
+
+TEST_F(Cli, MotionExportAsACompactXdmfSeriesHoldsTheSameFrames) {
+  const std::string args = body_arg() + " --motion shake_hips --betas \"0.5 -1\" --frames 6 --out ";
+  ASSERT_EQ(run_sflsh("-q motion export " + args + (dir_ / "vtk").string(), dir_).exit_code, 0);
+  for (const char* precision : {"float32", "float64"}) {
+    SCOPED_TRACE(precision);
+    const auto out = dir_ / precision;
+    const auto r = run_sflsh(fmt::format("-q motion export --format xdmf --precision {} {}{}", precision, args,
+                                         out.string()),
+                             dir_);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_EQ(count_entries(out), 3u);  // body.xmf, body.h5, summary.json
+    const xdmf::SeriesReader series(out / "body.xmf");
+    ASSERT_EQ(series.steps(), 6u);
+    EXPECT_DOUBLE_EQ(series.time(5), 5.0 / 60.0);
+    // The synthetic body is within a metre of the origin: Float32 rounds a coordinate by ≤ 2⁻²⁴ m ≈ 6e-8 m; Float64
+    // keeps the .vtp frames' values exactly.
+    const double tolerance = std::string(precision) == "float32" ? 1e-7 : 0.0;
+    for (std::size_t t : {std::size_t{0}, std::size_t{3}, std::size_t{5}}) {
+      const auto vtp = dir_ / "vtk" / fmt::format("body_{:06d}.vtp", t);
+      EXPECT_LE((series.points(t) - sflsh::vtk::read_points(vtp)).cwiseAbs().maxCoeff(), tolerance) << t;
+      for (const char* name : {"displacement", "velocity", "skin_weights_argmax", "Normals"}) {
+        const Eigen::MatrixXd expected = sflsh::vtk::read_point_array(vtp, name);
+        // Relative to the array's size (velocities reach m/s); Normals are Float32 in the .vtp frames as well.
+        const double bound = std::string(name) == "Normals" ? 1e-6 : tolerance * (1.0 + expected.cwiseAbs().maxCoeff());
+        EXPECT_LE((series.point_array(t, name) - expected).cwiseAbs().maxCoeff(), bound) << name << " at " << t;
+      }
+    }
+    EXPECT_EQ(read_json(out / "summary.json")["series"], "body.xmf");
+  }
+  const auto lz4 = run_sflsh("motion export --format xdmf --compression lz4 " + args + (dir_ / "lz4").string(), dir_);
+  EXPECT_EQ(lz4.exit_code, 1);
+  EXPECT_THAT(lz4.err, HasSubstr("--compression lz4"));
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "lz4"));
 }
 
 TEST_F(Cli, AmassAtTheOutputRateIsUsedFrameForFrame) {

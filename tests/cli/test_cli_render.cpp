@@ -82,6 +82,18 @@ TEST(CliRender, DrawsTheRunsPosedBodyColouredBySigmaWithoutADisplay) {
   EXPECT_THAT(result.err, HasSubstr("sigma_normal"));
   EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
   EXPECT_FALSE(std::filesystem::exists(dir / "none.png"));
+  // A run written with --format vtk (one .vtp per frame) draws the same way.
+  const auto vtk_run = dir / "vtk_run";
+  result = run_sflsh(fmt::format("-q simulate --solver reduced --mesh coarse --subject OPEN_TRAIN_1 --motion "
+                                 "jiggle_on_toes --frames 5 --format vtk --cache {} --out {}",
+                                 SFLSH_TEST_CACHE, vtk_run.string()),
+                     dir);
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  result = run_sflsh(fmt::format("-q render --run {} --color displacement --out {}", vtk_run.string(),
+                                 (dir / "vtk.png").string()),
+                     dir);
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  sflsh::testing::expect_drawn_png(dir / "vtk.png", 900, 1000, 200);
   // --run and --map together are refused.
   result = run_sflsh(fmt::format("render --run {} --map {} --fields sigma --out {}", run.string(), dynamics.string(),
                                  (dir / "none.png").string()),

@@ -2,6 +2,8 @@
 // reference of the XML present in the HDF5 file, Float32 on request, and meshio's reader on the result.
 #include "scratch_dir.hpp"
 
+#include <sflsh/core/error.hpp>
+#include <sflsh/core/xdmf_reader.hpp>
 #include <sflsh/core/xdmf_series.hpp>
 
 #include <gmock/gmock.h>
@@ -58,12 +60,13 @@ bool has_link(const fs::path& h5, const std::string& path) {
 }
 
 /// Two tetrahedra; step 1 keeps the nodes of step 0, step 2 moves them.
-void write_three_steps(const fs::path& xmf, Precision precision) {
+void write_three_steps(const fs::path& xmf, Precision precision,
+                       vtk::Compression compression = vtk::Compression::none) {
   vtk::Points points(5, 3);
   points << 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 1, 1, 1;
   vtk::Cells tets(2, 4);
   tets << 0, 1, 2, 3, 1, 2, 3, 4;
-  Series series(xmf, tets, precision);
+  Series series(xmf, tets, precision, compression);
   vtk::Fields fixed;
   fixed.cell_data.push_back({"part", (Eigen::MatrixXd(2, 1) << 2, 3).finished(), true});
   series.set_static(fixed);
@@ -120,11 +123,81 @@ TEST(XdmfSeries, Float32OnRequest) {
   EXPECT_THAT(text_of(dir / "body.xmf"), ::testing::HasSubstr(R"(NumberType="Float" Precision="4")"));
 }
 
+/// Number of filters of a dataset's creation property list (shuffle + deflate: 2; contiguous: 0).
+int filters(const fs::path& h5, const std::string& path) {
+  const hid_t file = H5Fopen(h5.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  const hid_t set = H5Dopen2(file, path.c_str(), H5P_DEFAULT);
+  const hid_t plist = H5Dget_create_plist(set);
+  const int n = H5Pget_nfilters(plist);
+  H5Pclose(plist);
+  H5Dclose(set);
+  H5Fclose(file);
+  return n;
+}
+
+TEST(XdmfSeries, ZlibCompressesEveryDatasetAndReadsBackTheSameValues) {
+  const fs::path dir = sflsh::testing::scratch_dir();
+  write_three_steps(dir / "plain.xmf", Precision::float64);
+  write_three_steps(dir / "packed.xmf", Precision::float64, vtk::Compression::zlib);
+  for (const char* path : {"/topology", "/geometry/000002", "/point/displacement_m/000001", "/static/cell/part"}) {
+    EXPECT_EQ(filters(dir / "plain.h5", path), 0) << path;
+    EXPECT_EQ(filters(dir / "packed.h5", path), 2) << path;  // shuffle, deflate
+    EXPECT_EQ(read_dataset(dir / "packed.h5", path).values, read_dataset(dir / "plain.h5", path).values) << path;
+  }
+  vtk::Cells tets(1, 4);
+  tets << 0, 1, 2, 3;
+  EXPECT_THROW(Series(dir / "lz4.xmf", tets, Precision::float32, vtk::Compression::lz4), Error);
+}
+
+TEST(XdmfSeriesReader, ReadsStepsTimesPointsAndArraysBack) {
+  const fs::path dir = sflsh::testing::scratch_dir();
+  write_three_steps(dir / "body.xmf", Precision::float32, vtk::Compression::zlib);
+  const SeriesReader reader(dir / "body.xmf");
+  ASSERT_EQ(reader.steps(), 3u);
+  EXPECT_DOUBLE_EQ(reader.time(2), 0.2);
+  EXPECT_EQ(reader.cells().rows(), 2);
+  EXPECT_EQ(reader.cells()(1, 3), 4);
+  EXPECT_EQ(reader.points(1)(4, 0), 1.0);  // step 1 reuses step 0's nodes
+  EXPECT_EQ(reader.points(2)(4, 0), 1.5);
+  EXPECT_THAT(reader.point_array_names(0), ::testing::ElementsAre("sigma_mm", "displacement_m"));
+  EXPECT_EQ(reader.point_array(2, "displacement_m")(4, 1), 0.5);
+  EXPECT_EQ(reader.point_array(0, "sigma_mm")(0, 0), static_cast<double>(static_cast<float>(1.0 / 3.0)));
+  try {
+    (void)reader.point_array(1, "velocity");
+    ADD_FAILURE() << "no error for a missing array";
+  } catch (const Error& e) {
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("step 1 has no node array 'velocity' (it has: sigma_mm, displacement_m)"));
+  }
+  EXPECT_THROW((void)reader.points(3), Error);
+}
+
+TEST(XdmfSeriesReader, RefusesWhatIsNotSuchASeriesInOneLine) {
+  const fs::path dir = sflsh::testing::scratch_dir();
+  const auto message = [&](const std::string& xml) {
+    std::ofstream(dir / "bad.xmf") << xml;
+    try {
+      SeriesReader reader(dir / "bad.xmf");
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_THAT(message("not xml at all <"), ::testing::HasSubstr("bad.xmf: not an XDMF file"));
+  EXPECT_THAT(message("<Xdmf><Domain><Grid Name=\"a\"/></Domain></Xdmf>"),
+              ::testing::HasSubstr("expected a temporal collection"));
+  EXPECT_THAT(message("<Xdmf><Domain><Grid CollectionType=\"Temporal\"></Grid></Domain></Xdmf>"),
+              ::testing::HasSubstr("the series has no steps"));
+  write_three_steps(dir / "body.xmf", Precision::float64);
+  fs::remove(dir / "body.h5");
+  EXPECT_THROW(SeriesReader(dir / "body.xmf"), Error);
+  EXPECT_THROW(SeriesReader(dir / "missing.xmf"), Error);
+}
+
 TEST(XdmfSeries, MeshioReadsTheSeries) {
   if (std::system("/usr/bin/python3 -c 'import meshio' >/dev/null 2>&1") != 0)
     GTEST_SKIP() << "python3-meshio is not installed";
   const fs::path dir = sflsh::testing::scratch_dir();
-  write_three_steps(dir / "body.xmf", Precision::float64);
+  write_three_steps(dir / "body.xmf", Precision::float64, vtk::Compression::zlib);  // HDF5 filters too
   const fs::path script = dir / "read.py";
   std::ofstream(script)
       << "import meshio\n"

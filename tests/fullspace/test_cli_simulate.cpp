@@ -1,15 +1,17 @@
 // The `sflsh simulate --solver full|reduced` contract, the same for both solvers: the posed surface per frame
-// in `sflsh motion export`'s layout (same points, same order, same .pvd), the extra fields, summary.json,
-// --no-output, and clear errors.
+// in `sflsh motion export`'s layout (same points, same order, same .pvd with --format vtk), the default compact
+// xdmf series (Float32, zlib, the display arrays), the extra fields, summary.json, --no-output, and clear errors.
 #include "run_command.hpp"
 #include "scratch_dir.hpp"
 #include "self_described.hpp"
 
 #include <sflsh/core/summary.hpp>
 #include <sflsh/core/vtk_io.hpp>
+#include <sflsh/core/xdmf_reader.hpp>
+#include <sflsh/model/simulation_output.hpp>
 
 #include <fmt/format.h>
-#include <gtest/gtest.h>
+#include <gmock/gmock.h>
 #include <hdf5.h>
 
 #include <algorithm>
@@ -34,7 +36,8 @@ class CliSimulate : public ::testing::TestWithParam<const char*> {
 TEST_P(CliSimulate, SurfaceMatchesMotionExportLayoutAndCarriesTheSoftTissueFields) {
   const fs::path dir = scratch_dir();
   const auto sim =
-      run_sflsh(solver() + "--mesh coarse " + common() + " --write-layer --out " + (dir / "sim").string(), dir);
+      run_sflsh(solver() + "--mesh coarse " + common() + " --format vtk --write-layer --out " + (dir / "sim").string(),
+                dir);  // --format vtk: the .pvd layout of `motion export`, with every array by default
   ASSERT_EQ(sim.exit_code, 0) << sim.err;
   const auto exp = run_sflsh(
       "motion export --subject OPEN_TRAIN_2 --motion shake_hips --frames 4 -q --out " + (dir / "exp").string(), dir);
@@ -99,10 +102,13 @@ std::vector<double> read_h5(const fs::path& file, const std::string& path) {
 
 TEST_P(CliSimulate, XdmfSeriesHoldsTheSameFramesAsTheVtkSeries) {
   const fs::path dir = scratch_dir();
-  const auto vtk_run = run_sflsh(solver() + "--mesh coarse " + common() + " --out " + (dir / "vtk").string(), dir);
+  const auto vtk_run =
+      run_sflsh(solver() + "--mesh coarse " + common() + " --format vtk --out " + (dir / "vtk").string(), dir);
   ASSERT_EQ(vtk_run.exit_code, 0) << vtk_run.err;
-  const auto xdmf_run = run_sflsh(
-      solver() + "--mesh coarse " + common() + " --format xdmf --write-layer --out " + (dir / "xdmf").string(), dir);
+  const auto xdmf_run = run_sflsh(solver() + "--mesh coarse " + common() +
+                                      " --format xdmf --precision float64 --fields all --write-layer --out " +
+                                      (dir / "xdmf").string(),
+                                  dir);
   ASSERT_EQ(xdmf_run.exit_code, 0) << xdmf_run.err;
   for (const char* file : {"body.xmf", "body.h5", "layer.xmf", "layer.h5", "dynamics.vtp", "summary.json"})
     EXPECT_TRUE(fs::exists(dir / "xdmf" / file)) << file;
@@ -133,6 +139,52 @@ TEST_P(CliSimulate, XdmfSeriesHoldsTheSameFramesAsTheVtkSeries) {
   const nlohmann::json summary = read_json(dir / "xdmf" / "summary.json");
   EXPECT_EQ(summary["output"]["format"], "xdmf");
   EXPECT_EQ(summary["output"]["series"], "body.xmf");
+}
+
+TEST_P(CliSimulate, DefaultOutputIsACompactXdmfSeriesOfTheDisplayArrays) {
+  const fs::path dir = scratch_dir();
+  const auto run = run_sflsh(solver() + "--mesh coarse " + common() + " --write-layer --out " + (dir / "d").string(), dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const auto exp = run_sflsh(
+      "motion export --subject OPEN_TRAIN_2 --motion shake_hips --frames 4 -q --out " + (dir / "exp").string(), dir);
+  ASSERT_EQ(exp.exit_code, 0) << exp.err;
+  std::vector<std::string> files;
+  for (const auto& entry : fs::directory_iterator(dir / "d")) files.push_back(entry.path().filename().string());
+  std::sort(files.begin(), files.end());
+  EXPECT_EQ(files, (std::vector<std::string>{"body.h5", "body.xmf", "dynamics.vtp", "layer.h5", "layer.xmf",
+                                             "summary.json"}));
+  const xdmf::SeriesReader body(dir / "d" / "body.xmf");
+  ASSERT_EQ(body.steps(), 4u);
+  // Float32 positions of a body ~1 m across: rounding ≤ 2⁻²⁴ · 2 m ≈ 1.2e-7 m; the rest frame is the export's.
+  const vtk::Points rest = vtk::read_points(dir / "exp" / "body_000000.vtp");
+  EXPECT_LT((body.points(0) - rest).cwiseAbs().maxCoeff(), 2e-7);
+  // The last frame differs from the export's by the soft tissue alone, each to Float32 rounding.
+  const vtk::Points last = vtk::read_points(dir / "exp" / "body_000003.vtp");
+  const Eigen::MatrixXd soft = body.point_array(3, "soft_tissue_displacement");
+  EXPECT_GT(soft.cwiseAbs().maxCoeff(), 1e-5);
+  EXPECT_LT(((body.points(3) - last) - soft).cwiseAbs().maxCoeff(), 4e-7);
+  EXPECT_THAT(body.point_array_names(3),
+              ::testing::UnorderedElementsAre("skin_weights_argmax", "thickness_fraction", "young_tangent",
+                                              "young_normal", "soft_region", "soft_tissue_displacement",
+                                              "strain_energy_density", "Normals"));
+  const xdmf::SeriesReader layer(dir / "d" / "layer.xmf");
+  EXPECT_EQ(layer.steps(), 4u);
+  EXPECT_EQ(layer.cells().cols(), 4);
+  const nlohmann::json summary = read_json(dir / "d" / "summary.json");
+  EXPECT_EQ(summary["output"]["format"], "xdmf");
+  EXPECT_EQ(summary["output"]["precision"], "float32");
+  EXPECT_EQ(summary["output"]["compression"], "zlib");
+  EXPECT_EQ(summary["output"]["fields"].size(), model::default_frame_fields().size());
+  // --fields all brings every array back; lz4 is refused for an xdmf series in one line, leaving nothing.
+  const auto all = run_sflsh(solver() + "--mesh coarse " + common() + " --fields all --out " + (dir / "a").string(), dir);
+  ASSERT_EQ(all.exit_code, 0) << all.err;
+  EXPECT_THAT(xdmf::SeriesReader(dir / "a" / "body.xmf").point_array_names(3),
+              ::testing::IsSupersetOf({"displacement", "velocity", "elastic_displacement", "soft_tissue_displacement"}));
+  const auto lz4 =
+      run_sflsh(solver() + "--mesh coarse " + common() + " --compression lz4 --out " + (dir / "z").string(), dir);
+  EXPECT_EQ(lz4.exit_code, 1);
+  EXPECT_THAT(lz4.err, ::testing::HasSubstr("--compression lz4: HDF5 has no LZ4 filter here"));
+  EXPECT_FALSE(fs::exists(dir / "z"));
 }
 
 TEST_P(CliSimulate, NoOutputWritesOnlyTheSummary) {

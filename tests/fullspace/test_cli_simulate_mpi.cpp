@@ -35,7 +35,7 @@ TEST_P(CliSimulateMpi, TwoProcessesMatchOne) {
   // Three frames: the first step (BDF2's backward-Euler start-up) and one step of the integrator itself.
   const std::string args = fmt::format(
       " simulate --solver full --mesh coarse --subject OPEN_TRAIN_2 --motion shake_hips --frames 3 --cache {} -q "
-      "--integrator {} --mass {} -snes_rtol 1e-12 -snes_atol 1e-13 -ksp_rtol 1e-13 --out ",
+      "--integrator {} --mass {} --format vtk -snes_rtol 1e-12 -snes_atol 1e-13 -ksp_rtol 1e-13 --out ",
       SFLSH_TEST_CACHE, model::to_string(integrator), model::to_string(mass));
   const auto serial = run_sflsh(args + (dir / "one").string(), dir);
   ASSERT_EQ(serial.exit_code, 0) << serial.err;

@@ -2,7 +2,8 @@
 python3-meshio 7.0, the reader most Python FE users reach for) with all its arrays, and every .vtp/.vtu opens in
 VTK's own readers with the unit of each array in its `units` field data (docs/output.md, "Units in the files").
 
-Runs `sflsh mesh`, `sflsh material show`, `sflsh simulate` (vtk and xdmf, with the layer), a small scene (vtk
+Runs `sflsh mesh`, `sflsh material show`, `sflsh simulate` (vtk and the default xdmf, with the layer), `sflsh motion
+export --format xdmf`, a small scene (vtk
 and xdmf, with the layer, a rigid object), `sflsh compare` and `sflsh verify` (the FEBio block) at small sizes: the coarse layer, four frames, the
 reduced model. `compare` writes surfaces only (compare.vtp: VTK and ParaView; meshio has no .vtp reader), as do
 `sflsh validate`'s σ maps (dynamics.vtp, the same writer; not run here: --preset quick takes minutes).
@@ -171,20 +172,23 @@ def test_mesh_and_material_show(cli, cache, scratch):
 
 
 def test_simulate_vtk_and_xdmf_with_the_layer(cli, cache, scratch):
-    run(cli, *SIMULATE, "--cache", cache, "--out", str(scratch / "vtk"))
+    run(cli, *SIMULATE, "--format", "vtk", "--cache", cache, "--out", str(scratch / "vtk"))
     check_folder(scratch / "vtk", vtu=4)
     frame = scratch / "vtk" / "layer_000003.vtu"
     assert 'compressor="vtkZLibDataCompressor"' in frame.read_text(errors="replace")[:400]
     mesh = meshio.read(frame)
     assert units_table(mesh.field_data["units"])["strain_energy_density"] == "J/m^3"
     assert mesh.cell_data["strain_energy_density"][0].shape == (mesh.cells[0].data.shape[0],)
-    run(cli, *SIMULATE, "--format", "xdmf", "--cache", cache, "--out", str(scratch / "xdmf"))
+    run(cli, *SIMULATE, "--cache", cache, "--out", str(scratch / "xdmf"))   # the default: xdmf
     check_folder(scratch / "xdmf", xmf=2)
+    run(cli, "motion", "export", *SUBJECT, "--motion", "jiggle_on_toes", "--frames", "4", "--format", "xdmf",
+        "--out", str(scratch / "export"))
+    check_folder(scratch / "export", xmf=1)
 
 
 def test_lz4_on_request(cli, cache, scratch):
     # LZ4 writes faster; VTK and ParaView read it, meshio does not (its VTU reader knows zlib and lzma).
-    run(cli, *SIMULATE, "--compression", "lz4", "--cache", cache, "--out", str(scratch / "lz4"))
+    run(cli, *SIMULATE, "--format", "vtk", "--compression", "lz4", "--cache", cache, "--out", str(scratch / "lz4"))
     frame = scratch / "lz4" / "layer_000001.vtu"
     assert 'compressor="vtkLZ4DataCompressor"' in frame.read_text(errors="replace")[:400]
     check_vtk_file(frame)

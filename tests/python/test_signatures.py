@@ -32,7 +32,8 @@ def test_simulation_signature_has_the_clis_options_and_defaults():
     for name, default in expected.items():
         assert p[name].default == default, name
     write = inspect.signature(sflsh.Simulation.write).parameters
-    assert list(write)[:2] == ["self", "dir"] and write["format"].default == "vtk"
+    assert list(write)[:2] == ["self", "dir"] and write["format"].default == "xdmf"  # as `simulate --format`
+    assert write["precision"].default == "float32"
     assert list(inspect.signature(sflsh.Layer).parameters)[:2] == ["subject", "betas"]
     assert inspect.signature(sflsh.Motion).parameters["fps"].default == 60.0
     # A bound method's signature starts after self.

@@ -26,7 +26,7 @@ def simulation(cache):
 def test_reduced_run_equals_the_cli(cli, cache, scratch):
     out = scratch / "run"
     r = run_cli(cli, "simulate", "--solver", "reduced", "--mesh", "coarse", "--subject", "OPEN_TRAIN_1", "--motion",
-                "jiggle_on_toes", "--frames", str(FRAMES), "--cache", cache, "--out", str(out))
+                "jiggle_on_toes", "--frames", str(FRAMES), "--format", "vtk", "--cache", cache, "--out", str(out))
     assert r.returncode == 0, r.stderr
     sim = sflsh.Simulation(**SETTINGS, cache=cache)
     result = sim.run()
@@ -59,7 +59,7 @@ def test_full_space_run_equals_the_cli(cli, cache, scratch):
     # `sflsh simulate --solver full`: the same solves on the same inputs, so again equal to round-off (1e-9 m).
     out = scratch / "run"
     r = run_cli(cli, "simulate", "--solver", "full", "--mesh", "coarse", "--subject", "OPEN_TRAIN_2", "--motion",
-                "shake_hips", "--frames", "3", "--cache", cache, "--out", str(out))
+                "shake_hips", "--frames", "3", "--format", "vtk", "--cache", cache, "--out", str(out))
     assert r.returncode == 0, r.stderr
     sim = sflsh.Simulation(subject="OPEN_TRAIN_2", motion="shake_hips", frames=3, solver="full", mesh="coarse", cache=cache)
     result = sim.run()

@@ -21,12 +21,22 @@ def files(folder):
 
 
 def test_write_gives_the_clis_run_folder(cli, cache, scratch):
-    r = run_cli(cli, *CLI_SETTINGS, "--write-layer", "--cache", cache, "--out", str(scratch / "cli"))
+    r = run_cli(cli, *CLI_SETTINGS, "--format", "vtk", "--write-layer", "--cache", cache, "--out", str(scratch / "cli"))
     assert r.returncode == 0, r.stderr
     sim = sflsh.Simulation(**SETTINGS, cache=cache)
     sim.run()
-    sim.write(scratch / "python", write_layer=True)
+    sim.write(scratch / "python", format="vtk", write_layer=True)
     assert files(scratch / "python") == files(scratch / "cli")
+    # The defaults agree too: the compact xdmf series (Float32, zlib, the display arrays) on both sides.
+    r = run_cli(cli, *CLI_SETTINGS, "--cache", cache, "--out", str(scratch / "cli_default"))
+    assert r.returncode == 0, r.stderr
+    sim.write(scratch / "python_default")
+    assert files(scratch / "python_default") == files(scratch / "cli_default") == [
+        "body.h5", "body.xmf", "dynamics.vtp", "summary.json"]
+    default_output = [json.loads((scratch / f / "summary.json").read_text())["output"]
+                      for f in ("python_default", "cli_default")]
+    assert default_output[0] == default_output[1]
+    assert default_output[0]["precision"] == "float32" and default_output[0]["compression"] == "zlib"
     for t in range(FRAMES):
         mine, theirs = read_vtp(scratch / "python" / f"body_{t:06d}.vtp"), read_vtp(scratch / "cli" / f"body_{t:06d}.vtp")
         np.testing.assert_allclose(mine[0], theirs[0], rtol=0, atol=1e-9)
@@ -53,7 +63,7 @@ def test_write_xdmf_every_and_refusals(cli, cache, scratch):
     summary = json.loads((scratch / "xdmf" / "summary.json").read_text())
     assert summary["output"]["format"] == "xdmf" and summary["output"]["precision"] == "float32"
     assert summary["dynamics"]["frames"] == 4
-    sim.write(scratch / "every", every=2)
+    sim.write(scratch / "every", format="vtk", every=2)
     assert [n for n in files(scratch / "every") if n.startswith("body_")] == [
         "body_000000.vtp", "body_000002.vtp", "body_000003.vtp"]
     with pytest.raises(sflsh.Error, match="--format"):
@@ -69,11 +79,12 @@ def test_write_xdmf_every_and_refusals(cli, cache, scratch):
 def test_fields_choose_the_frames_arrays_as_in_the_cli(cli, cache, scratch):
     # `simulate --fields` (as a scene's [output] fields) and write(fields=…): only those arrays in the frames.
     fields = ["soft_tissue_displacement", "Normals"]
-    r = run_cli(cli, *CLI_SETTINGS, "--fields", ",".join(fields), "--cache", cache, "--out", str(scratch / "cli"))
+    r = run_cli(cli, *CLI_SETTINGS, "--format", "vtk", "--fields", ",".join(fields), "--cache", cache, "--out",
+                str(scratch / "cli"))
     assert r.returncode == 0, r.stderr
     sim = sflsh.Simulation(**SETTINGS, cache=cache)
     sim.run()
-    sim.write(scratch / "python", fields=fields)
+    sim.write(scratch / "python", format="vtk", fields=fields)
     for folder in ("cli", "python"):
         _, arrays = read_vtp(scratch / folder / "body_000003.vtp")
         assert sorted(arrays) == sorted(fields), folder

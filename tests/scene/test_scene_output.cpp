@@ -129,7 +129,7 @@ TEST(SceneOutput, BadOutputValuesAreOneLineNamingTheKey) {
            {"every = 1000000000", "scene.toml:8: 'every' in [output] = 1000000000 must be an integer in [1, 10⁶]"},
            {"every = 1.5", "scene.toml:8: 'every'"},
            {R"(fields = ["displacement", "sigma"])",
-            "scene.toml:8: unknown field 'sigma' in 'fields' of [output] (expected some of"},
+            "scene.toml:8: unknown field 'sigma' in 'fields' of [output] (expected all, default, or some of"},
            {R"(fields = "displacement")", "scene.toml:8: 'fields' in [output] must be an array of strings"},
            {R"(compression = "gzip")",
             "scene.toml:8: 'compression' in [output] = 'gzip' is not one of lz4 | zlib | none"},

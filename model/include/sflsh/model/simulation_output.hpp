@@ -52,6 +52,14 @@ Eigen::VectorXd strain_energy_density(const Problem& problem, const Eigen::Vecto
 /// thickness_fraction (and its older name thickness), young_tangent, young_normal, soft_region, Normals, and
 /// in scenes with contact contact_force, penetration. Their units: core/array_units.hpp, docs/output.md.
 const std::vector<std::string>& frame_field_names();
+/// The arrays written when none are asked for (`simulate --fields`, Python's Simulation.write, a scene's [output]
+/// fields when given as "default"): what a viewer colours and shades by, each once per frame (docs/output.md,
+/// "Size"); the others (velocity, elastic_displacement, …) with `--fields all` or by name.
+const std::vector<std::string>& default_frame_fields();
+/// A field list as users write it: "all" alone is every array (nullopt), "default" alone default_frame_fields(),
+/// otherwise names of frame_field_names() (checked as check_frame_field_names does).
+std::optional<std::vector<std::string>> resolve_frame_fields(const std::vector<std::string>& names,
+                                                             const std::string& where, const std::string& context = "");
 /// The frame output formats: "vtk", "xdmf"; throws sflsh::Error "<where>: …" for another name.
 void check_output_format(const std::string& format, const std::string& where);
 /// Throws sflsh::Error "<where>: unknown field '<name>'<context> (expected …)" for a name not in frame_field_names().
@@ -82,6 +90,8 @@ struct SimulationWriterOptions {
   std::string format = "vtk";
   /// Precision of the xdmf series' floating-point datasets (the vtk frames stay Float64).
   xdmf::Precision precision = xdmf::Precision::float64;
+  /// Compression of the xdmf series' datasets: zlib (HDF5 shuffle + deflate) or none.
+  vtk::Compression series_compression = vtk::Compression::zlib;
   /// Non-null: the frame files are written by these jobs (a background thread); the caller waits for them
   /// before committing the run folder. Null: written at once.
   BackgroundJobs* jobs = nullptr;

@@ -50,12 +50,15 @@ struct BodyRunSettings {
   std::string integrator = "backward_euler";  ///< backward_euler | bdf2 | newmark (time_integrator.hpp)
   bool write_layer = false;                   ///< also write layer.pvd (when frames are written)
   int every = 1;                              ///< write every N-th frame (frame 0 and the last always)
-  std::string format = "vtk";                 ///< vtk (.pvd of .vtp/.vtu) | xdmf (.xmf + .h5), docs/output.md
-  std::string precision = "float64";          ///< float64 | float32 (xdmf datasets)
-  /// lz4 | zlib | none: of every vtk frame file; empty: LZ4 for the body's .vtp, zlib for the layer's .vtu
+  /// xdmf (.xmf + .h5: topology and fixed fields once, the default) | vtk (.pvd of .vtp/.vtu), docs/output.md
+  std::string format = "xdmf";
+  std::string precision = "float32";  ///< float32 | float64 (xdmf datasets; vtk frames are Float64)
+  /// lz4 | zlib | none: of every vtk frame file, or zlib | none of the xdmf datasets; empty: zlib for xdmf, LZ4 for
+  /// the body's .vtp and zlib for the layer's .vtu
   std::string compression;
   /// The arrays of the body and layer frames (names of model::frame_field_names(), as a scene's [output] fields);
-  /// nullopt: all of them.
+  /// nullopt: the format's default — model::default_frame_fields() for xdmf, every array for vtk (the .pvd layout
+  /// of `motion export` with all its arrays, as before xdmf became the default).
   std::optional<std::vector<std::string>> fields;
   // Reduced model.
   int handles = 86;
@@ -172,5 +175,8 @@ nlohmann::json run_body_simulation(const BodyRunSettings& settings, RunFolder* f
 /// every, the compressions and precision, the fields when chosen, from the settings and the body's summary() (its
 /// "compression" and "layer_compression").
 nlohmann::json simulate_output_summary(const BodyRunSettings& settings, const nlohmann::json& body_summary);
+/// How the frames of a run with these settings are written: format, precision, compressions, fields and layer (the
+/// command line's and Python's names checked, errors naming --format, --precision, --compression, --fields).
+model::SimulationWriterOptions frame_writer_options(const BodyRunSettings& settings);
 
 }  // namespace sflsh::scene
