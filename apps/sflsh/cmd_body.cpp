@@ -11,6 +11,7 @@
 #include <sflsh/core/log.hpp>
 #include <sflsh/core/render.hpp>
 #include <sflsh/core/run_folder.hpp>
+#include <sflsh/core/scoped_seconds.hpp>
 #include <sflsh/core/summary.hpp>
 #include <sflsh/core/vtk_io.hpp>
 
@@ -105,7 +106,7 @@ void run_generate(const GenerateOptions& opt) {
     variance += fmt::format("{}{:.3f}", i ? " " : "", result.explained_variance(i));
   logger()->info("wrote {} ({} vertices, {} faces) and {} in {:.1f} s; explained variance per component: {}",
                  out.string(), result.model.num_vertices(), result.model.num_faces(), subjects_path.string(),
-                 std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), variance);
+                 seconds_since(t0), variance);
 }
 
 struct ExportOptions {

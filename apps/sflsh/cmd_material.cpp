@@ -4,6 +4,7 @@
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
 #include <sflsh/core/run_folder.hpp>
+#include <sflsh/core/scoped_seconds.hpp>
 #include <sflsh/core/summary.hpp>
 #include <sflsh/material/curves.hpp>
 #include <sflsh/material/skin_material.hpp>
@@ -85,7 +86,7 @@ void run_curve(CurveOptions opt, const Invocation& invocation) {
                      {"stress_at_strain_max_pa", curve.points.back().stress}});
   }
   summary["tests"] = tests;
-  summary["wall_time_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  summary["wall_time_s"] = seconds_since(t0);
   write_json(run.stage("summary.json"), summary);
   run.commit();
   for (const material::MaterialCurve& curve : curves)

@@ -4,6 +4,7 @@
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
 #include <sflsh/core/run_folder.hpp>
+#include <sflsh/core/scoped_seconds.hpp>
 #include <sflsh/core/summary.hpp>
 #include <sflsh/core/vtk_io.hpp>
 #include <sflsh/material/layer_material.hpp>
@@ -117,7 +118,7 @@ void run_show(const ShowOptions& opt, const Invocation& invocation) {
   summary["tet_ranges"] = ranges;
   summary["basis_active_set_iterations"] = basis.total_iterations();
   summary["files"] = {"surface.vtp", "layer.vtu", "control_points.vtp", "material.toml"};
-  summary["wall_time_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  summary["wall_time_s"] = seconds_since(t0);
   write_json(run.stage("summary.json"), summary);
   run.commit();
   logger()->info("material of {}: {} control points, {} tets → {}", subject_label, count, mesh.num_tets(), opt.out);

@@ -4,6 +4,7 @@
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
 #include <sflsh/core/run_folder.hpp>
+#include <sflsh/core/scoped_seconds.hpp>
 #include <sflsh/core/summary.hpp>
 #include <sflsh/core/vtk_io.hpp>
 #include <sflsh/meshing/label_names.hpp>
@@ -53,11 +54,11 @@ void run_mesh(const MeshOptions& opt, const Invocation& invocation) {
   meshing::CacheOutcome outcome{};
   const auto t_mesh = std::chrono::steady_clock::now();
   const meshing::LayerMesh mesh = meshing::cached_layer_mesh(model, options, cache_dir, opt.rebuild_cache, &outcome);
-  const double mesh_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_mesh).count();
+  const double mesh_seconds = seconds_since(t_mesh);
 
   const auto t_factor = std::chrono::steady_clock::now();
   const meshing::Retargeter retargeter(model, mesh);
-  const double factor_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_factor).count();
+  const double factor_seconds = seconds_since(t_factor);
   const meshing::LayerGeometry template_geometry = meshing::layer_geometry(
       model, mesh.region_surface, mesh.correspondence, body::Betas::Zero(), mesh.template_thickness_field());
   const meshing::QualityReport template_quality = meshing::layer_quality(mesh, mesh.nodes, template_geometry);
@@ -134,7 +135,7 @@ void run_mesh(const MeshOptions& opt, const Invocation& invocation) {
                           {"template_load_or_build", mesh_seconds},
                           {"factorization", factor_seconds},
                           {"retarget", layer.seconds},
-                          {"total", std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()}};
+                          {"total", seconds_since(t0)}};
   summary["files"] = {"layer.vtu", "outer.vtp", "inner.vtp"};
   write_json(run.stage("summary.json"), summary);
   run.commit();

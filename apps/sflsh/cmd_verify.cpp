@@ -8,6 +8,7 @@
 #include <sflsh/core/log.hpp>
 #include <sflsh/core/progress.hpp>
 #include <sflsh/core/run_folder.hpp>
+#include <sflsh/core/scoped_seconds.hpp>
 #include <sflsh/core/summary.hpp>
 #include <sflsh/core/vtk_io.hpp>
 #include <sflsh/core/work_limit.hpp>
@@ -201,7 +202,7 @@ void run_verify(const VerifyOptions& opt, const Invocation& invocation, int rank
   summary["mass"] = mass_name;
   summary["solver"] = solver_json;
   summary["steps"] = steps_json;
-  summary["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+  summary["seconds"] = seconds_since(t_start);
   write_json(run.stage("summary.json"), summary);
   run.commit();
   logger()->info("wrote {} samples of {} nodes to {}/history.csv", records.size(), record_nodes.size(), opt.out);

@@ -3,6 +3,7 @@
 // compare, tradeoff): the layer options on the command line, the reduced-model options and a wall clock. The
 // settings themselves live in the libraries (model/layer_settings.hpp, reduced/reduced_settings.hpp), shared
 // with the Python module.
+#include <sflsh/core/scoped_seconds.hpp>
 #include <sflsh/material/material_file.hpp>
 #include <sflsh/model/body_layer.hpp>
 #include <sflsh/model/layer_settings.hpp>
@@ -19,7 +20,6 @@
 namespace sflsh::app {
 
 using Clock = std::chrono::steady_clock;
-inline double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 using model::body_layer_options;
 using model::check_layer_settings;

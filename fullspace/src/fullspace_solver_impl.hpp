@@ -5,6 +5,7 @@
 // arrays).
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
+#include <sflsh/core/scoped_seconds.hpp>
 #include <sflsh/fullspace/fullspace_solver.hpp>
 #include <sflsh/fullspace/node_partition.hpp>
 #include <sflsh/model/terms.hpp>
@@ -28,15 +29,13 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-inline double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
-
 /// PETSc calls inside the integrator: a non-zero code becomes sflsh::Error naming the call.
 inline void check(PetscErrorCode code, const char* what) {
   if (code != 0) throw_error("PETSc call {} failed with error code {}", what, static_cast<int>(code));
 }
 #define SFLSH_PETSC(call) check((call), #call)
 
-inline constexpr double kInfinity = std::numeric_limits<double>::infinity();
+using model::kInfinity;  // model/terms.hpp
 
 inline material::TetNodes problem_rest_nodes(const Problem& problem, int e) {
   material::TetNodes nodes;

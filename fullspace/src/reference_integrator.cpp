@@ -14,6 +14,7 @@
 #include "reference_integrator_impl.hpp"
 
 #include <sflsh/core/error.hpp>
+#include <sflsh/core/scoped_seconds.hpp>
 
 #include <Eigen/LU>
 
@@ -415,7 +416,7 @@ State ReferenceIntegrator::advance_to(double t_out) {
   const auto start = std::chrono::steady_clock::now();
   const double seconds_before = s.stats.seconds;
   auto fail = [&](const std::string& flag, double t_failed) {
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double seconds = seconds_since(start);
     s.ready = false;
     s.collect_stats();
     s.stats.seconds = seconds_before + seconds;
@@ -435,7 +436,7 @@ State ReferenceIntegrator::advance_to(double t_out) {
     s.t = t_reached;
     if (flag == ARK_TSTOP_RETURN || t_reached >= t_out) break;
   }
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double seconds = seconds_since(start);
   s.collect_stats();
   s.stats.seconds = seconds_before + seconds;
   s.t = t_out;  // ARKODE returns exactly the stop time (interpolating across a roundoff-sized overshoot)

@@ -6,6 +6,7 @@
 #include <sflsh/body/surface_checks.hpp>
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
+#include <sflsh/core/scoped_seconds.hpp>
 #include <sflsh/meshing/harmonic.hpp>
 #include <sflsh/meshing/layer_mesh.hpp>
 #include <sflsh/meshing/layer_surface.hpp>
@@ -169,7 +170,7 @@ LayerMesh build_layer_mesh(const body::BodyModel& model, const LayerMeshOptions&
     const QualityReport quality = quality_report(mesh.nodes, mesh.tets);
     require(quality.valid(), "layer '{}' (layered): {} inverted and {} degenerate tets in the template", mesh.region,
             quality.inverted, quality.degenerate);
-    mesh.meshing_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    mesh.meshing_seconds = seconds_since(start);
     logger()->info("layer '{}' (layered, {}): {} nodes, {} tets in {:.1f} s", mesh.region,
                    size_preset_name(options.size), mesh.num_nodes(), mesh.num_tets(), mesh.meshing_seconds);
     return mesh;
@@ -297,7 +298,7 @@ LayerMesh build_layer_mesh(const body::BodyModel& model, const LayerMeshOptions&
     mesh.skin.tet[k] = tet;
     mesh.skin.bary[k] = Eigen::Vector4d::Unit(corner);
   }
-  mesh.meshing_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  mesh.meshing_seconds = seconds_since(start);
   logger()->info("layer '{}' ({}, {}): {} nodes, {} tets in {:.1f} s", mesh.region, mesher_name(options.mesher),
                  size_preset_name(options.size), n, mesh.tets.rows(), mesh.meshing_seconds);
   return mesh;

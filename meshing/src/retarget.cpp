@@ -1,5 +1,6 @@
 // Retargeting the template layer to a shape and thickness (docs/architecture.md §3).
 #include <sflsh/core/error.hpp>
+#include <sflsh/core/scoped_seconds.hpp>
 #include <sflsh/meshing/retarget.hpp>
 
 #include <fmt/format.h>
@@ -200,7 +201,7 @@ RetargetedLayer Retargeter::retarget(const ShapedLayer& shaped, const Eigen::Vec
   } else {
     result.quality = layer_quality(mesh_, result.nodes, result.geometry);
   }
-  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  result.seconds = seconds_since(start);
 
   if (result.quality.inverted > 0 || result.quality.degenerate > 0) {
     const TetQuality per_tet = tet_quality(result.nodes, mesh_.tets);

@@ -1,5 +1,6 @@
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
+#include <sflsh/core/scoped_seconds.hpp>
 #include <sflsh/model/step_ladder.hpp>
 
 #include <chrono>
@@ -37,7 +38,7 @@ StepStats step_with_ladder(LadderSolver& solver, double h, const LadderOptions& 
     if (ok) {
       stats.substeps = substeps;
       stats.converged_reason = reason;
-      stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      stats.seconds = seconds_since(start);
       if (stats.failed_attempts > 0)
         logger()->debug("{}: t = {:.6g} s recovered with {} substep(s) after {} failed attempt(s)", name, t0 + h,
                         substeps, stats.failed_attempts);

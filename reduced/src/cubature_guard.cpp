@@ -1,4 +1,5 @@
 #include <sflsh/core/error.hpp>
+#include <sflsh/core/scoped_seconds.hpp>
 #include <sflsh/material/fung_strain.hpp>
 #include <sflsh/material/orthotropic_fung.hpp>
 #include <sflsh/model/terms.hpp>
@@ -135,10 +136,7 @@ std::vector<GuardViolation> CubatureGuard::check(const Eigen::VectorXd& q) {
     double* seconds;
     const double* renewals;
     double renewals_before;
-    ~PassTimer() {
-      *seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() -
-                  (*renewals - renewals_before);
-    }
+    ~PassTimer() { *seconds += seconds_since(start) - (*renewals - renewals_before); }
   } pass_timer{pass_start, &pass_seconds_, &renew_seconds_, renew_seconds_};
   ++generation_;
   std::vector<int> suspects;
@@ -201,7 +199,7 @@ std::vector<GuardViolation> CubatureGuard::renew(const Eigen::VectorXd& q) {
   }
   q_reference_ = q;
   valid_ = true;
-  renew_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - renew_start).count();
+  renew_seconds_ += seconds_since(renew_start);
   return over;
 }
 

@@ -2,6 +2,7 @@
 #include "free_objects.hpp"
 
 #include <sflsh/core/error.hpp>
+#include <sflsh/core/scoped_seconds.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -149,7 +150,7 @@ void FreeObjects::step(double t0, double h, const std::vector<BodySurfaceStep>& 
         friction_on_bodies_[surface_body[s]].emplace_back(surface_vertex[s][i], -force);
       }
   }
-  seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - clock).count();
+  seconds_ += seconds_since(clock);
 }
 
 void FreeObjects::account(Free& f, const RigidStepReport& r, double t1) {

@@ -5,6 +5,7 @@
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
 #include <sflsh/core/progress.hpp>
+#include <sflsh/core/scoped_seconds.hpp>
 #include <sflsh/validate/dynamics_metrics.hpp>
 #include <sflsh/validate/pose_fit.hpp>
 #include <sflsh/validate/rigidity.hpp>
@@ -431,7 +432,7 @@ PoseFitResult fit_motion_weighted(const body::BodyModel& model, const std::vecto
     progress.advance();
   }
   progress.finish();
-  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  result.seconds = seconds_since(t0);
   return result;
 }
 
@@ -476,7 +477,7 @@ PoseFitResult fit_motion(const body::BodyModel& model, const std::vector<RowMatr
       result = fit_motion_weighted(model, registered, fps, beta, result.beta, pass_options, weight);
     }
   }
-  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  result.seconds = seconds_since(t0);
   return result;
 }
 

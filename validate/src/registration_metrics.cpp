@@ -1,4 +1,5 @@
 #include <sflsh/core/error.hpp>
+#include <sflsh/core/scoped_seconds.hpp>
 #include <sflsh/validate/registration_metrics.hpp>
 
 #include <chrono>
@@ -17,7 +18,7 @@ RegistrationMetrics registration_metrics(const body::BodyModel& model, const std
   result.fit = fit_motion(model, registered, fps, beta, options);
   const auto t_metrics = std::chrono::steady_clock::now();
   result.dynamics = dynamics_metrics(model, result.fit.beta, result.fit.motion, registered, options.soft_vertices);
-  result.metrics_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_metrics).count();
+  result.metrics_seconds = seconds_since(t_metrics);
   return result;
 }
 

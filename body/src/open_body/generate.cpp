@@ -27,6 +27,7 @@
 #include <sflsh/body/open_body.hpp>
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
+#include <sflsh/core/scoped_seconds.hpp>
 
 #include <tbb/parallel_for.h>
 
@@ -39,9 +40,7 @@ OpenBodyResult generate_open_body(const OpenBodyOptions& options) {
   require(options.population > 2 * kNumBetas, "open body: population {} must exceed {}", options.population,
           2 * kNumBetas);
   const auto start = std::chrono::steady_clock::now();
-  const auto seconds = [&start]() {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  };
+  const auto seconds = [&start]() { return seconds_since(start); };
 
   // 1–2. Template surface and weights.
   const Skeleton average = make_skeleton(AnthroFactors::Zero());

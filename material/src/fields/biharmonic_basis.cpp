@@ -3,6 +3,7 @@
 
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
+#include <sflsh/core/scoped_seconds.hpp>
 #include <sflsh/material/biharmonic_basis.hpp>
 
 #include <Eigen/SparseCholesky>
@@ -142,7 +143,7 @@ BiharmonicBasis biharmonic_basis(const RowMatrixX3d& V, const RowMatrixX3i& F, c
     }
     basis.phi = basis.phi.cwiseMax(0.0).cwiseMin(1.0);
   }
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double seconds = seconds_since(start);
   logger()->info("biharmonic basis: {} functions on {} vertices ({}), {} active-set solves, {:.2f} s", N, V.rows(),
                  options.bounded ? "bounded" : "unbounded", basis.total_iterations(), seconds);
   return basis;

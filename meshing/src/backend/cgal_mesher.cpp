@@ -10,6 +10,7 @@
 
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
+#include <sflsh/core/scoped_seconds.hpp>
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Mesh_complex_3_in_triangulation_3.h>
@@ -211,8 +212,8 @@ TetMesh mesh_with_cgal(const ClosedSurface& surface, const SizeControl& size) {
     throw_error("cgal: Mesh_3 failed: {}", e.what());
   }
   logger()->debug("cgal: {} tets, {} nodes in {:.2f} s ({} seeds, {} feature polylines{})", mesh.tets.rows(),
-                  mesh.nodes.rows(), std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
-                  seeds, use_features ? surface.features.size() : 0, kParallel ? ", parallel" : "");
+                  mesh.nodes.rows(), seconds_since(start), seeds, use_features ? surface.features.size() : 0,
+                  kParallel ? ", parallel" : "");
   return mesh;
 }
 

@@ -8,6 +8,7 @@
 
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
+#include <sflsh/core/scoped_seconds.hpp>
 
 #include <gmsh.h>
 
@@ -218,9 +219,8 @@ TetMesh mesh_with_gmsh(const ClosedSurface& surface, const SizeControl& size) {
     }
   }
   logger()->debug("gmsh: {} tets, {} nodes in {:.2f} s ({} boundary triangles, {} subdivisions of the input)",
-                  mesh.tets.rows(), mesh.nodes.rows(),
-                  std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
-                  boundary.triangles.rows(), boundary.levels);
+                  mesh.tets.rows(), mesh.nodes.rows(), seconds_since(start), boundary.triangles.rows(),
+                  boundary.levels);
   return mesh;
 }
 

@@ -4,6 +4,7 @@
 
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
+#include <sflsh/core/scoped_seconds.hpp>
 #include <sflsh/meshing/quality.hpp>
 
 #include <Eigen/Geometry>
@@ -196,8 +197,7 @@ TetMesh tetrahedralize(const ClosedSurface& surface, Mesher mesher, const SizeCo
   orient(mesh);
   remove_unused_nodes(mesh);
   validate(mesh, surface, mesher);
-  logger()->debug("{}: meshed in {:.2f} s", backend,
-                  std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  logger()->debug("{}: meshed in {:.2f} s", backend, seconds_since(start));
   return mesh;
 }
 

@@ -1,5 +1,6 @@
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
+#include <sflsh/core/scoped_seconds.hpp>
 #include <sflsh/model/simulation_output.hpp>
 #include <sflsh/reduced/dynamics_case.hpp>
 #include <sflsh/reduced/dynamics_sensitivity.hpp>
@@ -49,7 +50,7 @@ CaseDynamics DynamicsCase::simulate(const LayerParameterization& parameterizatio
         parameterization.problem(*layer_, kappa, options_, nullptr, &shaped_layer(parameterization));
     ReducedSolver integrator(problem, model.subspace, model.cubature, options);
     integrator.initialize(model::initial_state(problem, 0.0));
-    const double setup_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double setup_seconds = seconds_since(start);
     model::DynamicsAmplitude amplitude(normals_);
     // The attached nodes carry no elastic displacement (x_D = X), so u = (B ⊗ I₃) q; the skin embedding is
     // affine with weights summing to one, hence linear in u. No pass over the skinned trajectory per frame.
@@ -68,7 +69,7 @@ CaseDynamics DynamicsCase::simulate(const LayerParameterization& parameterizatio
     out.frames = frames_;
     out.cubature_added = integrator.cubature_added();
     out.setup_seconds = setup_seconds;
-    out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    out.seconds = seconds_since(start);
     return out;
   } catch (const Error& e) {
     throw Error(fmt::format("{} / {}: {}", subject_, motion_, e.what()));
@@ -100,7 +101,7 @@ CaseDynamics DynamicsCase::simulate_with_sensitivity(const LayerParameterization
     // When the guard grows the cubature (a tet outside it leaves the material's range, reduced_solver.hpp), the
     // integrator takes the new tets' rows of the Young map and differentiates each substep on the cubature it was
     // solved with: the run simulate() makes, in one pass.
-    const double setup_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double setup_seconds = seconds_since(start);
     SensitivityIntegrator integrator(problem, model.subspace, model.cubature, young_map,
                                      sensitivity_solver_options(options), thickness ? &rest : nullptr);
     integrator.set_young_rows([&](const std::vector<int>& tets) {
@@ -134,7 +135,7 @@ CaseDynamics DynamicsCase::simulate_with_sensitivity(const LayerParameterization
     out.frames = frames_;
     out.cubature_added = integrator.integrator().cubature_added();
     out.setup_seconds = setup_seconds;
-    out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    out.seconds = seconds_since(start);
     return out;
   } catch (const Error& e) {
     throw Error(fmt::format("{} / {}: {}", subject_, motion_, e.what()));

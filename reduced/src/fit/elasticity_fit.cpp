@@ -497,7 +497,7 @@ FitResult fit_elasticity(const FitContext& context, const std::vector<FitTarget>
     const auto stage_start = std::chrono::steady_clock::now();
     const int done_before = resumed_here ? checkpoint->iteration : 0;
     lso.monitor = [&](int iteration, const Eigen::VectorXd& x, double loss, double gnorm) {
-      const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - stage_start).count();
+      const double elapsed = seconds_since(stage_start);
       const int it = done_before + iteration;
       const double eta = iteration > 0 ? elapsed / iteration * std::max(0, lso.max_iterations - iteration) : 0.0;
       if (context.progress)
@@ -529,7 +529,7 @@ FitResult fit_elasticity(const FitContext& context, const std::vector<FitTarget>
     report.iterations = done_before + ls.iterations;
     report.loss_fit = r.head(stage.fit_rows).squaredNorm();
     report.loss_reg = r.size() > stage.fit_rows ? r.tail(r.size() - stage.fit_rows).squaredNorm() : 0.0;
-    report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - stage_start).count();
+    report.seconds = seconds_since(stage_start);
     report.simulations = stage.simulations;
     report.jacobians = stage.jacobians;
     report.reason = ls.reason;
@@ -561,8 +561,7 @@ FitResult fit_elasticity(const FitContext& context, const std::vector<FitTarget>
     save_checkpoint(spec.checkpoint, fingerprint, c);
   }
   result.p = p;
-  logger()->debug("fit {}: {:.1f} s in total", spec.name,
-                  std::chrono::duration<double>(std::chrono::steady_clock::now() - start_time).count());
+  logger()->debug("fit {}: {:.1f} s in total", spec.name, seconds_since(start_time));
   return result;
 }
 

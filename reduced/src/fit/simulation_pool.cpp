@@ -1,4 +1,5 @@
 #include <sflsh/core/error.hpp>
+#include <sflsh/core/scoped_seconds.hpp>
 #include <sflsh/reduced/simulation_pool.hpp>
 
 #include <tbb/blocked_range.h>
@@ -124,7 +125,7 @@ std::vector<Eigen::VectorXd> SimulationPool::run_tasks(int count, const std::fun
         buffer.segment(offset[static_cast<std::size_t>(j)],
                        offset[static_cast<std::size_t>(j) + 1] - offset[static_cast<std::size_t>(j)]);
   simulations_ += count;
-  seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  seconds_ += seconds_since(start);
   return out;
 }
 

@@ -9,6 +9,7 @@
 #include <sflsh/core/log.hpp>
 #include <sflsh/core/progress.hpp>
 #include <sflsh/core/run_folder.hpp>
+#include <sflsh/core/scoped_seconds.hpp>
 #include <sflsh/core/summary.hpp>
 #include <sflsh/meshing/layer_cache.hpp>
 #include <sflsh/reduced/elasticity_fit.hpp>
@@ -394,7 +395,7 @@ nlohmann::json run_validation(const ValidateConfig& requested, const std::filesy
   summary["threads"] = pool.threads();
   if (pool.rank() == 0) {
     report.write(run, summary);
-    summary["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    summary["seconds"] = seconds_since(start);
     write_json(run.stage("summary.json"), summary);
     run.commit();
   }
@@ -427,7 +428,7 @@ nlohmann::json run_ground_truth(const ValidateConfig& config, const std::filesys
                                 {"seconds", c.seconds}});
   if (pool.rank() == 0) {
     write_ground_truth_files(run, setup.model, *first.layer().mesh, truth_pointers(truth), setup.bounds);
-    summary["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    summary["seconds"] = seconds_since(start);
     write_json(run.stage("summary.json"), summary);
     run.commit();
   }

@@ -1,6 +1,7 @@
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
 #include <sflsh/core/npz.hpp>
+#include <sflsh/core/scoped_seconds.hpp>
 #include <sflsh/fullspace/fullspace_solver.hpp>
 #include <sflsh/fullspace/reference_integrator.hpp>
 #include <sflsh/model/simulation_output.hpp>
@@ -64,7 +65,7 @@ GroundTruthCase simulate_ground_truth(const model::BodyLayer& layer, const body:
   out.sigma_tangent = 1e3 * amplitude.sigma_tangent();
   require(out.sigma_normal.allFinite() && out.sigma_tangent.allFinite(), "ground truth {} / {}: non-finite dynamics",
           subject, motion.name);
-  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  out.seconds = seconds_since(start);
   logger()->info("ground truth {} / {}: {} frames, mean σ {:.3f} mm, {:.1f} s", subject, motion.name, loop.frames,
                  out.mean_sigma(), out.seconds);
   return out;

@@ -1,6 +1,8 @@
 #pragma once
 // A parametric body in SMPL's array layout (Loper et al. 2015; docs/physics.md §3.1).
 // Units: metres, Y up, the body faces +Z, its left side is +X (as SMPL).
+#include <sflsh/core/eigen_types.hpp>
+
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 
@@ -22,8 +24,8 @@ extern const std::array<int, kNumJoints> kJointParents;
 /// Index of a joint by SMPL name; throws sflsh::Error for an unknown name.
 int joint_index(const std::string& name);
 
-using RowMatrixX3d = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
-using RowMatrixX3i = Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor>;
+using sflsh::RowMatrixX3d;  // core/eigen_types.hpp
+using sflsh::RowMatrixX3i;
 
 /// The arrays of a body model. n = vertex count, m = face count.
 struct BodyModel {

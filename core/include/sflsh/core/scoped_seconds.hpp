@@ -13,7 +13,7 @@ inline double seconds_since(std::chrono::steady_clock::time_point t0) {
 class ScopedSeconds {
  public:
   explicit ScopedSeconds(double& total) : total_(total), start_(std::chrono::steady_clock::now()) {}
-  ~ScopedSeconds() { total_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count(); }
+  ~ScopedSeconds() { total_ += seconds_since(start_); }
   ScopedSeconds(const ScopedSeconds&) = delete;
   ScopedSeconds& operator=(const ScopedSeconds&) = delete;
 

@@ -3,6 +3,8 @@
 // indices), possibly open (with boundary loops): the cotangent Laplacian, a lumped mass matrix, the
 // vertex adjacency and edge-graph (Dijkstra) distances. They carry the heterogeneous material fields
 // (SFLSH §3–4): control points (control_points.hpp) and the biharmonic basis (biharmonic_basis.hpp).
+#include <sflsh/core/eigen_types.hpp>
+
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 
@@ -12,8 +14,8 @@
 
 namespace sflsh::material {
 
-using RowMatrixX3d = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
-using RowMatrixX3i = Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor>;
+using sflsh::RowMatrixX3d;  // core/eigen_types.hpp
+using sflsh::RowMatrixX3i;
 using SparseMatrixd = Eigen::SparseMatrix<double>;  ///< column-major, as Eigen's sparse solvers want
 
 /// Throws sflsh::Error naming the first problem: empty arrays, non-finite positions, face indices out of

@@ -1,5 +1,7 @@
 #pragma once
 // Plain array types shared by the meshing stage.
+#include <sflsh/core/eigen_types.hpp>
+
 #include <Eigen/Core>
 
 #include <array>
@@ -7,8 +9,8 @@
 
 namespace sflsh::meshing {
 
-using RowMatrixX3d = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
-using RowMatrixX3i = Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor>;
+using sflsh::RowMatrixX3d;  // core/eigen_types.hpp
+using sflsh::RowMatrixX3i;
 using RowMatrixX4i = Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor>;
 
 /// What a node of the layer mesh is attached to. Values are stored in files: do not renumber.
