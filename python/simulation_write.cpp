@@ -29,9 +29,10 @@ void write_run_folder(const PythonSimulation& python, const std::filesystem::pat
   settings.every = options.every;
   settings.precision = options.precision;
   settings.compression = options.compression;
-  settings.fields = options.fields ? std::optional(model::resolve_frame_fields(*options.fields, "fields")
-                                                       .value_or(model::frame_field_names()))
-                                   : std::nullopt;  // the format's default
+  settings.fields =
+      options.fields
+          ? std::optional(model::resolve_frame_fields(*options.fields, "fields").value_or(model::frame_field_names()))
+          : std::nullopt;  // the format's default
   const model::SimulationWriterOptions writer_options = scene::frame_writer_options(settings);
   RunFolder run(dir);
   model::SimulationWriter writer(sim.layer(), &run, writer_options);

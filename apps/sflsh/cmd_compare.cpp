@@ -106,8 +106,9 @@ double correlation(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
 
 void run_compare(const CompareOptions& opt, const Invocation& invocation, int rank, int size) {
   const auto t_start = Clock::now();
-  require(opt.fps > 0.0, "--fps must be positive, got {}", opt.fps);
-  require(opt.substeps >= 1, "--substeps must be at least 1, got {}", opt.substeps);
+  require(opt.fps > 0.0 && opt.fps <= 1e4, "--fps must be in (0, 10000] frames per second, got {}", opt.fps);
+  require(opt.substeps >= 1 && opt.substeps <= 1'000'000, "--substeps must be an integer in [1, 10⁶], got {}",
+          opt.substeps);
   require(opt.frames >= 0, "--frames must be non-negative, got {}", opt.frames);
   check_layer_settings(opt.layer);
   const std::vector<int> handle_sweep = parse_sweep(opt.handles, "--handles", 1);

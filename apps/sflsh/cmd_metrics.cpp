@@ -10,6 +10,7 @@
 #include <sflsh/core/input_file.hpp>
 #include <sflsh/core/log.hpp>
 #include <sflsh/core/run_folder.hpp>
+#include <sflsh/core/scoped_seconds.hpp>
 #include <sflsh/core/summary.hpp>
 #include <sflsh/validate/dyna_file.hpp>
 #include <sflsh/validate/dynamics_metrics.hpp>
@@ -135,8 +136,10 @@ void run_metrics(const MetricsOptions& opt, const Invocation& invocation) {
   const body::BodyModel model = load_selected_body(opt.subject);
   file.require_vertices(model);
   const validate::DynaSequence sequence = file.read(opt.sequence, opt.frames);  // reads only the first N frames
-  require(sequence.num_frames() >= 2, "metrics: sequence '{}' has {} frame(s), σ needs at least 2", opt.sequence,
-          sequence.num_frames());
+  require(sequence.num_frames() >= 2, "{}: {}: {} frame{} {}, expected at least 2 (σ is a spread over time)", opt.dyna,
+          opt.sequence, sequence.num_frames(), sequence.num_frames() == 1 ? "" : "s",
+          opt.frames > 0 && opt.frames < file.info(opt.sequence).frames ? fmt::format("read (--frames {})", opt.frames)
+                                                                        : std::string("in the file"));
   std::optional<body::Betas> given_beta;
   if (!opt.subject.betas.empty()) given_beta = body::parse_betas(opt.subject.betas);
 
@@ -198,9 +201,7 @@ void run_metrics(const MetricsOptions& opt, const Invocation& invocation) {
   summary["dynamics"] = validate::dynamics_summary(dynamics);
   summary["output"] = {{"surface", "metrics.vtp"}, {"table", "metrics.csv"}, {"motion", "motion.npz"}};
   summary["timings"] = {
-      {"fit_seconds", fit.seconds},
-      {"metrics_seconds", metrics_seconds},
-      {"total_seconds", std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count()}};
+      {"fit_seconds", fit.seconds}, {"metrics_seconds", metrics_seconds}, {"total_seconds", seconds_since(t_start)}};
   write_json(run.stage("summary.json"), summary);
   run.commit();
   logger()->info(

@@ -6,6 +6,7 @@
 #include <sflsh/core/log.hpp>
 #include <sflsh/core/progress.hpp>
 #include <sflsh/core/run_folder.hpp>
+#include <sflsh/core/scoped_seconds.hpp>
 #include <sflsh/core/summary.hpp>
 #include <sflsh/core/vtk_io.hpp>
 #include <sflsh/core/xdmf_series.hpp>
@@ -103,13 +104,13 @@ void run_motion_export(const MotionExportOptions& opt, const Invocation& invocat
   summary["vertices"] = model.num_vertices();
   summary["faces"] = model.num_faces();
   summary["series"] = xdmf ? "body.xmf" : "body.pvd";
-  summary["frame_files"] = xdmf ? std::string("body.h5")
-                                : fmt::format("body_000000.vtp … body_{:06d}.vtp", motion.num_frames() - 1);
+  summary["frame_files"] =
+      xdmf ? std::string("body.h5") : fmt::format("body_000000.vtp … body_{:06d}.vtp", motion.num_frames() - 1);
   summary["point_data"] = {"displacement", "velocity", "skin_weights_argmax"};
   summary["output"] = {{"format", opt.format},
                        {"precision", xdmf ? opt.precision : "float64"},
                        {"compression", vtk::to_string(compression)}};
-  summary["wall_time_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  summary["wall_time_s"] = seconds_since(t0);
   write_json(run.stage("summary.json"), summary);
   run.commit();
   logger()->info("wrote {} frames of '{}' for {} to {}/{}", motion.num_frames(), motion.name, subject_label, opt.out,
@@ -142,7 +143,8 @@ void register_motion_commands(CLI::App& app, const Invocation& invocation) {
 
   auto opt = std::make_shared<MotionExportOptions>();
   CLI::App* exp = motion->add_subcommand(
-      "export", "Pose a body along a motion and write a ParaView series (one .vtp per frame + body.pvd, or body.xmf + body.h5 "
+      "export",
+      "Pose a body along a motion and write a ParaView series (one .vtp per frame + body.pvd, or body.xmf + body.h5 "
       "with --format xdmf)");
   add_body_option(*exp, opt->subject);
   exp->add_option("--motion", opt->motion, "Procedural motion name (see `motion list`) or an AMASS .npz")->required();
@@ -157,8 +159,7 @@ void register_motion_commands(CLI::App& app, const Invocation& invocation) {
   exp->add_option("--precision", opt->precision, "Floating-point precision of an xdmf series: float32 | float64")
       ->check(CLI::IsMember({"float64", "float32"}))
       ->capture_default_str();
-  exp->add_option("--compression", opt->compression,
-                  "Compression: zlib (default) | none, or lz4 for vtk frames")
+  exp->add_option("--compression", opt->compression, "Compression: zlib (default) | none, or lz4 for vtk frames")
       ->check(CLI::IsMember({"lz4", "zlib", "none"}));
   exp->add_option("--out", opt->out, "Output folder")->required();
   exp->callback([opt, invocation] { run_motion_export(*opt, invocation); });

@@ -121,7 +121,8 @@ void register_simulate_commands(CLI::App& app, const Invocation& invocation) {
   cmd->add_option(
          "--format", opt->body.format,
          "Time series: xdmf (body.xmf + body.h5: triangles and fixed fields once, one compressed HDF5 dataset per "
-         "field and frame; ParaView, meshio) | vtk (body.pvd of one .vtp per frame, layer.pvd of .vtu; docs/output.md); "
+         "field and frame; ParaView, meshio) | vtk (body.pvd of one .vtp per frame, layer.pvd of .vtu; "
+         "docs/output.md); "
          "with --scene it overrides [output] format")
       ->check(CLI::IsMember({"vtk", "xdmf"}))
       ->capture_default_str()
@@ -136,10 +137,11 @@ void register_simulate_commands(CLI::App& app, const Invocation& invocation) {
                   "for vtk), or names of docs/output.md; as a scene's [output] fields")
       ->delimiter(',')
       ->each([opt](const std::string&) { opt->fields_given = true; });
-  cmd->add_option("--compression", opt->body.compression,
-                  "Compression: zlib | none for xdmf (default zlib: HDF5 shuffle + deflate); lz4 | zlib | none of every "
-                  "vtk frame file (default: LZ4 for the body's .vtp frames, zlib for the layer's .vtu frames, which "
-                  "meshio reads)")
+  cmd->add_option(
+         "--compression", opt->body.compression,
+         "Compression: zlib | none for xdmf (default zlib: HDF5 shuffle + deflate); lz4 | zlib | none of every "
+         "vtk frame file (default: LZ4 for the body's .vtp frames, zlib for the layer's .vtu frames, which "
+         "meshio reads)")
       ->check(CLI::IsMember({"lz4", "zlib", "none"}));
   cmd->add_flag("--no-output", opt->no_output, "Write only summary.json");
   cmd->add_option(

@@ -99,8 +99,9 @@ void check_options(const TradeoffOptions& o) {
   require(o.budget_mm >= 0.0 && o.budget_relative >= 0.0,
           "--budget-mm and --budget-relative must be positive, got {} and {}", o.budget_mm, o.budget_relative);
   for (const auto* list : {&o.substeps, &o.reduced_substeps})
-    for (int s : *list) require(s >= 1, "--substeps and --reduced-substeps: {} is below 1", s);
-  for (int h : o.handles) require(h >= 1, "--handles: {} is below 1", h);
+    for (int s : *list)
+      require(s >= 1 && s <= 1'000'000, "--substeps and --reduced-substeps: {} is outside [1, 10⁶]", s);
+  for (int h : o.handles) require(h >= 1 && h <= 1'000'000, "--handles: {} is outside [1, 10⁶]", h);
   for (int k : o.cubature) require(k >= 0, "--cubature: {} is negative (0 = every tet)", k);
   if (o.reference != "sundials") {
     int finest = 0;

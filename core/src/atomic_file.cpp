@@ -2,6 +2,7 @@
 #include <sflsh/core/error.hpp>
 
 #include <fcntl.h>
+#include <signal.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -32,6 +33,29 @@ void write_atomically(const fs::path& target, const std::function<void(const fs:
     fs::remove(tmp, ignored);
     throw;
   }
+}
+
+int remove_stale_temporaries(const fs::path& target) {
+  const std::string prefix = fmt::format(".{}.tmp-", target.filename().string());  // as temporary_sibling names them
+  std::error_code ec;
+  int removed = 0;
+  for (fs::directory_iterator it(target.parent_path().empty() ? "." : target.parent_path(), ec), end; !ec && it != end;
+       it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (!name.starts_with(prefix)) continue;
+    const std::string rest = name.substr(prefix.size());  // "<pid>-<n>[.XXXXXX]"
+    long pid = 0;
+    try {
+      pid = std::stol(rest.substr(0, rest.find('-')));
+    } catch (const std::exception&) {
+      continue;  // not one of ours
+    }
+    if (pid <= 0 || (::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH)) {
+      std::error_code ignored;
+      if (fs::remove(it->path(), ignored)) ++removed;
+    }
+  }
+  return removed;
 }
 
 void throw_write_error(const fs::path& target, std::string_view what, int error_number) {

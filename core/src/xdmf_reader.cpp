@@ -125,8 +125,8 @@ Eigen::MatrixXd SeriesReader::read(const DataRef& ref) const {
   require(rank == 1 || rank == 2, "{}: {} has {} dimensions, expected 1 or 2", h5_.string(), ref.path, rank);
   H5Sget_simple_extent_dims(space.id, dims, nullptr);
   require(dims[0] == static_cast<hsize_t>(ref.rows) && (rank == 1 ? 1 : dims[1]) == static_cast<hsize_t>(ref.columns),
-          "{}: {} is {} × {}, {} says {} × {}", h5_.string(), ref.path, dims[0], rank == 1 ? 1 : dims[1],
-          xmf_.string(), ref.rows, ref.columns);
+          "{}: {} is {} × {}, {} says {} × {}", h5_.string(), ref.path, dims[0], rank == 1 ? 1 : dims[1], xmf_.string(),
+          ref.rows, ref.columns);
   Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> values(ref.rows, ref.columns);
   require(H5Dread(set.id, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()) >= 0,
           "{}: {} cannot be read as numbers", h5_.string(), ref.path);
@@ -149,8 +149,8 @@ std::vector<std::string> SeriesReader::point_array_names(std::size_t step) const
 
 Eigen::MatrixXd SeriesReader::point_array(std::size_t step, const std::string& name) const {
   const Step& s = step_at(step);
-  const auto found =
-      std::find_if(s.point_arrays.begin(), s.point_arrays.end(), [&](const auto& entry) { return entry.first == name; });
+  const auto found = std::find_if(s.point_arrays.begin(), s.point_arrays.end(),
+                                  [&](const auto& entry) { return entry.first == name; });
   if (found == s.point_arrays.end()) {
     std::string there;
     for (const auto& entry : s.point_arrays) there += (there.empty() ? "" : ", ") + entry.first;

@@ -1,8 +1,8 @@
 // XDMF 3 + HDF5 time series (xdmf_series.hpp), written with the HDF5 C library.
-#include <sflsh/core/array_units.hpp>
-#include <sflsh/core/atomic_file.hpp>
 #include "hdf5_handle.hpp"
 
+#include <sflsh/core/array_units.hpp>
+#include <sflsh/core/atomic_file.hpp>
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/xdmf_series.hpp>
 
@@ -140,7 +140,8 @@ struct Series::Impl {
               "{}: cannot set up compression for dataset {}", h5.string(), path);
     }
     // No chunk cache: a compressed chunk is written by H5Dwrite itself, so a full disk fails there (and is reported
-    // and abandoned below) instead of in a later flush, after which HDF5 1.10 cannot close the file and crashes at exit.
+    // and abandoned below) instead of in a later flush, after which HDF5 1.10 cannot close the file and crashes at
+    // exit.
     Handle access{H5Pcreate(H5P_DATASET_ACCESS), H5Pclose};
     H5Pset_chunk_cache(access.id, H5D_CHUNK_CACHE_NSLOTS_DEFAULT, 0, H5D_CHUNK_CACHE_W0_DEFAULT);
     Handle set{H5Dcreate2(file, path.c_str(), stored, space.id, H5P_DEFAULT, create.id, access.id), H5Dclose};

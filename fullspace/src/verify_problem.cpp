@@ -348,6 +348,36 @@ class Reader {
     }
   }
 
+  /// Plausibility before solving: every drive u(t), sampled at 1001 times over [0, time.duration], stays finite and
+  /// within ten times the mesh's size. A boundary moved farther than that is no soft-tissue problem; a drive of
+  /// 10³⁰⁰·t used to reach the solver, which then failed naming no file or key.
+  void check_drive_amplitudes(const toml::table& root, const VerifyProblem& p) const {
+    if (p.mesh.nodes.rows() == 0) return;
+    const double size = (p.mesh.nodes.colwise().maxCoeff() - p.mesh.nodes.colwise().minCoeff()).norm();
+    const double bound = 10.0 * size;
+    std::size_t k = 0;
+    for (const toml::table* t : tables(root, "drive")) {
+      const std::string entry = fmt::format("drive[{}].expression", k + 1);
+      const VerifyProblem::Drive& drive = p.drives.at(k++);
+      const ScalarDrive u = expression_drive(drive.expression);
+      constexpr int kSamples = 1000;
+      for (int i = 0; i <= kSamples; ++i) {
+        const double time = p.duration * i / kSamples;
+        double value = 0.0;
+        try {
+          value = u.value(time);
+        } catch (const Error& err) {
+          fail(*t->get("expression"), entry, "{}", err.what());
+        }
+        if (std::abs(value) > bound)
+          fail(*t->get("expression"), entry,
+               "'{}' = {:.6g} m at t = {:.6g} s; expected |u| ≤ {:.3g} m over [0, time.duration = {:.6g} s] (ten "
+               "times the mesh's size, {:.3g} m)",
+               drive.expression, value, time, bound, p.duration, size);
+      }
+    }
+  }
+
   VerifyProblem read() const {
     require_input_file(path_, "a verify problem TOML file");
     toml::table root;
@@ -394,6 +424,7 @@ class Reader {
     read_time(root, p);
     read_boundary(root, p);
     read_record_and_solver(root, p);
+    check_drive_amplitudes(root, p);
     return p;
   }
 

@@ -325,6 +325,8 @@ LayerMesh cached_layer_mesh(const body::BodyModel& model, const LayerMeshOptions
   const std::filesystem::path path = layer_cache_path(dir, model, options);
   const std::string key = layer_cache_key(model, options);
   CacheOutcome result = rebuild ? CacheOutcome::rebuilt_forced : CacheOutcome::built;
+  if (const int stale = remove_stale_temporaries(path); stale > 0)  // writers killed before their rename
+    logger()->info("layer mesh cache {}: removed {} temporary file(s) of killed writers", path.string(), stale);
   if (!rebuild && std::filesystem::exists(path)) {
     std::string stored;
     LayerMesh mesh;

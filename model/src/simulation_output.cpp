@@ -1,4 +1,5 @@
 #include <sflsh/core/error.hpp>
+#include <sflsh/core/scoped_seconds.hpp>
 #include <sflsh/model/layer_settings.hpp>  // region_normals
 #include <sflsh/model/simulation_output.hpp>
 
@@ -161,9 +162,16 @@ const std::vector<std::string>& default_frame_fields() {
   // Body frames: the soft tissue's own motion (σ's displacement), the energy density and the shading normals; layer
   // frames: the posed nodes with the energy density per tet; the fixed fields cost nothing per frame in an xdmf
   // series (stored once); contact arrays appear only in scenes with contact.
-  static const std::vector<std::string> names = {
-      "soft_tissue_displacement", "strain_energy_density", "Normals",      "skin_weights_argmax", "thickness_fraction",
-      "young_tangent",            "young_normal",          "soft_region", "contact_force",       "penetration"};
+  static const std::vector<std::string> names = {"soft_tissue_displacement",
+                                                 "strain_energy_density",
+                                                 "Normals",
+                                                 "skin_weights_argmax",
+                                                 "thickness_fraction",
+                                                 "young_tangent",
+                                                 "young_normal",
+                                                 "soft_region",
+                                                 "contact_force",
+                                                 "penetration"};
   return names;
 }
 
@@ -213,9 +221,8 @@ SimulationWriter::SimulationWriter(const BodyLayer& layer, RunFolder* run, const
   if (run_ && options_.format == "xdmf") {
     // The fields that do not change go in once; every frame then holds positions and the moving fields.
     run_->stage(options_.prefix + ".h5");
-    body_xdmf_ =
-        std::make_unique<xdmf::Series>(run_->stage(options_.prefix + ".xmf"), layer.model->faces, options_.precision,
-                                       options_.series_compression);
+    body_xdmf_ = std::make_unique<xdmf::Series>(run_->stage(options_.prefix + ".xmf"), layer.model->faces,
+                                                options_.precision, options_.series_compression);
     vtk::Fields fixed;
     if (wants("skin_weights_argmax")) fixed.point_data.push_back({"skin_weights_argmax", dominant_joint_, true});
     add_kappa_fields(fixed.point_data, vertex_kappa_, [this](const std::string& name) { return wants(name); });
@@ -223,9 +230,8 @@ SimulationWriter::SimulationWriter(const BodyLayer& layer, RunFolder* run, const
     body_xdmf_->set_static(fixed);
     if (write_layer_) {
       run_->stage(layer_prefix + ".h5");
-      layer_xdmf_ =
-          std::make_unique<xdmf::Series>(run_->stage(layer_prefix + ".xmf"), layer.problem.tets, options_.precision,
-                                         options_.series_compression);
+      layer_xdmf_ = std::make_unique<xdmf::Series>(run_->stage(layer_prefix + ".xmf"), layer.problem.tets,
+                                                   options_.precision, options_.series_compression);
       vtk::Fields layer_fixed;
       add_kappa_fields(layer_fixed.point_data, layer.fields.node,
                        [this](const std::string& name) { return wants(name); });
@@ -287,7 +293,7 @@ void SimulationWriter::add(int index, double t, const Eigen::VectorXd& x_state, 
   RowMatrixX3d skinned;
   if (wants("soft_tissue_displacement"))
     skinned = layer_.posed_surface_from_displacement(RowMatrixX3d::Zero(u.rows(), 3), t);
-  posing_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - clock).count();
+  posing_seconds_ += seconds_since(clock);
 
   vtk::Fields fields;
   if (wants("displacement")) fields.point_data.push_back({"displacement", posed - layer_.shaped, false});

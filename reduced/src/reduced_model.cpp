@@ -1,6 +1,8 @@
+#include <sflsh/core/atomic_file.hpp>
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
 #include <sflsh/core/npz.hpp>
+#include <sflsh/core/scoped_seconds.hpp>
 #include <sflsh/material/layer_material.hpp>
 #include <sflsh/material/orthotropic_fung.hpp>
 #include <sflsh/meshing/layer_cache.hpp>
@@ -306,13 +308,14 @@ ReducedModel build_reduced_model(const model::BodyLayer& layer, const ReducedMod
     if (options.use_cache) {
       try {
         std::filesystem::create_directories(dir);
+        remove_stale_temporaries(path);  // left by writers killed before their rename
         save_model(path, m);
       } catch (const std::exception& e) {
         logger()->warn("reduced: could not write the cache entry {} ({})", path.string(), e.what());
       }
     }
   }
-  m.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  m.build_seconds = seconds_since(start);
   logger()->info(
       "reduced model: {} point handles ({} coordinates), {} bone handles, {} cubature tets ({}; exact / cubature rest "
       "stiffness in [{:.3g}, {:.3g}]), cache {}, {:.2f} s",

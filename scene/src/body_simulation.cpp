@@ -36,10 +36,13 @@ BodySimulation::BodySimulation(const BodyRunSettings& opt, RunFolder* frames_to,
                                const BodyRunReporting& reporting)
     : settings_(opt), reporting_(reporting), rank_(rank), size_(size), t_start_(Clock::now()) {
   require(opt.solver == "full" || opt.solver == "reduced", "--solver {}: expected full or reduced", opt.solver);
-  require(opt.handles >= 1, "--handles must be at least 1, got {}", opt.handles);
+  // Both bounds in every message (issue 45); 10⁶ as a scene's integer keys, 10⁴ fps as a scene's fps.
+  require(opt.handles >= 1 && opt.handles <= 1'000'000, "--handles must be an integer in [1, 10⁶], got {}",
+          opt.handles);
   require(opt.cubature >= -1, "--cubature must be −1 (auto), 0 (every tet) or a tet count, got {}", opt.cubature);
-  require(opt.fps > 0.0, "--fps must be positive, got {}", opt.fps);
-  require(opt.substeps >= 1, "--substeps must be at least 1, got {}", opt.substeps);
+  require(opt.fps > 0.0 && opt.fps <= 1e4, "--fps must be in (0, 10000] frames per second, got {}", opt.fps);
+  require(opt.substeps >= 1 && opt.substeps <= 1'000'000, "--substeps must be an integer in [1, 10⁶], got {}",
+          opt.substeps);
   require(opt.frames >= 0, "--frames must be non-negative, got {}", opt.frames);
   model::check_layer_settings(opt.layer);
   const model::Integrator integrator = model::parse_integrator(opt.integrator, "--integrator");

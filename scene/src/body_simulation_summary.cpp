@@ -135,14 +135,13 @@ model::SimulationWriterOptions frame_writer_options(const BodyRunSettings& setti
 nlohmann::json simulate_output_summary(const BodyRunSettings& settings, const nlohmann::json& body_summary) {
   const bool xdmf = settings.format == "xdmf";
   const model::SimulationWriterOptions writer = frame_writer_options(settings);
-  nlohmann::json output = {
-      {"format", settings.format},
-      {"series", xdmf ? "body.xmf" : "body.pvd"},
-      {"layer", settings.write_layer ? (xdmf ? "layer.xmf" : "layer.pvd") : ""},
-      {"every", settings.every},
-      {"compression", xdmf ? vtk::to_string(writer.series_compression)
-                           : body_summary.value("compression", std::string("lz4"))},
-      {"precision", xdmf ? settings.precision : "float64"}};
+  nlohmann::json output = {{"format", settings.format},
+                           {"series", xdmf ? "body.xmf" : "body.pvd"},
+                           {"layer", settings.write_layer ? (xdmf ? "layer.xmf" : "layer.pvd") : ""},
+                           {"every", settings.every},
+                           {"compression", xdmf ? vtk::to_string(writer.series_compression)
+                                                : body_summary.value("compression", std::string("lz4"))},
+                           {"precision", xdmf ? settings.precision : "float64"}};
   if (!xdmf && settings.write_layer)
     output["layer_compression"] = body_summary.value("layer_compression", std::string("zlib"));
   output["fields"] = writer.fields ? nlohmann::json(*writer.fields) : nlohmann::json("all");

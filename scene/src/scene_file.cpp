@@ -59,6 +59,13 @@ int Scene::num_frames() const {
 
 namespace {
 
+// Plausible ranges of a scene's physical inputs (docs/scenes.md, "Input limits"): a body is ~2 m tall, objects
+// from a tenth of a millimetre to a room, everything within a kilometre of the origin, no faster than 100 m/s.
+constexpr double kPlausibleMinSize = 1e-4;        // [m]
+constexpr double kPlausibleMaxSize = 100.0;       // [m]
+constexpr double kPlausibleMaxPosition = 1000.0;  // [m] per component
+constexpr double kPlausibleMaxSpeed = 100.0;      // [m/s] per component
+
 class SceneReader : public TomlReader {
  public:
   using TomlReader::TomlReader;
@@ -116,6 +123,24 @@ class SceneReader : public TomlReader {
   double positive(const toml::node& node, std::string_view key, std::string_view context) const {
     const double v = number(node, key, context);
     require(v > 0.0, "{}: '{}'{} = {} must be positive", at(node), key, context, v);
+    return v;
+  }
+
+  /// A physical quantity within its plausible range [lo, hi] (docs/scenes.md, "Input limits"): values outside it are
+  /// typing errors (a radius of 10⁹ m used to reach the solver, which then failed naming no file or key).
+  double bounded(const toml::node& node, std::string_view key, std::string_view context, double lo, double hi,
+                 std::string_view unit) const {
+    const double v = number(node, key, context);
+    require(v >= lo && v <= hi, "{}: '{}'{} = {} must be in [{}, {}] {}", at(node), key, context, v, lo, hi, unit);
+    return v;
+  }
+
+  /// A vector whose components each lie in [−bound, bound] (positions, velocities).
+  Eigen::Vector3d bounded3(const toml::node& node, std::string_view key, std::string_view context, double bound,
+                           std::string_view unit) const {
+    const Eigen::Vector3d v = vector3(node, key, context);
+    require(v.cwiseAbs().maxCoeff() <= bound, "{}: '{}'{} = [{}, {}, {}] must have components in [-{}, {}] {}",
+            at(node), key, context, v.x(), v.y(), v.z(), bound, bound, unit);
     return v;
   }
 
@@ -257,7 +282,7 @@ class SceneReader : public TomlReader {
         check_keys(*k, {"t", "position"}, fmt::format(" in '{}'{}", key, context));
       SceneKeyframe f;
       f.t = non_negative(required(*k, "t", context), "t", context);
-      f.position = vector3(required(*k, "position", context), "position", context);
+      f.position = bounded3(required(*k, "position", context), "position", context, kPlausibleMaxPosition, "m");
       if (const toml::node* r = k->get("rotation")) f.rotation = vector3(*r, "rotation", context);
       require(out.empty() || f.t > out.back().t, "{}: keyframe times in '{}'{} must increase ({} after {})", at(item),
               key, context, f.t, out.empty() ? 0.0 : out.back().t);
@@ -270,7 +295,8 @@ class SceneReader : public TomlReader {
     const toml::table& t = table(node, "placement");
     check_keys(t, {"position", "yaw"}, fmt::format(" in 'placement'{}", context));
     Placement p;
-    if (const toml::node* n = t.get("position")) p.position = vector3(*n, "position", context);
+    if (const toml::node* n = t.get("position"))
+      p.position = bounded3(*n, "position", context, kPlausibleMaxPosition, "m");
     if (const toml::node* n = t.get("yaw")) p.yaw_degrees = number(*n, "yaw", context);
     return p;
   }
@@ -457,11 +483,14 @@ class SceneReader : public TomlReader {
       return n;
     };
     if (const toml::node* n = only_for("radius", {ShapeKind::sphere, ShapeKind::capsule}))
-      o.radius = positive(*n, "radius", context);
-    if (const toml::node* n = only_for("length", {ShapeKind::capsule})) o.length = positive(*n, "length", context);
+      o.radius = bounded(*n, "radius", context, kPlausibleMinSize, kPlausibleMaxSize, "m");
+    if (const toml::node* n = only_for("length", {ShapeKind::capsule}))
+      o.length = bounded(*n, "length", context, kPlausibleMinSize, kPlausibleMaxSize, "m");
     if (const toml::node* n = only_for("half_extents", {ShapeKind::box})) {
       o.half_extents = vector3(*n, "half_extents", context);
-      require(o.half_extents.minCoeff() > 0.0, "{}: 'half_extents'{} must be positive", at(*n), context);
+      require(o.half_extents.minCoeff() >= kPlausibleMinSize && o.half_extents.maxCoeff() <= kPlausibleMaxSize,
+              "{}: 'half_extents'{} = [{}, {}, {}] must have components in [{}, {}] m", at(*n), context,
+              o.half_extents.x(), o.half_extents.y(), o.half_extents.z(), kPlausibleMinSize, kPlausibleMaxSize);
     }
     if (const toml::node* n = only_for("normal", {ShapeKind::plane})) {
       o.normal = vector3(*n, "normal", context);
@@ -472,7 +501,8 @@ class SceneReader : public TomlReader {
       o.mesh_path = relative(string_value(*n, "file"));
       input_file(*n, "file", context, o.mesh_path, "a triangle mesh file (.obj, .stl, .ply)");
     }
-    if (const toml::node* n = only_for("scale", {ShapeKind::mesh})) o.scale = positive(*n, "scale", context);
+    if (const toml::node* n = only_for("scale", {ShapeKind::mesh}))
+      o.scale = bounded(*n, "scale", context, 1e-6, 1e3, "(a factor)");
     require(o.shape != ShapeKind::mesh || !o.mesh_path.empty(), "{}: a mesh object needs 'file'{}", at(node), context);
     // The size of every shape is given, never a silent default (docs/scenes.md).
     const std::pair<ShapeKind, const char*> needed[] = {{ShapeKind::sphere, "radius"},
@@ -483,7 +513,8 @@ class SceneReader : public TomlReader {
     for (const auto& [kind, key] : needed)
       if (o.shape == kind && t->get(key) == nullptr)
         fail(node, fmt::format("{}{}", key, context), "missing (a {} needs it)", shape);
-    if (const toml::node* n = t->get("position")) o.position = vector3(*n, "position", context);
+    if (const toml::node* n = t->get("position"))
+      o.position = bounded3(*n, "position", context, kPlausibleMaxPosition, "m");
     if (const toml::node* n = t->get("rotation")) o.rotation = vector3(*n, "rotation", context);
     if (const toml::node* n = t->get("motion")) {
       const std::string m = choice(*n, "motion", {"fixed", "prescribed", "free"}, context);
@@ -504,13 +535,15 @@ class SceneReader : public TomlReader {
       require(n == nullptr || o.motion == ObjectMotionKind::free, "{}: '{}'{} needs motion = \"free\"",
               n ? at(*n) : at(node), key, context);
     }
-    if (const toml::node* n = t->get("mass")) o.mass = positive(*n, "mass", context);
-    if (const toml::node* n = t->get("velocity")) o.velocity = vector3(*n, "velocity", context);
+    if (const toml::node* n = t->get("mass")) o.mass = bounded(*n, "mass", context, 1e-6, 1e4, "kg");
+    if (const toml::node* n = t->get("velocity"))
+      o.velocity = bounded3(*n, "velocity", context, kPlausibleMaxSpeed, "m/s");
     if (const toml::node* n = t->get("density")) {
       require(t->get("mass") == nullptr, "{}: give 'mass' [kg] or 'density' [kg/m³]{}, not both", at(*n), context);
-      o.density = positive(*n, "density", context);
+      o.density = bounded(*n, "density", context, 1.0, 1e5, "kg/m^3");
     }
-    if (const toml::node* n = t->get("angular_velocity")) o.angular_velocity = vector3(*n, "angular_velocity", context);
+    if (const toml::node* n = t->get("angular_velocity"))
+      o.angular_velocity = bounded3(*n, "angular_velocity", context, 1e3, "rad/s");
     if (const toml::node* n = t->get("friction")) {
       o.friction = number(*n, "friction", context);
       require(o.friction >= 0.0 && o.friction <= 10.0, "{}: 'friction'{} = {} must be in [0, 10] (Coulomb μ)", at(*n),
@@ -542,7 +575,8 @@ class SceneReader : public TomlReader {
     }
     if (const toml::node* n = t.get("max_offset"))
       c.max_offset = number_in(*n, "max_offset", context, 0.0, kMaxMotionOffset, "s");
-    if (const toml::node* n = t.get("spacing")) c.spacing = positive(*n, "spacing", context);
+    if (const toml::node* n = t.get("spacing"))
+      c.spacing = bounded(*n, "spacing", context, kPlausibleMinSize, kPlausibleMaxSize, "m");
     if (const toml::node* n = t.get("columns")) c.columns = count(*n, "columns", context, 1);
     if (const toml::node* n = t.get("shape_model")) {
       c.shape_model = relative(string_value(*n, "shape_model"));

@@ -88,9 +88,8 @@ TEST_F(Cli, MotionExportAsACompactXdmfSeriesHoldsTheSameFrames) {
   for (const char* precision : {"float32", "float64"}) {
     SCOPED_TRACE(precision);
     const auto out = dir_ / precision;
-    const auto r = run_sflsh(fmt::format("-q motion export --format xdmf --precision {} {}{}", precision, args,
-                                         out.string()),
-                             dir_);
+    const auto r = run_sflsh(
+        fmt::format("-q motion export --format xdmf --precision {} {}{}", precision, args, out.string()), dir_);
     ASSERT_EQ(r.exit_code, 0) << r.err;
     EXPECT_EQ(count_entries(out), 3u);  // body.xmf, body.h5, summary.json
     const xdmf::SeriesReader series(out / "body.xmf");

@@ -89,9 +89,9 @@ TEST(CliRender, DrawsTheRunsPosedBodyColouredBySigmaWithoutADisplay) {
                                  SFLSH_TEST_CACHE, vtk_run.string()),
                      dir);
   ASSERT_EQ(result.exit_code, 0) << result.err;
-  result = run_sflsh(fmt::format("-q render --run {} --color displacement --out {}", vtk_run.string(),
-                                 (dir / "vtk.png").string()),
-                     dir);
+  result = run_sflsh(
+      fmt::format("-q render --run {} --color displacement --out {}", vtk_run.string(), (dir / "vtk.png").string()),
+      dir);
   ASSERT_EQ(result.exit_code, 0) << result.err;
   sflsh::testing::expect_drawn_png(dir / "vtk.png", 900, 1000, 200);
   // --run and --map together are refused.

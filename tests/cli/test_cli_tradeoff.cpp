@@ -185,7 +185,7 @@ TEST(CliTradeoff, BadOptionsGiveOneLineAndWriteNothing) {
   };
   const std::vector<Case> cases = {
       {"--substeps 1 --budget-mm -1", "--budget-mm and --budget-relative must be positive"},
-      {"--substeps 0,2", "is below 1"},
+      {"--substeps 0,2", "0 is outside [1, 10⁶]"},
       {"--substeps 1,8", "must take a smaller step than every tested model"},
       {"--substeps 1 --budget-relative -0.5", "must be positive"},
       {"--substeps 1 --handles 100000", "100000 point handles requested"},

@@ -215,10 +215,32 @@ TEST(Npz, MembersWithAWrongCrcAreRefused) {
   bytes[central + 16] = static_cast<char>(bytes[central + 16] ^ 0x5A);
   std::ofstream(path, std::ios::binary | std::ios::trunc) << bytes;
 
-  const npz::Reader reader(path);
-  EXPECT_THAT([&] { reader.read("trans"); },
-              ::testing::ThrowsMessage<Error>(::testing::AllOf(HasSubstr(path.string() + ": trans: "), HasSubstr("CRC"),
-                                                               HasSubstr("corrupt archive"))));
+  // Refused at open (every member's CRC is checked there), naming the member.
+  EXPECT_THAT([&] { npz::Reader reader(path); },
+              ::testing::ThrowsMessage<Error>(::testing::AllOf(HasSubstr(path.string() + ": trans.npy: "),
+                                                               HasSubstr("CRC"), HasSubstr("corrupt archive"))));
+}
+
+TEST(Npz, AWrongCrcInAMemberNeverReadIsRefusedAtOpen) {
+  // Issue 45: a damaged member that is never read went unnoticed; the archive is now refused as a whole.
+  const auto dir = sflsh::testing::scratch_dir();
+  const auto path = dir / "body.npz";
+  npz::write(path, {{"a", npz::make_f64({2}, {1, 2})}, {"unused", npz::make_f64({3}, {3, 4, 5})}});
+  EXPECT_EQ(npz::Reader(path).keys().size(), 2u);
+  std::ifstream in(path, std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  in.close();
+  // The second member's local header and its central directory entry, flipped consistently.
+  const auto local = bytes.find(std::string("PK\x03\x04", 4), bytes.find(std::string("PK\x03\x04", 4)) + 1);
+  const auto central = bytes.find(std::string("PK\x01\x02", 4), bytes.find(std::string("PK\x01\x02", 4)) + 1);
+  ASSERT_NE(local, std::string::npos);
+  ASSERT_NE(central, std::string::npos);
+  bytes[local + 14] = static_cast<char>(bytes[local + 14] ^ 0x5A);
+  bytes[central + 16] = static_cast<char>(bytes[central + 16] ^ 0x5A);
+  std::ofstream(path, std::ios::binary | std::ios::trunc) << bytes;
+  EXPECT_THAT([&] { npz::Reader reader(path); },
+              ::testing::ThrowsMessage<Error>(
+                  ::testing::AllOf(HasSubstr(path.string() + ": unused.npy: "), HasSubstr("corrupt archive"))));
 }
 
 }  // namespace sflsh

@@ -166,7 +166,8 @@ TEST(XdmfSeriesReader, ReadsStepsTimesPointsAndArraysBack) {
     (void)reader.point_array(1, "velocity");
     ADD_FAILURE() << "no error for a missing array";
   } catch (const Error& e) {
-    EXPECT_THAT(e.what(), ::testing::HasSubstr("step 1 has no node array 'velocity' (it has: sigma_mm, displacement_m)"));
+    EXPECT_THAT(e.what(),
+                ::testing::HasSubstr("step 1 has no node array 'velocity' (it has: sigma_mm, displacement_m)"));
   }
   EXPECT_THROW((void)reader.points(3), Error);
 }

@@ -105,10 +105,10 @@ TEST_P(CliSimulate, XdmfSeriesHoldsTheSameFramesAsTheVtkSeries) {
   const auto vtk_run =
       run_sflsh(solver() + "--mesh coarse " + common() + " --format vtk --out " + (dir / "vtk").string(), dir);
   ASSERT_EQ(vtk_run.exit_code, 0) << vtk_run.err;
-  const auto xdmf_run = run_sflsh(solver() + "--mesh coarse " + common() +
-                                      " --format xdmf --precision float64 --fields all --write-layer --out " +
-                                      (dir / "xdmf").string(),
-                                  dir);
+  const auto xdmf_run =
+      run_sflsh(solver() + "--mesh coarse " + common() +
+                    " --format xdmf --precision float64 --fields all --write-layer --out " + (dir / "xdmf").string(),
+                dir);
   ASSERT_EQ(xdmf_run.exit_code, 0) << xdmf_run.err;
   for (const char* file : {"body.xmf", "body.h5", "layer.xmf", "layer.h5", "dynamics.vtp", "summary.json"})
     EXPECT_TRUE(fs::exists(dir / "xdmf" / file)) << file;
@@ -143,7 +143,8 @@ TEST_P(CliSimulate, XdmfSeriesHoldsTheSameFramesAsTheVtkSeries) {
 
 TEST_P(CliSimulate, DefaultOutputIsACompactXdmfSeriesOfTheDisplayArrays) {
   const fs::path dir = scratch_dir();
-  const auto run = run_sflsh(solver() + "--mesh coarse " + common() + " --write-layer --out " + (dir / "d").string(), dir);
+  const auto run =
+      run_sflsh(solver() + "--mesh coarse " + common() + " --write-layer --out " + (dir / "d").string(), dir);
   ASSERT_EQ(run.exit_code, 0) << run.err;
   const auto exp = run_sflsh(
       "motion export --subject OPEN_TRAIN_2 --motion shake_hips --frames 4 -q --out " + (dir / "exp").string(), dir);
@@ -151,8 +152,8 @@ TEST_P(CliSimulate, DefaultOutputIsACompactXdmfSeriesOfTheDisplayArrays) {
   std::vector<std::string> files;
   for (const auto& entry : fs::directory_iterator(dir / "d")) files.push_back(entry.path().filename().string());
   std::sort(files.begin(), files.end());
-  EXPECT_EQ(files, (std::vector<std::string>{"body.h5", "body.xmf", "dynamics.vtp", "layer.h5", "layer.xmf",
-                                             "summary.json"}));
+  EXPECT_EQ(files,
+            (std::vector<std::string>{"body.h5", "body.xmf", "dynamics.vtp", "layer.h5", "layer.xmf", "summary.json"}));
   const xdmf::SeriesReader body(dir / "d" / "body.xmf");
   ASSERT_EQ(body.steps(), 4u);
   // Float32 positions of a body ~1 m across: rounding ≤ 2⁻²⁴ · 2 m ≈ 1.2e-7 m; the rest frame is the export's.
@@ -163,10 +164,10 @@ TEST_P(CliSimulate, DefaultOutputIsACompactXdmfSeriesOfTheDisplayArrays) {
   const Eigen::MatrixXd soft = body.point_array(3, "soft_tissue_displacement");
   EXPECT_GT(soft.cwiseAbs().maxCoeff(), 1e-5);
   EXPECT_LT(((body.points(3) - last) - soft).cwiseAbs().maxCoeff(), 4e-7);
-  EXPECT_THAT(body.point_array_names(3),
-              ::testing::UnorderedElementsAre("skin_weights_argmax", "thickness_fraction", "young_tangent",
-                                              "young_normal", "soft_region", "soft_tissue_displacement",
-                                              "strain_energy_density", "Normals"));
+  EXPECT_THAT(
+      body.point_array_names(3),
+      ::testing::UnorderedElementsAre("skin_weights_argmax", "thickness_fraction", "young_tangent", "young_normal",
+                                      "soft_region", "soft_tissue_displacement", "strain_energy_density", "Normals"));
   const xdmf::SeriesReader layer(dir / "d" / "layer.xmf");
   EXPECT_EQ(layer.steps(), 4u);
   EXPECT_EQ(layer.cells().cols(), 4);
@@ -176,10 +177,12 @@ TEST_P(CliSimulate, DefaultOutputIsACompactXdmfSeriesOfTheDisplayArrays) {
   EXPECT_EQ(summary["output"]["compression"], "zlib");
   EXPECT_EQ(summary["output"]["fields"].size(), model::default_frame_fields().size());
   // --fields all brings every array back; lz4 is refused for an xdmf series in one line, leaving nothing.
-  const auto all = run_sflsh(solver() + "--mesh coarse " + common() + " --fields all --out " + (dir / "a").string(), dir);
+  const auto all =
+      run_sflsh(solver() + "--mesh coarse " + common() + " --fields all --out " + (dir / "a").string(), dir);
   ASSERT_EQ(all.exit_code, 0) << all.err;
-  EXPECT_THAT(xdmf::SeriesReader(dir / "a" / "body.xmf").point_array_names(3),
-              ::testing::IsSupersetOf({"displacement", "velocity", "elastic_displacement", "soft_tissue_displacement"}));
+  EXPECT_THAT(
+      xdmf::SeriesReader(dir / "a" / "body.xmf").point_array_names(3),
+      ::testing::IsSupersetOf({"displacement", "velocity", "elastic_displacement", "soft_tissue_displacement"}));
   const auto lz4 =
       run_sflsh(solver() + "--mesh coarse " + common() + " --compression lz4 --out " + (dir / "z").string(), dir);
   EXPECT_EQ(lz4.exit_code, 1);
@@ -206,6 +209,17 @@ TEST_P(CliSimulate, BadArgumentsGiveOneLineErrorsAndNoOutput) {
   const auto density = run_sflsh(solver() + common() + " --density -1 --out " + (dir / "b").string(), dir);
   EXPECT_NE(density.exit_code, 0);
   EXPECT_NE(density.err.find("--density"), std::string::npos) << density.err;
+  // Counts and rates state both bounds (issue 45: "--substeps must be an integer ≥ 1" although 10⁶ was the limit).
+  for (const auto& [option, expected] : std::vector<std::pair<std::string, std::string>>{
+           {"--substeps 1000000000", "--substeps must be an integer in [1, 10⁶], got 1000000000"},
+           {"--substeps 0", "--substeps must be an integer in [1, 10⁶], got 0"},
+           {"--handles 0", "--handles must be an integer in [1, 10⁶], got 0"},
+           {"--fps 1e9", "--fps must be in (0, 10000] frames per second, got 1000000000"}}) {
+    const auto r = run_sflsh(solver() + common() + " " + option + " --out " + (dir / "d").string(), dir);
+    EXPECT_EQ(r.exit_code, 1) << option;
+    EXPECT_NE(r.err.find(expected), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir / "d"));
+  }
   if (std::string(GetParam()) == "reduced") {
     const auto handles =
         run_sflsh(solver() + "--mesh coarse " + common() + " --handles 100000 --out " + (dir / "c").string(), dir);

@@ -267,6 +267,18 @@ TEST(VerifyProblem, BadExpressionsAreErrors) {
   EXPECT_NE(variable.find("time"), std::string::npos) << variable;
   const std::string nan = load_error(edited("0.01*sin(2*pi*2*t)", "sqrt(t-1)"));
   EXPECT_NE(nan.find("not finite"), std::string::npos) << nan;
+  // Plausibility before solving: over [0, time.duration] a drive stays within ten times the mesh's size (the bar's
+  // diagonal is 0.104 m, so 1.04 m); 10³⁰⁰·t and 2·t are refused at parse time, 0.5·t is not.
+  const std::string huge = load_error(edited("0.01*sin(2*pi*2*t)", "1e300*t"));
+  EXPECT_NE(huge.find(":16: drive[1].expression: '1e300*t' = 1e+297 m at t = 0.001 s; expected |u| ≤ 1.04 m"),
+            std::string::npos)
+      << huge;
+  EXPECT_NE(load_error(edited("0.01*sin(2*pi*2*t)", "2*t")).find("expected |u| ≤ 1.04 m over [0, time.duration = 1 s]"),
+            std::string::npos);
+  EXPECT_NE(load_error(edited("0.01*sin(2*pi*2*t)", "1/(t-0.5)")).find("drive[1].expression"), std::string::npos);
+  const fs::path dir = scratch_dir();
+  write_small_bar(dir);
+  EXPECT_NO_THROW(load_verify_problem(write_problem(dir, edited("0.01*sin(2*pi*2*t)", "0.5*t"))));
   // Non-finite later on: an error naming the expression and t, not a NaN.
   const ScalarDrive drive = expression_drive("1/(t-2)");
   EXPECT_NE(error_of([&] { drive.value(2.0); }).find("'1/(t-2)' is not finite at t = 2"), std::string::npos);

@@ -71,7 +71,20 @@ TEST(SceneFile, BadInputNamesFileAndLine) {
       {"[scene]\n" + std::string(kBody) + "mass = \"diagonal\"\n",
        "scene.toml:5: 'mass' in body #0 = 'diagonal' is not one of lumped | consistent"},
       {"[scene]\n" + std::string(kBody) + "[[object]]\nshape = \"sphere\"\nradius = -0.1\n",
-       "scene.toml:7: 'radius' in object #0 = -0.1 must be positive"},
+       "scene.toml:7: 'radius' in object #0 = -0.1 must be in [0.0001, 100] m"},
+      // Plausibility before solving: sizes, positions and speeds within their ranges (docs/scenes.md).
+      {"[scene]\n" + std::string(kBody) + "[[object]]\nshape = \"sphere\"\nradius = 1e9\n",
+       "scene.toml:7: 'radius' in object #0 = 1000000000 must be in [0.0001, 100] m"},
+      {"[scene]\n" + std::string(kBody) + "[[object]]\nshape = \"box\"\nhalf_extents = [0.1, 0.1, 500.0]\n",
+       "scene.toml:7: 'half_extents' in object #0 = [0.1, 0.1, 500] must have components in [0.0001, 100] m"},
+      {"[scene]\n" + std::string(kBody) + "[[object]]\nshape = \"sphere\"\nradius = 0.1\nposition = [0, 1e12, 0]\n",
+       "scene.toml:8: 'position' in object #0 = [0, 1000000000000, 0] must have components in [-1000, 1000] m"},
+      {"[scene]\n" + std::string(kBody) +
+           "[[object]]\nshape = \"sphere\"\nradius = 0.1\nmotion = \"free\"\nvelocity = [0, 0, -3e8]\n",
+       "scene.toml:9: 'velocity' in object #0 = [0, 0, -300000000] must have components in [-100, 100] m/s"},
+      {"[scene]\n" + std::string(kBody) +
+           "[[object]]\nshape = \"sphere\"\nradius = 0.1\nmotion = \"free\"\nmass = 1e9\n",
+       "scene.toml:9: 'mass' in object #0 = 1000000000 must be in [1e-06, 10000] kg"},
       {"[scene]\n" + std::string(kBody) + "[[object]]\nshape = \"box\"\nradius = 0.1\n",
        "'radius' in object #0 does not apply to a box"},
       {"[scene]\n" + std::string(kBody) +

@@ -86,6 +86,8 @@ TEST(SceneLimits, ObjObstaclesWithBadIndicesOrNonFiniteVerticesAreRefused) {
   EXPECT_THAT(beyond, HasSubstr("beyond.obj:9: f: vertex index 9 is outside the file's 4 vertices")) << beyond;
   const std::string nan = error_of([&] { TriangleMesh::load(write(dir / "nan.obj", "v nan 0 0\n" + tet)); });
   EXPECT_THAT(nan, HasSubstr("nan.obj:1: v: coordinate 1 is 'nan', expected a finite number")) << nan;
+  const std::string far = error_of([&] { TriangleMesh::load(write(dir / "far.obj", tet + "v 0 1e12 0\n")); });
+  EXPECT_THAT(far, HasSubstr("far.obj:9: v: coordinate 2 is 1e12, expected a number in [-1000, 1000]")) << far;
   std::filesystem::create_directories(dir / "mesh_dir.obj");
   const auto scene = write(
       dir / "scene.toml",

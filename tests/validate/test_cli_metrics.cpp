@@ -244,6 +244,12 @@ TEST(CliMetrics, BadArgumentsFailCleanlyAndWriteNothing) {
   EXPECT_NE(r.exit_code, 0);
   EXPECT_TRUE(one_error_line(r.err)) << r.err;
 
+  // One frame (asked with --frames 1, or all a sequence has): σ needs two; the message names the file and the key.
+  r = run_sflsh("metrics" + dyna + " --sequence 50004_shake_hips --frames 1 --out " + out.string(), dir);
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_THAT(r.err, HasSubstr(f.path.string() + ": 50004_shake_hips: 1 frame read (--frames 1), expected at least 2"));
+  EXPECT_TRUE(one_error_line(r.err)) << r.err;
+
   EXPECT_EQ(sflsh::testing::count_entries(out), 0u);  // no run folder content from any failure
 }
 

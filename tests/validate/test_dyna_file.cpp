@@ -203,6 +203,30 @@ TEST(DynaFile, WriterRejectsBadSequencesAndLeavesNoFileBehind) {
   EXPECT_FALSE(std::filesystem::exists(path));
 }
 
+TEST(DynaFile, UnrelatedDatasetsAreReadPastWithANote) {
+  // A dataset whose name cannot be '<subject>_<sequence>' (a note, a template kept beside the sequences) used to
+  // make the whole file unusable; it is read past, and the file's notes say so.
+  const auto dir = sflsh::testing::scratch_dir();
+  const auto path = dir / "extra.h5";
+  {
+    DynaWriter writer(path, small_faces());
+    writer.add(ramp("50004_shake_hips", 4, 3));
+    writer.commit();
+  }
+  {
+    H5::H5File file(path.string(), H5F_ACC_RDWR);
+    const hsize_t n[1] = {5};
+    const std::vector<double> values(5, 1.0);
+    file.createDataSet("readme", H5::PredType::IEEE_F64LE, H5::DataSpace(1, n))
+        .write(values.data(), H5::PredType::NATIVE_DOUBLE);
+  }
+  const DynaFile f(path);
+  EXPECT_EQ(f.keys(), std::vector<std::string>{"50004_shake_hips"});
+  ASSERT_EQ(f.notes().size(), 1u);
+  EXPECT_THAT(f.notes()[0], HasSubstr("extra.h5: readme: not a <subject>_<sequence> key, read past"));
+  EXPECT_EQ(f.read("50004_shake_hips").frames.size(), 3u);
+}
+
 TEST(DynaFile, KeysSplitIntoSubjectAndSequence) {
   EXPECT_EQ(subject_of("50004_one_leg_jump"), "50004");
   EXPECT_EQ(sequence_of("50004_one_leg_jump"), "one_leg_jump");

@@ -3,6 +3,7 @@
 
 #include <sflsh/body/motion.hpp>
 #include <sflsh/core/error.hpp>
+#include <sflsh/core/log.hpp>
 #include <sflsh/validate/dyna_file.hpp>
 
 #include <fmt/format.h>
@@ -212,6 +213,14 @@ DynaFile::DynaFile(const std::filesystem::path& path) : path_(path) {
     attributes_ = detail::read_attributes(file, where);
     for (const std::string& name : root_datasets(file, where)) {
       if (name == "faces") continue;
+      // A sequence key is '<subject>_<sequence>'; a dataset whose name cannot be one is not a sequence written
+      // badly but something else kept beside them (a note, a template): read past it, and say so.
+      const std::size_t underscore = name.find('_');
+      if (underscore == std::string::npos || underscore == 0 || underscore + 1 == name.size()) {
+        notes_.push_back(fmt::format("{}: {}: not a <subject>_<sequence> key, read past", where, name));
+        logger()->info("{}", notes_.back());
+        continue;
+      }
       const H5::DataSet dataset = file.openDataSet(name);
       const std::vector<hsize_t> dims = dimensions(dataset);
       require(dims.size() == 3 && dims[1] == 3 && dims[0] > 0 && dims[2] > 0,

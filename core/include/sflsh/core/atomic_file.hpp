@@ -16,6 +16,11 @@ std::filesystem::path temporary_sibling(const std::filesystem::path& target);
 void write_atomically(const std::filesystem::path& target,
                       const std::function<void(const std::filesystem::path& tmp)>& write);
 
+/// Removes the temporaries of `target` that writers killed before their rename left behind (".<name>.tmp-<pid>-<n>"
+/// and the files libzip derives from them) whose process <pid> is gone; those of live processes are left alone.
+/// Returns how many were removed. Caches call it before building an entry (issue 45: kills mid-write).
+int remove_stale_temporaries(const std::filesystem::path& target);
+
 /// Throws sflsh::Error "<target>: <what> (<strerror(error_number)>)", the one shape of every write failure.
 [[noreturn]] void throw_write_error(const std::filesystem::path& target, std::string_view what, int error_number);
 

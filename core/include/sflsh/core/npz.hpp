@@ -80,7 +80,8 @@ std::vector<std::uint8_t> serialize_npy(const Array& array);
 /// A read-only .npz archive. Keys are member names without the ".npy" suffix.
 class Reader {
  public:
-  /// Opens `path`; throws sflsh::Error "<path>: …" when it is missing or not a zip archive.
+  /// Opens `path` and checks every member's CRC-32 (read or not); throws sflsh::Error "<path>: …" when it is missing
+  /// or not a zip archive, "<path>: <member>: … (corrupt archive)" when a member's data and checksum disagree.
   explicit Reader(const std::filesystem::path& path);
   ~Reader();
   Reader(const Reader&) = delete;
@@ -98,6 +99,8 @@ class Reader {
   std::vector<std::string> keys_;
   struct Impl;
   std::unique_ptr<Impl> impl_;
+
+  void verify_member(std::uint64_t index, const std::string& member) const;
 };
 
 /// Writes an .npz (deflate-compressed members) atomically: temp file, then rename.

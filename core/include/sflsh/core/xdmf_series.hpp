@@ -3,8 +3,9 @@
 // `.h5`). The topology is stored once; the node positions once per step only when they change; every field
 // once per step, or once for the whole series when it is declared static (material fields, labels).
 // Float32 halves the file; zlib compression (HDF5's shuffle + deflate filters, one chunk per dataset) shrinks it
-// further and is read transparently by every HDF5 reader (ParaView, meshio through h5py, h5dump). ParaView opens the `.xmf` (its XDMF 3 reader) and meshio reads it
-// (meshio.xdmf.TimeSeriesReader); the datasets are ordinary HDF5 (h5py, h5dump). Layout of the `.h5`:
+// further and is read transparently by every HDF5 reader (ParaView, meshio through h5py, h5dump). ParaView opens the
+// `.xmf` (its XDMF 3 reader) and meshio reads it (meshio.xdmf.TimeSeriesReader); the datasets are ordinary HDF5 (h5py,
+// h5dump). Layout of the `.h5`:
 //   /topology                      cells × k  int32 (k = 3 triangles, 4 tetrahedra)
 //   /geometry/<step>               nodes × 3  positions [m] (a step that does not move the nodes reuses the last)
 //   /point/<name>/<step>, /cell/<name>/<step>      rows × components

@@ -89,8 +89,12 @@ class DynaFile {
   DynaFile& operator=(DynaFile&&) noexcept;
 
   const std::filesystem::path& path() const { return path_; }
-  /// Sequence dataset names (everything but `faces`), sorted.
+  /// Sequence dataset names (`<subject>_<sequence>`: every root dataset but `faces` whose name has an underscore),
+  /// sorted.
   const std::vector<std::string>& keys() const { return keys_; }
+  /// What was read past (root datasets that cannot be `<subject>_<sequence>` keys, e.g. 'readme'), one line each;
+  /// also logged when the file is opened.
+  const std::vector<std::string>& notes() const { return notes_; }
   bool has(const std::string& key) const;
   /// Distinct subjects (sorted) and the sequences of one subject (sorted).
   std::vector<std::string> subjects() const;
@@ -114,6 +118,7 @@ class DynaFile {
   std::filesystem::path path_;
   std::vector<std::string> keys_;
   std::vector<DynaSequenceInfo> infos_;
+  std::vector<std::string> notes_;
   RowMatrixX3i faces_;
   int vertices_ = 0;
   Attributes attributes_;
