@@ -124,6 +124,10 @@ Eigen::MatrixXd SeriesReader::read(const DataRef& ref) const {
   const int rank = H5Sget_simple_extent_ndims(space.id);
   require(rank == 1 || rank == 2, "{}: {} has {} dimensions, expected 1 or 2", h5_.string(), ref.path, rank);
   H5Sget_simple_extent_dims(space.id, dims, nullptr);
+  // Bounded before allocating (a sparse chunked dataset can declare any size): 2²⁸ values, 2 GiB as doubles.
+  require(dims[0] * (rank == 1 ? 1 : dims[1]) <= (hsize_t{1} << 28),
+          "{}: {} has {} × {} values, above the limit of 2^28", h5_.string(), ref.path, dims[0],
+          rank == 1 ? 1 : dims[1]);
   require(dims[0] == static_cast<hsize_t>(ref.rows) && (rank == 1 ? 1 : dims[1]) == static_cast<hsize_t>(ref.columns),
           "{}: {} is {} × {}, {} says {} × {}", h5_.string(), ref.path, dims[0], rank == 1 ? 1 : dims[1], xmf_.string(),
           ref.rows, ref.columns);
@@ -136,10 +140,18 @@ Eigen::MatrixXd SeriesReader::read(const DataRef& ref) const {
 
 vtk::Cells SeriesReader::cells() const {
   const Eigen::MatrixXd values = read(topology_);
+  const int nodes = steps_.front().geometry.rows;
+  require(values.size() == 0 || (values.minCoeff() >= 0 && values.maxCoeff() < nodes),
+          "{}: {} holds node indices outside 0 … {} (the geometry's nodes)", h5_.string(), topology_.path, nodes - 1);
   return values.cast<int>();
 }
 
-vtk::Points SeriesReader::points(std::size_t step) const { return read(step_at(step).geometry); }
+vtk::Points SeriesReader::points(std::size_t step) const {
+  const Step& s = step_at(step);
+  require(s.geometry.rows == steps_.front().geometry.rows, "{}: step {} has {} nodes, step 0 has {}", xmf_.string(),
+          step, s.geometry.rows, steps_.front().geometry.rows);
+  return read(s.geometry);
+}
 
 std::vector<std::string> SeriesReader::point_array_names(std::size_t step) const {
   std::vector<std::string> names;
@@ -157,6 +169,8 @@ Eigen::MatrixXd SeriesReader::point_array(std::size_t step, const std::string& n
     throw_error("{}: step {} has no node array '{}' (it has: {})", xmf_.string(), step, name,
                 there.empty() ? "none" : there);
   }
+  require(found->second.rows == s.geometry.rows, "{}: step {}: node array '{}' has {} rows for {} nodes", xmf_.string(),
+          step, name, found->second.rows, s.geometry.rows);
   return read(found->second);
 }
 

@@ -188,6 +188,13 @@ TEST(XdmfSeriesReader, RefusesWhatIsNotSuchASeriesInOneLine) {
               ::testing::HasSubstr("expected a temporal collection"));
   EXPECT_THAT(message("<Xdmf><Domain><Grid CollectionType=\"Temporal\"></Grid></Domain></Xdmf>"),
               ::testing::HasSubstr("the series has no steps"));
+  {  // cells naming a node the geometry does not have: refused before anything draws them
+    vtk::Cells tets(1, 4);
+    tets << 0, 1, 2, 7;
+    Series series(dir / "index.xmf", tets);
+    series.write(0.0, vtk::Points::Zero(5, 3), {});
+  }
+  EXPECT_THROW((void)SeriesReader(dir / "index.xmf").cells(), Error);
   write_three_steps(dir / "body.xmf", Precision::float64);
   fs::remove(dir / "body.h5");
   EXPECT_THROW(SeriesReader(dir / "body.xmf"), Error);
