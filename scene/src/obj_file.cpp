@@ -49,10 +49,11 @@ ObjMesh read_obj(const std::filesystem::path& path) {
         double value = 0.0;
         if (!(tokens >> token) || !parse_number(token, value) || !std::isfinite(value))
           throw_error("{}:{}: v: coordinate {} is '{}', expected a finite number", file, line, c + 1, token);
-        // Within a kilometre of the file's origin, as a scene's positions (docs/scenes.md, "Input limits").
-        if (std::abs(value) > 1000.0)
-          throw_error("{}:{}: v: coordinate {} is {}, expected a number in [-1000, 1000] (m before 'scale')", file,
-                      line, c + 1, token);
+        // Within a kilometre of the file's origin even in millimetres (files in mm come with scale = 0.001):
+        // ±10⁶ file units (docs/scenes.md, "Input limits").
+        if (std::abs(value) > 1e6)
+          throw_error("{}:{}: v: coordinate {} is {}, expected a number in [-1e6, 1e6] (file units, before 'scale')",
+                      file, line, c + 1, token);
         x[c] = value;
       }
       vertices.push_back(x);
