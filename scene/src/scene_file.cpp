@@ -120,46 +120,11 @@ class SceneReader : public TomlReader {
     }
   }
 
-  double positive(const toml::node& node, std::string_view key, std::string_view context) const {
-    const double v = number(node, key, context);
-    require(v > 0.0, "{}: '{}'{} = {} must be positive", at(node), key, context, v);
-    return v;
-  }
-
-  /// A physical quantity within its plausible range [lo, hi] (docs/scenes.md, "Input limits"): values outside it are
-  /// typing errors (a radius of 10⁹ m used to reach the solver, which then failed naming no file or key).
-  double bounded(const toml::node& node, std::string_view key, std::string_view context, double lo, double hi,
-                 std::string_view unit) const {
-    const double v = number(node, key, context);
-    require(v >= lo && v <= hi, "{}: '{}'{} = {} must be in [{}, {}] {}", at(node), key, context, v, lo, hi, unit);
-    return v;
-  }
-
-  /// A vector whose components each lie in [−bound, bound] (positions, velocities).
-  Eigen::Vector3d bounded3(const toml::node& node, std::string_view key, std::string_view context, double bound,
-                           std::string_view unit) const {
-    const Eigen::Vector3d v = vector3(node, key, context);
-    require(v.cwiseAbs().maxCoeff() <= bound, "{}: '{}'{} = [{}, {}, {}] must have components in [-{}, {}] {}",
-            at(node), key, context, v.x(), v.y(), v.z(), bound, bound, unit);
-    return v;
-  }
-
-  double non_negative(const toml::node& node, std::string_view key, std::string_view context) const {
-    const double v = number(node, key, context);
-    require(v >= 0.0, "{}: '{}'{} = {} must not be negative", at(node), key, context, v);
-    return v;
-  }
-
   int count(const toml::node& node, std::string_view key, std::string_view context, int minimum) const {
     const std::int64_t v = integer(node, key, context);
     require(v >= minimum && v <= 1'000'000, "{}: '{}'{} = {} must be an integer in [{}, 10⁶]", at(node), key, context,
             v, minimum);
     return static_cast<int>(v);
-  }
-
-  Eigen::Vector3d vector3(const toml::node& node, std::string_view key, std::string_view context) const {
-    const std::vector<double> v = numbers(node, key, 3, context);
-    return {v[0], v[1], v[2]};
   }
 
   std::string choice(const toml::node& node, std::string_view key, std::initializer_list<std::string_view> allowed,

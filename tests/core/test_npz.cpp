@@ -196,24 +196,36 @@ TEST(Npz, Float16IsConvertedExactly) {
   EXPECT_TRUE(std::isnan(v[10]));
 }
 
+namespace {
+
+/// Changes the CRC-32 of member `member` (0-based) in its local header (offset 14) and its central directory entry
+/// (offset 16) consistently, as a bit flip in transit would leave the data and the checksum disagreeing.
+void flip_crc(const std::filesystem::path& path, int member) {
+  std::ifstream in(path, std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  in.close();
+  const auto nth = [&](const char* signature) {
+    std::size_t at = bytes.find(std::string(signature, 4));
+    for (int k = 0; k < member && at != std::string::npos; ++k) at = bytes.find(std::string(signature, 4), at + 1);
+    return at;
+  };
+  const std::size_t local = nth("PK\x03\x04"), central = nth("PK\x01\x02");
+  ASSERT_NE(local, std::string::npos);
+  ASSERT_NE(central, std::string::npos);
+  bytes[local + 14] = static_cast<char>(bytes[local + 14] ^ 0x5A);
+  bytes[central + 16] = static_cast<char>(bytes[central + 16] ^ 0x5A);
+  std::ofstream(path, std::ios::binary | std::ios::trunc) << bytes;
+}
+
+}  // namespace
+
 TEST(Npz, MembersWithAWrongCrcAreRefused) {
   const auto dir = sflsh::testing::scratch_dir();
   const auto path = dir / "motion.npz";
   npz::write(path, {{"trans", npz::make_f64({2, 3}, {1, 2, 3, 4, 5, 6})}});
   EXPECT_EQ(npz::Reader(path).read("trans").to_doubles().back(), 6.0);
 
-  // Change the CRC-32 in the local header (offset 14) and the central directory (offset 16), consistently,
-  // as a bit flip in transit would leave the data and the checksum disagreeing.
-  std::ifstream in(path, std::ios::binary);
-  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  in.close();
-  const auto local = bytes.find(std::string("PK\x03\x04", 4));
-  const auto central = bytes.find(std::string("PK\x01\x02", 4));
-  ASSERT_NE(local, std::string::npos);
-  ASSERT_NE(central, std::string::npos);
-  bytes[local + 14] = static_cast<char>(bytes[local + 14] ^ 0x5A);
-  bytes[central + 16] = static_cast<char>(bytes[central + 16] ^ 0x5A);
-  std::ofstream(path, std::ios::binary | std::ios::trunc) << bytes;
+  flip_crc(path, 0);
 
   // Refused at open (every member's CRC is checked there), naming the member.
   EXPECT_THAT([&] { npz::Reader reader(path); },
@@ -227,17 +239,7 @@ TEST(Npz, AWrongCrcInAMemberNeverReadIsRefusedAtOpen) {
   const auto path = dir / "body.npz";
   npz::write(path, {{"a", npz::make_f64({2}, {1, 2})}, {"unused", npz::make_f64({3}, {3, 4, 5})}});
   EXPECT_EQ(npz::Reader(path).keys().size(), 2u);
-  std::ifstream in(path, std::ios::binary);
-  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  in.close();
-  // The second member's local header and its central directory entry, flipped consistently.
-  const auto local = bytes.find(std::string("PK\x03\x04", 4), bytes.find(std::string("PK\x03\x04", 4)) + 1);
-  const auto central = bytes.find(std::string("PK\x01\x02", 4), bytes.find(std::string("PK\x01\x02", 4)) + 1);
-  ASSERT_NE(local, std::string::npos);
-  ASSERT_NE(central, std::string::npos);
-  bytes[local + 14] = static_cast<char>(bytes[local + 14] ^ 0x5A);
-  bytes[central + 16] = static_cast<char>(bytes[central + 16] ^ 0x5A);
-  std::ofstream(path, std::ios::binary | std::ios::trunc) << bytes;
+  flip_crc(path, 1);  // the member never read
   EXPECT_THAT([&] { npz::Reader reader(path); },
               ::testing::ThrowsMessage<Error>(
                   ::testing::AllOf(HasSubstr(path.string() + ": unused.npy: "), HasSubstr("corrupt archive"))));

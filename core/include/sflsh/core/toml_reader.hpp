@@ -130,6 +130,41 @@ class TomlReader {
     return out;
   }
 
+  double positive(const toml::node& node, std::string_view key, std::string_view context) const {
+    const double v = number(node, key, context);
+    require(v > 0.0, "{}: '{}'{} = {} must be positive", at(node), key, context, v);
+    return v;
+  }
+
+  /// A physical quantity within its plausible range [lo, hi] (docs/scenes.md, "Input limits"): values outside
+  /// it are typing errors (a scene radius of 10⁹ m used to reach the solver, which then failed naming no key).
+  double bounded(const toml::node& node, std::string_view key, std::string_view context, double lo, double hi,
+                 std::string_view unit) const {
+    const double v = number(node, key, context);
+    require(v >= lo && v <= hi, "{}: '{}'{} = {} must be in [{}, {}] {}", at(node), key, context, v, lo, hi, unit);
+    return v;
+  }
+
+  /// A vector whose components each lie in [−bound, bound] (positions, velocities).
+  Eigen::Vector3d bounded3(const toml::node& node, std::string_view key, std::string_view context, double bound,
+                           std::string_view unit) const {
+    const Eigen::Vector3d v = vector3(node, key, context);
+    require(v.cwiseAbs().maxCoeff() <= bound, "{}: '{}'{} = [{}, {}, {}] must have components in [-{}, {}] {}",
+            at(node), key, context, v.x(), v.y(), v.z(), bound, bound, unit);
+    return v;
+  }
+
+  double non_negative(const toml::node& node, std::string_view key, std::string_view context) const {
+    const double v = number(node, key, context);
+    require(v >= 0.0, "{}: '{}'{} = {} must not be negative", at(node), key, context, v);
+    return v;
+  }
+
+  Eigen::Vector3d vector3(const toml::node& node, std::string_view key, std::string_view context) const {
+    const std::vector<double> v = numbers(node, key, 3, context);
+    return {v[0], v[1], v[2]};
+  }
+
   /// The 'vertex' of a [[control_point]] table (a body vertex index ≥ 0 that no earlier entry used: `seen`
   /// maps vertex → entry index) and its optional 'position' [m].
   int control_vertex(const toml::table& table, std::size_t index, std::string_view context,
