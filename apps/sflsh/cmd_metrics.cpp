@@ -109,6 +109,19 @@ void run_synthesize(const MetricsOptions& opt, const Invocation& invocation) {
       1e3 * s.truth.mean_sigma_soft());
 }
 
+/// The options of a measurement (not --list, not --synthesize), checked before anything is read.
+void check_measure_options(const MetricsOptions& opt) {
+  require(!opt.sequence.empty(), "metrics: --sequence KEY is required (see `sflsh metrics --dyna {} --list`)",
+          opt.dyna);
+  require(!opt.out.empty(), "metrics: --out DIR is required");
+  require(opt.frames >= 0, "metrics: --frames must be non-negative, got {}", opt.frames);
+  require(opt.soft_weight >= 0.0 && opt.soft_weight <= 1.0, "metrics: --soft-weight must be in [0, 1], got {}",
+          opt.soft_weight);
+  validate::parse_weighting(opt.pose_weights);  // a bad name fails before anything is read
+  require(opt.rigid_depth > 0.0, "metrics: --rigid-depth must be positive, got {}", opt.rigid_depth);
+  require(opt.temporal_weight >= 0.0, "metrics: --temporal-weight must be non-negative, got {}", opt.temporal_weight);
+}
+
 void run_metrics(const MetricsOptions& opt, const Invocation& invocation) {
   const auto t_start = std::chrono::steady_clock::now();
   if (!opt.synthesize.empty()) {
@@ -122,16 +135,7 @@ void run_metrics(const MetricsOptions& opt, const Invocation& invocation) {
     list_file(file);
     return;
   }
-  require(!opt.sequence.empty(), "metrics: --sequence KEY is required (see `sflsh metrics --dyna {} --list`)",
-          opt.dyna);
-  require(!opt.out.empty(), "metrics: --out DIR is required");
-  require(opt.frames >= 0, "metrics: --frames must be non-negative, got {}", opt.frames);
-  require(opt.soft_weight >= 0.0 && opt.soft_weight <= 1.0, "metrics: --soft-weight must be in [0, 1], got {}",
-          opt.soft_weight);
-  validate::parse_weighting(opt.pose_weights);  // a bad name fails before anything is read
-  require(opt.rigid_depth > 0.0, "metrics: --rigid-depth must be positive, got {}", opt.rigid_depth);
-  require(opt.temporal_weight >= 0.0, "metrics: --temporal-weight must be non-negative, got {}", opt.temporal_weight);
-
+  check_measure_options(opt);
   file.info(opt.sequence);  // an unknown sequence is named (with the file's list) before the body is loaded
   const body::BodyModel model = load_selected_body(opt.subject);
   file.require_vertices(model);
