@@ -12,6 +12,7 @@
 #include <sflsh/meshing/region.hpp>
 #include <sflsh/reduced/shape_model_file.hpp>
 
+#include <algorithm>
 #include <chrono>
 
 namespace sflsh::app {
@@ -62,6 +63,12 @@ void run_show(const ShowOptions& opt, const Invocation& invocation) {
 
   if (opt.material.empty() && opt.shape_model.empty())
     file = material::default_material(model, mesh, opt.control_points, subject_label);
+  // `betas`: the shape the fields are drawn for, so that `sflsh shapefit` can read the file without a subject
+  // table. A given material file keeps its own β; it gets the run's β only when it names the run's subject.
+  if (opt.material.empty() || (!file.betas && file.subject == subject_label)) {
+    file.betas.emplace();
+    std::copy(beta.data(), beta.data() + beta.size(), file.betas->begin());
+  }
   const material::BiharmonicBasis basis = material::layer_basis(model, mesh, file.vertices());
   const material::KappaMatrix kappa = file.kappa();
   const meshing::Retargeter retargeter(model, mesh);

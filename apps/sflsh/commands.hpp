@@ -38,6 +38,8 @@ void register_sweep_commands(CLI::App& app, const Invocation& invocation);
 void register_tradeoff_commands(CLI::App& app, const Invocation& invocation);
 /// `sflsh validate`: the paper's experiments on synthetic ground truth (cmd_validate.cpp).
 void register_validate_commands(CLI::App& app, const Invocation& invocation);
+/// `sflsh shapefit`: the shape regression of SFLSH eqs. 1, 4, 5 on material files (cmd_shapefit.cpp).
+void register_shapefit_commands(CLI::App& app, const Invocation& invocation);
 /// `sflsh groundtruth`: synthetic ground truth as DYNA-layout HDF5 (cmd_groundtruth.cpp).
 void register_groundtruth_commands(CLI::App& app, const Invocation& invocation);
 /// `sflsh metrics --dyna FILE.h5 --sequence KEY … --out DIR` and `--list` (cmd_metrics.cpp).

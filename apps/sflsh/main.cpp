@@ -93,6 +93,7 @@ int main(int argc, char** argv) {
   sflsh::app::register_sweep_commands(app, invocation);
   sflsh::app::register_tradeoff_commands(app, invocation);
   sflsh::app::register_validate_commands(app, invocation);
+  sflsh::app::register_shapefit_commands(app, invocation);
   sflsh::app::register_groundtruth_commands(app, invocation);
   sflsh::app::register_metrics_commands(app, invocation);
   sflsh::app::register_render_commands(app, invocation);

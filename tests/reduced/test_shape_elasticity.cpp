@@ -87,14 +87,26 @@ TEST(ShapeElasticity, LocalMetricIsSymmetricPositiveDefiniteAndGivesTheTrace) {
       material::lumped_mass(material::region_positions(open_body(), mesh), mesh.region_surface.faces);
   const std::vector<ShapeMetric> Q = local_shape_metric(open_body(), mesh.region_surface.vertices, area, param.phi());
   ASSERT_EQ(Q.size(), 12u);
+  const std::vector<ShapeMetric> M =
+      local_shape_covariance(open_body(), mesh.region_surface.vertices, area, param.phi());
+  ASSERT_EQ(M.size(), 12u);
   double trace_sum = 0.0;
-  for (const ShapeMetric& q : Q) {
+  double largest = 0.0;
+  for (std::size_t i = 0; i < Q.size(); ++i) {
+    const ShapeMetric& q = Q[i];
     EXPECT_LT((q - q.transpose()).norm(), 1e-12 * q.norm());
     const Eigen::SelfAdjointEigenSolver<ShapeMetric> eig(q);
     EXPECT_GT(eig.eigenvalues().minCoeff(), 0.0);
-    trace_sum += q.trace();
+    EXPECT_LT((q * M[i] - ShapeMetric::Identity()).norm(), 1e-8);  // Q_i = (M_i / m)⁻¹ (eq. 4)
+    trace_sum += M[i].trace();
+    largest = std::max(largest, Eigen::SelfAdjointEigenSolver<ShapeMetric>(M[i]).eigenvalues().maxCoeff());
   }
-  EXPECT_NEAR(trace_sum / (10.0 * 12.0), 1.0, 1e-12);  // the common scale (shape_elasticity.hpp)
+  // The common scale sits on the covariance (shape_elasticity.hpp): mean tr(M_i)/10 = 1, so the leading
+  // directions of β (eigenvalues of M_i of order one to ten; 11 measured) cost about what L² charges, not
+  // 10⁵× less as when the inverse carried the scale.
+  EXPECT_NEAR(trace_sum / (10.0 * 12.0), 1.0, 1e-12);
+  EXPECT_GT(largest, 1.0);
+  EXPECT_LT(largest, 100.0);
   // ‖L p‖² = (1/N) Σ tr(A_iᵀ Q_i A_i) (eq. 7).
   const ShapeElasticity s = random_model(12, 3);
   double expected = 0.0;

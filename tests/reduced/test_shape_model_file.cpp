@@ -105,7 +105,7 @@ TEST(ShapeModelFile, BadFilesAreRejectedWithFileAndLine) {
       {"inf_A", b1 + 4, "  [0.1, inf, 0.0],", "is not finite"},
       {"repeated_vertex", line_of("vertex = ", 1), "vertex = 3", "repeats vertex 3"},
       {"basis_kind", line_of("kind = "), "kind = 'radial'", "the only basis is 'bounded_biharmonic'"},
-      {"regularizer", line_of("regularizer = "), "regularizer = 'l1'", "expected l2 or local"},
+      {"regularizer", line_of("regularizer = "), "regularizer = 'l1'", "expected l2, local or none"},
       {"negative_lambda", line_of("lambda = "), "lambda = -1.0", "must be >= 0"},
       {"version", line_of("version = "), "version = 2", "'version' must be the integer 1"},
       {"syntax", line_of("poisson = "), "poisson = = 0.2", ""},

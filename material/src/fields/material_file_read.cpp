@@ -5,6 +5,7 @@
 
 #include <toml++/toml.h>
 
+#include <algorithm>
 #include <cmath>
 #include <initializer_list>
 #include <limits>
@@ -60,7 +61,7 @@ class Reader : public TomlReader {
 
   MaterialFile read() const {
     const toml::table root = parse("a material TOML file");
-    check_keys(root, {"version", "body", "subject", "poisson", "saturation", "bounds", "control_point"}, "");
+    check_keys(root, {"version", "body", "subject", "betas", "poisson", "saturation", "bounds", "control_point"}, "");
     MaterialFile file;
     file.source = path().string();
     if (const toml::node* version = root.get("version")) {
@@ -70,6 +71,11 @@ class Reader : public TomlReader {
     }
     file.body = string_value(required(root, "body", ""), "body");
     file.subject = string_value(required(root, "subject", ""), "subject");
+    if (const toml::node* betas = root.get("betas")) {
+      const std::vector<double> values = numbers(*betas, "betas", kNumBetasInFile, "");
+      file.betas.emplace();
+      std::copy(values.begin(), values.end(), file.betas->begin());
+    }
     const toml::node& poisson = required(root, "poisson", "");
     file.poisson = number(poisson, "poisson", "");
     require(file.poisson > -1.0 && file.poisson < 0.5, "{}: 'poisson' = {} is outside (-1, 0.5)", at(poisson),

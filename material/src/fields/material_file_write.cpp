@@ -14,6 +14,8 @@
 
 namespace sflsh::material {
 
+static_assert(kNumBetasInFile == static_cast<std::size_t>(body::kNumBetas), "'betas' holds the body's β");
+
 namespace {
 
 // "<what>:<line>" for points read from a file, "<what>" otherwise.
@@ -40,6 +42,8 @@ KappaMatrix MaterialFile::kappa() const {
 void validate(const MaterialFile& material, std::string_view what) {
   require(!material.body.empty(), "{}: 'body' must not be empty", what);
   require(!material.subject.empty(), "{}: 'subject' must not be empty", what);
+  if (material.betas)
+    for (double b : *material.betas) require(std::isfinite(b), "{}: 'betas' has a non-finite entry", what);
   require(std::isfinite(material.poisson) && material.poisson > -1.0 && material.poisson < 0.5,
           "{}: 'poisson' = {} is outside (-1, 0.5)", what, material.poisson);
   require(std::isfinite(material.saturation) && material.saturation > 0.0 && material.saturation <= kSaturationMax,
@@ -99,6 +103,11 @@ void save_material_file(const std::filesystem::path& path, const MaterialFile& m
   out << "version = " << kMaterialFileVersion << "\n";
   out << "body = " << toml_string(material.body) << "\n";
   out << "subject = " << toml_string(material.subject) << "\n";
+  if (material.betas) {
+    out << "betas = [";
+    for (std::size_t k = 0; k < material.betas->size(); ++k) out << (k ? ", " : "") << toml_float((*material.betas)[k]);
+    out << "]  # the subject's shape coefficients\n";
+  }
   out << "poisson = " << toml_float(material.poisson) << "\n";
   out << "saturation = " << toml_float(material.saturation) << "\n";
   out << "\n[bounds]  # closed ranges of each parameter; the maxima normalize κ (SFLSH §4)\n";

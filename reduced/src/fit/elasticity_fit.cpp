@@ -283,13 +283,10 @@ void setup_stage(Stage& stage, const FitContext& context, const std::vector<FitT
   }
   if (spec.kind == FitKind::shape) {
     std::vector<ShapeMetric> metric;
-    if (spec.regularizer == Regularizer::local) {
-      const meshing::LayerMesh& mesh = parameterization.mesh();
-      const Eigen::VectorXd area =
-          material::lumped_mass(material::region_positions(*context.body, mesh), mesh.region_surface.faces);
-      metric = local_shape_metric(*context.body, mesh.region_surface.vertices, area, parameterization.phi());
-    }
+    if (spec.regularizer == Regularizer::local)
+      metric = layer_shape_metric(*context.body, parameterization.mesh(), parameterization.phi());
     stage.L = regularizer_matrix(metric, N);
+    if (spec.regularizer == Regularizer::none) stage.L *= 0.0;  // no regularizer rows carry weight
   }
 
   if (spec.jacobian == JacobianMethod::sensitivities)

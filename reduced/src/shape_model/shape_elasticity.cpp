@@ -1,4 +1,6 @@
 #include <sflsh/core/error.hpp>
+#include <sflsh/material/layer_material.hpp>
+#include <sflsh/material/surface_operators.hpp>
 #include <sflsh/reduced/shape_elasticity.hpp>
 
 #include <Eigen/Cholesky>
@@ -66,16 +68,44 @@ Eigen::SparseMatrix<double> kappa_jacobian(const body::Betas& beta, int num_cont
   return J;
 }
 
-const char* regularizer_name(Regularizer r) { return r == Regularizer::l2 ? "L2" : "ours"; }
+const char* regularizer_name(Regularizer r) {
+  switch (r) {
+    case Regularizer::l2:
+      return "L2";
+    case Regularizer::local:
+      return "ours";
+    case Regularizer::none:
+      return "none";
+  }
+  return "?";
+}
 
-std::vector<ShapeMetric> local_shape_metric(const body::BodyModel& model, const std::vector<int>& region_vertices,
-                                            const Eigen::VectorXd& area, const Eigen::MatrixXd& phi) {
+const char* regularizer_key(Regularizer r) {
+  switch (r) {
+    case Regularizer::l2:
+      return "l2";
+    case Regularizer::local:
+      return "local";
+    case Regularizer::none:
+      return "none";
+  }
+  return "?";
+}
+
+Regularizer parse_regularizer(const std::string& text, const std::string& what) {
+  for (Regularizer r : {Regularizer::l2, Regularizer::local, Regularizer::none})
+    if (text == regularizer_key(r)) return r;
+  throw_error("{}: unknown regularizer '{}' (expected l2, local or none)", what, text);
+}
+
+std::vector<ShapeMetric> local_shape_covariance(const body::BodyModel& model, const std::vector<int>& region_vertices,
+                                                const Eigen::VectorXd& area, const Eigen::MatrixXd& phi) {
   const auto R = static_cast<Eigen::Index>(region_vertices.size());
   require(area.size() == R && phi.rows() == R, "local shape metric: {} region vertices, {} areas, basis with {} rows",
           R, area.size(), phi.rows());
   require(model.shapedirs.cols() >= kB, "local shape metric: the body has {} shape directions, expected ≥ {}",
           model.shapedirs.cols(), kB);
-  // Per vertex a(t) B(t)ᵀB(t), then the φ-weighted sums (eq. 4).
+  // Per vertex a(t) B(t)ᵀB(t), then the φ-weighted sums (eq. 3).
   std::vector<ShapeMetric> moment_of_vertex(static_cast<std::size_t>(R));
   for (Eigen::Index t = 0; t < R; ++t) {
     const int v = region_vertices[static_cast<std::size_t>(t)];
@@ -83,23 +113,37 @@ std::vector<ShapeMetric> local_shape_metric(const body::BodyModel& model, const 
     moment_of_vertex[static_cast<std::size_t>(t)] = area[t] * B.transpose() * B;
   }
   const int N = static_cast<int>(phi.cols());
-  std::vector<ShapeMetric> Q(static_cast<std::size_t>(N));
+  std::vector<ShapeMetric> M(static_cast<std::size_t>(N));
   double trace_sum = 0.0;
   for (int i = 0; i < N; ++i) {
-    ShapeMetric moment = ShapeMetric::Zero();
+    ShapeMetric& moment = M[static_cast<std::size_t>(i)];
+    moment.setZero();
     for (Eigen::Index t = 0; t < R; ++t) moment += phi(t, i) * moment_of_vertex[static_cast<std::size_t>(t)];
     moment = 0.5 * (moment + moment.transpose()).eval();
-    Eigen::LLT<ShapeMetric> llt(moment);
-    require(llt.info() == Eigen::Success && moment.diagonal().minCoeff() > 0.0,
+    require(Eigen::LLT<ShapeMetric>(moment).info() == Eigen::Success && moment.diagonal().minCoeff() > 0.0,
             "local shape metric: the shape blend-shape moment of control point {} is not positive definite", i);
-    Q[static_cast<std::size_t>(i)] = llt.solve(ShapeMetric::Identity());
-    Q[static_cast<std::size_t>(i)] =
-        0.5 * (Q[static_cast<std::size_t>(i)] + Q[static_cast<std::size_t>(i)].transpose()).eval();
-    trace_sum += Q[static_cast<std::size_t>(i)].trace();
+    trace_sum += moment.trace();
   }
-  const double scale = kB * N / trace_sum;  // mean tr(Q_i)/10 = 1
-  for (ShapeMetric& q : Q) q *= scale;
+  const double scale = kB * N / trace_sum;  // mean_i tr(M_i)/10 = 1: the covariance carries the scale, not Q
+  for (ShapeMetric& m : M) m *= scale;
+  return M;
+}
+
+std::vector<ShapeMetric> local_shape_metric(const body::BodyModel& model, const std::vector<int>& region_vertices,
+                                            const Eigen::VectorXd& area, const Eigen::MatrixXd& phi) {
+  std::vector<ShapeMetric> Q = local_shape_covariance(model, region_vertices, area, phi);
+  for (ShapeMetric& q : Q) {
+    const ShapeMetric inverse = Eigen::LLT<ShapeMetric>(q).solve(ShapeMetric::Identity());  // eq. 4
+    q = 0.5 * (inverse + inverse.transpose());
+  }
   return Q;
+}
+
+std::vector<ShapeMetric> layer_shape_metric(const body::BodyModel& model, const meshing::LayerMesh& mesh,
+                                            const Eigen::MatrixXd& phi) {
+  const Eigen::VectorXd area =
+      material::lumped_mass(material::region_positions(model, mesh), mesh.region_surface.faces);
+  return local_shape_metric(model, mesh.region_surface.vertices, area, phi);
 }
 
 Eigen::SparseMatrix<double> regularizer_matrix(const std::vector<ShapeMetric>& metric, int num_controls) {

@@ -128,7 +128,7 @@ void save_shape_model_file(const std::filesystem::path& path, const ShapeModelFi
   if (!model.mesh.empty()) out << "mesh = " << toml_string(model.mesh) << "\n";
   if (model.fit) {
     out << "\n[fit]  # how the model was fitted (metadata)\n";
-    out << "regularizer = " << toml_string(model.fit->regularizer == Regularizer::l2 ? "l2" : "local") << "\n";
+    out << "regularizer = " << toml_string(regularizer_key(model.fit->regularizer)) << "\n";
     out << "lambda = " << toml_float(model.fit->lambda) << "\n";
     out << "subjects = " << toml_strings(model.fit->subjects) << "\n";
     out << "motions = " << toml_strings(model.fit->motions) << "\n";

@@ -73,8 +73,7 @@ class Reader : public TomlReader {
     ShapeModelFit fit;
     const toml::node& reg = required(table, "regularizer", " in [fit]");
     const std::string r = string_value(reg, "regularizer", " in [fit]");
-    require(r == "l2" || r == "local", "{}: 'regularizer' in [fit] = '{}' (expected l2 or local)", at(reg), r);
-    fit.regularizer = r == "l2" ? Regularizer::l2 : Regularizer::local;
+    fit.regularizer = parse_regularizer(r, fmt::format("{}: 'regularizer' in [fit]", at(reg)));
     const toml::node& lambda = required(table, "lambda", " in [fit]");
     fit.lambda = number(lambda, "lambda", " in [fit]");
     require(fit.lambda >= 0.0, "{}: 'lambda' in [fit] = {} must be >= 0", at(lambda), fit.lambda);

@@ -8,6 +8,7 @@
 //   version = 1
 //   body = "open_body"                        # the body model's name (the stem of its .npz)
 //   subject = "OPEN_TRAIN_1"
+//   betas = [0.5, -1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]   # optional: the subject's 10 shape coefficients
 //   poisson = 0.2
 //   saturation = 4.0
 //   [bounds]                                  # optional; defaults of ParameterBounds
@@ -30,6 +31,7 @@ namespace sflsh::body {
 struct BodyModel;
 }
 
+#include <array>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -39,6 +41,8 @@ struct BodyModel;
 namespace sflsh::material {
 
 inline constexpr int kMaterialFileVersion = 1;
+/// Entries of the optional `betas` key: the body model's shape coefficients (body::kNumBetas).
+inline constexpr std::size_t kNumBetasInFile = 10;
 
 struct MaterialControlPoint {
   int vertex = -1;                          ///< body template vertex index
@@ -48,11 +52,12 @@ struct MaterialControlPoint {
 };
 
 struct MaterialFile {
-  std::string body;         ///< body model name (body::BodyModel::name)
-  std::string subject;      ///< subject name (body::Subject::name)
-  double poisson = 0.2;     ///< ν ∈ (−1, ½), uniform (SFLSH §3)
-  double saturation = 4.0;  ///< Fung saturation s > 0, uniform (SFLSH §3)
-  ParameterBounds bounds;   ///< ranges the κ_i must lie in; their maxima normalize κ
+  std::string body;                                          ///< body model name (body::BodyModel::name)
+  std::string subject;                                       ///< subject name (body::Subject::name)
+  std::optional<std::array<double, kNumBetasInFile>> betas;  ///< the subject's β (`betas`), when the file gives it
+  double poisson = 0.2;                                      ///< ν ∈ (−1, ½), uniform (SFLSH §3)
+  double saturation = 4.0;                                   ///< Fung saturation s > 0, uniform (SFLSH §3)
+  ParameterBounds bounds;                                    ///< ranges the κ_i must lie in; their maxima normalize κ
   std::vector<MaterialControlPoint> control_points;
   std::string source;  ///< the file it was read from (load_material_file); empty when built in memory
 
@@ -68,9 +73,9 @@ MaterialFile load_material_file(const std::filesystem::path& path);
 void save_material_file(const std::filesystem::path& path, const MaterialFile& material,
                         const std::string& header = "");
 
-/// Checks names non-empty, ν ∈ (−1, ½), s > 0, bounds (validate(ParameterBounds)), at least one control
-/// point, vertices ≥ 0 and distinct, positions finite, every κ_i within the bounds. Messages start with
-/// `what` (load passes "<file>:<line>").
+/// Checks names non-empty, β finite when given, ν ∈ (−1, ½), s > 0, bounds (validate(ParameterBounds)), at least one
+/// control point, vertices ≥ 0 and distinct, positions finite, every κ_i within the bounds. Messages start with `what`
+/// (load passes "<file>:<line>").
 void validate(const MaterialFile& material, std::string_view what = "material");
 
 /// Checks the file against the body it names: every vertex < #V, and every given position within

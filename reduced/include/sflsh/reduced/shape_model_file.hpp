@@ -20,10 +20,11 @@
 //   young_normal = [500.0, 50000.0]            # Pa
 //   [basis]                                    # φ of build_body_layer (material::layer_basis)
 //   kind = "bounded_biharmonic"                # the only kind: 0 ≤ φ ≤ 1, Σφ = 1, Voronoi mass
-//   region = "thighs+torso+upper_arms"         # optional: the layer region of the fit (names of
-//   meshing::known_region_names, '+') mesh = "coarse"                            # optional: the layer mesh size preset
-//   of the fit (coarse | default | fine) [fit]                                      # optional metadata regularizer =
-//   "local"                      # "l2" | "local" (eq. 7) lambda = 1.0                               # λ of eq. 7, ≥ 0
+//   region = "thighs+torso+upper_arms"         # optional: the layer region of the fit
+//   mesh = "coarse"                            # optional: the layer mesh preset of the fit
+//   [fit]                                      # optional metadata
+//   regularizer = "local"                      # "l2" | "local" (eq. 7) | "none"
+//   lambda = 1.0                               # λ of eq. 7, ≥ 0
 //   subjects = ["OPEN_TRAIN_1", "OPEN_TRAIN_2"]
 //   motions = ["running_on_spot"]
 //   [[control_point]]

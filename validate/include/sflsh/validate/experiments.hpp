@@ -5,7 +5,7 @@
 // fitted parameters per control point (Fig. 7) and — what the paper could not measure — the error of the
 // recovered parameters against the true ones. `sflsh validate` is a thin front end.
 #include <sflsh/meshing/layer_mesh.hpp>
-#include <sflsh/validate/lambda_choice.hpp>
+#include <sflsh/reduced/lambda_choice.hpp>
 
 #include <nlohmann/json.hpp>
 
@@ -14,6 +14,16 @@
 #include <vector>
 
 namespace sflsh::validate {
+
+// λ is chosen by the rules shared with `sflsh shapefit` (reduced/lambda_choice.hpp).
+using reduced::choose_lambda;
+using reduced::lambda_rule_name;
+using reduced::LambdaChoice;
+using reduced::LambdaRule;
+using reduced::LambdaScore;
+using reduced::mean_of_finite;
+using reduced::parse_lambda_rule;
+using reduced::standard_error_of_mean;
 
 struct ValidateConfig {
   std::string preset = "quick";

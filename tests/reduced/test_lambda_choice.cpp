@@ -1,14 +1,14 @@
 // Choosing λ from a leave-one-out sweep: the least-error rule and the one-standard-error rule on sweeps whose
 // answers are worked out by hand.
 #include <sflsh/core/error.hpp>
-#include <sflsh/validate/lambda_choice.hpp>
+#include <sflsh/reduced/lambda_choice.hpp>
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <limits>
 
-namespace validate = sflsh::validate;
+namespace validate = sflsh::reduced;  // validate chooses λ with these (and shapefit)
 
 namespace {
 

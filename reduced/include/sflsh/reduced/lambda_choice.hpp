@@ -1,11 +1,12 @@
 #pragma once
 // Choosing the regularization weight λ from a leave-one-out sweep (SFLSH §6.2, Fig. 5). The paper takes the λ
-// with the least cross-validation error; when the sweep is flat that picks a λ on noise. The one-standard-error
-// rule (docs/fit.md, "Choosing λ") takes the largest λ whose mean error is within one standard error of the least.
+// with the least cross-validation error (`sflsh validate` and `sflsh shapefit` share these rules); when the sweep is
+// flat that picks a λ on noise. The one-standard-error rule (docs/fit.md, "Choosing λ") takes the largest λ whose mean
+// error is within one standard error of the least.
 #include <string>
 #include <vector>
 
-namespace sflsh::validate {
+namespace sflsh::reduced {
 
 enum class LambdaRule {
   one_standard_error,  ///< largest λ with mean error ≤ least mean + its standard error (default)
@@ -16,7 +17,8 @@ enum class LambdaRule {
 LambdaRule parse_lambda_rule(const std::string& text, const std::string& what);
 std::string lambda_rule_name(LambdaRule rule);  ///< "one-se" or "min"
 
-/// One λ of the sweep: the cross-validation error of each left-out subject [mm] (NaN: missing).
+/// One λ of the sweep: the cross-validation error of each left-out subject (the unit of the caller's error: mm of σ in
+/// validate, normalized κ in shapefit; NaN: missing).
 struct LambdaScore {
   double lambda = 0.0;
   std::vector<double> fold_errors;
@@ -25,10 +27,10 @@ struct LambdaScore {
 struct LambdaChoice {
   double lambda = 0.0;              ///< chosen
   double least_lambda = 0.0;        ///< λ with the least mean error
-  double least_error = 0.0;         ///< its mean error over folds [mm]
-  double standard_error = 0.0;      ///< of that mean: sample standard deviation / √folds [mm] (0 with one fold)
-  double threshold = 0.0;           ///< the largest mean error the rule accepts [mm]
-  std::vector<double> mean_errors;  ///< per score, in the order given [mm] (NaN: no finite fold)
+  double least_error = 0.0;         ///< its mean error over folds
+  double standard_error = 0.0;      ///< of that mean: sample standard deviation / √folds (0 with one fold)
+  double threshold = 0.0;           ///< the largest mean error the rule accepts
+  std::vector<double> mean_errors;  ///< per score, in the order given (NaN: no finite fold)
 };
 
 /// Mean of the finite entries; NaN for none.
@@ -40,4 +42,4 @@ double standard_error_of_mean(const std::vector<double>& values);
 /// chosen. Throws when no λ has a finite error, naming `what` (e.g. the regularizer).
 LambdaChoice choose_lambda(const std::vector<LambdaScore>& sweep, LambdaRule rule, const std::string& what);
 
-}  // namespace sflsh::validate
+}  // namespace sflsh::reduced

@@ -1,10 +1,10 @@
 #include <sflsh/core/error.hpp>
-#include <sflsh/validate/lambda_choice.hpp>
+#include <sflsh/reduced/lambda_choice.hpp>
 
 #include <cmath>
 #include <limits>
 
-namespace sflsh::validate {
+namespace sflsh::reduced {
 
 LambdaRule parse_lambda_rule(const std::string& text, const std::string& what) {
   if (text == "one-se" || text == "one-standard-error") return LambdaRule::one_standard_error;
@@ -61,4 +61,4 @@ LambdaChoice choose_lambda(const std::vector<LambdaScore>& sweep, LambdaRule rul
   return choice;
 }
 
-}  // namespace sflsh::validate
+}  // namespace sflsh::reduced
