@@ -18,6 +18,7 @@ struct GroundTruthOptions {
   std::string mesh;
   int frames = -1;
   int threads = 0;
+  std::string truth_model;
   std::vector<std::string> subjects, motions;
 };
 
@@ -44,12 +45,16 @@ void register_groundtruth_commands(CLI::App& app, const Invocation& invocation) 
   cmd->add_option("--motions", o->motions, "Comma-separated motion names (replaces the preset's motions)")
       ->delimiter(',');
   cmd->add_option("--threads", o->threads, "Threads per process (0 = all)")->check(CLI::NonNegativeNumber);
+  cmd->add_option("--truth-model", o->truth_model,
+                  "Shape model file (TOML, as `sflsh shapefit` writes) whose κ(β) is the hidden material instead of "
+                  "the built-in one: κ at its control points is the model's, carried over the layer by φ");
   cmd->callback([o, invocation] {
     with_petsc(invocation, [&](int, int) {
       validate::ValidateConfig config = validate::ValidateConfig::from_preset(o->preset);
       if (!o->mesh.empty()) config.mesh = meshing::parse_size_preset(o->mesh);
       if (o->frames >= 0) config.frames = o->frames;
       config.threads = o->threads;
+      config.truth_model = o->truth_model;
       if (!o->subjects.empty()) {
         config.train_subjects = o->subjects;
         config.test_subjects.clear();

@@ -35,6 +35,7 @@ struct ValidateOptions {
   std::string jacobian = "exact";
   std::vector<std::string> dyna;
   std::string body;
+  std::string truth_model;
   bool quiet = false;
 };
 
@@ -55,6 +56,7 @@ void run_validate(const ValidateOptions& o, const Invocation& invocation) {
   }
   for (const std::string& f : o.dyna) config.dyna.emplace_back(f);
   config.body_path = o.body;
+  config.truth_model = o.truth_model;
   if (!o.test_subjects.empty()) config.test_subjects = o.test_subjects;
   if (!o.train_motions.empty()) config.train_motions = o.train_motions;
   if (!o.test_motions.empty()) config.test_motions = o.test_motions;
@@ -115,6 +117,9 @@ void register_validate_commands(CLI::App& app, const Invocation& invocation) {
       ->check(CLI::ExistingFile);
   cmd->add_option("--body", o->body, "Body model .npz (default: the open body; SMPL for DYNA data)")
       ->check(CLI::ExistingFile);
+  cmd->add_option("--truth-model", o->truth_model,
+                  "Shape model file (TOML, as `sflsh shapefit` writes) that defines the synthetic truth's material "
+                  "instead of the built-in one (docs/fit.md)");
   cmd->add_option("--threads", o->threads, "Threads per process (0 = all)")->check(CLI::NonNegativeNumber);
   cmd->add_option("--jacobian", o->jacobian,
                   "dσ/dq: exact (sensitivities, thickness through the retarget; default), hybrid (thickness columns "

@@ -104,7 +104,7 @@ TEST(OpenBody, HasSmplLayout) {
   EXPECT_EQ(m.weights.rows(), n);
   EXPECT_EQ(m.weights.cols(), kNumJoints);
   EXPECT_EQ(m.parents, kJointParents);
-  EXPECT_EQ(open_subjects().size(), 10u);
+  EXPECT_EQ(open_subjects().size(), 12u);  // 5 train, 7 test (6 and 7: locality probes)
 }
 
 TEST(OpenBody, SurfaceIsCleanAtTheMean) { expect_clean_surface(Betas::Zero(), "β = 0"); }
@@ -286,4 +286,35 @@ TEST(OpenBody, SubjectsAreNamedAndProjected) {
   const auto find = [&](const std::string& name) -> const Subject& { return find_subject(subjects, name); };
   EXPECT_GT(stature(find("OPEN_TRAIN_4").beta), stature(find("OPEN_TRAIN_1").beta) + 0.08) << "tall and thin";
   EXPECT_LT(stature(find("OPEN_TEST_4").beta), stature(find("OPEN_TRAIN_1").beta) - 0.08) << "short and thin";
+}
+
+// The locality probes (SFLSH's TEST 1 shares the upper body of DYNA 1): OPEN_TEST_6 keeps OPEN_TRAIN_3's chest,
+// OPEN_TEST_7 OPEN_TRAIN_2's hips and thighs, while the rest of the body and β differ. Measured on the shaped
+// templates, mean distance over the vertices each bone dominates: 0.0–0.1 mm on the shared part, 7–22 mm elsewhere.
+TEST(OpenBody, LocalityProbesShareOneBodyPartWithATrainSubject) {
+  const auto& subjects = open_subjects();
+  const Eigen::MatrixXd& w = model().weights;
+  auto mean_distance = [&](const std::string& a, const std::string& b, std::initializer_list<const char*> bones) {
+    const RowMatrixX3d va = shaped_template(model(), find_subject(subjects, a).beta);
+    const RowMatrixX3d vb = shaped_template(model(), find_subject(subjects, b).beta);
+    double sum = 0.0;
+    int count = 0;
+    for (Eigen::Index v = 0; v < w.rows(); ++v) {
+      Eigen::Index dominant = 0;
+      w.row(v).maxCoeff(&dominant);
+      for (const char* bone : bones)
+        if (kJointNames[static_cast<std::size_t>(dominant)] == std::string(bone)) {
+          sum += (va.row(v) - vb.row(v)).norm();
+          ++count;
+        }
+    }
+    EXPECT_GT(count, 50);
+    return sum / count;
+  };
+  EXPECT_GE((find_subject(subjects, "OPEN_TEST_6").beta - find_subject(subjects, "OPEN_TRAIN_3").beta).norm(), 2.0);
+  EXPECT_GE((find_subject(subjects, "OPEN_TEST_7").beta - find_subject(subjects, "OPEN_TRAIN_2").beta).norm(), 2.0);
+  EXPECT_LT(mean_distance("OPEN_TEST_6", "OPEN_TRAIN_3", {"spine2", "spine3"}), 1e-3);
+  EXPECT_GT(mean_distance("OPEN_TEST_6", "OPEN_TRAIN_3", {"pelvis", "left_hip", "right_hip"}), 5e-3);
+  EXPECT_LT(mean_distance("OPEN_TEST_7", "OPEN_TRAIN_2", {"left_hip", "right_hip", "left_knee", "right_knee"}), 1e-3);
+  EXPECT_GT(mean_distance("OPEN_TEST_7", "OPEN_TRAIN_2", {"spine2", "left_collar", "right_collar"}), 5e-3);
 }

@@ -24,7 +24,8 @@ OpenBodySubject subject(const char* name, const char* split, const char* descrip
 
 std::vector<OpenBodySubject> open_body_subject_definitions() {
   // Train subjects probe the features of the paper's Table 1 (average, pear, large chest, tall and
-  // thin, heavy); test subjects vary them so that none coincides with a train subject.
+  // thin, heavy); test subjects 1–5 vary them so that none coincides with a train subject (extrapolation),
+  // 6 and 7 keep one train subject's body part (locality).
   return {
       subject("OPEN_TRAIN_1", "train", "average body (all factors zero)", {}),
       subject("OPEN_TRAIN_2", "train", "pear shape: wide hips, heavy thighs and buttocks, narrow shoulders",
@@ -42,6 +43,17 @@ std::vector<OpenBodySubject> open_body_subject_definitions() {
       subject("OPEN_TEST_4", "test", "short and thin", {{kStature, -2.0}, {kGirth, -1.5}, {kBelly, -1.0}}),
       subject("OPEN_TEST_5", "test", "heavy with large buttocks and belly",
               {{kGirth, 1.5}, {kBelly, 1.5}, {kButtocks, 2.0}, {kThighGirth, 0.5}}),
+      // Locality probes (the paper's TEST 1 has the upper body of DYNA 1): one body part as a train subject's,
+      // the rest of the body different enough that β differs by ≥ 2 in norm (tests/body/test_open_body.cpp).
+      subject("OPEN_TEST_6", "test", "the large chest of OPEN_TRAIN_3 on a pear-shaped lower body",
+              {{kChest, 2.5}, {kGirth, 0.5}, {kHipWidth, 2.0}, {kThighGirth, 1.5}, {kButtocks, 1.5}}),
+      subject("OPEN_TEST_7", "test", "the hips, thighs and buttocks of OPEN_TRAIN_2 under a heavy upper body",
+              {{kHipWidth, 2.0},
+               {kThighGirth, 1.5},
+               {kButtocks, 1.5},
+               {kShoulderWidth, 1.0},
+               {kChest, 1.5},
+               {kBelly, 1.5}}),
   };
 }
 

@@ -12,6 +12,7 @@
 #include <sflsh/core/scoped_seconds.hpp>
 #include <sflsh/core/summary.hpp>
 #include <sflsh/meshing/layer_cache.hpp>
+#include <sflsh/meshing/region.hpp>
 #include <sflsh/reduced/elasticity_fit.hpp>
 #include <sflsh/validate/dyna_file.hpp>
 #include <sflsh/validate/dynamics_metrics.hpp>
@@ -46,6 +47,11 @@ double default_thickness_max(meshing::SizePreset size) {
 
 std::string case_key(const std::string& subject, const std::string& motion) { return subject + "_" + motion; }
 
+/// The hidden material of the synthetic truth: the built-in one, or the shape model of `--truth-model`.
+TrueMaterial true_material(const ValidateConfig& config) {
+  return config.truth_model.empty() ? TrueMaterial() : TrueMaterial::from_shape_model(config.truth_model);
+}
+
 /// The ground truth of every case, computed (round robin over ranks) or loaded from state/groundtruth.
 std::map<std::string, GroundTruthCase> compute_ground_truth(
     const ValidateConfig& config, const std::map<std::string, std::unique_ptr<reduced::DynamicsCase>>& cases,
@@ -55,6 +61,8 @@ std::map<std::string, GroundTruthCase> compute_ground_truth(
   std::map<std::string, GroundTruthCase> truth;
   GroundTruthOptions gto;
   gto.bounds = bounds;
+  gto.truth = true_material(config);
+  const std::string fingerprint = gto.truth.fingerprint();
   std::vector<std::string> keys;
   for (const auto& [key, c] : cases) keys.push_back(key);
   Progress progress("ground truth (full space)", keys.size(), config.progress && pool.rank() == 0);
@@ -62,7 +70,10 @@ std::map<std::string, GroundTruthCase> compute_ground_truth(
     if (static_cast<int>(k) % pool.ranks() != pool.rank()) continue;
     const std::filesystem::path file = state / "groundtruth" / (keys[k] + ".npz");
     GroundTruthCase c;
-    if (!load_ground_truth_case(file, c)) {
+    const bool cached = load_ground_truth_case(file, c);
+    if (cached && c.truth != fingerprint)
+      logger()->info("ground truth {}: cached with another true material ({}); recomputing", keys[k], c.truth);
+    if (!cached || c.truth != fingerprint) {
       const reduced::DynamicsCase& dc = *cases.at(keys[k]);
       c = simulate_ground_truth(dc.layer(), motions.at(dc.motion()), dc.subject(), parameterizations.get(1),
                                 layer_options, gto);
@@ -164,6 +175,15 @@ DynaTruth load_dyna_truth(const ValidateConfig& config, const body::BodyModel& m
 
 void prepare(const ValidateConfig& config, Setup& s, DynaTruth* dyna = nullptr) {
   s.model = body::load_body(config.body_path.empty() ? body::default_body_path() : config.body_path);
+  if (!config.truth_model.empty()) {  // a bad truth model fails before any layer is built
+    require(config.dyna.empty(), "--truth-model: the ground truth comes from the DYNA files given; drop one of them");
+    const TrueMaterial truth = true_material(config);
+    const reduced::ShapeModelFile& m = *truth.shape_model();
+    require(m.body == s.model.name, "{}: body: the truth model is for body '{}', but the run uses body '{}'", m.source,
+            m.body, s.model.name);
+    reduced::check_layer_match(m, meshing::region_key(meshing::default_region_names()),
+                               meshing::size_preset_name(config.mesh), "--truth-model");
+  }
   const std::vector<body::Subject> subjects = body::default_subjects();
   if (dyna) {
     *dyna = load_dyna_truth(config, s.model);
@@ -257,7 +277,8 @@ nlohmann::json run_validation(const ValidateConfig& requested, const std::filesy
     }
   } else {
     truth = compute_ground_truth(config, cases, motions, parameterizations, layer_options, bounds, state, pool);
-    if (pool.rank() == 0) write_ground_truth_files(run, model, *first.layer().mesh, truth_pointers(truth), bounds);
+    if (pool.rank() == 0)
+      write_ground_truth_files(run, model, *first.layer().mesh, truth_pointers(truth), bounds, true_material(config));
   }
 
   // The reduced model (template discretization shared by every subject).
@@ -427,7 +448,8 @@ nlohmann::json run_ground_truth(const ValidateConfig& config, const std::filesys
                                 {"sigma_mean_mm", c.mean_sigma()},
                                 {"seconds", c.seconds}});
   if (pool.rank() == 0) {
-    write_ground_truth_files(run, setup.model, *first.layer().mesh, truth_pointers(truth), setup.bounds);
+    write_ground_truth_files(run, setup.model, *first.layer().mesh, truth_pointers(truth), setup.bounds,
+                             true_material(config));
     summary["seconds"] = seconds_since(start);
     write_json(run.stage("summary.json"), summary);
     run.commit();

@@ -32,7 +32,8 @@ GroundTruthCase simulate_ground_truth(const model::BodyLayer& layer, const body:
   out.motion = motion.name;
   out.beta = layer.beta;
   out.fps = motion.fps;
-  out.kappa = true_kappa_field(*layer.model, *layer.mesh, layer.beta, options.bounds);
+  out.kappa = options.truth.kappa_field(*layer.model, *layer.mesh, layer.beta, options.bounds);
+  out.truth = options.truth.fingerprint();
   meshing::RowMatrixX3d rest_skin;
   const model::Problem problem = parameterization.problem_from_field(layer, out.kappa, layer_options, &rest_skin);
   fullspace::FullSpaceSolver solver(problem, MPI_COMM_SELF);
@@ -77,6 +78,7 @@ void save_ground_truth_case(const std::filesystem::path& path, const GroundTruth
   members.emplace_back("motion", npz::make_string(c.motion));
   members.emplace_back("beta", npz::make_f64(Eigen::MatrixXd(c.beta.transpose())));
   members.emplace_back("fps", npz::make_scalar(c.fps));
+  members.emplace_back("truth", npz::make_string(c.truth));
   members.emplace_back("sigma_normal", npz::make_f64(Eigen::MatrixXd(c.sigma_normal.transpose())));
   members.emplace_back("sigma_tangent", npz::make_f64(Eigen::MatrixXd(c.sigma_tangent.transpose())));
   members.emplace_back("kappa", npz::make_f64(Eigen::MatrixXd(c.kappa)));
@@ -105,6 +107,7 @@ bool load_ground_truth_case(const std::filesystem::path& path, GroundTruthCase& 
     c.motion = r.read("motion").to_string();
     c.beta = vec("beta");
     c.fps = vec("fps")[0];
+    c.truth = r.has("truth") ? r.read("truth").to_string() : std::string("builtin normal-offset v1");
     c.sigma_normal = vec("sigma_normal");
     c.sigma_tangent = vec("sigma_tangent");
     const npz::Array k = r.read("kappa");

@@ -11,8 +11,8 @@
 namespace sflsh::validate {
 
 void write_ground_truth_files(RunFolder& run, const body::BodyModel& model, const meshing::LayerMesh& mesh,
-                              const std::vector<const GroundTruthCase*>& cases,
-                              const material::ParameterBounds& bounds) {
+                              const std::vector<const GroundTruthCase*>& cases, const material::ParameterBounds& bounds,
+                              const TrueMaterial& truth) {
   require(!cases.empty(), "ground truth: no cases to write");
   std::vector<DynaSequence> sequences;
   std::map<std::string, const GroundTruthCase*> subjects;
@@ -31,7 +31,7 @@ void write_ground_truth_files(RunFolder& run, const body::BodyModel& model, cons
   Attributes file;
   file.strings["source"] = "sflsh synthetic ground truth";
   file.strings["body"] = model.name;
-  file.strings["true_material"] = true_material_description();
+  file.strings["true_material"] = truth.description();
   write_dyna_file(run.stage("groundtruth.h5"), model.faces, sequences, file);
 
   const std::vector<int>& region = mesh.region_surface.vertices;
@@ -41,7 +41,7 @@ void write_ground_truth_files(RunFolder& run, const body::BodyModel& model, cons
                                                      {"kappa", npz::make_f64(Eigen::MatrixXd(c->kappa))},
                                                      {"beta", npz::make_f64(Eigen::MatrixXd(c->beta.transpose()))}});
   nlohmann::json j;
-  j["description"] = true_material_description();
+  j["description"] = truth.description();
   j["columns"] = {"thickness", "young_tangent_pa", "young_normal_pa"};
   j["bounds"] = {{"thickness", {bounds.thickness.min, bounds.thickness.max}},
                  {"young_tangent", {bounds.young_tangent.min, bounds.young_tangent.max}},

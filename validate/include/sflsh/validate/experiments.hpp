@@ -63,6 +63,9 @@ struct ValidateConfig {
   std::filesystem::path body_path;          ///< body model (empty: the open body); SMPL for DYNA data
   bool preset_subjects_overridden = false;  ///< train_subjects were chosen by the user (DYNA: select those ids)
   std::filesystem::path cache_dir;          ///< template mesh cache (empty: default)
+  /// The synthetic truth's material: empty for the built-in one, else a shape model file (`--truth-model`,
+  /// true_material.hpp).
+  std::filesystem::path truth_model;
   bool progress = true;
 
   /// The presets: "quick" (coarse mesh, 3 train + 2 test subjects, one train and one test motion, 40

@@ -7,6 +7,7 @@
 #include <sflsh/core/run_folder.hpp>
 #include <sflsh/model/body_layer.hpp>
 #include <sflsh/reduced/layer_parameterization.hpp>
+#include <sflsh/validate/true_material.hpp>
 
 #include <filesystem>
 #include <string>
@@ -20,6 +21,7 @@ struct GroundTruthCase {
   double fps = 60.0;
   Eigen::VectorXd sigma_normal, sigma_tangent;  ///< per region vertex [mm]
   material::KappaMatrix kappa;                  ///< the true κ per region vertex (physical)
+  std::string truth;                            ///< TrueMaterial::fingerprint() of the material it ran with
   std::vector<body::RowMatrixX3d> posed;        ///< whole posed body per frame [m] (empty unless asked)
   double seconds = 0.0;
   int newton_iterations = 0;
@@ -30,6 +32,7 @@ struct GroundTruthCase {
 
 struct GroundTruthOptions {
   material::ParameterBounds bounds;
+  TrueMaterial truth;       ///< the hidden material (default: the built-in one)
   bool keep_frames = true;  ///< fill GroundTruthCase::posed
 };
 
@@ -56,7 +59,7 @@ namespace sflsh::validate {
 /// `<dir>/truth/<subject>.npz` (region_vertices, kappa per region vertex [h, Pa, Pa], beta) and
 /// `<dir>/truth/true_material.json`. Files are staged in `run` (atomic). Cases need their posed frames.
 void write_ground_truth_files(RunFolder& run, const body::BodyModel& model, const meshing::LayerMesh& mesh,
-                              const std::vector<const GroundTruthCase*>& cases,
-                              const material::ParameterBounds& bounds);
+                              const std::vector<const GroundTruthCase*>& cases, const material::ParameterBounds& bounds,
+                              const TrueMaterial& truth);
 
 }  // namespace sflsh::validate
