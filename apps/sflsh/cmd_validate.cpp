@@ -23,6 +23,7 @@ struct ValidateOptions {
   int cubature = -2;
   int frames = -1;
   int iterations = 0;
+  double loss_rtol = -1.0;
   int warm_iterations = -1;
   int threads = 0;
   std::vector<int> stages;
@@ -46,6 +47,7 @@ void run_validate(const ValidateOptions& o, const Invocation& invocation) {
   if (o.cubature >= -1) config.cubature = o.cubature;
   if (o.frames >= 0) config.frames = o.frames;
   if (o.iterations > 0) config.iterations = o.iterations;
+  if (o.loss_rtol >= 0.0) config.loss_rtol = o.loss_rtol;
   if (o.warm_iterations >= 0) config.warm_iterations = o.warm_iterations;
   config.threads = o.threads;
   if (!o.stages.empty()) config.stages = o.stages;
@@ -99,7 +101,14 @@ void register_validate_commands(CLI::App& app, const Invocation& invocation) {
   cmd->add_option("--stages", o->stages, "Control-point counts, e.g. 1,12,24,84")
       ->delimiter(',')
       ->check(CLI::PositiveNumber);
-  cmd->add_option("--iterations", o->iterations, "Trust-region iterations per stage")->check(CLI::PositiveNumber);
+  cmd->add_option("--iterations", o->iterations,
+                  "Trust-region iterations per stage at most: the safety net (fits.csv's reason says when it ended a "
+                  "stage)")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--loss-rtol", o->loss_rtol,
+                  "A stage converges when two accepted iterations lower its loss by at most this fraction (default "
+                  "1e-3; 0: only the gradient and trust-region tests)")
+      ->check(CLI::Range(0.0, 0.5));
   cmd->add_option("--warm-iterations", o->warm_iterations,
                   "Trust-region iterations of each warm-started fit of the λ sweep (0 = --iterations; paper preset: 3)")
       ->check(CLI::NonNegativeNumber);

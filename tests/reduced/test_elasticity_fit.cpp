@@ -43,6 +43,39 @@ TEST(BoundedLeastSquares, SolvesWithAnActiveBound) {
   EXPECT_DOUBLE_EQ(r.loss, 0.5 * r.residual.squaredNorm());
 }
 
+// The stopping tests are named. Rosenbrock's valley stops on the relative decrease of the loss once two
+// accepted iterations gain less than loss_rtol, well before the cap; with the test off the cap is what stops it, and
+// says so.
+TEST(BoundedLeastSquares, NamesTheTestThatStoppedIt) {
+  LeastSquaresProblem problem;
+  // r = (10 (x1 − x0²), 1 − x0): Rosenbrock's valley, many small accepted steps along the curve.
+  problem.residual = [](const Eigen::VectorXd& x) { return Eigen::Vector2d(10.0 * (x[1] - x[0] * x[0]), 1.0 - x[0]); };
+  problem.normal_equations = [](const Eigen::VectorXd& x, const Eigen::VectorXd& r) {
+    Eigen::Matrix2d J;
+    J << -20.0 * x[0], 10.0, -1.0, 0.0;
+    return NormalEquations{J.transpose() * J, J.transpose() * r};
+  };
+  problem.lower = Eigen::Vector2d(-5.0, -5.0);
+  problem.upper = Eigen::Vector2d(5.0, 5.0);
+  LeastSquaresOptions options;
+  options.gradient_atol = options.gradient_rtol = options.gradient_ttol = 0.0;
+  options.max_iterations = 3;
+  const LeastSquaresResult capped = solve_bounded_least_squares(problem, Eigen::Vector2d(-1.2, 1.0), options);
+  EXPECT_EQ(capped.stopped_by, "iteration_cap");
+  EXPECT_FALSE(capped.converged);
+  options.max_iterations = 200;
+  options.loss_rtol = 0.5;  // generous: any two accepted iterations that do not halve the loss end it
+  const LeastSquaresResult stalled = solve_bounded_least_squares(problem, Eigen::Vector2d(-1.2, 1.0), options);
+  EXPECT_EQ(stalled.stopped_by, "loss_decrease");
+  EXPECT_TRUE(stalled.converged);
+  EXPECT_LT(stalled.iterations, 200);
+  options.loss_rtol = 0.0;
+  options.gradient_atol = 1e-10;
+  const LeastSquaresResult solved = solve_bounded_least_squares(problem, Eigen::Vector2d(-1.2, 1.0), options);
+  EXPECT_EQ(solved.stopped_by, "projected_gradient");
+  EXPECT_NEAR(solved.p[0], 1.0, 1e-6);
+}
+
 TEST(BoundedLeastSquares, RejectsBadInput) {
   LeastSquaresProblem problem;
   problem.residual = [](const Eigen::VectorXd& x) { return x; };

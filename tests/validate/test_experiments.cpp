@@ -106,6 +106,18 @@ TEST(Experiments, SmallConfigurationReproducesPinnedTable2) {
   EXPECT_GT(row_value(summary, "Independent", "train_motions"), 0.85 * truth);
   EXPECT_GT(row_value(summary, "Full opt. ours", "train_motions"), 0.85 * truth);
   for (const auto& f : summary.at("fits")) EXPECT_TRUE(std::isfinite(f.at("loss_fit").get<double>()));
+  // Every stage names the test that stopped it; the iteration cap is only the safety net (docs/fit.md).
+  int stages = 0;
+  for (const auto& f : summary.at("fits")) {
+    const std::string reason = f.at("reason");
+    EXPECT_TRUE(reason == "loss_decrease" || reason == "projected_gradient" || reason == "trust_radius" ||
+                reason == "iteration_cap")
+        << f.at("fit") << ": " << reason;
+    ++stages;
+  }
+  int counted = 0;
+  for (const auto& [reason, count] : summary.at("stage_stops").items()) counted += count.get<int>();
+  EXPECT_EQ(counted, stages);
   // The truth's shape-dependent part is reported beside the independent fits' error (docs/fit.md).
   for (const char* p : {"thickness", "young_tangent", "young_normal"}) {
     const nlohmann::json& t = summary.at("truth_identifiability").at(p);

@@ -4,7 +4,9 @@
 
 #include <petsctao.h>
 
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 namespace sflsh::reduced {
 
@@ -18,7 +20,9 @@ struct Context {
   NormalEquations J;
   bool have_r = false, have_J = false;
   int residual_evaluations = 0, jacobian_evaluations = 0;
-  std::string error;  ///< an exception from a callback, rethrown after TaoSolve returns
+  std::string error;                    ///< an exception from a callback, rethrown after TaoSolve returns
+  std::vector<double> accepted_losses;  ///< the loss after every accepted iteration (and at the start)
+  bool loss_test_met = false;
 };
 
 Eigen::VectorXd to_eigen(Vec v) {
@@ -115,6 +119,38 @@ PetscErrorCode monitor(Tao tao, void* ctx) {
   });
 }
 
+/// TAO's own tests (gradient tolerances, iteration cap), then the relative decrease of the loss over the last
+/// `loss_window` accepted iterations (LeastSquaresOptions::loss_rtol).
+PetscErrorCode convergence_test(Tao tao, void* ctx) {
+  auto& c = *static_cast<Context*>(ctx);
+  PetscCall(TaoDefaultConvergenceTest(tao, nullptr));
+  TaoConvergedReason reason;
+  PetscCall(TaoGetConvergedReason(tao, &reason));
+  PetscInt it = 0;
+  PetscReal f = 0, gnorm = 0, cnorm = 0, xdiff = 0;
+  PetscCall(TaoGetSolutionStatus(tao, &it, &f, &gnorm, &cnorm, &xdiff, nullptr));
+  std::vector<double>& losses = c.accepted_losses;
+  if (losses.empty() || f < losses.back()) losses.push_back(f);
+  if (reason != TAO_CONTINUE_ITERATING || c.options->loss_rtol <= 0.0) return 0;
+  const auto window = static_cast<std::size_t>(std::max(1, c.options->loss_window));
+  if (losses.size() > window && losses[losses.size() - 1 - window] - f <= c.options->loss_rtol * std::abs(f)) {
+    c.loss_test_met = true;
+    PetscCall(TaoSetConvergedReason(tao, TAO_CONVERGED_USER));
+  }
+  return 0;
+}
+
+/// The name of the test that ended the solve (LeastSquaresResult::stopped_by).
+std::string stopping_test(TaoConvergedReason reason, bool loss_test_met) {
+  if (reason == TAO_CONVERGED_USER && loss_test_met) return "loss_decrease";
+  if (reason == TAO_CONVERGED_GATOL || reason == TAO_CONVERGED_GRTOL || reason == TAO_CONVERGED_GTTOL)
+    return "projected_gradient";
+  if (reason == TAO_DIVERGED_TR_REDUCTION || reason == TAO_CONVERGED_STEPTOL) return "trust_radius";
+  if (reason == TAO_DIVERGED_MAXITS) return "iteration_cap";
+  if (reason == TAO_DIVERGED_LS_FAILURE) return "line_search";
+  return TaoConvergedReasons[reason];
+}
+
 #define SFLSH_TAO(call)                                                                                   \
   do {                                                                                                    \
     const PetscErrorCode sflsh_tao_error = (call);                                                        \
@@ -182,6 +218,7 @@ LeastSquaresResult solve_bounded_least_squares(const LeastSquaresProblem& proble
   SFLSH_TAO(TaoSetTolerances(tao, options.gradient_atol, options.gradient_rtol, options.gradient_ttol));
   if (options.initial_radius > 0.0) SFLSH_TAO(TaoSetInitialTrustRegionRadius(tao, options.initial_radius));
   SFLSH_TAO(TaoSetMonitor(tao, monitor, &context, nullptr));
+  SFLSH_TAO(TaoSetConvergenceTest(tao, convergence_test, &context));
   SFLSH_TAO(TaoSetFromOptions(tao));  // -fit_tao_* options override
   // A callback's exception comes back as a PETSc error code; keep PETSc from printing a traceback for it.
   PetscPushErrorHandler(PetscReturnErrorHandler, nullptr);
@@ -203,7 +240,8 @@ LeastSquaresResult solve_bounded_least_squares(const LeastSquaresProblem& proble
   result.gradient_norm = gnorm;
   result.iterations = static_cast<int>(it);
   result.reason = TaoConvergedReasons[reason];
-  result.converged = reason > 0;
+  result.stopped_by = stopping_test(reason, context.loss_test_met);
+  result.converged = reason > 0 || reason == TAO_DIVERGED_TR_REDUCTION;
   result.residual_evaluations = context.residual_evaluations;
   result.jacobian_evaluations = context.jacobian_evaluations;
   require(reason > 0 || reason == TAO_DIVERGED_MAXITS || reason == TAO_DIVERGED_TR_REDUCTION ||

@@ -486,8 +486,9 @@ FitResult fit_elasticity(const FitContext& context, const std::vector<FitTarget>
     }
     LeastSquaresOptions lso;
     lso.max_iterations = resumed_here ? std::max(0, spec.iterations - checkpoint->iteration) : spec.iterations;
-    lso.gradient_ttol = 1e-6;  // the iteration budget, not this, usually ends a stage
+    lso.gradient_ttol = 1e-6;
     lso.gradient_rtol = 1e-8;
+    lso.loss_rtol = spec.loss_rtol;
     // The trust radius keeps TAO's floor (1e-10): a floor of 1e-3 in these normalized parameters saved the ~20
     // residual evaluations of a run of rejected steps but stopped warm and full fits after one iteration where the
     // default floor's small accepted steps kept lowering the loss (the paper preset, docs/fit.md).
@@ -529,7 +530,7 @@ FitResult fit_elasticity(const FitContext& context, const std::vector<FitTarget>
     report.seconds = seconds_since(stage_start);
     report.simulations = stage.simulations;
     report.jacobians = stage.jacobians;
-    report.reason = ls.reason;
+    report.reason = ls.stopped_by.empty() ? ls.reason : ls.stopped_by;
     result.stages.push_back(report);
     logger()->info("fit {}: N = {} done: loss fit {:.5g} mm², reg {:.4g}, {} iterations ({}), {} simulations, {:.1f} s",
                    spec.name, N, report.loss_fit, report.loss_reg, report.iterations, report.reason, report.simulations,

@@ -62,6 +62,7 @@ nlohmann::json ValidateConfig::to_json() const {
   for (const auto& f : dyna) files.push_back(f.string());
   j["dyna"] = files;
   j["truth_model"] = truth_model.string();
+  j["loss_rtol"] = loss_rtol;
   j["body"] = body_path.string();
   return j;
 }

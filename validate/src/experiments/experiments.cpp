@@ -319,6 +319,7 @@ nlohmann::json run_validation(const ValidateConfig& requested, const std::filesy
     spec.betas = betas_of(subject_list);
     spec.stages = config.stages;
     spec.iterations = config.iterations;
+    spec.loss_rtol = config.loss_rtol;
     spec.checkpoint = state / "fits" / (name + ".json");
     spec.jacobian =
         config.jacobian == "fd" ? reduced::JacobianMethod::finite_differences : reduced::JacobianMethod::sensitivities;

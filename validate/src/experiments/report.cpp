@@ -498,6 +498,13 @@ void Report::write(RunFolder& run, nlohmann::json& summary) const {
       }
     write_text_atomically(run.stage("fits.csv"), fc.str());
     summary["fits"] = fj;
+    // How the stages stopped: convergence tests, or the iteration cap (the safety net) when it was hit.
+    nlohmann::json stops = nlohmann::json::object();
+    for (const nlohmann::json& stage : fj) {
+      const std::string reason = stage.at("reason");
+      stops[reason] = stops.value(reason, 0) + 1;
+    }
+    summary["stage_stops"] = stops;
     std::vector<std::string> all = config.train_subjects;
     all.insert(all.end(), config.test_subjects.begin(), config.test_subjects.end());
     for (const std::string tag : {"l2", "ours"})

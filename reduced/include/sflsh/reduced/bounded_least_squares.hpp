@@ -32,6 +32,10 @@ struct LeastSquaresOptions {
   double gradient_atol = 1e-8;  ///< stop when ‖proj. gradient‖ ≤ atol
   double gradient_rtol = 1e-6;  ///< … or ≤ rtol · loss
   double gradient_ttol = 1e-4;  ///< … or ≤ ttol · initial ‖gradient‖
+  /// Stop (converged) when `loss_window` accepted iterations together lower the loss by ≤ loss_rtol · loss
+  /// (0: off). Rejected trial steps, which leave the loss where it was, do not count as iterations here.
+  double loss_rtol = 0.0;
+  int loss_window = 2;
   double initial_radius = 0.0;  ///< 0: TAO's default
   /// Called after every accepted iteration (and at iteration 0) with the current point and loss ½‖r‖².
   std::function<void(int iteration, const Eigen::VectorXd& p, double loss, double gradient_norm)> monitor;
@@ -45,8 +49,12 @@ struct LeastSquaresResult {
   int iterations = 0;
   int residual_evaluations = 0;
   int jacobian_evaluations = 0;
-  std::string reason;      ///< TAO's converged reason
-  bool converged = false;  ///< a convergence test was met (not: iteration limit, failure)
+  std::string reason;  ///< TAO's converged reason
+  /// The test that ended the solve: "loss_decrease", "projected_gradient", "trust_radius" (TAO could not find a
+  /// decreasing step above its radius floor: a minimum to the model's resolution), "iteration_cap" (the safety
+  /// net, not convergence) or "line_search".
+  std::string stopped_by;
+  bool converged = false;  ///< a convergence test was met (loss decrease, projected gradient or trust radius)
 };
 
 /// Throws sflsh::Error on inconsistent sizes, a start outside the bounds (it is projected first, with a

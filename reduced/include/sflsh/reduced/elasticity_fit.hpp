@@ -49,10 +49,13 @@ struct FitSpec {
   std::string name;  ///< for logs, checkpoints and reports
   FitKind kind = FitKind::shape;
   Regularizer regularizer = Regularizer::local;
-  double lambda = 1.0;                                      ///< λ of eq. 7 (shape fits)
-  std::vector<body::Betas> betas;                           ///< per subject (independent: exactly one)
-  std::vector<int> stages{1, 12, 24, 84};                   ///< control-point counts, ascending
-  int iterations = 8;                                       ///< trust-region iterations per stage
+  double lambda = 1.0;                     ///< λ of eq. 7 (shape fits)
+  std::vector<body::Betas> betas;          ///< per subject (independent: exactly one)
+  std::vector<int> stages{1, 12, 24, 84};  ///< control-point counts, ascending
+  int iterations = 8;  ///< trust-region iterations per stage: the safety net (FitStageReport::reason says when it hit)
+  /// A stage converges when two accepted iterations together lower its loss by ≤ loss_rtol (relative), when the
+  /// projected gradient is ≤ 1e-8 · loss, or when the trust region finds no decreasing step (docs/fit.md).
+  double loss_rtol = 1e-3;
   double fd_step = 2e-3;                                    ///< one-sided step in normalized κ̂
   double a_max = 0.25;                                      ///< |A_i(k, c)| bound (normalized κ̂ per unit β)
   JacobianMethod jacobian = JacobianMethod::sensitivities;  ///< measured ≈ 38× cheaper for the Y columns
@@ -89,7 +92,7 @@ struct FitStageReport {
   double seconds = 0.0;
   long simulations = 0;
   int jacobians = 0;
-  std::string reason;
+  std::string reason;  ///< the test that ended the stage (LeastSquaresResult::stopped_by) or "resumed"
   bool resumed = false;
 };
 

@@ -36,7 +36,8 @@ struct ValidateConfig {
   std::vector<std::string> test_motions{"jiggle_on_toes", "shake_shoulders"};
   int frames = 0;  ///< per clip; 0 = the motions' default length
   std::vector<int> stages{1, 12, 24, 84};
-  int iterations = 8;                           ///< per stage
+  int iterations = 8;       ///< per stage: the safety net; a stage normally stops on a convergence test (docs/fit.md)
+  double loss_rtol = 1e-3;  ///< a stage converges when 2 accepted iterations lower its loss by ≤ this (relative)
   std::vector<double> lambdas{0.01, 0.1, 1.0};  ///< cross-validation sweep (Fig. 5)
   bool cross_validation = true;
   /// How λ is chosen from the sweep: the largest within one standard error of the least error (default), or the
