@@ -51,7 +51,8 @@ TEST(Experiments, SmallConfigurationReproducesPinnedTable2) {
 
   for (const char* file :
        {"table2.csv", "table2.md", "table2_error.csv", "cross_validation.csv", "lambda_sweep.csv", "covariance.csv",
-        "parameter_error.csv", "dynamics.vtp", "fits.csv", "summary.json", "materials/ours/OPEN_TEST_1.toml"})
+        "parameter_error.csv", "dynamics.vtp", "fits.csv", "summary.json", "materials/ours/OPEN_TEST_1.toml",
+        "regularizer_comparison.csv", "shape_dependence_error.csv"})
     EXPECT_TRUE(std::filesystem::exists(dir / file)) << file;
   {
     std::ifstream in(dir / "table2.csv");
@@ -118,6 +119,20 @@ TEST(Experiments, SmallConfigurationReproducesPinnedTable2) {
   int counted = 0;
   for (const auto& [reason, count] : summary.at("stage_stops").items()) counted += count.get<int>();
   EXPECT_EQ(counted, stages);
+  // The regularizers paired on the test subject × (train, test) motion: 2 pairs; the sign test of a 2–0 split is
+  // ½ (two-sided: 2 · ¼), of 1–1 is 1.
+  {
+    const nlohmann::json& c = summary.at("regularizer_comparison");
+    EXPECT_EQ(c.at("pairs").get<int>(), 2);
+    const int ours = c.at("wins_ours").get<int>(), l2 = c.at("wins_l2").get<int>();
+    EXPECT_EQ(ours + l2 + c.at("ties").get<int>(), 2);
+    if (ours + l2 == 2) EXPECT_DOUBLE_EQ(c.at("sign_test_p").get<double>(), ours == 1 ? 1.0 : 0.5);
+    const std::vector<std::string> lines = sflsh::testing::lines_of(dir / "regularizer_comparison.csv");
+    ASSERT_EQ(lines.size(), 3u);
+    EXPECT_EQ(lines[0].rfind("subject,motion,error_l2,error_ours,winner,error_l2_chest,", 0), 0u) << lines[0];
+    for (const char* tag : {"l2", "ours"})
+      EXPECT_TRUE(std::isfinite(summary.at("shape_dependence_error").at(tag).at("thickness_rms").get<double>()));
+  }
   // The truth's shape-dependent part is reported beside the independent fits' error (docs/fit.md).
   for (const char* p : {"thickness", "young_tangent", "young_normal"}) {
     const nlohmann::json& t = summary.at("truth_identifiability").at(p);

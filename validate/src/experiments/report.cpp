@@ -544,6 +544,7 @@ void Report::write(RunFolder& run, nlohmann::json& summary) const {
                       config.preset, tag == std::string("l2") ? "L2" : "local", fit.lambda, N));
     }
   }
+  write_regularizer_comparison(*this, run, summary);
 }
 
 }  // namespace sflsh::validate

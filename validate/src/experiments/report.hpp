@@ -56,4 +56,9 @@ struct Report {
                      double Evaluation::*value) const;
 };
 
+/// regularizer_comparison.csv (the full fits L² and ours paired on every test subject × motion: relative σ error
+/// overall and per body part, the winner) and shape_dependence_error.csv (κ̂(β) − κ̂(β̄) against the truth's), with
+/// win counts, sign tests and means in `summary` (regularizer_comparison.cpp).
+void write_regularizer_comparison(const Report& report, RunFolder& run, nlohmann::json& summary);
+
 }  // namespace sflsh::validate

@@ -70,8 +70,9 @@ struct ValidateConfig {
   bool progress = true;
 
   /// The presets: "quick" (coarse mesh, 3 train + 2 test subjects, one train and one test motion, 40
-  /// frames, N = 1 → 4, 30 handles) and "paper" (coarse mesh, 5 + 5 subjects, 3 + 2 motions, 60 frames,
-  /// N = 1 → 12 → 24 → 84, 86 handles, 3 iterations per warm fit). Throws for an unknown name.
+  /// frames, N = 1 → 4, 30 handles, stages to convergence with a cap of 40 iterations) and "paper" (coarse mesh,
+  /// 5 + 7 subjects, 3 + 2 motions, 60 frames, N = 1 → 12 → 24 → 84, 86 handles, 8 iterations per stage and 3 per
+  /// warm fit: capped, not yet converged). Throws for an unknown name.
   static ValidateConfig from_preset(const std::string& name);
   nlohmann::json to_json() const;
 };
