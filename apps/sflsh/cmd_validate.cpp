@@ -27,7 +27,7 @@ struct ValidateOptions {
   int warm_iterations = -1;
   int threads = 0;
   std::vector<int> stages;
-  std::vector<double> lambdas;
+  std::vector<double> lambdas, lambdas_l2, lambdas_ours;
   std::vector<std::string> train_subjects, test_subjects, train_motions, test_motions;
   bool no_cross_validation = false;
   bool no_lambda_warm_start = false;
@@ -52,6 +52,8 @@ void run_validate(const ValidateOptions& o, const Invocation& invocation) {
   config.threads = o.threads;
   if (!o.stages.empty()) config.stages = o.stages;
   if (!o.lambdas.empty()) config.lambdas = o.lambdas;
+  if (!o.lambdas_l2.empty()) config.lambdas_of["l2"] = o.lambdas_l2;
+  if (!o.lambdas_ours.empty()) config.lambdas_of["ours"] = o.lambdas_ours;
   if (!o.train_subjects.empty()) {
     config.train_subjects = o.train_subjects;
     config.preset_subjects_overridden = true;
@@ -113,6 +115,14 @@ void register_validate_commands(CLI::App& app, const Invocation& invocation) {
                   "Trust-region iterations of each warm-started fit of the λ sweep (0 = --iterations; paper preset: 3)")
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--lambdas", o->lambdas, "λ values of the cross-validation sweep, e.g. 0.01,0.1,1")
+      ->delimiter(',')
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--lambdas-l2", o->lambdas_l2, "The L2 regularizer's own λ grid (default: --lambdas)")
+      ->delimiter(',')
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--lambdas-ours", o->lambdas_ours,
+                  "The local regularizer's own λ grid (default: --lambdas); its metric charges other directions than "
+                  "L2, so its minimum can lie elsewhere")
       ->delimiter(',')
       ->check(CLI::PositiveNumber);
   cmd->add_option("--train-subjects", o->train_subjects, "Comma-separated subject names (data/*subjects.toml)")

@@ -38,6 +38,11 @@ ValidateConfig ValidateConfig::from_preset(const std::string& name) {
   return c;
 }
 
+const std::vector<double>& ValidateConfig::lambdas_for(const std::string& tag) const {
+  const auto it = lambdas_of.find(tag);
+  return it != lambdas_of.end() && !it->second.empty() ? it->second : lambdas;
+}
+
 nlohmann::json ValidateConfig::to_json() const {
   nlohmann::json j;
   j["preset"] = preset;
@@ -52,6 +57,8 @@ nlohmann::json ValidateConfig::to_json() const {
   j["stages"] = stages;
   j["iterations"] = iterations;
   j["lambdas"] = lambdas;
+  j["lambdas_l2"] = lambdas_for("l2");
+  j["lambdas_ours"] = lambdas_for("ours");
   j["cross_validation"] = cross_validation;
   j["lambda_rule"] = lambda_rule_name(lambda_rule);
   j["lambda_warm_start"] = lambda_warm_start;

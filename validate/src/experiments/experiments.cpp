@@ -228,8 +228,11 @@ nlohmann::json run_validation(const ValidateConfig& requested, const std::filesy
   require(!config.train_motions.empty() && !config.test_motions.empty(),
           "validate: train and test motions are required");
   require(!config.stages.empty(), "validate: no control-point stages");
-  for (double l : config.lambdas) require(l > 0.0 && std::isfinite(l), "validate: λ must be positive, got {}", l);
-  require(!config.lambdas.empty(), "validate: no λ values");
+  for (const std::string tag : {"l2", "ours"}) {
+    for (double l : config.lambdas_for(tag))
+      require(l > 0.0 && std::isfinite(l), "validate: λ ({}) must be positive, got {}", tag, l);
+    require(!config.lambdas_for(tag).empty(), "validate: no λ values for {}", tag);
+  }
   RunFolder run(out_dir);
   const std::filesystem::path state = out_dir / "state";
   std::filesystem::create_directories(state / "groundtruth");
@@ -351,10 +354,10 @@ nlohmann::json run_validation(const ValidateConfig& requested, const std::filesy
   // result at the last stage (a regularization path) instead of going through every stage again.
   const std::vector<std::pair<Regularizer, std::string>> regs{{Regularizer::l2, "l2"}, {Regularizer::local, "ours"}};
   std::map<std::string, double> best_lambda;
-  std::vector<double> sweep = config.lambdas;
-  std::sort(sweep.begin(), sweep.end(), std::greater<>());
   for (const auto& [reg, tag] : regs) {
-    best_lambda[tag] = config.lambdas.front();
+    std::vector<double> sweep = config.lambdas_for(tag);
+    std::sort(sweep.begin(), sweep.end(), std::greater<>());
+    best_lambda[tag] = config.lambdas_for(tag).front();
     if (!config.cross_validation) continue;
     for (const std::string& left_out : config.train_subjects) {
       std::vector<std::string> rest;

@@ -11,6 +11,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -125,7 +126,7 @@ double Report::truth_entry(const std::string& subject, const std::vector<std::st
 
 LambdaChoice Report::choose_lambda(const std::string& tag) const {
   std::vector<LambdaScore> sweep;
-  for (double lambda : config.lambdas) {
+  for (double lambda : config.lambdas_for(tag)) {
     LambdaScore score{lambda, {}};
     for (const std::string& s : config.train_subjects)
       score.fold_errors.push_back(table_error(fmt::format("cv/{}/{:g}/{}", tag, lambda, s), s, config.train_motions));
@@ -154,8 +155,9 @@ void Report::write(RunFolder& run, nlohmann::json& summary) const {
                  return table_error(fit_of(s), s, m);
                }};
   };
-  const std::string l2 = fmt::format("{:g}", best.count("l2") ? best.at("l2") : config.lambdas.front());
-  const std::string ours = fmt::format("{:g}", best.count("ours") ? best.at("ours") : config.lambdas.front());
+  const std::string l2 = fmt::format("{:g}", best.count("l2") ? best.at("l2") : config.lambdas_for("l2").front());
+  const std::string ours =
+      fmt::format("{:g}", best.count("ours") ? best.at("ours") : config.lambdas_for("ours").front());
   std::vector<Row> rows;
   rows.push_back({"Ground truth", config.train_subjects,
                   [this](const std::string& s, const std::vector<std::string>& m) { return truth_entry(s, m); },
@@ -267,12 +269,20 @@ void Report::write(RunFolder& run, nlohmann::json& summary) const {
     chart.log_x = true;
     nlohmann::json sweep_json = nlohmann::json::array();
     std::size_t colour = 0;
+    nlohmann::json bracketed = nlohmann::json::object();
     for (const std::string tag : {"l2", "ours"}) {
-      chart::Series series;
+      chart::Series series, lower, upper;  // the mean and ± one standard error of it (Fig. 5)
       series.label = tag == std::string("l2") ? "L2" : "ours";
       series.line = chart::Line::solid;
-      series.color = chart::palette(colour++);
-      for (double lambda : config.lambdas) {
+      series.color = lower.color = upper.color = chart::palette(colour++);
+      lower.label = series.label + " - standard error";
+      upper.label = series.label + " + standard error";
+      lower.line = upper.line = chart::Line::dashed;
+      lower.marker = upper.marker = chart::Marker::none;
+      std::vector<double> grid = config.lambdas_for(tag);
+      std::sort(grid.begin(), grid.end());
+      std::vector<double> means;
+      for (double lambda : grid) {
         std::vector<double> tr, te;
         for (const std::string& s : config.train_subjects) {
           const std::string fit = fmt::format("cv/{}/{:g}/{}", tag, lambda, s);
@@ -287,13 +297,31 @@ void Report::write(RunFolder& run, nlohmann::json& summary) const {
               << cell(standard_error_of_mean(tr)) << "," << (chosen ? 1 : 0) << "\n";
         series.x.push_back(lambda);
         series.y.push_back(mean_of_finite(tr));
+        lower.x.push_back(lambda);
+        lower.y.push_back(mean_of_finite(tr) - standard_error_of_mean(tr));
+        upper.x.push_back(lambda);
+        upper.y.push_back(mean_of_finite(tr) + standard_error_of_mean(tr));
+        means.push_back(mean_of_finite(tr));
         sweep_json.push_back({{"regularizer", tag},
                               {"lambda", lambda},
                               {"train_motions", mean_of_finite(tr)},
                               {"test_motions", mean_of_finite(te)}});
       }
       chart.series.push_back(series);
+      if (grid.size() > 1) {
+        chart.series.push_back(lower);
+        chart.series.push_back(upper);
+      }
+      // Does the CV curve rise on both sides of its least λ? If not, the grid has not found the minimum.
+      const auto least = static_cast<std::size_t>(std::min_element(means.begin(), means.end()) - means.begin());
+      bracketed[tag] = least > 0 && least + 1 < means.size();
+      if (!bracketed[tag].get<bool>())
+        logger()->warn(
+            "validate: the cross-validation error of {} does not rise on both sides of its least λ = {:g} "
+            "(grid {:g} … {:g}): widen --lambdas-{}",
+            tag, grid[least], grid.front(), grid.back(), tag);
     }
+    summary["lambda_sweep_bracketed"] = bracketed;
     write_text_atomically(run.stage("cross_validation.csv"), cv.str());
     write_text_atomically(run.stage("lambda_sweep.csv"), sweep.str());
     summary["lambda_sweep"] = sweep_json;

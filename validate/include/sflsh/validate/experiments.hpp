@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -38,7 +39,12 @@ struct ValidateConfig {
   std::vector<int> stages{1, 12, 24, 84};
   int iterations = 8;       ///< per stage: the safety net; a stage normally stops on a convergence test (docs/fit.md)
   double loss_rtol = 1e-3;  ///< a stage converges when 2 accepted iterations lower its loss by ≤ this (relative)
-  std::vector<double> lambdas{0.01, 0.1, 1.0};  ///< cross-validation sweep (Fig. 5)
+  std::vector<double> lambdas{0.01, 0.1, 1.0};  ///< cross-validation sweep (Fig. 5), both regularizers
+  /// Own grids per regularizer ("l2", "ours"; `--lambdas-l2`, `--lambdas-ours`): the two penalize different
+  /// directions by different amounts, so one grid rarely brackets both minima. Empty: `lambdas`.
+  std::map<std::string, std::vector<double>> lambdas_of;
+  /// The grid of regularizer `tag`, ascending as given.
+  const std::vector<double>& lambdas_for(const std::string& tag) const;
   bool cross_validation = true;
   /// How λ is chosen from the sweep: the largest within one standard error of the least error (default), or the
   /// least error (the paper's; lambda_choice.hpp).
