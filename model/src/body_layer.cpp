@@ -2,6 +2,7 @@
 #include <sflsh/core/log.hpp>
 #include <sflsh/material/orthotropic_fung.hpp>
 #include <sflsh/meshing/layer_cache.hpp>
+#include <sflsh/meshing/tet_backend.hpp>
 #include <sflsh/model/body_layer.hpp>
 
 namespace sflsh::model {
@@ -61,7 +62,25 @@ BodyLayer build_body_layer(const body::BodyModel& model, const body::Betas& beta
   const material::KappaMatrix kappa = out.material.kappa();
   const meshing::Retargeter retargeter(model, mesh);
   const Eigen::VectorXd thickness = material::evaluate_field(basis.phi, kappa).col(0);
-  out.layer = retargeter.retarget(beta, thickness);
+  try {
+    out.layer = retargeter.retarget(beta, thickness);
+  } catch (const Error& e) {
+    if (!material) throw;
+    // A material file's thickness the template cannot be retargeted to: name the file and its thickest point.
+    std::size_t thickest = 0;
+    for (std::size_t i = 1; i < material->control_points.size(); ++i)
+      if (material->control_points[i].kappa.thickness > material->control_points[thickest].kappa.thickness)
+        thickest = i;
+    const material::MaterialControlPoint& p = material->control_points[thickest];
+    const std::string file = material->source.empty() ? std::string("material") : material->source;
+    throw_error(
+        "{}{}: thickness: up to {:.3g} (control_point #{}) is more than the {} {} layer retargets for this "
+        "shape ({}); lower the thickness or use a finer --mesh (every subject retargets up to 0.6 on the layered "
+        "coarse mesh, 0.8 on the default one, 0.9 on the fine one; cgal and gmsh about 0.4-0.7: "
+        "docs/meshing.md)",
+        file, p.line > 0 ? fmt::format(":{}", p.line) : std::string(), p.kappa.thickness, thickest,
+        meshing::mesher_name(options.mesher), meshing::size_preset_name(options.size), e.what());
+  }
   out.fields = material::layer_material_fields(retargeter, basis.phi, kappa, out.layer.nodes);
   out.depth = retargeter.depth();
   out.shaped = body::shaped_template(model, beta);

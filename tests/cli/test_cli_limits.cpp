@@ -193,4 +193,35 @@ TEST(CliLimits, EchoedInputIsCutAt300Characters) {
 }
 
 }  // namespace
+
+// A material whose thickness the mesh cannot be retargeted to for the subject fails naming the material file, the
+// line of its thickest control point and the supported range (the layered coarse mesh: h ≤ 0.6 for every subject;
+// TEST_3 at 0.9 inverts tets), not with the retarget's bare message.
+TEST(CliLimits, MaterialThickerThanTheMeshRetargetsNamesTheFile) {
+  const fs::path dir = sflsh::testing::scratch_dir();
+  auto r = run_sflsh(fmt::format("-q material show --subject TEST_3 --control-points 6 --mesher layered --mesh coarse "
+                                 "--cache {} --out {}",
+                                 SFLSH_TEST_CACHE, (dir / "show").string()),
+                     dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::string text = sflsh::testing::text_of(dir / "show" / "material.toml");
+  const std::size_t points = text.find("[[control_point]]");
+  ASSERT_NE(points, std::string::npos);
+  text = text.substr(0, points) +
+         std::regex_replace(text.substr(points), std::regex(R"(\nthickness = [-0-9.e]+)"), "\nthickness = 0.9");
+  const fs::path thick = dir / "thick.toml";
+  std::ofstream(thick) << text;
+  r = run_sflsh(
+      fmt::format("-q simulate --solver reduced --subject TEST_3 --motion shake_hips --frames 2 --mesh coarse "
+                  "--cache {} --material {} --no-output --out {}",
+                  SFLSH_TEST_CACHE, thick.string(), (dir / "run").string()),
+      dir);
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_THAT(r.err, HasSubstr(thick.string() + ":"));
+  EXPECT_THAT(r.err, HasSubstr("thickness: up to 0.9"));
+  EXPECT_THAT(r.err, HasSubstr("docs/meshing.md"));
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "run"));
+}
+
 }  // namespace sflsh
