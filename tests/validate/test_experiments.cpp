@@ -126,7 +126,9 @@ TEST(Experiments, SmallConfigurationReproducesPinnedTable2) {
     EXPECT_EQ(c.at("pairs").get<int>(), 2);
     const int ours = c.at("wins_ours").get<int>(), l2 = c.at("wins_l2").get<int>();
     EXPECT_EQ(ours + l2 + c.at("ties").get<int>(), 2);
-    if (ours + l2 == 2) EXPECT_DOUBLE_EQ(c.at("sign_test_p").get<double>(), ours == 1 ? 1.0 : 0.5);
+    if (ours + l2 == 2) {
+      EXPECT_DOUBLE_EQ(c.at("sign_test_p").get<double>(), ours == 1 ? 1.0 : 0.5);
+    }
     const std::vector<std::string> lines = sflsh::testing::lines_of(dir / "regularizer_comparison.csv");
     ASSERT_EQ(lines.size(), 3u);
     EXPECT_EQ(lines[0].rfind("subject,motion,error_l2,error_ours,winner,error_l2_chest,", 0), 0u) << lines[0];
