@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include <chrono>
+#include <functional>
 
 namespace sflsh::reduced {
 
@@ -140,120 +141,132 @@ struct Stage {
     NormalEquations ne;
     ne.JtJ = Eigen::MatrixXd::Zero(P, P);
     ne.Jtr = Eigen::VectorXd::Zero(P);
-    const double step = spec->fd_step;
-    const material::ParameterBounds nb = material::normalized_bounds(context->bounds);
     // Residual offsets per target.
     std::vector<int> offset(targets->size() + 1, 0);
     for (std::size_t t = 0; t < targets->size(); ++t)
       offset[t + 1] = offset[t] + static_cast<int>((*targets)[t].sigma.size());
-    for (int j = 0; j < num_subjects(); ++j) {
-      const std::vector<int>& mine = targets_of_subject[static_cast<std::size_t>(j)];
-      if (mine.empty()) continue;
-      Eigen::VectorXd active;
-      const material::KappaMatrix q0 = q(j, p, &active);
-      // One-sided differences (backwards at an upper bound) in every entry of q_j, or only in the thickness
-      // entries when the Young moduli come from sensitivities.
-      const bool sensitive = spec->jacobian == JacobianMethod::sensitivities;
-      const bool exact_thickness = sensitive && !spec->thickness_differences;
-      const int sensitivity_columns = exact_thickness ? 3 * controls : 2 * controls;
-      std::vector<int> fd_columns;
-      for (int k = 0; k < 3 * controls; ++k)
-        if (!sensitive || (k % kK == material::kThickness && !exact_thickness)) fd_columns.push_back(k);
-      std::vector<SimulationJob> jobs;
-      std::vector<double> h(static_cast<std::size_t>(3 * controls), 0.0);
-      for (int k : fd_columns) {
-        material::KappaMatrix qk = q0;
-        const int i = k / kK, c = k % kK;
-        h[static_cast<std::size_t>(k)] = q0(i, c) + step <= nb[c].max ? step : -step;
-        qk(i, c) += h[static_cast<std::size_t>(k)];
-        const material::KappaMatrix kappa = material::denormalize(qk, context->bounds);
-        for (int t : mine) jobs.push_back({t, kappa});
-      }
-      const std::vector<Eigen::VectorXd> sigma = jobs.empty() ? std::vector<Eigen::VectorXd>{} : simulate(jobs);
-      // Per target t: G_t = dσ_t/dq_j and its terms w² G_tᵀG_t, w G_tᵀ r_t (packed: 9N², then 3N), from the
-      // difference columns and, with sensitivities, dσ/dY (2R × 2N or 3N) [mm/Pa] of the target's run.
-      const int Q = 3 * controls;
-      auto normal_terms = [&](std::size_t m, const Eigen::MatrixXd* dsigma_dyoung) {
-        const int t = mine[m];
-        const Eigen::VectorXd rt =
-            r.segment(offset[static_cast<std::size_t>(t)],
-                      offset[static_cast<std::size_t>(t) + 1] - offset[static_cast<std::size_t>(t)]);
-        const Eigen::VectorXd sigma_t = rt / weight + (*targets)[static_cast<std::size_t>(t)].sigma;
-        Eigen::MatrixXd G(sigma_t.size(), Q);
-        for (std::size_t f = 0; f < fd_columns.size(); ++f) {
-          const int k = fd_columns[f];
-          G.col(k) = (sigma[f * mine.size() + m] - sigma_t) / h[static_cast<std::size_t>(k)];
-        }
-        if (dsigma_dyoung)  // dσ/dq̂ = dσ/dY · Y_max (q̂ = Y / Y_max)
-          for (int i = 0; i < controls; ++i) {
-            G.col(kK * i + material::kYoungTangent) = dsigma_dyoung->col(i) * context->bounds.young_tangent.max;
-            G.col(kK * i + material::kYoungNormal) =
-                dsigma_dyoung->col(controls + i) * context->bounds.young_normal.max;
-            if (exact_thickness)  // dσ/dĥ = dσ/dh · h_max
-              G.col(kK * i + material::kThickness) =
-                  dsigma_dyoung->col(2 * controls + i) * context->bounds.thickness.max;
-          }
-        G *= weight;
-        Eigen::VectorXd out(Q * Q + Q);
-        Eigen::Map<Eigen::MatrixXd>(out.data(), Q, Q).noalias() = G.transpose() * G;
-        out.tail(Q).noalias() = G.transpose() * rt;
-        return out;
-      };
-      std::vector<Eigen::VectorXd> terms(mine.size());
-      const material::KappaMatrix kappa0 = material::denormalize(q0, context->bounds);
-      if (sensitive) {  // one differentiated run per target, its G_tᵀG_t made where it ran (in parallel)
-        std::vector<std::size_t> missing;  // into mine: the targets whose terms the warm start's point lacks
-        for (std::size_t m = 0; m < mine.size(); ++m) {
-          const FitTarget& target = (*targets)[static_cast<std::size_t>(mine[m])];
-          const Eigen::VectorXd* known =
-              reuse && fd_columns.empty()
-                  ? reuse->terms(target.simulation, kappa0, parameterization, exact_thickness, weight, target.sigma)
-                  : nullptr;
-          if (known)
-            terms[m] = *known;
-          else
-            missing.push_back(m);
-        }
-        std::vector<Eigen::VectorXd> made;
-        if (!missing.empty())
-          made = context->pool->run_tasks(
-              static_cast<int>(missing.size()), [&](int) { return Eigen::Index{Q} * Q + Q; },
-              [&](int i) {
-                const std::size_t m = missing[static_cast<std::size_t>(i)];
-                const DynamicsCase& c = *(*targets)[static_cast<std::size_t>(mine[m])].simulation;
-                Eigen::MatrixXd d;
-                c.simulate_with_sensitivity(*parameterization, kappa0, *context->model, young_map, d, context->reduced,
-                                            exact_thickness);
-                require(d.cols() == sensitivity_columns, "fit: a differentiated run gave {} columns, expected {}",
-                        d.cols(), sensitivity_columns);
-                return normal_terms(m, &d);
-              });
-        for (std::size_t i = 0; i < missing.size(); ++i) terms[missing[i]] = std::move(made[i]);
-        simulations += static_cast<long>(missing.size());
-      } else {
-        for (std::size_t m = 0; m < mine.size(); ++m) terms[m] = normal_terms(m, nullptr);
-      }
-      record_jacobian_point(p, mine, kappa0, sensitive && fd_columns.empty(), exact_thickness, terms);
-      // H_q = Σ_t w² G_tᵀG_t, g_q = Σ_t w G_tᵀ r_t, summed in target order (the same on every rank).
-      Eigen::MatrixXd Hq = Eigen::MatrixXd::Zero(Q, Q);
-      Eigen::VectorXd gq = Eigen::VectorXd::Zero(Q);
-      for (const Eigen::VectorXd& term : terms) {
-        Hq += Eigen::Map<const Eigen::MatrixXd>(term.data(), Q, Q);
-        gq += term.tail(Q);
-      }
-      // Chain rule through the clamp and dq/dp (eq. 8).
-      // dq/dp stays sparse (11 entries per row for a shape fit): JqᵀHqJq costs P²·11 instead of P²·3N.
-      const Eigen::SparseMatrix<double> Jq = active.asDiagonal() * dq_dp[static_cast<std::size_t>(j)];
-      const Eigen::MatrixXd HqJq = Hq * Jq;
-      ne.JtJ.noalias() += Jq.transpose() * HqJq;
-      ne.Jtr.noalias() += Jq.transpose() * gq;
-    }
+    for (int j = 0; j < num_subjects(); ++j)
+      if (!targets_of_subject[static_cast<std::size_t>(j)].empty()) add_subject_terms(j, p, r, offset, ne);
     if (spec->kind == FitKind::shape) {
       const Eigen::MatrixXd LtL = Eigen::MatrixXd(L.transpose() * L);
       ne.JtJ += spec->lambda * LtL;
       ne.Jtr += std::sqrt(spec->lambda) * (L.transpose() * r.tail(L.rows()));
     }
     return ne;
+  }
+
+  /// Subject j's part of JᵀJ and Jᵀr: the terms of its targets, through the clamp and dq/dp (eq. 8).
+  void add_subject_terms(int j, const Eigen::VectorXd& p, const Eigen::VectorXd& r, const std::vector<int>& offset,
+                         NormalEquations& ne) {
+    const std::vector<int>& mine = targets_of_subject[static_cast<std::size_t>(j)];
+    const double step = spec->fd_step;
+    const material::ParameterBounds nb = material::normalized_bounds(context->bounds);
+    Eigen::VectorXd active;
+    const material::KappaMatrix q0 = q(j, p, &active);
+    // One-sided differences (backwards at an upper bound) in every entry of q_j, or only in the thickness
+    // entries when the Young moduli come from sensitivities.
+    const bool sensitive = spec->jacobian == JacobianMethod::sensitivities;
+    const bool exact_thickness = sensitive && !spec->thickness_differences;
+    std::vector<int> fd_columns;
+    for (int k = 0; k < 3 * controls; ++k)
+      if (!sensitive || (k % kK == material::kThickness && !exact_thickness)) fd_columns.push_back(k);
+    std::vector<SimulationJob> jobs;
+    std::vector<double> h(static_cast<std::size_t>(3 * controls), 0.0);
+    for (int k : fd_columns) {
+      material::KappaMatrix qk = q0;
+      const int i = k / kK, c = k % kK;
+      h[static_cast<std::size_t>(k)] = q0(i, c) + step <= nb[c].max ? step : -step;
+      qk(i, c) += h[static_cast<std::size_t>(k)];
+      const material::KappaMatrix kappa = material::denormalize(qk, context->bounds);
+      for (int t : mine) jobs.push_back({t, kappa});
+    }
+    const std::vector<Eigen::VectorXd> sigma = jobs.empty() ? std::vector<Eigen::VectorXd>{} : simulate(jobs);
+    // Per target t: G_t = dσ_t/dq_j and its terms w² G_tᵀG_t, w G_tᵀ r_t (packed: 9N², then 3N), from the
+    // difference columns and, with sensitivities, dσ/dY (2R × 2N or 3N) [mm/Pa] of the target's run.
+    const int Q = 3 * controls;
+    auto normal_terms = [&](std::size_t m, const Eigen::MatrixXd* dsigma_dyoung) {
+      const int t = mine[m];
+      const Eigen::VectorXd rt =
+          r.segment(offset[static_cast<std::size_t>(t)],
+                    offset[static_cast<std::size_t>(t) + 1] - offset[static_cast<std::size_t>(t)]);
+      const Eigen::VectorXd sigma_t = rt / weight + (*targets)[static_cast<std::size_t>(t)].sigma;
+      Eigen::MatrixXd G(sigma_t.size(), Q);
+      for (std::size_t f = 0; f < fd_columns.size(); ++f) {
+        const int k = fd_columns[f];
+        G.col(k) = (sigma[f * mine.size() + m] - sigma_t) / h[static_cast<std::size_t>(k)];
+      }
+      if (dsigma_dyoung)  // dσ/dq̂ = dσ/dY · Y_max (q̂ = Y / Y_max)
+        for (int i = 0; i < controls; ++i) {
+          G.col(kK * i + material::kYoungTangent) = dsigma_dyoung->col(i) * context->bounds.young_tangent.max;
+          G.col(kK * i + material::kYoungNormal) = dsigma_dyoung->col(controls + i) * context->bounds.young_normal.max;
+          if (exact_thickness)  // dσ/dĥ = dσ/dh · h_max
+            G.col(kK * i + material::kThickness) = dsigma_dyoung->col(2 * controls + i) * context->bounds.thickness.max;
+        }
+      G *= weight;
+      Eigen::VectorXd out(Q * Q + Q);
+      Eigen::Map<Eigen::MatrixXd>(out.data(), Q, Q).noalias() = G.transpose() * G;
+      out.tail(Q).noalias() = G.transpose() * rt;
+      return out;
+    };
+    std::vector<Eigen::VectorXd> terms(mine.size());
+    const material::KappaMatrix kappa0 = material::denormalize(q0, context->bounds);
+    if (sensitive)  // one differentiated run per target, its G_tᵀG_t made where it ran (in parallel)
+      terms = sensitivity_terms(mine, kappa0, !fd_columns.empty(), exact_thickness, normal_terms);
+    else
+      for (std::size_t m = 0; m < mine.size(); ++m) terms[m] = normal_terms(m, nullptr);
+    record_jacobian_point(p, mine, kappa0, sensitive && fd_columns.empty(), exact_thickness, terms);
+    // H_q = Σ_t w² G_tᵀG_t, g_q = Σ_t w G_tᵀ r_t, summed in target order (the same on every rank).
+    Eigen::MatrixXd Hq = Eigen::MatrixXd::Zero(Q, Q);
+    Eigen::VectorXd gq = Eigen::VectorXd::Zero(Q);
+    for (const Eigen::VectorXd& term : terms) {
+      Hq += Eigen::Map<const Eigen::MatrixXd>(term.data(), Q, Q);
+      gq += term.tail(Q);
+    }
+    // Chain rule through the clamp and dq/dp (eq. 8).
+    // dq/dp stays sparse (11 entries per row for a shape fit): JqᵀHqJq costs P²·11 instead of P²·3N.
+    const Eigen::SparseMatrix<double> Jq = active.asDiagonal() * dq_dp[static_cast<std::size_t>(j)];
+    const Eigen::MatrixXd HqJq = Hq * Jq;
+    ne.JtJ.noalias() += Jq.transpose() * HqJq;
+    ne.Jtr.noalias() += Jq.transpose() * gq;
+  }
+
+  /// The normal terms of every target in `mine` from one differentiated run each (or the warm start's point where
+  /// it holds them and no column is differenced), the runs shared over the pool.
+  std::vector<Eigen::VectorXd> sensitivity_terms(
+      const std::vector<int>& mine, const material::KappaMatrix& kappa0, bool with_differences, bool exact_thickness,
+      const std::function<Eigen::VectorXd(std::size_t, const Eigen::MatrixXd*)>& normal_terms) {
+    const int Q = 3 * controls;
+    const int sensitivity_columns = exact_thickness ? 3 * controls : 2 * controls;
+    std::vector<Eigen::VectorXd> terms(mine.size());
+    std::vector<std::size_t> missing;  // into mine: the targets whose terms the warm start's point lacks
+    for (std::size_t m = 0; m < mine.size(); ++m) {
+      const FitTarget& target = (*targets)[static_cast<std::size_t>(mine[m])];
+      const Eigen::VectorXd* known =
+          reuse && !with_differences
+              ? reuse->terms(target.simulation, kappa0, parameterization, exact_thickness, weight, target.sigma)
+              : nullptr;
+      if (known)
+        terms[m] = *known;
+      else
+        missing.push_back(m);
+    }
+    std::vector<Eigen::VectorXd> made;
+    if (!missing.empty())
+      made = context->pool->run_tasks(
+          static_cast<int>(missing.size()), [&](int) { return Eigen::Index{Q} * Q + Q; },
+          [&](int i) {
+            const std::size_t m = missing[static_cast<std::size_t>(i)];
+            const DynamicsCase& c = *(*targets)[static_cast<std::size_t>(mine[m])].simulation;
+            Eigen::MatrixXd d;
+            c.simulate_with_sensitivity(*parameterization, kappa0, *context->model, young_map, d, context->reduced,
+                                        exact_thickness);
+            require(d.cols() == sensitivity_columns, "fit: a differentiated run gave {} columns, expected {}", d.cols(),
+                    sensitivity_columns);
+            return normal_terms(m, &d);
+          });
+    for (std::size_t i = 0; i < missing.size(); ++i) terms[missing[i]] = std::move(made[i]);
+    simulations += static_cast<long>(missing.size());
+    return terms;
   }
 };
 
@@ -334,6 +347,107 @@ Eigen::VectorXd from_rows(const Eigen::MatrixXd& rows) {
   return Eigen::Map<const Eigen::VectorXd>(r.data(), r.size());
 }
 
+/// Throws naming the fit when the context, the targets or the spec cannot make a fit.
+void check_fit(const FitContext& context, const std::vector<FitTarget>& targets, const FitSpec& spec) {
+  require(context.body && context.model && context.pool && context.parameterization, "fit {}: incomplete context",
+          spec.name);
+  require(!targets.empty(), "fit {}: no targets", spec.name);
+  require(!spec.stages.empty() && spec.stages.front() >= 1, "fit {}: stages must start at ≥ 1 control point",
+          spec.name);
+  for (std::size_t s = 1; s < spec.stages.size(); ++s)
+    require(spec.stages[s] > spec.stages[s - 1], "fit {}: stages must grow, got {} after {}", spec.name, spec.stages[s],
+            spec.stages[s - 1]);
+  require(!spec.betas.empty(), "fit {}: no subjects", spec.name);
+  require(spec.kind == FitKind::shape || spec.betas.size() == 1, "fit {}: an independent fit has one subject, got {}",
+          spec.name, spec.betas.size());
+  require(spec.lambda >= 0.0 && std::isfinite(spec.lambda), "fit {}: λ must be ≥ 0, got {}", spec.name, spec.lambda);
+  require(spec.fd_step > 0.0 && spec.fd_step < 0.1, "fit {}: finite-difference step {} outside (0, 0.1)", spec.name,
+          spec.fd_step);
+  for (const FitTarget& t : targets) {
+    require(t.simulation && t.subject >= 0 && t.subject < static_cast<int>(spec.betas.size()),
+            "fit {}: a target names subject {} of {}", spec.name, t.subject, spec.betas.size());
+    require(t.sigma.size() == 2 * t.simulation->num_region_vertices() && t.sigma.allFinite(),
+            "fit {}: target {}/{} has {} values, expected 2 × {} finite", spec.name, t.simulation->subject(),
+            t.simulation->motion(), t.sigma.size(), t.simulation->num_region_vertices());
+  }
+}
+
+/// Lower and upper bounds of the stage's parameters: shape fits (A_i, b_i) by parameter_bounds, independent fits
+/// κ̂ within the normalized ranges.
+void set_parameter_bounds(LeastSquaresProblem& problem, const FitSpec& spec, const material::ParameterBounds& bounds,
+                          int N) {
+  if (spec.kind == FitKind::shape) {
+    parameter_bounds(bounds, N, spec.a_max, problem.lower, problem.upper);
+    return;
+  }
+  const material::ParameterBounds nb = material::normalized_bounds(bounds);
+  problem.lower.resize(kK * N);
+  problem.upper.resize(kK * N);
+  for (int i = 0; i < N; ++i)
+    for (int c = 0; c < kK; ++c) {
+      problem.lower[kK * i + c] = nb[c].min;
+      problem.upper[kK * i + c] = nb[c].max;
+    }
+}
+
+/// The first stage's start: the neutral material (initial_kappa) at every control point, no shape dependence.
+Eigen::VectorXd neutral_start(FitKind kind, const material::ParameterBounds& bounds, int N) {
+  material::KappaMatrix k0(N, kK);
+  for (int i = 0; i < N; ++i) k0.row(i) = material::to_row(material::initial_kappa(bounds));
+  const material::KappaMatrix kn = material::normalize(k0, bounds);
+  return kind == FitKind::shape ? ShapeElasticity::constant(kn).pack() : flatten(kn);
+}
+
+/// A fit its checkpoint says is finished: its parameters and stage reports, without simulating.
+FitResult finished_fit(const FitSpec& spec, const Checkpoint& checkpoint) {
+  require(checkpoint.p.size() == params_per_control(spec.kind) * spec.stages.back(),
+          "fit {}: checkpoint {} does not match the stages", spec.name, spec.checkpoint.string());
+  logger()->info("fit {}: finished earlier (checkpoint {})", spec.name, spec.checkpoint.string());
+  FitResult result;
+  result.name = spec.name;
+  result.kind = spec.kind;
+  result.p = checkpoint.p;
+  result.finished_earlier = true;
+  result.controls = spec.stages.back();
+  result.stages = checkpoint.done;
+  return result;
+}
+
+/// The solver's settings for a stage that has `done_before` iterations behind it (a resumed checkpoint).
+LeastSquaresOptions stage_options(const FitSpec& spec, int done_before) {
+  LeastSquaresOptions options;
+  options.max_iterations = std::max(0, spec.iterations - done_before);
+  options.gradient_ttol = 1e-6;
+  options.gradient_rtol = 1e-8;
+  options.loss_rtol = spec.loss_rtol;
+  // The trust radius keeps TAO's floor (1e-10): a floor of 1e-3 in these normalized parameters saved the ~20
+  // residual evaluations of a run of rejected steps but stopped warm and full fits after one iteration where the
+  // default floor's small accepted steps kept lowering the loss (the paper preset, docs/fit.md).
+  return options;
+}
+
+/// Writes the fit's checkpoint (rank 0 only, when the spec names one).
+void save_fit_checkpoint(const FitContext& context, const FitSpec& spec, const std::string& fingerprint,
+                         const Checkpoint& checkpoint) {
+  if (!spec.checkpoint.empty() && context.pool->rank() == 0) save_checkpoint(spec.checkpoint, fingerprint, checkpoint);
+}
+
+/// A stage's report from the solver's result: the loss split into its fit and regularizer parts at the solver's
+/// own residual (no further simulation) and the test that stopped it.
+FitStageReport stage_report(const Stage& stage, const LeastSquaresResult& ls, int N, int iterations, double seconds) {
+  const Eigen::VectorXd& r = ls.residual;
+  FitStageReport report;
+  report.controls = N;
+  report.iterations = iterations;
+  report.loss_fit = r.head(stage.fit_rows).squaredNorm();
+  report.loss_reg = r.size() > stage.fit_rows ? r.tail(r.size() - stage.fit_rows).squaredNorm() : 0.0;
+  report.seconds = seconds;
+  report.simulations = stage.simulations;
+  report.jacobians = stage.jacobians;
+  report.reason = ls.stopped_by.empty() ? ls.reason : ls.stopped_by;
+  return report;
+}
+
 }  // namespace
 
 const char* jacobian_method_name(JacobianMethod m) {
@@ -383,46 +497,16 @@ const LayerParameterization& ParameterizationCache::get(int controls) {
 }
 
 FitResult fit_elasticity(const FitContext& context, const std::vector<FitTarget>& targets, const FitSpec& spec) {
-  require(context.body && context.model && context.pool && context.parameterization, "fit {}: incomplete context",
-          spec.name);
-  require(!targets.empty(), "fit {}: no targets", spec.name);
-  require(!spec.stages.empty() && spec.stages.front() >= 1, "fit {}: stages must start at ≥ 1 control point",
-          spec.name);
-  for (std::size_t s = 1; s < spec.stages.size(); ++s)
-    require(spec.stages[s] > spec.stages[s - 1], "fit {}: stages must grow, got {} after {}", spec.name, spec.stages[s],
-            spec.stages[s - 1]);
-  require(!spec.betas.empty(), "fit {}: no subjects", spec.name);
-  require(spec.kind == FitKind::shape || spec.betas.size() == 1, "fit {}: an independent fit has one subject, got {}",
-          spec.name, spec.betas.size());
-  require(spec.lambda >= 0.0 && std::isfinite(spec.lambda), "fit {}: λ must be ≥ 0, got {}", spec.name, spec.lambda);
-  require(spec.fd_step > 0.0 && spec.fd_step < 0.1, "fit {}: finite-difference step {} outside (0, 0.1)", spec.name,
-          spec.fd_step);
-  for (const FitTarget& t : targets) {
-    require(t.simulation && t.subject >= 0 && t.subject < static_cast<int>(spec.betas.size()),
-            "fit {}: a target names subject {} of {}", spec.name, t.subject, spec.betas.size());
-    require(t.sigma.size() == 2 * t.simulation->num_region_vertices() && t.sigma.allFinite(),
-            "fit {}: target {}/{} has {} values, expected 2 × {} finite", spec.name, t.simulation->subject(),
-            t.simulation->motion(), t.sigma.size(), t.simulation->num_region_vertices());
-  }
+  check_fit(context, targets, spec);
   const auto start_time = std::chrono::steady_clock::now();
   const std::string fingerprint = spec_fingerprint(spec, targets);
   std::optional<Checkpoint> checkpoint = load_checkpoint(spec.checkpoint, fingerprint);
 
+  if (checkpoint && checkpoint->finished) return finished_fit(spec, *checkpoint);
   FitResult result;
   result.name = spec.name;
   result.kind = spec.kind;
   const int k = params_per_control(spec.kind);
-  if (checkpoint && checkpoint->finished) {
-    require(checkpoint->p.size() == k * spec.stages.back(), "fit {}: checkpoint {} does not match the stages",
-            spec.name, spec.checkpoint.string());
-    logger()->info("fit {}: finished earlier (checkpoint {})", spec.name, spec.checkpoint.string());
-    result.p = checkpoint->p;
-    result.finished_earlier = true;
-    result.controls = spec.stages.back();
-    result.stages = checkpoint->done;
-    return result;
-  }
-  const material::Kappa initial = material::initial_kappa(context.bounds);
   Eigen::VectorXd p;
   const LayerParameterization* previous = nullptr;
   std::size_t first_stage = 0;
@@ -452,14 +536,8 @@ FitResult fit_elasticity(const FitContext& context, const std::vector<FitTarget>
     const bool resumed_here = checkpoint && s == first_stage;
     const bool warm_here = warm && !checkpoint && s == first_stage;
     if (!resumed_here && !warm_here) {
-      if (previous) {
-        p = from_rows(transfer_control_values(*previous, parameterization, rows_of(p, k)));
-      } else {
-        material::KappaMatrix k0(N, kK);
-        for (int i = 0; i < N; ++i) k0.row(i) = material::to_row(initial);
-        const material::KappaMatrix kn = material::normalize(k0, context.bounds);
-        p = spec.kind == FitKind::shape ? ShapeElasticity::constant(kn).pack() : flatten(kn);
-      }
+      p = previous ? from_rows(transfer_control_values(*previous, parameterization, rows_of(p, k)))
+                   : neutral_start(spec.kind, context.bounds, N);
     }
     previous = &parameterization;
 
@@ -472,28 +550,10 @@ FitResult fit_elasticity(const FitContext& context, const std::vector<FitTarget>
     problem.normal_equations = [&](const Eigen::VectorXd& x, const Eigen::VectorXd& r) {
       return stage.normal_equations(x, r);
     };
-    if (spec.kind == FitKind::shape) {
-      parameter_bounds(context.bounds, N, spec.a_max, problem.lower, problem.upper);
-    } else {
-      const material::ParameterBounds nb = material::normalized_bounds(context.bounds);
-      problem.lower.resize(3 * N);
-      problem.upper.resize(3 * N);
-      for (int i = 0; i < N; ++i)
-        for (int c = 0; c < kK; ++c) {
-          problem.lower[kK * i + c] = nb[c].min;
-          problem.upper[kK * i + c] = nb[c].max;
-        }
-    }
-    LeastSquaresOptions lso;
-    lso.max_iterations = resumed_here ? std::max(0, spec.iterations - checkpoint->iteration) : spec.iterations;
-    lso.gradient_ttol = 1e-6;
-    lso.gradient_rtol = 1e-8;
-    lso.loss_rtol = spec.loss_rtol;
-    // The trust radius keeps TAO's floor (1e-10): a floor of 1e-3 in these normalized parameters saved the ~20
-    // residual evaluations of a run of rejected steps but stopped warm and full fits after one iteration where the
-    // default floor's small accepted steps kept lowering the loss (the paper preset, docs/fit.md).
-    const auto stage_start = std::chrono::steady_clock::now();
+    set_parameter_bounds(problem, spec, context.bounds, N);
     const int done_before = resumed_here ? checkpoint->iteration : 0;
+    LeastSquaresOptions lso = stage_options(spec, done_before);
+    const auto stage_start = std::chrono::steady_clock::now();
     lso.monitor = [&](int iteration, const Eigen::VectorXd& x, double loss, double gnorm) {
       const double elapsed = seconds_since(stage_start);
       const int it = done_before + iteration;
@@ -501,14 +561,7 @@ FitResult fit_elasticity(const FitContext& context, const std::vector<FitTarget>
       if (context.progress)
         logger()->info("fit {} · N = {} · iteration {}/{} · loss {:.5g} · |g| {:.3g} · {} simulations · ETA {:.0f} s",
                        spec.name, N, it, spec.iterations, 2.0 * loss, gnorm, stage.simulations, eta);
-      if (!spec.checkpoint.empty() && context.pool->rank() == 0) {
-        Checkpoint c;
-        c.stage = static_cast<int>(s);
-        c.iteration = it;
-        c.p = x;
-        c.done = result.stages;
-        save_checkpoint(spec.checkpoint, fingerprint, c);
-      }
+      save_fit_checkpoint(context, spec, fingerprint, {false, static_cast<int>(s), it, x, result.stages});
     };
     LeastSquaresResult ls;
     if (lso.max_iterations > 0) {
@@ -520,44 +573,25 @@ FitResult fit_elasticity(const FitContext& context, const std::vector<FitTarget>
       ls.converged = true;
     }
     p = ls.p;
-    // The solver's residual at its solution: the loss split below costs no further simulation.
-    const Eigen::VectorXd& r = ls.residual;
-    FitStageReport report;
-    report.controls = N;
-    report.iterations = done_before + ls.iterations;
-    report.loss_fit = r.head(stage.fit_rows).squaredNorm();
-    report.loss_reg = r.size() > stage.fit_rows ? r.tail(r.size() - stage.fit_rows).squaredNorm() : 0.0;
-    report.seconds = seconds_since(stage_start);
-    report.simulations = stage.simulations;
-    report.jacobians = stage.jacobians;
-    report.reason = ls.stopped_by.empty() ? ls.reason : ls.stopped_by;
+    const FitStageReport report = stage_report(stage, ls, N, done_before + ls.iterations, seconds_since(stage_start));
     result.stages.push_back(report);
     logger()->info("fit {}: N = {} done: loss fit {:.5g} mm², reg {:.4g}, {} iterations ({}), {} simulations, {:.1f} s",
                    spec.name, N, report.loss_fit, report.loss_reg, report.iterations, report.reason, report.simulations,
                    report.seconds);
-    if (!spec.checkpoint.empty() && context.pool->rank() == 0 && s + 1 < spec.stages.size()) {
-      Checkpoint c;
-      c.stage = static_cast<int>(s + 1);
-      c.iteration = 0;
-      c.p = from_rows(
-          transfer_control_values(parameterization, context.parameterization(spec.stages[s + 1]), rows_of(p, k)));
-      c.done = result.stages;
-      save_checkpoint(spec.checkpoint, fingerprint, c);
-    }
+    if (s + 1 < spec.stages.size())  // the next stage starts from this one's field at its control points
+      save_fit_checkpoint(context, spec, fingerprint,
+                          {false, static_cast<int>(s + 1), 0,
+                           from_rows(transfer_control_values(
+                               parameterization, context.parameterization(spec.stages[s + 1]), rows_of(p, k))),
+                           result.stages});
     checkpoint.reset();
     result.controls = N;
     if (s + 1 == spec.stages.size() && stage.last_jacobian_p.size() == p.size() && stage.last_jacobian_p == p)
       result.final_point = std::make_shared<const FitPoint>(std::move(stage.last_jacobian));
   }
-  if (!spec.checkpoint.empty() && context.pool->rank() == 0) {
-    Checkpoint c;
-    c.finished = true;
-    c.stage = static_cast<int>(spec.stages.size()) - 1;
-    c.iteration = result.stages.back().iterations;
-    c.p = p;
-    c.done = result.stages;
-    save_checkpoint(spec.checkpoint, fingerprint, c);
-  }
+  save_fit_checkpoint(
+      context, spec, fingerprint,
+      {true, static_cast<int>(spec.stages.size()) - 1, result.stages.back().iterations, p, result.stages});
   result.p = p;
   logger()->debug("fit {}: {:.1f} s in total", spec.name, seconds_since(start_time));
   return result;

@@ -218,12 +218,7 @@ void prepare(const ValidateConfig& config, Setup& s, DynaTruth* dyna = nullptr) 
     }
 }
 
-}  // namespace
-
-nlohmann::json run_validation(const ValidateConfig& requested, const std::filesystem::path& out_dir,
-                              const nlohmann::json& header) {
-  const auto start = std::chrono::steady_clock::now();
-  ValidateConfig config = requested;  // with DYNA files, the train subjects become the files' subject ids
+void check_config(const ValidateConfig& config) {
   require(!config.train_subjects.empty() || !config.dyna.empty(), "validate: no train subjects");
   require(!config.train_motions.empty() && !config.test_motions.empty(),
           "validate: train and test motions are required");
@@ -233,6 +228,149 @@ nlohmann::json run_validation(const ValidateConfig& requested, const std::filesy
       require(l > 0.0 && std::isfinite(l), "validate: λ ({}) must be positive, got {}", tag, l);
     require(!config.lambdas_for(tag).empty(), "validate: no λ values for {}", tag);
   }
+}
+
+/// σ* of the DYNA registrations on the layer's region vertices [mm], one case per sequence.
+std::map<std::string, GroundTruthCase> dyna_ground_truth(const DynaTruth& dyna, const Setup& setup,
+                                                         const std::vector<int>& region) {
+  std::map<std::string, GroundTruthCase> truth;
+  for (const auto& [key, frames] : dyna.frames) {
+    const reduced::DynamicsCase& c = *setup.cases.at(key);
+    const DynamicsResult d = dynamics_metrics(setup.model, c.beta(), dyna.motion.at(key), frames, region);
+    GroundTruthCase g;
+    g.subject = c.subject();
+    g.motion = c.motion();
+    g.beta = c.beta();
+    g.fps = dyna.motion.at(key).fps;
+    g.sigma_normal.resize(static_cast<Eigen::Index>(region.size()));
+    g.sigma_tangent.resize(static_cast<Eigen::Index>(region.size()));
+    for (std::size_t r = 0; r < region.size(); ++r) {
+      g.sigma_normal[static_cast<Eigen::Index>(r)] = 1e3 * d.sigma_normal[region[r]];
+      g.sigma_tangent[static_cast<Eigen::Index>(r)] = 1e3 * d.sigma_tangent[region[r]];
+    }
+    truth.emplace(key, std::move(g));
+  }
+  return truth;
+}
+
+nlohmann::json dyna_summary(const DynaTruth& dyna) {
+  nlohmann::json j;
+  for (const std::string& id : dyna.subjects) {
+    const body::Betas& b = dyna.beta.at(id);
+    j["subjects"][id]["beta"] = std::vector<double>(b.data(), b.data() + b.size());
+  }
+  for (const auto& [key, rms] : dyna.mean_rms) j["pose_fit_mean_rms_mm"][key] = 1e3 * rms;
+  return j;
+}
+
+const std::vector<std::pair<Regularizer, std::string>> kRegularizers{{Regularizer::l2, "l2"},
+                                                                     {Regularizer::local, "ours"}};
+
+/// The fits' specifications and targets of one study: its settings, subjects' β, cases, σ* and checkpoints.
+struct FitSpecs {
+  const ValidateConfig& config;
+  const Setup& setup;
+  const std::map<std::string, GroundTruthCase>& truth;
+  std::filesystem::path state;
+
+  std::vector<reduced::FitTarget> targets(const std::vector<std::string>& subjects,
+                                          const std::vector<std::string>& motions) const {
+    std::vector<reduced::FitTarget> t;
+    for (std::size_t s = 0; s < subjects.size(); ++s)
+      for (const std::string& m : motions) {
+        const std::string key = case_key(subjects[s], m);
+        t.push_back({setup.cases.at(key).get(), static_cast<int>(s), truth.at(key).sigma()});
+      }
+    return t;
+  }
+
+  reduced::FitSpec spec(const std::string& name, FitKind kind, Regularizer reg, double lambda,
+                        const std::vector<std::string>& subjects) const {
+    reduced::FitSpec spec;
+    spec.name = name;
+    spec.kind = kind;
+    spec.regularizer = reg;
+    spec.lambda = lambda;
+    for (const std::string& s : subjects) spec.betas.push_back(setup.beta_of.at(s));
+    spec.stages = config.stages;
+    spec.iterations = config.iterations;
+    spec.loss_rtol = config.loss_rtol;
+    spec.checkpoint = state / "fits" / (name + ".json");
+    spec.jacobian =
+        config.jacobian == "fd" ? reduced::JacobianMethod::finite_differences : reduced::JacobianMethod::sensitivities;
+    spec.thickness_differences = config.jacobian == "hybrid";
+    return spec;
+  }
+};
+
+/// Independent fits (the optimal targets, SFLSH §3), then leave-one-out cross-validation and the λ sweep (§6.2,
+/// Fig. 5): one chain per (regularizer, left-out subject), λ from the largest down; with the warm start each smaller
+/// λ continues from the previous one's result at the last stage (a regularization path).
+std::vector<FitChain> independent_and_leave_one_out_chains(const FitSpecs& specs) {
+  const ValidateConfig& config = specs.config;
+  std::vector<FitChain> chains;
+  for (const std::string& s : config.train_subjects)
+    chains.push_back(
+        {{"independent/" + s, specs.spec("independent_" + s, FitKind::independent, Regularizer::l2, 0.0, {s}),
+          specs.targets({s}, config.train_motions), false}});
+  if (!config.cross_validation) return chains;
+  for (const auto& [reg, tag] : kRegularizers) {
+    std::vector<double> sweep = config.lambdas_for(tag);
+    std::sort(sweep.begin(), sweep.end(), std::greater<>());
+    for (const std::string& left_out : config.train_subjects) {
+      std::vector<std::string> rest;
+      for (const std::string& s : config.train_subjects)
+        if (s != left_out) rest.push_back(s);
+      FitChain chain;
+      for (double lambda : sweep) {
+        reduced::FitSpec spec = specs.spec(fmt::format("cv_{}_lambda{:g}_without_{}", tag, lambda, left_out),
+                                           FitKind::shape, reg, lambda, rest);
+        const bool warm = config.lambda_warm_start && !chain.empty();
+        if (warm && config.warm_iterations > 0) spec.iterations = config.warm_iterations;
+        chain.push_back({fmt::format("cv/{}/{:g}/{}", tag, lambda, left_out), std::move(spec),
+                         specs.targets(rest, config.train_motions), warm});
+      }
+      chains.push_back(std::move(chain));
+    }
+  }
+  return chains;
+}
+
+Report make_report(const ValidateConfig& config, const Setup& setup,
+                   const std::map<std::string, GroundTruthCase>& truth,
+                   const reduced::LayerParameterization& parameterization, const model::BodyLayer& layer) {
+  Report report;
+  report.config = config;
+  report.bounds = setup.bounds;
+  report.model = &setup.model;
+  report.parameterization = &parameterization;
+  report.truth = &truth;
+  report.betas = setup.beta_of;
+  report.poisson = layer.material.poisson;
+  report.saturation = layer.material.saturation;
+  report.region = layer.mesh->region;
+  return report;
+}
+
+/// λ per regularizer by the config's rule from the leave-one-out errors, into `best` and report.choices.
+void choose_lambdas(Report& report, std::map<std::string, double>& best) {
+  for (const auto& [reg, tag] : kRegularizers) {
+    const LambdaChoice choice = report.choose_lambda(tag);
+    best[tag] = choice.lambda;
+    report.choices[tag] = choice;
+    logger()->info("validate: λ ({}) = {:g} by the {} rule (least CV error {:.3f} ± {:.3f} mm at λ = {:g})", tag,
+                   choice.lambda, lambda_rule_name(report.config.lambda_rule), choice.least_error,
+                   choice.standard_error, choice.least_lambda);
+  }
+}
+
+}  // namespace
+
+nlohmann::json run_validation(const ValidateConfig& requested, const std::filesystem::path& out_dir,
+                              const nlohmann::json& header) {
+  const auto start = std::chrono::steady_clock::now();
+  ValidateConfig config = requested;  // with DYNA files, the train subjects become the files' subject ids
+  check_config(config);
   RunFolder run(out_dir);
   const std::filesystem::path state = out_dir / "state";
   std::filesystem::create_directories(state / "groundtruth");
@@ -247,7 +385,6 @@ nlohmann::json run_validation(const ValidateConfig& requested, const std::filesy
           "validate: leave-one-out cross-validation needs at least 2 train subjects, have {}",
           config.train_subjects.size());
   const body::BodyModel& model = setup.model;
-  const std::map<std::string, body::Betas>& beta_of = setup.beta_of;
   const std::vector<std::string>& all_subjects = setup.all_subjects;
   const std::vector<std::string>& all_motions = setup.all_motions;
   const model::BodyLayerOptions& layer_options = setup.layer_options;
@@ -261,23 +398,7 @@ nlohmann::json run_validation(const ValidateConfig& requested, const std::filesy
   reduced::SimulationPool pool(config.threads);
   std::map<std::string, GroundTruthCase> truth;
   if (from_dyna) {
-    const std::vector<int>& region = first.layer().mesh->region_surface.vertices;
-    for (const auto& [key, frames] : dyna.frames) {
-      const reduced::DynamicsCase& c = *cases.at(key);
-      const DynamicsResult d = dynamics_metrics(model, c.beta(), dyna.motion.at(key), frames, region);
-      GroundTruthCase g;
-      g.subject = c.subject();
-      g.motion = c.motion();
-      g.beta = c.beta();
-      g.fps = dyna.motion.at(key).fps;
-      g.sigma_normal.resize(static_cast<Eigen::Index>(region.size()));
-      g.sigma_tangent.resize(static_cast<Eigen::Index>(region.size()));
-      for (std::size_t r = 0; r < region.size(); ++r) {
-        g.sigma_normal[static_cast<Eigen::Index>(r)] = 1e3 * d.sigma_normal[region[r]];
-        g.sigma_tangent[static_cast<Eigen::Index>(r)] = 1e3 * d.sigma_tangent[region[r]];
-      }
-      truth.emplace(key, std::move(g));
-    }
+    truth = dyna_ground_truth(dyna, setup, first.layer().mesh->region_surface.vertices);
   } else {
     truth = compute_ground_truth(config, cases, motions, parameterizations, layer_options, bounds, state, pool);
     if (pool.rank() == 0)
@@ -298,101 +419,26 @@ nlohmann::json run_validation(const ValidateConfig& requested, const std::filesy
   context.parameterization = [&](int n) -> const reduced::LayerParameterization& { return parameterizations.get(n); };
   context.progress = config.progress;
 
-  auto targets_of = [&](const std::vector<std::string>& subject_list, const std::vector<std::string>& motion_list) {
-    std::vector<reduced::FitTarget> t;
-    for (std::size_t s = 0; s < subject_list.size(); ++s)
-      for (const std::string& m : motion_list) {
-        const std::string key = case_key(subject_list[s], m);
-        t.push_back({cases.at(key).get(), static_cast<int>(s), truth.at(key).sigma()});
-      }
-    return t;
-  };
-  auto betas_of = [&](const std::vector<std::string>& subject_list) {
-    std::vector<body::Betas> b;
-    for (const std::string& s : subject_list) b.push_back(beta_of.at(s));
-    return b;
-  };
-  auto spec_of = [&](const std::string& name, FitKind kind, Regularizer reg, double lambda,
-                     const std::vector<std::string>& subject_list) {
-    reduced::FitSpec spec;
-    spec.name = name;
-    spec.kind = kind;
-    spec.regularizer = reg;
-    spec.lambda = lambda;
-    spec.betas = betas_of(subject_list);
-    spec.stages = config.stages;
-    spec.iterations = config.iterations;
-    spec.loss_rtol = config.loss_rtol;
-    spec.checkpoint = state / "fits" / (name + ".json");
-    spec.jacobian =
-        config.jacobian == "fd" ? reduced::JacobianMethod::finite_differences : reduced::JacobianMethod::sensitivities;
-    spec.thickness_differences = config.jacobian == "hybrid";
-    return spec;
-  };
-
-  Report report;
-  report.config = config;
-  report.bounds = bounds;
-  report.model = &model;
-  report.parameterization = &parameterizations.get(config.stages.back());
-  report.truth = &truth;
-  report.betas = beta_of;
+  const FitSpecs specs{config, setup, truth, state};
+  Report report = make_report(config, setup, truth, parameterizations.get(config.stages.back()), first.layer());
   report.true_parameters = !from_dyna;
-  report.poisson = first.layer().material.poisson;
-  report.saturation = first.layer().material.saturation;
-  report.region = first.layer().mesh->region;
 
   // The fits run as chains (fit_chains.hpp), shared among fit groups of MPI ranks with --fit-groups.
   const FitRunner runner(context, config.fit_groups, config.threads);
   // Independent fits: the optimal targets (SFLSH §3).
-  std::vector<FitChain> chains;
-  for (const std::string& s : config.train_subjects)
-    chains.push_back({{"independent/" + s, spec_of("independent_" + s, FitKind::independent, Regularizer::l2, 0.0, {s}),
-                       targets_of({s}, config.train_motions), false}});
-  // Leave-one-out cross-validation and the λ sweep (SFLSH §6.2, Fig. 5): one chain per (regularizer, left-out
-  // subject), λ from the largest down; with the warm start each smaller λ continues from the previous one's
-  // result at the last stage (a regularization path) instead of going through every stage again.
-  const std::vector<std::pair<Regularizer, std::string>> regs{{Regularizer::l2, "l2"}, {Regularizer::local, "ours"}};
+  std::vector<FitChain> chains = independent_and_leave_one_out_chains(specs);
   std::map<std::string, double> best_lambda;
-  for (const auto& [reg, tag] : regs) {
-    std::vector<double> sweep = config.lambdas_for(tag);
-    std::sort(sweep.begin(), sweep.end(), std::greater<>());
-    best_lambda[tag] = config.lambdas_for(tag).front();
-    if (!config.cross_validation) continue;
-    for (const std::string& left_out : config.train_subjects) {
-      std::vector<std::string> rest;
-      for (const std::string& s : config.train_subjects)
-        if (s != left_out) rest.push_back(s);
-      FitChain chain;
-      for (double lambda : sweep) {
-        reduced::FitSpec spec = spec_of(fmt::format("cv_{}_lambda{:g}_without_{}", tag, lambda, left_out),
-                                        FitKind::shape, reg, lambda, rest);
-        const bool warm = config.lambda_warm_start && !chain.empty();
-        if (warm && config.warm_iterations > 0) spec.iterations = config.warm_iterations;
-        chain.push_back({fmt::format("cv/{}/{:g}/{}", tag, lambda, left_out), std::move(spec),
-                         targets_of(rest, config.train_motions), warm});
-      }
-      chains.push_back(std::move(chain));
-    }
-  }
+  for (const auto& [reg, tag] : kRegularizers) best_lambda[tag] = config.lambdas_for(tag).front();
   runner.run("independent and leave-one-out fits", chains, report.fits);
   // Evaluate everything fitted so far, then pick λ per regularizer from the cross-validation errors.
   report.evaluate(pool, reduced_model, context.reduced, cases);
-  if (config.cross_validation)
-    for (const auto& [reg, tag] : regs) {
-      const LambdaChoice choice = report.choose_lambda(tag);
-      best_lambda[tag] = choice.lambda;
-      report.choices[tag] = choice;
-      logger()->info("validate: λ ({}) = {:g} by the {} rule (least CV error {:.3f} ± {:.3f} mm at λ = {:g})", tag,
-                     choice.lambda, lambda_rule_name(config.lambda_rule), choice.least_error, choice.standard_error,
-                     choice.least_lambda);
-    }
+  if (config.cross_validation) choose_lambdas(report, best_lambda);
   // Full optimizations on every train subject (SFLSH §6.3) and their generalization (§6.4).
   chains.clear();
-  for (const auto& [reg, tag] : regs)
+  for (const auto& [reg, tag] : kRegularizers)
     chains.push_back(
-        {{"full/" + tag, spec_of("full_" + tag, FitKind::shape, reg, best_lambda.at(tag), config.train_subjects),
-          targets_of(config.train_subjects, config.train_motions), false}});
+        {{"full/" + tag, specs.spec("full_" + tag, FitKind::shape, reg, best_lambda.at(tag), config.train_subjects),
+          specs.targets(config.train_subjects, config.train_motions), false}});
   runner.run("full fits", chains, report.fits);
   report.evaluate(pool, reduced_model, context.reduced, cases);
   report.best = best_lambda;
@@ -405,13 +451,7 @@ nlohmann::json run_validation(const ValidateConfig& requested, const std::filesy
   summary["reduced_model"] = {{"point_handles", config.point_handles},
                               {"coordinates", reduced_model.subspace.num_dofs()},
                               {"cubature", reduced_model.cubature.size()}};
-  if (from_dyna) {
-    for (const std::string& id : dyna.subjects) {
-      const body::Betas& b = dyna.beta.at(id);
-      summary["dyna"]["subjects"][id]["beta"] = std::vector<double>(b.data(), b.data() + b.size());
-    }
-    for (const auto& [key, rms] : dyna.mean_rms) summary["dyna"]["pose_fit_mean_rms_mm"][key] = 1e3 * rms;
-  }
+  if (from_dyna) summary["dyna"] = dyna_summary(dyna);
   summary["simulations"] = pool.simulations() + runner.group_simulations();
   // The work per rank: Σ / max is the speed-up P ranks on P free cores would see (docs/fit.md, fit groups).
   summary["rank_task_cpu_seconds"] = runner.rank_task_cpu_seconds();

@@ -135,30 +135,28 @@ LambdaChoice Report::choose_lambda(const std::string& tag) const {
   return validate::choose_lambda(sweep, config.lambda_rule, fmt::format("validate: regularizer {}", tag));
 }
 
-void Report::write(RunFolder& run, nlohmann::json& summary) const {
-  const meshing::LayerMesh& mesh = parameterization->mesh();
-  const std::size_t columns = std::max(config.train_subjects.size(), config.test_subjects.size());
-  // ---- Table 2 -------------------------------------------------------------------------------------------
-  struct Row {
-    std::string label;
-    std::vector<std::string> subjects;
-    std::function<double(const std::string&, const std::vector<std::string>&)> value;
-    std::function<double(const std::string&, const std::vector<std::string>&)> error;
-  };
+std::string Report::lambda_text(const std::string& tag) const {
+  return fmt::format("{:g}", best.count(tag) ? best.at(tag) : config.lambdas_for(tag).front());
+}
+
+material::KappaMatrix Report::normalized_truth(const std::string& subject) const {
+  const GroundTruthCase& t = truth->at(subject + "_" + config.train_motions.front());
+  return material::normalize(t.kappa, bounds);
+}
+
+std::vector<Report::Table2Row> Report::table2_rows() const {
   auto fit_row = [&](const std::string& label, std::function<std::string(const std::string&)> fit_of,
                      const std::vector<std::string>& subjects) {
-    return Row{label, subjects,
-               [this, fit_of](const std::string& s, const std::vector<std::string>& m) {
-                 return table_entry(fit_of(s), s, m);
-               },
-               [this, fit_of](const std::string& s, const std::vector<std::string>& m) {
-                 return table_error(fit_of(s), s, m);
-               }};
+    return Table2Row{label, subjects,
+                     [this, fit_of](const std::string& s, const std::vector<std::string>& m) {
+                       return table_entry(fit_of(s), s, m);
+                     },
+                     [this, fit_of](const std::string& s, const std::vector<std::string>& m) {
+                       return table_error(fit_of(s), s, m);
+                     }};
   };
-  const std::string l2 = fmt::format("{:g}", best.count("l2") ? best.at("l2") : config.lambdas_for("l2").front());
-  const std::string ours =
-      fmt::format("{:g}", best.count("ours") ? best.at("ours") : config.lambdas_for("ours").front());
-  std::vector<Row> rows;
+  const std::string l2 = lambda_text("l2"), ours = lambda_text("ours");
+  std::vector<Table2Row> rows;
   rows.push_back({"Ground truth", config.train_subjects,
                   [this](const std::string& s, const std::vector<std::string>& m) { return truth_entry(s, m); },
                   [](const std::string&, const std::vector<std::string>&) { return 0.0; }});
@@ -184,170 +182,178 @@ void Report::write(RunFolder& run, nlohmann::json& summary) const {
                     [this](const std::string& s, const std::vector<std::string>& m) { return truth_entry(s, m); },
                     [](const std::string&, const std::vector<std::string>&) { return 0.0; }});
   }
-  auto table = [&](bool error) {
-    std::ostringstream csv;
-    csv << "row,subjects";
-    for (const char* split : {"train_motions", "test_motions"}) {
-      for (std::size_t c = 0; c < columns; ++c) csv << "," << split << "_subject_" << c + 1;
-      csv << "," << split << "_avg";
+  return rows;
+}
+
+std::tuple<std::string, std::string, nlohmann::json> Report::table2_text(const std::vector<Table2Row>& rows,
+                                                                         bool error) const {
+  const std::size_t columns = std::max(config.train_subjects.size(), config.test_subjects.size());
+  std::ostringstream csv;
+  csv << "row,subjects";
+  for (const char* split : {"train_motions", "test_motions"}) {
+    for (std::size_t c = 0; c < columns; ++c) csv << "," << split << "_subject_" << c + 1;
+    csv << "," << split << "_avg";
+  }
+  csv << "\n";
+  std::ostringstream md;
+  md << "| " << (error ? "RMS error of σ vs ground truth [mm]" : "σ [mm]") << " | subjects |";
+  for (const char* split : {"train", "test"}) {
+    for (std::size_t c = 0; c < columns; ++c) md << " " << split << " " << c + 1 << " |";
+    md << " " << split << " avg |";
+  }
+  md << "\n|---|---|";
+  for (std::size_t c = 0; c < 2 * (columns + 1); ++c) md << "---|";
+  md << "\n";
+  nlohmann::json rows_json = nlohmann::json::array();
+  for (const Table2Row& row : rows) {
+    std::string names;
+    for (const std::string& s : row.subjects) names += (names.empty() ? "" : ";") + s;
+    csv << '"' << row.label << "\"," << names;
+    md << "| " << row.label << " | " << names << " |";
+    nlohmann::json rj = {{"row", row.label}, {"subjects", row.subjects}};
+    for (const auto* motions : {&config.train_motions, &config.test_motions}) {
+      std::vector<double> values;
+      for (std::size_t c = 0; c < columns; ++c) {
+        const double v = c < row.subjects.size()
+                             ? (error ? row.error(row.subjects[c], *motions) : row.value(row.subjects[c], *motions))
+                             : kNaN;
+        if (c < row.subjects.size()) values.push_back(v);
+        csv << "," << cell(v);
+        md << " " << cell(v) << " |";
+      }
+      const double avg = mean_of_finite(values);
+      csv << "," << cell(avg);
+      md << " **" << cell(avg) << "** |";
+      rj[motions == &config.train_motions ? "train_motions" : "test_motions"] = {{"values", values}, {"avg", avg}};
     }
     csv << "\n";
-    std::ostringstream md;
-    md << "| " << (error ? "RMS error of σ vs ground truth [mm]" : "σ [mm]") << " | subjects |";
-    for (const char* split : {"train", "test"}) {
-      for (std::size_t c = 0; c < columns; ++c) md << " " << split << " " << c + 1 << " |";
-      md << " " << split << " avg |";
-    }
-    md << "\n|---|---|";
-    for (std::size_t c = 0; c < 2 * (columns + 1); ++c) md << "---|";
     md << "\n";
-    nlohmann::json rows_json = nlohmann::json::array();
-    for (const Row& row : rows) {
-      std::string names;
-      for (const std::string& s : row.subjects) names += (names.empty() ? "" : ";") + s;
-      csv << '"' << row.label << "\"," << names;
-      md << "| " << row.label << " | " << names << " |";
-      nlohmann::json rj = {{"row", row.label}, {"subjects", row.subjects}};
-      for (const auto* motions : {&config.train_motions, &config.test_motions}) {
-        std::vector<double> values;
-        for (std::size_t c = 0; c < columns; ++c) {
-          const double v = c < row.subjects.size()
-                               ? (error ? row.error(row.subjects[c], *motions) : row.value(row.subjects[c], *motions))
-                               : kNaN;
-          if (c < row.subjects.size()) values.push_back(v);
-          csv << "," << cell(v);
-          md << " " << cell(v) << " |";
-        }
-        const double avg = mean_of_finite(values);
-        csv << "," << cell(avg);
-        md << " **" << cell(avg) << "** |";
-        rj[motions == &config.train_motions ? "train_motions" : "test_motions"] = {{"values", values}, {"avg", avg}};
-      }
-      csv << "\n";
-      md << "\n";
-      rows_json.push_back(rj);
-    }
-    return std::make_tuple(csv.str(), md.str(), rows_json);
-  };
-  {
-    const auto [csv, md, js] = table(false);
-    write_text_atomically(run.stage("table2.csv"), csv);
-    std::ostringstream doc;
-    doc << "# Table 2: standard deviation of per-vertex dynamics [mm]\n\n"
-        << "Mean over the soft region's skin vertices of σ_i (docs/physics.md §4), averaged over the motions of each "
-           "split.\n"
-        << "Train motions: ";
-    for (const auto& m : config.train_motions) doc << m << " ";
-    doc << "· test motions: ";
-    for (const auto& m : config.test_motions) doc << m << " ";
-    doc << "· λ (L2) = " << l2 << ", λ (ours) = " << ours
-        << (config.cross_validation
-                ? fmt::format(" (chosen by cross-validation, rule {}: docs/fit.md, \"Choosing λ\").\n\n",
-                              lambda_rule_name(config.lambda_rule))
-                : std::string(" (the first of the λ values: no cross-validation).\n\n"))
-        << md;
-    const auto [csv_e, md_e, js_e] = table(true);
-    doc << "\n## RMS error of the per-vertex σ against the ground truth [mm]\n\n" << md_e;
-    write_text_atomically(run.stage("table2.md"), doc.str());
-    write_text_atomically(run.stage("table2_error.csv"), csv_e);
-    summary["table2"] = js;
-    summary["table2_error"] = js_e;
+    rows_json.push_back(rj);
   }
-  // ---- Cross-validation and the λ sweep (Fig. 5) -----------------------------------------------------------
-  if (config.cross_validation) {
-    std::ostringstream cv, sweep;
-    cv << "regularizer,lambda,left_out,train_motions_rms_error_mm,test_motions_rms_error_mm,train_motions_mean_sigma_"
-          "mm,"
-          "test_motions_mean_sigma_mm\n";
-    // cv_train_motions_standard_error_mm: over the left-out subjects, of the mean; chosen: 1 for the λ the rule took.
-    sweep << "regularizer,lambda,cv_train_motions_rms_error_mm,cv_test_motions_rms_error_mm,"
-             "cv_train_motions_standard_error_mm,chosen\n";
-    chart::Chart chart;
-    chart.title = "Cross-validation error vs lambda";
-    chart.x_label = "lambda";
-    chart.y_label = "RMS error of sigma on left-out subjects [mm]";
-    chart.log_x = true;
-    nlohmann::json sweep_json = nlohmann::json::array();
-    std::size_t colour = 0;
-    nlohmann::json bracketed = nlohmann::json::object();
-    for (const std::string tag : {"l2", "ours"}) {
-      chart::Series series, lower, upper;  // the mean and ± one standard error of it (Fig. 5)
-      series.label = tag == std::string("l2") ? "L2" : "ours";
-      series.line = chart::Line::solid;
-      series.color = lower.color = upper.color = chart::palette(colour++);
-      lower.label = series.label + " - standard error";
-      upper.label = series.label + " + standard error";
-      lower.line = upper.line = chart::Line::dashed;
-      lower.marker = upper.marker = chart::Marker::none;
-      std::vector<double> grid = config.lambdas_for(tag);
-      std::sort(grid.begin(), grid.end());
-      std::vector<double> means;
-      for (double lambda : grid) {
-        std::vector<double> tr, te;
-        for (const std::string& s : config.train_subjects) {
-          const std::string fit = fmt::format("cv/{}/{:g}/{}", tag, lambda, s);
-          tr.push_back(table_error(fit, s, config.train_motions));
-          te.push_back(table_error(fit, s, config.test_motions));
-          cv << tag << "," << lambda << "," << s << "," << cell(tr.back()) << "," << cell(te.back()) << ","
-             << cell(table_entry(fit, s, config.train_motions)) << "," << cell(table_entry(fit, s, config.test_motions))
-             << "\n";
-        }
-        const bool chosen = best.count(tag) && best.at(tag) == lambda;
-        sweep << tag << "," << lambda << "," << cell(mean_of_finite(tr)) << "," << cell(mean_of_finite(te)) << ","
-              << cell(standard_error_of_mean(tr)) << "," << (chosen ? 1 : 0) << "\n";
-        series.x.push_back(lambda);
-        series.y.push_back(mean_of_finite(tr));
-        lower.x.push_back(lambda);
-        lower.y.push_back(mean_of_finite(tr) - standard_error_of_mean(tr));
-        upper.x.push_back(lambda);
-        upper.y.push_back(mean_of_finite(tr) + standard_error_of_mean(tr));
-        means.push_back(mean_of_finite(tr));
-        sweep_json.push_back({{"regularizer", tag},
-                              {"lambda", lambda},
-                              {"train_motions", mean_of_finite(tr)},
-                              {"test_motions", mean_of_finite(te)}});
+  return std::make_tuple(csv.str(), md.str(), rows_json);
+}
+
+void Report::write_table2(RunFolder& run, nlohmann::json& summary) const {
+  const std::vector<Table2Row> rows = table2_rows();
+  const std::string l2 = lambda_text("l2"), ours = lambda_text("ours");
+  const auto [csv, md, js] = table2_text(rows, false);
+  write_text_atomically(run.stage("table2.csv"), csv);
+  std::ostringstream doc;
+  doc << "# Table 2: standard deviation of per-vertex dynamics [mm]\n\n"
+      << "Mean over the soft region's skin vertices of σ_i (docs/physics.md §4), averaged over the motions of each "
+         "split.\n"
+      << "Train motions: ";
+  for (const auto& m : config.train_motions) doc << m << " ";
+  doc << "· test motions: ";
+  for (const auto& m : config.test_motions) doc << m << " ";
+  doc << "· λ (L2) = " << l2 << ", λ (ours) = " << ours
+      << (config.cross_validation
+              ? fmt::format(" (chosen by cross-validation, rule {}: docs/fit.md, \"Choosing λ\").\n\n",
+                            lambda_rule_name(config.lambda_rule))
+              : std::string(" (the first of the λ values: no cross-validation).\n\n"))
+      << md;
+  const auto [csv_e, md_e, js_e] = table2_text(rows, true);
+  doc << "\n## RMS error of the per-vertex σ against the ground truth [mm]\n\n" << md_e;
+  write_text_atomically(run.stage("table2.md"), doc.str());
+  write_text_atomically(run.stage("table2_error.csv"), csv_e);
+  summary["table2"] = js;
+  summary["table2_error"] = js_e;
+}
+
+/// cross_validation.csv, lambda_sweep.csv and .png (Fig. 5) of the leave-one-out fits.
+void Report::write_lambda_sweep(RunFolder& run, nlohmann::json& summary) const {
+  std::ostringstream cv, sweep;
+  cv << "regularizer,lambda,left_out,train_motions_rms_error_mm,test_motions_rms_error_mm,train_motions_mean_sigma_"
+        "mm,"
+        "test_motions_mean_sigma_mm\n";
+  // cv_train_motions_standard_error_mm: over the left-out subjects, of the mean; chosen: 1 for the λ the rule took.
+  sweep << "regularizer,lambda,cv_train_motions_rms_error_mm,cv_test_motions_rms_error_mm,"
+           "cv_train_motions_standard_error_mm,chosen\n";
+  chart::Chart chart;
+  chart.title = "Cross-validation error vs lambda";
+  chart.x_label = "lambda";
+  chart.y_label = "RMS error of sigma on left-out subjects [mm]";
+  chart.log_x = true;
+  nlohmann::json sweep_json = nlohmann::json::array();
+  std::size_t colour = 0;
+  nlohmann::json bracketed = nlohmann::json::object();
+  for (const std::string tag : {"l2", "ours"}) {
+    chart::Series series, lower, upper;  // the mean and ± one standard error of it (Fig. 5)
+    series.label = tag == std::string("l2") ? "L2" : "ours";
+    series.line = chart::Line::solid;
+    series.color = lower.color = upper.color = chart::palette(colour++);
+    lower.label = series.label + " - standard error";
+    upper.label = series.label + " + standard error";
+    lower.line = upper.line = chart::Line::dashed;
+    lower.marker = upper.marker = chart::Marker::none;
+    std::vector<double> grid = config.lambdas_for(tag);
+    std::sort(grid.begin(), grid.end());
+    std::vector<double> means;
+    for (double lambda : grid) {
+      std::vector<double> tr, te;
+      for (const std::string& s : config.train_subjects) {
+        const std::string fit = fmt::format("cv/{}/{:g}/{}", tag, lambda, s);
+        tr.push_back(table_error(fit, s, config.train_motions));
+        te.push_back(table_error(fit, s, config.test_motions));
+        cv << tag << "," << lambda << "," << s << "," << cell(tr.back()) << "," << cell(te.back()) << ","
+           << cell(table_entry(fit, s, config.train_motions)) << "," << cell(table_entry(fit, s, config.test_motions))
+           << "\n";
       }
-      chart.series.push_back(series);
-      if (grid.size() > 1) {
-        chart.series.push_back(lower);
-        chart.series.push_back(upper);
-      }
-      // Does the CV curve rise on both sides of its least λ? If not, the grid has not found the minimum.
-      const auto least = static_cast<std::size_t>(std::min_element(means.begin(), means.end()) - means.begin());
-      bracketed[tag] = least > 0 && least + 1 < means.size();
-      if (!bracketed[tag].get<bool>())
-        logger()->warn(
-            "validate: the cross-validation error of {} does not rise on both sides of its least λ = {:g} "
-            "(grid {:g} … {:g}): widen --lambdas-{}",
-            tag, grid[least], grid.front(), grid.back(), tag);
+      const bool chosen = best.count(tag) && best.at(tag) == lambda;
+      sweep << tag << "," << lambda << "," << cell(mean_of_finite(tr)) << "," << cell(mean_of_finite(te)) << ","
+            << cell(standard_error_of_mean(tr)) << "," << (chosen ? 1 : 0) << "\n";
+      series.x.push_back(lambda);
+      series.y.push_back(mean_of_finite(tr));
+      lower.x.push_back(lambda);
+      lower.y.push_back(mean_of_finite(tr) - standard_error_of_mean(tr));
+      upper.x.push_back(lambda);
+      upper.y.push_back(mean_of_finite(tr) + standard_error_of_mean(tr));
+      means.push_back(mean_of_finite(tr));
+      sweep_json.push_back({{"regularizer", tag},
+                            {"lambda", lambda},
+                            {"train_motions", mean_of_finite(tr)},
+                            {"test_motions", mean_of_finite(te)}});
     }
-    summary["lambda_sweep_bracketed"] = bracketed;
-    write_text_atomically(run.stage("cross_validation.csv"), cv.str());
-    write_text_atomically(run.stage("lambda_sweep.csv"), sweep.str());
-    summary["lambda_sweep"] = sweep_json;
-    summary["lambda"] = best;
-    summary["lambda_rule"] = lambda_rule_name(config.lambda_rule);
-    nlohmann::json choice_json = nlohmann::json::object();
-    for (const auto& [tag, c] : choices)
-      choice_json[tag] = {{"lambda", c.lambda},
-                          {"least_lambda", c.least_lambda},
-                          {"least_error_mm", c.least_error},
-                          {"standard_error_mm", c.standard_error},
-                          {"threshold_mm", c.threshold}};
-    summary["lambda_choice"] = choice_json;
-    try {
-      chart::write_chart_png(run.stage("lambda_sweep.png"), chart);
-    } catch (const Error& e) {
-      logger()->warn("validate: lambda_sweep.png not written ({})", e.what());
+    chart.series.push_back(series);
+    if (grid.size() > 1) {
+      chart.series.push_back(lower);
+      chart.series.push_back(upper);
     }
+    // Does the CV curve rise on both sides of its least λ? If not, the grid has not found the minimum.
+    const auto least = static_cast<std::size_t>(std::min_element(means.begin(), means.end()) - means.begin());
+    bracketed[tag] = least > 0 && least + 1 < means.size();
+    if (!bracketed[tag].get<bool>())
+      logger()->warn(
+          "validate: the cross-validation error of {} does not rise on both sides of its least λ = {:g} "
+          "(grid {:g} … {:g}): widen --lambdas-{}",
+          tag, grid[least], grid.front(), grid.back(), tag);
   }
-  // ---- Parameter covariance per control point (Fig. 7) and parameter recovery ------------------------------
+  summary["lambda_sweep_bracketed"] = bracketed;
+  write_text_atomically(run.stage("cross_validation.csv"), cv.str());
+  write_text_atomically(run.stage("lambda_sweep.csv"), sweep.str());
+  summary["lambda_sweep"] = sweep_json;
+  summary["lambda"] = best;
+  summary["lambda_rule"] = lambda_rule_name(config.lambda_rule);
+  nlohmann::json choice_json = nlohmann::json::object();
+  for (const auto& [tag, c] : choices)
+    choice_json[tag] = {{"lambda", c.lambda},
+                        {"least_lambda", c.least_lambda},
+                        {"least_error_mm", c.least_error},
+                        {"standard_error_mm", c.standard_error},
+                        {"threshold_mm", c.threshold}};
+  summary["lambda_choice"] = choice_json;
+  try {
+    chart::write_chart_png(run.stage("lambda_sweep.png"), chart);
+  } catch (const Error& e) {
+    logger()->warn("validate: lambda_sweep.png not written ({})", e.what());
+  }
+}
+
+/// covariance.csv (Fig. 7): per control point the norm of the covariance over subjects of each method's κ̂; the
+/// fields for dynamics.vtp.
+vtk::Fields Report::write_covariance(RunFolder& run, nlohmann::json& summary) const {
   const int N = parameterization->num_controls();
-  auto normalized_truth = [&](const std::string& subject) {
-    const GroundTruthCase& t = truth->at(subject + "_" + config.train_motions.front());
-    return material::normalize(t.kappa, bounds);
-  };
-  std::map<std::string, std::string> methods{{"independent", ""}, {"l2", "full/l2"}, {"ours", "full/ours"}};
+  const meshing::LayerMesh& mesh = parameterization->mesh();
   vtk::Fields cov_fields;
   std::ostringstream cov_csv;
   cov_csv << "control_point,vertex,covariance_truth,covariance_independent,covariance_l2,covariance_ours\n";
@@ -396,182 +402,197 @@ void Report::write(RunFolder& run, nlohmann::json& summary) const {
                                   {"l2", cov_norm["l2"].mean()},
                                   {"ours", cov_norm["ours"].mean()}};
   }
-  // Parameter recovery: the fitted field φ κ̂ against the true κ̂ on the region vertices.
-  if (true_parameters) {
-    std::ostringstream pe;
-    pe << "method,subject,split,thickness_rms,young_tangent_rms,young_normal_rms,young_tangent_log_rms,young_normal_"
-          "log_rms\n";
-    nlohmann::json pj = nlohmann::json::array();
-    auto add = [&](const std::string& method, const std::string& fit, const std::string& subject,
-                   const std::string& split) {
-      const GroundTruthCase& t = truth->at(subject + "_" + config.train_motions.front());
-      const material::KappaMatrix fitted = parameterization->field(fits.at(fit).kappa(t.beta, bounds));
-      const material::KappaMatrix fn = material::normalize(fitted, bounds), tn = material::normalize(t.kappa, bounds);
-      const auto R = static_cast<double>(fn.rows());
-      const Eigen::RowVector3d rms = ((fn - tn).array().square().colwise().sum() / R).sqrt().matrix();
-      const double lt = std::sqrt((fitted.col(1).array() / t.kappa.col(1).array()).log().square().mean());
-      const double ln = std::sqrt((fitted.col(2).array() / t.kappa.col(2).array()).log().square().mean());
-      pe << method << "," << subject << "," << split
-         << fmt::format(",{:.4f},{:.4f},{:.4f},{:.4f},{:.4f}\n", rms[0], rms[1], rms[2], lt, ln);
-      pj.push_back({{"method", method},
-                    {"subject", subject},
-                    {"split", split},
-                    {"thickness_rms", rms[0]},
-                    {"young_tangent_rms", rms[1]},
-                    {"young_normal_rms", rms[2]},
-                    {"young_tangent_log_rms", lt},
-                    {"young_normal_log_rms", ln}});
-    };
-    // The truth's shape-dependent part: per subject, RMS over the region of κ̂*(β_s) minus the train subjects' mean
-    // κ̂*. The independent fits must recover it to within about half of it for the study to tell regularizers
-    // apart (docs/fit.md, "A truth the data can identify").
-    material::KappaMatrix truth_mean;
-    for (const std::string& s : config.train_subjects) {
-      const material::KappaMatrix tn = normalized_truth(s);
-      truth_mean = truth_mean.size() ? material::KappaMatrix(truth_mean + tn) : tn;
-    }
-    truth_mean /= static_cast<double>(config.train_subjects.size());
-    Eigen::RowVector3d signal = Eigen::RowVector3d::Zero(), independent = Eigen::RowVector3d::Zero();
-    auto shape_part = [&](const std::string& subject, const std::string& split) {
-      const material::KappaMatrix d = normalized_truth(subject) - truth_mean;
-      const Eigen::RowVector3d rms =
-          (d.array().square().colwise().sum() / static_cast<double>(d.rows())).sqrt().matrix();
-      pe << "Truth shape dependence," << subject << "," << split
-         << fmt::format(",{:.4f},{:.4f},{:.4f},,\n", rms[0], rms[1], rms[2]);
-      pj.push_back({{"method", "Truth shape dependence"},
-                    {"subject", subject},
-                    {"split", split},
-                    {"thickness_rms", rms[0]},
-                    {"young_tangent_rms", rms[1]},
-                    {"young_normal_rms", rms[2]}});
-      return rms;
-    };
-    for (const std::string& s : config.train_subjects) signal += shape_part(s, "train");
-    signal /= static_cast<double>(config.train_subjects.size());
-    for (const std::string& s : config.train_subjects) {
-      add("Independent", "independent/" + s, s, "train");
-      const nlohmann::json& row = pj.back();
-      independent += Eigen::RowVector3d(row["thickness_rms"].get<double>(), row["young_tangent_rms"].get<double>(),
-                                        row["young_normal_rms"].get<double>());
-      add("Full opt. L2", "full/l2", s, "train");
-      add("Full opt. ours", "full/ours", s, "train");
-    }
-    for (const std::string& s : config.test_subjects) {
-      add("Generaliz. L2", "full/l2", s, "test");
-      add("Generaliz. ours", "full/ours", s, "test");
-    }
-    independent /= static_cast<double>(config.train_subjects.size());
-    write_text_atomically(run.stage("parameter_error.csv"), pe.str());
-    summary["parameter_error"] = pj;
-    nlohmann::json identifiable;
-    for (int c = 0; c < material::kNumKappa; ++c)
-      identifiable[std::string(material::kKappaNames[static_cast<std::size_t>(c)])] = {
-          {"truth_shape_rms", signal[c]},
-          {"independent_error_rms", independent[c]},
-          {"ratio", independent[c] / signal[c]},
-          {"recovered_within_half", independent[c] <= 0.5 * signal[c]}};
-    summary["truth_identifiability"] = identifiable;
+  return cov_fields;
+}
+
+/// parameter_error.csv: the fitted field φ κ̂ against the true κ̂ on the region vertices, and the truth's
+/// shape-dependent part beside the independent fits' error (truth_identifiability).
+void Report::write_parameter_error(RunFolder& run, nlohmann::json& summary) const {
+  std::ostringstream pe;
+  pe << "method,subject,split,thickness_rms,young_tangent_rms,young_normal_rms,young_tangent_log_rms,young_normal_"
+        "log_rms\n";
+  nlohmann::json pj = nlohmann::json::array();
+  auto add = [&](const std::string& method, const std::string& fit, const std::string& subject,
+                 const std::string& split) {
+    const GroundTruthCase& t = truth->at(subject + "_" + config.train_motions.front());
+    const material::KappaMatrix fitted = parameterization->field(fits.at(fit).kappa(t.beta, bounds));
+    const material::KappaMatrix fn = material::normalize(fitted, bounds), tn = material::normalize(t.kappa, bounds);
+    const auto R = static_cast<double>(fn.rows());
+    const Eigen::RowVector3d rms = ((fn - tn).array().square().colwise().sum() / R).sqrt().matrix();
+    const double lt = std::sqrt((fitted.col(1).array() / t.kappa.col(1).array()).log().square().mean());
+    const double ln = std::sqrt((fitted.col(2).array() / t.kappa.col(2).array()).log().square().mean());
+    pe << method << "," << subject << "," << split
+       << fmt::format(",{:.4f},{:.4f},{:.4f},{:.4f},{:.4f}\n", rms[0], rms[1], rms[2], lt, ln);
+    pj.push_back({{"method", method},
+                  {"subject", subject},
+                  {"split", split},
+                  {"thickness_rms", rms[0]},
+                  {"young_tangent_rms", rms[1]},
+                  {"young_normal_rms", rms[2]},
+                  {"young_tangent_log_rms", lt},
+                  {"young_normal_log_rms", ln}});
+  };
+  // The truth's shape-dependent part: per subject, RMS over the region of κ̂*(β_s) minus the train subjects' mean
+  // κ̂*. The independent fits must recover it to within about half of it for the study to tell regularizers
+  // apart (docs/fit.md, "A truth the data can identify").
+  material::KappaMatrix truth_mean;
+  for (const std::string& s : config.train_subjects) {
+    const material::KappaMatrix tn = normalized_truth(s);
+    truth_mean = truth_mean.size() ? material::KappaMatrix(truth_mean + tn) : tn;
   }
-  // ---- Dynamics fields on the template (Figures 3, 4, 6, 8) -------------------------------------------------
-  {
-    vtk::Fields fields = cov_fields;
-    auto motion_mean = [&](const std::string& fit, const std::string& subject) {
-      Eigen::VectorXd sum;
-      int n = 0;
+  truth_mean /= static_cast<double>(config.train_subjects.size());
+  Eigen::RowVector3d signal = Eigen::RowVector3d::Zero(), independent = Eigen::RowVector3d::Zero();
+  auto shape_part = [&](const std::string& subject, const std::string& split) {
+    const material::KappaMatrix d = normalized_truth(subject) - truth_mean;
+    const Eigen::RowVector3d rms = (d.array().square().colwise().sum() / static_cast<double>(d.rows())).sqrt().matrix();
+    pe << "Truth shape dependence," << subject << "," << split
+       << fmt::format(",{:.4f},{:.4f},{:.4f},,\n", rms[0], rms[1], rms[2]);
+    pj.push_back({{"method", "Truth shape dependence"},
+                  {"subject", subject},
+                  {"split", split},
+                  {"thickness_rms", rms[0]},
+                  {"young_tangent_rms", rms[1]},
+                  {"young_normal_rms", rms[2]}});
+    return rms;
+  };
+  for (const std::string& s : config.train_subjects) signal += shape_part(s, "train");
+  signal /= static_cast<double>(config.train_subjects.size());
+  for (const std::string& s : config.train_subjects) {
+    add("Independent", "independent/" + s, s, "train");
+    const nlohmann::json& row = pj.back();
+    independent += Eigen::RowVector3d(row["thickness_rms"].get<double>(), row["young_tangent_rms"].get<double>(),
+                                      row["young_normal_rms"].get<double>());
+    add("Full opt. L2", "full/l2", s, "train");
+    add("Full opt. ours", "full/ours", s, "train");
+  }
+  for (const std::string& s : config.test_subjects) {
+    add("Generaliz. L2", "full/l2", s, "test");
+    add("Generaliz. ours", "full/ours", s, "test");
+  }
+  independent /= static_cast<double>(config.train_subjects.size());
+  write_text_atomically(run.stage("parameter_error.csv"), pe.str());
+  summary["parameter_error"] = pj;
+  nlohmann::json identifiable;
+  for (int c = 0; c < material::kNumKappa; ++c)
+    identifiable[std::string(material::kKappaNames[static_cast<std::size_t>(c)])] = {
+        {"truth_shape_rms", signal[c]},
+        {"independent_error_rms", independent[c]},
+        {"ratio", independent[c] / signal[c]},
+        {"recovered_within_half", independent[c] <= 0.5 * signal[c]}};
+  summary["truth_identifiability"] = identifiable;
+}
+
+/// dynamics.vtp (Figures 3, 4, 6, 8): σ of the truth and of each fit per subject on the template, with `fields`.
+void Report::write_dynamics_fields(RunFolder& run, vtk::Fields fields) const {
+  const meshing::LayerMesh& mesh = parameterization->mesh();
+  const std::string l2 = lambda_text("l2"), ours = lambda_text("ours");
+  auto motion_mean = [&](const std::string& fit, const std::string& subject) {
+    Eigen::VectorXd sum;
+    int n = 0;
+    for (const std::string& m : config.train_motions) {
+      const auto it = evaluations.find(key_of(fit, subject, m));
+      if (it == evaluations.end()) continue;
+      sum = n == 0 ? it->second.sigma : Eigen::VectorXd(sum + it->second.sigma);
+      ++n;
+    }
+    return n ? Eigen::VectorXd(sum / n) : Eigen::VectorXd();
+  };
+  std::vector<std::string> all = config.train_subjects;
+  all.insert(all.end(), config.test_subjects.begin(), config.test_subjects.end());
+  for (const std::string& s : all) {
+    if (const GroundTruthCase* first = truth_of(s, config.train_motions.front())) {
+      Eigen::VectorXd t = Eigen::VectorXd::Zero(first->sigma_normal.size());
       for (const std::string& m : config.train_motions) {
-        const auto it = evaluations.find(key_of(fit, subject, m));
-        if (it == evaluations.end()) continue;
-        sum = n == 0 ? it->second.sigma : Eigen::VectorXd(sum + it->second.sigma);
-        ++n;
+        const GroundTruthCase& c = *truth_of(s, m);
+        t += (c.sigma_normal.array().square() + c.sigma_tangent.array().square()).sqrt().matrix();
       }
-      return n ? Eigen::VectorXd(sum / n) : Eigen::VectorXd();
-    };
-    std::vector<std::string> all = config.train_subjects;
-    all.insert(all.end(), config.test_subjects.begin(), config.test_subjects.end());
+      fields.point_data.push_back(
+          {"sigma_truth_" + s, on_body(*model, mesh, t / static_cast<double>(config.train_motions.size()))});
+    }
+    std::vector<std::pair<std::string, std::string>> fit_list{{"full_l2", "full/l2"}, {"full_ours", "full/ours"}};
+    if (fits.count("independent/" + s)) fit_list.emplace_back("independent", "independent/" + s);
+    if (config.cross_validation && fits.count("cv/l2/" + l2 + "/" + s))
+      fit_list.emplace_back("cv_l2", "cv/l2/" + l2 + "/" + s);
+    if (config.cross_validation && fits.count("cv/ours/" + ours + "/" + s))
+      fit_list.emplace_back("cv_ours", "cv/ours/" + ours + "/" + s);
+    for (const auto& [tag, fit] : fit_list) {
+      const Eigen::VectorXd v = motion_mean(fit, s);
+      if (v.size()) fields.point_data.push_back({"sigma_" + tag + "_" + s, on_body(*model, mesh, v)});
+    }
+  }
+  vtk::write_surface(run.stage("dynamics.vtp"), model->v_template, model->faces, fields);
+}
+
+/// fits.csv with the stages' stopping tests, the fitted materials of every subject and the shape models.
+void Report::write_fits_and_materials(RunFolder& run, nlohmann::json& summary) const {
+  const int N = parameterization->num_controls();
+  std::ostringstream fc;
+  fc << "fit,controls,iterations,loss_fit_mm2,loss_reg,simulations,jacobians,seconds,reason\n";
+  nlohmann::json fj = nlohmann::json::array();
+  for (const auto& [name, fit] : fits)
+    for (const reduced::FitStageReport& s : fit.stages) {
+      fc << name << "," << s.controls << "," << s.iterations << fmt::format(",{:.6g},{:.6g},", s.loss_fit, s.loss_reg)
+         << s.simulations << "," << s.jacobians << fmt::format(",{:.2f},", s.seconds) << s.reason << "\n";
+      nlohmann::json stage = reduced::stage_report_json(s);
+      stage["fit"] = name;
+      fj.push_back(std::move(stage));
+    }
+  write_text_atomically(run.stage("fits.csv"), fc.str());
+  summary["fits"] = fj;
+  // How the stages stopped: convergence tests, or the iteration cap (the safety net) when it was hit.
+  nlohmann::json stops = nlohmann::json::object();
+  for (const nlohmann::json& stage : fj) {
+    const std::string reason = stage.at("reason");
+    stops[reason] = stops.value(reason, 0) + 1;
+  }
+  summary["stage_stops"] = stops;
+  std::vector<std::string> all = config.train_subjects;
+  all.insert(all.end(), config.test_subjects.begin(), config.test_subjects.end());
+  for (const std::string tag : {"l2", "ours"})
     for (const std::string& s : all) {
-      if (const GroundTruthCase* first = truth_of(s, config.train_motions.front())) {
-        Eigen::VectorXd t = Eigen::VectorXd::Zero(first->sigma_normal.size());
-        for (const std::string& m : config.train_motions) {
-          const GroundTruthCase& c = *truth_of(s, m);
-          t += (c.sigma_normal.array().square() + c.sigma_tangent.array().square()).sqrt().matrix();
-        }
-        fields.point_data.push_back(
-            {"sigma_truth_" + s, on_body(*model, mesh, t / static_cast<double>(config.train_motions.size()))});
+      material::MaterialFile file;
+      file.body = model->name;
+      file.subject = s;
+      file.bounds = bounds;
+      const material::KappaMatrix k = fits.at("full/" + tag).kappa(betas.at(s), bounds);
+      for (int i = 0; i < N; ++i) {
+        material::MaterialControlPoint cp;
+        cp.vertex = parameterization->control_vertices()[static_cast<std::size_t>(i)];
+        cp.kappa = material::from_row(k.row(i));
+        file.control_points.push_back(cp);
       }
-      std::vector<std::pair<std::string, std::string>> fit_list{{"full_l2", "full/l2"}, {"full_ours", "full/ours"}};
-      if (fits.count("independent/" + s)) fit_list.emplace_back("independent", "independent/" + s);
-      if (config.cross_validation && fits.count("cv/l2/" + l2 + "/" + s))
-        fit_list.emplace_back("cv_l2", "cv/l2/" + l2 + "/" + s);
-      if (config.cross_validation && fits.count("cv/ours/" + ours + "/" + s))
-        fit_list.emplace_back("cv_ours", "cv/ours/" + ours + "/" + s);
-      for (const auto& [tag, fit] : fit_list) {
-        const Eigen::VectorXd v = motion_mean(fit, s);
-        if (v.size()) fields.point_data.push_back({"sigma_" + tag + "_" + s, on_body(*model, mesh, v)});
-      }
+      material::save_material_file(
+          run.stage("materials/" + tag + "/" + s + ".toml"), file,
+          fmt::format("Fitted by sflsh validate (full optimization, {} regularizer, λ = {:g})",
+                      tag == std::string("l2") ? "L2" : "local", best.count(tag) ? best.at(tag) : 0.0));
     }
-    vtk::write_surface(run.stage("dynamics.vtp"), model->v_template, model->faces, fields);
+  // The full fits themselves: κ̂(β) for any subject (shape_model_file.hpp; the crowd's materials).
+  for (const std::string tag : {"l2", "ours"}) {
+    reduced::ShapeModelFile file = reduced::make_shape_model_file(
+        fits.at("full/" + tag).shape(), *model, parameterization->control_vertices(), bounds, poisson, saturation);
+    file.region = region;
+    file.mesh = meshing::size_preset_name(config.mesh);
+    reduced::ShapeModelFit fit;
+    fit.regularizer = tag == std::string("l2") ? reduced::Regularizer::l2 : reduced::Regularizer::local;
+    fit.lambda = best.count(tag) ? best.at(tag) : 0.0;
+    fit.subjects = config.train_subjects;
+    fit.motions = config.train_motions;
+    file.fit = fit;
+    reduced::save_shape_model_file(
+        run.stage("shape_models/" + tag + ".toml"), file,
+        fmt::format("Fitted by sflsh validate --preset {} (full optimization, {} regularizer, "
+                    "λ = {:g}, N = {})",
+                    config.preset, tag == std::string("l2") ? "L2" : "local", fit.lambda, N));
   }
-  // ---- Fits and fitted materials ----------------------------------------------------------------------------
-  {
-    std::ostringstream fc;
-    fc << "fit,controls,iterations,loss_fit_mm2,loss_reg,simulations,jacobians,seconds,reason\n";
-    nlohmann::json fj = nlohmann::json::array();
-    for (const auto& [name, fit] : fits)
-      for (const reduced::FitStageReport& s : fit.stages) {
-        fc << name << "," << s.controls << "," << s.iterations << fmt::format(",{:.6g},{:.6g},", s.loss_fit, s.loss_reg)
-           << s.simulations << "," << s.jacobians << fmt::format(",{:.2f},", s.seconds) << s.reason << "\n";
-        nlohmann::json stage = reduced::stage_report_json(s);
-        stage["fit"] = name;
-        fj.push_back(std::move(stage));
-      }
-    write_text_atomically(run.stage("fits.csv"), fc.str());
-    summary["fits"] = fj;
-    // How the stages stopped: convergence tests, or the iteration cap (the safety net) when it was hit.
-    nlohmann::json stops = nlohmann::json::object();
-    for (const nlohmann::json& stage : fj) {
-      const std::string reason = stage.at("reason");
-      stops[reason] = stops.value(reason, 0) + 1;
-    }
-    summary["stage_stops"] = stops;
-    std::vector<std::string> all = config.train_subjects;
-    all.insert(all.end(), config.test_subjects.begin(), config.test_subjects.end());
-    for (const std::string tag : {"l2", "ours"})
-      for (const std::string& s : all) {
-        material::MaterialFile file;
-        file.body = model->name;
-        file.subject = s;
-        file.bounds = bounds;
-        const material::KappaMatrix k = fits.at("full/" + tag).kappa(betas.at(s), bounds);
-        for (int i = 0; i < N; ++i) {
-          material::MaterialControlPoint cp;
-          cp.vertex = parameterization->control_vertices()[static_cast<std::size_t>(i)];
-          cp.kappa = material::from_row(k.row(i));
-          file.control_points.push_back(cp);
-        }
-        material::save_material_file(
-            run.stage("materials/" + tag + "/" + s + ".toml"), file,
-            fmt::format("Fitted by sflsh validate (full optimization, {} regularizer, λ = {:g})",
-                        tag == std::string("l2") ? "L2" : "local", best.count(tag) ? best.at(tag) : 0.0));
-      }
-    // The full fits themselves: κ̂(β) for any subject (shape_model_file.hpp; the crowd's materials).
-    for (const std::string tag : {"l2", "ours"}) {
-      reduced::ShapeModelFile file = reduced::make_shape_model_file(
-          fits.at("full/" + tag).shape(), *model, parameterization->control_vertices(), bounds, poisson, saturation);
-      file.region = region;
-      file.mesh = meshing::size_preset_name(config.mesh);
-      reduced::ShapeModelFit fit;
-      fit.regularizer = tag == std::string("l2") ? reduced::Regularizer::l2 : reduced::Regularizer::local;
-      fit.lambda = best.count(tag) ? best.at(tag) : 0.0;
-      fit.subjects = config.train_subjects;
-      fit.motions = config.train_motions;
-      file.fit = fit;
-      reduced::save_shape_model_file(
-          run.stage("shape_models/" + tag + ".toml"), file,
-          fmt::format("Fitted by sflsh validate --preset {} (full optimization, {} regularizer, "
-                      "λ = {:g}, N = {})",
-                      config.preset, tag == std::string("l2") ? "L2" : "local", fit.lambda, N));
-    }
-  }
+}
+
+void Report::write(RunFolder& run, nlohmann::json& summary) const {
+  write_table2(run, summary);
+  if (config.cross_validation) write_lambda_sweep(run, summary);
+  const vtk::Fields covariance = write_covariance(run, summary);
+  if (true_parameters) write_parameter_error(run, summary);
+  write_dynamics_fields(run, covariance);
+  write_fits_and_materials(run, summary);
   write_regularizer_comparison(*this, run, summary);
 }
 

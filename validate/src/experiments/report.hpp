@@ -2,13 +2,16 @@
 // Evaluations of fitted models and the report files of `sflsh validate` (Table 2, cross-validation and λ
 // sweep, parameter covariance, parameter recovery, dynamics fields). Private to the experiments.
 #include <sflsh/core/run_folder.hpp>
+#include <sflsh/core/vtk_io.hpp>
 #include <sflsh/reduced/elasticity_fit.hpp>
 #include <sflsh/validate/experiments.hpp>
 #include <sflsh/validate/ground_truth.hpp>
 
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
+#include <tuple>
 
 namespace sflsh::validate {
 
@@ -54,6 +57,27 @@ struct Report {
   /// Mean over `motions` of one Evaluation member; NaN entries (missing) are skipped.
   double motion_mean(const std::string& fit, const std::string& subject, const std::vector<std::string>& motions,
                      double Evaluation::*value) const;
+
+ private:
+  /// A row of Table 2: its label, subjects, and the σ entry and its error for (subject, motions).
+  struct Table2Row {
+    std::string label;
+    std::vector<std::string> subjects;
+    std::function<double(const std::string&, const std::vector<std::string>&)> value;
+    std::function<double(const std::string&, const std::vector<std::string>&)> error;
+  };
+  std::vector<Table2Row> table2_rows() const;
+  /// Table 2 (σ, or its error when `error`) as CSV, Markdown and JSON.
+  std::tuple<std::string, std::string, nlohmann::json> table2_text(const std::vector<Table2Row>& rows,
+                                                                   bool error) const;
+  std::string lambda_text(const std::string& tag) const;  ///< the chosen λ of "l2" / "ours" as "{:g}"
+  material::KappaMatrix normalized_truth(const std::string& subject) const;  ///< κ̂* per region vertex
+  void write_table2(RunFolder& run, nlohmann::json& summary) const;
+  void write_lambda_sweep(RunFolder& run, nlohmann::json& summary) const;
+  vtk::Fields write_covariance(RunFolder& run, nlohmann::json& summary) const;
+  void write_parameter_error(RunFolder& run, nlohmann::json& summary) const;
+  void write_dynamics_fields(RunFolder& run, vtk::Fields fields) const;
+  void write_fits_and_materials(RunFolder& run, nlohmann::json& summary) const;
 };
 
 /// regularizer_comparison.csv (the full fits L² and ours paired on every test subject × motion: relative σ error
