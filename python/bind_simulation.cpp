@@ -42,7 +42,7 @@ std::unique_ptr<PythonSimulation> make_simulation(
     const std::string& mesher, const py::object& material, int control_points, const py::object& cache, double density,
     bool gravity, double stiffness_scale, const std::string& mass, const std::string& integrator, int handles,
     int cubature, const std::string& cubature_weights, bool affine, double newton_tolerance, bool allow_long,
-    bool record) {
+    bool record, bool energies) {
   scene::BodyRunSettings s;
   s.motion = motion;
   if (subject) s.subject.subject = *subject;
@@ -66,6 +66,7 @@ std::unique_ptr<PythonSimulation> make_simulation(
   s.affine = affine;
   s.newton_tolerance = newton_tolerance;
   s.allow_long = allow_long;
+  s.energies = energies;
   require(!s.motion.empty(), "simulate: --motion is required (a procedural name or an AMASS .npz path)");
   require(!(subject && !betas.is_none()), "--subject and --betas exclude each other");
   if (!betas.is_none()) s.subject.beta_values = betas_from(betas);
@@ -279,7 +280,7 @@ void bind_simulation(py::module_& m) {
         py::arg("integrator") = d.integrator, py::arg("handles") = d.handles, py::arg("cubature") = d.cubature,
         py::arg("cubature_weights") = d.cubature_weights, py::arg("affine") = d.affine,
         py::arg("newton_tolerance") = d.newton_tolerance, py::arg("allow_long") = d.allow_long,
-        py::arg("record") = true,
+        py::arg("record") = true, py::arg("energies") = d.energies,
         "motion: a procedural name (sflsh.motions()) or an AMASS .npz path; subject (a name of sflsh.subjects()) or "
         "betas (up to 10 numbers; neither: β = 0); body: None (the open body), a path or a sflsh.Body; solver "
         "'full' | 'reduced'; frames (0: the motion's length); fps [Hz]; substeps per frame; mesh 'coarse' | "
@@ -289,7 +290,8 @@ void bind_simulation(py::module_& m) {
         "'lumped' | 'consistent'; integrator 'backward_euler' | 'bdf2' | 'newmark'; reduced model: handles (point "
         "handles), cubature (tets; -1: auto), cubature_weights 'nnls' | 'voronoi', affine; newton_tolerance [m]; "
         "allow_long: run above the work limits; record: keep every frame's state for write() (6 float64 per layer "
-        "node and frame)");
+        "node and frame); energies: each frame's kinetic, elastic and gravitational energy over every tet in "
+        "summary()['frames'] [J] (they cost the reduced model about as much as its step)");
   bind_methods(c);
   bind_properties(c);
 }

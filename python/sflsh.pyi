@@ -349,7 +349,7 @@ class Simulation:
     write() for the run folder the command writes. Keyword arguments are simulate's options ('-' as '_') with
     its defaults; lengths in m, times in s, moduli in Pa.
     """
-    def __init__(self, *, motion: str, subject: Optional[str] = None, betas: Any = None, body: Any = None, solver: str = 'full', frames: int = 0, fps: float = 60.0, substeps: int = 1, mesh: str = 'default', mesher: str = 'layered', material: Any = None, control_points: int = 12, cache: Any = None, density: float = 1000.0, gravity: bool = False, stiffness_scale: float = 1.0, mass: str = 'lumped', integrator: str = 'backward_euler', handles: int = 86, cubature: int = -1, cubature_weights: str = 'nnls', affine: bool = False, newton_tolerance: float = 1e-05, allow_long: bool = False, record: bool = True) -> None:
+    def __init__(self, *, motion: str, subject: Optional[str] = None, betas: Any = None, body: Any = None, solver: str = 'full', frames: int = 0, fps: float = 60.0, substeps: int = 1, mesh: str = 'default', mesher: str = 'layered', material: Any = None, control_points: int = 12, cache: Any = None, density: float = 1000.0, gravity: bool = False, stiffness_scale: float = 1.0, mass: str = 'consistent', integrator: str = 'bdf2', handles: int = 86, cubature: int = -1, cubature_weights: str = 'nnls', affine: bool = False, newton_tolerance: float = 1e-05, allow_long: bool = False, record: bool = True, energies: bool = False) -> None:
         """
         motion: a procedural name (sflsh.motions()) or an AMASS .npz path; subject (a name of
         sflsh.subjects()) or betas (up to 10 numbers; neither: β = 0); body: None (the open body), a path or a
@@ -360,7 +360,9 @@ class Simulation:
         (multiplies Y_t and Y_n); mass 'lumped' | 'consistent'; integrator 'backward_euler' | 'bdf2' |
         'newmark'; reduced model: handles (point handles), cubature (tets; -1: auto), cubature_weights 'nnls'
         | 'voronoi', affine; newton_tolerance [m]; allow_long: run above the work limits; record: keep every
-        frame's state for write() (6 float64 per layer node and frame)
+        frame's state for write() (6 float64 per layer node and frame); energies: each frame's kinetic,
+        elastic and gravitational energy over every tet in summary()['frames'] [J] (they cost the reduced
+        model about as much as its step)
         """
     def step(self) -> int:
         """

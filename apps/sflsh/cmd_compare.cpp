@@ -5,6 +5,7 @@
 #include "commands.hpp"
 #include "compare_report.hpp"
 #include "layer_setup.hpp"
+#include "simulate_run.hpp"
 
 #include <sflsh/body/motion.hpp>
 #include <sflsh/core/error.hpp>
@@ -43,6 +44,7 @@ struct CompareOptions {
   int substeps = 1;
   std::string mesh = "default";
   LayerSettings layer;
+  std::string integrator = scene::BodyRunSettings().integrator;  ///< both solvers' (time_integrator.hpp)
   std::string handles = "30,86,200";
   std::string cubature = "100,200,400";
   bool exact_cubature = false;
@@ -111,6 +113,7 @@ void run_compare(const CompareOptions& opt, const Invocation& invocation, int ra
           opt.substeps);
   require(opt.frames >= 0, "--frames must be non-negative, got {}", opt.frames);
   check_layer_settings(opt.layer);
+  const model::Integrator integrator = model::parse_integrator(opt.integrator, "--integrator");
   const std::vector<int> handle_sweep = parse_sweep(opt.handles, "--handles", 1);
   std::vector<int> cubature_sweep = parse_sweep(opt.cubature, "--cubature", 0);
   if (opt.exact_cubature && std::find(cubature_sweep.begin(), cubature_sweep.end(), 0) == cubature_sweep.end())
@@ -173,7 +176,9 @@ void run_compare(const CompareOptions& opt, const Invocation& invocation, int ra
   double full_seconds = 0.0;
   long full_newton = 0, full_linear = 0, full_retries = 0;
   {
-    fullspace::FullSpaceSolver full(problem, MPI_COMM_WORLD);
+    fullspace::FullSpaceOptions full_options;
+    full_options.integrator = integrator;
+    fullspace::FullSpaceSolver full(problem, MPI_COMM_WORLD, full_options);
     full.initialize(model::initial_state(problem, 0.0));
     u_full.push_back(layer.surface_displacement(full.state().x));
     Progress progress("full-space frames", static_cast<std::size_t>(steps), rank == 0);
@@ -210,7 +215,9 @@ void run_compare(const CompareOptions& opt, const Invocation& invocation, int ra
   Progress progress("reduced frames", configs.size() * static_cast<std::size_t>(steps));
   for (auto& cp : configs) {
     Configuration& c = *cp;
-    reduced::ReducedSolver fast(problem, c.model.subspace, c.model.cubature);
+    reduced::ReducedOptions reduced_options;
+    reduced_options.integrator = integrator;
+    reduced::ReducedSolver fast(problem, c.model.subspace, c.model.cubature, reduced_options);
     fast.initialize(model::initial_state(problem, 0.0));
     model::DynamicsAmplitude amplitude(normals);
     c.error_sq = Eigen::VectorXd::Zero(R);
@@ -386,6 +393,8 @@ void run_compare(const CompareOptions& opt, const Invocation& invocation, int ra
   summary["material"] = material_summary(opt.layer, material_file);
   summary["step"] = h;
   summary["substeps"] = opt.substeps;
+  summary["integrator"] = model::to_string(integrator);
+  summary["mass"] = opt.layer.mass;
   summary["sweep"] = {{"handles", handle_sweep},
                       {"cubature", cubature_sweep},
                       {"cubature_weights", opt.reduced.cubature_weights},
@@ -432,7 +441,9 @@ void register_compare_commands(CLI::App& app, const Invocation& invocation) {
       ->required();
   cmd->add_option("--frames", opt->frames, "Number of frames (0: the motion's length)");
   cmd->add_option("--fps", opt->fps, "Frame rate (and motion sampling)")->capture_default_str();
-  cmd->add_option("--substeps", opt->substeps, "Backward-Euler steps per frame for both solvers");
+  cmd->add_option("--substeps", opt->substeps, "Integrator steps per frame for both solvers");
+  add_integrator_option(*cmd, opt->integrator);
+  add_mass_option(*cmd, opt->layer);
   cmd->add_option("--mesh", opt->mesh, "Layer resolution: coarse | default | fine")
       ->capture_default_str()
       ->check(CLI::IsMember({"coarse", "default", "fine"}));

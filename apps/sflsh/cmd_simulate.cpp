@@ -117,6 +117,9 @@ void register_simulate_commands(CLI::App& app, const Invocation& invocation) {
       ->check(CLI::IsMember({"coarse", "default", "fine"}));
   add_layer_options(*cmd, opt->body.layer);
   add_mass_option(*cmd, opt->body.layer);
+  cmd->add_flag("--energies", opt->body.energies,
+                "Record each frame's kinetic, elastic and gravitational energy over every tet in summary.json "
+                "(frames[].energy, J); off by default: for the reduced model they cost about as much as its step");
   cmd->add_flag("--write-layer", opt->body.write_layer, "Also write the tet layer per frame (layer.xmf or layer.pvd)");
   cmd->add_option(
          "--format", opt->body.format,

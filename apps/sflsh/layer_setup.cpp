@@ -16,8 +16,8 @@ void add_layer_options(CLI::App& cmd, LayerSettings& s) {
 
 void add_mass_option(CLI::App& cmd, LayerSettings& s) {
   cmd.add_option("--mass", s.mass,
-                 "Inertia: lumped (default; ρV/4 per node) | consistent (ρV/20 (1 + δ_ab) per tet node pair); "
-                 "docs/integrators.md");
+                 "Inertia: consistent (default; ρV/20 (1 + δ_ab) per tet node pair) | lumped (the paper's; ρV/4 per "
+                 "node); docs/integrators.md");
 }
 
 void add_reduced_options(CLI::App& cmd, ReducedSettings& s) {

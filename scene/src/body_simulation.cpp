@@ -129,16 +129,19 @@ const model::StepStats& BodySimulation::step() {
     const auto f = static_cast<std::size_t>(frame);
     const auto t_output = Clock::now();
     const model::State state = solver_->current_state();
-    const model::Energies e = model::energies(problem, state);
     writer_->add_frame(frame, motion_.time(f), state, model::is_written_frame(frame, num_frames(), settings_.every));
+    nlohmann::json record = {{"frame", f},
+                             {"t", motion_.time(f)},
+                             {"newton_iterations", st.newton_iterations},
+                             {"linear_iterations", st.linear_iterations},
+                             {"failed_attempts", st.failed_attempts},
+                             {"seconds", st.seconds}};
+    if (settings_.energies) {
+      const model::Energies e = model::energies(problem, state);
+      record["energy"] = {{"kinetic", e.kinetic}, {"elastic", e.elastic}, {"gravity", e.gravity}};
+    }
     output_seconds_ += seconds_since(t_output);
-    frames_.push_back({{"frame", f},
-                       {"t", motion_.time(f)},
-                       {"newton_iterations", st.newton_iterations},
-                       {"linear_iterations", st.linear_iterations},
-                       {"failed_attempts", st.failed_attempts},
-                       {"seconds", st.seconds},
-                       {"energy", {{"kinetic", e.kinetic}, {"elastic", e.elastic}, {"gravity", e.gravity}}}});
+    frames_.push_back(std::move(record));
     model::accumulate(total_, st);
     last_ = st;
     frame_ = frame;

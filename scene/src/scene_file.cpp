@@ -285,6 +285,10 @@ class SceneReader : public TomlReader {
     if (const toml::node* n = t.get("root")) b.free_root = choice(*n, "root", {"tracked", "free"}, context) == "free";
     read_joints(t, context, b);
     if (!b.tracking) return;
+    // The tracking skeleton is solved with backward Euler and lumped masses only (reduced_solver_root.cpp): a body
+    // that names neither takes the paper's pair instead of the default BDF2 + consistent.
+    if (t.get("integrator") == nullptr) b.integrator = model::kPaperIntegrator;
+    if (t.get("mass") == nullptr) b.mass = model::kPaperMassKind;
     const toml::node& at_node = *t.get("skeleton");
     require(b.solver == SolverKind::reduced,
             "{}: skeleton = \"tracking\"{} needs solver = \"reduced\" (the full-space solver keeps prescribed bones)",

@@ -27,8 +27,9 @@ def test_simulation_signature_has_the_clis_options_and_defaults():
     assert all(x.kind is inspect.Parameter.KEYWORD_ONLY for x in p.values())
     expected = {"subject": None, "betas": None, "solver": "full", "frames": 0, "fps": 60.0, "substeps": 1,
                 "mesh": "default", "mesher": "layered", "control_points": 12, "density": 1000.0, "gravity": False,
-                "mass": "lumped", "integrator": "backward_euler", "handles": 86, "cubature": -1,
-                "cubature_weights": "nnls", "newton_tolerance": 1e-5, "allow_long": False, "record": True}
+                "mass": "consistent", "integrator": "bdf2", "handles": 86, "cubature": -1,
+                "cubature_weights": "nnls", "newton_tolerance": 1e-5, "allow_long": False, "record": True,
+                "energies": False}
     for name, default in expected.items():
         assert p[name].default == default, name
     write = inspect.signature(sflsh.Simulation.write).parameters

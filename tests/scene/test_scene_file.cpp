@@ -181,8 +181,13 @@ TEST(SceneFile, IntegratorAndMassPerBodyAndCrowd) {
   ASSERT_EQ(scene.bodies.size(), 2u);
   EXPECT_EQ(scene.bodies[0].integrator, model::Integrator::newmark);
   EXPECT_EQ(scene.bodies[0].mass, model::MassKind::consistent);
-  EXPECT_EQ(scene.bodies[1].integrator, model::Integrator::backward_euler);  // the defaults
-  EXPECT_EQ(scene.bodies[1].mass, model::MassKind::lumped);
+  EXPECT_EQ(scene.bodies[1].integrator, model::Integrator::bdf2);  // the defaults (model::kDefaultIntegrator)
+  EXPECT_EQ(scene.bodies[1].mass, model::MassKind::consistent);
+  // A tracking skeleton is solved with the paper's pair only: a body naming neither takes it.
+  const Scene tracking = load_scene(write_scene(dir, "[scene]\n[effects]\ninertia = true\n" + std::string(kBody) +
+                                                         "solver = \"reduced\"\nskeleton = \"tracking\"\n"));
+  EXPECT_EQ(tracking.bodies[0].integrator, model::Integrator::backward_euler);
+  EXPECT_EQ(tracking.bodies[0].mass, model::MassKind::lumped);
   const Scene crowd =
       load_scene(write_scene(dir, "[scene]\n[crowd]\ncount = 2\nintegrator = \"bdf2\"\nmass = \"consistent\"\n"));
   ASSERT_TRUE(crowd.crowd.has_value());

@@ -5,6 +5,7 @@
 // module share this one definition; the messages name the command-line options.
 #include <sflsh/material/material_file.hpp>
 #include <sflsh/model/body_layer.hpp>
+#include <sflsh/model/mass.hpp>
 
 #include <nlohmann/json.hpp>
 
@@ -22,7 +23,8 @@ struct LayerSettings {
   double density = 1000.0;  ///< [kg/m³]
   bool gravity = false;
   double stiffness_scale = 1.0;  ///< multiplies Y_t and Y_n
-  std::string mass = "lumped";   ///< lumped | consistent (mass.hpp)
+  /// lumped | consistent (mass.hpp); consistent unless told (kDefaultMassKind; the paper's: lumped)
+  std::string mass = std::string(to_string(kDefaultMassKind));
 };
 
 /// Throws a one-line sflsh::Error for a non-positive density or stiffness scale or an unknown mass kind.

@@ -18,6 +18,11 @@ enum class MassKind { lumped, consistent };
 MassKind parse_mass_kind(std::string_view text, std::string_view where);
 std::string_view to_string(MassKind kind);
 
+/// The mass of every body run that names none (time_integrator.hpp kDefaultIntegrator; docs/decisions.md).
+inline constexpr MassKind kDefaultMassKind = MassKind::consistent;
+/// The paper's mass: lumped, ρV/4 per node.
+inline constexpr MassKind kPaperMassKind = MassKind::lumped;
+
 /// M_e(a, b) / (ρV_e): 1/10 on the diagonal, 1/20 off it (the consistent mass of a linear tet).
 inline double consistent_mass_factor(int a, int b) { return a == b ? 0.1 : 0.05; }
 

@@ -15,6 +15,7 @@
 #include <sflsh/model/layer_settings.hpp>
 #include <sflsh/model/simulation_output.hpp>
 #include <sflsh/model/step_stats.hpp>
+#include <sflsh/model/time_integrator.hpp>
 
 #include <nlohmann/json.hpp>
 
@@ -47,9 +48,13 @@ struct BodyRunSettings {
   model::LayerSettings layer;    ///< mesher, material, cache, density, gravity, stiffness, mass
   /// A material held in memory (the Python module's Material), used instead of layer.material when set.
   std::shared_ptr<const material::MaterialFile> material_data;
-  std::string integrator = "backward_euler";  ///< backward_euler | bdf2 | newmark (time_integrator.hpp)
-  bool write_layer = false;                   ///< also write layer.pvd (when frames are written)
-  int every = 1;                              ///< write every N-th frame (frame 0 and the last always)
+  /// backward_euler | bdf2 | newmark; bdf2 unless told (model::kDefaultIntegrator; the paper's: backward_euler)
+  std::string integrator = std::string(model::to_string(model::kDefaultIntegrator));
+  /// Per-frame kinetic, elastic and gravitational energies over every tet in summary.json's frames (--energies).
+  /// Off by default: over every tet they cost the reduced model about as much as its step (docs/output.md).
+  bool energies = false;
+  bool write_layer = false;  ///< also write layer.pvd (when frames are written)
+  int every = 1;             ///< write every N-th frame (frame 0 and the last always)
   /// xdmf (.xmf + .h5: topology and fixed fields once, the default) | vtk (.pvd of .vtp/.vtu), docs/output.md
   std::string format = "xdmf";
   std::string precision = "float32";  ///< float32 | float64 (xdmf datasets; vtk frames are Float64)

@@ -3,6 +3,7 @@
 // calls for, time stepping and output. The simulator builds only what the effects ask for (scene_runner.hpp).
 // Every error names the file and line: unknown keys, missing keys, wrong types, impossible values.
 #include <sflsh/core/vtk_io.hpp>
+#include <sflsh/model/mass.hpp>
 #include <sflsh/model/time_integrator.hpp>
 
 #include <Eigen/Core>
@@ -72,8 +73,9 @@ struct BodySpec {
   int cubature = -1;        ///< reduced: −1 auto, 0 every tet
   double density = 1000.0;  ///< [kg/m³]
   double stiffness_scale = 1.0;
-  model::Integrator integrator = model::Integrator::backward_euler;  ///< `integrator` (docs/integrators.md)
-  model::MassKind mass = model::MassKind::lumped;                    ///< `mass`
+  /// `integrator` (docs/integrators.md); a tracking skeleton without one takes the paper's backward Euler
+  model::Integrator integrator = model::kDefaultIntegrator;
+  model::MassKind mass = model::kDefaultMassKind;  ///< `mass`; lumped for a tracking skeleton without one
   /// `skeleton`: false ("prescribed") the bones follow the motion whatever touches them; true ("tracking", reduced
   /// only) the root's deviation from the motion is solved with the soft tissue (reduced/root_tracking.hpp).
   bool tracking = false;
@@ -155,8 +157,8 @@ struct CrowdSpec {
   SolverKind solver = SolverKind::reduced;
   std::string mesh = "coarse";
   int handles = 30;
-  model::Integrator integrator = model::Integrator::backward_euler;  ///< `integrator`
-  model::MassKind mass = model::MassKind::lumped;                    ///< `mass`
+  model::Integrator integrator = model::kDefaultIntegrator;  ///< `integrator`
+  model::MassKind mass = model::kDefaultMassKind;            ///< `mass`
   int cubature = -1;
 };
 
