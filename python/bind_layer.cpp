@@ -8,6 +8,7 @@
 #include <sflsh/meshing/layer_cache.hpp>
 #include <sflsh/meshing/region.hpp>
 #include <sflsh/meshing/retarget.hpp>
+#include <sflsh/meshing/subject_layer.hpp>
 #include <sflsh/meshing/tet_backend.hpp>
 
 #include <pybind11/stl.h>
@@ -57,10 +58,15 @@ std::shared_ptr<PyLayer> make_layer(const std::optional<std::string>& subject, c
   const std::filesystem::path cache_dir = cache ? std::filesystem::path(*cache) : meshing::default_cache_dir();
   py::gil_scoped_release release;
   meshing::CacheOutcome outcome{};
-  out->mesh = meshing::cached_layer_mesh(out->model, options, cache_dir, rebuild_cache, &outcome);
+  meshing::LayerMesh template_mesh =
+      meshing::cached_layer_mesh(out->model, options, cache_dir, rebuild_cache, &outcome);
   out->cache_outcome = meshing::cache_outcome_name(outcome);
-  const meshing::Retargeter retargeter(out->model, out->mesh);
-  out->layer = retargeter.retarget(out->beta, thickness);
+  // The template retargeted, or the subject's own layer where that inverts tets (meshing/subject_layer.hpp).
+  const Eigen::VectorXd field = Eigen::VectorXd::Constant(template_mesh.region_surface.num_vertices(), thickness);
+  meshing::SubjectLayer own =
+      meshing::subject_layer(out->model, std::move(template_mesh), out->beta, field, options, cache_dir);
+  out->mesh = *own.mesh;
+  out->layer = std::move(own.layer);
   return out;
 }
 

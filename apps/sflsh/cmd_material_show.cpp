@@ -10,6 +10,7 @@
 #include <sflsh/material/layer_material.hpp>
 #include <sflsh/meshing/layer_cache.hpp>
 #include <sflsh/meshing/region.hpp>
+#include <sflsh/meshing/subject_layer.hpp>
 #include <sflsh/reduced/shape_model_file.hpp>
 
 #include <algorithm>
@@ -58,22 +59,27 @@ void run_show(const ShowOptions& opt, const Invocation& invocation) {
   meshing::LayerMeshOptions mesh_options;
   mesh_options.mesher = meshing::parse_mesher(opt.mesher);
   mesh_options.size = meshing::parse_size_preset(opt.size);
-  const meshing::LayerMesh mesh = meshing::cached_layer_mesh(
-      model, mesh_options, opt.cache.empty() ? meshing::default_cache_dir() : std::filesystem::path(opt.cache));
+  const std::filesystem::path cache_dir =
+      opt.cache.empty() ? meshing::default_cache_dir() : std::filesystem::path(opt.cache);
+  meshing::LayerMesh template_mesh = meshing::cached_layer_mesh(model, mesh_options, cache_dir);
 
   if (opt.material.empty() && opt.shape_model.empty())
-    file = material::default_material(model, mesh, opt.control_points, subject_label);
+    file = material::default_material(model, template_mesh, opt.control_points, subject_label);
   // `betas`: the shape the fields are drawn for, so that `sflsh shapefit` can read the file without a subject
   // table. A given material file keeps its own β; it gets the run's β only when it names the run's subject.
   if (opt.material.empty() || (!file.betas && file.subject == subject_label)) {
     file.betas.emplace();
     std::copy(beta.data(), beta.data() + beta.size(), file.betas->begin());
   }
-  const material::BiharmonicBasis basis = material::layer_basis(model, mesh, file.vertices());
+  const material::BiharmonicBasis basis = material::layer_basis(model, template_mesh, file.vertices());
   const material::KappaMatrix kappa = file.kappa();
-  const meshing::Retargeter retargeter(model, mesh);
   const Eigen::VectorXd thickness = material::evaluate_field(basis.phi, kappa).col(0);
-  const meshing::RetargetedLayer layer = retargeter.retarget(beta, thickness);
+  // The template retargeted, or the subject's own layer where that inverts tets (meshing/subject_layer.hpp).
+  const meshing::SubjectLayer subject =
+      meshing::subject_layer(model, std::move(template_mesh), beta, thickness, mesh_options, cache_dir);
+  const meshing::LayerMesh& mesh = *subject.mesh;
+  const meshing::Retargeter& retargeter = *subject.retargeter;
+  const meshing::RetargetedLayer& layer = subject.layer;
   const material::LayerMaterialFields fields =
       material::layer_material_fields(retargeter, basis.phi, kappa, layer.nodes);
 

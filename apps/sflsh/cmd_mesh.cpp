@@ -10,6 +10,7 @@
 #include <sflsh/meshing/label_names.hpp>
 #include <sflsh/meshing/layer_cache.hpp>
 #include <sflsh/meshing/retarget.hpp>
+#include <sflsh/meshing/subject_layer.hpp>
 
 #include <chrono>
 #include <map>
@@ -53,16 +54,24 @@ void run_mesh(const MeshOptions& opt, const Invocation& invocation) {
       opt.cache.empty() ? meshing::default_cache_dir() : std::filesystem::path(opt.cache);
   meshing::CacheOutcome outcome{};
   const auto t_mesh = std::chrono::steady_clock::now();
-  const meshing::LayerMesh mesh = meshing::cached_layer_mesh(model, options, cache_dir, opt.rebuild_cache, &outcome);
+  meshing::LayerMesh template_mesh = meshing::cached_layer_mesh(model, options, cache_dir, opt.rebuild_cache, &outcome);
   const double mesh_seconds = seconds_since(t_mesh);
+  const meshing::LayerGeometry template_geometry =
+      meshing::layer_geometry(model, template_mesh.region_surface, template_mesh.correspondence, body::Betas::Zero(),
+                              template_mesh.template_thickness_field());
+  const meshing::QualityReport template_quality =
+      meshing::layer_quality(template_mesh, template_mesh.nodes, template_geometry);
 
+  // The template retargeted, or the subject's own layer where that inverts tets (meshing/subject_layer.hpp).
   const auto t_factor = std::chrono::steady_clock::now();
-  const meshing::Retargeter retargeter(model, mesh);
-  const double factor_seconds = seconds_since(t_factor);
-  const meshing::LayerGeometry template_geometry = meshing::layer_geometry(
-      model, mesh.region_surface, mesh.correspondence, body::Betas::Zero(), mesh.template_thickness_field());
-  const meshing::QualityReport template_quality = meshing::layer_quality(mesh, mesh.nodes, template_geometry);
-  const meshing::RetargetedLayer layer = retargeter.retarget(beta, opt.thickness);
+  const Eigen::VectorXd thickness_field =
+      Eigen::VectorXd::Constant(template_mesh.region_surface.num_vertices(), opt.thickness);
+  const meshing::SubjectLayer subject =
+      meshing::subject_layer(model, std::move(template_mesh), beta, thickness_field, options, cache_dir);
+  const meshing::LayerMesh& mesh = *subject.mesh;
+  const meshing::Retargeter& retargeter = *subject.retargeter;
+  const meshing::RetargetedLayer& layer = subject.layer;
+  const double factor_seconds = seconds_since(t_factor) - layer.seconds;  // and the subject's meshing, if any
 
   // Per-node fields: kind, part, thickness fraction and local thickness (carried in from the skin).
   const auto& geometry = layer.geometry;
@@ -131,6 +140,9 @@ void run_mesh(const MeshOptions& opt, const Invocation& invocation) {
                       {"outcome", meshing::cache_outcome_name(outcome)}};
   summary["quality_template"] = template_quality;
   summary["quality"] = layer.quality;
+  // true: the template inverted tets at this shape and thickness, and the subject's own layer was meshed (cached)
+  summary["remeshed"] = subject.remeshed;
+  if (subject.remeshed) summary["template_failure"] = subject.template_failure;
   summary["timings_s"] = {{"template_mesh", outcome == meshing::CacheOutcome::hit ? 0.0 : mesh.meshing_seconds},
                           {"template_load_or_build", mesh_seconds},
                           {"factorization", factor_seconds},

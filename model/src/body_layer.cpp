@@ -2,6 +2,7 @@
 #include <sflsh/core/log.hpp>
 #include <sflsh/material/orthotropic_fung.hpp>
 #include <sflsh/meshing/layer_cache.hpp>
+#include <sflsh/meshing/subject_layer.hpp>
 #include <sflsh/meshing/tet_backend.hpp>
 #include <sflsh/model/body_layer.hpp>
 
@@ -47,23 +48,23 @@ BodyLayer build_body_layer(const body::BodyModel& model, const body::Betas& beta
   meshing::LayerMeshOptions mesh_options;
   mesh_options.mesher = options.mesher;
   mesh_options.size = options.size;
-  out.mesh = std::make_unique<meshing::LayerMesh>(meshing::cached_layer_mesh(
-      model, mesh_options, options.cache_dir.empty() ? meshing::default_cache_dir() : options.cache_dir));
-  const meshing::LayerMesh& mesh = *out.mesh;
+  const std::filesystem::path cache_dir = options.cache_dir.empty() ? meshing::default_cache_dir() : options.cache_dir;
+  meshing::LayerMesh template_mesh = meshing::cached_layer_mesh(model, mesh_options, cache_dir);
 
   if (material) {
     material::check_against_body(*material, model);
     out.material = *material;
   } else {
     require(control_points >= 1, "body layer: --control-points must be at least 1, got {}", control_points);
-    out.material = material::default_material(model, mesh, control_points, "");
+    out.material = material::default_material(model, template_mesh, control_points, "");
   }
-  const material::BiharmonicBasis basis = material::layer_basis(model, mesh, out.material.vertices());
+  // φ over the region's vertices, from the template (the material's control points live on it).
+  const material::BiharmonicBasis basis = material::layer_basis(model, template_mesh, out.material.vertices());
   const material::KappaMatrix kappa = out.material.kappa();
-  const meshing::Retargeter retargeter(model, mesh);
   const Eigen::VectorXd thickness = material::evaluate_field(basis.phi, kappa).col(0);
+  meshing::SubjectLayer subject;
   try {
-    out.layer = retargeter.retarget(beta, thickness);
+    subject = meshing::subject_layer(model, std::move(template_mesh), beta, thickness, mesh_options, cache_dir);
   } catch (const Error& e) {
     if (!material) throw;
     // A material file's thickness the template cannot be retargeted to: name the file and its thickest point.
@@ -74,13 +75,17 @@ BodyLayer build_body_layer(const body::BodyModel& model, const body::Betas& beta
     const material::MaterialControlPoint& p = material->control_points[thickest];
     const std::string file = material->source.empty() ? std::string("material") : material->source;
     throw_error(
-        "{}{}: thickness: up to {:.3g} (control_point #{}) is more than the {} {} layer retargets for this "
-        "shape ({}); lower the thickness or use a finer --mesh (every subject retargets up to 0.6 on the layered "
-        "coarse mesh, 0.8 on the default one, 0.9 on the fine one; cgal and gmsh about 0.4-0.7: "
-        "docs/meshing.md)",
+        "{}{}: thickness: up to {:.3g} (control_point #{}) is more than the {} {} layer reaches for this shape, "
+        "retargeted or meshed on the subject itself ({}); lower the thickness or use a finer --mesh or another "
+        "--mesher (docs/meshing.md, \"Every mesher at every thickness\")",
         file, p.line > 0 ? fmt::format(":{}", p.line) : std::string(), p.kappa.thickness, thickest,
         meshing::mesher_name(options.mesher), meshing::size_preset_name(options.size), e.what());
   }
+  out.layer = std::move(subject.layer);
+  out.remeshed = subject.remeshed;
+  out.mesh = std::move(subject.mesh);
+  const meshing::LayerMesh& mesh = *out.mesh;
+  const meshing::Retargeter& retargeter = *subject.retargeter;
   out.fields = material::layer_material_fields(retargeter, basis.phi, kappa, out.layer.nodes);
   out.depth = retargeter.depth();
   out.shaped = body::shaped_template(model, beta);

@@ -112,3 +112,34 @@ TEST(CliMesh, CorruptCacheIsReportedWithTheFile) {
 }
 
 }  // namespace sflsh
+
+namespace sflsh {
+
+// Where the template inverts tets at a subject's shape and thickness, the subject's own layer is meshed (cached per
+// subject and thickness) and the run succeeds: OPEN_TEST_3 at h = 0.7 inverts 4 tets (thighs) of the layered coarse
+// template, and meshes cleanly on its own body in 0.2 s.
+TEST(CliMesh, SubjectTheTemplateCannotReachIsMeshedOnItsOwn) {
+  const auto dir = sflsh::testing::scratch_dir();
+  const auto cache = dir / "cache";
+  for (const char* run : {"first", "cached"}) {
+    SCOPED_TRACE(run);
+    const auto out = dir / run;
+    const auto r = run_sflsh(fmt::format("-q mesh --subject OPEN_TEST_3 --thickness 0.7 --mesher layered --mesh coarse "
+                                         "--cache {} --out {}",
+                                         cache.string(), out.string()),
+                             dir);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const nlohmann::json summary = read_json(out / "summary.json");
+    EXPECT_TRUE(summary["remeshed"].get<bool>());
+    EXPECT_THAT(summary["template_failure"].get<std::string>(), HasSubstr("inverts"));
+    EXPECT_EQ(summary["quality"]["inverted"].get<long>(), 0);
+    EXPECT_EQ(summary["quality"]["degenerate"].get<long>(), 0);
+    const auto h = sflsh::vtk::read_point_array(out / "layer.vtu", "thickness_fraction");
+    EXPECT_NEAR(h.minCoeff(), 0.7, 1e-9);
+    EXPECT_NEAR(h.maxCoeff(), 0.7, 1e-9);
+  }
+  // The template's entry and the subject's own, side by side in the cache.
+  EXPECT_EQ(count_entries(cache), 2u);
+}
+
+}  // namespace sflsh

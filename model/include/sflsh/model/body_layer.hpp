@@ -30,12 +30,15 @@ struct BodyLayerOptions {
 /// Everything a body simulation needs. Movable; the body model passed to build_body_layer must outlive it.
 struct BodyLayer {
   body::Betas beta;
-  std::unique_ptr<meshing::LayerMesh> mesh;  ///< template (β = 0) layer; heap so Retargeter refs stay valid
-  meshing::RetargetedLayer layer;            ///< nodes for (β, h)
-  material::MaterialFile material;           ///< the material used (given, or the defaults)
-  material::LayerMaterialFields fields;      ///< κ per region vertex, node, tet; normals per tet
-  Eigen::VectorXd depth;                     ///< harmonic depth per node (0 skin, 1 bone)
-  RowMatrixX3d shaped;                       ///< the body's shaped template T_S (n×3)
+  /// The layer mesh the nodes were retargeted from: the template (β = 0), or the subject's own where the template
+  /// inverted tets (`remeshed`; meshing/subject_layer.hpp). On the heap so that references to it stay valid.
+  std::unique_ptr<meshing::LayerMesh> mesh;
+  bool remeshed = false;
+  meshing::RetargetedLayer layer;        ///< nodes for (β, h)
+  material::MaterialFile material;       ///< the material used (given, or the defaults)
+  material::LayerMaterialFields fields;  ///< κ per region vertex, node, tet; normals per tet
+  Eigen::VectorXd depth;                 ///< harmonic depth per node (0 skin, 1 bone)
+  RowMatrixX3d shaped;                   ///< the body's shaped template T_S (n×3)
   std::shared_ptr<const MotionCurve> curve;
   std::shared_ptr<const SkinnedTrajectory> trajectory;
   Problem problem;  ///< validated
