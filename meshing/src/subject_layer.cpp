@@ -22,6 +22,18 @@ body::BodyModel subject_body(const body::BodyModel& model, const body::Betas& be
   return subject;
 }
 
+namespace {
+
+// The floor a subject's own layer must meet to replace the template. The worst retargeted template the stability
+// tests simulate (layered coarse at h = 0.6) has a smallest dihedral angle of 0.97° and a largest radius-edge ratio
+// of 28; the layered mesher's own thick layers fall far below it (h = 0.8 at β = 0: 0.18° and 132, on which the
+// reduced model's elastic energy grew to 40 kJ in ReducedStability.ThinAndThickLayers), cgal's stay far above
+// (TEST_3 at 0.9: 3.2° and 3.8).
+constexpr double kMinDihedralDeg = 0.5;
+constexpr double kMaxRadiusEdge = 50.0;
+
+}  // namespace
+
 SubjectLayer subject_layer(const body::BodyModel& model, LayerMesh template_mesh, const body::Betas& beta,
                            const Eigen::VectorXd& thickness, const LayerMeshOptions& options,
                            const std::filesystem::path& cache_dir) {
@@ -55,6 +67,10 @@ SubjectLayer subject_layer(const body::BodyModel& model, LayerMesh template_mesh
               mesh->region_surface.vertices.size(), region_vertices.size());
       auto retargeter = std::make_unique<Retargeter>(*subject, *mesh);
       RetargetedLayer layer = retargeter->retarget(body::Betas::Zero(), thickness);
+      require(layer.quality.min_dihedral_deg >= kMinDihedralDeg && layer.quality.max_radius_edge <= kMaxRadiusEdge,
+              "slivers: min dihedral {:.2f}° and radius-edge ratio {:.0f} against the floor of a fallback layer, "
+              "{}° and {:.0f}",
+              layer.quality.min_dihedral_deg, layer.quality.max_radius_edge, kMinDihedralDeg, kMaxRadiusEdge);
       out.retargeter = std::move(retargeter);  // before the mesh it refers to is replaced
       out.mesh = std::move(mesh);
       out.subject = std::move(subject);

@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 #include <gmock/gmock.h>
 
+#include <algorithm>
 #include <fstream>
 
 namespace sflsh {
@@ -116,18 +117,19 @@ TEST(CliMesh, CorruptCacheIsReportedWithTheFile) {
 namespace sflsh {
 
 // Where the template inverts tets at a subject's shape and thickness, the subject's own layer is meshed (cached per
-// subject and thickness) and the run succeeds: OPEN_TEST_3 at h = 0.7 inverts 4 tets (thighs) of the layered coarse
-// template, and meshes cleanly on its own body in 0.2 s.
+// subject and thickness) and the run succeeds: TEST_3 at h = 0.1 inverts 1519 tets of the gmsh coarse template and
+// meshes on its own body in about a second (smallest dihedral angle 8.7°). A subject's layer with slivers is refused:
+// the layered coarse mesher at h = 0.7 gives 0.34° (meshing/src/subject_layer.cpp), and the error names both tries.
 TEST(CliMesh, SubjectTheTemplateCannotReachIsMeshedOnItsOwn) {
   const auto dir = sflsh::testing::scratch_dir();
   const auto cache = dir / "cache";
   for (const char* run : {"first", "cached"}) {
     SCOPED_TRACE(run);
     const auto out = dir / run;
-    const auto r = run_sflsh(fmt::format("-q mesh --subject OPEN_TEST_3 --thickness 0.7 --mesher layered --mesh coarse "
-                                         "--cache {} --out {}",
-                                         cache.string(), out.string()),
-                             dir);
+    const auto r = run_sflsh(
+        fmt::format("-q mesh --subject TEST_3 --thickness 0.1 --mesher gmsh --mesh coarse --cache {} --out {}",
+                    cache.string(), out.string()),
+        dir);
     ASSERT_EQ(r.exit_code, 0) << r.err;
     const nlohmann::json summary = read_json(out / "summary.json");
     EXPECT_TRUE(summary["remeshed"].get<bool>());
@@ -135,11 +137,21 @@ TEST(CliMesh, SubjectTheTemplateCannotReachIsMeshedOnItsOwn) {
     EXPECT_EQ(summary["quality"]["inverted"].get<long>(), 0);
     EXPECT_EQ(summary["quality"]["degenerate"].get<long>(), 0);
     const auto h = sflsh::vtk::read_point_array(out / "layer.vtu", "thickness_fraction");
-    EXPECT_NEAR(h.minCoeff(), 0.7, 1e-9);
-    EXPECT_NEAR(h.maxCoeff(), 0.7, 1e-9);
+    EXPECT_NEAR(h.minCoeff(), 0.1, 1e-9);
+    EXPECT_NEAR(h.maxCoeff(), 0.1, 1e-9);
   }
   // The template's entry and the subject's own, side by side in the cache.
   EXPECT_EQ(count_entries(cache), 2u);
+  const auto slivers = run_sflsh(fmt::format("-q mesh --subject OPEN_TEST_3 --thickness 0.7 --mesher layered --mesh "
+                                             "coarse --cache {} --out {}",
+                                             cache.string(), (dir / "slivers").string()),
+                                 dir);
+  EXPECT_EQ(slivers.exit_code, 1);
+  EXPECT_THAT(slivers.err, HasSubstr("inverts"));
+  EXPECT_THAT(slivers.err, HasSubstr("the subject's own layer failed as well"));
+  EXPECT_THAT(slivers.err, HasSubstr("slivers"));
+  EXPECT_EQ(std::count(slivers.err.begin(), slivers.err.end(), '\n'), 1) << slivers.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "slivers"));
 }
 
 }  // namespace sflsh
