@@ -36,6 +36,78 @@ Eigen::MatrixXd as_column(const std::vector<meshing::Part>& parts) {
   return column;
 }
 
+/// layer.vtu: the retargeted tets with node kind, part, thickness fraction and local thickness (carried in from the
+/// skin), displacement from the mesh's own template, and per-tet quality.
+void write_layer_volume(RunFolder& run, const meshing::SubjectLayer& subject) {
+  const meshing::LayerMesh& mesh = *subject.mesh;
+  const meshing::RetargetedLayer& layer = subject.layer;
+  const auto& geometry = layer.geometry;
+  Eigen::MatrixXd surface_fields(mesh.region_surface.num_vertices(), 2);
+  surface_fields.col(0) = geometry.thickness;
+  surface_fields.col(1) = geometry.thickness.cwiseProduct(geometry.max_thickness());
+  const Eigen::MatrixXd node_fields = subject.retargeter->extend_surface_field(surface_fields);
+  Eigen::MatrixXd kind(mesh.num_nodes(), 1);
+  for (int i = 0; i < mesh.num_nodes(); ++i) kind(i) = static_cast<double>(mesh.kind[static_cast<std::size_t>(i)]);
+  const meshing::TetQuality quality = meshing::tet_quality(layer.nodes, mesh.tets);
+  vtk::Fields fields;
+  fields.point_data.push_back({"node_kind", kind, true});
+  fields.point_data.push_back({"part", as_column(mesh.node_part), true});
+  fields.point_data.push_back({"thickness_fraction", node_fields.col(0), false});
+  fields.point_data.push_back({"local_thickness", node_fields.col(1), false});
+  fields.point_data.push_back({"displacement_from_template", layer.nodes - mesh.nodes, false});
+  fields.cell_data.push_back({"part", as_column(mesh.tet_part), true});
+  fields.cell_data.push_back({"volume", quality.volume, false});
+  fields.cell_data.push_back({"min_dihedral_deg", quality.min_dihedral_deg, false});
+  fields.cell_data.push_back({"radius_edge", quality.radius_edge, false});
+  fields.labels.push_back({"part_names", meshing::part_names()});
+  fields.labels.push_back({"node_kind_names", meshing::node_kind_names()});
+  vtk::write_unstructured(run.stage("layer.vtu"), layer.nodes, mesh.tets, fields);
+}
+
+/// outer.vtp and inner.vtp: the skin and the layer's inner surface with thickness, part and the skeleton vector.
+void write_layer_surfaces(RunFolder& run, const meshing::LayerMesh& mesh, const meshing::LayerGeometry& geometry) {
+  vtk::Fields surface;
+  surface.point_data.push_back({"thickness_fraction", geometry.thickness, false});
+  surface.point_data.push_back(
+      {"local_thickness", Eigen::MatrixXd(geometry.thickness.cwiseProduct(geometry.max_thickness())), false});
+  surface.point_data.push_back({"max_thickness", geometry.max_thickness(), false});
+  surface.point_data.push_back({"part", as_column(mesh.region_surface.part), true});
+  surface.point_data.push_back({"to_skeleton", geometry.skeleton - geometry.skin, false});
+  surface.labels.push_back({"part_names", meshing::part_names()});
+  vtk::write_surface(run.stage("outer.vtp"), geometry.skin, mesh.region_surface.faces, surface);
+  meshing::RowMatrixX3d inner = geometry.skin;
+  for (int v = 0; v < inner.rows(); ++v)
+    inner.row(v) += geometry.thickness(v) * (geometry.skeleton.row(v) - geometry.skin.row(v));  // docs/physics.md §1.4
+  vtk::write_surface(run.stage("inner.vtp"), inner, mesh.region_surface.faces, surface);
+}
+
+/// summary.json's description of the layer: sizes, node kinds, the skin embedding's error, quality and remeshing.
+void add_layer_summary(nlohmann::json& summary, const meshing::SubjectLayer& subject) {
+  const meshing::LayerMesh& mesh = *subject.mesh;
+  const meshing::RetargetedLayer& layer = subject.layer;
+  std::map<std::string, long> kinds;
+  for (auto k : mesh.kind)
+    ++kinds[k == meshing::NodeKind::outer   ? "outer"
+            : k == meshing::NodeKind::inner ? "inner"
+            : k == meshing::NodeKind::side  ? "side"
+                                            : "interior"];
+  const meshing::RowMatrixX3d skin_points = mesh.skin_positions(layer.nodes);
+  summary["region"] = mesh.region;
+  summary["mesher"] = meshing::mesher_name(mesh.mesher);
+  summary["size"] = meshing::size_preset_name(mesh.size);
+  summary["edge_length_m"] = mesh.edge_length;
+  summary["nodes"] = mesh.num_nodes();
+  summary["tets"] = mesh.num_tets();
+  summary["node_kinds"] = kinds;
+  summary["skin_vertices"] = mesh.region_surface.num_vertices();
+  summary["skin_mapping"] = mesh.skin.node.empty() || mesh.skin.node.front() < 0 ? "embedded" : "nodes";
+  summary["skin_embedding_max_error_m"] = (skin_points - layer.geometry.skin).rowwise().norm().maxCoeff();
+  summary["quality"] = layer.quality;
+  // true: the template inverted tets at this shape and thickness, and the subject's own layer was meshed (cached)
+  summary["remeshed"] = subject.remeshed;
+  if (subject.remeshed) summary["template_failure"] = subject.template_failure;
+}
+
 void run_mesh(const MeshOptions& opt, const Invocation& invocation) {
   const auto t0 = std::chrono::steady_clock::now();
   require(opt.thickness > 0.0 && opt.thickness < 1.0, "--thickness {}: expected a fraction 0 < h < 1", opt.thickness);
@@ -56,6 +128,7 @@ void run_mesh(const MeshOptions& opt, const Invocation& invocation) {
   const auto t_mesh = std::chrono::steady_clock::now();
   meshing::LayerMesh template_mesh = meshing::cached_layer_mesh(model, options, cache_dir, opt.rebuild_cache, &outcome);
   const double mesh_seconds = seconds_since(t_mesh);
+  const double template_meshing_seconds = outcome == meshing::CacheOutcome::hit ? 0.0 : template_mesh.meshing_seconds;
   const meshing::LayerGeometry template_geometry =
       meshing::layer_geometry(model, template_mesh.region_surface, template_mesh.correspondence, body::Betas::Zero(),
                               template_mesh.template_thickness_field());
@@ -68,82 +141,23 @@ void run_mesh(const MeshOptions& opt, const Invocation& invocation) {
       Eigen::VectorXd::Constant(template_mesh.region_surface.num_vertices(), opt.thickness);
   const meshing::SubjectLayer subject =
       meshing::subject_layer(model, std::move(template_mesh), beta, thickness_field, options, cache_dir);
-  const meshing::LayerMesh& mesh = *subject.mesh;
-  const meshing::Retargeter& retargeter = *subject.retargeter;
   const meshing::RetargetedLayer& layer = subject.layer;
   const double factor_seconds = seconds_since(t_factor) - layer.seconds;  // and the subject's meshing, if any
 
-  // Per-node fields: kind, part, thickness fraction and local thickness (carried in from the skin).
-  const auto& geometry = layer.geometry;
-  Eigen::MatrixXd surface_fields(mesh.region_surface.num_vertices(), 2);
-  surface_fields.col(0) = geometry.thickness;
-  surface_fields.col(1) = geometry.thickness.cwiseProduct(geometry.max_thickness());
-  const Eigen::MatrixXd node_fields = retargeter.extend_surface_field(surface_fields);
-  Eigen::MatrixXd kind(mesh.num_nodes(), 1);
-  for (int i = 0; i < mesh.num_nodes(); ++i) kind(i) = static_cast<double>(mesh.kind[static_cast<std::size_t>(i)]);
-  const meshing::TetQuality quality = meshing::tet_quality(layer.nodes, mesh.tets);
-
   RunFolder run(opt.out);
-  vtk::Fields fields;
-  fields.point_data.push_back({"node_kind", kind, true});
-  fields.point_data.push_back({"part", as_column(mesh.node_part), true});
-  fields.point_data.push_back({"thickness_fraction", node_fields.col(0), false});
-  fields.point_data.push_back({"local_thickness", node_fields.col(1), false});
-  fields.point_data.push_back({"displacement_from_template", layer.nodes - mesh.nodes, false});
-  fields.cell_data.push_back({"part", as_column(mesh.tet_part), true});
-  fields.cell_data.push_back({"volume", quality.volume, false});
-  fields.cell_data.push_back({"min_dihedral_deg", quality.min_dihedral_deg, false});
-  fields.cell_data.push_back({"radius_edge", quality.radius_edge, false});
-  fields.labels.push_back({"part_names", meshing::part_names()});
-  fields.labels.push_back({"node_kind_names", meshing::node_kind_names()});
-  vtk::write_unstructured(run.stage("layer.vtu"), layer.nodes, mesh.tets, fields);
-
-  vtk::Fields surface;
-  surface.point_data.push_back({"thickness_fraction", geometry.thickness, false});
-  surface.point_data.push_back({"local_thickness", surface_fields.col(1), false});
-  surface.point_data.push_back({"max_thickness", geometry.max_thickness(), false});
-  surface.point_data.push_back({"part", as_column(mesh.region_surface.part), true});
-  surface.point_data.push_back({"to_skeleton", geometry.skeleton - geometry.skin, false});
-  surface.labels.push_back({"part_names", meshing::part_names()});
-  vtk::write_surface(run.stage("outer.vtp"), geometry.skin, mesh.region_surface.faces, surface);
-  meshing::RowMatrixX3d inner = geometry.skin;
-  for (int v = 0; v < inner.rows(); ++v)
-    inner.row(v) += geometry.thickness(v) * (geometry.skeleton.row(v) - geometry.skin.row(v));  // docs/physics.md §1.4
-  vtk::write_surface(run.stage("inner.vtp"), inner, mesh.region_surface.faces, surface);
-
-  std::map<std::string, long> kinds;
-  for (auto k : mesh.kind)
-    ++kinds[k == meshing::NodeKind::outer   ? "outer"
-            : k == meshing::NodeKind::inner ? "inner"
-            : k == meshing::NodeKind::side  ? "side"
-                                            : "interior"];
-  const meshing::RowMatrixX3d skin_points = mesh.skin_positions(layer.nodes);
-  const double skin_error = (skin_points - geometry.skin).rowwise().norm().maxCoeff();
-
+  write_layer_volume(run, subject);
+  write_layer_surfaces(run, *subject.mesh, layer.geometry);
   nlohmann::json summary = summary_header("mesh", invocation.argc, invocation.argv);
   summary["body"] = body::body_label(opt.subject);
   summary["body_name"] = model.name;
   summary["subject"] = subject_label;
   summary["beta"] = std::vector<double>(beta.data(), beta.data() + beta.size());
   summary["thickness"] = opt.thickness;
-  summary["region"] = mesh.region;
-  summary["mesher"] = meshing::mesher_name(mesh.mesher);
-  summary["size"] = meshing::size_preset_name(mesh.size);
-  summary["edge_length_m"] = mesh.edge_length;
-  summary["nodes"] = mesh.num_nodes();
-  summary["tets"] = mesh.num_tets();
-  summary["node_kinds"] = kinds;
-  summary["skin_vertices"] = mesh.region_surface.num_vertices();
-  summary["skin_mapping"] = mesh.skin.node.empty() || mesh.skin.node.front() < 0 ? "embedded" : "nodes";
-  summary["skin_embedding_max_error_m"] = skin_error;
+  add_layer_summary(summary, subject);
   summary["cache"] = {{"path", meshing::layer_cache_path(cache_dir, model, options).string()},
                       {"outcome", meshing::cache_outcome_name(outcome)}};
   summary["quality_template"] = template_quality;
-  summary["quality"] = layer.quality;
-  // true: the template inverted tets at this shape and thickness, and the subject's own layer was meshed (cached)
-  summary["remeshed"] = subject.remeshed;
-  if (subject.remeshed) summary["template_failure"] = subject.template_failure;
-  summary["timings_s"] = {{"template_mesh", outcome == meshing::CacheOutcome::hit ? 0.0 : mesh.meshing_seconds},
+  summary["timings_s"] = {{"template_mesh", template_meshing_seconds},
                           {"template_load_or_build", mesh_seconds},
                           {"factorization", factor_seconds},
                           {"retarget", layer.seconds},
@@ -152,7 +166,7 @@ void run_mesh(const MeshOptions& opt, const Invocation& invocation) {
   write_json(run.stage("summary.json"), summary);
   run.commit();
   logger()->info("layer for {} (h = {}): {} tets, min dihedral {:.1f}°, retarget {:.3f} s → {}", subject_label,
-                 opt.thickness, mesh.num_tets(), layer.quality.min_dihedral_deg, layer.seconds, opt.out);
+                 opt.thickness, subject.mesh->num_tets(), layer.quality.min_dihedral_deg, layer.seconds, opt.out);
 }
 
 }  // namespace
