@@ -6,6 +6,12 @@
 // Usage: bench_fullspace [--sflsh PATH] [--sizes coarse,default,fine] [--procs 1,2] [--frames 20]
 //                        [--integrators backward_euler,bdf2,newmark] [--masses lumped,consistent]
 //                        [--subject NAME] [--motion NAME] [--mesher layered] [--out bench_fullspace.json]
+// The driven block against FEBio (fullspace_block.hpp; docs/results/performance.md):
+//        bench_fullspace --block 10x10x3,20x20x6,40x40x12,80x80x24 [--pcs icc,gamg,hypre,automatic]
+//                        [--procs 1,2] [--threads 1] [--steps 6] [--runs 3] [--verify-args "PETSC OPTIONS"]
+//                        [--out bench_fullspace_block.json]
+#include "fullspace_block.hpp"
+
 #include <sflsh/core/summary.hpp>
 
 #include <fmt/format.h>
@@ -15,6 +21,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <iostream>
@@ -82,8 +89,22 @@ int main(int argc, char** argv) {
   std::string subject = "OPEN_TRAIN_1", motion = "running_on_spot", mesher = "layered";
   std::string integrators = "backward_euler", masses = "lumped";
   int frames = 20;
+  std::string block, pcs = "icc,gamg", verify_args;
+  int block_threads = 1, block_steps = 6, block_runs = 3;
   for (int i = 1; i + 1 < argc; i += 2) {
-    if (std::strcmp(argv[i], "--sflsh") == 0)
+    if (std::strcmp(argv[i], "--block") == 0)
+      block = argv[i + 1];
+    else if (std::strcmp(argv[i], "--verify-args") == 0)
+      verify_args = argv[i + 1];
+    else if (std::strcmp(argv[i], "--pcs") == 0)
+      pcs = argv[i + 1];
+    else if (std::strcmp(argv[i], "--threads") == 0)
+      block_threads = std::stoi(argv[i + 1]);
+    else if (std::strcmp(argv[i], "--steps") == 0)
+      block_steps = std::stoi(argv[i + 1]);
+    else if (std::strcmp(argv[i], "--runs") == 0)
+      block_runs = std::stoi(argv[i + 1]);
+    else if (std::strcmp(argv[i], "--sflsh") == 0)
       sflsh_path = argv[i + 1];
     else if (std::strcmp(argv[i], "--out") == 0)
       out = argv[i + 1];
@@ -109,6 +130,39 @@ int main(int argc, char** argv) {
     }
   }
   try {
+    if (!block.empty()) {
+      bench::BlockOptions o;
+      o.sflsh = sflsh_path;
+      for (const std::string& c : split(block)) {
+        std::array<int, 3> cells{};
+        if (std::sscanf(c.c_str(), "%dx%dx%d", &cells[0], &cells[1], &cells[2]) != 3 || cells[0] < 1 || cells[1] < 1 ||
+            cells[2] < 1) {
+          std::cerr << "bench_fullspace: --block expects cells as NXxNYxNZ[,...], got " << c << "\n";
+          return 2;
+        }
+        o.cells.push_back(cells);
+      }
+      o.pcs = split(pcs);
+      for (const std::string& p : split(procs)) o.procs.push_back(std::stoi(p));
+      o.threads = block_threads;
+      o.verify_args = verify_args;
+      o.steps = block_steps;
+      o.runs = block_runs;
+      o.scratch = std::filesystem::temp_directory_path() / fmt::format("bench_fullspace_block_{}", ::getpid());
+      const nlohmann::json rows = bench::run_block_table(o);
+      std::filesystem::remove_all(o.scratch);
+      if (out == "bench_fullspace.json") out = "bench_fullspace_block.json";
+      write_json(out, {{"benchmark", "fullspace_block"},
+                       {"problem", "examples/verify/febio_block refined, Newmark, consistent mass, 1/60 s steps"},
+                       {"steps", block_steps},
+                       {"runs", block_runs},
+                       {"threads_per_process", block_threads},
+                       {"verify_args", verify_args},
+                       {"seconds_per_step", "median over steps 2..N, then over runs [s]"},
+                       {"results", rows}});
+      std::cout << "wrote " << out << "\n";
+      return 0;
+    }
     nlohmann::json results = nlohmann::json::array();
     std::cout << fmt::format("{:<8} {:>5} {:<14} {:<10} {:>8} {:>8} {:>8} {:>8} {:>7} {:>8} {:>7} {:>7} {:>7}\n",
                              "size", "procs", "integrator", "mass", "tets", "nodes", "s/step", "median", "newton",

@@ -22,6 +22,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <map>
 #include <sstream>
 
 namespace sflsh::app {
@@ -34,6 +35,8 @@ struct VerifyOptions {
   std::string export_febio;  ///< the FEBio 4 input to write, or empty
   bool no_vtk = false;
   bool allow_long = false;
+  int threads = 0;  ///< assembly threads per process (0: the cores divided among the processes)
+  fullspace::Preconditioner preconditioner = fullspace::Preconditioner::automatic;
 };
 
 /// Steps, recorded samples and their memory, before the solver is built.
@@ -130,6 +133,8 @@ void run_verify(const VerifyOptions& opt, const Invocation& invocation, int rank
   } else {
     fullspace::FullSpaceOptions options;
     options.quasi_static = !dynamic;
+    options.threads = opt.threads;
+    options.preconditioner = opt.preconditioner;
     switch (spec.integrator) {
       case fullspace::VerifyProblem::Integrator::bdf2:
         options.integrator = model::Integrator::bdf2;
@@ -150,11 +155,12 @@ void run_verify(const VerifyOptions& opt, const Invocation& invocation, int rank
     }
     integrator.initialize(state);
     records.push_back({0.0, state.x});
-    long newton = 0, linear = 0;
+    long newton = 0, linear = 0, builds = 0;
     for (long k = 1; k <= steps; ++k) {
       const model::StepStats st = integrator.step(step);
       newton += st.newton_iterations;
       linear += st.linear_iterations;
+      builds += st.preconditioner_builds;
       steps_json.push_back({{"t", integrator.state().t},
                             {"newton_iterations", st.newton_iterations},
                             {"linear_iterations", st.linear_iterations},
@@ -165,8 +171,10 @@ void run_verify(const VerifyOptions& opt, const Invocation& invocation, int rank
     }
     solver_json = {{"integrator", integrator_name},
                    {"processes", size},
+                   {"threads_per_process", integrator.assembly_threads()},
                    {"newton_iterations", newton},
-                   {"linear_iterations", linear}};
+                   {"linear_iterations", linear},
+                   {"preconditioner_builds", builds}};
   }
   progress.finish();
   if (rank != 0) return;
@@ -223,6 +231,19 @@ void register_verify_commands(CLI::App& app, const Invocation& invocation) {
   cmd->add_option("--export-febio", opt->export_febio,
                   "Also write the problem as a FEBio 4 input (.feb, docs/fullspace.md); without --out, only that");
   cmd->add_flag("--no-vtk", opt->no_vtk, "Skip the .vtu series of the whole mesh");
+  cmd->add_option("--threads", opt->threads,
+                  "Assembly threads per process (0: the cores divided among the processes; PETSc's solves use one)")
+      ->check(CLI::Range(0, 1024));
+  const std::map<std::string, fullspace::Preconditioner> preconditioners = {
+      {"automatic", fullspace::Preconditioner::automatic},
+      {"direct", fullspace::Preconditioner::direct},
+      {"icc", fullspace::Preconditioner::icc},
+      {"gamg", fullspace::Preconditioner::gamg},
+      {"hypre", fullspace::Preconditioner::hypre}};
+  cmd->add_option("--preconditioner", opt->preconditioner,
+                  "CG preconditioner of the Newton systems (docs/fullspace.md): automatic, direct, icc (block-Jacobi "
+                  "ICC(0) in parallel), gamg or hypre; -pc_type overrides it")
+      ->transform(CLI::CheckedTransformer(preconditioners));
   cmd->add_flag(
       "--allow-long", opt->allow_long,
       "Run even when the work estimate (steps, recorded samples, memory) exceeds the limits of docs/fullspace.md");

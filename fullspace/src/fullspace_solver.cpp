@@ -39,7 +39,8 @@ void FullSpaceSolver::Impl::setup() {
   const int local = end - begin;
 
   // Threads within a rank share the machine with the other ranks.
-  const int threads = std::max(1, tbb::this_task_arena::max_concurrency() / size);
+  const int threads =
+      options.threads > 0 ? options.threads : std::max(1, tbb::this_task_arena::max_concurrency() / size);
   arena = std::make_unique<tbb::task_arena>(threads);
 
   constrained = problem.dirichlet.mask(n);
@@ -166,6 +167,41 @@ void FullSpaceSolver::Impl::setup() {
   SFLSH_PETSC(SNESLineSearchSetType(linesearch, SNESLINESEARCHSHELL));
   SFLSH_PETSC(SNESLineSearchShellSetUserFunc(linesearch, &Impl::linesearch_cb, this));
   SFLSH_PETSC(SNESSetFromOptions(snes));
+  {
+    PetscBool lag_given = PETSC_FALSE;
+    SFLSH_PETSC(PetscOptionsHasName(nullptr, prefix.empty() ? nullptr : prefix.c_str(), "-snes_lag_preconditioner",
+                                    &lag_given));
+    PCType type = nullptr;
+    SFLSH_PETSC(PCGetType(pc, &type));
+    const std::string chosen = type ? type : "";
+    const bool direct = chosen == PCCHOLESKY || chosen == PCLU || chosen == PCREDUNDANT;
+    pc_reuse.enabled = options.pc_reuse_growth > 0.0 && !direct && !lag_given;
+  }
+}
+
+void FullSpaceSolver::Impl::choose_pc_rebuild(SNES s) {
+  if (!pc_reuse.enabled) {  // rebuilt with every Jacobian (or as -snes_lag_preconditioner says)
+    if (stats) ++stats->preconditioner_builds;
+    return;
+  }
+  KSP ksp = nullptr;
+  SFLSH_PETSC(SNESGetKSP(s, &ksp));
+  PetscInt last = 0;  // the previous linear solve's CG iterations
+  SFLSH_PETSC(KSPGetIterationNumber(ksp, &last));
+  if (pc_reuse.measure_next) {
+    pc_reuse.reference = static_cast<int>(last);
+    pc_reuse.measure_next = false;
+  }
+  const bool grown =
+      last > options.pc_reuse_growth * pc_reuse.reference && last > static_cast<PetscInt>(pc_reuse.reference) + 2;
+  const bool rebuild = pc_reuse.force || grown;
+  // Lag −2: rebuild once now, then reuse (−1) until told otherwise; SNES applies it after this callback.
+  SFLSH_PETSC(SNESSetLagPreconditioner(s, rebuild ? -2 : -1));
+  if (rebuild) {
+    pc_reuse.force = false;
+    pc_reuse.measure_next = true;
+    if (stats) ++stats->preconditioner_builds;
+  }
 }
 
 void FullSpaceSolver::Impl::destroy() {
@@ -216,6 +252,7 @@ PetscErrorCode FullSpaceSolver::Impl::jacobian_cb(SNES s, Vec x, Mat, Mat, void*
   try {
     self->gather(x, self->x_full);
     if (!self->jacobian(self->x_full)) PetscCall(SNESSetJacobianDomainError(s));
+    self->choose_pc_rebuild(s);
   } catch (const std::exception& e) {
     logger()->debug("Hessian assembly failed: {}", e.what());
     PetscCall(SNESSetJacobianDomainError(s));
@@ -239,7 +276,8 @@ PetscErrorCode FullSpaceSolver::Impl::linesearch_cb(SNESLineSearch ls, void* ctx
   double phi0 = kInfinity;
   try {
     self->gather(Xv, self->x_full);
-    phi0 = self->objective(self->x_full);
+    phi0 = self->accepted_phi_valid && self->x_full == self->accepted_x ? self->accepted_phi
+                                                                        : self->objective(self->x_full);
   } catch (const std::exception&) {
     phi0 = kInfinity;
   }
@@ -268,6 +306,9 @@ PetscErrorCode FullSpaceSolver::Impl::linesearch_cb(SNESLineSearch ls, void* ctx
     PetscReal gnorm = 0.0;
     PetscCall(VecNorm(Gv, NORM_2, &gnorm));
     if (!armijo && !(gnorm < fnorm)) continue;
+    self->accepted_x = self->x_full;  // function_cb gathered Wv into x_full
+    self->accepted_phi = phi;
+    self->accepted_phi_valid = true;
     PetscCall(VecCopy(Wv, Xv));
     PetscCall(VecCopy(Gv, Fv));
     PetscCall(SNESLineSearchSetLambda(ls, lambda));
@@ -364,6 +405,7 @@ bool FullSpaceSolver::Impl::solve_from(const Eigen::VectorXd& start, double dt) 
     SFLSH_PETSC(VecRestoreArray(X, &a));
   }
 
+  accepted_phi_valid = false;  // a new substep or refinement: Φ itself may have changed
   SFLSH_PETSC(PetscPushErrorHandler(PetscReturnErrorHandler, nullptr));
   const PetscErrorCode code = SNESSolve(snes, nullptr, X);
   PetscPopErrorHandler();
@@ -383,6 +425,7 @@ bool FullSpaceSolver::Impl::solve_from(const Eigen::VectorXd& start, double dt) 
     stats->truncated_solves += static_cast<int>(failures);
   }
   if (code != 0 || reason <= 0) {
+    pc_reuse.force = true;  // the retry starts from a fresh preconditioner
     logger()->debug("t = {:.6g}: substep of {:.3g} s failed ({})", t1, dt, stats->converged_reason);
     return false;
   }
@@ -422,6 +465,8 @@ void FullSpaceSolver::initialize(const State& s) {
 }
 
 const State& FullSpaceSolver::state() const { return impl_->state; }
+
+int FullSpaceSolver::assembly_threads() const { return impl_->arena->max_concurrency(); }
 
 std::vector<int> FullSpaceSolver::owned_nodes() const {
   std::vector<int> nodes;

@@ -136,6 +136,7 @@ struct FullSpaceSolver::Impl {
     SFLSH_PETSC(PCGetType(pc, &type));
     saved_pc_type = type ? type : PCGAMG;
     SFLSH_PETSC(PCSetType(pc, PCJACOBI));
+    pc_reuse.force = true;
     if (stats) ++stats->fallback_preconditioner;
   }
   /// Restores the configured preconditioner (and re-reads its -pc_* options).
@@ -148,6 +149,7 @@ struct FullSpaceSolver::Impl {
     SFLSH_PETSC(PCSetType(pc, saved_pc_type.c_str()));
     SFLSH_PETSC(PCSetFromOptions(pc));
     saved_pc_type.clear();
+    pc_reuse.force = true;
   }
   /// Truncated Newton–CG for this attempt (FullSpaceOptions::truncate_on_negative_curvature): linear solves
   /// that stop early (negative curvature) do not end the SNES solve; the line search judges their direction
@@ -186,6 +188,20 @@ struct FullSpaceSolver::Impl {
     std::vector<PetscScalar> diag, offdiag;  ///< same layout as refill.diag / refill.offdiag
   } inertia_cache;
   long substep_serial = 0;  ///< counts solve_substep calls
+  /// Preconditioner reuse (FullSpaceOptions::pc_reuse_growth): decided in jacobian_cb for the coming solve.
+  struct PcReuse {
+    bool enabled = false;       ///< an iterative preconditioner, growth > 0 and no -snes_lag_preconditioner
+    bool force = true;          ///< rebuild at the next Jacobian (first one, after a failure or a switch)
+    bool measure_next = false;  ///< the last solve was the first after a rebuild: its count is the reference
+    int reference = 0;          ///< CG iterations of the first solve after the last rebuild
+  } pc_reuse;
+  /// Rebuilds or keeps the preconditioner for the solve that follows this Jacobian (SNES's lag −2 / −1).
+  void choose_pc_rebuild(SNES s);
+  /// Φ at the point the line search last accepted (valid within one SNESSolve): the next Newton iteration's
+  /// line search starts there, so its Φ(x₀) is this value instead of a second evaluation.
+  bool accepted_phi_valid = false;
+  double accepted_phi = 0.0;
+  Eigen::VectorXd accepted_x;
 
   Impl(const Problem& p, MPI_Comm c, const FullSpaceOptions& o) : problem(p), comm(c), options(o) {}
 

@@ -13,6 +13,7 @@ void accumulate(StepStats& total, const StepStats& step) {
   total.failed_attempts += step.failed_attempts;
   total.projected_retries += step.projected_retries;
   total.fallback_preconditioner += step.fallback_preconditioner;
+  total.preconditioner_builds += step.preconditioner_builds;
   total.truncated_solves += step.truncated_solves;
   total.potential_refinements += step.potential_refinements;
   total.startup_steps += step.startup_steps;

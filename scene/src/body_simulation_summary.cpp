@@ -29,6 +29,7 @@ nlohmann::json BodySimulation::summary() const {
                        {"substeps", settings_.substeps},
                        {"newton_iterations", total_.newton_iterations},
                        {"linear_iterations", total_.linear_iterations},
+                       {"preconditioner_builds", total_.preconditioner_builds},
                        {"failed_attempts", total_.failed_attempts},
                        {"projected_retries", total_.projected_retries},
                        {"truncated_solves", total_.truncated_solves}};

@@ -19,11 +19,12 @@ namespace {
 
 struct PcRun {
   std::vector<Eigen::VectorXd> x;  ///< positions after each step
-  int newton = 0, linear = 0, fallbacks = 0;
+  int newton = 0, linear = 0, fallbacks = 0, builds = 0;
 };
 
 /// `steps` Newmark steps of 1/60 s of the block with `cells`, from rest, with the given preconditioner.
-PcRun run_pc_block(std::array<int, 3> cells, Preconditioner pc, int steps, double snes_rtol, double snes_atol) {
+PcRun run_pc_block(std::array<int, 3> cells, Preconditioner pc, int steps, double snes_rtol, double snes_atol,
+                   double reuse_growth = FullSpaceOptions{}.pc_reuse_growth) {
   sflsh::testing::BlockSettings settings;
   settings.cells = cells;
   settings.step = 1.0 / 60.0;
@@ -37,6 +38,7 @@ PcRun run_pc_block(std::array<int, 3> cells, Preconditioner pc, int steps, doubl
   options.preconditioner = pc;
   options.default_snes_rtol = snes_rtol;
   options.default_snes_atol = snes_atol;
+  options.pc_reuse_growth = reuse_growth;
   FullSpaceSolver solver(problem, MPI_COMM_WORLD, options);
   State initial = initial_state(problem, 0.0);
   initial.a = model::initial_acceleration(problem, initial);
@@ -47,6 +49,7 @@ PcRun run_pc_block(std::array<int, 3> cells, Preconditioner pc, int steps, doubl
     out.newton += stats.newton_iterations;
     out.linear += stats.linear_iterations;
     out.fallbacks += stats.fallback_preconditioner;
+    out.builds += stats.preconditioner_builds;
     out.x.push_back(solver.state().x - problem.rest.reshaped<Eigen::RowMajor>());
   }
   return out;
@@ -64,16 +67,34 @@ TEST(Preconditioners, EveryChoiceGivesTheSameTrajectory) {
   const PcRun direct = run_pc_block(cells, Preconditioner::direct, kSteps, 1e-12, 1e-14);
   double scale = 0.0;
   for (const Eigen::VectorXd& u : direct.x) scale = std::max(scale, u.lpNorm<Eigen::Infinity>());
-  ASSERT_GT(scale, 1e-4);  // the bone face moves by ~mm in these steps: a trajectory worth comparing
-  for (Preconditioner pc : {Preconditioner::icc, Preconditioner::gamg, Preconditioner::hypre}) {
-    const PcRun other = run_pc_block(cells, pc, kSteps, 1e-12, 1e-14);
+  ASSERT_GT(scale, 1e-4);                   // the bone face moves by ~mm in these steps: a trajectory worth comparing
+  EXPECT_EQ(direct.builds, direct.newton);  // a factorization is never reused
+  // The iterative choices with their default reuse (FullSpaceOptions::pc_reuse_growth), and GAMG rebuilt at
+  // every Newton step: reuse changes the cost, not the answer.
+  struct Choice {
+    Preconditioner pc;
+    double reuse_growth;
+  };
+  for (const Choice choice : {Choice{Preconditioner::icc, 1.5}, Choice{Preconditioner::gamg, 1.5},
+                              Choice{Preconditioner::hypre, 1.5}, Choice{Preconditioner::gamg, 0.0}}) {
+    const Preconditioner pc = choice.pc;
+    const PcRun other = run_pc_block(cells, pc, kSteps, 1e-12, 1e-14, choice.reuse_growth);
     double worst = 0.0;
     for (int k = 0; k < kSteps; ++k)
       worst = std::max(
           worst,
           (other.x[static_cast<std::size_t>(k)] - direct.x[static_cast<std::size_t>(k)]).lpNorm<Eigen::Infinity>());
-    std::printf("[ measured ] preconditioner %d: %d Newton, %d CG iterations, %d fallbacks, max |Δx| %.2e of %.2e\n",
-                static_cast<int>(pc), other.newton, other.linear, other.fallbacks, worst, scale);
+    std::printf(
+        "[ measured ] preconditioner %d (reuse growth %.1f): %d Newton, %d CG iterations, %d builds, %d fallbacks, "
+        "max |Δx| %.2e of %.2e\n",
+        static_cast<int>(pc), choice.reuse_growth, other.newton, other.linear, other.builds, other.fallbacks, worst,
+        scale);
+    // Reuse took effect where enabled (fewer builds than Newton steps), and not where it is off.
+    if (choice.reuse_growth > 0.0) {
+      EXPECT_LT(other.builds, other.newton);
+    } else {
+      EXPECT_EQ(other.builds, other.newton);
+    }
     // The choice took effect: the direct solve is one CG iteration per Newton step (measured 16 in 16), an
     // iterative one several (64–96 measured).
     EXPECT_GT(other.linear, 2 * direct.newton);
@@ -94,7 +115,7 @@ TEST(Preconditioners, MultigridIterationsPerNewtonStepStayBoundedUnderRefinement
   for (Preconditioner pc : {Preconditioner::gamg, Preconditioner::hypre}) {
     std::vector<double> per_newton;
     for (const std::array<int, 3> cells : {std::array<int, 3>{5, 5, 2}, {10, 10, 4}, {20, 20, 8}}) {
-      const PcRun run = run_pc_block(cells, pc, 3, 1e-8, 1e-10);
+      const PcRun run = run_pc_block(cells, pc, 3, 1e-8, 1e-10, 0.0);  // a fresh multigrid at every Newton step
       ASSERT_GT(run.newton, 0);
       per_newton.push_back(static_cast<double>(run.linear) / run.newton);
       std::printf("[ measured ] preconditioner %d, %d×%d×%d cells: %.2f CG iterations per Newton step (%d fallbacks)\n",

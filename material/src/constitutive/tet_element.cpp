@@ -26,13 +26,29 @@ Vector12d gradient_from(const TetRest& rest, const Eigen::Matrix3d& P) {
   return g;
 }
 
-Matrix12d hessian_from(const TetRest& rest, const Matrix9d& dPdF, HessianProjection projection) {
-  const Matrix9x12d B = tet_dF_dq(rest);
-  if (projection == HessianProjection::kStressDerivative) {
-    const Matrix9d H = project_psd(dPdF);
-    return rest.volume * (B.transpose() * H * B);
+/// V Bᵀ H B without forming B (B = tet_dF_dq, H = ∂²Ψ/∂F² in vec order i + 3j): B's only entries are
+/// ∂F_ij/∂(x_a)_i = w_a(j), so (H B) column 3b + k is Σ_l w_b(l) H(:, k + 3l) and row 3a + i of Bᵀ(HB) is
+/// Σ_j w_a(j) (HB)(i + 3j, :). About 750 multiplications against the dense product's 2,300 plus its packing:
+/// the element Hessian is the full-space assembly's largest cost (docs/decisions.md "Element Hessian").
+Matrix12d pull_back(const TetRest& rest, const Matrix9d& H) {
+  Eigen::Matrix<double, 4, 3> w;
+  w.bottomRows<3>() = rest.dm_inv;
+  w.row(0) = -rest.dm_inv.colwise().sum();
+  Matrix9x12d HB;
+  for (int b = 0; b < 4; ++b)
+    for (int k = 0; k < 3; ++k)
+      HB.col(3 * b + k) = w(b, 0) * H.col(k) + w(b, 1) * H.col(k + 3) + w(b, 2) * H.col(k + 6);
+  Matrix12d K;
+  for (int a = 0; a < 4; ++a) {
+    K.middleRows<3>(3 * a) = (rest.volume * w(a, 0)) * HB.topRows<3>() + (rest.volume * w(a, 1)) * HB.middleRows<3>(3) +
+                             (rest.volume * w(a, 2)) * HB.bottomRows<3>();
   }
-  Matrix12d K = rest.volume * (B.transpose() * dPdF * B);  // K = V Bᵀ (dP/dF) B
+  return K;
+}
+
+Matrix12d hessian_from(const TetRest& rest, const Matrix9d& dPdF, HessianProjection projection) {
+  if (projection == HessianProjection::kStressDerivative) return pull_back(rest, project_psd(dPdF));
+  Matrix12d K = pull_back(rest, dPdF);  // K = V Bᵀ (dP/dF) B
   if (projection == HessianProjection::kElement) K = project_psd(K);
   return K;
 }

@@ -13,6 +13,7 @@ struct StepStats {
   int failed_attempts = 0;          ///< attempts rejected (divergence, NaN/Inf, failed line search, out of range)
   int projected_retries = 0;        ///< exact-Hessian attempts repeated with the PSD projection
   int fallback_preconditioner = 0;  ///< attempts repeated with CG + Jacobi after a linear-solver failure
+  int preconditioner_builds = 0;    ///< preconditioners built (full space; < newton_iterations when reused)
   int truncated_solves = 0;         ///< Newton iterations whose CG stopped at negative curvature (full space)
   int potential_refinements = 0;    ///< substeps solved again because a node potential refused the result
   int startup_steps = 0;            ///< substeps a multistep integrator (BDF2) took as backward Euler
