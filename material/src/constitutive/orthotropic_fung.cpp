@@ -82,20 +82,21 @@ double psi_from(const Strain& s, const Fung& f, const OrthotropicFung& m) {
   return m.inv_c == 0.0 ? s.psi0 : 0.5 * m.c * f.phi;  // Ψ = (c/2)(exp(2Ψ₀/c) − 1) (docs/physics.md §1.2)
 }
 
-/// ∂²Ψ₀/∂F² column by column: column k is dP₀ for dF = e_i e_jᵀ, k = i + 3j.
+/// ∂²Ψ₀/∂F² column by column: column k is dP₀ for dF = e_i e_jᵀ, k = i + 3j. With G = P_Y² and f_i = Fᵀe_i (row i
+/// of F), dE = ½(f_i e_jᵀ + e_j f_iᵀ), so dS₀ = 2μ₀ G dE G + λ₀ tr(G dE) G (P_Y symmetric, trace cyclic) and
+///   F dS₀ = μ₀ (F a_i g_jᵀ + F g_j a_iᵀ) + λ₀ a_i(j) F G,   a_i = G f_i,  g_j = G e_j,
+/// two outer products per column instead of five 3×3 products (docs/physics.md §1.2).
 Matrix9d stvk_hessian(const Eigen::Matrix3d& F, const Strain& s, const OrthotropicFung& m) {
+  const Eigen::Matrix3d G = m.scaling * m.scaling;
+  const Eigen::Matrix3d FG = F * G;             // column j: F g_j
+  const Eigen::Matrix3d A = G * F.transpose();  // column i: a_i = G f_i
+  const Eigen::Matrix3d FA = F * A;             // column i: F a_i
   Matrix9d H;
   for (int j = 0; j < 3; ++j) {
     for (int i = 0; i < 3; ++i) {
-      // Fᵀ dF has one non-zero column, j, equal to row i of F.
-      Eigen::Matrix3d FtdF = Eigen::Matrix3d::Zero();
-      FtdF.col(j) = F.row(i).transpose();
-      const Eigen::Matrix3d dE = 0.5 * (FtdF + FtdF.transpose());  // dE = sym(FᵀdF)
-      const Eigen::Matrix3d dE_hat = m.scaling * dE * m.scaling;   // dÊ = P_Y dE P_Y
-      const Eigen::Matrix3d dS0 =                                  // ℂ₀:dE (docs/physics.md §1.2)
-          m.scaling * (2.0 * m.mu0 * dE_hat + m.lambda0 * dE_hat.trace() * Eigen::Matrix3d::Identity()) * m.scaling;
-      Eigen::Matrix3d dP = F * dS0;  // F dS₀
-      dP.row(i) += s.S0.row(j);      // + dF S₀ = e_i (row j of S₀)
+      Eigen::Matrix3d dP = m.mu0 * (FA.col(i) * G.col(j).transpose() + FG.col(j) * A.col(i).transpose()) +
+                           (m.lambda0 * A(j, i)) * FG;  // F dS₀; A(j, i) = a_i(j) = tr(G dE)
+      dP.row(i) += s.S0.row(j);                         // + dF S₀ = e_i (row j of S₀)
       H.col(i + 3 * j) = Eigen::Map<const Vector9d>(dP.data());
     }
   }
