@@ -172,6 +172,7 @@ void run_verify(const VerifyOptions& opt, const Invocation& invocation, int rank
     solver_json = {{"integrator", integrator_name},
                    {"processes", size},
                    {"threads_per_process", integrator.assembly_threads()},
+                   {"preconditioner", integrator.preconditioner_type()},
                    {"newton_iterations", newton},
                    {"linear_iterations", linear},
                    {"preconditioner_builds", builds}};

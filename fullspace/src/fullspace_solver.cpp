@@ -468,6 +468,17 @@ const State& FullSpaceSolver::state() const { return impl_->state; }
 
 int FullSpaceSolver::assembly_threads() const { return impl_->arena->max_concurrency(); }
 
+std::string FullSpaceSolver::preconditioner_type() const {
+  if (!impl_->saved_pc_type.empty()) return impl_->saved_pc_type;  // during a CG + Jacobi fallback
+  KSP ksp = nullptr;
+  PC pc = nullptr;
+  SFLSH_PETSC(SNESGetKSP(impl_->snes, &ksp));
+  SFLSH_PETSC(KSPGetPC(ksp, &pc));
+  PCType type = nullptr;
+  SFLSH_PETSC(PCGetType(pc, &type));
+  return type ? type : "";
+}
+
 std::vector<int> FullSpaceSolver::owned_nodes() const {
   std::vector<int> nodes;
   for (int k = impl_->begin; k < impl_->end; ++k) nodes.push_back(impl_->node_of(k));

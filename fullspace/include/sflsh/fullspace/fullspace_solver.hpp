@@ -30,13 +30,12 @@
 namespace sflsh::fullspace {
 
 /// The preconditioner of the Newton systems' CG (docs/fullspace.md "Preconditioner"); -pc_type overrides it.
-/// automatic: a direct Cholesky up to 6000 dofs (redundant in parallel), above it ICC(0) (block-Jacobi ICC(0)
-/// in parallel) in dynamic steps and GAMG without the mass term. The others force one choice at every size:
-/// direct, icc (ICC(0) / block-Jacobi ICC(0)), gamg (smoothed aggregation with the rigid-body near-null space
-/// of the rest coordinates) or hypre (BoomerAMG with hypre's defaults). Measured on the driven block (1,800 –
-/// 115,200 tets, Newmark, 1 process): AMG keeps the iterations per Newton step nearly flat (8.8 → 10.8 for
-/// GAMG, 4 → 5 for BoomerAMG) while ICC's double (14 → 27), but its setup costs more than the extra ICC
-/// iterations, so automatic keeps ICC (docs/decisions.md).
+/// automatic: a direct Cholesky up to 6000 dofs (redundant in parallel); above it ICC(0) for dynamic steps on one
+/// process, GAMG in parallel and without the mass term. The others force one choice at every size: direct, icc
+/// (ICC(0) / block-Jacobi ICC(0)), gamg (smoothed aggregation with the rigid-body near-null space of the rest
+/// coordinates) or hypre (BoomerAMG with hypre's defaults). Measured on the driven block (1,800 – 921,600 tets,
+/// Newmark; docs/results/performance.md): GAMG's CG iterations per Newton step stay at 6 – 12 under refinement and
+/// across 1 – 8 processes, block-Jacobi ICC's grow with both (8 → 52 under refinement, 14 → 50 over 8 ranks).
 enum class Preconditioner { automatic, direct, icc, gamg, hypre };
 
 struct FullSpaceOptions {
@@ -92,6 +91,8 @@ class FullSpaceSolver final : public model::BodySolver {
   StepStats step(double h) override;
   /// The assembly threads of this process (FullSpaceOptions::threads resolved).
   int assembly_threads() const;
+  /// PETSc's name of the configured preconditioner (after -pc_type), e.g. "icc", "gamg", "cholesky".
+  std::string preconditioner_type() const;
   /// Local ownership (for reporting): the mesh nodes this rank owns, ascending.
   std::vector<int> owned_nodes() const;
 
