@@ -43,12 +43,13 @@ struct FullSpaceOptions {
   /// Assembly threads per process (TBB); 0: the machine's cores divided among the processes. PETSc's linear
   /// algebra runs on one thread per process either way, so strong scaling is measured with threads = 1.
   int threads = 0;
-  /// Preconditioner reuse for the iterative choices (ICC, GAMG, BoomerAMG; never the direct solve): the
-  /// preconditioner built for one Newton system is kept for the following ones, across Newton iterations and
-  /// steps, until a CG solve needs more than `pc_reuse_growth` times the iterations of the first solve after the
-  /// rebuild (and 2 more), a solve fails, or the preconditioner is switched. The systems change little from one
-  /// Newton step to the next (M/h² dominates), so the setup is paid rarely; the answers are unchanged (each CG
-  /// solve still reaches its tolerance). 0: rebuild at every Newton step. -snes_lag_preconditioner overrides it.
+  /// Preconditioner reuse for the multigrid choices (GAMG, BoomerAMG; never ICC or the direct solve): the
+  /// hierarchy built for one Newton system is kept for the following ones, across Newton iterations and steps,
+  /// until a CG solve needs more than `pc_reuse_growth` times the iterations of the first solve after the build
+  /// (and 2 more), a solve stops without converging (negative curvature, a failure), or the preconditioner is
+  /// switched. The systems change little from one Newton step to the next (M/h² dominates), so the setup is paid
+  /// rarely; the answers are unchanged (each CG solve still reaches its tolerance). 0: rebuild at every Newton
+  /// step. -snes_lag_preconditioner overrides it.
   double pc_reuse_growth = 1.5;
   model::Integrator integrator = model::Integrator::backward_euler;  ///< time_integrator.hpp
   bool quasi_static = false;         ///< drop inertia (equilibrium at each time; gravity still acts through mass)
