@@ -40,21 +40,6 @@ std::vector<std::string> split(const std::string& csv) {
   return out;
 }
 
-/// Runs a shell command in a child and returns its exit status and the peak RSS of its largest descendant.
-std::pair<int, double> run_measured(const std::string& command) {
-  std::cout.flush();
-  const pid_t child = ::fork();
-  if (child == 0) {
-    ::execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
-    ::_exit(127);
-  }
-  int status = 0;
-  rusage usage{};
-  ::wait4(child, &status, 0, &usage);
-  const int code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return {code, static_cast<double>(usage.ru_maxrss) / 1024.0};
-}
-
 /// Least-squares slope of log(y) against log(x).
 double loglog_slope(const std::vector<double>& x, const std::vector<double>& y) {
   const auto n = static_cast<double>(x.size());
@@ -76,10 +61,35 @@ double median_seconds_per_step(const nlohmann::json& summary) {
   const double substeps = summary["solver"]["substeps"].get<double>();
   for (const auto& frame : summary["frames"])
     if (frame["frame"].get<int>() > 0) per_step.push_back(frame["seconds"].get<double>() / substeps);
-  if (per_step.empty()) return 0.0;
-  std::sort(per_step.begin(), per_step.end());
-  const std::size_t n = per_step.size();
-  return n % 2 == 1 ? per_step[n / 2] : 0.5 * (per_step[n / 2 - 1] + per_step[n / 2]);
+  return bench::median_of(per_step);
+}
+
+/// --block: the driven block against FEBio (fullspace_block.hpp); returns the exit code.
+int run_block_mode(bench::BlockOptions o, const std::string& block, const std::string& procs, std::string out) {
+  for (const std::string& c : split(block)) {
+    std::array<int, 3> cells{};
+    if (std::sscanf(c.c_str(), "%dx%dx%d", &cells[0], &cells[1], &cells[2]) != 3 || cells[0] < 1 || cells[1] < 1 ||
+        cells[2] < 1) {
+      std::cerr << "bench_fullspace: --block expects cells as NXxNYxNZ[,...], got " << c << "\n";
+      return 2;
+    }
+    o.cells.push_back(cells);
+  }
+  for (const std::string& p : split(procs)) o.procs.push_back(std::stoi(p));
+  o.scratch = std::filesystem::temp_directory_path() / fmt::format("bench_fullspace_block_{}", ::getpid());
+  const nlohmann::json rows = bench::run_block_table(o);
+  std::filesystem::remove_all(o.scratch);
+  if (out == "bench_fullspace.json") out = "bench_fullspace_block.json";
+  write_json(out, {{"benchmark", "fullspace_block"},
+                   {"problem", "examples/verify/febio_block refined, Newmark, consistent mass, 1/60 s steps"},
+                   {"steps", o.steps},
+                   {"runs", o.runs},
+                   {"threads_per_process", o.threads},
+                   {"verify_args", o.verify_args},
+                   {"seconds_per_step", "median over steps 2..N, then over runs [s]"},
+                   {"results", rows}});
+  std::cout << "wrote " << out << "\n";
+  return 0;
 }
 
 }  // namespace
@@ -133,35 +143,12 @@ int main(int argc, char** argv) {
     if (!block.empty()) {
       bench::BlockOptions o;
       o.sflsh = sflsh_path;
-      for (const std::string& c : split(block)) {
-        std::array<int, 3> cells{};
-        if (std::sscanf(c.c_str(), "%dx%dx%d", &cells[0], &cells[1], &cells[2]) != 3 || cells[0] < 1 || cells[1] < 1 ||
-            cells[2] < 1) {
-          std::cerr << "bench_fullspace: --block expects cells as NXxNYxNZ[,...], got " << c << "\n";
-          return 2;
-        }
-        o.cells.push_back(cells);
-      }
       o.pcs = split(pcs);
-      for (const std::string& p : split(procs)) o.procs.push_back(std::stoi(p));
       o.threads = block_threads;
-      o.verify_args = verify_args;
       o.steps = block_steps;
       o.runs = block_runs;
-      o.scratch = std::filesystem::temp_directory_path() / fmt::format("bench_fullspace_block_{}", ::getpid());
-      const nlohmann::json rows = bench::run_block_table(o);
-      std::filesystem::remove_all(o.scratch);
-      if (out == "bench_fullspace.json") out = "bench_fullspace_block.json";
-      write_json(out, {{"benchmark", "fullspace_block"},
-                       {"problem", "examples/verify/febio_block refined, Newmark, consistent mass, 1/60 s steps"},
-                       {"steps", block_steps},
-                       {"runs", block_runs},
-                       {"threads_per_process", block_threads},
-                       {"verify_args", verify_args},
-                       {"seconds_per_step", "median over steps 2..N, then over runs [s]"},
-                       {"results", rows}});
-      std::cout << "wrote " << out << "\n";
-      return 0;
+      o.verify_args = verify_args;
+      return run_block_mode(o, block, procs, out);
     }
     nlohmann::json results = nlohmann::json::array();
     std::cout << fmt::format("{:<8} {:>5} {:<14} {:<10} {:>8} {:>8} {:>8} {:>8} {:>7} {:>8} {:>7} {:>7} {:>7}\n",
@@ -192,7 +179,7 @@ int main(int argc, char** argv) {
             np, command);
       }
       // Warm the layer cache outside the measurement (meshing is benchmarked by bench_meshing).
-      const auto [code, peak_mb] = run_measured(command);
+      const auto [code, peak_mb] = bench::run_measured(command);
       if (code != 0) {
         std::cerr << "bench_fullspace: " << size << " with " << np << " processes, " << integrator << ", " << mass
                   << " mass failed (exit " << code << ")\n";

@@ -44,7 +44,7 @@ inline double febio_seconds_per_step(long tets) {
 }
 
 /// Runs a shell command and returns its exit status and the peak RSS of its largest descendant [MB].
-inline std::pair<int, double> run_block_command(const std::string& command) {
+inline std::pair<int, double> run_measured(const std::string& command) {
   std::cout.flush();
   const pid_t child = ::fork();
   if (child == 0) {
@@ -97,7 +97,7 @@ inline nlohmann::json run_block_row(const BlockOptions& o, const std::filesystem
           "{}",
           np, command);
     }
-    const auto [code, peak_mb] = run_block_command(command);
+    const auto [code, peak_mb] = run_measured(command);
     if (code != 0) return {{"error", fmt::format("exit code {}", code)}};
     summary = read_json(out / "summary.json");
     std::vector<double> steps;
