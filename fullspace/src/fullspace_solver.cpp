@@ -109,39 +109,8 @@ void FullSpaceSolver::Impl::setup() {
   SFLSH_PETSC(MatSetOption(J, MAT_SYMMETRIC, PETSC_TRUE));
   SFLSH_PETSC(MatSetOption(J, MAT_SYMMETRY_ETERNAL, PETSC_TRUE));
 
-  // Rigid-body near-null space from the rest coordinates: what smoothed aggregation needs for elasticity.
-  {
-    Vec coords = nullptr;
-    SFLSH_PETSC(VecDuplicate(X, &coords));
-    PetscScalar* c = nullptr;
-    SFLSH_PETSC(VecGetArray(coords, &c));
-    for (int i = begin; i < end; ++i) {
-      for (int k = 0; k < 3; ++k) c[3 * (i - begin) + k] = problem.rest(node_of(i), k);
-    }
-    SFLSH_PETSC(VecRestoreArray(coords, &c));
-    MatNullSpace near_null = nullptr;
-    SFLSH_PETSC(MatNullSpaceCreateRigidBody(coords, &near_null));
-    SFLSH_PETSC(MatSetNearNullSpace(J, near_null));
-    SFLSH_PETSC(MatNullSpaceDestroy(&near_null));
-    SFLSH_PETSC(VecDestroy(&coords));
-  }
-
-  {
-    double sum = 0.0, count = 0.0;
-    for (int e : my_tets) {
-      const auto se = static_cast<std::size_t>(e);
-      const material::Matrix12d K =
-          material::tet_elastic_dq2(problem.tet_rest[se], problem_rest_nodes(problem, e), problem.tet_material[se],
-                                    material::HessianProjection::kNone);
-      if (K.allFinite()) {
-        sum += K.diagonal().sum();
-        count += 12.0;
-      }
-    }
-    double mine[2] = {sum, count}, global[2] = {0.0, 0.0};
-    MPI_Allreduce(mine, global, 2, MPI_DOUBLE, MPI_SUM, comm);
-    if (global[1] > 0.0 && global[0] > 0.0) dirichlet_diagonal = global[0] / global[1];
-  }
+  set_near_null_space();
+  set_dirichlet_diagonal();
   // The project's defaults are set on the objects before SNESSetFromOptions, so any -snes_*, -ksp_*, -pc_*
   // option (command line, PETSC_OPTIONS, -options_file) overrides them, and nothing leaks into the global
   // options database that a later solver in the same process would mistake for a user choice.
@@ -167,10 +136,53 @@ void FullSpaceSolver::Impl::setup() {
   SFLSH_PETSC(SNESLineSearchSetType(linesearch, SNESLINESEARCHSHELL));
   SFLSH_PETSC(SNESLineSearchShellSetUserFunc(linesearch, &Impl::linesearch_cb, this));
   SFLSH_PETSC(SNESSetFromOptions(snes));
+  configure_pc_reuse(pc);
+}
+
+void FullSpaceSolver::Impl::set_near_null_space() {
+  // Rigid-body near-null space from the rest coordinates: what smoothed aggregation needs for elasticity.
+  {
+    Vec coords = nullptr;
+    SFLSH_PETSC(VecDuplicate(X, &coords));
+    PetscScalar* c = nullptr;
+    SFLSH_PETSC(VecGetArray(coords, &c));
+    for (int i = begin; i < end; ++i) {
+      for (int k = 0; k < 3; ++k) c[3 * (i - begin) + k] = problem.rest(node_of(i), k);
+    }
+    SFLSH_PETSC(VecRestoreArray(coords, &c));
+    MatNullSpace near_null = nullptr;
+    SFLSH_PETSC(MatNullSpaceCreateRigidBody(coords, &near_null));
+    SFLSH_PETSC(MatSetNearNullSpace(J, near_null));
+    SFLSH_PETSC(MatNullSpaceDestroy(&near_null));
+    SFLSH_PETSC(VecDestroy(&coords));
+  }
+}
+
+/// The diagonal of constrained rows: the mean elastic diagonal at rest (dirichlet_diagonal).
+void FullSpaceSolver::Impl::set_dirichlet_diagonal() {
+  {
+    double sum = 0.0, count = 0.0;
+    for (int e : my_tets) {
+      const auto se = static_cast<std::size_t>(e);
+      const material::Matrix12d K =
+          material::tet_elastic_dq2(problem.tet_rest[se], problem_rest_nodes(problem, e), problem.tet_material[se],
+                                    material::HessianProjection::kNone);
+      if (K.allFinite()) {
+        sum += K.diagonal().sum();
+        count += 12.0;
+      }
+    }
+    double mine[2] = {sum, count}, global[2] = {0.0, 0.0};
+    MPI_Allreduce(mine, global, 2, MPI_DOUBLE, MPI_SUM, comm);
+    if (global[1] > 0.0 && global[0] > 0.0) dirichlet_diagonal = global[0] / global[1];
+  }
+}
+
+void FullSpaceSolver::Impl::configure_pc_reuse(PC pc) {
   {
     PetscBool lag_given = PETSC_FALSE;
-    SFLSH_PETSC(PetscOptionsHasName(nullptr, prefix.empty() ? nullptr : prefix.c_str(), "-snes_lag_preconditioner",
-                                    &lag_given));
+    SFLSH_PETSC(PetscOptionsHasName(nullptr, options.options_prefix.empty() ? nullptr : options.options_prefix.c_str(),
+                                    "-snes_lag_preconditioner", &lag_given));
     PCType type = nullptr;
     SFLSH_PETSC(PCGetType(pc, &type));
     const std::string chosen = type ? type : "";
