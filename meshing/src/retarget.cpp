@@ -2,11 +2,13 @@
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/scoped_seconds.hpp>
 #include <sflsh/meshing/retarget.hpp>
+#include <sflsh/meshing/untangle.hpp>
 
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <limits>
 #include <map>
 
@@ -17,61 +19,6 @@ std::vector<char> boundary_flags(const LayerMesh& mesh) {
   std::vector<char> fixed(mesh.anchor.size(), 0);
   for (std::size_t i = 0; i < mesh.anchor.size(); ++i) fixed[i] = mesh.anchor[i].valid() ? 1 : 0;
   return fixed;
-}
-
-double signed_volume(const RowMatrixX3d& x, const RowMatrixX4i& tets, Eigen::Index e) {
-  Eigen::Matrix3d dm;
-  for (int k = 0; k < 3; ++k) dm.col(k) = (x.row(tets(e, k + 1)) - x.row(tets(e, 0))).transpose();
-  return dm.determinant() / 6.0;
-}
-
-// Local untangling: interior nodes of inverted tets are moved towards the centroid of their
-// neighbours (in steps of 1, ½, ¼) whenever that raises the smallest signed volume around them.
-// Boundary nodes never move. Returns the number of nodes moved.
-int untangle(RowMatrixX3d& x, const RowMatrixX4i& tets, const std::vector<SurfaceAnchor>& anchors,
-             const std::vector<std::vector<int>>& tets_of, int sweeps) {
-  int moved = 0;
-  for (int sweep = 0; sweep < sweeps; ++sweep) {
-    std::vector<int> candidates;
-    for (Eigen::Index e = 0; e < tets.rows(); ++e)
-      if (signed_volume(x, tets, e) <= 0.0)
-        for (int c = 0; c < 4; ++c)
-          if (!anchors[static_cast<std::size_t>(tets(e, c))].valid()) candidates.push_back(tets(e, c));
-    if (candidates.empty()) break;
-    std::sort(candidates.begin(), candidates.end());
-    candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
-    for (int node : candidates) {
-      const auto& around = tets_of[static_cast<std::size_t>(node)];
-      const auto worst = [&] {
-        double v = std::numeric_limits<double>::infinity();
-        for (int e : around) v = std::min(v, signed_volume(x, tets, e));
-        return v;
-      };
-      Eigen::RowVector3d centroid = Eigen::RowVector3d::Zero();
-      int count = 0;
-      for (int e : around)
-        for (int c = 0; c < 4; ++c)
-          if (tets(e, c) != node) {
-            centroid += x.row(tets(e, c));
-            ++count;
-          }
-      centroid /= count;
-      const Eigen::RowVector3d start = x.row(node);
-      double best = worst();
-      Eigen::RowVector3d best_position = start;
-      for (double step : {1.0, 0.5, 0.25}) {
-        x.row(node) = start + step * (centroid - start);
-        const double value = worst();
-        if (value > best) {
-          best = value;
-          best_position = x.row(node);
-        }
-      }
-      x.row(node) = best_position;
-      if (best_position != start) ++moved;
-    }
-  }
-  return moved;
 }
 
 }  // namespace
@@ -194,7 +141,7 @@ RetargetedLayer Retargeter::retarget(const ShapedLayer& shaped, const Eigen::Vec
   bool inverted = false;  // a signed-volume pass: the full quality report below is needed once, not twice
   for (Eigen::Index e = 0; e < mesh_.tets.rows() && !inverted; ++e)
     inverted = signed_volume(result.nodes, mesh_.tets, e) <= 0.0;
-  if (inverted) result.untangled_nodes = untangle(result.nodes, mesh_.tets, mesh_.anchor, tets_of_, 20);
+  if (inverted) result.untangled_nodes = untangle(result.nodes, mesh_.tets, boundary_flags(mesh_), tets_of_);
   if (check == RetargetCheck::light && tets_valid(result.nodes, mesh_.tets)) {
     result.quality.tets = static_cast<long>(mesh_.tets.rows());
     result.quality.nodes = static_cast<long>(n);

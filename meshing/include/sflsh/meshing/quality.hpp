@@ -2,6 +2,7 @@
 // Element quality of a tet mesh: the report every mesh carries (issue: quality report).
 #include <sflsh/meshing/types.hpp>
 
+#include <Eigen/Dense>
 #include <nlohmann/json_fwd.hpp>
 
 #include <vector>
@@ -34,6 +35,13 @@ struct TetQuality {
   Eigen::VectorXd radius_edge;
   std::vector<char> degenerate;  ///< per tet, by QualityReport's degenerate criterion
 };
+
+/// Signed volume of tet e [m³]: det[x1 − x0, x2 − x0, x3 − x0] / 6, positive for the meshers' orientation.
+inline double signed_volume(const RowMatrixX3d& nodes, const RowMatrixX4i& tets, Eigen::Index e) {
+  Eigen::Matrix3d edges;
+  for (int k = 0; k < 3; ++k) edges.col(k) = (nodes.row(tets(e, k + 1)) - nodes.row(tets(e, 0))).transpose();
+  return edges.determinant() / 6.0;
+}
 
 TetQuality tet_quality(const RowMatrixX3d& nodes, const RowMatrixX4i& tets);
 QualityReport quality_report(const RowMatrixX3d& nodes, const RowMatrixX4i& tets);
