@@ -83,7 +83,9 @@ TEST(Untangle, ScrambledInteriorNodesComeBackValidWithTheBoundaryUntouched) {
     // The block's volume is the boundary's: valid tets tile it exactly (round-off of 384 determinants).
     EXPECT_NEAR(report.total_volume, 64e-6, 1e-15);
     for (Eigen::Index i = 0; i < block.nodes.rows(); ++i) {
-      if (block.fixed[static_cast<std::size_t>(i)]) EXPECT_EQ(block.nodes.row(i), boundary.row(i)) << "node " << i;
+      if (block.fixed[static_cast<std::size_t>(i)]) {
+        EXPECT_EQ(block.nodes.row(i), boundary.row(i)) << "node " << i;
+      }
     }
   }
 }
