@@ -27,12 +27,13 @@ using ::testing::StartsWith;
 
 namespace {
 
-/// A tmpfs of `size` mounted on a fresh folder, unmounted at the end; empty when mounting is not permitted.
+/// A tmpfs of `size` mounted on a fresh folder (with mount `flags`, e.g. MS_RDONLY), unmounted at the end; not
+/// mounted when mounting is not permitted.
 class SmallFileSystem {
  public:
-  SmallFileSystem(const std::filesystem::path& at, const std::string& size) : at_(at) {
+  SmallFileSystem(const std::filesystem::path& at, const std::string& size, unsigned long flags = 0) : at_(at) {
     std::filesystem::create_directories(at_);
-    mounted_ = ::mount("tmpfs", at_.c_str(), "tmpfs", 0, ("size=" + size).c_str()) == 0;
+    mounted_ = ::mount("tmpfs", at_.c_str(), "tmpfs", flags, ("size=" + size).c_str()) == 0;
   }
   ~SmallFileSystem() {
     if (mounted_) ::umount2(at_.c_str(), MNT_DETACH);
@@ -88,6 +89,13 @@ std::string reduced_run(const std::filesystem::path& out, int frames = 30) {
       "-q simulate --solver reduced --mesh coarse --subject OPEN_TRAIN_1 --motion one_leg_jump "
       "--frames {} --out {}",
       frames, out.string());
+}
+
+/// Regular files below `folder` (folders not counted).
+std::size_t count_files(const std::filesystem::path& folder) {
+  std::size_t files = 0;
+  for (const auto& entry : std::filesystem::recursive_directory_iterator(folder)) files += entry.is_regular_file();
+  return files;
 }
 
 }  // namespace
@@ -150,6 +158,53 @@ TEST(CliWriteErrors, MeshAndItsCacheOnAFullDisk) {
     EXPECT_EQ(count_entries(fs.path() / "cache"), 0u) << "a partial cache entry was left behind";
     EXPECT_FALSE(std::filesystem::exists(dir / "layer"));
   }
+}
+
+TEST(CliWriteErrors, ReadOnlyFolderForARunARenderAndACache) {
+  const auto dir = sflsh::testing::scratch_dir();
+  SmallFileSystem fs(dir / "ro", "1m", MS_RDONLY);
+  if (!fs.mounted()) GTEST_SKIP() << "mounting a tmpfs is not permitted here (needs root)";
+  const std::string reason = "Read-only file system";
+  expect_one_line_write_error(run_sflsh(reduced_run(fs.path() / "run", 5), dir), fs.path(), reason);
+  expect_one_line_write_error(
+      run_sflsh(fmt::format("-q mesh --subject OPEN_TEST_3 --mesher layered --mesh coarse --cache {} --out {}",
+                            (fs.path() / "cache").string(), (dir / "layer").string()),
+                dir),
+      fs.path(), reason);
+  EXPECT_FALSE(std::filesystem::exists(dir / "layer"));
+  const auto run = run_sflsh(reduced_run(dir / "run", 5), dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  expect_one_line_write_error(
+      run_sflsh(fmt::format("-q render --run {} --out {}", (dir / "run").string(), (fs.path() / "pic.png").string()),
+                dir),
+      fs.path(), reason);
+}
+
+TEST(CliWriteErrors, RenderedPictureOnAFullDisk) {
+  const auto dir = sflsh::testing::scratch_dir();
+  SmallFileSystem fs(dir / "tiny", "64k");  // the picture takes ~110 kB
+  if (!fs.mounted()) GTEST_SKIP() << "mounting a tmpfs is not permitted here (needs root)";
+  const auto run = run_sflsh(reduced_run(dir / "run", 5), dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const auto r = run_sflsh(
+      fmt::format("-q render --run {} --out {}", (dir / "run").string(), (fs.path() / "pic.png").string()), dir);
+  expect_one_line_write_error(r, fs.path(), "No space left on device");
+  EXPECT_EQ(count_entries(fs.path()), 0u) << "a partial picture was left behind";
+}
+
+TEST(CliWriteErrors, ValidateCheckpointOnAFullDisk) {
+  const auto dir = sflsh::testing::scratch_dir();
+  SmallFileSystem fs(dir / "tiny", "64k");  // the first ground-truth checkpoint takes more than 700 kB
+  if (!fs.mounted()) GTEST_SKIP() << "mounting a tmpfs is not permitted here (needs root)";
+  const auto r = run_sflsh(fmt::format("-q validate --train-subjects OPEN_TRAIN_1,OPEN_TRAIN_2 --test-subjects "
+                                       "OPEN_TEST_1 --frames 10 --stages 1 --iterations 2 --lambdas 1 "
+                                       "--no-cross-validation --threads 1 --mesh coarse --out {}",
+                                       (fs.path() / "v").string()),
+                           dir);
+  expect_one_line_write_error(r, fs.path(), "No space left on device");
+  EXPECT_THAT(r.err, HasSubstr("/state/"));
+  // The resumable state folder may stay (an interrupted run resumes from it), but holds no partial checkpoint.
+  EXPECT_EQ(count_files(fs.path()), 0u) << "a partial checkpoint was left behind";
 }
 
 TEST(CliWriteErrors, FileSizeLimitInVtkAndHdf5Output) {
