@@ -1,7 +1,7 @@
 // Every mesher × named subject × thickness gives a valid layer (docs/meshing.md, "Every mesher at every thickness"):
 // the coarse template retargeted or, where that inverts tets, the subject's own layer (meshing/subject_layer.hpp).
 // The whole sweep (3 meshers × 22 subjects × h = 0.1…0.9) is a long test that writes its table to the build tree
-// (thickness-sweep.md); a slice runs in every CI run.
+// (meshing-sweep/thickness.md); a slice runs in every CI run.
 #include "layer_fixture.hpp"
 #include "long_test.hpp"
 
@@ -80,7 +80,9 @@ TEST(ThicknessSweep, EveryMesherSubjectAndThicknessGivesAValidLayer) {
   std::vector<std::string> names;
   for (const auto& subject : body::default_subjects()) names.push_back(subject.name);
   const std::string table = sweep(kMeshers, names, {0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9});
-  const std::filesystem::path report = std::filesystem::path(SFLSH_TEST_CACHE).parent_path() / "thickness-sweep.md";
+  const std::filesystem::path report =
+      std::filesystem::path(SFLSH_TEST_CACHE).parent_path() / "meshing-sweep/thickness.md";
+  std::filesystem::create_directories(report.parent_path());
   std::ofstream(report) << "# Mesher × subject × thickness (coarse): ok = template retargeted, remeshed = the "
                            "subject's own layer; smallest dihedral angle\n\n"
                         << table;

@@ -149,11 +149,10 @@ TEST(ReducedStability, StiffestMaterialOnShakeHips) {
   EXPECT_LE(o.max_newton_per_frame, 10);
 }
 
-// Open (issue 23): the soft end (500 Pa) finishes without a failed attempt, but the exact elastic energy of the
-// reduced state reaches 6.4e6 J against a budget of 77 J: the guard lets a tet outside the cubature reach the Fung
-// exponent 25, and one such tet holds (c/2) e^25 V ≈ 1e6 J at c = 125 Pa (docs/reduced.md "The ends of the material
-// bounds"). Enabled once the guard's limit bounds the energy rather than the exponent.
-TEST(ReducedStability, DISABLED_SoftestMaterialOnShakeHipsKeepsBoundedEnergy) {
+// The soft end (500 Pa, issue 23): with the exponent limit alone (x = 25) the exact elastic energy of the reduced
+// state reached 6.4e6 J against a budget of 77 J — one tet outside the cubature at x = 25 holds (c/2) e^25 V ≈ 1e6 J
+// at c = 125 Pa. The guard's energy limit (1 J per unseen tet, cubature_guard.hpp) brings them into the cubature.
+TEST(ReducedStability, SoftestMaterialOnShakeHipsKeepsBoundedEnergy) {
   const Outcome o = shake_hips_with(500.0);
   expect_bounded(o);
   EXPECT_EQ(o.failed_attempts, 0);
