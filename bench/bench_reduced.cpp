@@ -8,7 +8,7 @@
 // The guard of the tets outside the cubature (cubature_guard.hpp) is part of "elastic"; its share is the "(guard)"
 // column. Usage: bench_reduced [--mesh coarse] [--handles 86] [--cubature 200] [--frames 120] [--crowd 25]
 //                      [--step-tolerance M] [--gradient-rtol R] [--refresh-ratio R] [--predictor-order 1|2]
-//                      [--guard 0|1] [--guard-exponent X]
+//                      [--guard 0|1] [--guard-exponent X] [--guard-energy J]
 //                      [--threads 2] [--motion shake_hips] [--integrators backward_euler,bdf2,newmark]
 //                      [--masses lumped,consistent] [--out bench_reduced.json]
 #include <sflsh/body/body_io.hpp>
@@ -135,6 +135,8 @@ int main(int argc, char** argv) {
       tuned.predictor_order = std::stoi(argv[i + 1]);
     else if (std::strcmp(argv[i], "--guard-exponent") == 0)
       tuned.guard_exponent = std::stod(argv[i + 1]);
+    else if (std::strcmp(argv[i], "--guard-energy") == 0)
+      tuned.guard_energy = std::stod(argv[i + 1]);
     else if (std::strcmp(argv[i], "--guard") == 0)
       tuned.guard = std::stoi(argv[i + 1]) != 0;
     else {

@@ -35,15 +35,20 @@ Cubature unguarded_tets(const model::Problem& problem, const Cubature& cubature)
 }  // namespace
 
 CubatureGuard::CubatureGuard(const model::Problem& problem, const Subspace& subspace, const Cubature& cubature,
-                             double exponent_limit)
-    : problem_(problem), tets_(problem, subspace, unguarded_tets(problem, cubature)), limit_(exponent_limit) {
+                             double exponent_limit, double energy_limit)
+    : problem_(problem),
+      tets_(problem, subspace, unguarded_tets(problem, cubature)),
+      limit_(exponent_limit),
+      energy_limit_(energy_limit) {
   require(exponent_limit > 0.0 && exponent_limit <= material::kFungExponentCap,
           "reduced: the guard's exponent limit {} must be in (0, {}]", exponent_limit, material::kFungExponentCap);
+  require(energy_limit > 0.0, "reduced: the guard's energy limit {} J must be positive", energy_limit);
   const int n = tets_.num_points();
   guarded_ = n;
   active_.assign(static_cast<std::size_t>(n), 1);
   spectral_.resize(static_cast<std::size_t>(n));
   allowed_.resize(static_cast<std::size_t>(n));
+  point_limit_.resize(static_cast<std::size_t>(n));
   offset_.assign(1, 0);
   point_of_tet_.assign(static_cast<std::size_t>(problem.num_tets()), -1);
   for (int p = 0; p < n; ++p) {
@@ -57,9 +62,13 @@ CubatureGuard::CubatureGuard(const model::Problem& problem, const Subspace& subs
                               .cwiseAbs()
                               .maxCoeff();
     spectral_[k] = p_norm * p_norm;
+    // The tet's Fung energy (c/2)(eˣ − 1) V (docs/physics.md §1.2) reaches the energy limit at x_E.
+    const double volume = problem.tet_rest[static_cast<std::size_t>(e)].volume;
+    const double x_energy = m.inv_c == 0.0 ? kInfinity : std::log1p(2.0 * energy_limit_ / (m.c * volume));
+    point_limit_[k] = std::min(limit_, std::isnan(x_energy) ? limit_ : x_energy);
     // x = 2Ψ₀/c ≤ (2/c)(μ₀ + 3/2 λ₀⁺)‖Ê‖² ≤ limit  ⇐  ‖Ê‖ ≤ √(limit c / (2(μ₀ + 3/2 λ₀⁺)))
     const double modulus = m.mu0 + 1.5 * std::max(m.lambda0, 0.0);
-    allowed_[k] = m.inv_c == 0.0 || modulus <= 0.0 ? kInfinity : std::sqrt(limit_ * m.c / (2.0 * modulus));
+    allowed_[k] = m.inv_c == 0.0 || modulus <= 0.0 ? kInfinity : std::sqrt(point_limit_[k] * m.c / (2.0 * modulus));
   }
   scaled_.assign(static_cast<std::size_t>(offset_.back()), kInfinity);
   moved_.assign(static_cast<std::size_t>(subspace.num_functions()), 0.0);
@@ -75,6 +84,13 @@ CubatureGuard::CubatureGuard(const model::Problem& problem, const Subspace& subs
     for (int f : tets_.point_functions(p))
       function_points_[static_cast<std::size_t>(fill[static_cast<std::size_t>(f)]++)] = p;
   visited_.assign(static_cast<std::size_t>(n), 0);
+}
+
+double CubatureGuard::smallest_tet_limit() const {
+  double smallest = kInfinity;
+  for (std::size_t k = 0; k < point_limit_.size(); ++k)
+    if (active_[k]) smallest = std::min(smallest, point_limit_[k]);
+  return smallest;
 }
 
 void CubatureGuard::set_prescribed_state(const Eigen::VectorXd& x_prescribed) {
@@ -163,7 +179,7 @@ std::vector<GuardViolation> CubatureGuard::check(const Eigen::VectorXd& q) {
   for (int p : suspects) {
     ++exact_;
     const double x = exponent(p, q, nullptr);
-    if (!(x <= limit_)) over.push_back({tets_.point_tet(p), x});
+    if (!(x <= point_limit_[static_cast<std::size_t>(p)])) over.push_back({tets_.point_tet(p), x});
   }
   return over;
 }
@@ -180,7 +196,7 @@ std::vector<GuardViolation> CubatureGuard::renew(const Eigen::VectorXd& q) {
     double radius = 0.0;
     const double x = exponent(p, q, &radius);
     last_max_ = std::max(last_max_, x);
-    if (!(x <= limit_)) over.push_back({tets_.point_tet(p), x});
+    if (!(x <= point_limit_[k])) over.push_back({tets_.point_tet(p), x});
     const std::span<const Eigen::Vector3d> vectors = tets_.point_vectors(p);
     double* scaled = scaled_.data() + offset_[k];
     for (std::size_t j = 0; j < vectors.size(); ++j) scaled[j] = radius > 0.0 ? vectors[j].norm() / radius : kInfinity;

@@ -47,7 +47,9 @@ ReducedSolver::ReducedSolver(const model::Problem& problem, const Subspace& subs
       gravity_term_(inertia_),
       potential_term_(potentials_, inertia_) {
   require(options.max_halvings >= 0 && options.max_newton >= 1, "reduced: max_halvings must be ≥ 0 and max_newton ≥ 1");
-  if (options.guard) guard_ = std::make_unique<CubatureGuard>(problem, subspace, cubature_, options.guard_exponent);
+  if (options.guard)
+    guard_ =
+        std::make_unique<CubatureGuard>(problem, subspace, cubature_, options.guard_exponent, options.guard_energy);
   // Attached nodes must be attached as a whole and carry no basis functions.
   std::vector<int> constrained_axes(static_cast<std::size_t>(problem.num_nodes()), 0);
   for (int d : problem.dirichlet.dof) ++constrained_axes[static_cast<std::size_t>(d / 3)];
@@ -412,9 +414,9 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
       if (!over.empty()) {
         if (enlargements >= options_.max_enlargements) {
           reason = fmt::format(
-              "tet {} outside the cubature still leaves the material's range (Fung exponent {:.3g} > {}) after {} "
-              "enlargements of the cubature",
-              over.front().tet, over.front().exponent, options_.guard_exponent, enlargements);
+              "tet {} outside the cubature still leaves the material's range (Fung exponent {:.3g} over the guard's "
+              "limit: {} or {} J of energy) after {} enlargements of the cubature",
+              over.front().tet, over.front().exponent, options_.guard_exponent, options_.guard_energy, enlargements);
           factor_valid_ = false;
           return false;
         }

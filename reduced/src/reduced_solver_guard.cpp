@@ -66,10 +66,9 @@ void ReducedSolver::enlarge_cubature(const std::vector<GuardViolation>& over, do
     if (named.size() < 200) named += fmt::format("{}{} (x = {:.3g})", named.empty() ? "" : ", ", e, v.exponent);
   }
   logger()->warn(
-      "reduced: t = {:.6g} s: tet(s) {} outside the cubature passed the guard's Fung exponent {} (the material's cap "
-      "is "
-      "{}); added to the cubature, now {} tets, and the substep solved again",
-      t, named, options_.guard_exponent, material::kFungExponentCap, cubature_.size());
+      "reduced: t = {:.6g} s: tet(s) {} outside the cubature passed the guard's limit (Fung exponent {} or {} J of "
+      "elastic energy; the material's cap is x = {}); added to the cubature, now {} tets, and the substep solved again",
+      t, named, options_.guard_exponent, options_.guard_energy, material::kFungExponentCap, cubature_.size());
 }
 
 }  // namespace sflsh::reduced

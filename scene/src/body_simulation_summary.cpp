@@ -58,6 +58,8 @@ nlohmann::json BodySimulation::summary() const {
         {"stiffness_ratio_max", reduced_model_->cubature.stiffness_ratio_max},
         {"stiffness_ratio_min", reduced_model_->cubature.stiffness_ratio_min},
         {"guard", fast_->guard() ? nlohmann::json{{"exponent_limit", fast_->guard()->exponent_limit()},
+                                                  {"energy_limit_j", fast_->guard()->energy_limit()},
+                                                  {"smallest_tet_exponent_limit", fast_->guard()->smallest_tet_limit()},
                                                   {"guarded_tets", fast_->guard()->num_guarded()},
                                                   {"checks", fast_->guard()->checks()},
                                                   {"per_tet_passes", fast_->guard()->tet_passes()},

@@ -8,9 +8,12 @@
 // a check first compares each ‖t_s − t_ref,s‖ with the budget β_s = min over the tets touching s of r_e / L_e (O(S));
 // only the tets touching a function beyond its budget get their own bound, and those whose bound exceeds r_e are
 // evaluated exactly. When many need it the reference moves to q (every tet evaluated, radii renewed).
-// Tets over the limit are returned: the solver adds them to the cubature and solves the substep again
+// The limit of a tet is the smaller of two: the exponent limit, and the exponent at which its Fung energy
+// (c/2)(eˣ − 1) V reaches the energy limit, x_E = ln(1 + 2 E_max / (c V)) — an unseen tet may hold at most E_max.
+// Tets over their limit are returned: the solver adds them to the cubature and solves the substep again
 // (reduced_solver.hpp).
 #include <sflsh/model/problem.hpp>
+#include <sflsh/model/terms.hpp>
 #include <sflsh/reduced/cubature.hpp>
 #include <sflsh/reduced/cubature_elastic.hpp>
 #include <sflsh/reduced/subspace.hpp>
@@ -28,9 +31,10 @@ struct GuardViolation {
 class CubatureGuard {
  public:
   /// Guards every tet of `problem` that carries no weight in `cubature`; `exponent_limit` is the x above which a
-  /// tet counts as leaving the material's range (the energy itself refuses x > material::kFungExponentCap).
+  /// tet counts as leaving the material's range (the energy itself refuses x > material::kFungExponentCap), and
+  /// `energy_limit` [J] the Fung energy a guarded tet may hold (+∞: the exponent limit alone).
   CubatureGuard(const model::Problem& problem, const Subspace& subspace, const Cubature& cubature,
-                double exponent_limit);
+                double exponent_limit, double energy_limit = model::kInfinity);
 
   /// The prescribed state changed (attached nodes driven): the next check is a full one.
   void set_prescribed_state(const Eigen::VectorXd& x_prescribed);
@@ -50,6 +54,9 @@ class CubatureGuard {
   double pass_seconds() const { return pass_seconds_; }
   double renew_seconds() const { return renew_seconds_; }
   double exponent_limit() const { return limit_; }
+  double energy_limit() const { return energy_limit_; }
+  /// The smallest limit of a guarded tet (the energy limit makes it per tet).
+  double smallest_tet_limit() const;
   /// The largest exponent of a guarded tet at the last renewal of the reference.
   double last_max_exponent() const { return last_max_; }
 
@@ -59,13 +66,14 @@ class CubatureGuard {
   std::vector<GuardViolation> renew(const Eigen::VectorXd& q);
 
   const model::Problem& problem_;
-  CubatureElastic tets_;           ///< the guarded tets as points of weight 1 (their F(q), S_e and c_s)
-  std::vector<char> active_;       ///< per point: still guarded
-  std::vector<double> spectral_;   ///< ‖P_Y‖₂² per point
-  std::vector<double> allowed_;    ///< the ‖Ê‖_F at which x reaches the limit, per point (+∞: Fung off)
-  std::vector<double> scaled_;     ///< ‖c_s‖ / r_e, parallel to the points' functions (+∞ when r_e = 0)
-  std::vector<int> offset_;        ///< point p's entries of scaled_ are [offset_[p], offset_[p+1])
-  std::vector<int> point_of_tet_;  ///< −1 for tets not guarded
+  CubatureElastic tets_;             ///< the guarded tets as points of weight 1 (their F(q), S_e and c_s)
+  std::vector<char> active_;         ///< per point: still guarded
+  std::vector<double> spectral_;     ///< ‖P_Y‖₂² per point
+  std::vector<double> point_limit_;  ///< x limit per point: min(limit_, x_E)
+  std::vector<double> allowed_;      ///< the ‖Ê‖_F at which x reaches its limit, per point (+∞: Fung off)
+  std::vector<double> scaled_;       ///< ‖c_s‖ / r_e, parallel to the points' functions (+∞ when r_e = 0)
+  std::vector<int> offset_;          ///< point p's entries of scaled_ are [offset_[p], offset_[p+1])
+  std::vector<int> point_of_tet_;    ///< −1 for tets not guarded
   Eigen::VectorXd q_reference_;
   std::vector<double> moved_;         ///< ‖t_s − t_ref,s‖ per function (scratch)
   std::vector<double> budget_;        ///< β_s = min over the tets touching s of r_e / L_e, per function
@@ -75,6 +83,7 @@ class CubatureGuard {
   unsigned generation_ = 0;
   bool valid_ = false;  ///< a reference is set
   double limit_ = 0.0;
+  double energy_limit_ = model::kInfinity;
   double renew_fraction_ = 0.05;  ///< renew the reference when more tets than this fraction need evaluating
   double last_max_ = 0.0;
   int guarded_ = 0, full_checks_ = 0, checks_ = 0, tet_passes_ = 0;

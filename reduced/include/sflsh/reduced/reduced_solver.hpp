@@ -61,8 +61,13 @@ struct ReducedOptions {
   /// Guard the tets outside the cubature (cubature_guard.hpp): a tet whose Fung exponent x = 2Ψ₀/c passes
   /// `guard_exponent` at a converged substep joins the cubature (weight 1, its volume taken from the nearest point's
   /// weight) and the substep is solved again, at most `max_enlargements` times per substep.
+  /// A tet also joins when its Fung energy passes `guard_energy` [J] (its exponent limit is then
+  /// ln(1 + 2 guard_energy / (c V)), cubature_guard.hpp): at 25 alone an unseen tet of 1 cm³ at c = 1250 Pa may
+  /// hold 4·10⁷ J, and default runs left tets of 7.5 kJ–39 MJ outside the cubature (docs/reduced.md, "Robust
+  /// cubature").
   bool guard = true;
   double guard_exponent = 25.0;
+  double guard_energy = 1.0;
   int max_enlargements = 8;
   /// A tracking root (root_tracking.hpp): the six root coordinates join q in the Newton solve. Off: the skeleton
   /// follows its motion exactly (prescribed), bit for bit as before.
