@@ -24,6 +24,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <functional>
 #include <iostream>
 #include <map>
 #include <sstream>
@@ -92,160 +93,167 @@ int run_block_mode(bench::BlockOptions o, const std::string& block, const std::s
   return 0;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+struct Arguments {
   std::string sflsh_path = SFLSH_CLI, out = "bench_fullspace.json", sizes = "coarse,default,fine", procs = "1,2";
   std::string subject = "OPEN_TRAIN_1", motion = "running_on_spot", mesher = "layered";
   std::string integrators = "backward_euler", masses = "lumped";
   int frames = 20;
   std::string block, pcs = "icc,gamg", verify_args;
   int block_threads = 1, block_steps = 6, block_runs = 3;
+};
+
+/// Reads the options (pairs of name and value); false after a message on an unknown one.
+bool parse_arguments(int argc, char** argv, Arguments& a) {
+  const std::map<std::string, std::function<void(const char*)>> setters = {
+      {"--block", [&](const char* v) { a.block = v; }},
+      {"--verify-args", [&](const char* v) { a.verify_args = v; }},
+      {"--pcs", [&](const char* v) { a.pcs = v; }},
+      {"--threads", [&](const char* v) { a.block_threads = std::stoi(v); }},
+      {"--steps", [&](const char* v) { a.block_steps = std::stoi(v); }},
+      {"--runs", [&](const char* v) { a.block_runs = std::stoi(v); }},
+      {"--sflsh", [&](const char* v) { a.sflsh_path = v; }},
+      {"--out", [&](const char* v) { a.out = v; }},
+      {"--sizes", [&](const char* v) { a.sizes = v; }},
+      {"--procs", [&](const char* v) { a.procs = v; }},
+      {"--frames", [&](const char* v) { a.frames = std::stoi(v); }},
+      {"--subject", [&](const char* v) { a.subject = v; }},
+      {"--motion", [&](const char* v) { a.motion = v; }},
+      {"--mesher", [&](const char* v) { a.mesher = v; }},
+      {"--integrators", [&](const char* v) { a.integrators = v; }},
+      {"--masses", [&](const char* v) { a.masses = v; }}};
   for (int i = 1; i + 1 < argc; i += 2) {
-    if (std::strcmp(argv[i], "--block") == 0)
-      block = argv[i + 1];
-    else if (std::strcmp(argv[i], "--verify-args") == 0)
-      verify_args = argv[i + 1];
-    else if (std::strcmp(argv[i], "--pcs") == 0)
-      pcs = argv[i + 1];
-    else if (std::strcmp(argv[i], "--threads") == 0)
-      block_threads = std::stoi(argv[i + 1]);
-    else if (std::strcmp(argv[i], "--steps") == 0)
-      block_steps = std::stoi(argv[i + 1]);
-    else if (std::strcmp(argv[i], "--runs") == 0)
-      block_runs = std::stoi(argv[i + 1]);
-    else if (std::strcmp(argv[i], "--sflsh") == 0)
-      sflsh_path = argv[i + 1];
-    else if (std::strcmp(argv[i], "--out") == 0)
-      out = argv[i + 1];
-    else if (std::strcmp(argv[i], "--sizes") == 0)
-      sizes = argv[i + 1];
-    else if (std::strcmp(argv[i], "--procs") == 0)
-      procs = argv[i + 1];
-    else if (std::strcmp(argv[i], "--frames") == 0)
-      frames = std::stoi(argv[i + 1]);
-    else if (std::strcmp(argv[i], "--subject") == 0)
-      subject = argv[i + 1];
-    else if (std::strcmp(argv[i], "--motion") == 0)
-      motion = argv[i + 1];
-    else if (std::strcmp(argv[i], "--mesher") == 0)
-      mesher = argv[i + 1];
-    else if (std::strcmp(argv[i], "--integrators") == 0)
-      integrators = argv[i + 1];
-    else if (std::strcmp(argv[i], "--masses") == 0)
-      masses = argv[i + 1];
-    else {
+    const auto setter = setters.find(argv[i]);
+    if (setter == setters.end()) {
       std::cerr << "bench_fullspace: unknown option " << argv[i] << "\n";
-      return 2;
+      return false;
     }
+    setter->second(argv[i + 1]);
   }
-  try {
-    if (!block.empty()) {
-      bench::BlockOptions o;
-      o.sflsh = sflsh_path;
-      o.pcs = split(pcs);
-      o.threads = block_threads;
-      o.steps = block_steps;
-      o.runs = block_runs;
-      o.verify_args = verify_args;
-      return run_block_mode(o, block, procs, out);
-    }
-    nlohmann::json results = nlohmann::json::array();
-    std::cout << fmt::format("{:<8} {:>5} {:<14} {:<10} {:>8} {:>8} {:>8} {:>8} {:>7} {:>8} {:>7} {:>7} {:>7}\n",
-                             "size", "procs", "integrator", "mass", "tets", "nodes", "s/step", "median", "newton",
-                             "ksp/step", "assem %", "build s", "peak MB");
-    // (procs, integrator, mass) → (tets, s/step)
-    std::map<std::string, std::pair<std::vector<double>, std::vector<double>>> scaling;
-    const auto scratch = std::filesystem::temp_directory_path() / fmt::format("bench_fullspace_{}", ::getpid());
-    struct Run {
-      std::string size, integrator, mass;
-      int np = 1;
-    };
-    std::vector<Run> runs;
-    for (const std::string& size : split(sizes))
-      for (const std::string& p : split(procs))
-        for (const std::string& integrator : split(integrators))
-          for (const std::string& mass : split(masses)) runs.push_back({size, integrator, mass, std::stoi(p)});
-    for (const auto& [size, integrator, mass, np] : runs) {
-      const auto dir = scratch / fmt::format("{}_{}_{}_{}", size, np, integrator, mass);
-      std::string command = fmt::format(
-          "{} simulate --solver full --mesh {} --mesher {} --subject {} --motion {} --frames {} --integrator {} "
-          "--mass {} --no-output -q --out {}",
-          sflsh_path, size, mesher, subject, motion, frames + 1, integrator, mass, dir.string());
-      if (np > 1) {
-        command = fmt::format(
-            "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 mpiexec -n "
-            "{} {}",
-            np, command);
-      }
-      // Warm the layer cache outside the measurement (meshing is benchmarked by bench_meshing).
-      const auto [code, peak_mb] = bench::run_measured(command);
-      if (code != 0) {
-        std::cerr << "bench_fullspace: " << size << " with " << np << " processes, " << integrator << ", " << mass
-                  << " mass failed (exit " << code << ")\n";
-        results.push_back({{"size", size},
-                           {"procs", np},
-                           {"integrator", integrator},
-                           {"mass", mass},
-                           {"error", fmt::format("exit code {}", code)}});
-        continue;
-      }
-      const nlohmann::json summary = read_json(dir / "summary.json");
-      const double steps = static_cast<double>(summary["motion"]["frames"].get<long>() - 1) *
-                           summary["solver"]["substeps"].get<double>();
-      const double solve_s = summary["timings"]["solve_seconds"].get<double>();
-      const double per_step = solve_s / steps;
-      const double median = median_seconds_per_step(summary);
-      const double newton = summary["solver"]["newton_iterations"].get<double>() / steps;
-      const double ksp = summary["solver"]["linear_iterations"].get<double>() / steps;
-      const double assembly =
-          summary["timings"]["jacobian_seconds"].get<double>() + summary["timings"]["function_seconds"].get<double>();
-      const long tets = summary["mesh"]["tets"].get<long>();
-      nlohmann::json r = {{"size", size},
-                          {"procs", np},
-                          {"integrator", integrator},
-                          {"mass", mass},
-                          {"mesher", mesher},
-                          {"tets", tets},
-                          {"nodes", summary["mesh"]["nodes"]},
-                          {"steps", steps},
-                          {"seconds_per_step", per_step},
-                          {"median_seconds_per_step", median},
-                          {"newton_per_step", newton},
-                          {"ksp_per_step", ksp},
-                          {"assembly_fraction", solve_s > 0 ? assembly / solve_s : 0.0},
-                          {"build_seconds", summary["timings"]["build_seconds"]},
-                          {"peak_rss_mb", peak_mb}};
-      std::cout << fmt::format(
-          "{:<8} {:>5} {:<14} {:<10} {:>8} {:>8} {:>8.3f} {:>8.3f} {:>7.2f} {:>8.1f} {:>7.0f} {:>7.1f} {:>7.0f}\n",
-          size, np, integrator, mass, tets, summary["mesh"]["nodes"].get<long>(), per_step, median, newton, ksp,
-          100.0 * r["assembly_fraction"].get<double>(), r["build_seconds"].get<double>(), peak_mb);
-      const std::string key = fmt::format("{} process(es), {}, {} mass", np, integrator, mass);
-      scaling[key].first.push_back(static_cast<double>(tets));
-      scaling[key].second.push_back(per_step);
-      results.push_back(r);
-    }
-    std::filesystem::remove_all(scratch);
-    nlohmann::json exponents = nlohmann::json::object();
-    for (const auto& [key, data] : scaling) {
-      if (data.first.size() < 2) continue;
-      const double slope = loglog_slope(data.first, data.second);
-      exponents[key] = slope;
-      std::cout << fmt::format("scaling exponent (s/step ∝ tets^k) with {}: k = {:.2f}\n", key, slope);
-    }
-    write_json(out, {{"benchmark", "fullspace"},
-                     {"subject", subject},
-                     {"motion", motion},
-                     {"frames", frames},
-                     {"mesher", mesher},
-                     {"integrators", split(integrators)},
-                     {"masses", split(masses)},
+  return true;
+}
+
+struct LayerRun {
+  std::string size, integrator, mass;
+  int np = 1;
+};
+
+/// One `sflsh simulate --solver full` run of the body layer: its row of the table (printed) and of the JSON.
+nlohmann::json measure_layer_run(const Arguments& a, const LayerRun& run, const std::filesystem::path& scratch) {
+  const auto& [size, integrator, mass, np] = run;
+  const auto dir = scratch / fmt::format("{}_{}_{}_{}", size, np, integrator, mass);
+  std::string command = fmt::format(
+      "{} simulate --solver full --mesh {} --mesher {} --subject {} --motion {} --frames {} --integrator {} "
+      "--mass {} --no-output -q --out {}",
+      a.sflsh_path, size, a.mesher, a.subject, a.motion, a.frames + 1, integrator, mass, dir.string());
+  if (np > 1) {
+    command = fmt::format(
+        "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 mpiexec -n "
+        "{} {}",
+        np, command);
+  }
+  const auto [code, peak_mb] = bench::run_measured(command);
+  if (code != 0) {
+    std::cerr << "bench_fullspace: " << size << " with " << np << " processes, " << integrator << ", " << mass
+              << " mass failed (exit " << code << ")\n";
+    return {{"size", size},
+            {"procs", np},
+            {"integrator", integrator},
+            {"mass", mass},
+            {"error", fmt::format("exit code {}", code)}};
+  }
+  const nlohmann::json summary = read_json(dir / "summary.json");
+  const double steps =
+      static_cast<double>(summary["motion"]["frames"].get<long>() - 1) * summary["solver"]["substeps"].get<double>();
+  const double solve_s = summary["timings"]["solve_seconds"].get<double>();
+  const double per_step = solve_s / steps;
+  const double median = median_seconds_per_step(summary);
+  const double newton = summary["solver"]["newton_iterations"].get<double>() / steps;
+  const double ksp = summary["solver"]["linear_iterations"].get<double>() / steps;
+  const double assembly =
+      summary["timings"]["jacobian_seconds"].get<double>() + summary["timings"]["function_seconds"].get<double>();
+  const long tets = summary["mesh"]["tets"].get<long>();
+  nlohmann::json r = {{"size", size},
+                      {"procs", np},
+                      {"integrator", integrator},
+                      {"mass", mass},
+                      {"mesher", a.mesher},
+                      {"tets", tets},
+                      {"nodes", summary["mesh"]["nodes"]},
+                      {"steps", steps},
+                      {"seconds_per_step", per_step},
+                      {"median_seconds_per_step", median},
+                      {"newton_per_step", newton},
+                      {"ksp_per_step", ksp},
+                      {"assembly_fraction", solve_s > 0 ? assembly / solve_s : 0.0},
+                      {"build_seconds", summary["timings"]["build_seconds"]},
+                      {"peak_rss_mb", peak_mb}};
+  std::cout << fmt::format(
+      "{:<8} {:>5} {:<14} {:<10} {:>8} {:>8} {:>8.3f} {:>8.3f} {:>7.2f} {:>8.1f} {:>7.0f} {:>7.1f} {:>7.0f}\n", size,
+      np, integrator, mass, tets, summary["mesh"]["nodes"].get<long>(), per_step, median, newton, ksp,
+      100.0 * r["assembly_fraction"].get<double>(), r["build_seconds"].get<double>(), peak_mb);
+  return r;
+}
+
+/// The body-layer table: every size × process count × integrator × mass, and the scaling exponent in the tet count.
+int run_layer_mode(const Arguments& a) {
+  nlohmann::json results = nlohmann::json::array();
+  std::cout << fmt::format("{:<8} {:>5} {:<14} {:<10} {:>8} {:>8} {:>8} {:>8} {:>7} {:>8} {:>7} {:>7} {:>7}\n", "size",
+                           "procs", "integrator", "mass", "tets", "nodes", "s/step", "median", "newton", "ksp/step",
+                           "assem %", "build s", "peak MB");
+  // (procs, integrator, mass) → (tets, s/step)
+  std::map<std::string, std::pair<std::vector<double>, std::vector<double>>> scaling;
+  const auto scratch = std::filesystem::temp_directory_path() / fmt::format("bench_fullspace_{}", ::getpid());
+  for (const std::string& size : split(a.sizes))
+    for (const std::string& p : split(a.procs))
+      for (const std::string& integrator : split(a.integrators))
+        for (const std::string& mass : split(a.masses)) {
+          const nlohmann::json r = measure_layer_run(a, {size, integrator, mass, std::stoi(p)}, scratch);
+          results.push_back(r);
+          if (r.contains("error")) continue;
+          const std::string key = fmt::format("{} process(es), {}, {} mass", p, integrator, mass);
+          scaling[key].first.push_back(r["tets"].get<double>());
+          scaling[key].second.push_back(r["seconds_per_step"].get<double>());
+        }
+  std::filesystem::remove_all(scratch);
+  nlohmann::json exponents = nlohmann::json::object();
+  for (const auto& [key, data] : scaling) {
+    if (data.first.size() < 2) continue;
+    const double slope = loglog_slope(data.first, data.second);
+    exponents[key] = slope;
+    std::cout << fmt::format("scaling exponent (s/step ∝ tets^k) with {}: k = {:.2f}\n", key, slope);
+  }
+  write_json(a.out, {{"benchmark", "fullspace"},
+                     {"subject", a.subject},
+                     {"motion", a.motion},
+                     {"frames", a.frames},
+                     {"mesher", a.mesher},
+                     {"integrators", split(a.integrators)},
+                     {"masses", split(a.masses)},
                      {"results", results},
                      {"scaling_exponent", exponents}});
-    std::cout << "wrote " << out << "\n";
+  std::cout << "wrote " << a.out << "\n";
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Arguments a;
+  if (!parse_arguments(argc, argv, a)) return 2;
+  try {
+    if (!a.block.empty()) {
+      bench::BlockOptions o;
+      o.sflsh = a.sflsh_path;
+      o.pcs = split(a.pcs);
+      o.threads = a.block_threads;
+      o.steps = a.block_steps;
+      o.runs = a.block_runs;
+      o.verify_args = a.verify_args;
+      return run_block_mode(o, a.block, a.procs, a.out);
+    }
+    return run_layer_mode(a);
   } catch (const std::exception& e) {
     std::cerr << "bench_fullspace: error: " << e.what() << "\n";
     return 1;
   }
-  return 0;
 }

@@ -26,8 +26,9 @@
 #include <tbb/task_arena.h>
 
 #include <chrono>
-#include <cstring>
+#include <functional>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <random>
 #include <sstream>
@@ -94,227 +95,272 @@ void advance(Body& b, double h, Breakdown& breakdown) {
   breakdown.output += seconds_since(t);
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+struct Arguments {
   std::string mesh = "coarse", motion_name = "shake_hips", out = "bench_reduced.json";
   // The defaults of every body run (model::kDefaultIntegrator, kDefaultMassKind); the paper's pair with
   // --integrators backward_euler --masses lumped.
-  std::string integrator_list(model::to_string(model::kDefaultIntegrator)),
-      mass_list(model::to_string(model::kDefaultMassKind));
+  std::string integrator_list{model::to_string(model::kDefaultIntegrator)};
+  std::string mass_list{model::to_string(model::kDefaultMassKind)};
   int handles = 86, cubature = 200, frames = 120, crowd = 25, threads = 2;
   reduced::ReducedOptions tuned;  // solver settings from the command line
+};
+
+/// Reads the options (pairs of name and value); false after a message on an unknown one.
+bool parse_arguments(int argc, char** argv, Arguments& a) {
+  reduced::ReducedOptions& tuned = a.tuned;
+  const std::map<std::string, std::function<void(const char*)>> setters = {
+      {"--mesh", [&](const char* v) { a.mesh = v; }},
+      {"--handles", [&](const char* v) { a.handles = std::stoi(v); }},
+      {"--cubature", [&](const char* v) { a.cubature = std::stoi(v); }},
+      {"--frames", [&](const char* v) { a.frames = std::stoi(v); }},
+      {"--crowd", [&](const char* v) { a.crowd = std::stoi(v); }},
+      {"--threads", [&](const char* v) { a.threads = std::stoi(v); }},
+      {"--motion", [&](const char* v) { a.motion_name = v; }},
+      {"--integrators", [&](const char* v) { a.integrator_list = v; }},
+      {"--masses", [&](const char* v) { a.mass_list = v; }},
+      {"--out", [&](const char* v) { a.out = v; }},
+      {"--step-tolerance", [&](const char* v) { tuned.step_tolerance = std::stod(v); }},
+      {"--gradient-rtol", [&](const char* v) { tuned.gradient_rtol = std::stod(v); }},
+      {"--refresh-ratio", [&](const char* v) { tuned.refresh_ratio = std::stod(v); }},
+      {"--predictor-order", [&](const char* v) { tuned.predictor_order = std::stoi(v); }},
+      {"--guard-exponent", [&](const char* v) { tuned.guard_exponent = std::stod(v); }},
+      {"--guard-energy", [&](const char* v) { tuned.guard_energy = std::stod(v); }},
+      {"--guard", [&](const char* v) { tuned.guard = std::stoi(v) != 0; }}};
   for (int i = 1; i + 1 < argc; i += 2) {
-    if (std::strcmp(argv[i], "--mesh") == 0)
-      mesh = argv[i + 1];
-    else if (std::strcmp(argv[i], "--handles") == 0)
-      handles = std::stoi(argv[i + 1]);
-    else if (std::strcmp(argv[i], "--cubature") == 0)
-      cubature = std::stoi(argv[i + 1]);
-    else if (std::strcmp(argv[i], "--frames") == 0)
-      frames = std::stoi(argv[i + 1]);
-    else if (std::strcmp(argv[i], "--crowd") == 0)
-      crowd = std::stoi(argv[i + 1]);
-    else if (std::strcmp(argv[i], "--threads") == 0)
-      threads = std::stoi(argv[i + 1]);
-    else if (std::strcmp(argv[i], "--motion") == 0)
-      motion_name = argv[i + 1];
-    else if (std::strcmp(argv[i], "--integrators") == 0)
-      integrator_list = argv[i + 1];
-    else if (std::strcmp(argv[i], "--masses") == 0)
-      mass_list = argv[i + 1];
-    else if (std::strcmp(argv[i], "--out") == 0)
-      out = argv[i + 1];
-    else if (std::strcmp(argv[i], "--step-tolerance") == 0)
-      tuned.step_tolerance = std::stod(argv[i + 1]);
-    else if (std::strcmp(argv[i], "--gradient-rtol") == 0)
-      tuned.gradient_rtol = std::stod(argv[i + 1]);
-    else if (std::strcmp(argv[i], "--refresh-ratio") == 0)
-      tuned.refresh_ratio = std::stod(argv[i + 1]);
-    else if (std::strcmp(argv[i], "--predictor-order") == 0)
-      tuned.predictor_order = std::stoi(argv[i + 1]);
-    else if (std::strcmp(argv[i], "--guard-exponent") == 0)
-      tuned.guard_exponent = std::stod(argv[i + 1]);
-    else if (std::strcmp(argv[i], "--guard-energy") == 0)
-      tuned.guard_energy = std::stod(argv[i + 1]);
-    else if (std::strcmp(argv[i], "--guard") == 0)
-      tuned.guard = std::stoi(argv[i + 1]) != 0;
-    else {
+    const auto setter = setters.find(argv[i]);
+    if (setter == setters.end()) {
       std::cerr << "bench_reduced: unknown option " << argv[i] << "\n";
-      return 2;
+      return false;
+    }
+    setter->second(argv[i + 1]);
+  }
+  return true;
+}
+
+/// What the runs share: the body model, the motion, the layer and reduced-model options, the integrators and masses.
+struct Setup {
+  body::BodyModel model;
+  body::Motion motion;
+  model::BodyLayerOptions layer_options;
+  reduced::ReducedModelOptions options;
+  std::vector<model::Integrator> integrators;
+  std::vector<model::MassKind> masses;
+};
+
+constexpr double kStep = 1.0 / 60.0;
+constexpr int kOffsetFrames = 60;  // crowd members start up to 1 s apart
+
+Setup make_setup(const Arguments& a) {
+  Setup setup{body::load_body(std::filesystem::path(SFLSH_DATA_DIR) / "open_body.npz"),
+              body::make_procedural_motion(a.motion_name, 60.0, a.frames + kOffsetFrames + 2),
+              {},
+              {},
+              {},
+              {}};
+  setup.layer_options.size = meshing::parse_size_preset(a.mesh);
+  setup.options.point_handles = a.handles;
+  setup.options.cubature = a.cubature;
+  for (const std::string& name : split_list(a.integrator_list))
+    setup.integrators.push_back(model::parse_integrator(name, "--integrators"));
+  for (const std::string& name : split_list(a.mass_list))
+    setup.masses.push_back(model::parse_mass_kind(name, "--masses"));
+  require(!setup.integrators.empty() && !setup.masses.empty(),
+          "--integrators and --masses need at least one entry each");
+  return setup;
+}
+
+/// One body on one thread for one integrator and mass.
+struct Case {
+  model::Integrator integrator;
+  model::MassKind mass;
+  Breakdown breakdown;
+  double wall = 0.0;
+  int guard_full_checks = 0, guard_checks = 0, guard_passes = 0, cubature_added = 0;
+  double guard_seconds = 0.0;  ///< per-tet passes and renewals [s]
+};
+
+/// Every integrator × mass on one body; `coordinates` receives the subspace's size.
+std::vector<Case> run_one_body_cases(const Arguments& a, const Setup& setup, int& coordinates) {
+  std::vector<Case> cases;
+  for (model::MassKind mass : setup.masses) {
+    for (model::Integrator integrator : setup.integrators) {
+      model::BodyLayerOptions case_layer = setup.layer_options;
+      case_layer.mass = mass;
+      reduced::ReducedOptions solver_options = a.tuned;
+      solver_options.integrator = integrator;
+      auto body =
+          make_body(setup.model, body::Betas::Zero(), setup.motion, 0.0, case_layer, setup.options, solver_options);
+      coordinates = body->model.subspace.num_dofs();
+      Case c{integrator, mass, {}, 0.0};
+      const auto t = Clock::now();
+      for (int f = 0; f < a.frames; ++f) advance(*body, kStep, c.breakdown);
+      c.wall = seconds_since(t);
+      if (const reduced::CubatureGuard* guard = body->integrator->guard()) {
+        c.guard_full_checks = guard->full_checks();
+        c.guard_checks = guard->checks();
+        c.guard_passes = guard->tet_passes();
+        c.guard_seconds = guard->pass_seconds() + guard->renew_seconds();
+      }
+      c.cubature_added = body->integrator->cubature_added();
+      cases.push_back(c);
     }
   }
+  return cases;
+}
+
+struct CrowdResult {
+  Breakdown total;  ///< summed over the bodies
+  double wall = 0.0, build_seconds = 0.0;
+};
+
+/// The crowd: random shapes (β ~ N(0, 1), clamped to ±2.5) and time offsets, parallel over bodies, with the first
+/// integrator and mass.
+CrowdResult run_crowd(const Arguments& a, const Setup& setup) {
+  model::BodyLayerOptions crowd_layer = setup.layer_options;
+  crowd_layer.mass = setup.masses.front();
+  reduced::ReducedOptions crowd_solver = a.tuned;
+  crowd_solver.integrator = setup.integrators.front();
+  std::mt19937 rng(20231212);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  std::uniform_int_distribution<int> offset(0, kOffsetFrames);
+  std::vector<std::unique_ptr<Body>> bodies;
+  CrowdResult result;
+  const auto t_build = Clock::now();
+  for (int b = 0; b < a.crowd; ++b) {
+    body::Betas beta;
+    for (int k = 0; k < beta.size(); ++k) beta[k] = std::clamp(normal(rng), -2.5, 2.5);
+    bodies.push_back(
+        make_body(setup.model, beta, setup.motion, offset(rng) / 60.0, crowd_layer, setup.options, crowd_solver));
+  }
+  result.build_seconds = seconds_since(t_build);
+  std::vector<Breakdown> per_body(bodies.size());
+  tbb::task_arena arena(a.threads);
+  const auto t_crowd = Clock::now();
+  for (int f = 0; f < a.frames; ++f)
+    arena.execute([&] {
+      tbb::parallel_for(std::size_t{0}, bodies.size(), [&](std::size_t b) { advance(*bodies[b], kStep, per_body[b]); });
+    });
+  result.wall = seconds_since(t_crowd);
+  for (const Breakdown& b : per_body) {
+    result.total.step += b.step;
+    result.total.elastic += b.elastic;
+    result.total.inertia += b.inertia;
+    result.total.solve += b.solve;
+    result.total.output += b.output;
+    result.total.newton += b.newton;
+    result.total.factorizations += b.factorizations;
+  }
+  return result;
+}
+
+double ms(double seconds, double count) { return 1e3 * seconds / count; }
+
+/// Prints the one-body rows; returns them as JSON.
+nlohmann::json report_one_body_cases(const std::vector<Case>& cases, int frames) {
+  nlohmann::json combinations = nlohmann::json::array();
+  for (const Case& c : cases) {
+    const Breakdown& b = c.breakdown;
+    const std::string label = fmt::format("1 body, {}, {}", model::to_string(c.integrator), model::to_string(c.mass));
+    std::cout << fmt::format(
+        "{:<36} {:>8.1f} {:>10.3f} {:>10.3f} {:>10.3f} {:>10.3f} {:>10.3f} {:>10.3f} {:>8.2f} {:>8.2f} {:>12}\n", label,
+        frames / c.wall, ms(c.wall, frames), ms(b.elastic, frames), ms(c.guard_seconds, frames), ms(b.inertia, frames),
+        ms(b.solve, frames), ms(b.output, frames), static_cast<double>(b.newton) / frames,
+        static_cast<double>(b.factorizations) / frames, &c == &cases.front() ? "30 (1 thr)" : "");
+    combinations.push_back({{"integrator", model::to_string(c.integrator)},
+                            {"mass", model::to_string(c.mass)},
+                            {"threads", 1},
+                            {"fps", frames / c.wall},
+                            {"ms_per_frame", ms(c.wall, frames)},
+                            {"elastic_ms", ms(b.elastic, frames)},
+                            {"inertia_ms", ms(b.inertia, frames)},
+                            {"solve_ms", ms(b.solve, frames)},
+                            {"output_ms", ms(b.output, frames)},
+                            {"newton_per_frame", static_cast<double>(b.newton) / frames},
+                            {"factorizations_per_frame", static_cast<double>(b.factorizations) / frames},
+                            {"startup_steps", b.startup},
+                            {"failed_attempts", b.failed},
+                            {"substeps", b.substeps},
+                            {"guard",
+                             {{"ms_per_frame", ms(c.guard_seconds, frames)},
+                              {"checks", c.guard_checks},
+                              {"per_tet_passes", c.guard_passes},
+                              {"renewals", c.guard_full_checks},
+                              {"cubature_added", c.cubature_added}}}});
+  }
+  return combinations;
+}
+
+/// Prints the crowd row (none for --crowd 0); returns it as JSON (null for --crowd 0).
+nlohmann::json report_crowd(const Arguments& a, const Setup& setup, const CrowdResult& crowd) {
+  const double n = static_cast<double>(a.frames) * a.crowd;
+  const Breakdown& total = crowd.total;
+  const double crowd_fps = a.frames / crowd.wall;
+  if (a.crowd > 0)
+    std::cout << fmt::format(
+        "{:<36} {:>8.1f} {:>10.3f} {:>10.3f} {:>10} {:>10.3f} {:>10.3f} {:>10.3f} {:>8.2f} {:>8.2f} {:>12}\n",
+        fmt::format("{} bodies, {} threads", a.crowd, a.threads), crowd_fps, ms(crowd.wall, a.frames),
+        ms(total.elastic, n), "", ms(total.inertia, n), ms(total.solve, n), ms(total.output, n),
+        static_cast<double>(total.newton) / n, static_cast<double>(total.factorizations) / n, "1.2 (1 thr)");
+  std::cout << fmt::format(
+      "\n(ms per frame; newton and factor: Newton iterations and Hessian factorizations per frame; the crowd runs {} "
+      "with {} masses, its breakdown columns are per body and frame; crowd built in {:.1f} s)\n",
+      model::to_string(setup.integrators.front()), model::to_string(setup.masses.front()), crowd.build_seconds);
+  if (a.crowd == 0) return nlohmann::json(nullptr);
+  return {{"bodies", a.crowd},
+          {"threads", a.threads},
+          {"fps", crowd_fps},
+          {"ms_per_frame", ms(crowd.wall, a.frames)},
+          {"elastic_ms_per_body", ms(total.elastic, n)},
+          {"inertia_ms_per_body", ms(total.inertia, n)},
+          {"solve_ms_per_body", ms(total.solve, n)},
+          {"output_ms_per_body", ms(total.output, n)},
+          {"build_seconds", crowd.build_seconds},
+          {"paper_fps", 1.2}};
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Arguments a;
+  if (!parse_arguments(argc, argv, a)) return 2;
   try {
     logger()->set_level(spdlog::level::warn);
-    const body::BodyModel model = body::load_body(std::filesystem::path(SFLSH_DATA_DIR) / "open_body.npz");
-    model::BodyLayerOptions layer_options;
-    layer_options.size = meshing::parse_size_preset(mesh);
-    reduced::ReducedModelOptions options;
-    options.point_handles = handles;
-    options.cubature = cubature;
-    const double h = 1.0 / 60.0;
-    const int offset_frames = 60;  // crowd members start up to 1 s apart
-    const body::Motion motion = body::make_procedural_motion(motion_name, 60.0, frames + offset_frames + 2);
-
-    std::vector<model::Integrator> integrators;
-    for (const std::string& name : split_list(integrator_list))
-      integrators.push_back(model::parse_integrator(name, "--integrators"));
-    std::vector<model::MassKind> masses;
-    for (const std::string& name : split_list(mass_list)) masses.push_back(model::parse_mass_kind(name, "--masses"));
-    require(!integrators.empty() && !masses.empty(), "--integrators and --masses need at least one entry each");
-
-    // One body, one thread, per integrator × mass.
-    struct Case {
-      model::Integrator integrator;
-      model::MassKind mass;
-      Breakdown breakdown;
-      double wall = 0.0;
-      int guard_full_checks = 0, guard_checks = 0, guard_passes = 0, cubature_added = 0;
-      double guard_seconds = 0.0;  ///< per-tet passes and renewals [s]
-    };
-    std::vector<Case> cases;
+    const Setup setup = make_setup(a);
     int coordinates = 0;
-    for (model::MassKind mass : masses) {
-      for (model::Integrator integrator : integrators) {
-        model::BodyLayerOptions case_layer = layer_options;
-        case_layer.mass = mass;
-        reduced::ReducedOptions solver_options = tuned;
-        solver_options.integrator = integrator;
-        auto body = make_body(model, body::Betas::Zero(), motion, 0.0, case_layer, options, solver_options);
-        coordinates = body->model.subspace.num_dofs();
-        Case c{integrator, mass, {}, 0.0};
-        const auto t = Clock::now();
-        for (int f = 0; f < frames; ++f) advance(*body, h, c.breakdown);
-        c.wall = seconds_since(t);
-        if (const reduced::CubatureGuard* guard = body->integrator->guard()) {
-          c.guard_full_checks = guard->full_checks();
-          c.guard_checks = guard->checks();
-          c.guard_passes = guard->tet_passes();
-          c.guard_seconds = guard->pass_seconds() + guard->renew_seconds();
-        }
-        c.cubature_added = body->integrator->cubature_added();
+    const std::vector<Case> cases = run_one_body_cases(a, setup, coordinates);
+    const CrowdResult crowd = run_crowd(a, setup);
 
-        cases.push_back(c);
-      }
-    }
-    const Breakdown& one = cases.front().breakdown;
-    const double one_wall = cases.front().wall;
-    model::BodyLayerOptions crowd_layer = layer_options;
-    crowd_layer.mass = masses.front();
-    reduced::ReducedOptions crowd_solver = tuned;
-    crowd_solver.integrator = integrators.front();
-    // The crowd: random shapes (β ~ N(0, 1), clamped to ±2.5) and time offsets, parallel over bodies.
-    std::mt19937 rng(20231212);
-    std::normal_distribution<double> normal(0.0, 1.0);
-    std::uniform_int_distribution<int> offset(0, offset_frames);
-    std::vector<std::unique_ptr<Body>> bodies;
-    const auto t_build = Clock::now();
-    for (int b = 0; b < crowd; ++b) {
-      body::Betas beta;
-      for (int k = 0; k < beta.size(); ++k) beta[k] = std::clamp(normal(rng), -2.5, 2.5);
-      bodies.push_back(make_body(model, beta, motion, offset(rng) / 60.0, crowd_layer, options, crowd_solver));
-    }
-    const double build_seconds = seconds_since(t_build);
-    std::vector<Breakdown> per_body(bodies.size());
-    tbb::task_arena arena(threads);
-    const auto t_crowd = Clock::now();
-    for (int f = 0; f < frames; ++f)
-      arena.execute([&] {
-        tbb::parallel_for(std::size_t{0}, bodies.size(), [&](std::size_t b) { advance(*bodies[b], h, per_body[b]); });
-      });
-    const double crowd_wall = seconds_since(t_crowd);
-    Breakdown total;
-    for (const Breakdown& b : per_body) {
-      total.step += b.step;
-      total.elastic += b.elastic;
-      total.inertia += b.inertia;
-      total.solve += b.solve;
-      total.output += b.output;
-      total.newton += b.newton;
-      total.factorizations += b.factorizations;
-    }
-
-    const double one_fps = frames / one_wall, crowd_fps = frames / crowd_wall;
-    const auto ms = [&](double s, double n) { return 1e3 * s / n; };
     std::cout << fmt::format(
-        "reduced model: {} mesh, {} point handles ({} coordinates), {} cubature tets, {} frames of 1/60 s\n\n", mesh,
-        handles, coordinates, cubature, frames);
+        "reduced model: {} mesh, {} point handles ({} coordinates), {} cubature tets, {} frames of 1/60 s\n\n", a.mesh,
+        a.handles, coordinates, a.cubature, a.frames);
     std::cout << fmt::format("{:<36} {:>8} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10} {:>8} {:>8} {:>12}\n", "case",
                              "fps", "ms/frame", "elastic", "(guard)", "inertia", "solve", "output", "newton", "factor",
                              "paper fps");
-    nlohmann::json combinations = nlohmann::json::array();
-    for (const Case& c : cases) {
-      const Breakdown& b = c.breakdown;
-      const std::string label = fmt::format("1 body, {}, {}", model::to_string(c.integrator), model::to_string(c.mass));
-      std::cout << fmt::format(
-          "{:<36} {:>8.1f} {:>10.3f} {:>10.3f} {:>10.3f} {:>10.3f} {:>10.3f} {:>10.3f} {:>8.2f} {:>8.2f} {:>12}\n",
-          label, frames / c.wall, ms(c.wall, frames), ms(b.elastic, frames), ms(c.guard_seconds, frames),
-          ms(b.inertia, frames), ms(b.solve, frames), ms(b.output, frames), static_cast<double>(b.newton) / frames,
-          static_cast<double>(b.factorizations) / frames, &c == &cases.front() ? "30 (1 thr)" : "");
-      combinations.push_back({{"integrator", model::to_string(c.integrator)},
-                              {"mass", model::to_string(c.mass)},
-                              {"threads", 1},
-                              {"fps", frames / c.wall},
-                              {"ms_per_frame", ms(c.wall, frames)},
-                              {"elastic_ms", ms(b.elastic, frames)},
-                              {"inertia_ms", ms(b.inertia, frames)},
-                              {"solve_ms", ms(b.solve, frames)},
-                              {"output_ms", ms(b.output, frames)},
-                              {"newton_per_frame", static_cast<double>(b.newton) / frames},
-                              {"factorizations_per_frame", static_cast<double>(b.factorizations) / frames},
-                              {"startup_steps", b.startup},
-                              {"failed_attempts", b.failed},
-                              {"substeps", b.substeps},
-                              {"guard",
-                               {{"ms_per_frame", ms(c.guard_seconds, frames)},
-                                {"checks", c.guard_checks},
-                                {"per_tet_passes", c.guard_passes},
-                                {"renewals", c.guard_full_checks},
-                                {"cubature_added", c.cubature_added}}}});
-    }
-    const double n = static_cast<double>(frames) * crowd;
-    if (crowd > 0)  // --crowd 0: no crowd row (nothing was run)
-      std::cout << fmt::format(
-          "{:<36} {:>8.1f} {:>10.3f} {:>10.3f} {:>10} {:>10.3f} {:>10.3f} {:>10.3f} {:>8.2f} {:>8.2f} {:>12}\n",
-          fmt::format("{} bodies, {} threads", crowd, threads), crowd_fps, ms(crowd_wall, frames), ms(total.elastic, n),
-          "", ms(total.inertia, n), ms(total.solve, n), ms(total.output, n), static_cast<double>(total.newton) / n,
-          static_cast<double>(total.factorizations) / n, "1.2 (1 thr)");
-    std::cout << fmt::format(
-        "\n(ms per frame; newton and factor: Newton iterations and Hessian factorizations per frame; the crowd runs {} "
-        "with {} masses, its breakdown columns are per body and frame; crowd built in {:.1f} s)\n",
-        model::to_string(integrators.front()), model::to_string(masses.front()), build_seconds);
-    const nlohmann::json crowd_json = crowd > 0 ? nlohmann::json{{"bodies", crowd},
-                                                                 {"threads", threads},
-                                                                 {"fps", crowd_fps},
-                                                                 {"ms_per_frame", ms(crowd_wall, frames)},
-                                                                 {"elastic_ms_per_body", ms(total.elastic, n)},
-                                                                 {"inertia_ms_per_body", ms(total.inertia, n)},
-                                                                 {"solve_ms_per_body", ms(total.solve, n)},
-                                                                 {"output_ms_per_body", ms(total.output, n)},
-                                                                 {"build_seconds", build_seconds},
-                                                                 {"paper_fps", 1.2}}
-                                                : nlohmann::json(nullptr);
-    write_json(out, {{"benchmark", "reduced"},
-                     {"mesh", mesh},
-                     {"point_handles", handles},
-                     {"coordinates", coordinates},
-                     {"cubature", cubature},
-                     {"frames", frames},
-                     {"one_body",
-                      {{"threads", 1},
-                       {"integrator", model::to_string(integrators.front())},
-                       {"mass", model::to_string(masses.front())},
-                       {"fps", one_fps},
-                       {"ms_per_frame", ms(one_wall, frames)},
-                       {"elastic_ms", ms(one.elastic, frames)},
-                       {"inertia_ms", ms(one.inertia, frames)},
-                       {"solve_ms", ms(one.solve, frames)},
-                       {"output_ms", ms(one.output, frames)},
-                       {"newton_per_frame", static_cast<double>(one.newton) / frames},
-                       {"paper_fps", 30.0}}},
-                     {"one_body_cases", combinations},
-                     {"crowd", crowd_json}});
-    std::cout << "wrote " << out << "\n";
+    const nlohmann::json combinations = report_one_body_cases(cases, a.frames);
+    const nlohmann::json crowd_json = report_crowd(a, setup, crowd);
+    const Breakdown& one = cases.front().breakdown;
+    const double one_wall = cases.front().wall;
+    write_json(a.out, {{"benchmark", "reduced"},
+                       {"mesh", a.mesh},
+                       {"point_handles", a.handles},
+                       {"coordinates", coordinates},
+                       {"cubature", a.cubature},
+                       {"frames", a.frames},
+                       {"one_body",
+                        {{"threads", 1},
+                         {"integrator", model::to_string(setup.integrators.front())},
+                         {"mass", model::to_string(setup.masses.front())},
+                         {"fps", a.frames / one_wall},
+                         {"ms_per_frame", ms(one_wall, a.frames)},
+                         {"elastic_ms", ms(one.elastic, a.frames)},
+                         {"inertia_ms", ms(one.inertia, a.frames)},
+                         {"solve_ms", ms(one.solve, a.frames)},
+                         {"output_ms", ms(one.output, a.frames)},
+                         {"newton_per_frame", static_cast<double>(one.newton) / a.frames},
+                         {"paper_fps", 30.0}}},
+                       {"one_body_cases", combinations},
+                       {"crowd", crowd_json}});
+    std::cout << "wrote " << a.out << "\n";
   } catch (const std::exception& e) {
     std::cerr << "bench_reduced: " << e.what() << "\n";
     return 1;

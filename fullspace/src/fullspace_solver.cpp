@@ -32,18 +32,25 @@ Eigen::VectorXd flattened(const RowMatrixX3d& positions) {
 void FullSpaceSolver::Impl::setup() {
   MPI_Comm_rank(comm, &rank);
   MPI_Comm_size(comm, &size);
-  const int n = problem.num_nodes();
-  partition = partition_nodes(n, problem.tets, size);
+  partition = partition_nodes(problem.num_nodes(), problem.tets, size);
   begin = partition.range[static_cast<std::size_t>(rank)];
   end = partition.range[static_cast<std::size_t>(rank) + 1];
-  const int local = end - begin;
 
   // Threads within a rank share the machine with the other ranks.
   const int threads =
       options.threads > 0 ? options.threads : std::max(1, tbb::this_task_arena::max_concurrency() / size);
   arena = std::make_unique<tbb::task_arena>(threads);
 
-  constrained = problem.dirichlet.mask(n);
+  constrained = problem.dirichlet.mask(problem.num_nodes());
+  distribute_tets();
+  create_terms();
+  create_vectors_and_matrix();
+  set_near_null_space();
+  set_dirichlet_diagonal();
+  create_snes();
+}
+
+void FullSpaceSolver::Impl::distribute_tets() {
   std::vector<int> lowest(static_cast<std::size_t>(problem.num_tets()));
   for (int e = 0; e < problem.num_tets(); ++e) {
     int& low = lowest[static_cast<std::size_t>(e)];
@@ -63,8 +70,11 @@ void FullSpaceSolver::Impl::setup() {
   };
   std::stable_sort(my_tets.begin(), my_tets.end(), by_lowest);
   std::stable_sort(row_tets.begin(), row_tets.end(), by_lowest);
-  create_terms();
+}
 
+void FullSpaceSolver::Impl::create_vectors_and_matrix() {
+  const int n = problem.num_nodes();
+  const int local = end - begin;
   // Block sparsity of the owned block rows (solver indices): every node pair sharing a tet.
   std::vector<std::vector<int>> adjacency(static_cast<std::size_t>(local));
   for (int e : row_tets) {
@@ -108,12 +118,13 @@ void FullSpaceSolver::Impl::setup() {
   SFLSH_PETSC(MatSetOption(J, MAT_ROW_ORIENTED, PETSC_FALSE));  // Eigen's column-major blocks
   SFLSH_PETSC(MatSetOption(J, MAT_SYMMETRIC, PETSC_TRUE));
   SFLSH_PETSC(MatSetOption(J, MAT_SYMMETRY_ETERNAL, PETSC_TRUE));
+}
 
-  set_near_null_space();
-  set_dirichlet_diagonal();
+void FullSpaceSolver::Impl::create_snes() {
   // The project's defaults are set on the objects before SNESSetFromOptions, so any -snes_*, -ksp_*, -pc_*
   // option (command line, PETSC_OPTIONS, -options_file) overrides them, and nothing leaks into the global
   // options database that a later solver in the same process would mistake for a user choice.
+  const std::string& prefix = options.options_prefix;
   SFLSH_PETSC(SNESCreate(comm, &snes));
   if (!prefix.empty()) SFLSH_PETSC(SNESSetOptionsPrefix(snes, prefix.c_str()));
   SFLSH_PETSC(SNESSetFunction(snes, F, &Impl::function_cb, this));
@@ -130,7 +141,7 @@ void FullSpaceSolver::Impl::setup() {
   SFLSH_PETSC(KSPSetTolerances(ksp, options.default_ksp_rtol, PETSC_DEFAULT, PETSC_DEFAULT, PETSC_DEFAULT));
   SFLSH_PETSC(KSPGetPC(ksp, &pc));
   const bool dynamic = !options.quasi_static && problem.dynamic();
-  SFLSH_PETSC(PCSetType(pc, default_pc_type(3 * n, size, dynamic, options.preconditioner)));
+  SFLSH_PETSC(PCSetType(pc, default_pc_type(3 * problem.num_nodes(), size, dynamic, options.preconditioner)));
   SNESLineSearch linesearch = nullptr;
   SFLSH_PETSC(SNESGetLineSearch(snes, &linesearch));
   SFLSH_PETSC(SNESLineSearchSetType(linesearch, SNESLINESEARCHSHELL));

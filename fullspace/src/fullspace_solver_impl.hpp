@@ -197,9 +197,12 @@ struct FullSpaceSolver::Impl {
   } pc_reuse;
   /// Rebuilds or keeps the preconditioner for the solve that follows this Jacobian (SNES's lag −2 / −1).
   void choose_pc_rebuild(SNES s);
-  void set_near_null_space();      ///< the rigid-body modes of the rest coordinates on J (for GAMG)
-  void set_dirichlet_diagonal();   ///< dirichlet_diagonal from the elastic diagonal at rest
-  void configure_pc_reuse(PC pc);  ///< pc_reuse.enabled for the configured preconditioner
+  void distribute_tets();            ///< my_tets and row_tets of this rank, ordered by their lowest solver index
+  void create_vectors_and_matrix();  ///< X, F, the scatter to all, and J preallocated from the tets' node pairs
+  void create_snes();                ///< SNES, CG, the preconditioner and the line search with the project's defaults
+  void set_near_null_space();        ///< the rigid-body modes of the rest coordinates on J (for GAMG)
+  void set_dirichlet_diagonal();     ///< dirichlet_diagonal from the elastic diagonal at rest
+  void configure_pc_reuse(PC pc);    ///< pc_reuse.enabled for the configured preconditioner
   /// Φ at the point the line search last accepted (valid within one SNESSolve): the next Newton iteration's
   /// line search starts there, so its Φ(x₀) is this value instead of a second evaluation.
   bool accepted_phi_valid = false;

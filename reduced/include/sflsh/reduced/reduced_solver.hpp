@@ -172,9 +172,29 @@ class ReducedSolver final : public model::BodySolver {
  private:
   class Ladder;  ///< the solver on the model's robustness ladder (model/step_ladder.hpp)
   Eigen::VectorXd prescribed_state(double t) const;
-  /// One substep from the current state; `startup` counts a BDF2 substep taken as backward Euler.
+  /// One substep from the current state; `startup` counts a BDF2 substep taken as backward Euler
+  /// (reduced_solver_substep.cpp: the steps below).
   bool solve_substep(double t0, double dt, material::HessianProjection projection, model::StepStats& stats,
                      std::string& reason, int& startup);
+  struct Substep;  ///< what one substep's steps share: times, targets, the start and the sum of terms
+  enum class GuardOutcome { clear, enlarged, failed };
+  void set_substep_targets(Substep& s, model::StepStats& stats);
+  void begin_substep_potentials(Substep& s, model::StepStats& stats);
+  void collect_substep_terms(Substep& s, model::StepStats& stats) const;
+  /// The start of Newton: x_start or the predicted state, whichever has the lower Φ.
+  bool start_iterate(const Substep& s, Eigen::VectorXd& q, double& phi, std::string& reason) const;
+  bool substep_gradient(const Substep& s, const Eigen::VectorXd& q, Eigen::VectorXd& gradient,
+                        std::string& reason) const;
+  /// The Hessian of Φ at q, factorized into factor_.
+  bool factorize(const Substep& s, const Eigen::VectorXd& q, Eigen::MatrixXd& hessian, model::StepStats& stats,
+                 std::string& reason);
+  /// Newton with backtracking on Φ, reusing the factor while it contracts the gradient.
+  bool newton(const Substep& s, Eigen::VectorXd& q, double phi, model::StepStats& stats, std::string& reason);
+  GuardOutcome check_guard(const Substep& s, const Eigen::VectorXd& q, int& enlargements, model::StepStats& stats,
+                           std::string& reason);
+  /// Whether the node potentials and the coupled system accept q (or refinements are exhausted): the substep ends.
+  bool contact_settled(const Substep& s, const Eigen::VectorXd& q, int refinement, model::StepStats& stats);
+  void commit_substep(const Substep& s, const Eigen::VectorXd& q, model::StepStats& stats, int& startup);
   /// Newmark's p̈ at the inertia nodes for the current q and time (zero without inertia).
   Eigen::VectorXd initial_acceleration() const;
   /// Adds the guard's violations to the cubature (reduced_solver_guard.cpp).
