@@ -105,7 +105,10 @@ void add_layer_summary(nlohmann::json& summary, const meshing::SubjectLayer& sub
   summary["quality"] = layer.quality;
   // true: the template inverted tets at this shape and thickness, and the subject's own layer was meshed (cached)
   summary["remeshed"] = subject.remeshed;
-  if (subject.remeshed) summary["template_failure"] = subject.template_failure;
+  if (subject.remeshed) {
+    summary["template_failure"] = subject.template_failure;
+    summary["fallback"] = subject.fallback;
+  }
 }
 
 void run_mesh(const MeshOptions& opt, const Invocation& invocation) {

@@ -103,11 +103,25 @@ std::string body_fingerprint(const body::BodyModel& model) {
   return fmt::format("{:016x}", fnv.hash);
 }
 
+namespace {
+
+/// A layered mesh with a prism-layer count other than its size preset's.
+bool explicit_layers(const LayerMeshOptions& options) {
+  if (options.mesher != Mesher::layered || options.layers == 0) return false;
+  LayerMeshOptions preset = options;
+  preset.layers = 0;
+  return options.layers != layered_prism_layers(preset);
+}
+
+}  // namespace
+
 std::string layer_cache_key(const body::BodyModel& model, const LayerMeshOptions& options) {
   const auto names = options.region_names.empty() ? default_region_names() : options.region_names;
-  return fmt::format("body={} format={} region={} mesher={} size={} h={:.6f}", body_fingerprint(model),
+  // An explicit prism-layer count (layered only) joins the key; the presets' keys stay as they were.
+  const std::string layers = explicit_layers(options) ? fmt::format(" layers={}", options.layers) : std::string();
+  return fmt::format("body={} format={} region={} mesher={} size={} h={:.6f}{}", body_fingerprint(model),
                      kLayerMeshFormat, region_key(names), mesher_name(options.mesher), size_preset_name(options.size),
-                     options.template_thickness);
+                     options.template_thickness, layers);
 }
 
 std::filesystem::path default_cache_dir() {
@@ -123,8 +137,9 @@ std::filesystem::path layer_cache_path(const std::filesystem::path& dir, const b
   for (char& c : body_name)
     if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '_') c = '_';
   const auto names = options.region_names.empty() ? default_region_names() : options.region_names;
-  return dir / fmt::format("layer-{}-{}-{}-{}-h{:.3f}.npz", body_name, region_key(names), mesher_name(options.mesher),
-                           size_preset_name(options.size), options.template_thickness);
+  const std::string layers = explicit_layers(options) ? fmt::format("-L{}", options.layers) : std::string();
+  return dir / fmt::format("layer-{}-{}-{}-{}{}-h{:.3f}.npz", body_name, region_key(names), mesher_name(options.mesher),
+                           size_preset_name(options.size), layers, options.template_thickness);
 }
 
 void save_layer_mesh(const std::filesystem::path& path, const LayerMesh& mesh, const std::string& key) {

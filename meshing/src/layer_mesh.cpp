@@ -131,6 +131,14 @@ QualityReport layer_quality(const LayerMesh& mesh, const RowMatrixX3d& nodes, co
   return report;
 }
 
+int layered_prism_layers(const LayerMeshOptions& options) {
+  require(options.layers >= 0 && options.layers <= 64,
+          "layered mesh: {} prism layers; expected 1 to 64 (0: the size "
+          "preset's)",
+          options.layers);
+  return options.layers > 0 ? options.layers : detail::layered_layers(options.size);
+}
+
 LayerMesh build_layer_mesh(const body::BodyModel& model, const LayerMeshOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   LayerMesh mesh;
@@ -154,7 +162,7 @@ LayerMesh build_layer_mesh(const body::BodyModel& model, const LayerMeshOptions&
                                            build_layer_surface(region, geometry, 1.0, 1).surface.triangles, true);
     require(check.ok(), "layer '{}' at h = {}: the closed layer boundary is not a valid surface ({})", mesh.region,
             mesh.template_thickness, check.summary());
-    detail::build_layered(mesh, geometry, detail::layered_layers(options.size));
+    detail::build_layered(mesh, geometry, layered_prism_layers(options));
     mesh.node_part.resize(static_cast<std::size_t>(mesh.num_nodes()));
     for (int i = 0; i < mesh.num_nodes(); ++i)
       mesh.node_part[static_cast<std::size_t>(i)] =
@@ -171,8 +179,9 @@ LayerMesh build_layer_mesh(const body::BodyModel& model, const LayerMeshOptions&
     require(quality.valid(), "layer '{}' (layered): {} inverted and {} degenerate tets in the template", mesh.region,
             quality.inverted, quality.degenerate);
     mesh.meshing_seconds = seconds_since(start);
-    logger()->info("layer '{}' (layered, {}): {} nodes, {} tets in {:.1f} s", mesh.region,
-                   size_preset_name(options.size), mesh.num_nodes(), mesh.num_tets(), mesh.meshing_seconds);
+    logger()->info("layer '{}' (layered, {}, {} prism layers): {} nodes, {} tets in {:.1f} s", mesh.region,
+                   size_preset_name(options.size), layered_prism_layers(options), mesh.num_nodes(), mesh.num_tets(),
+                   mesh.meshing_seconds);
     return mesh;
   }
 

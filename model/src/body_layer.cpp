@@ -83,6 +83,7 @@ BodyLayer build_body_layer(const body::BodyModel& model, const body::Betas& beta
   }
   out.layer = std::move(subject.layer);
   out.remeshed = subject.remeshed;
+  out.fallback = subject.fallback;
   out.mesh = std::move(subject.mesh);
   const meshing::LayerMesh& mesh = *out.mesh;
   const meshing::Retargeter& retargeter = *subject.retargeter;

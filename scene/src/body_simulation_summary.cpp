@@ -42,7 +42,11 @@ nlohmann::json BodySimulation::summary() const {
                      {"size", settings_.mesh},
                      {"nodes", layer_->problem.num_nodes()},
                      {"tets", layer_->problem.num_tets()},
-                     {"constrained_dofs", layer_->problem.dirichlet.dof.size()}};
+                     {"constrained_dofs", layer_->problem.dirichlet.dof.size()},
+                     // the template inverted tets at this shape and thickness: which layer replaced it
+                     {"remeshed", layer_->remeshed},
+                     {"fallback", layer_->fallback},
+                     {"layer_mesher", meshing::mesher_name(layer_->mesh->mesher)}};
   summary["material"] = model::material_summary(settings_.layer, material_file_);
   if (reduced_model_) {
     summary["reduced"] = {

@@ -1,5 +1,6 @@
 // Every mesher × named subject × thickness gives a valid layer (docs/meshing.md, "Every mesher at every thickness"):
-// the coarse template retargeted or, where that inverts tets, the subject's own layer (meshing/subject_layer.hpp).
+// the coarse template retargeted or, where that inverts tets, the subject's own layer by the same mesher or the
+// layered mesh with more prism layers (meshing/subject_layer.hpp).
 // The whole sweep (3 meshers × 22 subjects × h = 0.1…0.9) is a long test that writes its table to the build tree
 // (meshing-sweep/thickness.md); a slice runs in every CI run.
 #include "layer_fixture.hpp"
@@ -10,6 +11,7 @@
 #include <sflsh/meshing/subject_layer.hpp>
 
 #include <fmt/format.h>
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -25,7 +27,9 @@ using sflsh::testing::coarse_options;
 using sflsh::testing::open_body;
 
 struct Outcome {
-  std::string kind;  ///< ok (template retargeted), remeshed (the subject's own layer) or failed
+  /// ok (template retargeted), remeshed (the subject's own layer by the same mesher), layered×L (the layered mesh
+  /// with L prism layers) or failed
+  std::string kind;
   double min_dihedral_deg = 0.0;
   std::string error;
 };
@@ -37,7 +41,10 @@ Outcome layer_outcome(Mesher mesher, const body::Subject& subject, double thickn
                                              Eigen::VectorXd::Constant(mesh.region_surface.num_vertices(), thickness),
                                              coarse_options(mesher), SFLSH_TEST_CACHE);
     EXPECT_TRUE(layer.layer.quality.valid()) << "a returned layer is always valid";
-    return {layer.remeshed ? "remeshed" : "ok", layer.layer.quality.min_dihedral_deg, ""};
+    std::string kind = layer.remeshed ? "remeshed" : "ok";
+    if (layer.remeshed && layer.mesh->mesher == Mesher::layered)
+      kind = fmt::format("layered×{}", layer.mesh->num_nodes() / layer.mesh->region_surface.num_vertices() - 1);
+    return {kind, layer.layer.quality.min_dihedral_deg, ""};
   } catch (const Error& e) {
     return {"failed", 0.0, e.what()};
   }
@@ -68,11 +75,32 @@ const std::vector<Mesher> kMeshers = {Mesher::layered, Mesher::gmsh, Mesher::cga
 
 TEST(ThicknessSweep, SliceOfEveryMesherGivesValidLayers) {
   // The hardest Table-1 shape and the hardest open test subject (docs/meshing.md §6) at a thin, the template's and a
-  // thick layer. Layered coarse stops at h = 0.6: above, its prisms twist at the crotch on the template and on the
-  // subject alike (radius-edge ratio 77–87 against the fallback floor of 50), which the long sweep reports.
+  // thick layer; layered up to 0.9, where its single coarse prism layer twists at the crotch and the fallback takes
+  // 2, 4, 8 layers (a second each); cgal at 0.1, where its thin layer over concave skin fails on the template and on
+  // the subject alike and the layered mesh takes over (~20 s: the subject is meshed twice first).
   std::string table = sweep({Mesher::gmsh, Mesher::cgal}, {"TEST_3", "OPEN_TEST_3"}, {0.3, 0.5, 0.7});
-  table += sweep({Mesher::layered}, {"TEST_3", "OPEN_TEST_3"}, {0.3, 0.5, 0.6});
+  table += sweep({Mesher::layered}, {"TEST_3", "OPEN_TEST_3"}, {0.3, 0.5, 0.7, 0.8, 0.9});
+  table += sweep({Mesher::cgal}, {"TEST_3"}, {0.1});
   RecordProperty("table", table);
+}
+
+TEST(ThicknessSweep, AFieldNoLayerTakesFailsNamingEveryTry) {
+  // A thickness alternating between 0.02 and 0.98 from one skin vertex to the next folds the inner surface over
+  // itself: no mesh of any layer count can follow it, so the error names the template's failure and every fallback.
+  const LayerMesh& mesh = coarse_layer(Mesher::layered);
+  Eigen::VectorXd h(mesh.region_surface.num_vertices());
+  for (int v = 0; v < h.size(); ++v) h(v) = (v % 2) ? 0.98 : 0.02;
+  std::string message;
+  try {
+    subject_layer(open_body(), mesh, body::Betas::Zero(), h, coarse_options(Mesher::layered), SFLSH_TEST_CACHE);
+  } catch (const Error& e) {
+    message = e.what();
+  }
+  EXPECT_THAT(message, ::testing::HasSubstr("inverts"));
+  EXPECT_THAT(message, ::testing::HasSubstr("the subject's own layer failed as well"));
+  for (int layers : {2, 4, 8, 16})
+    EXPECT_THAT(message, ::testing::HasSubstr(fmt::format("the layered mesh with {} prism layers:", layers)));
+  EXPECT_EQ(message.find('\n'), std::string::npos) << "one line";
 }
 
 TEST(ThicknessSweep, EveryMesherSubjectAndThicknessGivesAValidLayer) {
@@ -84,7 +112,8 @@ TEST(ThicknessSweep, EveryMesherSubjectAndThicknessGivesAValidLayer) {
       std::filesystem::path(SFLSH_TEST_CACHE).parent_path() / "meshing-sweep/thickness.md";
   std::filesystem::create_directories(report.parent_path());
   std::ofstream(report) << "# Mesher × subject × thickness (coarse): ok = template retargeted, remeshed = the "
-                           "subject's own layer; smallest dihedral angle\n\n"
+                           "subject's own layer, layered×L = the layered mesh with L prism layers; smallest dihedral "
+                           "angle\n\n"
                         << table;
   std::cout << table;
 }

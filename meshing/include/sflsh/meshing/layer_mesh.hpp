@@ -64,7 +64,14 @@ struct LayerMeshOptions {
   SizePreset size = SizePreset::medium;
   double template_thickness = 0.5;
   int threads = 2;
+  /// layered mesher only: prism layers through the thickness; 0: the size preset's (1, 2, 8 for coarse, default,
+  /// fine). More layers keep thick layers valid where the columns converge (docs/meshing.md, "Every mesher at every
+  /// thickness").
+  int layers = 0;
 };
+
+/// The prism layers the layered mesher builds with `options` (its `layers`, else the size preset's).
+int layered_prism_layers(const LayerMeshOptions& options);
 
 /// Meshes the template layer (β = 0, uniform h = template_thickness). Throws when the layer boundary
 /// self-intersects or the mesher returns inverted or degenerate tets.

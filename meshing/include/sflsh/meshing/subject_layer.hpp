@@ -28,6 +28,7 @@ struct SubjectLayer {
   RetargetedLayer layer;
   bool remeshed = false;         ///< the template inverted tets; the subject's own layer was meshed
   std::string template_failure;  ///< the template's retarget error when remeshed
+  std::string fallback;          ///< when remeshed: which layer replaced the template (subject_layer.cpp, fallbacks)
 };
 
 /// The layer of shape β with thickness field h (one value per region vertex of `template_mesh`): the template

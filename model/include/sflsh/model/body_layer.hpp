@@ -13,6 +13,7 @@
 
 #include <filesystem>
 #include <memory>
+#include <string>
 
 namespace sflsh::model {
 
@@ -34,6 +35,7 @@ struct BodyLayer {
   /// inverted tets (`remeshed`; meshing/subject_layer.hpp). On the heap so that references to it stay valid.
   std::unique_ptr<meshing::LayerMesh> mesh;
   bool remeshed = false;
+  std::string fallback;                  ///< when remeshed: the layer that replaced the template
   meshing::RetargetedLayer layer;        ///< nodes for (β, h)
   material::MaterialFile material;       ///< the material used (given, or the defaults)
   material::LayerMaterialFields fields;  ///< κ per region vertex, node, tet; normals per tet
