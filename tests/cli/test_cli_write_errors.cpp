@@ -1,6 +1,6 @@
-// Write errors (issue 45): a full file system and a file size limit while sflsh writes a run folder, a scene, a
-// layer mesh and its cache. Each is one line `sflsh: error: <path>: <what> (<strerror>)`, exit code 1, no signal,
-// and nothing left behind (no staging folder, no temporary or partial file).
+// Write errors (issue 45): a full file system, a file size limit, an I/O error and a quota while sflsh writes a run
+// folder, a scene, a layer mesh and its cache. Each is one line `sflsh: error: <path>: <what> (<strerror>)`, exit code
+// 1, no signal, and nothing left behind (no staging folder, no temporary or partial file).
 #include "run_command.hpp"
 #include "scratch_dir.hpp"
 
@@ -12,6 +12,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <csignal>
 #include <cstdlib>
 #include <filesystem>
@@ -48,18 +49,17 @@ class SmallFileSystem {
   bool mounted_ = false;
 };
 
-/// Runs sflsh with RLIMIT_FSIZE = `limit_bytes` and SIGXFSZ ignored in the child (so write() returns EFBIG).
-sflsh::testing::CommandResult run_sflsh_with_file_size_limit(const std::string& args,
-                                                             const std::filesystem::path& scratch, rlim_t limit_bytes) {
+/// Runs sflsh in a forked child after `prepare()` ran there (limits, signals, environment).
+template <class Prepare>
+sflsh::testing::CommandResult run_sflsh_prepared(const std::string& args, const std::filesystem::path& scratch,
+                                                 const Prepare& prepare) {
   const auto out_file = scratch / "cmd.stdout";
   const auto err_file = scratch / "cmd.stderr";
   const std::string command =
       std::string(SFLSH_CLI) + " " + args + " >" + out_file.string() + " 2>" + err_file.string();
   const pid_t pid = ::fork();
   if (pid == 0) {
-    std::signal(SIGXFSZ, SIG_IGN);
-    const rlimit limit{limit_bytes, limit_bytes};
-    ::setrlimit(RLIMIT_FSIZE, &limit);
+    prepare();
     ::execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
     ::_exit(127);
   }
@@ -72,6 +72,35 @@ sflsh::testing::CommandResult run_sflsh_with_file_size_limit(const std::string& 
   std::filesystem::remove(out_file);
   std::filesystem::remove(err_file);
   return result;
+}
+
+/// Runs sflsh with RLIMIT_FSIZE = `limit_bytes` and SIGXFSZ ignored in the child (so write() returns EFBIG).
+sflsh::testing::CommandResult run_sflsh_with_file_size_limit(const std::string& args,
+                                                             const std::filesystem::path& scratch, rlim_t limit_bytes) {
+  return run_sflsh_prepared(args, scratch, [limit_bytes] {
+    std::signal(SIGXFSZ, SIG_IGN);
+    const rlimit limit{limit_bytes, limit_bytes};
+    ::setrlimit(RLIMIT_FSIZE, &limit);
+  });
+}
+
+/// Runs sflsh with tests/support/write_fault.cpp preloaded: writes to files under `folder` fail with `error` once
+/// more than `after_bytes` went there.
+sflsh::testing::CommandResult run_sflsh_with_write_fault(const std::string& args, const std::filesystem::path& scratch,
+                                                         const std::filesystem::path& folder, int error,
+                                                         long long after_bytes) {
+  const std::filesystem::path shim =
+      std::filesystem::path(SFLSH_TEST_CACHE).parent_path() / "tests" / "libsflsh_write_fault.so";
+  EXPECT_TRUE(std::filesystem::exists(shim)) << shim;
+  const std::string dir = std::filesystem::absolute(folder).string();
+  const std::string code = std::to_string(error);
+  const std::string after = std::to_string(after_bytes);
+  return run_sflsh_prepared(args, scratch, [&] {
+    ::setenv("LD_PRELOAD", shim.c_str(), 1);
+    ::setenv("SFLSH_FAULT_DIR", dir.c_str(), 1);
+    ::setenv("SFLSH_FAULT_ERRNO", code.c_str(), 1);
+    ::setenv("SFLSH_FAULT_AFTER", after.c_str(), 1);
+  });
 }
 
 /// One line `sflsh: error: <path under folder>…: … (<reason>)`, exit code 1.
@@ -215,6 +244,40 @@ TEST(CliWriteErrors, FileSizeLimitInVtkAndHdf5Output) {
   expect_one_line_write_error(xdmf, dir, "File too large");
   EXPECT_THAT(xdmf.err, HasSubstr("body.h5"));
   EXPECT_FALSE(std::filesystem::exists(dir / "xdmf"));
+}
+
+// An I/O error and an exhausted quota, which no test machine gives on demand: the preloaded shim answers sflsh's
+// writes under one folder with EIO or EDQUOT after the first megabyte (a frame or two in: the background writer's
+// files) or at once (the cache entry). The same one line, exit code 1, nothing left behind.
+TEST(CliWriteErrors, IoErrorAndQuotaInARunAndACache) {
+#if defined(__SANITIZE_ADDRESS__)
+  GTEST_SKIP() << "a preloaded library cannot come before AddressSanitizer's runtime";
+#endif
+  const auto dir = sflsh::testing::scratch_dir();
+  const auto faulty = dir / "faulty";
+  std::filesystem::create_directories(faulty);
+  struct Case {
+    int error;
+    const char* reason;
+  };
+  for (const Case c : {Case{EIO, "Input/output error"}, Case{EDQUOT, "Disk quota exceeded"}}) {
+    SCOPED_TRACE(c.reason);
+    for (const char* format : {"vtk", "xdmf"}) {
+      SCOPED_TRACE(format);
+      const auto r = run_sflsh_with_write_fault(reduced_run(faulty / "run") + " --format " + format, dir, faulty,
+                                                c.error, 1 << 20);
+      expect_one_line_write_error(r, faulty, c.reason);
+      EXPECT_EQ(count_entries(faulty), 0u) << "a staging folder or partial file was left behind";
+    }
+    const auto r = run_sflsh_with_write_fault(
+        fmt::format("-q mesh --subject OPEN_TEST_3 --mesher layered --mesh coarse --cache {} --out {}",
+                    (faulty / "cache").string(), (dir / "layer").string()),
+        dir, faulty, c.error, 0);
+    expect_one_line_write_error(r, faulty / "cache", c.reason);
+    EXPECT_EQ(count_entries(faulty / "cache"), 0u) << "a partial cache entry was left behind";
+    EXPECT_FALSE(std::filesystem::exists(dir / "layer"));
+    std::filesystem::remove_all(faulty / "cache");
+  }
 }
 
 }  // namespace sflsh
