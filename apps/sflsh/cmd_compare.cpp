@@ -106,234 +106,262 @@ double correlation(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
   return norm > 0.0 ? (da * db).sum() / norm : std::nan("");
 }
 
-void run_compare(const CompareOptions& opt, const Invocation& invocation, int rank, int size) {
-  const auto t_start = Clock::now();
+/// The region's rows of the posed body surface of skin displacement u at time t.
+model::RowMatrixX3d posed_region(const model::BodyLayer& layer, const model::RowMatrixX3d& u, double t) {
+  const std::vector<int>& region = layer.mesh->region_surface.vertices;
+  const model::RowMatrixX3d all = layer.posed_surface_from_displacement(u, t);
+  model::RowMatrixX3d rows(static_cast<Eigen::Index>(region.size()), 3);
+  for (std::size_t r = 0; r < region.size(); ++r) rows.row(static_cast<Eigen::Index>(r)) = all.row(region[r]);
+  return rows;
+}
+
+/// What a comparison runs on: the checked options, the subject's layer and the motion. Not movable: the layer refers
+/// to the body model.
+struct CompareCase {
+  const CompareOptions& opt;
+  model::Integrator integrator = model::Integrator::bdf2;
+  std::vector<int> handle_sweep, cubature_sweep;
+  body::BodyModel model;
+  std::string subject_label;
+  body::Betas beta;
+  body::Motion motion;
+  std::optional<material::MaterialFile> material_file;
+  model::BodyLayer layer;
+  double build_seconds = 0.0;
+  int steps = 0;             ///< frames after the first
+  double h = 0.0;            ///< integrator step [s]
+  Eigen::Index regions = 0;  ///< region vertices
+
+  explicit CompareCase(const CompareOptions& options) : opt(options) {}
+  CompareCase(const CompareCase&) = delete;
+  CompareCase& operator=(const CompareCase&) = delete;
+
+  model::FrameLoopOptions frame_loop() const {
+    model::FrameLoopOptions loop;
+    loop.frames = steps + 1;
+    loop.fps = motion.fps;
+    loop.substeps = opt.substeps;
+    return loop;
+  }
+};
+
+/// Checks the options and builds the subject's layer for the motion (every input error before any solve).
+void prepare_case(CompareCase& c) {
+  const CompareOptions& opt = c.opt;
   require(opt.fps > 0.0 && opt.fps <= 1e4, "--fps must be in (0, 10000] frames per second, got {}", opt.fps);
   require(opt.substeps >= 1 && opt.substeps <= 1'000'000, "--substeps must be an integer in [1, 10⁶], got {}",
           opt.substeps);
   require(opt.frames >= 0, "--frames must be non-negative, got {}", opt.frames);
   check_layer_settings(opt.layer);
-  const model::Integrator integrator = model::parse_integrator(opt.integrator, "--integrator");
-  const std::vector<int> handle_sweep = parse_sweep(opt.handles, "--handles", 1);
-  std::vector<int> cubature_sweep = parse_sweep(opt.cubature, "--cubature", 0);
-  if (opt.exact_cubature && std::find(cubature_sweep.begin(), cubature_sweep.end(), 0) == cubature_sweep.end())
-    cubature_sweep.push_back(0);
+  c.integrator = model::parse_integrator(opt.integrator, "--integrator");
+  c.handle_sweep = parse_sweep(opt.handles, "--handles", 1);
+  c.cubature_sweep = parse_sweep(opt.cubature, "--cubature", 0);
+  if (opt.exact_cubature && std::find(c.cubature_sweep.begin(), c.cubature_sweep.end(), 0) == c.cubature_sweep.end())
+    c.cubature_sweep.push_back(0);
 
-  const body::BodyModel model = load_selected_body(opt.subject);
-  std::string subject_label;
-  const body::Betas beta = selected_betas(opt.subject, subject_label, "compare");
-  const body::Motion motion = body::load_motion(opt.motion, opt.fps, opt.frames);
-  motion.validate();
-  require(motion.num_frames() >= 2, "compare: the motion has {} frame(s); at least 2 are needed", motion.num_frames());
-  const std::optional<material::MaterialFile> material_file = load_layer_material(opt.layer);
+  c.model = load_selected_body(opt.subject);
+  c.beta = selected_betas(opt.subject, c.subject_label, "compare");
+  c.motion = body::load_motion(opt.motion, opt.fps, opt.frames);
+  c.motion.validate();
+  require(c.motion.num_frames() >= 2, "compare: the motion has {} frame(s); at least 2 are needed",
+          c.motion.num_frames());
+  c.material_file = load_layer_material(opt.layer);
   const auto t_build = Clock::now();
-  const model::BodyLayer layer =
-      model::build_body_layer(model, beta, motion, material_file ? &*material_file : nullptr, opt.layer.control_points,
-                              body_layer_options(opt.layer, opt.mesh));
-  const double build_seconds = seconds_since(t_build);
-  const model::Problem& problem = layer.problem;
-  const std::vector<int>& region = layer.mesh->region_surface.vertices;
-  const auto R = static_cast<Eigen::Index>(region.size());
-  const int steps = static_cast<int>(motion.num_frames()) - 1;
-  const double h = 1.0 / (motion.fps * opt.substeps);
+  c.layer = model::build_body_layer(c.model, c.beta, c.motion, c.material_file ? &*c.material_file : nullptr,
+                                    opt.layer.control_points, body_layer_options(opt.layer, opt.mesh));
+  c.build_seconds = seconds_since(t_build);
+  c.regions = static_cast<Eigen::Index>(c.layer.mesh->region_surface.vertices.size());
+  c.steps = static_cast<int>(c.motion.num_frames()) - 1;
+  c.h = 1.0 / (c.motion.fps * opt.substeps);
+}
 
-  // Every reduced model first (rank 0; cached beside the template mesh): a handle count the mesh cannot take
-  // fails here, before the expensive reference run.
+/// Every reduced model of the sweep (rank 0; cached beside the template mesh): a handle count the mesh cannot take
+/// fails here, before the expensive reference run.
+std::vector<std::unique_ptr<Configuration>> build_configurations(const CompareCase& c, int rank) {
+  check_handle_counts(c.layer, c.handle_sweep);  // all counts checked before any model is built (one message)
   std::vector<std::unique_ptr<Configuration>> configs;
-  const auto t_models = Clock::now();
-  check_handle_counts(layer, handle_sweep);  // all counts checked before any model is built (one message, no output)
-  if (rank == 0) {
-    for (int handles : handle_sweep) {
-      for (int k : cubature_sweep) {
-        auto c = std::make_unique<Configuration>();
-        c->handles = handles;
-        c->cubature_request = k;
-        c->model = reduced::build_reduced_model(layer, reduced_model_options(opt.reduced, handles, k, opt.layer.cache));
-        configs.push_back(std::move(c));
+  if (rank != 0) return configs;
+  for (int handles : c.handle_sweep)
+    for (int k : c.cubature_sweep) {
+      auto config = std::make_unique<Configuration>();
+      config->handles = handles;
+      config->cubature_request = k;
+      config->model =
+          reduced::build_reduced_model(c.layer, reduced_model_options(c.opt.reduced, handles, k, c.opt.layer.cache));
+      configs.push_back(std::move(config));
+    }
+  return configs;
+}
+
+/// The full-space reference run: its skin displacement per frame (kept for the error maps) and its posed region
+/// surface (for the trajectory error).
+struct FullReference {
+  std::vector<model::RowMatrixX3d> u, posed;
+  Eigen::VectorXd sigma;  ///< per region vertex [m]
+  double rms = 0.0;       ///< RMS of u over region vertices and frames [m]
+  double samples = 0.0;   ///< region vertices × frames
+  model::StepStats total;
+};
+
+FullReference run_full_reference(const CompareCase& c, int rank) {
+  FullReference full;
+  full.u.reserve(c.motion.num_frames());
+  full.posed.reserve(c.motion.num_frames());
+  fullspace::FullSpaceOptions options;
+  options.integrator = c.integrator;
+  fullspace::FullSpaceSolver solver(c.layer.problem, MPI_COMM_WORLD, options);
+  solver.initialize(model::initial_state(c.layer.problem, 0.0));
+  full.u.push_back(c.layer.surface_displacement(solver.state().x));
+  Progress progress("full-space frames", static_cast<std::size_t>(c.steps), rank == 0);
+  full.total = model::run_frames(solver, c.frame_loop(), [&](int f, double, const model::StepStats&) {
+    const model::State& state = solver.state();
+    require(state.x.allFinite(), "compare: the full-space state at t = {} is not finite",
+            c.motion.time(static_cast<std::size_t>(f)));
+    full.u.push_back(c.layer.surface_displacement(state.x));
+    progress.advance();
+  });
+  model::DynamicsAmplitude amplitude(region_normals(c.layer));
+  double sum_sq = 0.0;
+  for (std::size_t f = 0; f < full.u.size(); ++f) {
+    amplitude.add(full.u[f]);
+    full.posed.push_back(posed_region(c.layer, full.u[f], c.motion.time(f)));
+    sum_sq += full.u[f].squaredNorm();
+  }
+  full.sigma = amplitude.sigma();
+  full.samples = static_cast<double>(c.regions) * static_cast<double>(full.u.size());
+  full.rms = std::sqrt(sum_sq / full.samples);
+  return full;
+}
+
+/// One reduced configuration, frame by frame against the stored reference. The full-space elastic energy of each
+/// reduced state (outside the timing) checks that no tet left the material's range: a cubature too small for its
+/// subspace stays stable on its own points while the tets it does not sample deform freely.
+void run_configuration(Configuration& config, const CompareCase& c, const FullReference& full, Progress& progress) {
+  const model::Problem& problem = c.layer.problem;
+  reduced::ReducedOptions options;
+  options.integrator = c.integrator;
+  reduced::ReducedSolver solver(problem, config.model.subspace, config.model.cubature, options);
+  solver.initialize(model::initial_state(problem, 0.0));
+  model::DynamicsAmplitude amplitude(region_normals(c.layer));
+  config.error_sq = Eigen::VectorXd::Zero(c.regions);
+  // Named by the requested count (the per-function coverage may add a tet or two; every tet for exact cubature).
+  const std::string name = compare::config_suffix(
+      config.handles, config.cubature_request > 0 ? config.cubature_request : config.model.cubature.size());
+  auto record = [&](std::size_t f) {
+    const model::State state = solver.full_state();
+    const model::RowMatrixX3d u = c.layer.surface_displacement(state.x);
+    require(u.allFinite(), "compare: reduced {} state at t = {} is not finite", name, c.motion.time(f));
+    amplitude.add(u);
+    config.error_sq += (u - full.u[f]).rowwise().squaredNorm();
+    if (f > 0) {
+      const Eigen::VectorXd d2 = (posed_region(c.layer, u, c.motion.time(f)) - full.posed[f]).rowwise().squaredNorm();
+      config.trajectory_sq += d2.sum();
+      config.trajectory_max = std::max(config.trajectory_max, std::sqrt(d2.maxCoeff()));
+    }
+    if (config.invalid.empty()) {
+      try {
+        (void)model::energies(problem, state);
+      } catch (const Error& e) {
+        config.invalid = fmt::format("at t = {:.4f} s: {}", c.motion.time(f), e.what());
+        logger()->warn("reduced {}: the full-space state leaves the material's range {}", name, config.invalid);
       }
     }
-  }
-  const double models_seconds = seconds_since(t_models);
-  logger()->info(
-      "compare: {} nodes, {} tets, {} region vertices, {} frames at {} fps; reference on {} process(es), {} reduced "
-      "configuration(s)",
-      problem.num_nodes(), problem.num_tets(), R, motion.num_frames(), motion.fps, size,
-      handle_sweep.size() * cubature_sweep.size());
-
-  // The full-space reference: its skin displacement per frame is kept for the error maps, its posed region surface
-  // for the trajectory error.
-  std::vector<model::RowMatrixX3d> u_full, posed_full;
-  u_full.reserve(motion.num_frames());
-  posed_full.reserve(motion.num_frames());
-  auto posed_region = [&](const model::RowMatrixX3d& u, double t) {
-    const model::RowMatrixX3d all = layer.posed_surface_from_displacement(u, t);
-    model::RowMatrixX3d rows(R, 3);
-    for (Eigen::Index r = 0; r < R; ++r) rows.row(r) = all.row(region[static_cast<std::size_t>(r)]);
-    return rows;
   };
-  const model::RowMatrixX3d normals = region_normals(layer);
-  model::DynamicsAmplitude full_amplitude(normals);
-  double full_seconds = 0.0;
-  long full_newton = 0, full_linear = 0, full_retries = 0;
-  {
-    fullspace::FullSpaceOptions full_options;
-    full_options.integrator = integrator;
-    fullspace::FullSpaceSolver full(problem, MPI_COMM_WORLD, full_options);
-    full.initialize(model::initial_state(problem, 0.0));
-    u_full.push_back(layer.surface_displacement(full.state().x));
-    Progress progress("full-space frames", static_cast<std::size_t>(steps), rank == 0);
-    model::FrameLoopOptions loop;
-    loop.frames = steps + 1;
-    loop.fps = motion.fps;
-    loop.substeps = opt.substeps;
-    const model::StepStats total = model::run_frames(full, loop, [&](int f, double, const model::StepStats&) {
-      const model::State& state = full.state();
-      require(state.x.allFinite(), "compare: the full-space state at t = {} is not finite",
-              motion.time(static_cast<std::size_t>(f)));
-      u_full.push_back(layer.surface_displacement(state.x));
-      progress.advance();
-    });
-    full_seconds = total.seconds;
-    full_newton = total.newton_iterations;
-    full_linear = total.linear_iterations;
-    full_retries = total.failed_attempts;
-  }
-  for (const auto& u : u_full) full_amplitude.add(u);
-  for (std::size_t f = 0; f < u_full.size(); ++f) posed_full.push_back(posed_region(u_full[f], motion.time(f)));
-  const Eigen::VectorXd sigma_full = full_amplitude.sigma();
-  double full_sq = 0.0;
-  for (const auto& u : u_full) full_sq += u.squaredNorm();
-  const double samples = static_cast<double>(R) * static_cast<double>(u_full.size());
-  const double full_rms = std::sqrt(full_sq / samples);
-  logger()->info("full space: {:.3f} s per frame, mean σ = {:.3f} mm", per_frame(full_seconds, steps),
-                 1e3 * sigma_full.mean());
-  if (rank != 0) return;
+  record(0);
+  const model::StepStats total = model::run_frames(solver, c.frame_loop(), [&](int f, double, const model::StepStats&) {
+    record(static_cast<std::size_t>(f));
+    progress.advance();
+  });
+  config.cubature_tets = solver.cubature().size();
+  config.seconds = total.seconds;
+  config.elastic_seconds = total.elastic_seconds;
+  config.inertia_seconds = total.inertia_seconds;
+  config.solve_seconds = total.solve_seconds;
+  config.newton = total.newton_iterations;
+  config.retries = total.failed_attempts;
+  config.frames = c.steps;
+  config.sigma = amplitude.sigma();
+}
 
-  // The reduced sweep, frame by frame against the stored reference. The full-space elastic energy of each
-  // reduced state (outside the timing) checks that no tet left the material's range: a cubature too small
-  // for its subspace stays stable on its own points while the tets it does not sample deform freely.
-  Progress progress("reduced frames", configs.size() * static_cast<std::size_t>(steps));
-  for (auto& cp : configs) {
-    Configuration& c = *cp;
-    reduced::ReducedOptions reduced_options;
-    reduced_options.integrator = integrator;
-    reduced::ReducedSolver fast(problem, c.model.subspace, c.model.cubature, reduced_options);
-    fast.initialize(model::initial_state(problem, 0.0));
-    model::DynamicsAmplitude amplitude(normals);
-    c.error_sq = Eigen::VectorXd::Zero(R);
-    // Named by the requested count (the per-function coverage may add a tet or two; every tet for exact cubature).
-    const std::string name =
-        compare::config_suffix(c.handles, c.cubature_request > 0 ? c.cubature_request : c.model.cubature.size());
-    auto record = [&](std::size_t f) {
-      const model::State state = fast.full_state();
-      const model::RowMatrixX3d u = layer.surface_displacement(state.x);
-      require(u.allFinite(), "compare: reduced {} state at t = {} is not finite", name, motion.time(f));
-      amplitude.add(u);
-      c.error_sq += (u - u_full[f]).rowwise().squaredNorm();
-      if (f > 0) {
-        const Eigen::VectorXd d2 = (posed_region(u, motion.time(f)) - posed_full[f]).rowwise().squaredNorm();
-        c.trajectory_sq += d2.sum();
-        c.trajectory_max = std::max(c.trajectory_max, std::sqrt(d2.maxCoeff()));
-      }
-      if (c.invalid.empty()) {
-        try {
-          (void)model::energies(problem, state);
-        } catch (const Error& e) {
-          c.invalid = fmt::format("at t = {:.4f} s: {}", motion.time(f), e.what());
-          logger()->warn("reduced {}: the full-space state leaves the material's range {}", name, c.invalid);
-        }
-      }
-    };
-    record(0);
-    model::FrameLoopOptions loop;
-    loop.frames = steps + 1;
-    loop.fps = motion.fps;
-    loop.substeps = opt.substeps;
-    const model::StepStats total = model::run_frames(fast, loop, [&](int f, double, const model::StepStats&) {
-      record(static_cast<std::size_t>(f));
-      progress.advance();
-    });
-    c.cubature_tets = fast.cubature().size();
-    c.seconds = total.seconds;
-    c.elastic_seconds = total.elastic_seconds;
-    c.inertia_seconds = total.inertia_seconds;
-    c.solve_seconds = total.solve_seconds;
-    c.newton = total.newton_iterations;
-    c.retries = total.failed_attempts;
-    c.frames = steps;
-    c.sigma = amplitude.sigma();
-  }
-  progress.finish();
+/// The trade-off table, the per-vertex maps and summary.json's per-configuration records.
+struct CompareReport {
+  std::vector<compare::TradeoffRow> rows;  ///< the full space first
+  vtk::Fields fields;                      ///< of compare.vtp, on the body's vertices
+  std::vector<compare::ReducedTimings> timings;
+  nlohmann::json reduced = nlohmann::json::array();
+};
 
-  // The trade-off rows and the per-vertex maps.
-  std::vector<compare::TradeoffRow> rows;
+CompareReport make_report(const CompareCase& c, const FullReference& full,
+                          const std::vector<std::unique_ptr<Configuration>>& configs) {
+  CompareReport report;
+  const std::vector<int>& region = c.layer.mesh->region_surface.vertices;
   compare::TradeoffRow full_row;
-  full_row.seconds_per_frame = per_frame(full_seconds, steps);
-  full_row.frames_per_second = full_seconds > 0 ? steps / full_seconds : 0.0;
-  full_row.sigma_mean_mm = 1e3 * sigma_full.mean();
+  full_row.seconds_per_frame = per_frame(full.total.seconds, c.steps);
+  full_row.frames_per_second = full.total.seconds > 0 ? c.steps / full.total.seconds : 0.0;
+  full_row.sigma_mean_mm = 1e3 * full.sigma.mean();
   full_row.recovered_fraction = 1.0;
   full_row.sigma_correlation = 1.0;
-  rows.push_back(full_row);
+  report.rows.push_back(full_row);
   auto scatter = [&](const Eigen::VectorXd& region_values) {
-    Eigen::MatrixXd out = Eigen::MatrixXd::Zero(layer.shaped.rows(), 1);
-    for (Eigen::Index r = 0; r < R; ++r) out(region[static_cast<std::size_t>(r)], 0) = region_values[r];
+    Eigen::MatrixXd out = Eigen::MatrixXd::Zero(c.layer.shaped.rows(), 1);
+    for (Eigen::Index r = 0; r < c.regions; ++r) out(region[static_cast<std::size_t>(r)], 0) = region_values[r];
     return out;
   };
-  vtk::Fields fields;
-  fields.point_data.push_back({"sigma_full", scatter(1e3 * sigma_full), false});
-  fields.point_data.push_back({"soft_region", scatter(Eigen::VectorXd::Ones(R)), true});
-  fields.point_data.push_back({"region", scatter(Eigen::VectorXd::Ones(R)), true});  // soft_region's older name
-  std::vector<compare::ReducedTimings> timings;
-  nlohmann::json reduced_json = nlohmann::json::array();
+  report.fields.point_data.push_back({"sigma_full", scatter(1e3 * full.sigma), false});
+  report.fields.point_data.push_back({"soft_region", scatter(Eigen::VectorXd::Ones(c.regions)), true});
+  report.fields.point_data.push_back(
+      {"region", scatter(Eigen::VectorXd::Ones(c.regions)), true});  // soft_region's older name
   for (const auto& cp : configs) {
-    const Configuration& c = *cp;
+    const Configuration& config = *cp;
     compare::TradeoffRow row;
     row.reduced = true;
-    row.handles = c.handles;
-    row.cubature = c.cubature_request > 0 ? c.cubature_request : c.model.cubature.size();
-    row.coordinates = c.model.subspace.num_dofs();
-    row.seconds_per_frame = per_frame(c.seconds, c.frames);
-    row.frames_per_second = c.seconds > 0 ? c.frames / c.seconds : 0.0;
-    row.sigma_mean_mm = 1e3 * c.sigma.mean();
-    row.recovered_fraction = sigma_full.mean() > 0 ? c.sigma.mean() / sigma_full.mean() : std::nan("");
-    row.rms_error_mm = 1e3 * std::sqrt(c.error_sq.sum() / samples);
-    row.relative_rms_error = full_rms > 0 ? std::sqrt(c.error_sq.sum() / samples) / full_rms : std::nan("");
-    row.valid = c.invalid.empty();
-    row.sigma_correlation = correlation(c.sigma, sigma_full);
-    row.trajectory_rms_mm = 1e3 * std::sqrt(c.trajectory_sq / (static_cast<double>(R) * static_cast<double>(steps)));
-    row.trajectory_max_mm = 1e3 * c.trajectory_max;
-    rows.push_back(row);
+    row.handles = config.handles;
+    row.cubature = config.cubature_request > 0 ? config.cubature_request : config.model.cubature.size();
+    row.coordinates = config.model.subspace.num_dofs();
+    row.seconds_per_frame = per_frame(config.seconds, config.frames);
+    row.frames_per_second = config.seconds > 0 ? config.frames / config.seconds : 0.0;
+    row.sigma_mean_mm = 1e3 * config.sigma.mean();
+    row.recovered_fraction = full.sigma.mean() > 0 ? config.sigma.mean() / full.sigma.mean() : std::nan("");
+    row.rms_error_mm = 1e3 * std::sqrt(config.error_sq.sum() / full.samples);
+    row.relative_rms_error = full.rms > 0 ? std::sqrt(config.error_sq.sum() / full.samples) / full.rms : std::nan("");
+    row.valid = config.invalid.empty();
+    row.sigma_correlation = correlation(config.sigma, full.sigma);
+    row.trajectory_rms_mm =
+        1e3 * std::sqrt(config.trajectory_sq / (static_cast<double>(c.regions) * static_cast<double>(c.steps)));
+    row.trajectory_max_mm = 1e3 * config.trajectory_max;
+    report.rows.push_back(row);
     const std::string suffix = compare::config_suffix(row.handles, row.cubature);
-    const Eigen::VectorXd rms_vertex = (c.error_sq / static_cast<double>(u_full.size())).cwiseSqrt();
-    fields.point_data.push_back({"sigma_reduced_" + suffix, scatter(1e3 * c.sigma), false});
-    fields.point_data.push_back({"sigma_error_" + suffix, scatter(1e3 * (c.sigma - sigma_full)), false});
-    fields.point_data.push_back({"rms_error_" + suffix, scatter(1e3 * rms_vertex), false});
-    compare::ReducedTimings t{row.handles,
-                              row.cubature,
-                              per_frame(c.elastic_seconds, c.frames),
-                              per_frame(c.inertia_seconds, c.frames),
-                              per_frame(c.solve_seconds, c.frames),
-                              per_frame(static_cast<double>(c.newton), c.frames)};
-    timings.push_back(t);
-    reduced_json.push_back(
+    const Eigen::VectorXd rms_vertex = (config.error_sq / static_cast<double>(full.u.size())).cwiseSqrt();
+    report.fields.point_data.push_back({"sigma_reduced_" + suffix, scatter(1e3 * config.sigma), false});
+    report.fields.point_data.push_back({"sigma_error_" + suffix, scatter(1e3 * (config.sigma - full.sigma)), false});
+    report.fields.point_data.push_back({"rms_error_" + suffix, scatter(1e3 * rms_vertex), false});
+    const compare::ReducedTimings t{row.handles,
+                                    row.cubature,
+                                    per_frame(config.elastic_seconds, config.frames),
+                                    per_frame(config.inertia_seconds, config.frames),
+                                    per_frame(config.solve_seconds, config.frames),
+                                    per_frame(static_cast<double>(config.newton), config.frames)};
+    report.timings.push_back(t);
+    const double speedup = row.seconds_per_frame > 0 ? full_row.seconds_per_frame / row.seconds_per_frame : 0.0;
+    report.reduced.push_back(
         {{"handles", row.handles},
-         {"bone_handles", c.model.handles.bone_joints().size()},
+         {"bone_handles", config.model.handles.bone_joints().size()},
          {"coordinates", row.coordinates},
          {"cubature", row.cubature},
-         {"cubature_tets", c.cubature_tets},
-         {"cubature_method", c.model.cubature.method},
-         {"cache", c.model.cache_outcome},
+         {"cubature_tets", config.cubature_tets},
+         {"cubature_method", config.model.cubature.method},
+         {"cache", config.model.cache_outcome},
          {"fields", {"sigma_reduced_" + suffix, "sigma_error_" + suffix, "rms_error_" + suffix}},
          {"seconds_per_frame", row.seconds_per_frame},
          {"frames_per_second", row.frames_per_second},
          {"elastic_seconds_per_frame", t.elastic_seconds_per_frame},
          {"inertia_seconds_per_frame", t.inertia_seconds_per_frame},
          {"solve_seconds_per_frame", t.solve_seconds_per_frame},
-         {"newton_iterations", c.newton},
-         {"failed_attempts", c.retries},
-         {"speedup", row.seconds_per_frame > 0 ? full_row.seconds_per_frame / row.seconds_per_frame : 0.0},
+         {"newton_iterations", config.newton},
+         {"failed_attempts", config.retries},
+         {"speedup", speedup},
          {"sigma_mean_mm", row.sigma_mean_mm},
-         {"sigma_max_mm", 1e3 * c.sigma.maxCoeff()},
+         {"sigma_max_mm", 1e3 * config.sigma.maxCoeff()},
          {"recovered_fraction", row.recovered_fraction},
          {"rms_error_mm", row.rms_error_mm},
          {"max_vertex_rms_error_mm", 1e3 * rms_vertex.maxCoeff()},
@@ -342,76 +370,54 @@ void run_compare(const CompareOptions& opt, const Invocation& invocation, int ra
          {"trajectory_rms_mm", row.trajectory_rms_mm},
          {"trajectory_max_mm", row.trajectory_max_mm},
          {"within_material_range", row.valid},
-         {"out_of_range", c.invalid.empty() ? nlohmann::json(nullptr) : nlohmann::json(c.invalid)}});
+         {"out_of_range", config.invalid.empty() ? nlohmann::json(nullptr) : nlohmann::json(config.invalid)}});
     logger()->info(
         "reduced {} handles, {} cubature tets: {:.2f} ms per frame ({:.0f}× faster), {:.0f}% of the dynamics, relative "
         "RMS error {:.3f}",
-        row.handles, row.cubature, 1e3 * row.seconds_per_frame,
-        row.seconds_per_frame > 0 ? full_row.seconds_per_frame / row.seconds_per_frame : 0.0,
-        100.0 * row.recovered_fraction, row.relative_rms_error);
+        row.handles, row.cubature, 1e3 * row.seconds_per_frame, speedup, 100.0 * row.recovered_fraction,
+        row.relative_rms_error);
   }
+  return report;
+}
 
-  // Everything is computed: the run folder appears at once.
-  RunFolder run(opt.out);
-  vtk::write_surface(run.stage("compare.vtp"), layer.shaped, model.faces, fields);
-  compare::write_tradeoff_csv(run.stage("tradeoff.csv"), rows);
-  const std::string title = fmt::format("{} · {} · {} mesh · {} frames at {:g} fps", subject_label, motion.name,
-                                        opt.mesh, motion.num_frames(), motion.fps);
-  compare::write_tradeoff_markdown(
-      run.stage("tradeoff.md"), "Full space against reduced models: " + title,
-      {fmt::format("layer: {} nodes, {} tets, {} region vertices; step {:.4g} s", problem.num_nodes(),
-                   problem.num_tets(), R, h),
-       fmt::format("full space: {} Newton and {} linear iterations on {} process(es)", full_newton, full_linear, size),
-       "σ: dynamics amplitude per vertex (docs/physics.md §4), mean over the region; recovered = mean σ / mean σ of "
-       "the full space",
-       "RMS error: of |u − u_full| over region vertices and frames; relative: divided by the RMS of u_full",
-       "σ correlation: Pearson correlation of σ and σ_full over the region's vertices; trajectory RMS / max: of |p − "
-       "p_full| over "
-       "region vertices and frames 1..F, p the posed body surface that `sflsh simulate` writes"},
-      rows, timings);
-  std::string png = "tradeoff.png";
-  try {
-    compare::write_tradeoff_png(run.stage("tradeoff.png"), "Error against time: " + title, rows);
-  } catch (const Error& e) {  // the picture is a convenience: the tables never depend on a display
-    logger()->warn("skipped tradeoff.png: {}", e.what());
-    png.clear();
-  }
-
+/// summary.json of a comparison.
+nlohmann::json compare_summary(const CompareCase& c, const FullReference& full, const CompareReport& report,
+                               const Invocation& invocation, int size, const std::string& png) {
+  const model::Problem& problem = c.layer.problem;
+  const compare::TradeoffRow& full_row = report.rows.front();
   nlohmann::json summary = summary_header("compare", invocation.argc, invocation.argv);
-  summary["body"] = body::body_label(opt.subject);
-  summary["subject"] = subject_label;
-  summary["beta"] = std::vector<double>(beta.data(), beta.data() + beta.size());
+  summary["body"] = body::body_label(c.opt.subject);
+  summary["subject"] = c.subject_label;
+  summary["beta"] = std::vector<double>(c.beta.data(), c.beta.data() + c.beta.size());
   summary["motion"] = {
-      {"name", motion.name}, {"source", motion.source}, {"fps", motion.fps}, {"frames", motion.num_frames()}};
-  summary["mesh"] = {{"mesher", opt.layer.mesher},
-                     {"size", opt.mesh},
+      {"name", c.motion.name}, {"source", c.motion.source}, {"fps", c.motion.fps}, {"frames", c.motion.num_frames()}};
+  summary["mesh"] = {{"mesher", c.opt.layer.mesher},
+                     {"size", c.opt.mesh},
                      {"nodes", problem.num_nodes()},
                      {"tets", problem.num_tets()},
                      {"constrained_dofs", problem.dirichlet.dof.size()},
-                     {"region_vertices", R},
-                     {"body_vertices", model.num_vertices()}};
-  summary["material"] = material_summary(opt.layer, material_file);
-  summary["step"] = h;
-  summary["substeps"] = opt.substeps;
-  summary["integrator"] = model::to_string(integrator);
-  summary["mass"] = opt.layer.mass;
-  summary["sweep"] = {{"handles", handle_sweep},
-                      {"cubature", cubature_sweep},
-                      {"cubature_weights", opt.reduced.cubature_weights},
-                      {"affine", opt.reduced.affine}};
+                     {"region_vertices", c.regions},
+                     {"body_vertices", c.model.num_vertices()}};
+  summary["material"] = material_summary(c.opt.layer, c.material_file);
+  summary["step"] = c.h;
+  summary["substeps"] = c.opt.substeps;
+  summary["integrator"] = model::to_string(c.integrator);
+  summary["mass"] = c.opt.layer.mass;
+  summary["sweep"] = {{"handles", c.handle_sweep},
+                      {"cubature", c.cubature_sweep},
+                      {"cubature_weights", c.opt.reduced.cubature_weights},
+                      {"affine", c.opt.reduced.affine}};
   summary["full"] = {{"processes", size},
                      {"free_dofs", problem.num_dofs() - static_cast<int>(problem.dirichlet.dof.size())},
                      {"seconds_per_frame", full_row.seconds_per_frame},
                      {"frames_per_second", full_row.frames_per_second},
-                     {"newton_iterations", full_newton},
-                     {"linear_iterations", full_linear},
-                     {"failed_attempts", full_retries},
+                     {"newton_iterations", full.total.newton_iterations},
+                     {"linear_iterations", full.total.linear_iterations},
+                     {"failed_attempts", full.total.failed_attempts},
                      {"sigma_mean_mm", full_row.sigma_mean_mm},
-                     {"sigma_max_mm", 1e3 * sigma_full.maxCoeff()},
-                     {"displacement_rms_mm", 1e3 * full_rms}};
-  summary["reduced"] = reduced_json;
-  summary["timings"] = {
-      {"build_seconds", build_seconds}, {"models_seconds", models_seconds}, {"total_seconds", seconds_since(t_start)}};
+                     {"sigma_max_mm", 1e3 * full.sigma.maxCoeff()},
+                     {"displacement_rms_mm", 1e3 * full.rms}};
+  summary["reduced"] = report.reduced;
   summary["output"] = {{"fields", "compare.vtp"},
                        {"table", "tradeoff.csv"},
                        {"markdown", "tradeoff.md"},
@@ -421,10 +427,69 @@ void run_compare(const CompareOptions& opt, const Invocation& invocation, int ra
                       {"trajectory_rms", "mm"},
                       {"trajectory_max", "mm"},
                       {"seconds_per_frame", "s"}};
+  return summary;
+}
+
+/// Writes the run folder at once: compare.vtp, tradeoff.csv / .md / .png and summary.json.
+void write_compare_folder(const CompareCase& c, const FullReference& full, const CompareReport& report,
+                          const Invocation& invocation, int size, nlohmann::json timings) {
+  RunFolder run(c.opt.out);
+  vtk::write_surface(run.stage("compare.vtp"), c.layer.shaped, c.model.faces, report.fields);
+  compare::write_tradeoff_csv(run.stage("tradeoff.csv"), report.rows);
+  const std::string title = fmt::format("{} · {} · {} mesh · {} frames at {:g} fps", c.subject_label, c.motion.name,
+                                        c.opt.mesh, c.motion.num_frames(), c.motion.fps);
+  compare::write_tradeoff_markdown(
+      run.stage("tradeoff.md"), "Full space against reduced models: " + title,
+      {fmt::format("layer: {} nodes, {} tets, {} region vertices; step {:.4g} s", c.layer.problem.num_nodes(),
+                   c.layer.problem.num_tets(), c.regions, c.h),
+       fmt::format("full space: {} Newton and {} linear iterations on {} process(es)", full.total.newton_iterations,
+                   full.total.linear_iterations, size),
+       "σ: dynamics amplitude per vertex (docs/physics.md §4), mean over the region; recovered = mean σ / mean σ of "
+       "the full space",
+       "RMS error: of |u − u_full| over region vertices and frames; relative: divided by the RMS of u_full",
+       "σ correlation: Pearson correlation of σ and σ_full over the region's vertices; trajectory RMS / max: of |p − "
+       "p_full| over "
+       "region vertices and frames 1..F, p the posed body surface that `sflsh simulate` writes"},
+      report.rows, report.timings);
+  std::string png = "tradeoff.png";
+  try {
+    compare::write_tradeoff_png(run.stage("tradeoff.png"), "Error against time: " + title, report.rows);
+  } catch (const Error& e) {  // the picture is a convenience: the tables never depend on a display
+    logger()->warn("skipped tradeoff.png: {}", e.what());
+    png.clear();
+  }
+  nlohmann::json summary = compare_summary(c, full, report, invocation, size, png);
+  summary["timings"] = std::move(timings);
   write_json(run.stage("summary.json"), summary);
   run.commit();
-  logger()->info("compare: wrote {} ({} configurations, {:.1f} s)", run.dir().string(), configs.size(),
-                 seconds_since(t_start));
+}
+
+void run_compare(const CompareOptions& opt, const Invocation& invocation, int rank, int size) {
+  const auto t_start = Clock::now();
+  CompareCase c(opt);
+  prepare_case(c);
+  const auto t_models = Clock::now();
+  const std::vector<std::unique_ptr<Configuration>> configs = build_configurations(c, rank);
+  const double models_seconds = seconds_since(t_models);
+  logger()->info(
+      "compare: {} nodes, {} tets, {} region vertices, {} frames at {} fps; reference on {} process(es), {} reduced "
+      "configuration(s)",
+      c.layer.problem.num_nodes(), c.layer.problem.num_tets(), c.regions, c.motion.num_frames(), c.motion.fps, size,
+      c.handle_sweep.size() * c.cubature_sweep.size());
+  const FullReference full = run_full_reference(c, rank);
+  logger()->info("full space: {:.3f} s per frame, mean σ = {:.3f} mm", per_frame(full.total.seconds, c.steps),
+                 1e3 * full.sigma.mean());
+  if (rank != 0) return;
+  Progress progress("reduced frames", configs.size() * static_cast<std::size_t>(c.steps));
+  for (const auto& config : configs) run_configuration(*config, c, full, progress);
+  progress.finish();
+  const CompareReport report = make_report(c, full, configs);
+  // Everything is computed: the run folder appears at once.
+  write_compare_folder(c, full, report, invocation, size,
+                       {{"build_seconds", c.build_seconds},
+                        {"models_seconds", models_seconds},
+                        {"total_seconds", seconds_since(t_start)}});
+  logger()->info("compare: wrote {} ({} configurations, {:.1f} s)", opt.out, configs.size(), seconds_since(t_start));
 }
 
 }  // namespace
