@@ -183,315 +183,382 @@ struct BuiltLayer {
   double seconds = 0.0;
 };
 
-void run_tradeoff(const TradeoffOptions& opt, const Invocation& invocation, int rank, int size) {
-  const auto t_start = Clock::now();
-  require(size == 1, "tradeoff runs on one process (got {}): its timings compare solvers on the same cores", size);
-  (void)rank;
-  check_options(opt);
-  const body::BodyModel model = load_selected_body(opt.subject);
-  std::string subject_label;
-  const body::Betas beta = selected_betas(opt.subject, subject_label);
-  const body::Motion motion = body::load_motion(opt.motion, opt.fps, opt.frames);
-  motion.validate();
-  require(motion.num_frames() >= 2, "tradeoff: the motion has {} frame(s); at least 2 are needed", motion.num_frames());
-  const std::optional<material::MaterialFile> material_file = load_layer_material(opt.layer);
-  const int steps = static_cast<int>(motion.num_frames()) - 1;
-  const tradeoff::Budget budget{opt.budget_mm > 0 ? std::optional<double>(opt.budget_mm) : std::nullopt,
-                                opt.budget_relative > 0 ? std::optional<double>(opt.budget_relative) : std::nullopt};
+/// A copy of `problem` with inertia `mass` ("lumped" | "consistent"; `option` names the flag in errors): each run
+/// gets its own, so that no run changes the layer another run uses.
+model::Problem with_mass(const model::Problem& problem, const std::string& mass, const char* option) {
+  model::Problem copy = problem;
+  copy.mass_kind = model::parse_mass_kind(mass, option);
+  return copy;
+}
 
-  // Every layer first, and every handle count checked on it, before any solve (one message, no output).
-  std::map<std::string, BuiltLayer> layers;
-  auto layer_of = [&](const std::string& mesh) -> BuiltLayer& {  // std::map: references stay valid
-    auto it = layers.find(mesh);
-    if (it != layers.end()) return it->second;
-    const auto t0 = Clock::now();
-    model::BodyLayer l = model::build_body_layer(model, beta, motion, material_file ? &*material_file : nullptr,
-                                                 opt.layer.control_points, body_layer_options(opt.layer, mesh));
-    return layers.emplace(mesh, BuiltLayer{std::move(l), seconds_since(t0)}).first->second;
-  };
-  const BuiltLayer& ref_layer = layer_of(opt.reference_mesh);
-  for (const std::string& c : opt.reference_checks)
-    if (c == "space" && opt.reference_mesh != "fine")
-      (void)layer_of(opt.reference_mesh == "coarse" ? "default" : "fine");
-  for (const std::string& mesh : opt.meshes) (void)layer_of(mesh);
-  for (const std::string& mesh : opt.reduced_meshes) check_handle_counts(layer_of(mesh).layer, opt.handles);
-  const std::vector<int>& region = ref_layer.layer.mesh->region_surface.vertices;
-  for (const auto& [mesh, built] : layers)
-    require(built.layer.mesh->region_surface.vertices == region,
-            "tradeoff: the {} mesh has a different skin region than the {} mesh", mesh, opt.reference_mesh);
+/// One tradeoff study: the case, its layers (every mesh asked for), the reference track and the scored rows.
+/// Not movable: the layers refer to the body model.
+class TradeoffStudy {
+ public:
+  explicit TradeoffStudy(const TradeoffOptions& opt) : opt_(opt) {}
+  TradeoffStudy(const TradeoffStudy&) = delete;
+  TradeoffStudy& operator=(const TradeoffStudy&) = delete;
+
+  /// Loads the case and builds every layer, checking every handle count on it, before any solve (one message, no
+  /// output).
+  void prepare();
+  /// The reference row and its track; `reference_json_` describes it.
+  void run_reference();
+  /// How converged the reference is: the same configuration at twice the substeps ("time") or on the next finer mesh
+  /// ("space"), over the first frames, against the reference itself.
+  void run_reference_checks();
+  void run_full_rows();
+  void run_reduced_rows();
+  /// The Pareto front, the recommendation and the run folder (written at once).
+  void write(const Invocation& invocation, double started_seconds_ago);
+
+ private:
+  BuiltLayer& layer_of(const std::string& mesh);
+  /// One stepping run of the full-space solver (an integrator, a mass, substeps per frame) over the first `frames`
+  /// frames.
+  Measured run_full(const model::BodyLayer& layer, const std::string& integrator, const std::string& mass, int substeps,
+                    std::size_t frames, ReferenceTrack* keep, const ReferenceTrack* against,
+                    double& setup_seconds) const;
+  Measured run_sundials_reference(const model::BodyLayer& layer, tradeoff::Row& row);
+  /// Scores one run against the reference into its row; a solver that gives up is a row that failed, not a failed
+  /// command.
+  void add_row(tradeoff::Row row, const std::function<Measured()>& run);
+  std::string reference_text() const;
+  nlohmann::json rows_json() const;
+
+  const TradeoffOptions& opt_;
+  body::BodyModel model_;
+  std::string subject_label_;
+  body::Betas beta_;
+  body::Motion motion_;
+  std::optional<material::MaterialFile> material_file_;
+  int steps_ = 0;
+  std::map<std::string, BuiltLayer> layers_;  // std::map: references stay valid
+  std::vector<int> region_;
+  ReferenceTrack ref_;
+  nlohmann::json reference_json_;
+  std::vector<tradeoff::Row> rows_;
+};
+
+BuiltLayer& TradeoffStudy::layer_of(const std::string& mesh) {
+  auto it = layers_.find(mesh);
+  if (it != layers_.end()) return it->second;
+  const auto t0 = Clock::now();
+  model::BodyLayer l = model::build_body_layer(model_, beta_, motion_, material_file_ ? &*material_file_ : nullptr,
+                                               opt_.layer.control_points, body_layer_options(opt_.layer, mesh));
+  return layers_.emplace(mesh, BuiltLayer{std::move(l), seconds_since(t0)}).first->second;
+}
+
+void TradeoffStudy::prepare() {
+  check_options(opt_);
+  model_ = load_selected_body(opt_.subject);
+  beta_ = selected_betas(opt_.subject, subject_label_);
+  motion_ = body::load_motion(opt_.motion, opt_.fps, opt_.frames);
+  motion_.validate();
+  require(motion_.num_frames() >= 2, "tradeoff: the motion has {} frame(s); at least 2 are needed",
+          motion_.num_frames());
+  material_file_ = load_layer_material(opt_.layer);
+  steps_ = static_cast<int>(motion_.num_frames()) - 1;
+  (void)layer_of(opt_.reference_mesh);
+  for (const std::string& c : opt_.reference_checks)
+    if (c == "space" && opt_.reference_mesh != "fine")
+      (void)layer_of(opt_.reference_mesh == "coarse" ? "default" : "fine");
+  for (const std::string& mesh : opt_.meshes) (void)layer_of(mesh);
+  for (const std::string& mesh : opt_.reduced_meshes) check_handle_counts(layer_of(mesh).layer, opt_.handles);
+  region_ = layers_.at(opt_.reference_mesh).layer.mesh->region_surface.vertices;
+  for (const auto& [mesh, built] : layers_)
+    require(built.layer.mesh->region_surface.vertices == region_,
+            "tradeoff: the {} mesh has a different skin region than the {} mesh", mesh, opt_.reference_mesh);
   logger()->info("tradeoff: {} frames at {:g} fps, {} region vertices; reference {} on the {} mesh",
-                 motion.num_frames(), motion.fps, region.size(), opt.reference, opt.reference_mesh);
+                 motion_.num_frames(), motion_.fps, region_.size(), opt_.reference, opt_.reference_mesh);
+}
 
-  // One stepping run of the full-space solver (an integrator, a mass, substeps per frame) over the first `frames`
-  // frames; the problem's mass is set for the run (the solver is built afterwards).
-  auto run_full = [&](model::BodyLayer& layer, const std::string& integrator, const std::string& mass, int substeps,
-                      std::size_t frames, ReferenceTrack* keep, const ReferenceTrack* against, double& setup_seconds) {
-    layer.problem.mass_kind = model::parse_mass_kind(mass, "--masses");
-    fullspace::FullSpaceOptions options;
-    options.integrator = model::parse_integrator(integrator, "--integrators");
-    const auto t0 = Clock::now();
-    const model::State initial = model::initial_state(layer.problem, 0.0);
-    fullspace::FullSpaceSolver solver(layer.problem, MPI_COMM_WORLD, options);
-    solver.initialize(initial);
-    setup_seconds = seconds_since(t0);
-    const double step = 1.0 / (motion.fps * substeps);
-    return track(
-        layer, motion, frames, initial,
-        [&](std::size_t, double& seconds) {
-          for (int k = 0; k < substeps; ++k) seconds += solver.step(step).seconds;
-          return solver.state();
-        },
-        false, keep, against);
-  };
+Measured TradeoffStudy::run_full(const model::BodyLayer& layer, const std::string& integrator, const std::string& mass,
+                                 int substeps, std::size_t frames, ReferenceTrack* keep, const ReferenceTrack* against,
+                                 double& setup_seconds) const {
+  const model::Problem problem = with_mass(layer.problem, mass, "--masses");
+  fullspace::FullSpaceOptions options;
+  options.integrator = model::parse_integrator(integrator, "--integrators");
+  const auto t0 = Clock::now();
+  const model::State initial = model::initial_state(problem, 0.0);
+  fullspace::FullSpaceSolver solver(problem, MPI_COMM_WORLD, options);
+  solver.initialize(initial);
+  setup_seconds = seconds_since(t0);
+  const double step = 1.0 / (motion_.fps * substeps);
+  return track(
+      layer, motion_, frames, initial,
+      [&](std::size_t, double& seconds) {
+        for (int k = 0; k < substeps; ++k) seconds += solver.step(step).seconds;
+        return solver.state();
+      },
+      false, keep, against);
+}
 
-  // The reference.
-  std::vector<tradeoff::Row> rows;
-  ReferenceTrack ref;
-  nlohmann::json reference_json;
-  {
-    model::BodyLayer& layer = layer_of(opt.reference_mesh).layer;
-    tradeoff::Row row{"reference", opt.reference, opt.reference_mesh};
-    row.mass = opt.reference_mass;
-    Measured m;
-    if (opt.reference == "sundials") {
-      layer.problem.mass_kind = model::parse_mass_kind(opt.reference_mass, "--reference-mass");
-      const auto t0 = Clock::now();
-      const model::State initial = model::initial_state(layer.problem, 0.0);
-      fullspace::ReferenceOptions ro;
-      ro.rtol = opt.rtol;
-      ro.atol = opt.atol;
-      fullspace::ReferenceIntegrator integrator(layer.problem, ro);
-      integrator.initialize(initial);
-      row.setup_seconds = ref_layer.seconds + seconds_since(t0);
-      m = track(
-          layer, motion, motion.num_frames(), initial,
-          [&](std::size_t f, double& seconds) {
-            const double before = integrator.stats().seconds;
-            model::State s = integrator.advance_to(motion.time(f));
-            seconds += integrator.stats().seconds - before;
-            return s;
-          },
-          false, &ref, nullptr);
-      const fullspace::ReferenceStats& st = integrator.stats();
-      reference_json = {{"integrator", "sundials"},
-                        {"method", "ARKODE ARKStep, adaptive implicit SDIRK, KLU"},
-                        {"rtol", opt.rtol},
-                        {"atol", opt.atol},
-                        {"order", ro.order},
-                        {"internal_steps", st.steps},
-                        {"error_test_fails", st.error_test_fails},
-                        {"newton_iterations", st.nonlin_iters},
-                        {"mean_step", motion.duration() / std::max(1L, st.steps)}};
-    } else {
-      row.substeps = opt.reference_substeps;
-      row.step = 1.0 / (motion.fps * opt.reference_substeps);
-      double setup = 0.0;
-      m = run_full(layer, opt.reference, opt.reference_mass, row.substeps, motion.num_frames(), &ref, nullptr, setup);
-      row.setup_seconds = ref_layer.seconds + setup;
-      reference_json = {{"integrator", opt.reference}, {"substeps", row.substeps}, {"step", row.step}};
-    }
-    row.seconds_per_frame = m.solve_seconds / steps;
-    row.sigma_ratio = 1.0;
-    rows.push_back(row);
-    reference_json["mass"] = opt.reference_mass;
-    reference_json["mesh"] = opt.reference_mesh;
-    reference_json["nodes"] = layer.problem.num_nodes();
-    reference_json["tets"] = layer.problem.num_tets();
-    reference_json["preset"] = opt.preset;
-    reference_json["seconds_per_frame"] = row.seconds_per_frame;
-    reference_json["soft_tissue_rms_mm"] = 1e3 * ref.soft_rms;
-    reference_json["sigma_mean_mm"] = 1e3 * ref.sigma_mean;
-    logger()->info("reference: {:.3f} s per frame, soft-tissue RMS {:.3f} mm, mean σ {:.3f} mm", row.seconds_per_frame,
-                   1e3 * ref.soft_rms, 1e3 * ref.sigma_mean);
+Measured TradeoffStudy::run_sundials_reference(const model::BodyLayer& layer, tradeoff::Row& row) {
+  const model::Problem problem = with_mass(layer.problem, opt_.reference_mass, "--reference-mass");
+  const auto t0 = Clock::now();
+  const model::State initial = model::initial_state(problem, 0.0);
+  fullspace::ReferenceOptions ro;
+  ro.rtol = opt_.rtol;
+  ro.atol = opt_.atol;
+  fullspace::ReferenceIntegrator integrator(problem, ro);
+  integrator.initialize(initial);
+  row.setup_seconds = layers_.at(opt_.reference_mesh).seconds + seconds_since(t0);
+  const Measured m = track(
+      layer, motion_, motion_.num_frames(), initial,
+      [&](std::size_t f, double& seconds) {
+        const double before = integrator.stats().seconds;
+        model::State s = integrator.advance_to(motion_.time(f));
+        seconds += integrator.stats().seconds - before;
+        return s;
+      },
+      false, &ref_, nullptr);
+  const fullspace::ReferenceStats& st = integrator.stats();
+  reference_json_ = {{"integrator", "sundials"},
+                     {"method", "ARKODE ARKStep, adaptive implicit SDIRK, KLU"},
+                     {"rtol", opt_.rtol},
+                     {"atol", opt_.atol},
+                     {"order", ro.order},
+                     {"internal_steps", st.steps},
+                     {"error_test_fails", st.error_test_fails},
+                     {"newton_iterations", st.nonlin_iters},
+                     {"mean_step", motion_.duration() / std::max(1L, st.steps)}};
+  return m;
+}
+
+void TradeoffStudy::run_reference() {
+  const BuiltLayer& built = layers_.at(opt_.reference_mesh);
+  tradeoff::Row row{"reference", opt_.reference, opt_.reference_mesh};
+  row.mass = opt_.reference_mass;
+  Measured m;
+  if (opt_.reference == "sundials") {
+    m = run_sundials_reference(built.layer, row);
+  } else {
+    row.substeps = opt_.reference_substeps;
+    row.step = 1.0 / (motion_.fps * opt_.reference_substeps);
+    double setup = 0.0;
+    m = run_full(built.layer, opt_.reference, opt_.reference_mass, row.substeps, motion_.num_frames(), &ref_, nullptr,
+                 setup);
+    row.setup_seconds = built.seconds + setup;
+    reference_json_ = {{"integrator", opt_.reference}, {"substeps", row.substeps}, {"step", row.step}};
   }
-  require(ref.soft_rms > 0.0, "tradeoff: the reference does not move the soft tissue (motion {}, {} frames)",
-          motion.name, motion.num_frames());
-  const double samples = static_cast<double>(region.size()) * steps;
+  row.seconds_per_frame = m.solve_seconds / steps_;
+  row.sigma_ratio = 1.0;
+  rows_.push_back(row);
+  reference_json_["mass"] = opt_.reference_mass;
+  reference_json_["mesh"] = opt_.reference_mesh;
+  reference_json_["nodes"] = built.layer.problem.num_nodes();
+  reference_json_["tets"] = built.layer.problem.num_tets();
+  reference_json_["preset"] = opt_.preset;
+  reference_json_["seconds_per_frame"] = row.seconds_per_frame;
+  reference_json_["soft_tissue_rms_mm"] = 1e3 * ref_.soft_rms;
+  reference_json_["sigma_mean_mm"] = 1e3 * ref_.sigma_mean;
+  logger()->info("reference: {:.3f} s per frame, soft-tissue RMS {:.3f} mm, mean σ {:.3f} mm", row.seconds_per_frame,
+                 1e3 * ref_.soft_rms, 1e3 * ref_.sigma_mean);
+  require(ref_.soft_rms > 0.0, "tradeoff: the reference does not move the soft tissue (motion {}, {} frames)",
+          motion_.name, motion_.num_frames());
+}
 
-  // How converged the reference is: the same configuration at twice the substeps ("time") or on the next finer
-  // mesh ("space"), over the first frames, against the reference itself.
+void TradeoffStudy::run_reference_checks() {
   nlohmann::json checks = nlohmann::json::array();
-  for (const std::string& check : opt.reference_checks) {
-    require(opt.reference != "sundials",
+  for (const std::string& check : opt_.reference_checks) {
+    require(opt_.reference != "sundials",
             "--reference-check applies to a stepping reference, not sundials (its error is controlled)");
     const std::size_t frames =
-        std::min<std::size_t>(motion.num_frames(), static_cast<std::size_t>(opt.reference_check_frames));
+        std::min<std::size_t>(motion_.num_frames(), static_cast<std::size_t>(opt_.reference_check_frames));
     const std::string mesh =
-        check == "space" ? (opt.reference_mesh == "coarse" ? "default" : "fine") : opt.reference_mesh;
-    require(check == "time" || opt.reference_mesh != "fine",
+        check == "space" ? (opt_.reference_mesh == "coarse" ? "default" : "fine") : opt_.reference_mesh;
+    require(check == "time" || opt_.reference_mesh != "fine",
             "--reference-check space: there is no mesh finer than fine");
-    BuiltLayer& built = layer_of(mesh);
-    require(built.layer.mesh->region_surface.vertices == region, "tradeoff: the {} mesh has a different skin region",
+    const BuiltLayer& built = layer_of(mesh);
+    require(built.layer.mesh->region_surface.vertices == region_, "tradeoff: the {} mesh has a different skin region",
             mesh);
-    const int substeps = check == "time" ? 2 * opt.reference_substeps : opt.reference_substeps;
+    const int substeps = check == "time" ? 2 * opt_.reference_substeps : opt_.reference_substeps;
     double setup = 0.0;
-    const Measured m = run_full(built.layer, opt.reference, opt.reference_mass, substeps, frames, nullptr, &ref, setup);
-    const double rms = std::sqrt(m.error_sq / (static_cast<double>(region.size()) * static_cast<double>(frames - 1)));
+    const Measured m =
+        run_full(built.layer, opt_.reference, opt_.reference_mass, substeps, frames, nullptr, &ref_, setup);
+    const double rms = std::sqrt(m.error_sq / (static_cast<double>(region_.size()) * static_cast<double>(frames - 1)));
     checks.push_back({{"check", check},
                       {"mesh", mesh},
                       {"substeps", substeps},
                       {"frames", frames},
                       {"rms_difference_mm", 1e3 * rms},
-                      {"relative_difference", rms / ref.soft_rms},
+                      {"relative_difference", rms / ref_.soft_rms},
                       {"seconds", m.solve_seconds}});
     logger()->info(
         "reference check ({}): {} mesh, {} substeps, {} frames: RMS difference {:.4f} mm ({:.2f} % of the soft-tissue "
         "motion)",
-        check, mesh, substeps, frames, 1e3 * rms, 100.0 * rms / ref.soft_rms);
+        check, mesh, substeps, frames, 1e3 * rms, 100.0 * rms / ref_.soft_rms);
   }
-  reference_json["checks"] = checks;
+  reference_json_["checks"] = checks;
+}
 
-  // Scores one run against the reference into its row.
-  auto score = [&](tradeoff::Row& row, const Measured& m) {
-    row.seconds_per_frame = m.solve_seconds / steps;
+void TradeoffStudy::add_row(tradeoff::Row row, const std::function<Measured()>& run) {
+  try {
+    const Measured m = run();
+    const double samples = static_cast<double>(region_.size()) * steps_;
+    row.seconds_per_frame = m.solve_seconds / steps_;
     row.rms_error_mm = 1e3 * std::sqrt(m.error_sq / samples);
-    row.relative_error = std::sqrt(m.error_sq / samples) / ref.soft_rms;
-    row.sigma_ratio = ref.sigma_mean > 0 ? m.sigma_mean / ref.sigma_mean : std::nan("");
+    row.relative_error = std::sqrt(m.error_sq / samples) / ref_.soft_rms;
+    row.sigma_ratio = ref_.sigma_mean > 0 ? m.sigma_mean / ref_.sigma_mean : std::nan("");
     row.valid = m.invalid.empty();
     if (!row.valid) logger()->warn("{}: {}", row.label(), m.invalid);
     logger()->info("{}: {:.4f} s per frame, RMS error {:.4f} mm (relative {:.3f}), σ ratio {:.3f}", row.label(),
                    row.seconds_per_frame, row.rms_error_mm, row.relative_error, row.sigma_ratio);
-  };
-  // A solver that gives up is a row that failed, not a failed command.
-  auto guarded = [&](tradeoff::Row& row, const std::function<Measured()>& run) {
-    try {
-      score(row, run());
-    } catch (const Error& e) {
-      row.valid = false;
-      row.rms_error_mm = row.relative_error = row.sigma_ratio = std::nan("");
-      logger()->warn("{} failed: {}", row.label(), e.what());
-    }
-    rows.push_back(row);
-  };
+  } catch (const Error& e) {
+    row.valid = false;
+    row.rms_error_mm = row.relative_error = row.sigma_ratio = std::nan("");
+    logger()->warn("{} failed: {}", row.label(), e.what());
+  }
+  rows_.push_back(row);
+}
 
-  for (const std::string& mesh : opt.meshes) {
-    BuiltLayer& built = layers.at(mesh);
-    for (const std::string& integrator : opt.integrators)
-      for (const std::string& mass : opt.masses)
-        for (int substeps : opt.substeps) {
+void TradeoffStudy::run_full_rows() {
+  for (const std::string& mesh : opt_.meshes) {
+    const BuiltLayer& built = layers_.at(mesh);
+    for (const std::string& integrator : opt_.integrators)
+      for (const std::string& mass : opt_.masses)
+        for (int substeps : opt_.substeps) {
           tradeoff::Row row{"full", integrator, mesh};
           row.mass = mass;
           row.substeps = substeps;
-          row.step = 1.0 / (motion.fps * substeps);
-          guarded(row, [&] {
+          row.step = 1.0 / (motion_.fps * substeps);
+          double setup_seconds = 0.0;  // stays 0 for a run that failed
+          add_row(row, [&] {
             double setup = 0.0;
             const Measured m =
-                run_full(built.layer, integrator, mass, substeps, motion.num_frames(), nullptr, &ref, setup);
-            row.setup_seconds = built.seconds + setup;
+                run_full(built.layer, integrator, mass, substeps, motion_.num_frames(), nullptr, &ref_, setup);
+            setup_seconds = built.seconds + setup;
             return m;
           });
+          rows_.back().setup_seconds = setup_seconds;
         }
   }
-  for (const std::string& mesh : opt.reduced_meshes) {
-    BuiltLayer& built = layers.at(mesh);
-    for (int handles : opt.handles)
-      for (int k : opt.cubature) {
+}
+
+void TradeoffStudy::run_reduced_rows() {
+  for (const std::string& mesh : opt_.reduced_meshes) {
+    const BuiltLayer& built = layers_.at(mesh);
+    for (int handles : opt_.handles)
+      for (int k : opt_.cubature) {
         const auto t0 = Clock::now();
-        const reduced::ReducedModel reduced_model =
-            reduced::build_reduced_model(built.layer, reduced_model_options(opt.reduced, handles, k, opt.layer.cache));
+        const reduced::ReducedModel reduced_model = reduced::build_reduced_model(
+            built.layer, reduced_model_options(opt_.reduced, handles, k, opt_.layer.cache));
         const double model_seconds = seconds_since(t0);
-        for (const std::string& integrator : opt.integrators)
-          for (const std::string& mass : opt.masses)
-            for (int substeps : opt.reduced_substeps) {
+        for (const std::string& integrator : opt_.integrators)
+          for (const std::string& mass : opt_.masses)
+            for (int substeps : opt_.reduced_substeps) {
               tradeoff::Row row{"reduced",
                                 integrator,
                                 mesh,
                                 handles,
                                 static_cast<int>(reduced_model.cubature.size()),
                                 substeps,
-                                1.0 / (motion.fps * substeps)};
+                                1.0 / (motion_.fps * substeps)};
               row.mass = mass;
-              guarded(row, [&] {
-                built.layer.problem.mass_kind = model::parse_mass_kind(mass, "--masses");
+              double setup_seconds = 0.0;  // stays 0 for a run that failed in its set-up
+              add_row(row, [&] {
+                const model::Problem problem = with_mass(built.layer.problem, mass, "--masses");
                 reduced::ReducedOptions options;
                 options.integrator = model::parse_integrator(integrator, "--integrators");
                 const auto t1 = Clock::now();
-                const model::State initial = model::initial_state(built.layer.problem, 0.0);
-                reduced::ReducedSolver solver(built.layer.problem, reduced_model.subspace, reduced_model.cubature,
-                                              options);
+                const model::State initial = model::initial_state(problem, 0.0);
+                reduced::ReducedSolver solver(problem, reduced_model.subspace, reduced_model.cubature, options);
                 solver.initialize(initial);
-                row.setup_seconds = built.seconds + model_seconds + seconds_since(t1);
+                setup_seconds = built.seconds + model_seconds + seconds_since(t1);
                 return track(
-                    built.layer, motion, motion.num_frames(), initial,
+                    built.layer, motion_, motion_.num_frames(), initial,
                     [&](std::size_t, double& seconds) {
                       for (int s = 0; s < substeps; ++s) seconds += solver.step(row.step).seconds;
                       return solver.full_state();
                     },
-                    true, nullptr, &ref);
+                    true, nullptr, &ref_);
               });
+              rows_.back().setup_seconds = setup_seconds;
             }
       }
   }
-  tradeoff::mark_pareto_front(rows);
-  const std::optional<std::size_t> pick = tradeoff::recommend(rows, budget);
-  const std::string recommendation = tradeoff::recommendation_text(rows, budget, pick);
+}
+
+std::string TradeoffStudy::reference_text() const {
+  return opt_.reference == "sundials"
+             ? fmt::format("SUNDIALS ARKODE (adaptive, rtol {:g}, atol {:g}) on the {} mesh", opt_.rtol, opt_.atol,
+                           opt_.reference_mesh)
+             : fmt::format("{} with {} masses at {} substeps per frame on the {} mesh", opt_.reference,
+                           opt_.reference_mass, opt_.reference_substeps, opt_.reference_mesh);
+}
+
+nlohmann::json TradeoffStudy::rows_json() const {
+  auto number = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
+  nlohmann::json out = nlohmann::json::array();
+  for (const tradeoff::Row& r : rows_)
+    out.push_back({{"label", r.label()},
+                   {"model", r.model},
+                   {"integrator", r.integrator},
+                   {"mass", r.mass},
+                   {"mesh", r.mesh},
+                   {"handles", r.handles},
+                   {"cubature", r.cubature},
+                   {"substeps", r.substeps},
+                   {"step", r.step},
+                   {"setup_seconds", r.setup_seconds},
+                   {"seconds_per_frame", r.seconds_per_frame},
+                   {"rms_error_mm", number(r.rms_error_mm)},
+                   {"relative_error", number(r.relative_error)},
+                   {"sigma_ratio", number(r.sigma_ratio)},
+                   {"valid", r.valid},
+                   {"pareto", r.pareto}});
+  return out;
+}
+
+void TradeoffStudy::write(const Invocation& invocation, double started_seconds_ago) {
+  const tradeoff::Budget budget{opt_.budget_mm > 0 ? std::optional<double>(opt_.budget_mm) : std::nullopt,
+                                opt_.budget_relative > 0 ? std::optional<double>(opt_.budget_relative) : std::nullopt};
+  tradeoff::mark_pareto_front(rows_);
+  const std::optional<std::size_t> pick = tradeoff::recommend(rows_, budget);
+  const std::string recommendation = tradeoff::recommendation_text(rows_, budget, pick);
   logger()->info("{}", recommendation);
 
-  // Everything is computed: the run folder appears at once.
-  RunFolder run(opt.out);
-  tradeoff::write_csv(run.stage("tradeoff.csv"), rows);
+  RunFolder run(opt_.out);
+  tradeoff::write_csv(run.stage("tradeoff.csv"), rows_);
   const std::string title =
-      fmt::format("{} · {} · {} frames at {:g} fps", subject_label, motion.name, motion.num_frames(), motion.fps);
-  const std::string reference_text =
-      opt.reference == "sundials"
-          ? fmt::format("SUNDIALS ARKODE (adaptive, rtol {:g}, atol {:g}) on the {} mesh", opt.rtol, opt.atol,
-                        opt.reference_mesh)
-          : fmt::format("{} with {} masses at {} substeps per frame on the {} mesh", opt.reference, opt.reference_mass,
-                        opt.reference_substeps, opt.reference_mesh);
+      fmt::format("{} · {} · {} frames at {:g} fps", subject_label_, motion_.name, motion_.num_frames(), motion_.fps);
+  const std::string reference = reference_text();
   tradeoff::write_markdown(
       run.stage("tradeoff.md"), "What accuracy costs in time: " + title,
-      {fmt::format("preset {}; reference: {}", opt.preset, reference_text),
+      {fmt::format("preset {}; reference: {}", opt_.preset, reference),
        fmt::format("error: RMS over the {} region vertices of the body surface and frames 1..{} of |p − p_ref|, p the "
                    "posed body "
                    "surface every model writes (model::BodyLayer::posed_surface); relative: divided by the RMS of the "
                    "reference's "
                    "soft-tissue displacement p_ref − p_skinned ({:.3f} mm)",
-                   region.size(), steps, 1e3 * ref.soft_rms),
+                   region_.size(), steps_, 1e3 * ref_.soft_rms),
        fmt::format("σ ratio: mean σ / mean σ_ref over the region (model::DynamicsAmplitude of the unposed skin "
                    "displacement, as "
                    "`sflsh simulate` reports it; σ_ref = {:.3f} mm)",
-                   1e3 * ref.sigma_mean),
+                   1e3 * ref_.sigma_mean),
        "s/frame: solve time per output frame (steps only); setup: layer build + solver (+ reduced model) setup",
        "Pareto: no other valid row is both faster and more accurate"},
-      rows, recommendation);
+      rows_, recommendation);
   std::string png = "tradeoff.png";
   try {
-    tradeoff::write_png(run.stage("tradeoff.png"), "Error against time: " + title, rows);
+    tradeoff::write_png(run.stage("tradeoff.png"), "Error against time: " + title, rows_);
   } catch (const Error& e) {  // the picture is a convenience: the tables never depend on a display
     logger()->warn("skipped tradeoff.png: {}", e.what());
     png.clear();
   }
-  nlohmann::json row_json = nlohmann::json::array();
-  for (const tradeoff::Row& r : rows)
-    row_json.push_back(
-        {{"label", r.label()},
-         {"model", r.model},
-         {"integrator", r.integrator},
-         {"mass", r.mass},
-         {"mesh", r.mesh},
-         {"handles", r.handles},
-         {"cubature", r.cubature},
-         {"substeps", r.substeps},
-         {"step", r.step},
-         {"setup_seconds", r.setup_seconds},
-         {"seconds_per_frame", r.seconds_per_frame},
-         {"rms_error_mm", std::isfinite(r.rms_error_mm) ? nlohmann::json(r.rms_error_mm) : nlohmann::json(nullptr)},
-         {"relative_error",
-          std::isfinite(r.relative_error) ? nlohmann::json(r.relative_error) : nlohmann::json(nullptr)},
-         {"sigma_ratio", std::isfinite(r.sigma_ratio) ? nlohmann::json(r.sigma_ratio) : nlohmann::json(nullptr)},
-         {"valid", r.valid},
-         {"pareto", r.pareto}});
+  const nlohmann::json row_json = rows_json();
   nlohmann::json summary = summary_header("tradeoff", invocation.argc, invocation.argv);
-  summary["preset"] = opt.preset;
-  summary["body"] = body::body_label(opt.subject);
-  summary["subject"] = subject_label;
-  summary["beta"] = std::vector<double>(beta.data(), beta.data() + beta.size());
+  summary["preset"] = opt_.preset;
+  summary["body"] = body::body_label(opt_.subject);
+  summary["subject"] = subject_label_;
+  summary["beta"] = std::vector<double>(beta_.data(), beta_.data() + beta_.size());
   summary["motion"] = {
-      {"name", motion.name}, {"source", motion.source}, {"fps", motion.fps}, {"frames", motion.num_frames()}};
-  summary["material"] = material_summary(opt.layer, material_file);
-  summary["region_vertices"] = region.size();
-  summary["reference"] = reference_json;
-  summary["reference"]["description"] = reference_text;
+      {"name", motion_.name}, {"source", motion_.source}, {"fps", motion_.fps}, {"frames", motion_.num_frames()}};
+  summary["material"] = material_summary(opt_.layer, material_file_);
+  summary["region_vertices"] = region_.size();
+  summary["reference"] = reference_json_;
+  summary["reference"]["description"] = reference;
   summary["rows"] = row_json;
   summary["budget"] = {
       {"rms_error_mm", budget.mm ? nlohmann::json(*budget.mm) : nlohmann::json(nullptr)},
@@ -503,10 +570,24 @@ void run_tradeoff(const TradeoffOptions& opt, const Invocation& invocation, int 
                        {"markdown", "tradeoff.md"},
                        {"plot", png.empty() ? nlohmann::json(nullptr) : nlohmann::json(png)}};
   summary["units"] = {{"rms_error", "mm"}, {"seconds_per_frame", "s"}, {"setup_seconds", "s"}, {"step", "s"}};
-  summary["timings"] = {{"total_seconds", seconds_since(t_start)}};
+  summary["timings"] = {{"total_seconds", started_seconds_ago}};
   write_json(run.stage("summary.json"), summary);
   run.commit();
-  logger()->info("tradeoff: wrote {} ({} rows, {:.1f} s)", run.dir().string(), rows.size(), seconds_since(t_start));
+  logger()->info("tradeoff: wrote {} ({} rows, {:.1f} s)", run.dir().string(), rows_.size(), started_seconds_ago);
+}
+
+void run_tradeoff(const TradeoffOptions& opt, const Invocation& invocation, int rank, int size) {
+  const auto t_start = Clock::now();
+  require(size == 1, "tradeoff runs on one process (got {}): its timings compare solvers on the same cores", size);
+  (void)rank;
+  TradeoffStudy study(opt);
+  study.prepare();
+  study.run_reference();
+  study.run_reference_checks();
+  study.run_full_rows();
+  study.run_reduced_rows();
+  // Everything is computed: the run folder appears at once.
+  study.write(invocation, seconds_since(t_start));
 }
 
 }  // namespace
