@@ -139,76 +139,66 @@ int layered_prism_layers(const LayerMeshOptions& options) {
   return options.layers > 0 ? options.layers : detail::layered_layers(options.size);
 }
 
-LayerMesh build_layer_mesh(const body::BodyModel& model, const LayerMeshOptions& options) {
-  const auto start = std::chrono::steady_clock::now();
-  LayerMesh mesh;
-  mesh.body_name = model.name;
-  const auto names = options.region_names.empty() ? default_region_names() : options.region_names;
-  mesh.region = region_key(names);
-  mesh.mesher = options.mesher;
-  mesh.size = options.size;
-  mesh.template_thickness = options.template_thickness;
-  require(options.template_thickness > 0.0 && options.template_thickness < 1.0,
-          "template thickness h = {}; expected 0 < h < 1", options.template_thickness);
+namespace {
 
-  mesh.region_surface = select_region(model, names);
+/// Throws when the closed boundary of the layer (skin, inner surface, side wall) is not a valid surface.
+void check_layer_boundary(const LayerMesh& mesh, const LayerSurface& layer) {
+  const auto check = body::check_surface(layer.surface.vertices, layer.surface.triangles, true);
+  require(check.ok(), "layer '{}' at h = {}: the closed layer boundary is not a valid surface ({})", mesh.region,
+          mesh.template_thickness, check.summary());
+}
+
+/// The layered mesher's mesh: prisms on the skin triangles, parts from each node's skin vertex, tets by majority.
+void build_layered_layer(LayerMesh& mesh, const LayerGeometry& geometry, const LayerMeshOptions& options) {
   const Region& region = mesh.region_surface;
-  mesh.correspondence = skeleton_correspondence(model, region);
-  const LayerGeometry geometry =
-      layer_geometry(model, region, mesh.correspondence, body::Betas::Zero(), mesh.template_thickness_field());
-
-  if (options.mesher == Mesher::layered) {
-    const auto check = body::check_surface(build_layer_surface(region, geometry, 1.0, 1).surface.vertices,
-                                           build_layer_surface(region, geometry, 1.0, 1).surface.triangles, true);
-    require(check.ok(), "layer '{}' at h = {}: the closed layer boundary is not a valid surface ({})", mesh.region,
-            mesh.template_thickness, check.summary());
-    detail::build_layered(mesh, geometry, layered_prism_layers(options));
-    mesh.node_part.resize(static_cast<std::size_t>(mesh.num_nodes()));
-    for (int i = 0; i < mesh.num_nodes(); ++i)
-      mesh.node_part[static_cast<std::size_t>(i)] =
-          region.part[static_cast<std::size_t>(mesh.anchor[static_cast<std::size_t>(i)].vertex[0])];
-    mesh.tet_part.resize(static_cast<std::size_t>(mesh.num_tets()));
-    for (int e = 0; e < mesh.num_tets(); ++e) {
-      std::array<int, kNumParts> votes{};
-      for (int c = 0; c < 4; ++c)
-        ++votes[static_cast<std::size_t>(mesh.node_part[static_cast<std::size_t>(mesh.tets(e, c))])];
-      mesh.tet_part[static_cast<std::size_t>(e)] =
-          static_cast<Part>(std::max_element(votes.begin(), votes.end()) - votes.begin());
-    }
-    const QualityReport quality = quality_report(mesh.nodes, mesh.tets);
-    require(quality.valid(), "layer '{}' (layered): {} inverted and {} degenerate tets in the template", mesh.region,
-            quality.inverted, quality.degenerate);
-    mesh.meshing_seconds = seconds_since(start);
-    logger()->info("layer '{}' (layered, {}, {} prism layers): {} nodes, {} tets in {:.1f} s", mesh.region,
-                   size_preset_name(options.size), layered_prism_layers(options), mesh.num_nodes(), mesh.num_tets(),
-                   mesh.meshing_seconds);
-    return mesh;
+  check_layer_boundary(mesh, build_layer_surface(region, geometry, 1.0, 1));
+  detail::build_layered(mesh, geometry, layered_prism_layers(options));
+  mesh.node_part.resize(static_cast<std::size_t>(mesh.num_nodes()));
+  for (int i = 0; i < mesh.num_nodes(); ++i)
+    mesh.node_part[static_cast<std::size_t>(i)] =
+        region.part[static_cast<std::size_t>(mesh.anchor[static_cast<std::size_t>(i)].vertex[0])];
+  mesh.tet_part.resize(static_cast<std::size_t>(mesh.num_tets()));
+  for (int e = 0; e < mesh.num_tets(); ++e) {
+    std::array<int, kNumParts> votes{};
+    for (int c = 0; c < 4; ++c)
+      ++votes[static_cast<std::size_t>(mesh.node_part[static_cast<std::size_t>(mesh.tets(e, c))])];
+    mesh.tet_part[static_cast<std::size_t>(e)] =
+        static_cast<Part>(std::max_element(votes.begin(), votes.end()) - votes.begin());
   }
+  const QualityReport quality = quality_report(mesh.nodes, mesh.tets);
+  require(quality.valid(), "layer '{}' (layered): {} inverted and {} degenerate tets in the template", mesh.region,
+          quality.inverted, quality.degenerate);
+}
 
-  // Size: the target edge from the layer volume and the preset's tet count.
+/// A tet mesh of the layer surface by cgal or gmsh and the surface it was meshed from.
+struct SizedTetMesh {
+  TetMesh tets;
+  LayerSurface layer;
+  double edge_length = 0.0;  ///< the target edge it was meshed with [m]
+};
+
+/// Meshes the layer with the target edge from the layer volume and the preset's tet count. The regular-tet estimate
+/// assumes the tets fill the volume freely; a thin layer needs more tets (the thickness must be resolved), so the
+/// count is corrected by remeshing with a rescaled edge (exponent between surface-bound 1/2 and volume-bound 1/3
+/// scaling) until within ×1.4 of the target.
+SizedTetMesh mesh_to_target_size(const LayerMesh& mesh, const LayerGeometry& geometry,
+                                 const LayerMeshOptions& options) {
+  const Region& region = mesh.region_surface;
   const double volume = enclosed_volume(build_layer_surface(region, geometry, 1.0, 1).surface);
   require(volume > 0.0, "layer '{}': enclosed volume {:.3e} m³ is not positive (inverted layer boundary)", mesh.region,
           volume);
-  // The regular-tet estimate assumes the tets fill the volume freely; a thin layer needs more tets
-  // (the thickness must be resolved), so the count is corrected by remeshing with a rescaled edge
-  // (exponent between surface-bound 1/2 and volume-bound 1/3 scaling) until within ×1.4 of the target.
   SizeControl size = size_for_target_tets(volume, target_tets(options.size), options.mesher, options.threads);
   const long target = target_tets(options.size);
-  TetMesh tet_mesh;
-  LayerSurface layer;
+  SizedTetMesh out;
   double previous_ratio = 0.0;
   for (int pass = 0;; ++pass) {
-    layer = build_layer_surface(region, geometry, size.edge_length);
-    if (pass == 0) {
-      const auto check = body::check_surface(layer.surface.vertices, layer.surface.triangles, true);
-      require(check.ok(), "layer '{}' at h = {}: the closed layer boundary is not a valid surface ({})", mesh.region,
-              mesh.template_thickness, check.summary());
-    }
-    tet_mesh = tetrahedralize(layer.surface, options.mesher, size);
-    const double ratio = static_cast<double>(tet_mesh.tets.rows()) / static_cast<double>(target);
+    out.layer = build_layer_surface(region, geometry, size.edge_length);
+    if (pass == 0) check_layer_boundary(mesh, out.layer);
+    out.tets = tetrahedralize(out.layer.surface, options.mesher, size);
+    const double ratio = static_cast<double>(out.tets.tets.rows()) / static_cast<double>(target);
     logger()->info("layer '{}' ({}, {}): edge {:.4f} m, {} side layers → {} tets ({:.2f} × target)", mesh.region,
-                   mesher_name(options.mesher), size_preset_name(options.size), size.edge_length, layer.side_layers,
-                   tet_mesh.tets.rows(), ratio);
+                   mesher_name(options.mesher), size_preset_name(options.size), size.edge_length, out.layer.side_layers,
+                   out.tets.tets.rows(), ratio);
     // Stop when close enough, after two corrections, or when the count no longer follows the edge
     // (gmsh keeps every skin vertex, which bounds its count from below).
     if (pass == 2 || (ratio > 1.0 / 1.4 && ratio < 1.4) || std::abs(ratio / previous_ratio - 1.0) < 0.1) break;
@@ -218,18 +208,18 @@ LayerMesh build_layer_mesh(const body::BodyModel& model, const LayerMeshOptions&
     next.surface_distance *= next.edge_length / size.edge_length;
     size = next;
   }
-  mesh.edge_length = size.edge_length;
+  out.edge_length = size.edge_length;
   logger()->info("layer '{}': {} skin vertices, {} boundary loops, volume {:.4f} m³", mesh.region,
                  region.num_vertices(), region.boundary_loops.size(), volume);
+  return out;
+}
 
-  mesh.nodes = tet_mesh.nodes;
-  mesh.tets = tet_mesh.tets;
-  const int n = static_cast<int>(mesh.nodes.rows());
-
-  // Node kinds and anchors: gmsh nodes that are input vertices take their anchors directly; other
-  // boundary nodes are located on the layer surface. Boundary nodes are then snapped onto the anchor's
-  // position so that retargeting reproduces the template exactly.
-  const BoundaryLocation location = locate_boundary_nodes(tet_mesh, layer.surface);
+/// Node kinds and anchors: gmsh nodes that are input vertices take their anchors directly; other boundary nodes are
+/// located on the layer surface. Boundary nodes are then snapped onto the anchor's position so that retargeting
+/// reproduces the template exactly.
+void anchor_boundary_nodes(LayerMesh& mesh, const SizedTetMesh& sized, const LayerGeometry& geometry) {
+  const int n = mesh.num_nodes();
+  const BoundaryLocation location = locate_boundary_nodes(sized.tets, sized.layer.surface);
   mesh.kind.assign(static_cast<std::size_t>(n), NodeKind::interior);
   mesh.anchor.assign(static_cast<std::size_t>(n), SurfaceAnchor{});
   constexpr double kRimTolerance = 1e-6;  // depth closer than this to 0 or 1 is on the rim
@@ -237,10 +227,10 @@ LayerMesh build_layer_mesh(const body::BodyModel& model, const LayerMeshOptions&
   for (int i = 0; i < n; ++i) {
     const auto k = static_cast<std::size_t>(i);
     SurfaceAnchor anchor;
-    if (!tet_mesh.input_vertex.empty() && tet_mesh.input_vertex[k] >= 0) {
-      anchor = layer.anchors[static_cast<std::size_t>(tet_mesh.input_vertex[k])];
+    if (!sized.tets.input_vertex.empty() && sized.tets.input_vertex[k] >= 0) {
+      anchor = sized.layer.anchors[static_cast<std::size_t>(sized.tets.input_vertex[k])];
     } else if (location.triangle[k] >= 0) {
-      anchor = blend_anchor(layer, location.triangle[k], location.bary[k]);
+      anchor = blend_anchor(sized.layer, location.triangle[k], location.bary[k]);
     } else {
       continue;
     }
@@ -256,10 +246,13 @@ LayerMesh build_layer_mesh(const body::BodyModel& model, const LayerMeshOptions&
   const QualityReport snapped_quality = quality_report(mesh.nodes, mesh.tets);
   require(snapped_quality.valid(),
           "layer '{}' ({}): {} inverted and {} degenerate tets after placing boundary nodes on the layer surface",
-          mesh.region, mesher_name(options.mesher), snapped_quality.inverted, snapped_quality.degenerate);
+          mesh.region, mesher_name(mesh.mesher), snapped_quality.inverted, snapped_quality.degenerate);
+}
 
-  // Parts: boundary nodes from their anchor's main vertex, interior nodes by harmonic interpolation of
-  // the part indicators; tets by the largest summed indicator of their nodes.
+/// Parts: boundary nodes from their anchor's main vertex, interior nodes by harmonic interpolation of the part
+/// indicators; tets by the largest summed indicator of their nodes.
+void assign_parts(LayerMesh& mesh) {
+  const int n = mesh.num_nodes();
   std::vector<char> fixed(static_cast<std::size_t>(n), 0);
   Eigen::MatrixXd indicator = Eigen::MatrixXd::Zero(n, kNumParts);
   for (int i = 0; i < n; ++i) {
@@ -267,7 +260,8 @@ LayerMesh build_layer_mesh(const body::BodyModel& model, const LayerMeshOptions&
     if (!anchor.valid()) continue;
     fixed[static_cast<std::size_t>(i)] = 1;
     for (int s = 0; s < 3; ++s)
-      indicator(i, static_cast<int>(region.part[static_cast<std::size_t>(anchor.vertex[s])])) += anchor.weight(s);
+      indicator(i, static_cast<int>(mesh.region_surface.part[static_cast<std::size_t>(anchor.vertex[s])])) +=
+          anchor.weight(s);
   }
   indicator = HarmonicInterpolator(mesh.nodes, mesh.tets, fixed).extend(indicator);
   mesh.node_part.resize(static_cast<std::size_t>(n));
@@ -284,9 +278,12 @@ LayerMesh build_layer_mesh(const body::BodyModel& model, const LayerMeshOptions&
     sum.maxCoeff(&best);
     mesh.tet_part[static_cast<std::size_t>(e)] = static_cast<Part>(best);
   }
+}
 
-  // Skin embedding: nodes where the mesher kept the skin vertices, point location otherwise.
-  const int count = region.num_vertices();
+/// Skin embedding: nodes where the mesher kept the skin vertices, point location otherwise.
+void embed_skin(LayerMesh& mesh, const TetMesh& tet_mesh, const LayerGeometry& geometry) {
+  const int n = mesh.num_nodes();
+  const int count = mesh.region_surface.num_vertices();
   mesh.skin.node.assign(static_cast<std::size_t>(count), -1);
   if (!tet_mesh.input_vertex.empty())
     for (int i = 0; i < n; ++i) {
@@ -307,9 +304,44 @@ LayerMesh build_layer_mesh(const body::BodyModel& model, const LayerMeshOptions&
     mesh.skin.tet[k] = tet;
     mesh.skin.bary[k] = Eigen::Vector4d::Unit(corner);
   }
+}
+
+}  // namespace
+
+LayerMesh build_layer_mesh(const body::BodyModel& model, const LayerMeshOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  LayerMesh mesh;
+  mesh.body_name = model.name;
+  const auto names = options.region_names.empty() ? default_region_names() : options.region_names;
+  mesh.region = region_key(names);
+  mesh.mesher = options.mesher;
+  mesh.size = options.size;
+  mesh.template_thickness = options.template_thickness;
+  require(options.template_thickness > 0.0 && options.template_thickness < 1.0,
+          "template thickness h = {}; expected 0 < h < 1", options.template_thickness);
+  mesh.region_surface = select_region(model, names);
+  mesh.correspondence = skeleton_correspondence(model, mesh.region_surface);
+  const LayerGeometry geometry = layer_geometry(model, mesh.region_surface, mesh.correspondence, body::Betas::Zero(),
+                                                mesh.template_thickness_field());
+
+  if (options.mesher == Mesher::layered) {
+    build_layered_layer(mesh, geometry, options);
+    mesh.meshing_seconds = seconds_since(start);
+    logger()->info("layer '{}' (layered, {}, {} prism layers): {} nodes, {} tets in {:.1f} s", mesh.region,
+                   size_preset_name(options.size), layered_prism_layers(options), mesh.num_nodes(), mesh.num_tets(),
+                   mesh.meshing_seconds);
+    return mesh;
+  }
+  const SizedTetMesh sized = mesh_to_target_size(mesh, geometry, options);
+  mesh.edge_length = sized.edge_length;
+  mesh.nodes = sized.tets.nodes;
+  mesh.tets = sized.tets.tets;
+  anchor_boundary_nodes(mesh, sized, geometry);
+  assign_parts(mesh);
+  embed_skin(mesh, sized.tets, geometry);
   mesh.meshing_seconds = seconds_since(start);
   logger()->info("layer '{}' ({}, {}): {} nodes, {} tets in {:.1f} s", mesh.region, mesher_name(options.mesher),
-                 size_preset_name(options.size), n, mesh.tets.rows(), mesh.meshing_seconds);
+                 size_preset_name(options.size), mesh.num_nodes(), mesh.tets.rows(), mesh.meshing_seconds);
   return mesh;
 }
 
