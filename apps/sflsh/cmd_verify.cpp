@@ -70,6 +70,127 @@ void write_history(const std::filesystem::path& path, const model::Problem& prob
   write_text_atomically(path, csv.str());
 }
 
+/// What a verify run produced: the recorded samples, per-step records (stepping integrators) and the solver's
+/// description for summary.json.
+struct VerifyRun {
+  std::vector<Record> records;
+  nlohmann::json steps = nlohmann::json::array();
+  nlohmann::json solver;
+};
+
+/// The whole number of steps of spec.step in spec.duration, within the work limits.
+long step_count(const VerifyOptions& opt, const fullspace::VerifyProblem& spec, const model::Problem& problem) {
+  check_work(verify_work(spec, problem), WorkLimits{}, opt.allow_long,
+             fmt::format("{}: time.duration / time.step (and record.every)", opt.problem));
+  require(spec.duration / spec.step < 1e15, "{}: time.step: {} s gives more than 1e15 steps over time.duration = {} s",
+          opt.problem, spec.step, spec.duration);
+  const auto steps = static_cast<long>(std::llround(spec.duration / spec.step));
+  require(std::abs(static_cast<double>(steps) * spec.step - spec.duration) <= 1e-9 * std::max(1.0, spec.duration),
+          "{}: time.duration = {} is not a whole number of steps of {}", opt.problem, spec.duration, spec.step);
+  return steps;
+}
+
+/// The SUNDIALS reference (adaptive; one process), sampled every record.every steps.
+VerifyRun run_reference(const fullspace::VerifyProblem& spec, const model::Problem& problem, long steps,
+                        Progress& progress) {
+  VerifyRun run;
+  fullspace::ReferenceOptions ref;
+  ref.rtol = spec.rtol;
+  ref.atol = spec.atol;
+  fullspace::ReferenceIntegrator integrator(problem, ref);
+  const model::State state = model::initial_state(problem, 0.0);
+  integrator.initialize(state);
+  run.records.push_back({0.0, state.x});
+  for (long k = spec.record_every; k <= steps; k += spec.record_every) {
+    const model::State s = integrator.advance_to(static_cast<double>(k) * spec.step);
+    run.records.push_back({s.t, s.x});
+    progress.advance(static_cast<std::size_t>(spec.record_every));
+  }
+  const fullspace::ReferenceStats& st = integrator.stats();
+  run.solver = {{"integrator", "reference"},
+                {"rtol", spec.rtol},
+                {"atol", spec.atol},
+                {"steps", st.steps},
+                {"rhs_evals", st.rhs_evals},
+                {"jacobian_evals", st.jac_evals},
+                {"nonlinear_iterations", st.nonlin_iters},
+                {"error_test_failures", st.error_test_fails},
+                {"mass_solves", st.mass_solves},
+                {"seconds", st.seconds}};
+  return run;
+}
+
+model::Integrator stepping_integrator(fullspace::VerifyProblem::Integrator integrator) {
+  switch (integrator) {
+    case fullspace::VerifyProblem::Integrator::bdf2:
+      return model::Integrator::bdf2;
+    case fullspace::VerifyProblem::Integrator::newmark:
+      return model::Integrator::newmark;
+    default:
+      return model::Integrator::backward_euler;
+  }
+}
+
+/// The full-space solver with the problem's integrator (quasi-static without density), one record per step.
+VerifyRun run_stepping(const VerifyOptions& opt, const fullspace::VerifyProblem& spec, const model::Problem& problem,
+                       long steps, const std::string& integrator_name, int size, Progress& progress) {
+  VerifyRun run;
+  const bool dynamic = problem.dynamic();
+  fullspace::FullSpaceOptions options;
+  options.quasi_static = !dynamic;
+  options.threads = opt.threads;
+  options.preconditioner = opt.preconditioner;
+  options.integrator = stepping_integrator(spec.integrator);
+  fullspace::FullSpaceSolver integrator(problem, MPI_COMM_WORLD, options);
+  model::State state = model::initial_state(problem, 0.0);
+  if (!dynamic) {
+    state.w.setZero();  // a static problem starts at equilibrium with the drives at t = 0
+  } else if (options.integrator == model::Integrator::newmark) {
+    state.a = model::initial_acceleration(problem, state);  // p̈(0) from the equations of motion
+  }
+  integrator.initialize(state);
+  run.records.push_back({0.0, state.x});
+  long newton = 0, linear = 0, builds = 0;
+  for (long k = 1; k <= steps; ++k) {
+    const model::StepStats st = integrator.step(spec.step);
+    newton += st.newton_iterations;
+    linear += st.linear_iterations;
+    builds += st.preconditioner_builds;
+    run.steps.push_back({{"t", integrator.state().t},
+                         {"newton_iterations", st.newton_iterations},
+                         {"linear_iterations", st.linear_iterations},
+                         {"substeps", st.substeps},
+                         {"seconds", st.seconds}});
+    if (k % spec.record_every == 0) run.records.push_back({integrator.state().t, integrator.state().x});
+    progress.advance();
+  }
+  run.solver = {{"integrator", integrator_name},
+                {"processes", size},
+                {"threads_per_process", integrator.assembly_threads()},
+                {"preconditioner", integrator.preconditioner_type()},
+                {"newton_iterations", newton},
+                {"linear_iterations", linear},
+                {"preconditioner_builds", builds}};
+  return run;
+}
+
+/// The samples as solution.pvd of .vtu frames (displacement [m] per node).
+void write_solution_series(RunFolder& run, const model::Problem& problem, const std::vector<Record>& records) {
+  vtk::PvdSeries series(run.stage("solution.pvd"));
+  const vtk::Cells cells = problem.tets;
+  for (std::size_t k = 0; k < records.size(); ++k) {
+    const Record& r = records[k];
+    const Eigen::Map<const vtk::Points> x(r.x.data(), problem.num_nodes(), 3);
+    vtk::Fields fields;
+    fields.point_data.push_back({"displacement", Eigen::MatrixXd(x - problem.rest), false});
+    fields.field_data.push_back({"TimeValue", Eigen::MatrixXd::Constant(1, 1, r.t), false});
+    const std::string name = fmt::format("solution_{:06d}.vtu", k);
+    vtk::write_unstructured(run.stage(name), x, cells, fields);
+    series.add(r.t, name);
+  }
+  series.write();
+}
+
 void run_verify(const VerifyOptions& opt, const Invocation& invocation, int rank, int size) {
   const auto t_start = std::chrono::steady_clock::now();
   const fullspace::VerifyProblem spec = fullspace::load_verify_problem(opt.problem);
@@ -83,120 +204,25 @@ void run_verify(const VerifyOptions& opt, const Invocation& invocation, int rank
   require(!reference || dynamic, "{}: integrator \"reference\" needs a dynamic problem (density > 0)", opt.problem);
   require(!reference || size == 1, "{}: the SUNDIALS reference integrator runs on one process (got {})", opt.problem,
           size);
-
-  const double step = spec.step;
-  check_work(verify_work(spec, problem), WorkLimits{}, opt.allow_long,
-             fmt::format("{}: time.duration / time.step (and record.every)", opt.problem));
-  require(spec.duration / step < 1e15, "{}: time.step: {} s gives more than 1e15 steps over time.duration = {} s",
-          opt.problem, step, spec.duration);
-  const auto steps = static_cast<long>(std::llround(spec.duration / step));
-  require(std::abs(static_cast<double>(steps) * step - spec.duration) <= 1e-9 * std::max(1.0, spec.duration),
-          "{}: time.duration = {} is not a whole number of steps of {}", opt.problem, spec.duration, step);
+  const long steps = step_count(opt, spec, problem);
   // What ran: the integrator of the problem file, or "static" without density (mass then means nothing).
   const std::string integrator_name = dynamic ? std::string(fullspace::to_string(spec.integrator)) : "static";
   const std::string mass_name = dynamic ? std::string(model::to_string(problem.mass_kind)) : "none";
   logger()->info(
       "verify {}: {} nodes, {} tets, {} {} steps of {:.6g} s ({} mass), recording {} nodes of '{}' every {} steps",
       spec.file.filename().string(), problem.num_nodes(), problem.num_tets(), steps,
-      reference ? "reference (SUNDIALS)" : integrator_name, step, mass_name, record_nodes.size(), spec.record_group,
-      spec.record_every);
+      reference ? "reference (SUNDIALS)" : integrator_name, spec.step, mass_name, record_nodes.size(),
+      spec.record_group, spec.record_every);
 
-  std::vector<Record> records;
-  nlohmann::json steps_json = nlohmann::json::array();
-  model::State state = model::initial_state(problem, 0.0);
-  nlohmann::json solver_json;
   Progress progress("time steps", static_cast<std::size_t>(steps), rank == 0);
-
-  if (reference) {
-    fullspace::ReferenceOptions ref;
-    ref.rtol = spec.rtol;
-    ref.atol = spec.atol;
-    fullspace::ReferenceIntegrator integrator(problem, ref);
-    integrator.initialize(state);
-    records.push_back({0.0, state.x});
-    for (long k = spec.record_every; k <= steps; k += spec.record_every) {
-      const model::State s = integrator.advance_to(static_cast<double>(k) * step);
-      records.push_back({s.t, s.x});
-      progress.advance(static_cast<std::size_t>(spec.record_every));
-    }
-    const fullspace::ReferenceStats& st = integrator.stats();
-    solver_json = {{"integrator", "reference"},
-                   {"rtol", spec.rtol},
-                   {"atol", spec.atol},
-                   {"steps", st.steps},
-                   {"rhs_evals", st.rhs_evals},
-                   {"jacobian_evals", st.jac_evals},
-                   {"nonlinear_iterations", st.nonlin_iters},
-                   {"error_test_failures", st.error_test_fails},
-                   {"mass_solves", st.mass_solves},
-                   {"seconds", st.seconds}};
-  } else {
-    fullspace::FullSpaceOptions options;
-    options.quasi_static = !dynamic;
-    options.threads = opt.threads;
-    options.preconditioner = opt.preconditioner;
-    switch (spec.integrator) {
-      case fullspace::VerifyProblem::Integrator::bdf2:
-        options.integrator = model::Integrator::bdf2;
-        break;
-      case fullspace::VerifyProblem::Integrator::newmark:
-        options.integrator = model::Integrator::newmark;
-        break;
-      default:
-        options.integrator = model::Integrator::backward_euler;
-        break;
-    }
-    fullspace::FullSpaceSolver integrator(problem, MPI_COMM_WORLD, options);
-    if (!dynamic) {
-      // A static problem starts at equilibrium with the drives at t = 0.
-      state.w.setZero();
-    } else if (options.integrator == model::Integrator::newmark) {
-      state.a = model::initial_acceleration(problem, state);  // p̈(0) from the equations of motion
-    }
-    integrator.initialize(state);
-    records.push_back({0.0, state.x});
-    long newton = 0, linear = 0, builds = 0;
-    for (long k = 1; k <= steps; ++k) {
-      const model::StepStats st = integrator.step(step);
-      newton += st.newton_iterations;
-      linear += st.linear_iterations;
-      builds += st.preconditioner_builds;
-      steps_json.push_back({{"t", integrator.state().t},
-                            {"newton_iterations", st.newton_iterations},
-                            {"linear_iterations", st.linear_iterations},
-                            {"substeps", st.substeps},
-                            {"seconds", st.seconds}});
-      if (k % spec.record_every == 0) records.push_back({integrator.state().t, integrator.state().x});
-      progress.advance();
-    }
-    solver_json = {{"integrator", integrator_name},
-                   {"processes", size},
-                   {"threads_per_process", integrator.assembly_threads()},
-                   {"preconditioner", integrator.preconditioner_type()},
-                   {"newton_iterations", newton},
-                   {"linear_iterations", linear},
-                   {"preconditioner_builds", builds}};
-  }
+  const VerifyRun result = reference ? run_reference(spec, problem, steps, progress)
+                                     : run_stepping(opt, spec, problem, steps, integrator_name, size, progress);
   progress.finish();
   if (rank != 0) return;
 
   RunFolder run(opt.out);
-  write_history(run.stage("history.csv"), problem, record_nodes, records);
-  if (!opt.no_vtk) {
-    vtk::PvdSeries series(run.stage("solution.pvd"));
-    const vtk::Cells cells = problem.tets;
-    for (std::size_t k = 0; k < records.size(); ++k) {
-      const Record& r = records[k];
-      const Eigen::Map<const vtk::Points> x(r.x.data(), problem.num_nodes(), 3);
-      vtk::Fields fields;
-      fields.point_data.push_back({"displacement", Eigen::MatrixXd(x - problem.rest), false});
-      fields.field_data.push_back({"TimeValue", Eigen::MatrixXd::Constant(1, 1, r.t), false});
-      const std::string name = fmt::format("solution_{:06d}.vtu", k);
-      vtk::write_unstructured(run.stage(name), x, cells, fields);
-      series.add(r.t, name);
-    }
-    series.write();
-  }
+  write_history(run.stage("history.csv"), problem, record_nodes, result.records);
+  if (!opt.no_vtk) write_solution_series(run, problem, result.records);
   nlohmann::json summary = summary_header("verify", invocation.argc, invocation.argv);
   summary["problem"] = std::filesystem::absolute(spec.file).string();
   summary["mesh"] = {{"file", spec.mesh_path.string()},
@@ -206,15 +232,15 @@ void run_verify(const VerifyOptions& opt, const Invocation& invocation, int rank
   summary["record"] = {{"group", spec.record_group},
                        {"nodes", record_nodes.size()},
                        {"every", spec.record_every},
-                       {"samples", records.size()}};
+                       {"samples", result.records.size()}};
   summary["integrator"] = integrator_name;
   summary["mass"] = mass_name;
-  summary["solver"] = solver_json;
-  summary["steps"] = steps_json;
+  summary["solver"] = result.solver;
+  summary["steps"] = result.steps;
   summary["seconds"] = seconds_since(t_start);
   write_json(run.stage("summary.json"), summary);
   run.commit();
-  logger()->info("wrote {} samples of {} nodes to {}/history.csv", records.size(), record_nodes.size(), opt.out);
+  logger()->info("wrote {} samples of {} nodes to {}/history.csv", result.records.size(), record_nodes.size(), opt.out);
 }
 
 }  // namespace
