@@ -19,6 +19,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <memory>
@@ -144,98 +145,98 @@ void run_case(const SweepOptions& opt, sweep::SweepRun& run) {
   run.seconds = seconds_since(t0);
 }
 
-void run_sweep(const SweepOptions& opt, const Invocation& invocation, int size) {
-  const auto t_start = Clock::now();
-  require(size == 1, "sweep runs on one process (got {}); use --threads for parallel cases", size);
-  require(opt.base.frames >= 2, "--frames must be at least 2, got {}", opt.base.frames);
-  require(opt.threads >= 0, "--threads must be non-negative, got {}", opt.threads);
-  require(opt.base.solver == "full" || opt.base.solver == "reduced", "--solver {}: expected full or reduced",
-          opt.base.solver);
-  check_layer_settings(opt.base.layer);
-  const std::vector<std::string> meshes = expand_meshes(opt.meshes);
-  const std::vector<std::string> subjects = expand_subjects(opt.subjects);
-  const std::vector<std::string> motions = expand_motions(opt.motions, opt.base.fps);
-
+/// What a sweep runs: meshes × subjects × motions, in that nesting order (the cases of one mesh together).
+struct SweepPlan {
+  std::vector<std::string> meshes, subjects, motions;
   std::vector<sweep::SweepRun> runs;
-  for (const std::string& mesh : meshes)
-    for (const std::string& subject : subjects)
-      for (const std::string& motion : motions) {
+  int threads = 1;  ///< cases at once (full space: one, PETSc objects are not shared across threads)
+
+  std::size_t per_mesh() const { return subjects.size() * motions.size(); }
+};
+
+SweepPlan plan_sweep(const SweepOptions& opt) {
+  SweepPlan plan;
+  plan.meshes = expand_meshes(opt.meshes);
+  plan.subjects = expand_subjects(opt.subjects);
+  plan.motions = expand_motions(opt.motions, opt.base.fps);
+  for (const std::string& mesh : plan.meshes)
+    for (const std::string& subject : plan.subjects)
+      for (const std::string& motion : plan.motions) {
         sweep::SweepRun r;
         r.mesh = mesh;
         r.subject = subject;
         r.motion = motion;
         r.frames_requested = opt.base.frames;
-        runs.push_back(r);
+        plan.runs.push_back(r);
       }
-  const int threads =
+  plan.threads =
       opt.base.solver == "full" ? 1 : (opt.threads > 0 ? opt.threads : tbb::this_task_arena::max_concurrency());
-  RunFolder run_folder(opt.out);  // the staging folder: the report appears at once when every case has ended
-  logger()->info(
-      "sweep: {} run(s) ({} mesh(es) × {} subject(s) × {} motion(s)), {} frames, --solver {}, {}", runs.size(),
-      meshes.size(), subjects.size(), motions.size(), opt.base.frames, opt.base.solver,
-      opt.base.solver == "full" ? std::string("one at a time (PETSc)") : fmt::format("{} thread(s)", threads));
+  return plan;
+}
 
-  // One info line per run (failures too: the report lists them, and with -q only the final line remains).
+/// Runs every case, one info line each (failures too: the report lists them, and with -q only the final line
+/// remains). The first case of a mesh runs alone: it builds (or loads) the template mesh and the reduced model that
+/// every other case of that mesh then reads from the cache.
+void run_cases(const SweepOptions& opt, SweepPlan& plan) {
   std::atomic<int> done{0};
   auto run_one = [&](std::size_t i) {
-    sweep::SweepRun& r = runs[i];
+    sweep::SweepRun& r = plan.runs[i];
     run_case(opt, r);
     const int k = ++done;
     if (r.ok)
-      logger()->info("sweep [{}/{}] {} {} {}: ok, mean σ {:.2f} mm, {:.2f} Newton/frame, {:.1f} s", k, runs.size(),
+      logger()->info("sweep [{}/{}] {} {} {}: ok, mean σ {:.2f} mm, {:.2f} Newton/frame, {:.1f} s", k, plan.runs.size(),
                      r.mesh, r.subject, r.motion, r.sigma_mm, r.newton_per_frame, r.seconds);
     else
-      logger()->info("sweep [{}/{}] {} {} {}: FAILED after {} frames: {}", k, runs.size(), r.mesh, r.subject, r.motion,
-                     r.frames, r.error);
+      logger()->info("sweep [{}/{}] {} {} {}: FAILED after {} frames: {}", k, plan.runs.size(), r.mesh, r.subject,
+                     r.motion, r.frames, r.error);
   };
-  {
-    std::optional<tbb::global_control> parallelism;
-    if (opt.threads > 0)
-      parallelism.emplace(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(opt.threads));
-    const std::size_t per_mesh = subjects.size() * motions.size();
-    for (std::size_t m = 0; m < meshes.size(); ++m) {
-      const std::size_t first = m * per_mesh;
-      // The first case of a mesh runs alone: it builds (or loads) the template mesh and the reduced model that every
-      // other case of that mesh then reads from the cache.
-      run_one(first);
-      if (opt.base.solver == "full") {
-        for (std::size_t i = first + 1; i < first + per_mesh; ++i)
-          run_one(i);  // PETSc objects are not shared across threads
-      } else {
-        tbb::parallel_for(
-            first + 1, first + per_mesh, [&](std::size_t i) { run_one(i); }, tbb::simple_partitioner());
-      }
+  std::optional<tbb::global_control> parallelism;
+  if (opt.threads > 0)
+    parallelism.emplace(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(opt.threads));
+  const std::size_t per_mesh = plan.per_mesh();
+  for (std::size_t m = 0; m < plan.meshes.size(); ++m) {
+    const std::size_t first = m * per_mesh;
+    run_one(first);
+    if (opt.base.solver == "full") {
+      for (std::size_t i = first + 1; i < first + per_mesh; ++i) run_one(i);
+    } else {
+      tbb::parallel_for(
+          first + 1, first + per_mesh, [&](std::size_t i) { run_one(i); }, tbb::simple_partitioner());
     }
   }
-  const double wall_seconds = seconds_since(t_start);
+}
 
+/// sweep.csv, sweep.md and summary.json into the staging folder; returns summary.json's per-mesh counts.
+nlohmann::json write_sweep_report(RunFolder& folder, const SweepOptions& opt, const SweepPlan& plan,
+                                  double wall_seconds, const Invocation& invocation) {
+  const std::vector<sweep::SweepRun>& runs = plan.runs;
   const nlohmann::json counts = sweep::counts_per_mesh(runs);
   const nlohmann::json failures = sweep::failures_json(runs);
   const std::string reduced_text = opt.base.solver == "reduced"
                                        ? fmt::format(" --handles {} --cubature {}{}", opt.base.handles,
                                                      opt.base.cubature, opt.base.affine ? " --affine" : "")
                                        : std::string();
-  sweep::write_sweep_csv(run_folder.stage("sweep.csv"), runs);
+  sweep::write_sweep_csv(folder.stage("sweep.csv"), runs);
   sweep::write_sweep_markdown(
-      run_folder.stage("sweep.md"),
+      folder.stage("sweep.md"),
       fmt::format("Sweep: --solver {}, {} frames at {:g} fps", opt.base.solver, opt.base.frames, opt.base.fps),
       {fmt::format("each run is `sflsh simulate --solver {} --mesh M --subject S --motion X --frames {} --integrator "
                    "{} --mass {}{} "
                    "--no-output`",
                    opt.base.solver, opt.base.frames, opt.base.integrator, opt.base.layer.mass, reduced_text),
        fmt::format("{} run(s), {} failed; wall time {:.1f} s on {} thread(s)", runs.size(), failures.size(),
-                   wall_seconds, threads),
+                   wall_seconds, plan.threads),
        "σ: dynamics amplitude per region vertex (docs/physics.md §4); frames: output frames computed, the rest state "
        "included; "
        "retried attempts: substep attempts rejected and repeated (PSD projection, then splitting)"},
       runs);
 
   nlohmann::json summary = summary_header("sweep", invocation.argc, invocation.argv);
-  summary["sweep"] = {{"solver", opt.base.solver},     {"meshes", meshes},
-                      {"subjects", subjects},          {"motions", motions},
+  summary["sweep"] = {{"solver", opt.base.solver},     {"meshes", plan.meshes},
+                      {"subjects", plan.subjects},     {"motions", plan.motions},
                       {"frames", opt.base.frames},     {"fps", opt.base.fps},
                       {"substeps", opt.base.substeps}, {"integrator", opt.base.integrator},
-                      {"mass", opt.base.layer.mass},   {"threads", threads}};
+                      {"mass", opt.base.layer.mass},   {"threads", plan.threads}};
   if (opt.base.solver == "reduced")
     summary["sweep"]["reduced"] = {{"handles", opt.base.handles},
                                    {"cubature", opt.base.cubature},
@@ -249,17 +250,39 @@ void run_sweep(const SweepOptions& opt, const Invocation& invocation, int size) 
   summary["timings"] = {{"wall_seconds", wall_seconds}};
   summary["output"] = {{"table", "sweep.csv"}, {"markdown", "sweep.md"}};
   summary["units"] = {{"sigma", "mm"}, {"seconds", "s"}, {"fps", "output frames per second of solve time"}};
-  write_json(run_folder.stage("summary.json"), summary);
+  write_json(folder.stage("summary.json"), summary);
+  return counts;
+}
+
+void run_sweep(const SweepOptions& opt, const Invocation& invocation, int size) {
+  const auto t_start = Clock::now();
+  require(size == 1, "sweep runs on one process (got {}); use --threads for parallel cases", size);
+  require(opt.base.frames >= 2, "--frames must be at least 2, got {}", opt.base.frames);
+  require(opt.threads >= 0, "--threads must be non-negative, got {}", opt.threads);
+  require(opt.base.solver == "full" || opt.base.solver == "reduced", "--solver {}: expected full or reduced",
+          opt.base.solver);
+  check_layer_settings(opt.base.layer);
+  SweepPlan plan = plan_sweep(opt);
+  RunFolder run_folder(opt.out);  // the staging folder: the report appears at once when every case has ended
+  logger()->info(
+      "sweep: {} run(s) ({} mesh(es) × {} subject(s) × {} motion(s)), {} frames, --solver {}, {}", plan.runs.size(),
+      plan.meshes.size(), plan.subjects.size(), plan.motions.size(), opt.base.frames, opt.base.solver,
+      opt.base.solver == "full" ? std::string("one at a time (PETSc)") : fmt::format("{} thread(s)", plan.threads));
+  run_cases(opt, plan);
+  const double wall_seconds = seconds_since(t_start);
+  const nlohmann::json counts = write_sweep_report(run_folder, opt, plan, wall_seconds, invocation);
   run_folder.commit();
 
+  const long failed = std::count_if(plan.runs.begin(), plan.runs.end(), [](const sweep::SweepRun& r) { return !r.ok; });
   std::string where;
   for (const auto& [mesh, c] : counts.items())
     where +=
         fmt::format("{}{} {}/{}", where.empty() ? "" : ", ", mesh, c["failures"].get<long>(), c["runs"].get<long>());
-  if (!failures.empty())
-    throw_error("sweep: {} of {} runs failed ({}); see {}", failures.size(), runs.size(), where,
+  if (failed > 0)
+    throw_error("sweep: {} of {} runs failed ({}); see {}", failed, plan.runs.size(), where,
                 (run_folder.dir() / "sweep.md").string());
-  logger()->info("sweep: all {} runs ok in {:.1f} s; wrote {}", runs.size(), wall_seconds, run_folder.dir().string());
+  logger()->info("sweep: all {} runs ok in {:.1f} s; wrote {}", plan.runs.size(), wall_seconds,
+                 run_folder.dir().string());
 }
 
 }  // namespace
