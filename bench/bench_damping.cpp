@@ -11,6 +11,7 @@
 #include <sflsh/body/motion.hpp>
 #include <sflsh/body/subjects.hpp>
 #include <sflsh/core/error.hpp>
+#include <sflsh/core/scoped_seconds.hpp>
 #include <sflsh/core/summary.hpp>
 #include <sflsh/fullspace/fullspace_solver.hpp>
 #include <sflsh/fullspace/petsc_session.hpp>
@@ -122,11 +123,11 @@ int main(int argc, char** argv) {
       ref_samples.push_back(layer.surface_displacement(reference.advance_to(static_cast<double>(k) / finest).x));
       if (k % std::max(1, finest / 10) == 0 || k == frames - 1) {
         std::cout << fmt::format("  reference at t = {:.3f} s: {} steps, {:.1f} s\n", static_cast<double>(k) / finest,
-                                 reference.stats().steps, std::chrono::duration<double>(Clock::now() - t_ref).count());
+                                 reference.stats().steps, sflsh::seconds_since(t_ref));
         std::cout.flush();
       }
     }
-    const double ref_seconds = std::chrono::duration<double>(Clock::now() - t_ref).count();
+    const double ref_seconds = sflsh::seconds_since(t_ref);
     const ReferenceStats& st = reference.stats();
     std::cout << fmt::format("reference: {} steps, {} Jacobians, {:.1f} s\n\n", st.steps, st.jac_evals, ref_seconds);
     std::cout.flush();
@@ -147,7 +148,7 @@ int main(int argc, char** argv) {
         samples.push_back(layer.surface_displacement(be.state().x));
         ref_at.push_back(ref_samples[static_cast<std::size_t>(k)]);
       }
-      const double wall = std::chrono::duration<double>(Clock::now() - t0).count();
+      const double wall = sflsh::seconds_since(t0);
       const Eigen::VectorXd sigma = sigma_of(layer, samples, normals), sigma_ref = sigma_of(layer, ref_at, normals);
       double err2 = 0.0, ref2 = 0.0;
       for (std::size_t k = 0; k < samples.size(); ++k) {

@@ -2,6 +2,7 @@
 // PSD projection) on one thread, for deformations of a given strain size (random F = I + ε G). These are the
 // inner loops of both solvers' assembly; the table says what a Newton iteration costs per element.
 // Usage: bench_element [--tets 20000] [--strain 0.05] [--repeat 5] [--out bench_element.json]
+#include <sflsh/core/scoped_seconds.hpp>
 #include <sflsh/core/summary.hpp>
 #include <sflsh/material/orthotropic_fung.hpp>
 #include <sflsh/material/skin_material.hpp>
@@ -56,7 +57,7 @@ int main(int argc, char** argv) {
     for (int r = 0; r < repeat; ++r) {
       const auto t0 = Clock::now();
       for (const TetNodes& x : states) sink += kernel(x);
-      best = std::min(best, std::chrono::duration<double>(Clock::now() - t0).count());
+      best = std::min(best, sflsh::seconds_since(t0));
     }
     const double us = 1e6 * best / count;
     std::cout << fmt::format("{:<34} {:>10.3f} µs/tet\n", name, us);

@@ -14,6 +14,7 @@
 //             [--iterations 8] [--fit λ] [--out bench_fit.json]
 #include <sflsh/body/body_io.hpp>
 #include <sflsh/body/subjects.hpp>
+#include <sflsh/core/scoped_seconds.hpp>
 #include <sflsh/core/summary.hpp>
 #include <sflsh/fullspace/petsc_session.hpp>
 #include <sflsh/reduced/elasticity_fit.hpp>
@@ -31,7 +32,6 @@
 namespace {
 using namespace sflsh;
 using Clock = std::chrono::steady_clock;
-double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -92,7 +92,7 @@ int main(int argc, char** argv) {
     context.parameterization = [&](int n) -> const reduced::LayerParameterization& { return parameterizations.get(n); };
     context.progress = false;
     const reduced::LayerParameterization& param = parameterizations.get(controls);
-    const double setup_seconds = since(t_setup);
+    const double setup_seconds = sflsh::seconds_since(t_setup);
 
     // Targets: the dynamics of a perturbed uniform material (values do not matter for timing).
     material::KappaMatrix start(controls, 3);
@@ -104,7 +104,7 @@ int main(int argc, char** argv) {
     for (const auto& c : cases) case_list.push_back(c.get());
     auto t = Clock::now();
     const std::vector<Eigen::VectorXd> sigma = pool.run(case_list, jobs, param, rm, context.reduced);
-    const double residual_seconds = since(t);
+    const double residual_seconds = sflsh::seconds_since(t);
     for (std::size_t c = 0; c < cases.size(); ++c)
       targets.push_back({cases[c].get(), static_cast<int>(c / 3), 1.1 * sigma[c]});
 
@@ -131,7 +131,7 @@ int main(int argc, char** argv) {
     }
     t = Clock::now();
     pool.run(case_list, fd_jobs, param, rm, context.reduced);
-    const double column_seconds = since(t) / fd_columns;
+    const double column_seconds = sflsh::seconds_since(t) / fd_columns;
 
     // Sensitivity runs: one per case.
     const Eigen::MatrixXd W = reduced::young_tet_map(param.retargeter(), param.phi(), rm.cubature.tets, 1.0);
@@ -143,7 +143,7 @@ int main(int argc, char** argv) {
           cases[static_cast<std::size_t>(c)]->simulate_with_sensitivity(param, start, rm, W, d, context.reduced);
           return Eigen::VectorXd::Constant(1, d.norm());
         });
-    const double sensitivity_seconds = since(t);
+    const double sensitivity_seconds = sflsh::seconds_since(t);
     // The same with the thickness columns too (exact through the retarget): the whole Jacobian.
     t = Clock::now();
     pool.run_tasks(
@@ -153,7 +153,7 @@ int main(int argc, char** argv) {
           cases[static_cast<std::size_t>(c)]->simulate_with_sensitivity(param, start, rm, W, d, context.reduced, true);
           return Eigen::VectorXd::Constant(1, d.norm());
         });
-    const double exact_seconds = since(t);
+    const double exact_seconds = sflsh::seconds_since(t);
 
     const double fd_jacobian = 3.0 * controls * column_seconds;
     const double hybrid_jacobian = controls * column_seconds + sensitivity_seconds;
@@ -226,7 +226,7 @@ int main(int argc, char** argv) {
         const long before = pool.simulations();
         const auto t0 = Clock::now();
         reduced::FitResult r = reduced::fit_elasticity(context, fit_targets, spec);
-        const double seconds = since(t0);
+        const double seconds = sflsh::seconds_since(t0);
         int its = 0, jacobians = 0;
         for (const auto& st : r.stages) {
           its += st.iterations;

@@ -9,6 +9,7 @@
 // Pearson correlation of σ per soft-region vertex, seconds of fit + metric).
 #include <sflsh/body/body_io.hpp>
 #include <sflsh/body/subjects.hpp>
+#include <sflsh/core/scoped_seconds.hpp>
 #include <sflsh/core/summary.hpp>
 #include <sflsh/validate/registration_metrics.hpp>
 #include <sflsh/validate/synthetic_dyna.hpp>
@@ -169,7 +170,7 @@ int main(int argc, char** argv) {
           const auto t0 = std::chrono::steady_clock::now();
           const validate::RegistrationMetrics m = validate::registration_metrics(
               model, s.frames, spec.fps, beta_given ? std::optional<body::Betas>(s.beta) : std::nullopt, options);
-          const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+          const double seconds = sflsh::seconds_since(t0);
           const double recovered = m.dynamics.mean_sigma_soft();
           const double error = 100.0 * (recovered - truth) / truth;
           const double r = validate::sigma_correlation(s.truth.sigma, m.dynamics.sigma, s.truth.soft_vertices);

@@ -4,6 +4,7 @@
 #include <sflsh/body/body_io.hpp>
 #include <sflsh/body/motion.hpp>
 #include <sflsh/body/subjects.hpp>
+#include <sflsh/core/scoped_seconds.hpp>
 #include <sflsh/core/summary.hpp>
 
 #include <fmt/format.h>
@@ -34,7 +35,7 @@ int main(int argc, char** argv) {
       const auto t0 = std::chrono::steady_clock::now();
       for (std::size_t t = 0; t < motion.num_frames(); ++t)
         checksum += poser.pose(motion.poses[t], motion.trans[t])(0, 1);
-      const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      const double seconds = sflsh::seconds_since(t0);
       const double per_frame = 1e3 * seconds / static_cast<double>(motion.num_frames());
       std::cout << fmt::format("{:<18} {:>8} {:>8} {:>12.3f} {:>12.0f}\n", name, model.num_vertices(),
                                motion.num_frames(), per_frame, 1e3 / per_frame);

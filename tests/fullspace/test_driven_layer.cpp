@@ -11,6 +11,7 @@
 #include "scratch_dir.hpp"
 #include "terms_stepper.hpp"
 
+#include <sflsh/core/scoped_seconds.hpp>
 #include <sflsh/fullspace/fullspace_solver.hpp>
 #include <sflsh/fullspace/msh_reader.hpp>
 #include <sflsh/fullspace/reference_integrator.hpp>
@@ -83,7 +84,7 @@ Trajectory sample(const Problem& problem, const std::vector<int>& top, const Adv
       u.segment<3>(3 * static_cast<Eigen::Index>(n)) = x.segment<3>(3 * top[n]) - problem.rest.row(top[n]).transpose();
     out.u.push_back(u);
   }
-  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  out.seconds = sflsh::seconds_since(start);
   return out;
 }
 

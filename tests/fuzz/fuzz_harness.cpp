@@ -1,6 +1,8 @@
 // The fuzzing harness (fuzz_harness.hpp).
 #include "fuzz_harness.hpp"
 
+#include <sflsh/core/scoped_seconds.hpp>
+
 #include <fmt/format.h>
 #include <sys/wait.h>
 
@@ -78,7 +80,7 @@ Outcome run_case(const Case& c, const fs::path& workdir) {
                                           kHangSeconds, SFLSH_CLI, c.arguments, out_file.string(), err_file.string());
   const auto start = std::chrono::steady_clock::now();
   const int status = std::system(command.c_str());
-  o.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  o.seconds = sflsh::seconds_since(start);
   o.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
   const std::string err = slurp(err_file);
   std::error_code ec;

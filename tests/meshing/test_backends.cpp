@@ -3,6 +3,7 @@
 #include "shell_fixture.hpp"
 
 #include <sflsh/core/error.hpp>
+#include <sflsh/core/scoped_seconds.hpp>
 #include <sflsh/meshing/quality.hpp>
 #include <sflsh/meshing/tet_backend.hpp>
 
@@ -319,7 +320,7 @@ TEST(SizeCalibration, DISABLED_PresetsOnLayerLikeShells) {
           std::printf("%-20s %-5s %8ld failed: %s\n", shape.name, meshing::mesher_name(mesher), target, e.what());
           continue;
         }
-        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        const double seconds = sflsh::seconds_since(start);
         const meshing::QualityReport q = meshing::quality_report(mesh.nodes, mesh.tets);
         const double a = size.edge_length;
         double edge_sum = 0.0;

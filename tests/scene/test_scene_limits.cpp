@@ -5,6 +5,7 @@
 #include "scratch_dir.hpp"
 
 #include <sflsh/body/motion.hpp>
+#include <sflsh/core/scoped_seconds.hpp>
 #include <sflsh/meshing/region.hpp>
 #include <sflsh/reduced/shape_model_file.hpp>
 #include <sflsh/scene/obstacle.hpp>
@@ -55,7 +56,7 @@ TEST(SceneLimits, AProceduralWindowIsTheTailOfTheWholeMotionAndCostsOnlyItsFrame
   const auto t0 = std::chrono::steady_clock::now();
   const body::Motion far = body::procedural_motion_window("running_on_spot", 10000.0, 3600LL * 10000, 2);
   EXPECT_EQ(far.num_frames(), 2u);
-  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 1.0);
+  EXPECT_LT(sflsh::seconds_since(t0), 1.0);
 }
 
 TEST(SceneLimits, EveryShapeNeedsItsSize) {
@@ -108,7 +109,7 @@ TEST(SceneLimits, RunawayWorkIsRefusedBeforeAnythingIsBuilt) {
   EXPECT_EQ(e.steps, 100000.0 * 60.0);
   const auto t0 = std::chrono::steady_clock::now();
   const std::string message = error_of([&] { run_scene(scene, options); });
-  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 1.0);
+  EXPECT_LT(sflsh::seconds_since(t0), 1.0);
   EXPECT_THAT(message, HasSubstr("crowd.toml: [scene] duration")) << message;
   EXPECT_THAT(message, HasSubstr("([crowd] count at line 6)")) << message;
   EXPECT_THAT(message, HasSubstr("exceed the limit")) << message;

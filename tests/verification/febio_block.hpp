@@ -5,6 +5,7 @@
 // u(t) = 0.01 (1 − cos 4πt)² / 4 m; the top face (zmax, nodes 363–483) sampled every 1/60 s over 1 s.
 // Written as a `sflsh verify` problem file and read through it, so the tests run what users run.
 #include <sflsh/core/error.hpp>
+#include <sflsh/core/scoped_seconds.hpp>
 #include <sflsh/fullspace/fullspace_solver.hpp>
 #include <sflsh/fullspace/msh_reader.hpp>
 #include <sflsh/fullspace/reference_integrator.hpp>
@@ -193,7 +194,7 @@ TopTrajectory sample_block(const FebioBlock& b, double sample, Advance&& advance
     out.t.push_back(t);
     out.u.push_back(top_displacement(b, k == 0 ? model::initial_state(b.problem, 0.0).x : advance(t)));
   }
-  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  out.seconds = sflsh::seconds_since(start);
   return out;
 }
 
