@@ -1,4 +1,6 @@
 // The on-disk cache of template layer meshes.
+#include "layered_mesh.hpp"
+
 #include <sflsh/core/atomic_file.hpp>
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
@@ -107,10 +109,8 @@ namespace {
 
 /// A layered mesh with a prism-layer count other than its size preset's.
 bool explicit_layers(const LayerMeshOptions& options) {
-  if (options.mesher != Mesher::layered || options.layers == 0) return false;
-  LayerMeshOptions preset = options;
-  preset.layers = 0;
-  return options.layers != layered_prism_layers(preset);
+  return options.mesher == Mesher::layered && options.layers > 0 &&
+         options.layers != detail::layered_layers(options.size);
 }
 
 }  // namespace
