@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
 namespace sflsh::reduced {
@@ -49,13 +50,11 @@ CubatureGuard::CubatureGuard(const model::Problem& problem, const Subspace& subs
   spectral_.resize(static_cast<std::size_t>(n));
   allowed_.resize(static_cast<std::size_t>(n));
   point_limit_.resize(static_cast<std::size_t>(n));
-  offset_.assign(1, 0);
   point_of_tet_.assign(static_cast<std::size_t>(problem.num_tets()), -1);
   for (int p = 0; p < n; ++p) {
     const auto k = static_cast<std::size_t>(p);
     const int e = tets_.point_tet(p);
     point_of_tet_[static_cast<std::size_t>(e)] = p;
-    offset_.push_back(offset_.back() + static_cast<int>(tets_.point_functions(p).size()));
     const material::OrthotropicFung& m = problem.tet_material[static_cast<std::size_t>(e)];
     const double p_norm = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(m.scaling, Eigen::EigenvaluesOnly)
                               .eigenvalues()
@@ -70,20 +69,85 @@ CubatureGuard::CubatureGuard(const model::Problem& problem, const Subspace& subs
     const double modulus = m.mu0 + 1.5 * std::max(m.lambda0, 0.0);
     allowed_[k] = m.inv_c == 0.0 || modulus <= 0.0 ? kInfinity : std::sqrt(point_limit_[k] * m.c / (2.0 * modulus));
   }
-  scaled_.assign(static_cast<std::size_t>(offset_.back()), kInfinity);
-  moved_.assign(static_cast<std::size_t>(subspace.num_functions()), 0.0);
-  budget_.assign(static_cast<std::size_t>(subspace.num_functions()), 0.0);
-  // The guarded points touching each function (CSR).
-  function_offset_.assign(static_cast<std::size_t>(subspace.num_functions()) + 1, 0);
-  for (int p = 0; p < n; ++p)
-    for (int f : tets_.point_functions(p)) ++function_offset_[static_cast<std::size_t>(f) + 1];
-  for (std::size_t f = 0; f + 1 < function_offset_.size(); ++f) function_offset_[f + 1] += function_offset_[f];
-  function_points_.resize(static_cast<std::size_t>(function_offset_.back()));
-  std::vector<int> fill(function_offset_.begin(), function_offset_.end() - 1);
-  for (int p = 0; p < n; ++p)
-    for (int f : tets_.point_functions(p))
-      function_points_[static_cast<std::size_t>(fill[static_cast<std::size_t>(f)]++)] = p;
+  build_terms(subspace.num_functions());
   visited_.assign(static_cast<std::size_t>(n), 0);
+}
+
+void CubatureGuard::build_terms(int num_functions) {
+  ground_ = num_functions;
+  const int n = tets_.num_points();
+  const int clusters = num_functions + 1;
+  // Per point: its anchor (the entry of largest ‖c‖ among its functions and g) and its terms keyed (a, s).
+  std::vector<int> anchor(static_cast<std::size_t>(n));
+  std::vector<std::int64_t> term_key;
+  offset_.assign(1, 0);
+  std::vector<std::pair<int, double>> entries;  // (function or g, ‖c‖) of one point
+  for (int p = 0; p < n; ++p) {
+    const std::span<const int> functions = tets_.point_functions(p);
+    const std::span<const Eigen::Vector3d> vectors = tets_.point_vectors(p);
+    entries.clear();
+    Eigen::Vector3d ground = Eigen::Vector3d::Zero();  // c_g = −Σ_s c_s
+    for (std::size_t j = 0; j < functions.size(); ++j) {
+      entries.emplace_back(functions[j], vectors[j].norm());
+      ground -= vectors[j];
+    }
+    entries.emplace_back(ground_, ground.norm());
+    const int a = std::max_element(entries.begin(), entries.end(), [](const auto& x, const auto& y) {
+                    return x.second < y.second;
+                  })->first;
+    anchor[static_cast<std::size_t>(p)] = a;
+    for (std::size_t j = 0; j < entries.size(); ++j) {
+      const auto [f, norm] = entries[j];
+      if (f == a || norm == 0.0) continue;
+      term_key.push_back(static_cast<std::int64_t>(a) * clusters + f);
+      term_norm_.push_back(norm);
+      term_vector_.push_back(j < functions.size() ? vectors[j] : ground);
+    }
+    offset_.push_back(static_cast<int>(term_key.size()));
+  }
+  // Edges numbered by (anchor, function): cluster by cluster.
+  std::vector<std::int64_t> edge_key = term_key;
+  std::sort(edge_key.begin(), edge_key.end());
+  edge_key.erase(std::unique(edge_key.begin(), edge_key.end()), edge_key.end());
+  term_edge_.resize(term_key.size());
+  for (std::size_t j = 0; j < term_key.size(); ++j)
+    term_edge_[j] =
+        static_cast<int>(std::lower_bound(edge_key.begin(), edge_key.end(), term_key[j]) - edge_key.begin());
+  const std::size_t edges = edge_key.size();
+  cluster_edge_offset_.assign(static_cast<std::size_t>(clusters) + 1, 0);
+  for (const std::int64_t key : edge_key) {
+    edge_anchor_.push_back(static_cast<int>(key / clusters));
+    edge_function_.push_back(static_cast<int>(key % clusters));
+    ++cluster_edge_offset_[static_cast<std::size_t>(edge_anchor_.back()) + 1];
+  }
+  for (std::size_t c = 0; c + 1 < cluster_edge_offset_.size(); ++c)
+    cluster_edge_offset_[c + 1] += cluster_edge_offset_[c];
+  scaled_.assign(term_edge_.size(), kInfinity);
+  moved_.assign(edges, 0.0);
+  budget_.assign(edges, 0.0);
+  edge_reference_ = Eigen::VectorXd::Zero(3 * static_cast<Eigen::Index>(edges));
+  edge_moved_ = Eigen::VectorXd::Zero(3 * static_cast<Eigen::Index>(edges));
+  radius_.assign(static_cast<std::size_t>(n), 0.0);
+  point_budget_.assign(static_cast<std::size_t>(n), 0.0);
+  cluster_max_.assign(static_cast<std::size_t>(clusters), 0.0);
+  const auto csr = [](std::size_t rows, const std::vector<std::pair<int, int>>& pairs, std::vector<int>& offset,
+                      std::vector<int>& column) {  // (row, column) pairs in row order
+    offset.assign(rows + 1, 0);
+    for (const auto& [row, col] : pairs) ++offset[static_cast<std::size_t>(row) + 1];
+    for (std::size_t r = 0; r < rows; ++r) offset[r + 1] += offset[r];
+    column.resize(pairs.size());
+    std::vector<int> fill(offset.begin(), offset.end() - 1);
+    for (const auto& [row, col] : pairs) column[static_cast<std::size_t>(fill[static_cast<std::size_t>(row)]++)] = col;
+  };
+  std::vector<std::pair<int, int>> pairs;
+  for (int p = 0; p < n; ++p) pairs.emplace_back(anchor[static_cast<std::size_t>(p)], p);
+  csr(static_cast<std::size_t>(clusters), pairs, cluster_offset_, cluster_points_);
+  pairs.clear();
+  for (int p = 0; p < n; ++p)
+    for (int j = offset_[static_cast<std::size_t>(p)]; j < offset_[static_cast<std::size_t>(p) + 1]; ++j)
+      pairs.emplace_back(term_edge_[static_cast<std::size_t>(j)], p);
+  csr(edges, pairs, edge_offset_, edge_points_);
+  edge_point_budget_.assign(edge_points_.size(), 0.0);
 }
 
 double CubatureGuard::smallest_tet_limit() const {
@@ -130,93 +194,149 @@ double CubatureGuard::exponent(int p, const Eigen::VectorXd& q, double* radius) 
   return std::isfinite(x) ? x : kInfinity;
 }
 
+double CubatureGuard::last_max_exponent() const {
+  return cluster_max_.empty() ? 0.0 : *std::max_element(cluster_max_.begin(), cluster_max_.end());
+}
+
 std::vector<GuardViolation> CubatureGuard::check(const Eigen::VectorXd& q) {
   ++checks_;
   if (guarded_ == 0) return {};
-  if (!valid_ || q_reference_.size() != q.size()) return renew(q);
-  // Functions within their budget β_s cannot push a tet over its radius; only the tets touching one that moved
-  // further need their own bound Σ_s ‖Δt_s‖ ‖c_s‖ ≤ r_e, and those failing it are evaluated exactly. Too many
-  // suspects renew the reference.
-  std::vector<int> beyond;
-  for (std::size_t s = 0; s < moved_.size(); ++s) {
-    moved_[s] =
-        (q.segment<3>(3 * static_cast<Eigen::Index>(s)) - q_reference_.segment<3>(3 * static_cast<Eigen::Index>(s)))
-            .norm();
-    if (moved_[s] > budget_[s]) beyond.push_back(static_cast<int>(s));
+  // t: the coordinates per function, and 0 for the fixed skeleton g.
+  Eigen::VectorXd t = Eigen::VectorXd::Zero(3 * (static_cast<Eigen::Index>(ground_) + 1));
+  t.head(3 * ground_) = q.head(3 * ground_);
+  std::vector<GuardViolation> over;
+  if (!valid_ || q_size_ != q.size()) {
+    ++full_checks_;
+    for (int c = 0; c < num_clusters(); ++c) renew_cluster(c, q, t, over);
+    valid_ = true;
+    q_size_ = q.size();
+    return over;
   }
-  if (beyond.empty()) return {};
+  // Pairs within their budget β cannot push a tet over its radius; only the tets using a pair that moved further
+  // need their own bound Σ ‖d_s − d_s,ref‖ ‖c_s‖ ≤ r_e, cluster by cluster.
+  std::vector<int> beyond;  // in cluster order (edges are numbered so)
+  for (std::size_t k = 0; k < moved_.size(); ++k) {
+    const auto edge = static_cast<Eigen::Index>(k);
+    edge_moved_.segment<3>(3 * edge) = t.segment<3>(3 * static_cast<Eigen::Index>(edge_function_[k])) -
+                                       t.segment<3>(3 * static_cast<Eigen::Index>(edge_anchor_[k])) -
+                                       edge_reference_.segment<3>(3 * edge);
+    moved_[k] = edge_moved_.segment<3>(3 * edge).norm();
+    if (moved_[k] > budget_[k]) beyond.push_back(static_cast<int>(k));
+  }
+  if (beyond.empty()) return over;
   ++tet_passes_;
   const auto pass_start = std::chrono::steady_clock::now();
-  struct PassTimer {  // the pass alone: a renewal it ends in counts as a renewal
-    std::chrono::steady_clock::time_point start;
-    double* seconds;
-    const double* renewals;
-    double renewals_before;
-    ~PassTimer() { *seconds += seconds_since(start) - (*renewals - renewals_before); }
-  } pass_timer{pass_start, &pass_seconds_, &renew_seconds_, renew_seconds_};
+  const double renewals_before = renew_seconds_;
   ++generation_;
-  std::vector<int> suspects;
-  const auto budget = static_cast<std::size_t>(renew_fraction_ * guarded_) + 1;
-  for (int s : beyond) {
-    for (int k = function_offset_[static_cast<std::size_t>(s)]; k < function_offset_[static_cast<std::size_t>(s) + 1];
-         ++k) {
-      const int p = function_points_[static_cast<std::size_t>(k)];
+  for (std::size_t first = 0; first < beyond.size();) {
+    const int cluster = edge_anchor_[static_cast<std::size_t>(beyond[first])];
+    std::size_t last = first;
+    while (last < beyond.size() && edge_anchor_[static_cast<std::size_t>(beyond[last])] == cluster) ++last;
+    pass_cluster(cluster, std::span<const int>(beyond.data() + first, last - first), q, t, over);
+    first = last;
+  }
+  pass_seconds_ += seconds_since(pass_start) - (renew_seconds_ - renewals_before);  // a renewal counts as one
+  return over;
+}
+
+void CubatureGuard::pass_cluster(int cluster, std::span<const int> edges, const Eigen::VectorXd& q,
+                                 const Eigen::VectorXd& t, std::vector<GuardViolation>& over) {
+  const auto c = static_cast<std::size_t>(cluster);
+  const auto budget = static_cast<std::size_t>(renew_fraction_ * (cluster_offset_[c + 1] - cluster_offset_[c])) + 1;
+  std::vector<int> suspects;  // ‖ΔF‖ past r_e: evaluated exactly
+  for (int edge : edges) {
+    const auto k_edge = static_cast<std::size_t>(edge);
+    // Only the tets whose own budget r_e / L_e this pair's move passes (the edge's tets are sorted by it): a tet
+    // whose every pair moved less than its budget is within its radius.
+    for (int k = edge_offset_[k_edge]; k < edge_offset_[k_edge + 1]; ++k) {
+      if (edge_point_budget_[static_cast<std::size_t>(k)] >= moved_[k_edge]) break;
+      const int p = edge_points_[static_cast<std::size_t>(k)];
       const auto pk = static_cast<std::size_t>(p);
       if (visited_[pk] == generation_ || !active_[pk]) continue;
       visited_[pk] = generation_;
-      const std::span<const int> functions = tets_.point_functions(p);
-      const double* scaled = scaled_.data() + offset_[pk];
+      // The bound first (one product per term), then ‖ΔF‖ itself (one outer product per term) where it fails.
       double bound = 0.0;
-      for (std::size_t j = 0; j < functions.size(); ++j)
-        bound += moved_[static_cast<std::size_t>(functions[j])] * scaled[j];
-      if (bound > 1.0) {
-        suspects.push_back(p);
-        if (suspects.size() > budget) return renew(q);
+      for (int j = offset_[pk]; j < offset_[pk + 1]; ++j)
+        bound += moved_[static_cast<std::size_t>(term_edge_[static_cast<std::size_t>(j)])] *
+                 scaled_[static_cast<std::size_t>(j)];
+      if (bound <= 1.0 || change_norm(p) <= radius_[pk]) continue;
+      suspects.push_back(p);
+      if (suspects.size() > budget) {  // the reference is stale for this cluster: move it to q
+        renew_cluster(cluster, q, t, over);
+        return;
       }
     }
   }
-  std::vector<GuardViolation> over;
   for (int p : suspects) {
     ++exact_;
     const double x = exponent(p, q, nullptr);
     if (!(x <= point_limit_[static_cast<std::size_t>(p)])) over.push_back({tets_.point_tet(p), x});
   }
-  return over;
 }
 
-std::vector<GuardViolation> CubatureGuard::renew(const Eigen::VectorXd& q) {
-  ++full_checks_;
+double CubatureGuard::change_norm(int p) const {
+  const auto k = static_cast<std::size_t>(p);
+  Eigen::Matrix3d change = Eigen::Matrix3d::Zero();  // ΔF = Σ_{s ≠ a} (d_s − d_s,ref) c_sᵀ
+  for (int j = offset_[k]; j < offset_[k + 1]; ++j)
+    change.noalias() += edge_moved_.segment<3>(3 * static_cast<Eigen::Index>(term_edge_[static_cast<std::size_t>(j)])) *
+                        term_vector_[static_cast<std::size_t>(j)].transpose();
+  return change.norm();
+}
+
+void CubatureGuard::renew_cluster(int cluster, const Eigen::VectorXd& q, const Eigen::VectorXd& t,
+                                  std::vector<GuardViolation>& over) {
+  ++cluster_renewals_;
   const auto renew_start = std::chrono::steady_clock::now();
-  std::vector<GuardViolation> over;
-  last_max_ = 0.0;
-  for (int p = 0; p < tets_.num_points(); ++p) {
+  const auto c = static_cast<std::size_t>(cluster);
+  double largest = 0.0;
+  for (int m = cluster_offset_[c]; m < cluster_offset_[c + 1]; ++m) {
+    const int p = cluster_points_[static_cast<std::size_t>(m)];
     const auto k = static_cast<std::size_t>(p);
     if (!active_[k]) continue;
     ++exact_;
     double radius = 0.0;
     const double x = exponent(p, q, &radius);
-    last_max_ = std::max(last_max_, x);
+    radius_[k] = radius;
+    largest = std::max(largest, x);
     if (!(x <= point_limit_[k])) over.push_back({tets_.point_tet(p), x});
-    const std::span<const Eigen::Vector3d> vectors = tets_.point_vectors(p);
-    double* scaled = scaled_.data() + offset_[k];
-    for (std::size_t j = 0; j < vectors.size(); ++j) scaled[j] = radius > 0.0 ? vectors[j].norm() / radius : kInfinity;
   }
-  // β_s = min over the tets touching s of r_e / L_e: while every ‖Δt_s‖ ≤ β_s, Σ_s ‖Δt_s‖ ‖c_s‖ ≤ r_e for every tet.
-  std::fill(budget_.begin(), budget_.end(), kInfinity);
-  for (int p = 0; p < tets_.num_points(); ++p) {
-    const auto k = static_cast<std::size_t>(p);
+  cluster_max_[c] = largest;
+  // The pairs' references move to q; β of a pair = min over the cluster's tets using it of r_e / L_e: while every
+  // pair keeps within its β, Σ ‖d_s − d_s,ref‖ ‖c_s‖ ≤ r_e for every tet of the cluster.
+  for (int k = cluster_edge_offset_[c]; k < cluster_edge_offset_[c + 1]; ++k) {
+    const auto edge = static_cast<std::size_t>(k);
+    budget_[edge] = kInfinity;
+    edge_reference_.segment<3>(3 * static_cast<Eigen::Index>(k)) =
+        t.segment<3>(3 * static_cast<Eigen::Index>(edge_function_[edge])) -
+        t.segment<3>(3 * static_cast<Eigen::Index>(edge_anchor_[edge]));
+  }
+  for (int m = cluster_offset_[c]; m < cluster_offset_[c + 1]; ++m) {
+    const auto k = static_cast<std::size_t>(cluster_points_[static_cast<std::size_t>(m)]);
     if (!active_[k]) continue;
-    const std::span<const int> functions = tets_.point_functions(p);
-    const double* scaled = scaled_.data() + offset_[k];
     double sum = 0.0;  // L_e / r_e
-    for (std::size_t j = 0; j < functions.size(); ++j) sum += scaled[j];
-    for (int s : functions)
-      budget_[static_cast<std::size_t>(s)] = std::min(budget_[static_cast<std::size_t>(s)], 1.0 / sum);
+    for (int j = offset_[k]; j < offset_[k + 1]; ++j) {
+      double& scaled = scaled_[static_cast<std::size_t>(j)];
+      scaled = radius_[k] > 0.0 ? term_norm_[static_cast<std::size_t>(j)] / radius_[k] : kInfinity;
+      sum += scaled;
+    }
+    point_budget_[k] = 1.0 / sum;
+    for (int j = offset_[k]; j < offset_[k + 1]; ++j) {
+      double& b = budget_[static_cast<std::size_t>(term_edge_[static_cast<std::size_t>(j)])];
+      b = std::min(b, point_budget_[k]);
+    }
   }
-  q_reference_ = q;
-  valid_ = true;
+  // Each pair's tets by their own budget, ascending (released tets count as +∞).
+  for (int k = cluster_edge_offset_[c]; k < cluster_edge_offset_[c + 1]; ++k) {
+    const auto first = edge_points_.begin() + edge_offset_[static_cast<std::size_t>(k)];
+    const auto last = edge_points_.begin() + edge_offset_[static_cast<std::size_t>(k) + 1];
+    const auto budget_of = [this](int p) {
+      return active_[static_cast<std::size_t>(p)] ? point_budget_[static_cast<std::size_t>(p)] : kInfinity;
+    };
+    std::sort(first, last, [&](int a, int b) { return budget_of(a) < budget_of(b); });
+    for (auto it = first; it != last; ++it)
+      edge_point_budget_[static_cast<std::size_t>(it - edge_points_.begin())] = budget_of(*it);
+  }
   renew_seconds_ += seconds_since(renew_start);
-  return over;
 }
 
 }  // namespace sflsh::reduced

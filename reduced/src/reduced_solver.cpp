@@ -52,6 +52,7 @@ ReducedSolver::ReducedSolver(const model::Problem& problem, const Subspace& subs
     if (c == 3) require(subspace.basis.row(i).nonZeros() == 0, "reduced: attached node {} has basis functions", i);
   }
   for (int id : problem.dirichlet.drive) has_drives_ = has_drives_ || id >= 0;
+  rest_state_ = Eigen::Map<const Eigen::VectorXd>(problem.rest.data(), problem.num_dofs());
   q_ = Eigen::VectorXd::Zero(subspace.num_dofs());
   if (options.root.enabled && !options.root.joints.setup.joints.empty())
     skeleton_ = SkeletonDeviation(options.root.joints.setup);
@@ -63,10 +64,11 @@ ReducedSolver::ReducedSolver(const model::Problem& problem, const Subspace& subs
   if (options.coupled) setup_coupled();
 }
 
-Eigen::VectorXd ReducedSolver::prescribed_state(double t) const {
-  Eigen::VectorXd x = Eigen::Map<const Eigen::VectorXd>(problem_.rest.data(), problem_.num_dofs());
-  problem_.apply_dirichlet(t, x);
-  return x;
+const Eigen::VectorXd& ReducedSolver::prescribed_state(double t, Eigen::VectorXd& storage) const {
+  if (!has_drives_) return rest_state_;  // apply_dirichlet would write X + 0 on the attached nodes
+  storage = rest_state_;
+  problem_.apply_dirichlet(t, storage);
+  return storage;
 }
 
 Eigen::VectorXd ReducedSolver::initial_acceleration() const {
@@ -90,7 +92,8 @@ void ReducedSolver::initialize(const model::State& state) {
           "reduced: the initial state's history (a, p_previous, w_previous) is not finite");
   t_ = state.t;
   substeps_.clear();
-  const Eigen::VectorXd x_prescribed = prescribed_state(t_);
+  Eigen::VectorXd storage;
+  const Eigen::VectorXd& x_prescribed = prescribed_state(t_, storage);
   const Eigen::VectorXd u = state.x - x_prescribed;
   q_.setZero();
   if (u.cwiseAbs().maxCoeff() > 0.0 && subspace_.num_functions() > 0) {
@@ -166,7 +169,8 @@ model::State ReducedSolver::full_state() const {
 }
 
 Eigen::VectorXd ReducedSolver::positions() const {
-  Eigen::VectorXd x = prescribed_state(t_);
+  Eigen::VectorXd storage;
+  Eigen::VectorXd x = prescribed_state(t_, storage);
   subspace_.add_displacement(q_, x);
   return x;
 }

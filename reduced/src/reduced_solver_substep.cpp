@@ -32,8 +32,9 @@ struct ReducedSolver::Substep {
   double t0 = 0.0, dt = 0.0, t1 = 0.0;
   material::HessianProjection projection{};
   bool inertia_on = false, track = false, contact = false;
-  Eigen::Index offset = 0;  ///< q's size; a tracking root's and a coupled system's unknowns follow
-  Eigen::VectorXd x_prescribed;
+  Eigen::Index offset = 0;    ///< q's size; a tracking root's and a coupled system's unknowns follow
+  Eigen::VectorXd x_storage;  ///< x_D when drives move it
+  const Eigen::VectorXd* x_prescribed = nullptr;  ///< x_D at t1
   model::InertiaTarget target, carried_target;
   meshing::RowMatrixX3d carried_end;
   DeviationPose pose;
@@ -88,11 +89,11 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
 
 void ReducedSolver::set_substep_targets(Substep& s, model::StepStats& stats) {
   const auto clock = Clock::now();
-  s.x_prescribed = prescribed_state(s.t1);
-  inertia_.set_time(s.t1, s.x_prescribed);
+  s.x_prescribed = &prescribed_state(s.t1, s.x_storage);
+  inertia_.set_time(s.t1, *s.x_prescribed);
   s.target = model::inertia_target(options_.integrator, history_, s.dt);
   if (s.track) {  // the skeleton's inertia over every node, its tracking springs and dampers
-    carried_posed(s.t1, s.x_prescribed, s.carried_end);
+    carried_posed(s.t1, *s.x_prescribed, s.carried_end);
     s.pose = deviation_pose(s.t1, s.carried_end);
     s.carried_target = model::inertia_target(options_.integrator, carried_history_, s.dt);
     root_inertia_term_->set_step(s.target.p_tilde, s.carried_target.p_tilde, s.carried_end, s.pose, s.target.h_eff);
@@ -117,8 +118,8 @@ void ReducedSolver::set_substep_targets(Substep& s, model::StepStats& stats) {
   stats.inertia_seconds += seconds_since(clock);
   const auto elastic_clock = Clock::now();
   if (has_drives_) {
-    elastic_.set_prescribed_state(s.x_prescribed);
-    if (guard_) guard_->set_prescribed_state(s.x_prescribed);
+    elastic_.set_prescribed_state(*s.x_prescribed);
+    if (guard_) guard_->set_prescribed_state(*s.x_prescribed);
   }
   elastic_term_.set_projection(s.projection);
   stats.elastic_seconds += seconds_since(elastic_clock);

@@ -128,8 +128,17 @@ const model::StepStats& BodySimulation::step() {
   model::run_frames(*solver_, loop, [&](int frame, double, const model::StepStats& st) {
     const auto f = static_cast<std::size_t>(frame);
     const auto t_output = Clock::now();
-    const model::State state = solver_->current_state();
-    writer_->add_frame(frame, motion_.time(f), state, model::is_written_frame(frame, num_frames(), settings_.every));
+    const bool written = model::is_written_frame(frame, num_frames(), settings_.every);
+    // The skin's fields and σ need x alone; the velocities (and the motion's node maps behind them) only for the tet
+    // layer's frames and the energies.
+    const bool full_state = settings_.energies || (written && settings_.write_layer);
+    model::State state;
+    if (full_state) {
+      state = solver_->current_state();
+      writer_->add_frame(frame, motion_.time(f), state, written);
+    } else {
+      writer_->add_positions(frame, motion_.time(f), solver_->positions(), written);
+    }
     nlohmann::json record = {{"frame", f},
                              {"t", motion_.time(f)},
                              {"newton_iterations", st.newton_iterations},

@@ -67,7 +67,12 @@ nlohmann::json BodySimulation::summary() const {
                                                   {"guarded_tets", fast_->guard()->num_guarded()},
                                                   {"checks", fast_->guard()->checks()},
                                                   {"per_tet_passes", fast_->guard()->tet_passes()},
-                                                  {"renewals", fast_->guard()->full_checks()}}
+                                                  {"renewals", fast_->guard()->full_checks()},
+                                                  {"clusters", fast_->guard()->num_clusters()},
+                                                  {"cluster_renewals", fast_->guard()->cluster_renewals()},
+                                                  {"exact_evaluations", fast_->guard()->exact_evaluations()},
+                                                  {"pass_seconds", fast_->guard()->pass_seconds()},
+                                                  {"renew_seconds", fast_->guard()->renew_seconds()}}
                                  : nlohmann::json(nullptr)},
         {"newton_tolerance_m", settings_.newton_tolerance},
         {"cache", reduced_model_->cache_outcome},

@@ -17,6 +17,9 @@ class BodySolver {
   virtual StepStats step(double h) = 0;
   /// The current full-space state (x, w at every node).
   virtual State current_state() const = 0;
+  /// The unposed elastic positions x alone (3N) [m]: what σ and the skin's output need; solvers that can give them
+  /// without the velocities and the motion's node maps of current_state() override it.
+  virtual Eigen::VectorXd positions() const { return current_state().x; }
 };
 
 /// Adds the counts and timings of `step` into `total` (substeps and the reason: the last step's).

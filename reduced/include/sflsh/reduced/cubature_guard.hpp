@@ -3,11 +3,18 @@
 // its points, so a subspace state can strain a tet outside the set far beyond the material's range while the
 // reduced energy stays low. The guard watches every tet that carries no cubature weight, cheaply. At a reference
 // state q_ref every guarded tet gets the radius r_e in F within which its Fung exponent x = 2Ψ₀/c stays below the
-// limit (Ψ₀ ≤ (μ₀ + 3/2 λ₀⁺)‖Ê‖², ‖Ê − Ê_ref‖ ≤ ‖P_Y‖² ‖E − E_ref‖, ‖E − E_ref‖ ≤ ‖F_ref‖₂ r + r²/2), and since
-//   ‖F_e(q) − F_e(q_ref)‖_F ≤ Σ_{s ∈ S_e} ‖t_s − t_ref,s‖ ‖c_s‖      (F = F_D + Σ_s t_s c_sᵀ, cubature_elastic.hpp)
-// a check first compares each ‖t_s − t_ref,s‖ with the budget β_s = min over the tets touching s of r_e / L_e (O(S));
-// only the tets touching a function beyond its budget get their own bound, and those whose bound exceeds r_e are
-// evaluated exactly. When many need it the reference moves to q (every tet evaluated, radii renewed).
+// limit (Ψ₀ ≤ (μ₀ + 3/2 λ₀⁺)‖Ê‖², ‖Ê − Ê_ref‖ ≤ ‖P_Y‖² ‖E − E_ref‖, ‖E − E_ref‖ ≤ ‖F_ref‖₂ r + r²/2). With
+// F = F_D + Σ_s t_s c_sᵀ (cubature_elastic.hpp), the fixed skeleton counted as one more function g with Δt_g = 0 and
+// c_g = −Σ_s c_s, any anchor a among the tet's functions and g gives exactly
+//   F_e(q) − F_e(q_ref) = Σ_{s ∈ S_e ∪ {g}, s ≠ a} (Δt_s − Δt_a) c_sᵀ,  so  ‖ΔF_e‖_F ≤ Σ_{s ≠ a} ‖Δt_s − Δt_a‖ ‖c_s‖,
+// with a the entry of largest ‖c‖. Where the basis sums to one (inside the flesh) c_g vanishes and a region that
+// moves as a whole strains nothing: the bound sees differences between neighbouring functions, not their motion.
+// The tets sharing an anchor form a cluster with its own reference q_ref (the differences d_s = t_s − t_a of its
+// pairs at its last renewal), so that a region in motion renews its own tets and leaves the rest alone. A check
+// compares each pair's ‖d_s − d_s,ref‖ with its budget β = min over the cluster's tets using it of r_e / L_e,
+// L_e = Σ_{s ≠ a} ‖c_s‖ (O(pairs)); only the tets using a pair beyond its budget get their own bound, and those whose
+// bound exceeds r_e are evaluated exactly. When more than 5 % of a cluster's tets need it, the cluster's reference
+// moves to q (its tets evaluated, radii renewed).
 // The limit of a tet is the smaller of two: the exponent limit, and the exponent at which its Fung energy
 // (c/2)(eˣ − 1) V reaches the energy limit, x_E = ln(1 + 2 E_max / (c V)) — an unseen tet may hold at most E_max.
 // Tets over their limit are returned: the solver adds them to the cubature and solves the substep again
@@ -18,6 +25,7 @@
 #include <sflsh/reduced/cubature_elastic.hpp>
 #include <sflsh/reduced/subspace.hpp>
 
+#include <span>
 #include <vector>
 
 namespace sflsh::reduced {
@@ -44,7 +52,7 @@ class CubatureGuard {
   void release(int tet);
 
   int num_guarded() const { return guarded_; }
-  /// Checks, checks that renewed the reference (every tet evaluated), and tets evaluated exactly in all.
+  /// Checks, checks that renewed every cluster's reference (every tet evaluated), and tets evaluated exactly in all.
   int checks() const { return checks_; }
   int full_checks() const { return full_checks_; }
   long exact_evaluations() const { return exact_; }
@@ -57,13 +65,27 @@ class CubatureGuard {
   double energy_limit() const { return energy_limit_; }
   /// The smallest limit of a guarded tet (the energy limit makes it per tet).
   double smallest_tet_limit() const;
-  /// The largest exponent of a guarded tet at the last renewal of the reference.
-  double last_max_exponent() const { return last_max_; }
+  /// The largest exponent of a guarded tet at its cluster's last renewal.
+  double last_max_exponent() const;
+  /// Clusters (the tets sharing one anchor, each with its own reference) and renewals of one cluster.
+  int num_clusters() const { return static_cast<int>(cluster_offset_.size()) - 1; }
+  int cluster_renewals() const { return cluster_renewals_; }
 
  private:
   /// x of point p at q, and (when `radius`) its radius r in F below the limit.
   double exponent(int point, const Eigen::VectorXd& q, double* radius) const;
-  std::vector<GuardViolation> renew(const Eigen::VectorXd& q);
+  /// Each point's terms, its anchor among its functions and g, and the pairs (edges) they use, cluster by cluster.
+  void build_terms(int num_functions);
+  /// Moves cluster c's reference to q (t: the coordinates, 3 per function and g): its tets evaluated exactly (those
+  /// over their limit appended to `over`), their radii, its pairs' budgets and reference differences.
+  void renew_cluster(int cluster, const Eigen::VectorXd& q, const Eigen::VectorXd& t,
+                     std::vector<GuardViolation>& over);
+  /// Point p's ‖ΔF‖_F from its cluster's reference, summed exactly from its terms (the edges' current moves).
+  double change_norm(int point) const;
+  /// The tets of cluster c using the pairs beyond their budget (`edges`): bounded, then ‖ΔF‖ computed where the bound
+  /// fails; those past r_e evaluated exactly, or the cluster renewed when they are too many.
+  void pass_cluster(int cluster, std::span<const int> edges, const Eigen::VectorXd& q, const Eigen::VectorXd& t,
+                    std::vector<GuardViolation>& over);
 
   const model::Problem& problem_;
   CubatureElastic tets_;             ///< the guarded tets as points of weight 1 (their F(q), S_e and c_s)
@@ -71,22 +93,37 @@ class CubatureGuard {
   std::vector<double> spectral_;     ///< ‖P_Y‖₂² per point
   std::vector<double> point_limit_;  ///< x limit per point: min(limit_, x_E)
   std::vector<double> allowed_;      ///< the ‖Ê‖_F at which x reaches its limit, per point (+∞: Fung off)
-  std::vector<double> scaled_;       ///< ‖c_s‖ / r_e, parallel to the points' functions (+∞ when r_e = 0)
-  std::vector<int> offset_;          ///< point p's entries of scaled_ are [offset_[p], offset_[p+1])
   std::vector<int> point_of_tet_;    ///< −1 for tets not guarded
-  Eigen::VectorXd q_reference_;
-  std::vector<double> moved_;         ///< ‖t_s − t_ref,s‖ per function (scratch)
-  std::vector<double> budget_;        ///< β_s = min over the tets touching s of r_e / L_e, per function
-  std::vector<int> function_offset_;  ///< function s touches the points function_points_[offset[s] .. offset[s+1])
-  std::vector<int> function_points_;
-  std::vector<unsigned> visited_;  ///< per point: the generation of the check that last bounded it
+  int ground_ = 0;                   ///< the index of the fixed function g (= S)
+  // Per point, its terms ‖Δd_s‖ ‖c_s‖ (d_s = t_s − t_a): the pair (edge) of each and ‖c_s‖, in [offset_[p],
+  // offset_[p+1]).
+  std::vector<int> offset_;
+  std::vector<int> term_edge_;
+  std::vector<double> term_norm_;
+  std::vector<double> scaled_;                ///< ‖c_s‖ / r_e, parallel to the terms (+∞ when r_e = 0)
+  std::vector<Eigen::Vector3d> term_vector_;  ///< c_s (c_g for the skeleton's term), parallel to the terms
+  std::vector<double> radius_;                ///< r_e per point around its cluster's reference
+  // A cluster: the points of one anchor a (a function or g), each with its own reference. Edges are numbered
+  // cluster by cluster: cluster a owns edges [cluster_edge_offset_[a], cluster_edge_offset_[a+1]).
+  std::vector<int> cluster_offset_, cluster_points_;  ///< the points of each cluster (CSR)
+  std::vector<int> cluster_edge_offset_;
+  std::vector<int> edge_function_, edge_anchor_;  ///< the pair (s, a) of each edge
+  std::vector<int> edge_offset_, edge_points_;    ///< the points using each edge (CSR), by their budget ascending
+  std::vector<double> edge_point_budget_;         ///< r_e / L_e of each entry of edge_points_
+  std::vector<double> point_budget_;              ///< r_e / L_e per point
+  Eigen::VectorXd edge_reference_;                ///< d_s = t_s − t_a at the cluster's reference, 3 per edge
+  Eigen::VectorXd edge_moved_;                    ///< d_s − d_s,ref per edge, 3 each (scratch)
+  std::vector<double> moved_;                     ///< ‖d_s − d_s,ref‖ per edge (scratch)
+  std::vector<double> budget_;                    ///< β per edge
+  std::vector<double> cluster_max_;               ///< the largest exponent at the cluster's last renewal
+  std::vector<unsigned> visited_;                 ///< per point: the generation of the check that last bounded it
   unsigned generation_ = 0;
-  bool valid_ = false;  ///< a reference is set
+  bool valid_ = false;  ///< every cluster has a reference for the current prescribed state and q size
+  Eigen::Index q_size_ = 0;
   double limit_ = 0.0;
   double energy_limit_ = model::kInfinity;
-  double renew_fraction_ = 0.05;  ///< renew the reference when more tets than this fraction need evaluating
-  double last_max_ = 0.0;
-  int guarded_ = 0, full_checks_ = 0, checks_ = 0, tet_passes_ = 0;
+  double renew_fraction_ = 0.05;  ///< renew a cluster when more of its tets than this fraction need evaluating
+  int guarded_ = 0, full_checks_ = 0, cluster_renewals_ = 0, checks_ = 0, tet_passes_ = 0;
   long exact_ = 0;
   double pass_seconds_ = 0.0, renew_seconds_ = 0.0;
 };

@@ -113,7 +113,7 @@ class ReducedSolver final : public model::BodySolver {
   model::State current_state() const override { return full_state(); }
   /// The node positions x = x_D + (B ⊗ I₃) q alone [m] (3N): what the skin displacement and σ need, without the
   /// velocities and the prescribed motion's node maps that full_state() evaluates.
-  Eigen::VectorXd positions() const;
+  Eigen::VectorXd positions() const override;
   /// The posed history of the inertia nodes (ReducedInertia::inertia_nodes()).
   const model::PosedHistory& history() const { return history_; }
   const ReducedInertia& inertia() const { return inertia_; }
@@ -171,7 +171,9 @@ class ReducedSolver final : public model::BodySolver {
 
  private:
   class Ladder;  ///< the solver on the model's robustness ladder (model/step_ladder.hpp)
-  Eigen::VectorXd prescribed_state(double t) const;
+  /// x_D at t: the rest state with the attached nodes' prescribed values. Without drives that is the rest state at
+  /// every t: a reference to it, with no pass over the nodes; with drives `storage` is filled and returned.
+  const Eigen::VectorXd& prescribed_state(double t, Eigen::VectorXd& storage) const;
   /// One substep from the current state; `startup` counts a BDF2 substep taken as backward Euler
   /// (reduced_solver_substep.cpp: the steps below).
   bool solve_substep(double t0, double dt, material::HessianProjection projection, model::StepStats& stats,
@@ -223,6 +225,7 @@ class ReducedSolver final : public model::BodySolver {
   ReducedGravityTerm gravity_term_;
   ReducedPotentialTerm potential_term_;
   bool has_drives_ = false;
+  Eigen::VectorXd rest_state_;  ///< X (3N), the prescribed state of every t without drives
   // The reusable factorization and what it was computed for.
   Eigen::LLT<Eigen::MatrixXd> factor_;
   bool factor_valid_ = false;
