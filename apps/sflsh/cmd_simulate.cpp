@@ -41,6 +41,9 @@ struct SimulateOptions {
 void run_scene_file(const SimulateOptions& opt, const Invocation& invocation, int rank) {
   scene::Scene scene = scene::load_scene(opt.scene);
   if (opt.format_given) scene.output.format = opt.body.format;
+  require(scene.output.format != "xdmf" || scene.output.series_compression != vtk::Compression::lz4,
+          "--format xdmf: {}: [output] compression lz4 is not available for HDF5 datasets (expected zlib or none)",
+          opt.scene);
   scene::SceneRunOptions options;
   options.frames = opt.body.frames;
   options.out = opt.out;

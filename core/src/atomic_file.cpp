@@ -65,6 +65,22 @@ void throw_write_error(const fs::path& target, std::string_view what, int error_
 void write_file_checked(const fs::path& file, const fs::path& target, std::string_view contents) {
   const int fd = ::open(file.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) throw_write_error(target, "cannot create file", errno);
+  // The blocks reserved before the first byte: a full disk or an exhausted quota is reported here, not later by
+  // delayed allocation. Where the file system cannot reserve (EOPNOTSUPP: e.g. NFSv3), fsync after the writes.
+  // A reservation instead of an fsync per file: 11 against 3 ms per 1.6 MB frame file on this machine's ext4, which
+  // made fsync three quarters of the crowd's writer time (docs/output.md).
+  bool reserved = contents.empty();
+  if (!reserved) {
+    int r = 0;
+    do r = ::fallocate(fd, 0, 0, static_cast<off_t>(contents.size()));
+    while (r != 0 && errno == EINTR);
+    if (r != 0 && errno != EOPNOTSUPP && errno != ENOSYS) {
+      const int e = errno;
+      ::close(fd);
+      throw_write_error(target, "write failed", e);
+    }
+    reserved = r == 0;
+  }
   const char* data = contents.data();
   std::size_t left = contents.size();
   while (left > 0) {
@@ -78,8 +94,8 @@ void write_file_checked(const fs::path& file, const fs::path& target, std::strin
     data += n;
     left -= static_cast<std::size_t>(n);
   }
-  // Delayed allocation (and NFS) can report a full disk only at fsync or close.
-  if (::fsync(fd) != 0 && errno != EINVAL && errno != EROFS) {
+  // Without a reservation, delayed allocation (and NFS) can report a full disk only at fsync or close.
+  if (!reserved && ::fsync(fd) != 0 && errno != EINVAL && errno != EROFS) {
     const int e = errno;
     ::close(fd);
     throw_write_error(target, "write failed", e);

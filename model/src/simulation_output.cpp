@@ -216,6 +216,14 @@ SimulationWriter::SimulationWriter(const BodyLayer& layer, RunFolder* run, const
   vertex_kappa_ = scatter(layer, layer.fields.vertex);
   soft_region_ =
       scatter(layer, Eigen::MatrixXd::Ones(static_cast<Eigen::Index>(layer.mesh->region_surface.vertices.size()), 1));
+  // Neighbouring skin vertices share tets (on the coarse layer 6,929 vertices lie in about half as many tets).
+  skin_tets_ = layer.mesh->skin.tet;
+  std::sort(skin_tets_.begin(), skin_tets_.end());
+  skin_tets_.erase(std::unique(skin_tets_.begin(), skin_tets_.end()), skin_tets_.end());
+  skin_tet_slot_.reserve(layer.mesh->skin.tet.size());
+  for (const int e : layer.mesh->skin.tet)
+    skin_tet_slot_.push_back(
+        static_cast<int>(std::lower_bound(skin_tets_.begin(), skin_tets_.end(), e) - skin_tets_.begin()));
   check_output_format(options_.format, "simulation output");
   const std::string layer_prefix = options_.prefix == "body" ? "layer" : options_.prefix + "_layer";
   if (run_ && options_.format == "xdmf") {
@@ -328,8 +336,11 @@ void SimulationWriter::add(int index, double t, const Eigen::VectorXd& x_state, 
   run_job([this, path, t, posed, own_fields, fields = std::move(fields), R = frame_rotation_, T = frame_translation_,
            deviation = vertex_deviation_, x = energy ? x_state : Eigen::VectorXd()]() mutable {
     if (x.size() > 0) {
-      // Only the tets under the skin's vertices (a sixth of the layer's on the coarse mesh).
-      const Eigen::VectorXd vertex_psi = strain_energy_density(layer_.problem, x, layer_.mesh->skin.tet);
+      // Only the tets under the skin's vertices (a sixth of the layer's on the coarse mesh), each once.
+      const Eigen::VectorXd tet_psi = strain_energy_density(layer_.problem, x, skin_tets_);
+      Eigen::VectorXd vertex_psi(static_cast<Eigen::Index>(skin_tet_slot_.size()));
+      for (std::size_t k = 0; k < skin_tet_slot_.size(); ++k)
+        vertex_psi[static_cast<Eigen::Index>(k)] = tet_psi[skin_tet_slot_[k]];
       for (vtk::Field& f : fields.point_data)
         if (f.name == "strain_energy_density" && f.values.size() == 0) f.values = scatter(layer_, vertex_psi);
     }

@@ -211,7 +211,7 @@ class SceneReader : public TomlReader {
 
   void read_output(const toml::node& node, OutputSpec& output) const {
     const toml::table& t = table(node, "output");
-    check_keys(t, {"layer", "frames", "every", "fields", "compression", "format"}, " in [output]");
+    check_keys(t, {"layer", "frames", "every", "fields", "compression", "format", "precision"}, " in [output]");
     if (const toml::node* n = t.get("layer")) output.layer = boolean(*n, "layer", " in [output]");
     if (const toml::node* n = t.get("frames")) output.frames = boolean(*n, "frames", " in [output]");
     if (const toml::node* n = t.get("every")) output.every = count(*n, "every", " in [output]", 1);
@@ -225,9 +225,17 @@ class SceneReader : public TomlReader {
     if (const toml::node* n = t.get("compression")) {  // asked for: every frame file, the layer's too
       output.compression =
           vtk::parse_compression(choice(*n, "compression", {"lz4", "zlib", "none"}, " in [output]"), "compression");
-      output.layer_compression = output.compression;
+      output.layer_compression = output.series_compression = output.compression;
     }
     if (const toml::node* n = t.get("format")) output.format = choice(*n, "format", {"vtk", "xdmf"}, " in [output]");
+    if (const toml::node* n = t.get("compression"); n && output.format == "xdmf")
+      require(output.compression != vtk::Compression::lz4,
+              "{}: 'compression' in [output]: lz4 is not available for the HDF5 datasets of format xdmf (expected zlib "
+              "or none)",
+              at(*n));
+    if (const toml::node* n = t.get("precision"))
+      output.precision =
+          xdmf::parse_precision(choice(*n, "precision", {"float64", "float32"}, " in [output]"), "precision");
   }
 
   std::vector<SceneKeyframe> keyframes(const toml::node& node, std::string_view key, std::string_view context,

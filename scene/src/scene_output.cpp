@@ -39,12 +39,15 @@ SceneOutput::SceneOutput(const Scene& scene, const std::vector<std::unique_ptr<S
       o.fields = scene_.output.fields;
       o.compression = scene_.output.compression;
       o.layer_compression = scene_.output.layer_compression;
+      o.series_compression = scene_.output.series_compression;
+      o.precision = scene_.output.precision;
       o.format = scene_.output.format;
       o.jobs = jobs_;
       writers_[b] = std::make_unique<model::SimulationWriter>(body.layer(), folder_, o);
     } else if (folder_ && xdmf()) {
       folder_->stage(body.name() + ".h5");
-      skinned_xdmf_[b] = std::make_unique<xdmf::Series>(folder_->stage(body.name() + ".xmf"), body.model().faces);
+      skinned_xdmf_[b] = std::make_unique<xdmf::Series>(folder_->stage(body.name() + ".xmf"), body.model().faces,
+                                                        scene_.output.precision, scene_.output.series_compression);
     } else if (folder_) {
       skinned_series_[b] = std::make_unique<vtk::PvdSeries>(folder_->stage(body.name() + ".pvd"));
     }
@@ -54,7 +57,8 @@ SceneOutput::SceneOutput(const Scene& scene, const std::vector<std::unique_ptr<S
     Eigen::MatrixXd ids;
     const Surface surface = merged_object_surfaces(objects_, ids);  // the objects' triangles do not change
     folder_->stage("objects.h5");
-    objects_xdmf_ = std::make_unique<xdmf::Series>(folder_->stage("objects.xmf"), surface.triangles);
+    objects_xdmf_ = std::make_unique<xdmf::Series>(folder_->stage("objects.xmf"), surface.triangles,
+                                                   scene_.output.precision, scene_.output.series_compression);
     vtk::Fields fixed;
     fixed.cell_data.push_back({"object_id", ids, true});
     objects_xdmf_->set_static(fixed);

@@ -133,6 +133,10 @@ TEST(SceneOutput, BadOutputValuesAreOneLineNamingTheKey) {
            {R"(fields = "displacement")", "scene.toml:8: 'fields' in [output] must be an array of strings"},
            {R"(compression = "gzip")",
             "scene.toml:8: 'compression' in [output] = 'gzip' is not one of lz4 | zlib | none"},
+           {"compression = \"lz4\"\nformat = \"xdmf\"",
+            "scene.toml:8: 'compression' in [output]: lz4 is not available for the HDF5 datasets of format xdmf"},
+           {R"(precision = "float16")",
+            "scene.toml:8: 'precision' in [output] = 'float16' is not one of float64 | float32"},
        }) {
     SCOPED_TRACE(c.output);
     const auto path = write_output_scene(dir, c.output);

@@ -37,14 +37,20 @@ void require_finite(const Eigen::Matrix3d& F) {
   }
 }
 
-Strain strain_of(const Eigen::Matrix3d& F, const OrthotropicFung& m) {
+/// Ê and Ψ₀ without S₀ (the energy alone); strain_of adds S₀ to the same numbers.
+void strain_energy_of(const Eigen::Matrix3d& F, const OrthotropicFung& m, Strain& s) {
   require_finite(F);
-  Strain s;
   const Eigen::Matrix3d E = green_strain(F);
   s.E_hat = m.scaling * E * m.scaling;  // Ê = P_Y E P_Y (docs/physics.md §1.2)
   const double tr = s.E_hat.trace();
   s.psi0 = m.mu0 * s.E_hat.squaredNorm() + 0.5 * m.lambda0 * tr * tr;  // tr(Ê²) = ‖Ê‖²_F (Ê symmetric)
   require(std::isfinite(s.psi0), "orthotropic Fung: the StVK energy overflows (‖F‖ = {:.4g})", F.norm());
+}
+
+Strain strain_of(const Eigen::Matrix3d& F, const OrthotropicFung& m) {
+  Strain s;
+  strain_energy_of(F, m, s);
+  const double tr = s.E_hat.trace();
   s.S0 = m.scaling * (2.0 * m.mu0 * s.E_hat + m.lambda0 * tr * Eigen::Matrix3d::Identity()) * m.scaling;
   return s;
 }
@@ -147,8 +153,14 @@ FungStrain fung_strain(const Eigen::Matrix3d& F, const OrthotropicFung& m) {
   return {2.0 * s.psi0 * m.inv_c, s.E_hat.norm()};
 }
 
-// The three share eval_ortho_fung so that they return bit-identical numbers to one combined evaluation.
-double psi_ortho_fung(const Eigen::Matrix3d& F, const OrthotropicFung& m) { return eval_ortho_fung(F, m, false).psi; }
+// The three share strain_energy_of, fung_factor and psi_from (through eval_ortho_fung for the derivatives) so that they
+// return bit-identical numbers to one combined evaluation; the energy alone skips S₀ and P (output fields, line
+// searches).
+double psi_ortho_fung(const Eigen::Matrix3d& F, const OrthotropicFung& m) {
+  Strain s;
+  strain_energy_of(F, m, s);
+  return psi_from(s, fung_factor(2.0 * s.psi0 * m.inv_c, m), m);
+}
 
 Eigen::Matrix3d dpsi_ortho_fung_dF(const Eigen::Matrix3d& F, const OrthotropicFung& m) {
   return eval_ortho_fung(F, m, false).P;

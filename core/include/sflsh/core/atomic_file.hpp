@@ -24,8 +24,9 @@ int remove_stale_temporaries(const std::filesystem::path& target);
 /// Throws sflsh::Error "<target>: <what> (<strerror(error_number)>)", the one shape of every write failure.
 [[noreturn]] void throw_write_error(const std::filesystem::path& target, std::string_view what, int error_number);
 
-/// Writes `contents` to `file` with checked write/fsync/close (a full disk, a file size limit, an I/O error throw
-/// through throw_write_error naming `target`, the path the user knows).
+/// Writes `contents` to `file` with its space reserved first (fallocate; fsync after the writes where the file system
+/// cannot reserve) and checked writes and close: a full disk, a quota, a file size limit, an I/O error throw through
+/// throw_write_error naming `target`, the path the user knows.
 void write_file_checked(const std::filesystem::path& file, const std::filesystem::path& target,
                         std::string_view contents);
 

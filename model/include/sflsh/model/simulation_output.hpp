@@ -162,6 +162,8 @@ class SimulationWriter {
   Eigen::MatrixXd dominant_joint_;                        ///< per body vertex: argmax of the skinning weights
   Eigen::MatrixXd vertex_kappa_;                          ///< per body vertex (h, Y_t, Y_n), zero outside the region
   Eigen::MatrixXd soft_region_;                           ///< per body vertex 1 in the region, 0 elsewhere
+  std::vector<int> skin_tets_;      ///< the tets that hold skin vertices, each once (strain_energy_density)
+  std::vector<int> skin_tet_slot_;  ///< per region vertex: its tet's index in skin_tets_
   DynamicsAmplitude amplitude_;
   RowMatrixX3d previous_posed_;
   double previous_t_ = 0.0;

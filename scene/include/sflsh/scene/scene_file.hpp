@@ -3,6 +3,7 @@
 // calls for, time stepping and output. The simulator builds only what the effects ask for (scene_runner.hpp).
 // Every error names the file and line: unknown keys, missing keys, wrong types, impossible values.
 #include <sflsh/core/vtk_io.hpp>
+#include <sflsh/core/xdmf_series.hpp>
 #include <sflsh/model/mass.hpp>
 #include <sflsh/model/time_integrator.hpp>
 
@@ -174,6 +175,10 @@ struct OutputSpec {
   /// "vtk": a .pvd of .vtp frames per body and object, and scene.pvd over all of them; "xdmf": <name>.xmf +
   /// <name>.h5 per body and for the objects (docs/output.md), no collection.
   std::string format = "vtk";
+  /// of an xdmf series' datasets: zlib (shuffle + deflate) unless `compression` is given (none | zlib; HDF5 has no lz4)
+  vtk::Compression series_compression = vtk::Compression::zlib;
+  /// of an xdmf series' floating-point datasets: float64 | float32 (display); .vtp frames are Float64
+  xdmf::Precision precision = xdmf::Precision::float64;
 };
 
 struct Scene {
