@@ -17,6 +17,7 @@
 #include <cmath>
 #include <mutex>
 #include <optional>
+#include <set>
 
 namespace sflsh::xdmf {
 
@@ -56,12 +57,17 @@ struct Step {
   std::vector<Attribute> attributes;
 };
 
-void create_groups(hid_t file, const std::string& path) {
+/// The groups on `path` that `created` does not hold yet (the series made every group of its file, so a name it
+/// remembers exists; looking it up in the file cost a tenth of a crowd frame's writing).
+void create_groups(hid_t file, const std::string& path, std::set<std::string>& created) {
   for (std::size_t at = path.find('/', 1); at != std::string::npos; at = path.find('/', at + 1)) {
-    const std::string group = path.substr(0, at);
-    if (H5Lexists(file, group.c_str(), H5P_DEFAULT) > 0) continue;
-    Handle g{H5Gcreate2(file, group.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose};
-    require(g.id >= 0, "xdmf: cannot create group {}", group);
+    std::string group = path.substr(0, at);
+    if (created.count(group) > 0) continue;
+    if (H5Lexists(file, group.c_str(), H5P_DEFAULT) <= 0) {
+      Handle g{H5Gcreate2(file, group.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose};
+      require(g.id >= 0, "xdmf: cannot create group {}", group);
+    }
+    created.insert(std::move(group));
   }
 }
 
@@ -98,6 +104,7 @@ struct Series::Impl {
   std::vector<Attribute> static_attributes;
   std::vector<Step> steps;
   std::optional<vtk::Points> last_points;
+  std::set<std::string> groups;         ///< the groups created in the file
   std::vector<std::string> unit_names;  ///< the attributes' names, each once, in the order written
   std::vector<vtk::Labels> labels;      ///< names of label values (`part_names`, …)
   bool closed = false;
@@ -126,7 +133,7 @@ struct Series::Impl {
   Item write_dataset(const std::string& path, const double* values, hsize_t rows, hsize_t columns, bool integer,
                      const std::string& unit) {
     H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // per thread: the background writer's too
-    create_groups(file, path);
+    create_groups(file, path, groups);
     const hsize_t dims[2] = {rows, columns};
     Handle space{H5Screate_simple(columns == 1 ? 1 : 2, dims, nullptr), H5Sclose};
     const bool single = precision == Precision::float32;
