@@ -16,9 +16,9 @@ namespace sflsh::model {
 
 namespace {
 
-material::TetNodes tet_nodes(const Problem& problem, const Eigen::VectorXd& x, int e) {
+material::TetNodes tet_nodes(const std::array<int, 4>& tet, const Eigen::VectorXd& x) {
   material::TetNodes nodes;
-  for (int a = 0; a < 4; ++a) nodes.col(a) = x.segment<3>(3 * problem.tets(e, a));
+  for (int a = 0; a < 4; ++a) nodes.col(a) = x.segment<3>(3 * tet[static_cast<std::size_t>(a)]);
   return nodes;
 }
 
@@ -45,23 +45,52 @@ std::shared_ptr<const TermSubset> TermSubset::whole(const Problem& problem) {
 // ---------------------------------------------------------------------------------------------------------
 // Elasticity
 
-ElasticTerm::ElasticTerm(const Problem& problem, std::shared_ptr<const TermSubset> subset)
-    : problem_(problem), subset_(std::move(subset)) {
-  require(subset_ != nullptr, "elastic term: no subset");
+ElasticTerm::ElasticTerm(const Problem& problem, std::shared_ptr<const TermSubset> subset) {
+  require(subset != nullptr, "elastic term: no subset");
+  require(problem.tet_rest.size() == static_cast<std::size_t>(problem.num_tets()) &&
+              problem.tet_material.size() == static_cast<std::size_t>(problem.num_tets()),
+          "elastic term: the problem has {} tets but {} rest states and {} materials (Problem::validate first)",
+          problem.num_tets(), problem.tet_rest.size(), problem.tet_material.size());
+  auto pack = [&](int e) {
+    require(e >= 0 && e < problem.num_tets(), "elastic term: tet {} of the subset is not one of the problem's {}", e,
+            problem.num_tets());
+    const auto se = static_cast<std::size_t>(e);
+    PackedTet t;
+    t.rest = problem.tet_rest[se];
+    t.material = problem.tet_material[se];
+    t.energy_scale = energy_scale(problem, e);
+    t.tet = e;
+    for (int a = 0; a < 4; ++a) t.nodes[static_cast<std::size_t>(a)] = problem.tets(e, a);
+    packed_.push_back(t);
+  };
+  std::vector<int> slot_of(static_cast<std::size_t>(problem.num_tets()), -1);
+  packed_.reserve(subset->row_tets.size());
+  for (int e : subset->row_tets) {
+    pack(e);
+    slot_of[static_cast<std::size_t>(e)] = static_cast<int>(packed_.size()) - 1;
+  }
+  row_count_ = packed_.size();
+  value_slots_.reserve(subset->value_tets.size());
+  for (int e : subset->value_tets) {
+    require(e >= 0 && e < problem.num_tets(), "elastic term: tet {} of the subset is not one of the problem's {}", e,
+            problem.num_tets());
+    int& slot = slot_of[static_cast<std::size_t>(e)];
+    if (slot < 0) {
+      pack(e);
+      slot = static_cast<int>(packed_.size()) - 1;
+    }
+    value_slots_.push_back(slot);
+  }
 }
 
 double ElasticTerm::value(const Eigen::VectorXd& x) const {
-  const std::vector<int>& tets = subset_->value_tets;
   const double total = deterministic_reduce(
-      tets.size(), 0.0,
+      value_slots_.size(), 0.0,
       [&](const tbb::blocked_range<std::size_t>& range, double acc) {
         for (std::size_t k = range.begin(); k < range.end(); ++k) {
-          const int e = tets[k];
+          const PackedTet& t = packed_[static_cast<std::size_t>(value_slots_[k])];
           try {
-            acc +=
-                energy_scale(problem_, e) *
-                material::tet_elastic_energy(problem_.tet_rest[static_cast<std::size_t>(e)], tet_nodes(problem_, x, e),
-                                             problem_.tet_material[static_cast<std::size_t>(e)]);
+            acc += t.energy_scale * material::tet_elastic_energy(t.rest, tet_nodes(t.nodes, x), t.material);
           } catch (const Error&) {
             acc = kInfinity;  // the Fung exponent overflowed: this state is out of reach
           }
@@ -73,22 +102,20 @@ double ElasticTerm::value(const Eigen::VectorXd& x) const {
 }
 
 bool ElasticTerm::add_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& g) const {
-  const std::vector<int>& tets = subset_->row_tets;
   struct Partial {
     Eigen::VectorXd gradient;
     int failed = 0;
   };
   const Partial total = deterministic_reduce(
-      tets.size(), Partial{Eigen::VectorXd::Zero(x.size()), 0},
+      row_count_, Partial{Eigen::VectorXd::Zero(x.size()), 0},
       [&](const tbb::blocked_range<std::size_t>& range, Partial acc) {
         for (std::size_t k = range.begin(); k < range.end(); ++k) {
-          const int e = tets[k];
-          const auto se = static_cast<std::size_t>(e);
+          const PackedTet& t = packed_[k];
           try {
             const material::Vector12d ge =
-                energy_scale(problem_, e) *
-                material::tet_elastic_dq(problem_.tet_rest[se], tet_nodes(problem_, x, e), problem_.tet_material[se]);
-            for (int a = 0; a < 4; ++a) acc.gradient.segment<3>(3 * problem_.tets(e, a)) += ge.segment<3>(3 * a);
+                t.energy_scale * material::tet_elastic_dq(t.rest, tet_nodes(t.nodes, x), t.material);
+            for (int a = 0; a < 4; ++a)
+              acc.gradient.segment<3>(3 * t.nodes[static_cast<std::size_t>(a)]) += ge.segment<3>(3 * a);
           } catch (const Error&) {
             ++acc.failed;
           }
@@ -105,21 +132,18 @@ bool ElasticTerm::add_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& g) con
 }
 
 bool ElasticTerm::add_hessian(const Eigen::VectorXd& x, HessianSink& sink) const {
-  const std::vector<int>& tets = subset_->row_tets;
   constexpr std::size_t kBatch = 8192;  // blocks computed in parallel, then handed over in order
-  std::vector<material::Matrix12d> blocks(std::min(kBatch, tets.size()));
+  std::vector<material::Matrix12d> blocks(std::min(kBatch, row_count_));
   int failed_total = 0;
-  for (std::size_t first = 0; first < tets.size(); first += kBatch) {
-    const std::size_t count = std::min(kBatch, tets.size() - first);
+  for (std::size_t first = 0; first < row_count_; first += kBatch) {
+    const std::size_t count = std::min(kBatch, row_count_ - first);
     tbb::enumerable_thread_specific<int> failed(0);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 64), [&](const auto& range) {
       for (std::size_t k = range.begin(); k < range.end(); ++k) {
-        const int e = tets[first + k];
-        const auto se = static_cast<std::size_t>(e);
+        const PackedTet& t = packed_[first + k];
         material::Matrix12d& K = blocks[k];
         try {
-          K = energy_scale(problem_, e) * material::tet_elastic_dq2(problem_.tet_rest[se], tet_nodes(problem_, x, e),
-                                                                    problem_.tet_material[se], projection_);
+          K = t.energy_scale * material::tet_elastic_dq2(t.rest, tet_nodes(t.nodes, x), t.material, projection_);
         } catch (const Error&) {
           K.setZero();
           ++failed.local();
@@ -131,7 +155,7 @@ bool ElasticTerm::add_hessian(const Eigen::VectorXd& x, HessianSink& sink) const
       }
     });
     failed_total += failed.combine(std::plus<int>());
-    for (std::size_t k = 0; k < count; ++k) sink.add_tet(first + k, tets[first + k], blocks[k]);
+    for (std::size_t k = 0; k < count; ++k) sink.add_tet(first + k, packed_[first + k].tet, blocks[k]);
   }
   return failed_total == 0;
 }

@@ -18,6 +18,7 @@
 
 #include <Eigen/Core>
 
+#include <array>
 #include <functional>
 #include <limits>
 #include <memory>
@@ -60,6 +61,9 @@ class Term {
   virtual bool add_hessian(const Eigen::VectorXd& x, HessianSink& sink) const = 0;
 };
 
+/// The elastic term reads each tet's rest data and material from a copy packed in the subset's order when it is
+/// constructed (PackedTet): the problem's tets, materials and Young moduli must not change while the term is in use
+/// (the full-space solver builds its terms for one problem; a new material means a new solver).
 class ElasticTerm final : public Term {
  public:
   ElasticTerm(const Problem& problem, std::shared_ptr<const TermSubset> subset);
@@ -71,8 +75,20 @@ class ElasticTerm final : public Term {
   bool add_hessian(const Eigen::VectorXd& x, HessianSink& sink) const override;
 
  private:
-  const Problem& problem_;
-  std::shared_ptr<const TermSubset> subset_;
+  /// What the kernels read of one tet, contiguous. The row tets come in matrix-row order (the Hessian refill
+  /// walks the rows), which is not the mesh's: read from the problem's per-tet arrays in that order, every tet's
+  /// rest data and material were a cache and TLB miss (the energy pass 3.3× slower on the 115k-tet block,
+  /// docs/results/performance.md).
+  struct PackedTet {
+    material::TetRest rest;
+    material::OrthotropicFung material;
+    double energy_scale = 1.0;
+    std::array<int, 4> nodes{};
+    int tet = 0;  ///< its index in the problem
+  };
+  std::vector<PackedTet> packed_;  ///< the row tets in their order, then value tets that are not row tets
+  std::vector<int> value_slots_;   ///< per value tet: its entry of packed_
+  std::size_t row_count_ = 0;      ///< packed_[0, row_count_) are the row tets
   material::HessianProjection projection_ = material::HessianProjection::kNone;
 };
 
