@@ -168,6 +168,29 @@ InertiaTerm::InertiaTerm(const Problem& problem, std::shared_ptr<const TermSubse
   require(subset_ != nullptr, "inertia term: no subset");
   require(problem.mass_kind == MassKind::lumped || problem.tet_mass.size() == problem.num_tets(),
           "inertia term: consistent mass without ρV per tet");
+  if (problem.mass_kind != MassKind::consistent) return;
+  std::vector<int> slot_of(static_cast<std::size_t>(problem.num_tets()), -1);
+  std::vector<char> used(static_cast<std::size_t>(problem.num_nodes()), 0);
+  auto pack = [&](int e) {
+    require(e >= 0 && e < problem.num_tets(), "inertia term: tet {} of the subset is not one of the problem's {}", e,
+            problem.num_tets());
+    std::array<int, 4> nodes{};
+    for (int a = 0; a < 4; ++a) {
+      nodes[static_cast<std::size_t>(a)] = problem.tets(e, a);
+      used[static_cast<std::size_t>(problem.tets(e, a))] = 1;
+    }
+    tet_nodes_.push_back(nodes);
+    tet_mass_.push_back(problem.tet_mass[e]);
+    slot_of[static_cast<std::size_t>(e)] = static_cast<int>(tet_nodes_.size()) - 1;
+  };
+  for (int e : subset_->row_tets) pack(e);
+  row_count_ = tet_nodes_.size();
+  for (int e : subset_->value_tets) {
+    if (e < 0 || e >= problem.num_tets() || slot_of[static_cast<std::size_t>(e)] < 0) pack(e);
+    value_slots_.push_back(slot_of[static_cast<std::size_t>(e)]);
+  }
+  for (int i = 0; i < problem.num_nodes(); ++i)
+    if (used[static_cast<std::size_t>(i)]) residual_nodes_.push_back(i);
 }
 
 void InertiaTerm::set_step(const NodeFrame& frame, const InertiaTarget& target) {
@@ -183,6 +206,13 @@ Eigen::Vector3d InertiaTerm::residual(const Eigen::VectorXd& x, int node) const 
   return posed_node(*frame_, x, node) - target_->p_tilde.segment<3>(3 * node);
 }
 
+// Each node's residual once (a tet's four would otherwise be recomputed by each of its ~5 tets per node).
+Eigen::Matrix3Xd InertiaTerm::residuals(const Eigen::VectorXd& x) const {
+  Eigen::Matrix3Xd r(3, problem_.num_nodes());
+  for (int i : residual_nodes_) r.col(i) = residual(x, i);
+  return r;
+}
+
 double InertiaTerm::value(const Eigen::VectorXd& x) const {
   require(frame_ != nullptr, "inertia term: set_step was not called");
   const double scale = 1.0 / (2.0 * target_->h_eff * target_->h_eff);
@@ -190,12 +220,14 @@ double InertiaTerm::value(const Eigen::VectorXd& x) const {
   if (problem_.mass_kind == MassKind::lumped) {
     for (int i : subset_->nodes) total += problem_.mass[i] * residual(x, i).squaredNorm();
   } else {
-    for (int e : subset_->value_tets) {
+    const Eigen::Matrix3Xd residual_of = residuals(x);
+    for (int slot : value_slots_) {
+      const auto k = static_cast<std::size_t>(slot);
       Eigen::Matrix<double, 3, 4> r;
-      for (int a = 0; a < 4; ++a) r.col(a) = residual(x, problem_.tets(e, a));
+      for (int a = 0; a < 4; ++a) r.col(a) = residual_of.col(tet_nodes_[k][static_cast<std::size_t>(a)]);
       const Eigen::Vector3d sum = r.rowwise().sum();
       // Σ_ab ρV/20 (1 + δ_ab) r_a·r_b = ρV/20 (|Σ_a r_a|² + Σ_a |r_a|²)   (consistent mass, mass.hpp)
-      total += problem_.tet_mass[e] * 0.05 * (sum.squaredNorm() + r.colwise().squaredNorm().sum());
+      total += tet_mass_[k] * 0.05 * (sum.squaredNorm() + r.colwise().squaredNorm().sum());
     }
   }
   return scale * total;
@@ -211,13 +243,14 @@ bool InertiaTerm::add_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& g) con
     return true;
   }
   // Only the rows of the subset's nodes are complete; the others are partial sums, as for elasticity.
-  for (int e : subset_->row_tets) {
+  const Eigen::Matrix3Xd residual_of = residuals(x);
+  for (std::size_t k = 0; k < row_count_; ++k) {
     Eigen::Matrix<double, 3, 4> r;
-    for (int a = 0; a < 4; ++a) r.col(a) = residual(x, problem_.tets(e, a));
+    for (int a = 0; a < 4; ++a) r.col(a) = residual_of.col(tet_nodes_[k][static_cast<std::size_t>(a)]);
     const Eigen::Vector3d sum = r.rowwise().sum();
     for (int a = 0; a < 4; ++a) {
-      const int i = problem_.tets(e, a);
-      const Eigen::Vector3d force = problem_.tet_mass[e] * 0.05 * (sum + r.col(a));  // Σ_b M_e(a, b) r_b
+      const int i = tet_nodes_[k][static_cast<std::size_t>(a)];
+      const Eigen::Vector3d force = tet_mass_[k] * 0.05 * (sum + r.col(a));  // Σ_b M_e(a, b) r_b
       g.segment<3>(3 * i) += scale * (frame_->A[static_cast<std::size_t>(i)].transpose() * force);
     }
   }

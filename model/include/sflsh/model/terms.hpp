@@ -104,8 +104,16 @@ class InertiaTerm final : public Term {
 
  private:
   Eigen::Vector3d residual(const Eigen::VectorXd& x, int node) const;  ///< p_i(x) − p̃_i
+  Eigen::Matrix3Xd residuals(const Eigen::VectorXd& x) const;          ///< p_i(x) − p̃_i of residual_nodes_
   const Problem& problem_;
   std::shared_ptr<const TermSubset> subset_;
+  // Consistent mass: the row tets' nodes and ρV in row order, then value tets that are not row tets (as
+  // ElasticTerm packs them, for the same reason), and the nodes those tets touch.
+  std::vector<std::array<int, 4>> tet_nodes_;
+  std::vector<double> tet_mass_;
+  std::vector<int> value_slots_;
+  std::vector<int> residual_nodes_;
+  std::size_t row_count_ = 0;
   const NodeFrame* frame_ = nullptr;
   const InertiaTarget* target_ = nullptr;
 };
