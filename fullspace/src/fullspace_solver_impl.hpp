@@ -43,26 +43,15 @@ inline material::TetNodes problem_rest_nodes(const Problem& problem, int e) {
   return nodes;
 }
 
-/// The preconditioner unless -pc_type says otherwise (measurements: docs/fullspace.md, docs/decisions.md,
-/// docs/results/performance.md). Up to kDirectDofs a sparse direct factorization: faster there, and immune to the
-/// smoother trouble AMG has on a handful of aggregates (GAMG's Chebyshev smoother came out indefinite on 72-dof
-/// verification bars). Dynamic steps on one process: M/h² keeps the system well conditioned, and ICC(0)'s cheap
-/// iterations win up to ~10⁶ tets (driven block, one thread: ICC 1.1 vs GAMG 1.1 s per step at 115k tets, 11.2 vs
-/// 11.1 s at 922k, with both reused across Newton steps). In parallel block-Jacobi ICC's iterations grow with the
-/// process count (14 → 25 → 40 → 50 CG iterations per Newton step from 1 to 8 ranks at 14,400 tets per rank)
-/// while GAMG's stay flat (8.8 → 11.8 → 13.1 → 10.8), and at 922k tets two processes take 6.2 s per step with GAMG
-/// against 8.1 s with block-Jacobi ICC: GAMG is the parallel default. Without the mass term (quasi-static and
-/// static problems) ICC's iteration count grows with the mesh and GAMG wins on any process count.
-/// `choice` other than automatic forces one preconditioner regardless of the size (FullSpaceOptions).
+/// The PETSc type of a preconditioner choice on `size` processes (automatic_preconditioner resolves automatic).
 inline PCType default_pc_type(int dofs, int size, bool dynamic, Preconditioner choice = Preconditioner::automatic) {
-  // Block Jacobi's blocks default to ICC for a matrix marked symmetric (MAT_SYMMETRIC below).
-  const PCType icc = size == 1 ? PCICC : PCBJACOBI;
-  const PCType direct = size == 1 ? PCCHOLESKY : PCREDUNDANT;
+  if (choice == Preconditioner::automatic) choice = automatic_preconditioner(dofs, size, dynamic);
   switch (choice) {
     case Preconditioner::direct:
-      return direct;
+      return size == 1 ? PCCHOLESKY : PCREDUNDANT;
     case Preconditioner::icc:
-      return icc;
+      // Block Jacobi's blocks default to ICC for a matrix marked symmetric (MAT_SYMMETRIC below).
+      return size == 1 ? PCICC : PCBJACOBI;
     case Preconditioner::gamg:
       return PCGAMG;
     case Preconditioner::hypre:
@@ -70,10 +59,7 @@ inline PCType default_pc_type(int dofs, int size, bool dynamic, Preconditioner c
     case Preconditioner::automatic:
       break;
   }
-  constexpr int kDirectDofs = 6000;
-  if (dofs <= kDirectDofs) return direct;
-  if (!dynamic || size > 1) return PCGAMG;
-  return icc;
+  return PCGAMG;
 }
 
 }  // namespace

@@ -55,6 +55,23 @@ PcRun run_pc_block(std::array<int, 3> cells, Preconditioner pc, int steps, doubl
   return out;
 }
 
+TEST(Preconditioners, AutomaticChoiceFollowsTheMeasuredCrossovers) {
+  // automatic_preconditioner (fullspace_solver.hpp): direct up to 6000 dofs; dynamic steps ICC on one process at
+  // every size and block-Jacobi ICC on P processes while dofs · P ≤ 360,000 (measured crossover between the 115k-
+  // and the 922k-tet block on two processes); GAMG above it and for every quasi-static problem.
+  EXPECT_EQ(automatic_preconditioner(6000, 1, true), Preconditioner::direct);
+  EXPECT_EQ(automatic_preconditioner(6000, 2, false), Preconditioner::direct);
+  EXPECT_EQ(automatic_preconditioner(492075, 1, true), Preconditioner::icc);
+  EXPECT_EQ(automatic_preconditioner(25086, 2, true), Preconditioner::icc);  // the default body layer
+  EXPECT_EQ(automatic_preconditioner(65559, 2, true), Preconditioner::icc);  // the 115k-tet block
+  EXPECT_EQ(automatic_preconditioner(180000, 2, true), Preconditioner::icc);
+  EXPECT_EQ(automatic_preconditioner(180001, 2, true), Preconditioner::gamg);
+  EXPECT_EQ(automatic_preconditioner(492075, 2, true), Preconditioner::gamg);  // the 922k-tet block
+  EXPECT_EQ(automatic_preconditioner(65559, 8, true), Preconditioner::gamg);
+  EXPECT_EQ(automatic_preconditioner(9261, 1, false), Preconditioner::gamg);
+  EXPECT_EQ(automatic_preconditioner(9261, 2, false), Preconditioner::gamg);
+}
+
 TEST(Preconditioners, EveryChoiceGivesTheSameTrajectory) {
   // 6 × 6 × 2 cells (432 tets, 441 dofs): small enough for every choice, including the direct one.
   // Newton is run to rtol 1e-12 (atol 1e-14 N, far below the ~1e-3 N of the driven residual) so that the

@@ -30,13 +30,22 @@
 namespace sflsh::fullspace {
 
 /// The preconditioner of the Newton systems' CG (docs/fullspace.md "Preconditioner"); -pc_type overrides it.
-/// automatic: a direct Cholesky up to 6000 dofs (redundant in parallel); above it ICC(0) for dynamic steps on one
-/// process, GAMG in parallel and without the mass term. The others force one choice at every size: direct, icc
+/// automatic (automatic_preconditioner): a direct Cholesky up to 6000 dofs (redundant in parallel); above it
+/// ICC(0) for dynamic steps on one process and block-Jacobi ICC(0) on P processes while dofs · P ≤ 360,000, GAMG on
+/// larger parallel problems and without the mass term. The others force one choice at every size: direct, icc
 /// (ICC(0) / block-Jacobi ICC(0)), gamg (smoothed aggregation with the rigid-body near-null space of the rest
 /// coordinates) or hypre (BoomerAMG with hypre's defaults). Measured on the driven block (1,800 – 921,600 tets,
 /// Newmark; docs/results/performance.md): GAMG's CG iterations per Newton step stay at 6 – 12 under refinement and
 /// across 1 – 8 processes, block-Jacobi ICC's grow with both (8 → 52 under refinement, 14 → 50 over 8 ranks).
 enum class Preconditioner { automatic, direct, icc, gamg, hypre };
+
+/// What `automatic` resolves to (never automatic or hypre) for `dofs` unknowns on `processes` processes; `dynamic`:
+/// the system has the mass term M/ĥ². Two processes, CG to 1e-4, one thread each (docs/results/performance.md):
+/// block-Jacobi ICC 0.18 against GAMG 0.26 s per frame on the default body layer (25k dofs), 0.50 against 0.57 s
+/// per step on the 115k-tet block (66k dofs), 8.7 against 7.5 s at 922k tets (492k dofs); block-Jacobi's
+/// iterations also grow with the ranks (14 → 50 from 1 to 8 at 14,400 tets per rank), so the crossover, ~180k
+/// dofs on two processes, is taken as dofs · P ≤ 360,000.
+Preconditioner automatic_preconditioner(int dofs, int processes, bool dynamic);
 
 struct FullSpaceOptions {
   Preconditioner preconditioner = Preconditioner::automatic;
