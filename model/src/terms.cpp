@@ -132,7 +132,8 @@ bool ElasticTerm::add_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& g) con
 }
 
 bool ElasticTerm::add_hessian(const Eigen::VectorXd& x, HessianSink& sink) const {
-  constexpr std::size_t kBatch = 512;  // blocks computed in parallel, then handed over in order (590 kB: cache-resident)
+  constexpr std::size_t kBatch =
+      512;  // blocks computed in parallel, then handed over in order (590 kB: cache-resident)
   std::vector<material::Matrix12d> blocks(std::min(kBatch, row_count_));
   int failed_total = 0;
   for (std::size_t first = 0; first < row_count_; first += kBatch) {
