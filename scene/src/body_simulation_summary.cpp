@@ -4,6 +4,7 @@
 #include <sflsh/core/progress.hpp>
 #include <sflsh/core/scoped_seconds.hpp>
 #include <sflsh/core/vtk_io.hpp>
+#include <sflsh/fullspace/fullspace_solver.hpp>
 #include <sflsh/model/time_integrator.hpp>
 #include <sflsh/reduced/reduced_model.hpp>
 #include <sflsh/reduced/reduced_solver.hpp>
@@ -33,6 +34,8 @@ nlohmann::json BodySimulation::summary() const {
                        {"failed_attempts", total_.failed_attempts},
                        {"projected_retries", total_.projected_retries},
                        {"truncated_solves", total_.truncated_solves}};
+  // The full-space CG's preconditioner as PETSc names it (automatic depends on the size and the process count).
+  if (full_) summary["solver"]["preconditioner"] = full_->preconditioner_type();
   summary["body"] = body::body_label(settings_.subject);
   summary["subject"] = subject_label_;
   summary["beta"] = std::vector<double>(beta_.data(), beta_.data() + beta_.size());
