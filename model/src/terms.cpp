@@ -32,6 +32,35 @@ Eigen::Vector3d posed_node(const NodeFrame& frame, const Eigen::VectorXd& x, int
   return frame.A[static_cast<std::size_t>(node)] * x.segment<3>(3 * node) + frame.d.row(node).transpose();
 }
 
+/// The order in which a term packs its subset's tets (ElasticTerm::PackedTet, InertiaTerm's arrays): the row tets
+/// in their order, then the value tets that are not row tets; value_slots[k] is value tet k's place in `tets`.
+struct PackOrder {
+  std::vector<int> tets;
+  std::size_t row_count = 0;
+  std::vector<int> value_slots;
+};
+
+PackOrder pack_order(const Problem& problem, const TermSubset& subset, const char* term) {
+  PackOrder order;
+  std::vector<int> slot_of(static_cast<std::size_t>(problem.num_tets()), -1);
+  // Every row tet takes its own place (the sink's k); a value tet takes its row tet's place or a new one.
+  auto add = [&](int e, bool always) {
+    require(e >= 0 && e < problem.num_tets(), "{} term: tet {} of the subset is not one of the problem's {}", term, e,
+            problem.num_tets());
+    int& slot = slot_of[static_cast<std::size_t>(e)];
+    if (always || slot < 0) {
+      slot = static_cast<int>(order.tets.size());
+      order.tets.push_back(e);
+    }
+    return slot;
+  };
+  for (int e : subset.row_tets) add(e, true);
+  order.row_count = order.tets.size();
+  order.value_slots.reserve(subset.value_tets.size());
+  for (int e : subset.value_tets) order.value_slots.push_back(add(e, false));
+  return order;
+}
+
 }  // namespace
 
 std::shared_ptr<const TermSubset> TermSubset::whole(const Problem& problem) {
@@ -53,9 +82,9 @@ ElasticTerm::ElasticTerm(const Problem& problem, std::shared_ptr<const TermSubse
               problem.tet_material.size() == static_cast<std::size_t>(problem.num_tets()),
           "elastic term: the problem has {} tets but {} rest states and {} materials (Problem::validate first)",
           problem.num_tets(), problem.tet_rest.size(), problem.tet_material.size());
-  auto pack = [&](int e) {
-    require(e >= 0 && e < problem.num_tets(), "elastic term: tet {} of the subset is not one of the problem's {}", e,
-            problem.num_tets());
+  PackOrder order = pack_order(problem, *subset, "elastic");
+  packed_.reserve(order.tets.size());
+  for (int e : order.tets) {
     const auto se = static_cast<std::size_t>(e);
     PackedTet t;
     t.rest = problem.tet_rest[se];
@@ -64,25 +93,9 @@ ElasticTerm::ElasticTerm(const Problem& problem, std::shared_ptr<const TermSubse
     t.tet = e;
     for (int a = 0; a < 4; ++a) t.nodes[static_cast<std::size_t>(a)] = problem.tets(e, a);
     packed_.push_back(t);
-  };
-  std::vector<int> slot_of(static_cast<std::size_t>(problem.num_tets()), -1);
-  packed_.reserve(subset->row_tets.size());
-  for (int e : subset->row_tets) {
-    pack(e);
-    slot_of[static_cast<std::size_t>(e)] = static_cast<int>(packed_.size()) - 1;
   }
-  row_count_ = packed_.size();
-  value_slots_.reserve(subset->value_tets.size());
-  for (int e : subset->value_tets) {
-    require(e >= 0 && e < problem.num_tets(), "elastic term: tet {} of the subset is not one of the problem's {}", e,
-            problem.num_tets());
-    int& slot = slot_of[static_cast<std::size_t>(e)];
-    if (slot < 0) {
-      pack(e);
-      slot = static_cast<int>(packed_.size()) - 1;
-    }
-    value_slots_.push_back(slot);
-  }
+  row_count_ = order.row_count;
+  value_slots_ = std::move(order.value_slots);
 }
 
 double ElasticTerm::value(const Eigen::VectorXd& x) const {
@@ -190,11 +203,9 @@ InertiaTerm::InertiaTerm(const Problem& problem, std::shared_ptr<const TermSubse
   require(problem.mass_kind == MassKind::lumped || problem.tet_mass.size() == problem.num_tets(),
           "inertia term: consistent mass without ρV per tet");
   if (problem.mass_kind != MassKind::consistent) return;
-  std::vector<int> slot_of(static_cast<std::size_t>(problem.num_tets()), -1);
+  PackOrder order = pack_order(problem, *subset_, "inertia");
   std::vector<char> used(static_cast<std::size_t>(problem.num_nodes()), 0);
-  auto pack = [&](int e) {
-    require(e >= 0 && e < problem.num_tets(), "inertia term: tet {} of the subset is not one of the problem's {}", e,
-            problem.num_tets());
+  for (int e : order.tets) {
     std::array<int, 4> nodes{};
     for (int a = 0; a < 4; ++a) {
       nodes[static_cast<std::size_t>(a)] = problem.tets(e, a);
@@ -202,14 +213,9 @@ InertiaTerm::InertiaTerm(const Problem& problem, std::shared_ptr<const TermSubse
     }
     tet_nodes_.push_back(nodes);
     tet_mass_.push_back(problem.tet_mass[e]);
-    slot_of[static_cast<std::size_t>(e)] = static_cast<int>(tet_nodes_.size()) - 1;
-  };
-  for (int e : subset_->row_tets) pack(e);
-  row_count_ = tet_nodes_.size();
-  for (int e : subset_->value_tets) {
-    if (e < 0 || e >= problem.num_tets() || slot_of[static_cast<std::size_t>(e)] < 0) pack(e);
-    value_slots_.push_back(slot_of[static_cast<std::size_t>(e)]);
   }
+  row_count_ = order.row_count;
+  value_slots_ = std::move(order.value_slots);
   for (int i = 0; i < problem.num_nodes(); ++i)
     if (used[static_cast<std::size_t>(i)]) residual_nodes_.push_back(i);
 }
@@ -288,19 +294,17 @@ bool InertiaTerm::add_hessian(const Eigen::VectorXd&, HessianSink& sink) const {
     }
     return true;
   }
-  const std::vector<int>& tets = subset_->row_tets;
-  for (std::size_t k = 0; k < tets.size(); ++k) {
-    const int e = tets[k];
+  for (std::size_t k = 0; k < row_count_; ++k) {
+    const std::array<int, 4>& nodes = tet_nodes_[k];
     material::Matrix12d block;
     for (int a = 0; a < 4; ++a) {
-      const Eigen::Matrix3d& Aa = frame_->A[static_cast<std::size_t>(problem_.tets(e, a))];
+      const Eigen::Matrix3d& Aa = frame_->A[static_cast<std::size_t>(nodes[static_cast<std::size_t>(a)])];
       for (int b = 0; b < 4; ++b) {
-        const Eigen::Matrix3d& Ab = frame_->A[static_cast<std::size_t>(problem_.tets(e, b))];
-        block.block<3, 3>(3 * a, 3 * b) =
-            (scale * problem_.tet_mass[e] * consistent_mass_factor(a, b)) * (Aa.transpose() * Ab);
+        const Eigen::Matrix3d& Ab = frame_->A[static_cast<std::size_t>(nodes[static_cast<std::size_t>(b)])];
+        block.block<3, 3>(3 * a, 3 * b) = (scale * tet_mass_[k] * consistent_mass_factor(a, b)) * (Aa.transpose() * Ab);
       }
     }
-    sink.add_tet(k, e, block);
+    sink.add_tet(k, subset_->row_tets[k], block);
   }
   return true;
 }
