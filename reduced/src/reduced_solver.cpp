@@ -28,12 +28,14 @@ Eigen::VectorXd node_major(const meshing::RowMatrixX3d& rows) {
 ReducedSolver::ReducedSolver(const model::Problem& problem, const Subspace& subspace, const Cubature& cubature,
                              const ReducedOptions& options)
     : problem_(problem),
-      subspace_(subspace),
+      base_subspace_(subspace),
+      local_subspace_(options.local ? local_subspace(subspace, *options.local) : Subspace{}),
+      subspace_(options.local ? local_subspace_ : subspace),
       cubature_(cubature),
       options_(options),
       elastic_(problem, subspace, cubature_),
-      inertia_(problem, subspace),
-      potentials_(problem, subspace, inertia_.active_nodes()),
+      inertia_(problem, subspace_),
+      potentials_(problem, subspace_, inertia_.active_nodes()),
       elastic_term_(elastic_),
       inertia_term_(inertia_),
       gravity_term_(inertia_),
@@ -52,12 +54,17 @@ ReducedSolver::ReducedSolver(const model::Problem& problem, const Subspace& subs
     if (c == 3) require(subspace.basis.row(i).nonZeros() == 0, "reduced: attached node {} has basis functions", i);
   }
   for (int id : problem.dirichlet.drive) has_drives_ = has_drives_ || id >= 0;
+  if (options.local) {
+    local_term_ = std::make_unique<LocalCorrectionTerm>(problem, subspace_, *options.local, handle_dofs());
+    elastic_head_ = std::make_unique<HeadTerm>(elastic_term_, handle_dofs());
+    local_head_ = std::make_unique<HeadTerm>(*local_term_, subspace_.num_dofs());
+  }
   rest_state_ = Eigen::Map<const Eigen::VectorXd>(problem.rest.data(), problem.num_dofs());
-  q_ = Eigen::VectorXd::Zero(subspace.num_dofs());
+  q_ = Eigen::VectorXd::Zero(subspace_.num_dofs());
   if (options.root.enabled && !options.root.joints.setup.joints.empty())
     skeleton_ = SkeletonDeviation(options.root.joints.setup);
   deviation_ = Eigen::VectorXd::Zero(skeleton_.size());
-  q_rate_ = Eigen::VectorXd::Zero(subspace.num_dofs() + (options.root.enabled ? skeleton_.size() : 0) +
+  q_rate_ = Eigen::VectorXd::Zero(subspace_.num_dofs() + (options.root.enabled ? skeleton_.size() : 0) +
                                   (options.coupled ? options.coupled->size() : 0));
   q_rate_previous_ = q_rate_;
   if (options.root.enabled) setup_root();
@@ -75,7 +82,14 @@ Eigen::VectorXd ReducedSolver::initial_acceleration() const {
   const auto size = 3 * static_cast<Eigen::Index>(inertia_.inertia_nodes().size());
   if (options_.quasi_static || !problem_.dynamic()) return Eigen::VectorXd::Zero(size);
   Eigen::VectorXd gradient = Eigen::VectorXd::Zero(subspace_.num_dofs());
-  elastic_.add_gradient(q_, gradient);
+  if (local_term_) {
+    Eigen::VectorXd head = Eigen::VectorXd::Zero(handle_dofs());
+    elastic_.add_gradient(Eigen::VectorXd(q_.head(handle_dofs())), head);
+    gradient.head(handle_dofs()) = head;
+    local_term_->add_gradient(q_, gradient);
+  } else {
+    elastic_.add_gradient(q_, gradient);
+  }
   const Eigen::VectorXd zeta =
       gather_nodes(prescribed_acceleration(problem_, subspace_, q_, t_), inertia_.inertia_nodes());
   return subspace_acceleration(inertia_, gradient, zeta);
@@ -117,6 +131,7 @@ void ReducedSolver::initialize(const model::State& state) {
   if (has_drives_) {
     elastic_.set_prescribed_state(x_prescribed);
     if (guard_) guard_->set_prescribed_state(x_prescribed);
+    if (local_term_) local_term_->set_prescribed_state(x_prescribed);
   }
   inertia_.set_time(t_, x_prescribed);
   const std::vector<int>& nodes = inertia_.inertia_nodes();
@@ -175,6 +190,9 @@ Eigen::VectorXd ReducedSolver::positions() const {
   return x;
 }
 
-double ReducedSolver::elastic_energy() const { return elastic_.energy(q_); }
+double ReducedSolver::elastic_energy() const {
+  if (!local_term_) return elastic_.energy(q_);
+  return elastic_.energy(Eigen::VectorXd(q_.head(handle_dofs()))) + local_term_->energy(q_);
+}
 
 }  // namespace sflsh::reduced

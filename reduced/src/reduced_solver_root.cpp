@@ -23,7 +23,7 @@ void ReducedSolver::setup_root() {
     carried_mass_.push_back(problem_.mass[i]);
   }
   const auto offset = static_cast<Eigen::Index>(subspace_.num_dofs());
-  elastic_head_ = std::make_unique<HeadTerm>(elastic_term_, offset);
+  elastic_head_ = std::make_unique<HeadTerm>(elastic_term_, handle_dofs());
   gravity_head_ = std::make_unique<HeadTerm>(gravity_term_, offset);
   root_inertia_term_ =
       std::make_unique<RootInertiaTerm>(inertia_, subspace_, skeleton_, carried_, carried_mass_, offset);
@@ -47,7 +47,7 @@ void ReducedSolver::setup_coupled() {
   }
   inertia_head_ = std::make_unique<HeadTerm>(inertia_term_, offset);
   gravity_head_ = std::make_unique<HeadTerm>(gravity_term_, offset);
-  elastic_head_ = std::make_unique<HeadTerm>(elastic_term_, offset);
+  elastic_head_ = std::make_unique<HeadTerm>(elastic_term_, handle_dofs());
   potential_head_ = std::make_unique<HeadTerm>(potential_term_, offset);
 }
 

@@ -39,7 +39,7 @@ struct ReducedSolver::Substep {
   meshing::RowMatrixX3d carried_end;
   DeviationPose pose;
   Eigen::VectorXd x_start;  ///< x = [q; r; y] at t0 (r with a tracking skeleton, y with a coupled system)
-  std::array<Term, 6> term_storage;
+  std::array<Term, 7> term_storage;
   std::size_t num_terms = 0;
 
   std::span<const Term> terms() const { return {term_storage.data(), num_terms}; }
@@ -120,8 +120,10 @@ void ReducedSolver::set_substep_targets(Substep& s, model::StepStats& stats) {
   if (has_drives_) {
     elastic_.set_prescribed_state(*s.x_prescribed);
     if (guard_) guard_->set_prescribed_state(*s.x_prescribed);
+    if (local_term_) local_term_->set_prescribed_state(*s.x_prescribed);
   }
   elastic_term_.set_projection(s.projection);
+  if (local_term_) local_term_->set_projection(s.projection);
   stats.elastic_seconds += seconds_since(elastic_clock);
 }
 
@@ -157,18 +159,25 @@ void ReducedSolver::collect_substep_terms(Substep& s, model::StepStats& stats) c
     add(root_tracking_term_.get(), &stats.inertia_seconds);
     add(gravity_head_.get(), &stats.inertia_seconds);
     add(elastic_head_.get(), &stats.elastic_seconds);
+    if (local_head_) add(local_head_.get(), &stats.elastic_seconds);
     if (s.contact) add(root_potential_term_.get(), &stats.potential_seconds);
     if (coupled_term_) add(coupled_term_.get(), &stats.potential_seconds);
   } else if (coupled_term_) {
     if (s.inertia_on) add(inertia_head_.get(), &stats.inertia_seconds);
     add(gravity_head_.get(), &stats.inertia_seconds);
     add(elastic_head_.get(), &stats.elastic_seconds);
+    if (local_head_) add(local_head_.get(), &stats.elastic_seconds);
     if (s.contact) add(potential_head_.get(), &stats.potential_seconds);
     add(coupled_term_.get(), &stats.potential_seconds);
   } else {
     if (s.inertia_on) add(&inertia_term_, &stats.inertia_seconds);
     add(&gravity_term_, &stats.inertia_seconds);
-    add(&elastic_term_, &stats.elastic_seconds);
+    if (local_term_) {
+      add(elastic_head_.get(), &stats.elastic_seconds);
+      add(local_term_.get(), &stats.elastic_seconds);
+    } else {
+      add(&elastic_term_, &stats.elastic_seconds);
+    }
     if (s.contact) add(&potential_term_, &stats.potential_seconds);
   }
 }
@@ -347,8 +356,9 @@ ReducedSolver::GuardOutcome ReducedSolver::check_guard(const Substep& s, const E
   if (!guard_) return GuardOutcome::clear;
   // The tets outside the cubature: over their limit → into the cubature, and the substep solved again.
   const auto clock = Clock::now();
+  const Eigen::Index handles = handle_dofs();  // the guard watches the cubature's model, on the handles alone
   const std::vector<GuardViolation> over =
-      q.size() > s.offset ? guard_->check(Eigen::VectorXd(q.head(s.offset))) : guard_->check(q);
+      q.size() > handles ? guard_->check(Eigen::VectorXd(q.head(handles))) : guard_->check(q);
   stats.elastic_seconds += seconds_since(clock);
   if (over.empty()) return GuardOutcome::clear;
   if (enlargements >= options_.max_enlargements) {

@@ -95,6 +95,21 @@ std::vector<int> SceneBody::contact_nodes() const {
   return nodes;
 }
 
+void SceneBody::set_local_region(std::vector<int> nodes, const reduced::LocalBasisOptions& options) {
+  require(solver_ == SolverKind::reduced, "scene body '{}': local bumps need the reduced solver", name());
+  local_.reset();
+  if (nodes.empty()) return;
+  reduced::LocalBasis local = reduced::local_basis(layer_->problem, nodes, options);
+  if (local.size() == 0) return;
+  const std::string what = local.spacing > 0.0
+                               ? fmt::format("{} local bumps {:.0f} mm apart", local.size(), 1000.0 * local.spacing)
+                               : fmt::format("{} free nodes", local.size());
+  logger()->info("scene body '{}': {} over {} tets where objects reach {} skin nodes (local contact resolution)",
+                 name(), what, local.tets.size(), nodes.size());
+  model_info += fmt::format(", {} over {} tets", what, local.tets.size());
+  local_ = std::move(local);
+}
+
 void SceneBody::start(bool inertia) {
   quasi_static_ = !inertia;
   t_ = 0.0;
@@ -105,6 +120,7 @@ void SceneBody::start(bool inertia) {
     options.quasi_static = quasi_static_;
     options.integrator = spec_.integrator;
     options.coupled = coupled_;
+    options.local = local_basis();
     if (spec_.tracking) {
       require(!quasi_static_, "scene body '{}': skeleton = \"tracking\" needs inertia ([effects] inertia = true)",
               name());

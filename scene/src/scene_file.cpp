@@ -192,7 +192,7 @@ class SceneReader : public TomlReader {
     const toml::table& t = table(node, "contact");
     check_keys(t,
                {"stiffness", "tolerance", "margin", "max_refinements", "max_exchanges", "exchange_tolerance",
-                "body_exchange", "object_coupling"},
+                "body_exchange", "object_coupling", "local_resolution", "local_spacing", "local_depth", "local_reach"},
                " in [contact]");
     if (const toml::node* n = t.get("stiffness")) contact.stiffness = non_negative(*n, "stiffness", " in [contact]");
     if (const toml::node* n = t.get("tolerance")) contact.tolerance = positive(*n, "tolerance", " in [contact]");
@@ -207,6 +207,14 @@ class SceneReader : public TomlReader {
       contact.exchange_tolerance = positive(*n, "exchange_tolerance", " in [contact]");
     if (const toml::node* n = t.get("object_coupling"))
       contact.object_coupling = choice(*n, "object_coupling", {"monolithic", "staggered"}, " in [contact]");
+    if (const toml::node* n = t.get("local_resolution"))
+      contact.local_resolution = boolean(*n, "local_resolution", " in [contact]");
+    if (const toml::node* n = t.get("local_spacing"))
+      contact.local_spacing = non_negative(*n, "local_spacing", " in [contact]");
+    if (const toml::node* n = t.get("local_depth"))
+      contact.local_depth = non_negative(*n, "local_depth", " in [contact]");
+    if (const toml::node* n = t.get("local_reach"))
+      contact.local_reach = non_negative(*n, "local_reach", " in [contact]");
   }
 
   void read_output(const toml::node& node, OutputSpec& output) const {

@@ -81,6 +81,11 @@ class SceneBody {
   /// Unknowns to solve with the body's own (free objects, coupled_objects.hpp); reduced bodies with a prescribed
   /// skeleton only, set before start(). Not owned.
   void set_coupled(reduced::CoupledSystem* coupled) { coupled_ = coupled; }
+  /// Reduced bodies: local bumps around these layer nodes (the skin objects reach, local_region.hpp), set before
+  /// start(); the solver's subspace becomes [B  Φ] (reduced/local_basis.hpp).
+  void set_local_region(std::vector<int> nodes, const reduced::LocalBasisOptions& options);
+  /// The local bumps in use (null without).
+  const reduced::LocalBasis* local_basis() const { return local_ ? &*local_ : nullptr; }
   /// Builds the solver (after the potentials are in layer().problem.potentials).
   void start(bool inertia);
   /// Advances from t0 by h. A quasi-static body without gravity whose potentials have no candidates is at
@@ -137,6 +142,7 @@ class SceneBody {
   std::vector<int> vertex_node_;
   bool quasi_static_ = false;
   reduced::CoupledSystem* coupled_ = nullptr;
+  std::optional<reduced::LocalBasis> local_;  ///< local bumps for contact (reduced bodies), or none
   double t_ = 0.0;
   // The tracking root's largest deviation so far: |τ| [m], |θ| [rad] and their times [s].
   std::vector<std::pair<double, Eigen::VectorXd>> deviation_history_;

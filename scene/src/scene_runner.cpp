@@ -4,6 +4,7 @@
 #include "crowd.hpp"
 #include "free_objects.hpp"
 #include "group_step.hpp"
+#include "local_region.hpp"
 #include "object_coupling_setup.hpp"
 #include "scene_contact.hpp"
 #include "scene_internal.hpp"
@@ -205,6 +206,17 @@ class SceneRun {
         }
         c.objects = std::make_shared<ContactPotential>(nodes, areas, std::move(obstacles), parameters);
         body.layer().problem.potentials.push_back(c.objects);
+        if (body.solver() == SolverKind::reduced && scene_.contact.local_resolution) {
+          detail::LocalRegionOptions region;
+          region.reach = scene_.contact.local_reach;
+          region.gravity = scene_.effects.gravity ? gravity_vector(scene_.effects) : Eigen::Vector3d::Zero();
+          reduced::LocalBasisOptions bumps;
+          bumps.spacing = scene_.contact.local_spacing;
+          bumps.depth = scene_.contact.local_depth;
+          body.set_local_region(detail::reached_nodes(body, nodes, body_from_world, objects_,
+                                                      std::max(frames_ - 1, 1) / scene_.fps, region),
+                                bumps);
+        }
         if (monolithic) {
           coupled_ = detail::make_coupled_objects(
               scene_, body, c, *free_, objects_,

@@ -22,6 +22,8 @@
 #include <sflsh/reduced/cubature.hpp>
 #include <sflsh/reduced/cubature_elastic.hpp>
 #include <sflsh/reduced/cubature_guard.hpp>
+#include <sflsh/reduced/local_basis.hpp>
+#include <sflsh/reduced/local_correction.hpp>
 #include <sflsh/reduced/reduced_inertia.hpp>
 #include <sflsh/reduced/reduced_potentials.hpp>
 #include <sflsh/reduced/reduced_terms.hpp>
@@ -75,6 +77,9 @@ struct ReducedOptions {
   /// Unknowns solved in the same Newton solve (coupled_system.hpp: e.g. free rigid objects on the skin), not
   /// owned; x = [q; y], or [q; θ; τ; y] with a tracking root. Null: none.
   CoupledSystem* coupled = nullptr;
+  /// Local bumps for contact (local_basis.hpp), not owned: the solver's subspace becomes [B  Φ], q = [t; e], and the
+  /// tets the bumps touch are integrated exactly (local_correction.hpp). Null: the handles alone.
+  const LocalBasis* local = nullptr;
 };
 
 /// One converged substep of an accepted step: from t0 over dt to coordinates q.
@@ -119,7 +124,10 @@ class ReducedSolver final : public model::BodySolver {
   const ReducedInertia& inertia() const { return inertia_; }
   /// Φ's elastic part at the current state (cubature) [J].
   double elastic_energy() const;
+  /// The subspace q lives in: the handles' [B], or [B  Φ] with local bumps (options.local).
   const Subspace& subspace() const { return subspace_; }
+  /// The handles' coordinates in q (3S; the cubature's); the bumps' follow.
+  Eigen::Index handle_dofs() const { return base_subspace_.num_dofs(); }
   /// The cubature in use: the model's, plus the tets the guard added (cubature_added()).
   const Cubature& cubature() const { return cubature_; }
   /// Tets the guard added to the cubature since construction.
@@ -212,8 +220,10 @@ class ReducedSolver final : public model::BodySolver {
   void setup_coupled();
 
   const model::Problem& problem_;
-  const Subspace& subspace_;
-  Cubature cubature_;  ///< the model's cubature, grown by the guard
+  const Subspace& base_subspace_;  ///< the handles' functions B (the cubature's)
+  Subspace local_subspace_;        ///< [B  Φ] with local bumps, else empty
+  const Subspace& subspace_;       ///< the subspace of q: one of the two
+  Cubature cubature_;              ///< the model's cubature, grown by the guard
   ReducedOptions options_;
   CubatureElastic elastic_;
   std::unique_ptr<CubatureGuard> guard_;
@@ -255,6 +265,9 @@ class ReducedSolver final : public model::BodySolver {
   // Coupled system (options.coupled): x = [q; y], y at offset 3S; the q terms on the head of x.
   std::unique_ptr<CoupledTerm> coupled_term_;
   std::unique_ptr<HeadTerm> inertia_head_, potential_head_;
+  // Local bumps (options.local): their exact energy, on the head [t; e] of x with a root or a coupled system.
+  std::unique_ptr<LocalCorrectionTerm> local_term_;
+  std::unique_ptr<HeadTerm> local_head_;
 };
 
 }  // namespace sflsh::reduced

@@ -142,6 +142,12 @@ struct ContactSpec {
   /// Newton solve where the scene allows it (one soft reduced body with a prescribed skeleton, docs/contact.md),
   /// else staggered; "staggered" always solves the objects first against the body's predicted skin.
   std::string object_coupling = "monolithic";
+  /// Reduced bodies: local bumps where objects reach the skin (docs/contact.md "Local resolution of contact"), so the
+  /// body dents where it is touched; false: the handles alone (the model before, stiffer and wider).
+  bool local_resolution = true;
+  double local_spacing = 0.0;  ///< [m] between the bumps' centres; 0: every node of the region is free (a patch)
+  double local_depth = 0.04;   ///< [m] nodes up to this far (along the mesh) from the reached skin nodes
+  double local_reach = 0.02;   ///< [m] a skin node is reached when an object comes this close to it (skinned)
 };
 
 /// The paper's Fig. 1: `count` avatars with random shapes, each with its own shape-dependent material.

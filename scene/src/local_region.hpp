@@ -1,0 +1,24 @@
+#pragma once
+// Where a reduced body gets local bumps for contact (reduced/local_basis.hpp, docs/contact.md "Local resolution of
+// contact"): the contact nodes an object reaches during the scene, found before the run from the body's skinned
+// motion (its rest shape posed at sampled times) and each object's motion — a fixed or prescribed object at its pose
+// of each sample, a free object along its ballistic path from its start until it first meets the skin.
+#include "scene_internal.hpp"
+#include "scene_objects.hpp"
+
+#include <vector>
+
+namespace sflsh::scene::detail {
+
+struct LocalRegionOptions {
+  double reach = 0.02;  ///< a node is reached when the object's φ at its skinned position is below this [m]
+  int samples = 120;    ///< times sampled over the scene (at most; every frame when fewer)
+  Eigen::Vector3d gravity = Eigen::Vector3d::Zero();  ///< the free objects' [m/s²], world
+};
+
+/// Entries of `nodes` (ascending mesh nodes) an object reaches, for a body placed by `body_from_world`.
+std::vector<int> reached_nodes(const SceneBody& body, const std::vector<int>& nodes, const Rigid& body_from_world,
+                               const std::vector<SceneObject>& objects, double duration,
+                               const LocalRegionOptions& options);
+
+}  // namespace sflsh::scene::detail
