@@ -422,6 +422,10 @@ bool FullSpaceSolver::Impl::solve_substep(State& s, double t0, double dt) {
     const bool accepted = potential_term->accept(x_new);
     stats->potential_seconds += seconds_since(t_accept);
     if (accepted) break;
+    if (std::string why = potential_term->unresolved(); !why.empty()) {
+      stats->converged_reason = why;  // refused for good: the ladder tries smaller substeps, then stops with it
+      return false;
+    }
     if (refinement >= max_refinements) {
       logger()->warn("t = {:.6g}: contact still over its tolerance after {} refinement(s); the substep is kept", t1,
                      refinement);

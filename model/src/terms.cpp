@@ -373,6 +373,12 @@ bool PotentialTerm::accept(const Eigen::VectorXd& x_new) const {
   return accepted;
 }
 
+std::string PotentialTerm::unresolved() const {
+  for (const Active& term : active_)
+    if (std::string reason = term.potential->unresolved(); !reason.empty()) return reason;
+  return {};
+}
+
 int PotentialTerm::max_refinements() const {
   int most = 0;
   for (const Active& term : active_) most = std::max(most, term.potential->max_refinements());

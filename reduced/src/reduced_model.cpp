@@ -227,6 +227,46 @@ model::Problem template_problem(const model::BodyLayer& layer) {
   return p;
 }
 
+Cubature cubature_outside(const model::BodyLayer& layer, const Subspace& subspace, const ReducedModelOptions& requested,
+                          const std::vector<int>& excluded) {
+  const meshing::LayerMesh& mesh = *layer.mesh;
+  std::vector<char> out(static_cast<std::size_t>(mesh.num_tets()), 0);
+  for (int e : excluded) {
+    require(e >= 0 && e < mesh.num_tets(), "reduced: excluded tet {} is not a tet of the layer", e);
+    out[static_cast<std::size_t>(e)] = 1;
+  }
+  std::vector<int> kept;  // the problem's tet k is the layer's tet kept[k]
+  for (int e = 0; e < mesh.num_tets(); ++e)
+    if (!out[static_cast<std::size_t>(e)]) kept.push_back(e);
+  Cubature c;
+  if (requested.cubature == 0 || kept.empty()) {
+    c.tets = kept;
+    c.weights.assign(kept.size(), 1.0);
+    c.stiffness_ratio_max = c.stiffness_ratio_min = 1.0;
+    return c;
+  }
+  model::Problem full = template_problem(layer);
+  model::Problem p;
+  p.rest = full.rest;
+  p.tets.resize(static_cast<Eigen::Index>(kept.size()), 4);
+  CubatureOptions co;
+  co.count = std::min(resolved_cubature_count(requested), static_cast<int>(kept.size()));
+  co.weighting = requested.weighting;
+  for (std::size_t k = 0; k < kept.size(); ++k) {
+    p.tets.row(static_cast<Eigen::Index>(k)) = full.tets.row(kept[k]);
+    p.tet_material.push_back(full.tet_material[static_cast<std::size_t>(kept[k])]);
+    co.density.push_back(
+        mesh.tet_part[static_cast<std::size_t>(kept[k])] == meshing::Part::torso ? material::kTorsoDensity : 1.0);
+  }
+  p.dirichlet = full.dirichlet;
+  p.mass = model::lumped_masses(p.rest, p.tets, layer.problem.density > 0 ? layer.problem.density : 1000.0);
+  p.validate();
+  c = requested.cubature == -1 ? select_covering_cubature(p, subspace, co, requested.coverage_ratio)
+                               : select_cubature(p, subspace, co);
+  for (int& t : c.tets) t = kept[static_cast<std::size_t>(t)];
+  return c;
+}
+
 int max_point_handles(const model::BodyLayer& layer) { return layer.mesh->region_surface.num_vertices() / 4; }
 
 int resolved_cubature_count(const ReducedModelOptions& options) {

@@ -167,6 +167,12 @@ bool ReducedPotentials::accept(const Eigen::VectorXd& q, const ReducedInertia& i
   return accepted;
 }
 
+std::string ReducedPotentials::unresolved() const {
+  for (const Term& term : terms_)
+    if (std::string reason = term.potential->unresolved(); !reason.empty()) return reason;
+  return {};
+}
+
 int ReducedPotentials::max_refinements() const {
   int most = 0;
   for (const Term& term : terms_) most = std::max(most, term.potential->max_refinements());

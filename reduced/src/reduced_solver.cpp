@@ -55,7 +55,15 @@ ReducedSolver::ReducedSolver(const model::Problem& problem, const Subspace& subs
   }
   for (int id : problem.dirichlet.drive) has_drives_ = has_drives_ || id >= 0;
   if (options.local) {
-    local_term_ = std::make_unique<LocalCorrectionTerm>(problem, subspace_, *options.local, handle_dofs());
+    // The cubature must leave the patch's tets to it (reduced_model.hpp, cubature_outside), and the guard too.
+    std::vector<char> in_patch(static_cast<std::size_t>(problem.num_tets()), 0);
+    for (int e : options.local->tets) in_patch[static_cast<std::size_t>(e)] = 1;
+    for (int e : cubature_.tets)
+      require(!in_patch[static_cast<std::size_t>(e)],
+              "reduced: cubature tet {} is in the local patch (fit the cubature without the patch's tets)", e);
+    if (guard_)
+      for (int e : options.local->tets) guard_->release(e);
+    local_term_ = std::make_unique<LocalElasticTerm>(problem, subspace_, *options.local);
     elastic_head_ = std::make_unique<HeadTerm>(elastic_term_, handle_dofs());
     local_head_ = std::make_unique<HeadTerm>(*local_term_, subspace_.num_dofs());
   }

@@ -79,7 +79,9 @@ bool ReducedSolver::solve_substep(double t0, double dt, material::HessianProject
     const GuardOutcome guard = check_guard(s, q, enlargements, stats, reason);
     if (guard == GuardOutcome::failed) return false;
     if (guard == GuardOutcome::enlarged) continue;
-    if (contact_settled(s, q, refinement, stats)) break;
+    const ContactOutcome contact = contact_settled(s, q, refinement, stats, reason);
+    if (contact == ContactOutcome::failed) return false;
+    if (contact == ContactOutcome::settled) break;
     ++refinement;
     ++stats.potential_refinements;
   }
@@ -376,9 +378,9 @@ ReducedSolver::GuardOutcome ReducedSolver::check_guard(const Substep& s, const E
   return GuardOutcome::enlarged;
 }
 
-bool ReducedSolver::contact_settled(const Substep& s, const Eigen::VectorXd& q, int refinement,
-                                    model::StepStats& stats) {
-  if (!s.contact && !coupled_term_) return true;
+ReducedSolver::ContactOutcome ReducedSolver::contact_settled(const Substep& s, const Eigen::VectorXd& q, int refinement,
+                                                             model::StepStats& stats, std::string& reason) {
+  if (!s.contact && !coupled_term_) return ContactOutcome::settled;
   const auto clock = Clock::now();
   bool accepted = true;
   if (s.track && s.contact) {
@@ -390,15 +392,21 @@ bool ReducedSolver::contact_settled(const Substep& s, const Eigen::VectorXd& q, 
   if (coupled_term_) accepted = coupled_term_->accept(q) && accepted;
   stats.potential_seconds += seconds_since(clock);
   factor_valid_ = false;  // the factor holds this substep's contact Hessian
-  if (accepted) return true;
+  if (accepted) return ContactOutcome::settled;
+  if (s.contact) {
+    if (std::string why = potentials_.unresolved(); !why.empty()) {
+      reason = std::move(why);
+      return ContactOutcome::failed;
+    }
+  }
   const int most_refinements =
       std::max(s.contact ? potentials_.max_refinements() : 0, coupled_term_ ? options_.coupled->max_refinements() : 0);
   if (refinement >= most_refinements) {
-    logger()->warn("reduced: t = {:.6g}: contact still over its tolerance after {} refinement(s); the substep is kept",
-                   s.t1, refinement);
-    return true;
+    reason = fmt::format("contact with a free object still over its tolerance at t = {:.6g} s after {} stiffening(s)",
+                         s.t1, refinement);
+    return ContactOutcome::failed;
   }
-  return false;
+  return ContactOutcome::refine;
 }
 
 void ReducedSolver::commit_substep(const Substep& s, const Eigen::VectorXd& q, model::StepStats& stats, int& startup) {

@@ -17,6 +17,7 @@
 #include <sflsh/scene/contact_potential.hpp>
 
 #include <Eigen/Eigenvalues>
+#include <fmt/format.h>
 
 #include <cassert>
 #include <chrono>
@@ -200,6 +201,7 @@ bool ContactPotential::accept_substep(const meshing::RowMatrixX3d& p_end) {
   const auto start = Clock::now();
   require(p_end.rows() == static_cast<Eigen::Index>(candidates_.size()),
           "contact: accept_substep expects {} rows (one per candidate), got {}", candidates_.size(), p_end.rows());
+  unresolved_.clear();
   // Penetration of each candidate at the end of the substep.
   std::vector<int> too_deep;
   Eigen::VectorXd depth = Eigen::VectorXd::Zero(p_end.rows());
@@ -210,16 +212,45 @@ bool ContactPotential::accept_substep(const meshing::RowMatrixX3d& p_end) {
       if (mask_[k] & (std::uint64_t{1} << j))
         depth(static_cast<Eigen::Index>(c)) =
             std::max(depth(static_cast<Eigen::Index>(c)), -obstacles_[j].shape->distance(p));
-    if (!(depth(static_cast<Eigen::Index>(c)) <= parameters_.tolerance)) too_deep.push_back(candidates_[c]);
+    if (!(depth(static_cast<Eigen::Index>(c)) <= parameters_.tolerance)) too_deep.push_back(static_cast<int>(c));
   }
   if (!too_deep.empty() && substep_refinements_ < parameters_.max_refinements) {
-    for (int k : too_deep) factor_[static_cast<std::size_t>(k)] *= parameters_.refinement_factor;
+    for (int c : too_deep)
+      factor_[static_cast<std::size_t>(candidates_[static_cast<std::size_t>(c)])] *= parameters_.refinement_factor;
     ++substep_refinements_;
     ++stats_.refinements;
     stats_.seconds += seconds_since(start);
     return false;  // last_accepted_ stays false: the next begin_substep of this interval is a retry
   }
-  if (!too_deep.empty()) ++stats_.unresolved;
+  if (!too_deep.empty()) {
+    // Refinements used up (or a non-finite position): refused for good, with the deepest node and its obstacle.
+    ++stats_.unresolved;
+    int deepest = too_deep.front();
+    for (int c : too_deep)
+      if (!(depth(c) <= depth(deepest))) deepest = c;
+    const auto k = static_cast<std::size_t>(candidates_[static_cast<std::size_t>(deepest)]);
+    const Eigen::Vector3d p = p_end.row(deepest).transpose();
+    std::size_t worst = 0;
+    double worst_depth = -std::numeric_limits<double>::infinity();
+    for (std::size_t j = 0; j < obstacles_.size(); ++j)
+      if ((mask_[k] & (std::uint64_t{1} << j)) && -obstacles_[j].shape->distance(p) > worst_depth) {
+        worst = j;
+        worst_depth = -obstacles_[j].shape->distance(p);
+      }
+    const std::string name = obstacles_.empty() || obstacles_[worst].name.empty() ? fmt::format("obstacle {}", worst)
+                                                                                  : obstacles_[worst].name;
+    unresolved_ = std::isfinite(depth(deepest))
+                      ? fmt::format(
+                            "contact with {} unresolved at t = {:.6g} s: skin node {} is {:.2f} mm inside it "
+                            "after {} stiffening(s) (tolerance {:.2f} mm)",
+                            name, t_end_, nodes_[k], 1000.0 * depth(deepest), substep_refinements_,
+                            1000.0 * parameters_.tolerance)
+                      : fmt::format("contact with {} at t = {:.6g} s: skin node {} has a non-finite position", name,
+                                    t_end_, nodes_[k]);
+    substep_refinements_ = 0;
+    stats_.seconds += seconds_since(start);
+    return false;
+  }
 
   // Accepted: forces on the nodes and their reactions on the obstacles.
   force_.setZero();

@@ -106,7 +106,12 @@ void SceneBody::set_local_region(std::vector<int> nodes, const reduced::LocalBas
                                : fmt::format("{} free nodes", local.size());
   logger()->info("scene body '{}': {} over {} tets where objects reach {} skin nodes (local contact resolution)",
                  name(), what, local.tets.size(), nodes.size());
-  model_info += fmt::format(", {} over {} tets", what, local.tets.size());
+  reduced::ReducedModelOptions ro;
+  ro.point_handles = spec_.handles;
+  ro.cubature = spec_.cubature;
+  local_cubature_ = reduced::cubature_outside(*layer_, reduced_model_->subspace, ro, local.tets);
+  model_info += fmt::format(", {} over {} tets (cubature refitted without them: {} tets)", what, local.tets.size(),
+                            local_cubature_.size());
   local_ = std::move(local);
 }
 
@@ -137,8 +142,8 @@ void SceneBody::start(bool inertia) {
       };
       options.root.joints = joint_tracking_options(spec_, *layer_);
     }
-    fast_ =
-        std::make_unique<reduced::ReducedSolver>(problem, reduced_model_->subspace, reduced_model_->cubature, options);
+    fast_ = std::make_unique<reduced::ReducedSolver>(problem, reduced_model_->subspace,
+                                                     local_ ? local_cubature_ : reduced_model_->cubature, options);
     fast_->initialize(model::initial_state(problem, 0.0));
   } else {
     fullspace::FullSpaceOptions options;

@@ -4,6 +4,7 @@
 #include "coupled_objects.hpp"
 
 #include <algorithm>
+#include <limits>
 #include <map>
 
 namespace sflsh::scene::detail {
@@ -64,6 +65,36 @@ std::vector<vtk::Field> contact_fields(const BodyContact& c, const SceneBody& bo
     }
   }
   return {{"contact_force", force, false}, {"penetration", depth, false}};
+}
+
+void record_dent(const SceneBody& body, BodyContact& contact, double t) {
+  if (!contact.objects || contact.objects->obstacles().empty()) return;
+  const ContactStats stats = contact.objects->stats();
+  if (!(stats.max_force > contact.dent.force)) return;
+  const model::BodyLayer& layer = body.layer();
+  const RowMatrixX3d posed = layer.posed_surface(body.positions(), t);
+  const Eigen::VectorXd rest = Eigen::Map<const Eigen::VectorXd>(layer.problem.rest.data(), layer.problem.num_dofs());
+  const RowMatrixX3d skinned = layer.posed_surface(rest, t);
+  Dent d;
+  d.force = stats.max_force;
+  d.time = t;
+  double near_sum = 0.0, far_sum = 0.0;
+  for (Eigen::Index v = 0; v < posed.rows(); ++v) {
+    double phi = std::numeric_limits<double>::infinity();
+    for (const ContactObstacle& o : contact.objects->obstacles())
+      phi = std::min(phi, o.shape->distance(posed.row(v).transpose()));
+    const double u = (posed.row(v) - skinned.row(v)).norm();
+    if (phi < 0.10) {
+      near_sum += u;
+      ++d.near_vertices;
+    } else if (phi < 0.20) {
+      far_sum += u;
+      ++d.far_vertices;
+    }
+  }
+  d.dent = d.near_vertices > 0 ? near_sum / d.near_vertices : 0.0;
+  d.spread = d.far_vertices > 0 ? far_sum / d.far_vertices : 0.0;
+  contact.dent = d;
 }
 
 }  // namespace sflsh::scene::detail

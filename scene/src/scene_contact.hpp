@@ -17,6 +17,16 @@ namespace sflsh::scene::detail {
 /// A soft body's contact: its potentials against the objects and against the other bodies.
 class CoupledObjects;
 
+/// The dent the objects make at the step of the largest object contact force (docs/contact.md "Reduced against full
+/// space"): the mean soft-tissue displacement |p − p_skinned| of the body's surface vertices within 10 cm of an
+/// object's surface, and 10–20 cm away (the spread) [m], at that step's end.
+struct Dent {
+  double force = 0.0;  ///< the largest total contact force so far [N]
+  double time = 0.0;   ///< [s]
+  double dent = 0.0, spread = 0.0;
+  int near_vertices = 0, far_vertices = 0;
+};
+
 struct BodyContact {
   std::shared_ptr<ContactPotential> objects;                  ///< null without object contact
   std::vector<std::shared_ptr<detail::PlacedMotion>> placed;  ///< per scene object (object potential)
@@ -30,7 +40,11 @@ struct BodyContact {
   double max_penetration = 0.0;      ///< measured at the written frames on the skin [m]
   ContactPotential::Checkpoint objects_start, bodies_start;  ///< the potentials at the start of the step
   const CoupledObjects* coupled = nullptr;  ///< free objects in this body's solve (their push on the nodes), or null
+  Dent dent;                                ///< of the object potential's obstacles
 };
+
+/// Updates `contact.dent` when the object potential's largest force grew in the step that ended at t.
+void record_dent(const SceneBody& body, BodyContact& contact, double t);
 
 /// Lumped skin area per contact node: the region vertex's (lumped_vertex_areas) on the node it sits on;
 /// nodes without a region vertex (embedded skins) get the mean.

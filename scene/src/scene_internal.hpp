@@ -143,6 +143,7 @@ class SceneBody {
   bool quasi_static_ = false;
   reduced::CoupledSystem* coupled_ = nullptr;
   std::optional<reduced::LocalBasis> local_;  ///< local bumps for contact (reduced bodies), or none
+  reduced::Cubature local_cubature_;          ///< with local_: the model's cubature fitted without the patch
   double t_ = 0.0;
   // The tracking root's largest deviation so far: |τ| [m], |θ| [rad] and their times [s].
   std::vector<std::pair<double, Eigen::VectorXd>> deviation_history_;

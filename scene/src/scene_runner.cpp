@@ -202,7 +202,7 @@ class SceneRun {
           c.placed.push_back(placed);
           // A coupled free object is in the body's solve through coupled_ instead.
           if (!monolithic || o.spec.motion != ObjectMotionKind::free)
-            obstacles.push_back({detail::make_shape(o.spec), placed});
+            obstacles.push_back({detail::make_shape(o.spec), placed, fmt::format("object '{}'", o.spec.name)});
         }
         c.objects = std::make_shared<ContactPotential>(nodes, areas, std::move(obstacles), parameters);
         body.layer().problem.potentials.push_back(c.objects);
@@ -239,7 +239,7 @@ class SceneRun {
                                                      model.faces);
           c.other.push_back(static_cast<int>(o));
           c.surfaces.push_back(mesh);
-          obstacles.push_back({mesh, nullptr});
+          obstacles.push_back({mesh, nullptr, fmt::format("body '{}'", bodies_[o]->name())});
         }
         c.bodies = std::make_shared<ContactPotential>(nodes, areas, std::move(obstacles), parameters);
         body.layer().problem.potentials.push_back(c.bodies);
@@ -308,6 +308,8 @@ class SceneRun {
     groups_ += static_cast<long>(groups.size());
     if (coupled_) free_->account_coupled(coupled_->finish_step(), t1, coupled_->take_seconds());
     commit_objects(t1);
+    for (std::size_t b = 0; b < bodies_.size(); ++b)
+      if (bodies_[b]->soft()) detail::record_dent(*bodies_[b], contact_[b], t1);
   }
 
   /// The friction the free objects exerted on the bodies' skins in their step, as loads on the contact nodes
@@ -488,6 +490,11 @@ class SceneRun {
                           {"max_force_n", st.max_force},
                           {"max_force_time_s", st.max_force_time},
                           {"seconds", st.seconds}};
+        if (std::string(label) == "objects" && c.dent.near_vertices > 0) {
+          contact[label]["dent_mm"] = 1e3 * c.dent.dent;
+          contact[label]["spread_mm"] = 1e3 * c.dent.spread;
+          contact[label]["dent_time_s"] = c.dent.time;
+        }
         (std::string(label) == "objects" ? object_seconds : body_seconds) += st.seconds;
         total.broad_phase_passes += st.broad_phase_passes;
         total.narrow_phase_evaluations += st.narrow_phase_evaluations;

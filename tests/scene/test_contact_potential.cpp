@@ -151,35 +151,50 @@ TEST(ContactPotential, BroadPhaseDropsFarNodes) {
   EXPECT_GT(potential.evaluate(0, {0.0, 0.0, 0.0995}, nullptr, nullptr), 0.0);
 }
 
-// A node 5 mm deep is rejected (tolerance 1 mm) and gets ×4 stiffness; after max_refinements the
-// substep is accepted and counted as unresolved.
-TEST(ContactPotential, AcceptRejectsTooDeepNodesAndRaisesStiffness) {
+// A node 5 mm deep is rejected (tolerance 1 mm) and gets ×4 stiffness; after max_refinements the substep is
+// refused for good: counted as unresolved, with one line naming the obstacle, the node and the time, and nothing
+// committed. A substep within the tolerance is then accepted with its forces.
+TEST(ContactPotential, AcceptRejectsTooDeepNodesRaisesStiffnessAndThenRefusesForGood) {
   auto plane = std::make_shared<HalfSpace>(Eigen::Vector3d::UnitZ(), 0.0);
   ContactParameters parameters;
   parameters.max_refinements = 2;
-  ContactPotential potential({0, 1}, {}, {{plane, nullptr}}, parameters);
+  ContactPotential potential({0, 1}, {}, {{plane, nullptr, "object 'floor'"}}, parameters);
   const RowMatrixX3d p = rows({{0.0, 0.0, -0.005}, {0.1, 0.0, -0.0005}});
   const double k0 = potential.node_stiffness(0);
   ASSERT_TRUE(potential.begin_substep(0.0, 0.01, p, p));
   ASSERT_EQ(potential.candidates().size(), 2u);
   EXPECT_FALSE(potential.accept_substep(p));
+  EXPECT_TRUE(potential.unresolved().empty());  // a refinement, not a refusal
   EXPECT_DOUBLE_EQ(potential.node_stiffness(0), 4.0 * k0);
   EXPECT_DOUBLE_EQ(potential.node_stiffness(1), k0);  // within tolerance: unchanged
   EXPECT_EQ(potential.stats().refinements, 1);
   ASSERT_TRUE(potential.begin_substep(0.0, 0.01, p, p));  // the retry keeps the raised stiffness
   EXPECT_DOUBLE_EQ(potential.node_stiffness(0), 4.0 * k0);
   EXPECT_FALSE(potential.accept_substep(p));
-  EXPECT_TRUE(potential.accept_substep(p));  // max_refinements reached: accepted, unresolved
-  const ContactStats s = potential.stats();
+  EXPECT_FALSE(potential.accept_substep(p));  // max_refinements reached: refused for good
+  const std::string why = potential.unresolved();
+  EXPECT_NE(why.find("object 'floor'"), std::string::npos) << why;
+  EXPECT_NE(why.find("skin node 0"), std::string::npos) << why;
+  EXPECT_NE(why.find("5.00 mm"), std::string::npos) << why;
+  EXPECT_NE(why.find("t = 0.01"), std::string::npos) << why;
+  ContactStats s = potential.stats();
   EXPECT_EQ(s.refinements, 2);
   EXPECT_EQ(s.unresolved, 1);
+  EXPECT_EQ(s.accepted, 0);
+  EXPECT_EQ(s.max_penetration, 0.0);  // nothing committed
+  EXPECT_EQ(potential.contact_force().cwiseAbs().maxCoeff(), 0.0);
+  // The ladder's smaller substep from the same start, now within the tolerance: accepted with its forces.
+  const RowMatrixX3d q = rows({{0.0, 0.0, -0.0008}, {0.1, 0.0, -0.0005}});
+  ASSERT_TRUE(potential.begin_substep(0.0, 0.005, q, q));
+  EXPECT_TRUE(potential.accept_substep(q));
+  EXPECT_TRUE(potential.unresolved().empty());
+  s = potential.stats();
   EXPECT_EQ(s.accepted, 1);
-  EXPECT_NEAR(s.max_penetration, 0.005, 1e-15);
-  EXPECT_NEAR(potential.penetration()(0), 0.005, 1e-15);
-  // Forces: −∇u on the nodes, the opposite on the obstacle.
-  const double k = potential.node_stiffness(0);
-  EXPECT_NEAR(potential.contact_force()(0, 2), k * 0.006, 1e-9);
-  EXPECT_NEAR(potential.obstacle_force(0).z(), -(k * 0.006 + k0 * 0.0015), 1e-9);
+  EXPECT_NEAR(s.max_penetration, 0.0008, 1e-15);
+  const double k = potential.node_stiffness(0);  // the raised stiffness is kept
+  EXPECT_DOUBLE_EQ(k, 16.0 * k0);
+  EXPECT_NEAR(potential.contact_force()(0, 2), k * 0.0018, 1e-9);
+  EXPECT_NEAR(potential.obstacle_force(0).z(), -(k * 0.0018 + k0 * 0.0015), 1e-9);
   EXPECT_GT(s.seconds, 0.0);
 }
 

@@ -18,7 +18,8 @@ using sflsh::testing::write_scene;
 constexpr const char* kBody = "[[body]]\nname = \"a\"\nmotion = \"rest\"\n";
 
 TEST(SceneFile, ShippedScenesParse) {
-  for (const char* name : {"belly_press", "two_bodies_push", "crowd", "skinning_only", "push_sway"}) {
+  for (const char* name :
+       {"belly_press", "thigh_press", "arm_press", "two_bodies_push", "crowd", "skinning_only", "push_sway"}) {
     SCOPED_TRACE(name);
     const Scene scene = load_scene(std::filesystem::path(SFLSH_DATA_DIR) / "scenes" / (std::string(name) + ".toml"));
     EXPECT_EQ(scene.name, name);

@@ -9,6 +9,7 @@
 
 #include <Eigen/Core>
 
+#include <string>
 #include <vector>
 
 namespace sflsh::model {
@@ -41,6 +42,11 @@ class NodePotential {
   /// again from the same start; integrators do so at most `max_refinements()` times.
   virtual bool accept_substep(const meshing::RowMatrixX3d& p_end) = 0;
   virtual int max_refinements() const { return 4; }
+  /// Why the last accept_substep refused a substep no refinement can fix any more (its refinements are used up and
+  /// the result is still over its tolerance, or not finite), in one line naming the object and the time; empty when
+  /// it accepted or asked for a refinement. The integrator then fails the substep with this reason: its ladder
+  /// tries smaller substeps, and a step that still fails stops the run with it (never a silent, kept violation).
+  virtual std::string unresolved() const { return {}; }
 };
 
 }  // namespace sflsh::model

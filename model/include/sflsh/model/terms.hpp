@@ -148,6 +148,8 @@ class PotentialTerm final : public Term {
   /// accept_substep of every active potential at the new state (all see the result).
   bool accept(const Eigen::VectorXd& x_new) const;
   int max_refinements() const;
+  /// The first active potential's unresolved() after accept() refused (empty: none refused for good).
+  std::string unresolved() const;
   double value(const Eigen::VectorXd& x) const override;
   bool add_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& g) const override;
   bool add_hessian(const Eigen::VectorXd& x, HessianSink& sink) const override;

@@ -9,7 +9,7 @@
 //   φ_k(i) = ψ(d(i, c_k) / ρ),   ψ(r) = (1 − r)⁴ (4r + 1) for r < 1, else 0      (Wendland's C² function),
 // with d the shortest path along the layer's edges (rest lengths, so the bump does not jump a gap between body
 // parts) and ρ = radius_factor · h; φ_k = 0 on attached nodes. The enriched subspace is [B  Φ] (local_subspace()),
-// and the tets the bumps touch are where the elastic energy is integrated exactly (local_correction.hpp).
+// and the tets the bumps touch are where the elastic energy is integrated exactly (local_elastic.hpp).
 #include <sflsh/model/problem.hpp>
 #include <sflsh/reduced/subspace.hpp>
 

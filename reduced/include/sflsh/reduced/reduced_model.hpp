@@ -67,4 +67,11 @@ int resolved_cubature_count(const ReducedModelOptions& options);
 /// The template problem the cubature is fitted on: template nodes and tets, isotropic default tissue.
 model::Problem template_problem(const model::BodyLayer& layer);
 
+/// The model's cubature fitted again with the tets `excluded` left out (ascending; those a local patch integrates
+/// exactly, local_basis.hpp): points and weights for the energy of the other tets alone, chosen as
+/// build_reduced_model chooses them for `requested` (exact, a count, or auto with its coverage). Tet indices are the
+/// layer's; no excluded tet is a point.
+Cubature cubature_outside(const model::BodyLayer& layer, const Subspace& subspace, const ReducedModelOptions& requested,
+                          const std::vector<int>& excluded);
+
 }  // namespace sflsh::reduced

@@ -53,6 +53,8 @@ class ReducedPotentials {
   /// accept_substep of the active potentials at q; false when one refused (and stiffened).
   bool accept(const Eigen::VectorXd& q, const ReducedInertia& inertia, const DeviationFrame* root = nullptr);
   int max_refinements() const;
+  /// The first potential's unresolved() reason after accept() refused (empty: none refused for good).
+  std::string unresolved() const;
 
  private:
   struct Term {

@@ -23,7 +23,7 @@
 #include <sflsh/reduced/cubature_elastic.hpp>
 #include <sflsh/reduced/cubature_guard.hpp>
 #include <sflsh/reduced/local_basis.hpp>
-#include <sflsh/reduced/local_correction.hpp>
+#include <sflsh/reduced/local_elastic.hpp>
 #include <sflsh/reduced/reduced_inertia.hpp>
 #include <sflsh/reduced/reduced_potentials.hpp>
 #include <sflsh/reduced/reduced_terms.hpp>
@@ -77,8 +77,9 @@ struct ReducedOptions {
   /// Unknowns solved in the same Newton solve (coupled_system.hpp: e.g. free rigid objects on the skin), not
   /// owned; x = [q; y], or [q; θ; τ; y] with a tracking root. Null: none.
   CoupledSystem* coupled = nullptr;
-  /// Local bumps for contact (local_basis.hpp), not owned: the solver's subspace becomes [B  Φ], q = [t; e], and the
-  /// tets the bumps touch are integrated exactly (local_correction.hpp). Null: the handles alone.
+  /// A local patch for contact (local_basis.hpp), not owned: the solver's subspace becomes [B  Φ], q = [t; e], and the
+  /// tets the local functions touch are integrated exactly (local_elastic.hpp); the cubature must then be fitted
+  /// without them (reduced_model.hpp, cubature_outside). Null: the handles alone.
   const LocalBasis* local = nullptr;
 };
 
@@ -202,8 +203,11 @@ class ReducedSolver final : public model::BodySolver {
   bool newton(const Substep& s, Eigen::VectorXd& q, double phi, model::StepStats& stats, std::string& reason);
   GuardOutcome check_guard(const Substep& s, const Eigen::VectorXd& q, int& enlargements, model::StepStats& stats,
                            std::string& reason);
-  /// Whether the node potentials and the coupled system accept q (or refinements are exhausted): the substep ends.
-  bool contact_settled(const Substep& s, const Eigen::VectorXd& q, int refinement, model::StepStats& stats);
+  /// Whether the node potentials and the coupled system accept q (settled: the substep ends), stiffened themselves
+  /// (refine: solved again), or refuse it for good (failed, with the potential's reason: the ladder goes on).
+  enum class ContactOutcome { settled, refine, failed };
+  ContactOutcome contact_settled(const Substep& s, const Eigen::VectorXd& q, int refinement, model::StepStats& stats,
+                                 std::string& reason);
   void commit_substep(const Substep& s, const Eigen::VectorXd& q, model::StepStats& stats, int& startup);
   /// Newmark's p̈ at the inertia nodes for the current q and time (zero without inertia).
   Eigen::VectorXd initial_acceleration() const;
@@ -266,7 +270,7 @@ class ReducedSolver final : public model::BodySolver {
   std::unique_ptr<CoupledTerm> coupled_term_;
   std::unique_ptr<HeadTerm> inertia_head_, potential_head_;
   // Local bumps (options.local): their exact energy, on the head [t; e] of x with a root or a coupled system.
-  std::unique_ptr<LocalCorrectionTerm> local_term_;
+  std::unique_ptr<LocalElasticTerm> local_term_;
   std::unique_ptr<HeadTerm> local_head_;
 };
 

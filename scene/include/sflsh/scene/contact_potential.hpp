@@ -64,6 +64,7 @@ struct ContactStats {
 struct ContactObstacle {
   std::shared_ptr<Obstacle> shape;
   std::shared_ptr<RigidMotion> motion;
+  std::string name;  ///< how messages name it, e.g. "object 'ball'" (empty: "obstacle <index>")
 };
 
 /// Lumped (one third of the incident triangles') area per vertex [m²] of a triangle surface, e.g. the
@@ -86,6 +87,7 @@ class ContactPotential final : public model::NodePotential {
   double evaluate(int c, const Eigen::Vector3d& p, Eigen::Vector3d* gradient, Eigen::Matrix3d* hessian) const override;
   bool accept_substep(const meshing::RowMatrixX3d& p_end) override;
   int max_refinements() const override { return parameters_.max_refinements; }
+  std::string unresolved() const override { return unresolved_; }
 
   const ContactParameters& parameters() const { return parameters_; }
   const std::vector<ContactObstacle>& obstacles() const { return obstacles_; }
@@ -110,14 +112,17 @@ class ContactPotential final : public model::NodePotential {
   /// The state a step changes besides the results: the refinement factors and the deepest accepted
   /// penetration. Saved at a step's start and put back when the step is solved again (a scene's body-contact
   /// exchanges), so that every exchange starts from the same stiffness.
+  /// The maxima are put back too, so that they count accepted steps only (not an exchange's intermediate solves).
   struct Checkpoint {
     std::vector<double> factor;
-    double max_penetration = 0.0;
+    double max_penetration = 0.0, max_force = 0.0, max_force_time = 0.0;
   };
-  Checkpoint checkpoint() const { return {factor_, stats_.max_penetration}; }
+  Checkpoint checkpoint() const { return {factor_, stats_.max_penetration, stats_.max_force, stats_.max_force_time}; }
   void restore(const Checkpoint& c) {
     factor_ = c.factor;
     stats_.max_penetration = c.max_penetration;
+    stats_.max_force = c.max_force;
+    stats_.max_force_time = c.max_force_time;
   }
 
  private:
@@ -131,6 +136,7 @@ class ContactPotential final : public model::NodePotential {
   ContactParameters parameters_;
 
   std::vector<double> factor_;       ///< per entry: refinement factor on k (1 until raised)
+  std::string unresolved_;           ///< unresolved(): why the last accept_substep refused for good
   std::vector<int> candidates_;      ///< entries of nodes() near an obstacle in this substep
   std::vector<std::uint64_t> mask_;  ///< per entry: the obstacles it is near (bit j)
   double t_end_ = 0.0;               ///< end time of the current substep
