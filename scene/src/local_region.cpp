@@ -67,7 +67,8 @@ std::vector<int> reached_nodes(const SceneBody& body, const std::vector<int>& no
         mark_reached(*shape, to_body(object.motion->pose(time_of(k))), at(k), options.reach, reached);
       continue;
     }
-    // A free object: along its ballistic path until it is in the skin (where it lands; it stays about there).
+    if (!options.free_objects) continue;
+    // A free object: along its ballistic path until it is in the skin (where it lands).
     const Pose start = object.motion->pose(0.0);
     for (int k = 0; k <= samples; ++k) {
       const double t = time_of(k);

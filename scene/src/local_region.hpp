@@ -11,9 +11,10 @@
 namespace sflsh::scene::detail {
 
 struct LocalRegionOptions {
-  double reach = 0.02;  ///< a node is reached when the object's φ at its skinned position is below this [m]
-  int samples = 120;    ///< times sampled over the scene (at most; every frame when fewer)
+  double reach = 0.005;  ///< a node is reached when the object's φ at its skinned position is below this [m]
+  int samples = 120;     ///< times sampled over the scene (at most; every frame when fewer)
   Eigen::Vector3d gravity = Eigen::Vector3d::Zero();  ///< the free objects' [m/s²], world
+  bool free_objects = false;  ///< also where free objects land (off: fixed and prescribed objects only)
 };
 
 /// Entries of `nodes` (ascending mesh nodes) an object reaches, for a body placed by `body_from_world`.

@@ -95,12 +95,19 @@ std::vector<int> SceneBody::contact_nodes() const {
   return nodes;
 }
 
-void SceneBody::set_local_region(std::vector<int> nodes, const reduced::LocalBasisOptions& options) {
+void SceneBody::set_local_region(std::vector<int> nodes, const reduced::LocalBasisOptions& options, int max_nodes) {
   require(solver_ == SolverKind::reduced, "scene body '{}': local bumps need the reduced solver", name());
   local_.reset();
   if (nodes.empty()) return;
   reduced::LocalBasis local = reduced::local_basis(layer_->problem, nodes, options);
   if (local.size() == 0) return;
+  if (local.size() > max_nodes) {
+    logger()->warn(
+        "scene body '{}': a local patch of {} nodes (over local_max_nodes = {}) would make every Newton "
+        "step a dense solve of {} coordinates; contact is resolved by the handles alone (docs/contact.md)",
+        name(), local.size(), max_nodes, 3 * local.size());
+    return;
+  }
   const std::string what = local.spacing > 0.0
                                ? fmt::format("{} local bumps {:.0f} mm apart", local.size(), 1000.0 * local.spacing)
                                : fmt::format("{} free nodes", local.size());

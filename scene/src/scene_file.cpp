@@ -190,10 +190,11 @@ class SceneReader : public TomlReader {
 
   void read_contact(const toml::node& node, ContactSpec& contact) const {
     const toml::table& t = table(node, "contact");
-    check_keys(t,
-               {"stiffness", "tolerance", "margin", "max_refinements", "max_exchanges", "exchange_tolerance",
-                "body_exchange", "object_coupling", "local_resolution", "local_spacing", "local_depth", "local_reach"},
-               " in [contact]");
+    check_keys(
+        t,
+        {"stiffness", "tolerance", "margin", "max_refinements", "max_exchanges", "exchange_tolerance", "body_exchange",
+         "object_coupling", "local_resolution", "local_spacing", "local_depth", "local_reach", "local_free_objects"},
+        " in [contact]");
     if (const toml::node* n = t.get("stiffness")) contact.stiffness = non_negative(*n, "stiffness", " in [contact]");
     if (const toml::node* n = t.get("tolerance")) contact.tolerance = positive(*n, "tolerance", " in [contact]");
     if (const toml::node* n = t.get("margin")) contact.margin = non_negative(*n, "margin", " in [contact]");
@@ -215,6 +216,10 @@ class SceneReader : public TomlReader {
       contact.local_depth = non_negative(*n, "local_depth", " in [contact]");
     if (const toml::node* n = t.get("local_reach"))
       contact.local_reach = non_negative(*n, "local_reach", " in [contact]");
+    if (const toml::node* n = t.get("local_free_objects"))
+      contact.local_free_objects = boolean(*n, "local_free_objects", " in [contact]");
+    if (const toml::node* n = t.get("local_max_nodes"))
+      contact.local_max_nodes = count(*n, "local_max_nodes", " in [contact]", 0);
   }
 
   void read_output(const toml::node& node, OutputSpec& output) const {

@@ -83,7 +83,7 @@ class SceneBody {
   void set_coupled(reduced::CoupledSystem* coupled) { coupled_ = coupled; }
   /// Reduced bodies: local bumps around these layer nodes (the skin objects reach, local_region.hpp), set before
   /// start(); the solver's subspace becomes [B  Φ] (reduced/local_basis.hpp).
-  void set_local_region(std::vector<int> nodes, const reduced::LocalBasisOptions& options);
+  void set_local_region(std::vector<int> nodes, const reduced::LocalBasisOptions& options, int max_nodes);
   /// The local bumps in use (null without).
   const reduced::LocalBasis* local_basis() const { return local_ ? &*local_ : nullptr; }
   /// Builds the solver (after the potentials are in layer().problem.potentials).

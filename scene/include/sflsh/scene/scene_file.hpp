@@ -147,7 +147,13 @@ struct ContactSpec {
   bool local_resolution = true;
   double local_spacing = 0.0;  ///< [m] between the bumps' centres; 0: every node of the region is free (a patch)
   double local_depth = 0.04;   ///< [m] nodes up to this far (along the mesh) from the reached skin nodes
-  double local_reach = 0.02;   ///< [m] a skin node is reached when an object comes this close to it (skinned)
+  double local_reach = 0.005;  ///< [m] a skin node is reached when an object comes this close to it (skinned)
+  /// The largest patch [nodes]: its coordinates join the dense Newton solve (3 per node), so a larger one (a body
+  /// lying on a floor) keeps the handles alone, with a warning.
+  int local_max_nodes = 400;
+  /// Also a patch where free objects land (off by default: a 2 kg ball sinks 17 cm into the full-space belly, deeper
+  /// than a patch around its landing holds, and rolls off it; docs/contact.md).
+  bool local_free_objects = false;
 };
 
 /// The paper's Fig. 1: `count` avatars with random shapes, each with its own shape-dependent material.
