@@ -83,4 +83,18 @@ std::vector<int> reached_nodes(const SceneBody& body, const std::vector<int>& no
   return out;
 }
 
+void add_local_patch(SceneBody& body, const std::vector<int>& nodes, const Rigid& body_from_world,
+                     const std::vector<SceneObject>& objects, const ContactSpec& contact, double duration,
+                     const Eigen::Vector3d& gravity) {
+  LocalRegionOptions region;
+  region.reach = contact.local_reach;
+  region.free_objects = contact.local_free_objects;
+  region.gravity = gravity;
+  reduced::LocalBasisOptions patch;
+  patch.spacing = contact.local_spacing;
+  patch.depth = contact.local_depth;
+  body.set_local_region(reached_nodes(body, nodes, body_from_world, objects, duration, region), patch,
+                        contact.local_max_nodes);
+}
+
 }  // namespace sflsh::scene::detail

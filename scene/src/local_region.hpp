@@ -22,4 +22,10 @@ std::vector<int> reached_nodes(const SceneBody& body, const std::vector<int>& no
                                const std::vector<SceneObject>& objects, double duration,
                                const LocalRegionOptions& options);
 
+/// Gives a reduced body its local patch ([contact] local_*: reached_nodes, then SceneBody::set_local_region), before
+/// the body starts; `gravity` [m/s²] is the free objects'.
+void add_local_patch(SceneBody& body, const std::vector<int>& nodes, const Rigid& body_from_world,
+                     const std::vector<SceneObject>& objects, const ContactSpec& contact, double duration,
+                     const Eigen::Vector3d& gravity);
+
 }  // namespace sflsh::scene::detail

@@ -206,18 +206,10 @@ class SceneRun {
         }
         c.objects = std::make_shared<ContactPotential>(nodes, areas, std::move(obstacles), parameters);
         body.layer().problem.potentials.push_back(c.objects);
-        if (body.solver() == SolverKind::reduced && scene_.contact.local_resolution) {
-          detail::LocalRegionOptions region;
-          region.reach = scene_.contact.local_reach;
-          region.free_objects = scene_.contact.local_free_objects;
-          region.gravity = scene_.effects.gravity ? gravity_vector(scene_.effects) : Eigen::Vector3d::Zero();
-          reduced::LocalBasisOptions bumps;
-          bumps.spacing = scene_.contact.local_spacing;
-          bumps.depth = scene_.contact.local_depth;
-          body.set_local_region(detail::reached_nodes(body, nodes, body_from_world, objects_,
-                                                      std::max(frames_ - 1, 1) / scene_.fps, region),
-                                bumps, scene_.contact.local_max_nodes);
-        }
+        if (body.solver() == SolverKind::reduced && scene_.contact.local_resolution)
+          detail::add_local_patch(body, nodes, body_from_world, objects_, scene_.contact,
+                                  std::max(frames_ - 1, 1) / scene_.fps,
+                                  scene_.effects.gravity ? gravity_vector(scene_.effects) : Eigen::Vector3d::Zero());
         if (monolithic) {
           coupled_ = detail::make_coupled_objects(
               scene_, body, c, *free_, objects_,
