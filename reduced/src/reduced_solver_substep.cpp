@@ -240,10 +240,11 @@ bool ReducedSolver::factorize(const Substep& s, const Eigen::VectorXd& q, Eigen:
     *term.seconds += seconds_since(clock);
   }
   const auto clock = Clock::now();
-  factor_.compute(hessian);
+  // A local patch's block is a mesh's (sparse): factored by the Schur complement on the other coordinates.
+  factor_valid_ = local_term_ ? factor_.compute(hessian, handle_dofs(), subspace_.num_dofs() - handle_dofs())
+                              : factor_.compute(hessian);
   stats.solve_seconds += seconds_since(clock);
   ++stats.factorizations;
-  factor_valid_ = factor_.info() == Eigen::Success;
   factor_h_ = s.target.h_eff;
   factor_projection_ = s.projection;
   if (!factor_valid_) {

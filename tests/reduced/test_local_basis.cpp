@@ -6,6 +6,7 @@
 #include <sflsh/model/problem.hpp>
 #include <sflsh/reduced/local_basis.hpp>
 #include <sflsh/reduced/local_elastic.hpp>
+#include <sflsh/reduced/newton_factor.hpp>
 
 #include <Eigen/Eigenvalues>
 #include <gtest/gtest.h>
@@ -77,9 +78,11 @@ TEST_F(ReducedTermsFixture, LocalBumpsAreOneAtTheirCentresAndVanishOnAttachedNod
     EXPECT_GE(phi.col(k).minCoeff(), 0.0);
     for (int a : box.attached) EXPECT_EQ(phi(a, k), 0.0);
     // Compact support: nothing farther than ρ (straight-line distance ≤ path length).
-    for (int i = 0; i < p.num_nodes(); ++i)
-      if (phi(i, k) > 0.0)
+    for (int i = 0; i < p.num_nodes(); ++i) {
+      if (phi(i, k) > 0.0) {
         EXPECT_LT((p.rest.row(i) - p.rest.row(local.centres[static_cast<std::size_t>(k)])).norm(), local.radius);
+      }
+    }
   }
 }
 
@@ -132,6 +135,28 @@ TEST_F(ReducedTermsFixture, PatchAndCubatureOutsideItSumToTheFullSpaceEnergyWhen
   const double full = model::evaluate_elastic(p, positions, false).energy;
   const double reduced = handles.energy(Eigen::VectorXd(x.head(subspace.num_dofs()))) + term.energy(x);
   EXPECT_NEAR(reduced, full, 1e-10 * std::abs(full));
+}
+
+TEST(NewtonFactor, SchurComplementOnAPatchSolvesLikeTheDenseCholesky) {
+  // A positive definite H: dense "other" coordinates around a sparse, banded patch block in the middle.
+  const Eigen::Index n = 40, begin = 12, size = 21;
+  Eigen::MatrixXd a = testing::random_q(static_cast<int>(n * n), 1.0, 3).reshaped(n, n);
+  Eigen::MatrixXd h = a * a.transpose() + n * Eigen::MatrixXd::Identity(n, n);
+  for (Eigen::Index i = 0; i < size; ++i)
+    for (Eigen::Index j = 0; j < size; ++j)
+      if (std::abs(i - j) > 3) h(begin + i, begin + j) = 0.0;                            // the mesh's non-neighbours
+  h.block(begin, begin, size, size) += 4.0 * n * Eigen::MatrixXd::Identity(size, size);  // keeps it definite
+  const Eigen::VectorXd r = testing::random_q(static_cast<int>(n), 1.0, 4);
+  NewtonFactor dense, schur;
+  ASSERT_TRUE(dense.compute(h));
+  ASSERT_TRUE(schur.compute(h, begin, size));
+  const Eigen::VectorXd x = dense.solve(r), y = schur.solve(r);
+  EXPECT_LE((x - y).cwiseAbs().maxCoeff(), 1e-12 * x.cwiseAbs().maxCoeff());
+  EXPECT_LE((h * y - r).cwiseAbs().maxCoeff(), 1e-10 * r.cwiseAbs().maxCoeff());
+  // Not definite: refused either way.
+  h(0, 0) = -1e6;
+  EXPECT_FALSE(dense.compute(h));
+  EXPECT_FALSE(schur.compute(h, begin, size));
 }
 
 }  // namespace

@@ -24,6 +24,7 @@
 #include <sflsh/reduced/cubature_guard.hpp>
 #include <sflsh/reduced/local_basis.hpp>
 #include <sflsh/reduced/local_elastic.hpp>
+#include <sflsh/reduced/newton_factor.hpp>
 #include <sflsh/reduced/reduced_inertia.hpp>
 #include <sflsh/reduced/reduced_potentials.hpp>
 #include <sflsh/reduced/reduced_terms.hpp>
@@ -169,7 +170,7 @@ class ReducedSolver final : public model::BodySolver {
     double rate_dt = 0.0;
     int rate_steps = 0;
     model::PosedHistory history;
-    Eigen::LLT<Eigen::MatrixXd> factor;
+    NewtonFactor factor;
     bool factor_valid = false;
     double factor_h = 0.0;
     material::HessianProjection factor_projection = material::HessianProjection::kNone;
@@ -241,7 +242,7 @@ class ReducedSolver final : public model::BodySolver {
   bool has_drives_ = false;
   Eigen::VectorXd rest_state_;  ///< X (3N), the prescribed state of every t without drives
   // The reusable factorization and what it was computed for.
-  Eigen::LLT<Eigen::MatrixXd> factor_;
+  NewtonFactor factor_;  ///< dense, or by the Schur complement on a local patch
   bool factor_valid_ = false;
   double factor_h_ = 0.0;  ///< ĥ of the factorized Hessian
   material::HessianProjection factor_projection_ = material::HessianProjection::kNone;

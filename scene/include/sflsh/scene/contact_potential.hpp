@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <string>
 #include <vector>
 
 namespace sflsh::scene {
@@ -62,6 +63,9 @@ struct ContactStats {
 /// (and, for a TriangleMesh, the vertices) before each substep; otherwise begin_substep() sets the pose
 /// at the substep's end and accept_substep() commits the reaction force to it.
 struct ContactObstacle {
+  ContactObstacle() = default;
+  ContactObstacle(std::shared_ptr<Obstacle> shape_, std::shared_ptr<RigidMotion> motion_, std::string name_ = {})
+      : shape(std::move(shape_)), motion(std::move(motion_)), name(std::move(name_)) {}
   std::shared_ptr<Obstacle> shape;
   std::shared_ptr<RigidMotion> motion;
   std::string name;  ///< how messages name it, e.g. "object 'ball'" (empty: "obstacle <index>")
