@@ -40,7 +40,8 @@ bool NewtonFactor::compute(const Eigen::MatrixXd& hessian, Eigen::Index patch_be
     ok_ = false;
     return false;
   }
-  const std::vector<Eigen::Index> o = others(n, begin_, size_);
+  others_ = others(n, begin_, size_);
+  const std::vector<Eigen::Index>& o = others_;
   const auto m = static_cast<Eigen::Index>(o.size());
   coupling_.resize(size_, m);
   Eigen::MatrixXd schur(m, m);
@@ -59,7 +60,7 @@ bool NewtonFactor::compute(const Eigen::MatrixXd& hessian, Eigen::Index patch_be
 Eigen::VectorXd NewtonFactor::solve(const Eigen::VectorXd& r) const {
   if (size_ == 0) return dense_.solve(r);
   const Eigen::Index n = r.size();
-  const std::vector<Eigen::Index> o = others(n, begin_, size_);
+  const std::vector<Eigen::Index>& o = others_;
   Eigen::VectorXd r_other(static_cast<Eigen::Index>(o.size()));
   for (std::size_t k = 0; k < o.size(); ++k) r_other[static_cast<Eigen::Index>(k)] = r[o[k]];
   const Eigen::VectorXd y = patch_->solve(Eigen::VectorXd(r.segment(begin_, size_)));

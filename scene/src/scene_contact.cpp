@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <limits>
 #include <map>
+#include <string>
 
 namespace sflsh::scene::detail {
 
@@ -65,6 +66,37 @@ std::vector<vtk::Field> contact_fields(const BodyContact& c, const SceneBody& bo
     }
   }
   return {{"contact_force", force, false}, {"penetration", depth, false}};
+}
+
+nlohmann::json contact_summary(const BodyContact& c, ContactTally& tally) {
+  nlohmann::json contact = nlohmann::json::object();
+  for (const auto& [label, p] : {std::pair{"objects", c.objects.get()}, std::pair{"bodies", c.bodies.get()}}) {
+    if (!p) continue;
+    ++tally.potentials;
+    const ContactStats st = p->stats();
+    const bool objects = std::string(label) == "objects";
+    contact[label] = {{"broad_phase_passes", st.broad_phase_passes},
+                      {"candidates", st.candidates},
+                      {"narrow_phase_evaluations", st.narrow_phase_evaluations},
+                      {"refinements", st.refinements},
+                      {"unresolved", st.unresolved},
+                      {"max_penetration_mm", 1e3 * st.max_penetration},
+                      {"max_force_n", st.max_force},
+                      {"max_force_time_s", st.max_force_time},
+                      {"seconds", st.seconds}};
+    if (objects && c.dent.near_vertices > 0) {
+      contact[label]["dent_mm"] = 1e3 * c.dent.dent;
+      contact[label]["spread_mm"] = 1e3 * c.dent.spread;
+      contact[label]["dent_time_s"] = c.dent.time;
+    }
+    (objects ? tally.object_seconds : tally.body_seconds) += st.seconds;
+    tally.total.broad_phase_passes += st.broad_phase_passes;
+    tally.total.narrow_phase_evaluations += st.narrow_phase_evaluations;
+    tally.total.max_penetration = std::max(tally.total.max_penetration, st.max_penetration);
+  }
+  tally.body_seconds += c.surface_seconds;
+  if (!contact.empty()) contact["measured_max_penetration_mm"] = 1e3 * c.max_penetration;
+  return contact;
 }
 
 void record_dent(const SceneBody& body, BodyContact& contact, double t) {

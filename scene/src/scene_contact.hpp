@@ -9,6 +9,8 @@
 #include <sflsh/scene/node_loads.hpp>
 #include <sflsh/scene/obstacle.hpp>
 
+#include <nlohmann/json.hpp>
+
 #include <memory>
 #include <vector>
 
@@ -42,6 +44,17 @@ struct BodyContact {
   const CoupledObjects* coupled = nullptr;  ///< free objects in this body's solve (their push on the nodes), or null
   Dent dent;                                ///< of the object potential's obstacles
 };
+
+/// Sums over the bodies' potentials for the scene summary.
+struct ContactTally {
+  double object_seconds = 0.0, body_seconds = 0.0;  ///< object and body contact, the latter with the surface updates
+  long potentials = 0;
+  ContactStats total;  ///< broad-phase passes, narrow-phase evaluations, deepest penetration
+};
+
+/// summary.json "contact" of one soft body (empty without potentials): per potential its counters, largest
+/// penetration and force, and for the objects the dent (Dent); adds to `tally`.
+nlohmann::json contact_summary(const BodyContact& contact, ContactTally& tally);
 
 /// Updates `contact.dent` when the object potential's largest force grew in the step that ended at t.
 void record_dent(const SceneBody& body, BodyContact& contact, double t);

@@ -420,6 +420,36 @@ class SceneRun {
   }
 
   // --- summary -------------------------------------------------------------------------------------------
+  /// summary.json "effects": the effects that ran, with their time and share of the stepping loop.
+  nlohmann::json effects_summary(double loop_seconds, bool solved, const detail::ContactTally& tally) const {
+    const Effects& e = scene_.effects;
+    nlohmann::json ran = nlohmann::json::array();
+    auto entry = [&](const char* name, double seconds, const char* note) {
+      nlohmann::json j = {
+          {"name", name}, {"seconds", seconds}, {"share", loop_seconds > 0 ? seconds / loop_seconds : 0.0}};
+      if (note && *note) j["note"] = note;
+      ran.push_back(j);
+    };
+    entry("skinning", output_->skinning_seconds(),
+          "posing the skinned bodies (soft bodies' skinning is inside their solves)");
+    if (solved) {
+      entry("elasticity", seconds_.elasticity, "the soft layers' solves without their mass and contact terms");
+      if (e.inertia)
+        entry("inertia", seconds_.inertia, e.gravity ? "the mass terms, gravity included" : "the mass terms");
+      else if (e.gravity)
+        entry("gravity", seconds_.inertia, "the mass terms of gravity");
+      if (e.inertia && e.gravity) entry("gravity", 0.0, "inside the inertia terms");
+    }
+    if (e.object_contact && tally.potentials > 0)
+      entry("object_contact", tally.object_seconds, "broad phase, penalty terms, acceptance");
+    if (!free_->empty())
+      entry("free_objects", free_->seconds(),
+            free_->coupled() ? "the rigid objects' terms in the body's solve" : "the rigid objects' implicit solves");
+    if (e.body_contact && tally.potentials > 0)
+      entry("body_contact", tally.body_seconds, "other bodies' surfaces (trees), penalty terms");
+    return ran;
+  }
+
   nlohmann::json make_summary(double setup_seconds, double loop_seconds, double total_seconds, double h) const {
     nlohmann::json s = options_.header.is_object() ? options_.header : nlohmann::json::object();
     s["scene"] = {{"file", scene_.file.string()},
@@ -434,9 +464,8 @@ class SceneRun {
                               {"object_contact", e.object_contact},
                               {"body_contact", e.body_contact},
                               {"self_contact", false}};
-    double object_seconds = 0.0, body_seconds = 0.0;
-    long soft = 0, solved_steps = 0, potentials = 0;
-    ContactStats total;
+    long soft = 0, solved_steps = 0;
+    detail::ContactTally tally;
     nlohmann::json bodies = nlohmann::json::array();
     for (std::size_t b = 0; b < bodies_.size(); ++b) {
       const SceneBody& body = *bodies_[b];
@@ -469,35 +498,7 @@ class SceneRun {
         j["dynamics"] = output_->dynamics_summary(b);
         if (body.solver() == SolverKind::reduced) j["skeleton"] = body.skeleton_summary();
       }
-      nlohmann::json contact = nlohmann::json::object();
-      for (const auto& [label, p] : {std::pair{"objects", c.objects.get()}, std::pair{"bodies", c.bodies.get()}}) {
-        if (!p) continue;
-        ++potentials;
-        const ContactStats st = p->stats();
-        contact[label] = {{"broad_phase_passes", st.broad_phase_passes},
-                          {"candidates", st.candidates},
-                          {"narrow_phase_evaluations", st.narrow_phase_evaluations},
-                          {"refinements", st.refinements},
-                          {"unresolved", st.unresolved},
-                          {"max_penetration_mm", 1e3 * st.max_penetration},
-                          {"max_force_n", st.max_force},
-                          {"max_force_time_s", st.max_force_time},
-                          {"seconds", st.seconds}};
-        if (std::string(label) == "objects" && c.dent.near_vertices > 0) {
-          contact[label]["dent_mm"] = 1e3 * c.dent.dent;
-          contact[label]["spread_mm"] = 1e3 * c.dent.spread;
-          contact[label]["dent_time_s"] = c.dent.time;
-        }
-        (std::string(label) == "objects" ? object_seconds : body_seconds) += st.seconds;
-        total.broad_phase_passes += st.broad_phase_passes;
-        total.narrow_phase_evaluations += st.narrow_phase_evaluations;
-        total.max_penetration = std::max(total.max_penetration, st.max_penetration);
-      }
-      body_seconds += c.surface_seconds;
-      if (!contact.empty()) {
-        contact["measured_max_penetration_mm"] = 1e3 * c.max_penetration;
-        j["contact"] = contact;
-      }
+      if (nlohmann::json contact = detail::contact_summary(c, tally); !contact.empty()) j["contact"] = contact;
       bodies.push_back(j);
     }
     s["bodies"] = bodies;
@@ -512,42 +513,17 @@ class SceneRun {
     s["objects"] = objects;
     if (!free_->empty()) s["free_objects"] = free_->summary();
 
-    // The effects that ran, with their time and share of the stepping loop.
-    nlohmann::json ran = nlohmann::json::array();
-    auto entry = [&](const char* name, double seconds, const char* note) {
-      nlohmann::json j = {
-          {"name", name}, {"seconds", seconds}, {"share", loop_seconds > 0 ? seconds / loop_seconds : 0.0}};
-      if (note && *note) j["note"] = note;
-      ran.push_back(j);
-    };
-    entry("skinning", output_->skinning_seconds(),
-          "posing the skinned bodies (soft bodies' skinning is inside their solves)");
-    if (soft > 0 && solved_steps > 0) {
-      entry("elasticity", seconds_.elasticity, "the soft layers' solves without their mass and contact terms");
-      if (e.inertia)
-        entry("inertia", seconds_.inertia, e.gravity ? "the mass terms, gravity included" : "the mass terms");
-      else if (e.gravity)
-        entry("gravity", seconds_.inertia, "the mass terms of gravity");
-      if (e.inertia && e.gravity) entry("gravity", 0.0, "inside the inertia terms");
-    }
-    if (e.object_contact && potentials > 0)
-      entry("object_contact", object_seconds, "broad phase, penalty terms, acceptance");
-    if (!free_->empty())
-      entry("free_objects", free_->seconds(),
-            free_->coupled() ? "the rigid objects' terms in the body's solve" : "the rigid objects' implicit solves");
-    if (e.body_contact && potentials > 0)
-      entry("body_contact", body_seconds, "other bodies' surfaces (trees), penalty terms");
-    s["effects"] = ran;
+    s["effects"] = effects_summary(loop_seconds, soft > 0 && solved_steps > 0, tally);
     s["built"] = {{"soft_layers", soft},
                   {"skinned_bodies", static_cast<long>(bodies_.size()) - soft},
-                  {"contact_potentials", potentials},
-                  {"broad_phase_passes", total.broad_phase_passes},
-                  {"narrow_phase_evaluations", total.narrow_phase_evaluations}};
+                  {"contact_potentials", tally.potentials},
+                  {"broad_phase_passes", tally.total.broad_phase_passes},
+                  {"narrow_phase_evaluations", tally.total.narrow_phase_evaluations}};
     double measured = 0.0;
     for (const BodyContact& c : contact_) measured = std::max(measured, c.max_penetration);
-    if (potentials > 0)
+    if (tally.potentials > 0)
       s["contact"] = {{"tolerance_mm", 1e3 * scene_.contact.tolerance},
-                      {"max_penetration_mm", 1e3 * total.max_penetration},
+                      {"max_penetration_mm", 1e3 * tally.total.max_penetration},
                       {"measured_max_penetration_mm", 1e3 * measured},
                       {"measured_at", deepest_time_},
                       {"skeleton_response",

@@ -2,6 +2,7 @@
 // Scene files for the scene tests: written into a folder, and the message that loading one fails with.
 #include <sflsh/core/error.hpp>
 #include <sflsh/scene/scene_file.hpp>
+#include <sflsh/scene/scene_runner.hpp>
 
 #include <filesystem>
 #include <fstream>
@@ -25,6 +26,15 @@ inline std::string load_error(const std::filesystem::path& path) {
     return e.what();
   }
   return "";
+}
+
+/// Runs `text` as dir/scene.toml on one thread with the tests' cache; writes into dir/out when `write`.
+inline nlohmann::json run_scene_text(const std::filesystem::path& dir, const std::string& text, bool write = false) {
+  scene::SceneRunOptions options;
+  options.cache_dir = SFLSH_TEST_CACHE;
+  if (write) options.out = dir / "out";
+  options.threads = 1;
+  return scene::run_scene(scene::load_scene(write_scene(dir, text)), options);
 }
 
 }  // namespace sflsh::testing

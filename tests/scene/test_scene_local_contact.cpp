@@ -2,6 +2,7 @@
 // the belly press and a 2 cm thigh press on the coarse layer with the scene's default handles, compared by the
 // summary's largest contact force and dent (the mean soft-tissue displacement of the skin within 10 cm of the ball at
 // the step of the largest force, and 10–20 cm away); a contact that stays over its tolerance fails with one line.
+#include "scene_files.hpp"
 #include "scratch_dir.hpp"
 
 #include <sflsh/core/error.hpp>
@@ -15,17 +16,6 @@
 
 namespace sflsh::scene {
 namespace {
-
-nlohmann::json run_local(const std::filesystem::path& dir, const std::string& text, bool write = false) {
-  std::filesystem::create_directories(dir);
-  const auto path = dir / "scene.toml";
-  std::ofstream(path) << text;
-  SceneRunOptions options;
-  options.cache_dir = SFLSH_TEST_CACHE;
-  if (write) options.out = dir / "out";
-  options.threads = 1;
-  return run_scene(load_scene(path), options);
-}
 
 /// A ball of `radius` pressed from `start` to `press` in 0.4 s and held (`frames` at 60 fps), on the coarse layer with
 /// the scene's default handles; `contact` extra [contact] lines.
@@ -79,15 +69,16 @@ void expect_agreement(const PressDent& reduced, const PressDent& full, double sp
 TEST(SceneLocalContact, ReducedBellyPressAgreesWithTheFullSpaceModel) {
   const auto dir = testing::scratch_dir();
   const Eigen::Vector3d start(0.0, 0.06, 0.23), press(0.0, 0.06, 0.15);
-  const nlohmann::json reduced = run_local(dir / "reduced", press_scene("reduced", 0.06, start, press, 31));
-  const nlohmann::json full = run_local(dir / "full", press_scene("full", 0.06, start, press, 31));
+  const nlohmann::json reduced =
+      testing::run_scene_text(dir / "reduced", press_scene("reduced", 0.06, start, press, 31));
+  const nlohmann::json full = testing::run_scene_text(dir / "full", press_scene("full", 0.06, start, press, 31));
   SCOPED_TRACE(
       fmt::format("reduced {} / full {}", reduced["bodies"][0]["contact"].dump(), full["bodies"][0]["contact"].dump()));
   EXPECT_NE(reduced["bodies"][0]["model"].get<std::string>().find("free nodes"), std::string::npos);
   expect_agreement(dent_of(reduced), dent_of(full), 1.5);
   // The handles alone (the model before local resolution) push back about three times as hard.
-  const nlohmann::json handles =
-      run_local(dir / "handles", press_scene("reduced", 0.06, start, press, 31, "local_resolution = false"));
+  const nlohmann::json handles = testing::run_scene_text(
+      dir / "handles", press_scene("reduced", 0.06, start, press, 31, "local_resolution = false"));
   EXPECT_GT(dent_of(handles).force, 2.0 * dent_of(full).force);
 }
 
@@ -95,8 +86,9 @@ TEST(SceneLocalContact, ReducedBellyPressAgreesWithTheFullSpaceModel) {
 TEST(SceneLocalContact, ReducedThighPressOfTwoCentimetresAgreesWithTheFullSpaceModel) {
   const auto dir = testing::scratch_dir();
   const Eigen::Vector3d start(0.1, -0.2, 0.15), press(0.1, -0.2, 0.10);
-  const nlohmann::json reduced = run_local(dir / "reduced", press_scene("reduced", 0.04, start, press, 31));
-  const nlohmann::json full = run_local(dir / "full", press_scene("full", 0.04, start, press, 31));
+  const nlohmann::json reduced =
+      testing::run_scene_text(dir / "reduced", press_scene("reduced", 0.04, start, press, 31));
+  const nlohmann::json full = testing::run_scene_text(dir / "full", press_scene("full", 0.04, start, press, 31));
   SCOPED_TRACE(
       fmt::format("reduced {} / full {}", reduced["bodies"][0]["contact"].dump(), full["bodies"][0]["contact"].dump()));
   // Spread: 1.6× measured on a 0.1 mm spread (the handles carry the thigh a little); 2× keeps it from growing.
@@ -110,7 +102,7 @@ TEST(SceneLocalContact, AContactThatStaysOverItsToleranceFailsWithOneLine) {
   const std::string scene =
       press_scene("reduced", 0.06, {0.0, 0.06, 0.23}, {0.0, 0.06, 0.15}, 31, "stiffness = 10.0\nmax_refinements = 0");
   try {
-    run_local(dir, scene, true);
+    testing::run_scene_text(dir, scene, true);
     ADD_FAILURE() << "the run should have failed";
   } catch (const Error& e) {
     const std::string what = e.what();

@@ -1,6 +1,7 @@
 // Scenes end to end: effects on demand (nothing built that is not asked for, idle bodies not solved, an
 // inactive effect changes nothing), a ball pressed into the belly stops at the skin, two bodies pushed
 // together do not interpenetrate. Coarse layers, 30 handles, short clips.
+#include "scene_files.hpp"
 #include "scratch_dir.hpp"
 
 #include <sflsh/body/body_io.hpp>
@@ -19,14 +20,7 @@ namespace sflsh::scene {
 namespace {
 
 nlohmann::json run(const std::filesystem::path& dir, const std::string& text, bool write = false) {
-  std::filesystem::create_directories(dir);
-  const auto path = dir / "scene.toml";
-  std::ofstream(path) << text;
-  SceneRunOptions options;
-  options.cache_dir = SFLSH_TEST_CACHE;
-  if (write) options.out = dir / "out";
-  options.threads = 1;
-  return run_scene(load_scene(path), options);
+  return testing::run_scene_text(dir, text, write);
 }
 
 const nlohmann::json* effect(const nlohmann::json& summary, const std::string& name) {

@@ -12,6 +12,7 @@
 #include <Eigen/SparseCore>
 
 #include <memory>
+#include <vector>
 
 namespace sflsh::reduced {
 
@@ -27,6 +28,7 @@ class NewtonFactor {
  private:
   bool ok_ = false;
   Eigen::Index begin_ = 0, size_ = 0;
+  std::vector<Eigen::Index> others_;   ///< the coordinates outside the patch, ascending
   Eigen::LLT<Eigen::MatrixXd> dense_;  ///< H itself without a patch, else the Schur complement S
   /// L_C, made anew by each compute() and never changed after: copies (the solver's checkpoints) share it.
   std::shared_ptr<const Eigen::SimplicialLLT<Eigen::SparseMatrix<double>>> patch_;
