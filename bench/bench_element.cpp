@@ -2,6 +2,8 @@
 // PSD projection) on one thread, for deformations of a given strain size (random F = I + ε G). These are the
 // inner loops of both solvers' assembly; the table says what a Newton iteration costs per element.
 // Usage: bench_element [--tets 20000] [--strain 0.05] [--repeat 5] [--out bench_element.json]
+#include "bench_options.hpp"
+
 #include <sflsh/core/scoped_seconds.hpp>
 #include <sflsh/core/summary.hpp>
 #include <sflsh/material/orthotropic_fung.hpp>
@@ -12,29 +14,41 @@
 
 #include <chrono>
 #include <iostream>
+#include <optional>
 #include <random>
 #include <string>
 
-int main(int argc, char** argv) {
-  using namespace sflsh::material;
+namespace {
+
+struct ElementOptions {
   int count = 20000, repeat = 5;
   double strain = 0.05;
   std::string out = "bench_element.json";
-  for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string key = argv[i];
-    if (key == "--tets")
-      count = std::stoi(argv[i + 1]);
-    else if (key == "--strain")
-      strain = std::stod(argv[i + 1]);
-    else if (key == "--repeat")
-      repeat = std::stoi(argv[i + 1]);
-    else if (key == "--out")
-      out = argv[i + 1];
-    else {
-      std::cerr << "bench_element: unknown option " << key << "\n";
-      return 2;
-    }
-  }
+};
+
+/// Reads the command line into `o`; nothing to run, otherwise the exit status (bench_options.hpp).
+std::optional<int> parse_options(int argc, char** argv, ElementOptions& o) {
+  CLI::App app{
+      "Cost per tet of the orthotropic StVK–Fung element kernels (energy, gradient, Hessian with each PSD "
+      "projection) on one thread, for random deformations F = I + ε G.",
+      "bench_element"};
+  sflsh::bench::use_bench_defaults(app);
+  app.add_option("--tets", o.count, "Random deformed tets each kernel runs over");
+  app.add_option("--strain", o.strain, "Strain size ε of the deformations (G has standard normal entries)");
+  app.add_option("--repeat", o.repeat, "Passes over the tets per kernel; the fastest is reported");
+  app.add_option("--out", o.out, "JSON file of the results");
+  return sflsh::bench::parse_command_line(app, argc, argv);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace sflsh::material;
+  ElementOptions o;
+  if (const std::optional<int> status = parse_options(argc, argv, o)) return *status;
+  const int count = o.count, repeat = o.repeat;
+  const double strain = o.strain;
+  const std::string& out = o.out;
   std::mt19937 rng(7);
   std::normal_distribution<double> normal(0.0, 1.0);
   TetNodes rest_nodes;

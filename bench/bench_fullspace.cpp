@@ -10,6 +10,7 @@
 //        bench_fullspace --block 10x10x3,20x20x6,40x40x12,80x80x24 [--pcs icc,gamg,hypre,automatic]
 //                        [--procs 1,2] [--threads 1] [--steps 6] [--runs 3] [--verify-args "PETSC OPTIONS"]
 //                        [--out bench_fullspace_block.json]
+#include "bench_options.hpp"
 #include "fullspace_block.hpp"
 
 #include <sflsh/core/summary.hpp>
@@ -22,24 +23,14 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <filesystem>
-#include <functional>
 #include <iostream>
 #include <map>
-#include <sstream>
+#include <optional>
 
 namespace {
 
 using namespace sflsh;
-
-std::vector<std::string> split(const std::string& csv) {
-  std::vector<std::string> out;
-  std::stringstream stream(csv);
-  for (std::string item; std::getline(stream, item, ',');)
-    if (!item.empty()) out.push_back(item);
-  return out;
-}
 
 /// Least-squares slope of log(y) against log(x).
 double loglog_slope(const std::vector<double>& x, const std::vector<double>& y) {
@@ -67,7 +58,7 @@ double median_seconds_per_step(const nlohmann::json& summary) {
 
 /// --block: the driven block against FEBio (fullspace_block.hpp); returns the exit code.
 int run_block_mode(bench::BlockOptions o, const std::string& block, const std::string& procs, std::string out) {
-  for (const std::string& c : split(block)) {
+  for (const std::string& c : bench::split_list(block)) {
     std::array<int, 3> cells{};
     if (std::sscanf(c.c_str(), "%dx%dx%d", &cells[0], &cells[1], &cells[2]) != 3 || cells[0] < 1 || cells[1] < 1 ||
         cells[2] < 1) {
@@ -76,7 +67,7 @@ int run_block_mode(bench::BlockOptions o, const std::string& block, const std::s
     }
     o.cells.push_back(cells);
   }
-  for (const std::string& p : split(procs)) o.procs.push_back(std::stoi(p));
+  o.procs = bench::split_ints(procs);
   o.scratch = std::filesystem::temp_directory_path() / fmt::format("bench_fullspace_block_{}", ::getpid());
   const nlohmann::json rows = bench::run_block_table(o);
   std::filesystem::remove_all(o.scratch);
@@ -102,34 +93,39 @@ struct Arguments {
   int block_threads = 1, block_steps = 6, block_runs = 3;
 };
 
-/// Reads the options (pairs of name and value); false after a message on an unknown one.
-bool parse_arguments(int argc, char** argv, Arguments& a) {
-  const std::map<std::string, std::function<void(const char*)>> setters = {
-      {"--block", [&](const char* v) { a.block = v; }},
-      {"--verify-args", [&](const char* v) { a.verify_args = v; }},
-      {"--pcs", [&](const char* v) { a.pcs = v; }},
-      {"--threads", [&](const char* v) { a.block_threads = std::stoi(v); }},
-      {"--steps", [&](const char* v) { a.block_steps = std::stoi(v); }},
-      {"--runs", [&](const char* v) { a.block_runs = std::stoi(v); }},
-      {"--sflsh", [&](const char* v) { a.sflsh_path = v; }},
-      {"--out", [&](const char* v) { a.out = v; }},
-      {"--sizes", [&](const char* v) { a.sizes = v; }},
-      {"--procs", [&](const char* v) { a.procs = v; }},
-      {"--frames", [&](const char* v) { a.frames = std::stoi(v); }},
-      {"--subject", [&](const char* v) { a.subject = v; }},
-      {"--motion", [&](const char* v) { a.motion = v; }},
-      {"--mesher", [&](const char* v) { a.mesher = v; }},
-      {"--integrators", [&](const char* v) { a.integrators = v; }},
-      {"--masses", [&](const char* v) { a.masses = v; }}};
-  for (int i = 1; i + 1 < argc; i += 2) {
-    const auto setter = setters.find(argv[i]);
-    if (setter == setters.end()) {
-      std::cerr << "bench_fullspace: unknown option " << argv[i] << "\n";
-      return false;
-    }
-    setter->second(argv[i + 1]);
-  }
-  return true;
+/// Reads the command line into `a`; nothing to run, otherwise the exit status (bench_options.hpp).
+std::optional<int> parse_arguments(int argc, char** argv, Arguments& a) {
+  CLI::App app{
+      "Seconds per 1/60 s step of the full-space solver on the body layer per size, process count, "
+      "integrator and mass (`sflsh simulate --solver full --no-output` runs); with --block, the driven "
+      "block against FEBio (`sflsh verify` runs).",
+      "bench_fullspace"};
+  bench::use_bench_defaults(app);
+  app.add_option("--sflsh", a.sflsh_path, "The sflsh executable");
+  app.add_option("--out", a.out,
+                 "JSON file of the results (with --block, the default becomes bench_fullspace_block.json)");
+  app.add_option("--procs", a.procs, "MPI process counts, comma-separated (mpiexec -n P for P > 1)")
+      ->check(bench::int_list());
+  app.add_option("--sizes", a.sizes, "Layer resolutions, comma-separated: coarse | default | fine");
+  app.add_option("--frames", a.frames, "Steps of 1/60 s per run (sflsh simulate --frames N+1)");
+  app.add_option("--subject", a.subject, "Named subject (data/open_body_subjects.toml)");
+  app.add_option("--motion", a.motion, "Procedural motion (sflsh motion list)");
+  app.add_option("--mesher", a.mesher, "Layer mesher: layered | cgal | gmsh");
+  app.add_option("--integrators", a.integrators, "Time integrators, comma-separated: backward_euler | bdf2 | newmark");
+  app.add_option("--masses", a.masses, "Mass kinds, comma-separated: lumped | consistent");
+  app.add_option("--block", a.block,
+                 "The driven block against FEBio instead: refinements as cells NXxNYxNZ, comma-separated "
+                 "(e.g. 10x10x3,20x20x6)");
+  app.add_option("--pcs", a.pcs, "--block: preconditioners (sflsh verify --preconditioner), comma-separated");
+  app.add_option("--threads", a.block_threads,
+                 "--block: assembly threads per process (1: strong scaling counts cores; 0: the cores divided among "
+                 "the processes)");
+  app.add_option("--steps", a.block_steps, "--block: steps of 1/60 s per run (the first is not counted)");
+  app.add_option("--runs", a.block_runs, "--block: runs of each configuration; the median is reported");
+  app.add_option("--verify-args", a.verify_args,
+                 "--block: PETSc options appended to every sflsh verify, in one argument (e.g. "
+                 "\"-snes_lag_preconditioner 1\")");
+  return bench::parse_command_line(app, argc, argv);
 }
 
 struct LayerRun {
@@ -203,10 +199,10 @@ int run_layer_mode(const Arguments& a) {
   // (procs, integrator, mass) → (tets, s/step)
   std::map<std::string, std::pair<std::vector<double>, std::vector<double>>> scaling;
   const auto scratch = std::filesystem::temp_directory_path() / fmt::format("bench_fullspace_{}", ::getpid());
-  for (const std::string& size : split(a.sizes))
-    for (const std::string& p : split(a.procs))
-      for (const std::string& integrator : split(a.integrators))
-        for (const std::string& mass : split(a.masses)) {
+  for (const std::string& size : bench::split_list(a.sizes))
+    for (const std::string& p : bench::split_list(a.procs))
+      for (const std::string& integrator : bench::split_list(a.integrators))
+        for (const std::string& mass : bench::split_list(a.masses)) {
           const nlohmann::json r = measure_layer_run(a, {size, integrator, mass, std::stoi(p)}, scratch);
           results.push_back(r);
           if (r.contains("error")) continue;
@@ -227,8 +223,8 @@ int run_layer_mode(const Arguments& a) {
                      {"motion", a.motion},
                      {"frames", a.frames},
                      {"mesher", a.mesher},
-                     {"integrators", split(a.integrators)},
-                     {"masses", split(a.masses)},
+                     {"integrators", bench::split_list(a.integrators)},
+                     {"masses", bench::split_list(a.masses)},
                      {"results", results},
                      {"scaling_exponent", exponents}});
   std::cout << "wrote " << a.out << "\n";
@@ -239,12 +235,12 @@ int run_layer_mode(const Arguments& a) {
 
 int main(int argc, char** argv) {
   Arguments a;
-  if (!parse_arguments(argc, argv, a)) return 2;
+  if (const std::optional<int> status = parse_arguments(argc, argv, a)) return *status;
   try {
     if (!a.block.empty()) {
       bench::BlockOptions o;
       o.sflsh = a.sflsh_path;
-      o.pcs = split(a.pcs);
+      o.pcs = bench::split_list(a.pcs);
       o.threads = a.block_threads;
       o.steps = a.block_steps;
       o.runs = a.block_runs;

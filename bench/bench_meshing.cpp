@@ -2,6 +2,8 @@
 // peak memory. Each configuration runs in a child process so its peak RSS is its own.
 // Usage: bench_meshing [--body PATH] [--sizes coarse,default,fine] [--meshers cgal,gmsh] [--threads N]
 //                      [--out bench_meshing.json]
+#include "bench_options.hpp"
+
 #include <sflsh/body/body_io.hpp>
 #include <sflsh/body/subjects.hpp>
 #include <sflsh/core/log.hpp>
@@ -16,10 +18,9 @@
 #include <unistd.h>
 
 #include <chrono>
-#include <cstring>
 #include <filesystem>
 #include <iostream>
-#include <sstream>
+#include <optional>
 
 namespace {
 
@@ -61,31 +62,35 @@ nlohmann::json run_one(const body::BodyModel& model, meshing::Mesher mesher, mes
           {"retargeted_min_dihedral_deg", worst_dihedral}};
 }
 
-std::vector<std::string> split(const std::string& csv) {
-  std::vector<std::string> out;
-  std::stringstream stream(csv);
-  for (std::string item; std::getline(stream, item, ',');)
-    if (!item.empty()) out.push_back(item);
-  return out;
+struct MeshingOptions {
+  std::string body_path, out = "bench_meshing.json", sizes = "coarse,default,fine", meshers = "cgal,gmsh";
+  int threads = 2;
+};
+
+/// Reads the command line into `o`; nothing to run, otherwise the exit status (bench_options.hpp).
+std::optional<int> parse_options(int argc, char** argv, MeshingOptions& o) {
+  CLI::App app{
+      "Template layer meshing per backend and size preset, factorization and retargeting time, peak "
+      "memory; each configuration in a child process.",
+      "bench_meshing"};
+  bench::use_bench_defaults(app);
+  app.add_option("--body", o.body_path, "Body model .npz in SMPL layout (default: the open body, data/open_body.npz)");
+  app.add_option("--sizes", o.sizes, "Size presets, comma-separated: coarse | default | fine")
+      ->check(bench::each_accepted_by("coarse|default|fine[,...]", meshing::parse_size_preset));
+  app.add_option("--meshers", o.meshers, "Meshers, comma-separated: cgal | gmsh | layered")
+      ->check(bench::each_accepted_by("cgal|gmsh|layered[,...]", meshing::parse_mesher));
+  app.add_option("--threads", o.threads, "Threads of the mesher");
+  app.add_option("--out", o.out, "JSON file of the results");
+  return bench::parse_command_line(app, argc, argv);
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string body_path, out = "bench_meshing.json", sizes = "coarse,default,fine", meshers = "cgal,gmsh";
-  int threads = 2;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    if (std::strcmp(argv[i], "--body") == 0)
-      body_path = argv[i + 1];
-    else if (std::strcmp(argv[i], "--out") == 0)
-      out = argv[i + 1];
-    else if (std::strcmp(argv[i], "--sizes") == 0)
-      sizes = argv[i + 1];
-    else if (std::strcmp(argv[i], "--meshers") == 0)
-      meshers = argv[i + 1];
-    else if (std::strcmp(argv[i], "--threads") == 0)
-      threads = std::stoi(argv[i + 1]);
-  }
+  MeshingOptions o;
+  if (const std::optional<int> status = parse_options(argc, argv, o)) return *status;
+  const std::string &body_path = o.body_path, &out = o.out, &sizes = o.sizes, &meshers = o.meshers;
+  const int threads = o.threads;
   try {
     sflsh::logger()->set_level(spdlog::level::warn);
     const body::BodyModel model =
@@ -94,8 +99,8 @@ int main(int argc, char** argv) {
     std::cout << fmt::format("{:<6} {:<8} {:>8} {:>8} {:>8} {:>9} {:>10} {:>9} {:>8} {:>8} {:>9}\n", "mesher", "size",
                              "tets", "nodes", "mesh s", "factor s", "retarget s", "min dih°", "med dih°", "max r/e",
                              "peak MB");
-    for (const std::string& mesher_name : split(meshers))
-      for (const std::string& size_name : split(sizes)) {
+    for (const std::string& mesher_name : bench::split_list(meshers))
+      for (const std::string& size_name : bench::split_list(sizes)) {
         const auto mesher = meshing::parse_mesher(mesher_name);
         const auto size = meshing::parse_size_preset(size_name);
         const auto result_file =

@@ -1,6 +1,8 @@
 // Benchmark: posing the body along a motion (forward kinematics + linear blend skinning).
 // Usage: bench_posing [--body PATH] [--out results.json]
 // Prints a table and writes JSON (frames per second, per-frame time, vertices).
+#include "bench_options.hpp"
+
 #include <sflsh/body/body_io.hpp>
 #include <sflsh/body/motion.hpp>
 #include <sflsh/body/subjects.hpp>
@@ -10,17 +12,32 @@
 #include <fmt/format.h>
 
 #include <chrono>
-#include <cstring>
 #include <iostream>
+#include <optional>
+#include <string>
+
+namespace {
+
+struct PosingOptions {
+  std::string body_path, out = "bench_posing.json";
+};
+
+/// Reads the command line into `o`; nothing to run, otherwise the exit status (bench_options.hpp).
+std::optional<int> parse_options(int argc, char** argv, PosingOptions& o) {
+  CLI::App app{"Posing the body along each procedural motion (forward kinematics + linear blend skinning), one thread.",
+               "bench_posing"};
+  sflsh::bench::use_bench_defaults(app);
+  app.add_option("--body", o.body_path, "Body model .npz in SMPL layout (default: the open body, data/open_body.npz)");
+  app.add_option("--out", o.out, "JSON file of the results");
+  return sflsh::bench::parse_command_line(app, argc, argv);
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
-  std::string body_path, out = "bench_posing.json";
-  for (int i = 1; i + 1 < argc; i += 2) {
-    if (std::strcmp(argv[i], "--body") == 0)
-      body_path = argv[i + 1];
-    else if (std::strcmp(argv[i], "--out") == 0)
-      out = argv[i + 1];
-  }
+  PosingOptions o;
+  if (const std::optional<int> status = parse_options(argc, argv, o)) return *status;
+  const std::string &body_path = o.body_path, &out = o.out;
   try {
     using namespace sflsh;
     const body::BodyModel model =

@@ -11,6 +11,8 @@
 //                      [--guard 0|1] [--guard-exponent X] [--guard-energy J]
 //                      [--threads 2] [--motion shake_hips] [--integrators backward_euler,bdf2,newmark]
 //                      [--masses lumped,consistent] [--out bench_reduced.json]
+#include "bench_options.hpp"
+
 #include <sflsh/body/body_io.hpp>
 #include <sflsh/body/motion.hpp>
 #include <sflsh/core/error.hpp>
@@ -26,12 +28,10 @@
 #include <tbb/task_arena.h>
 
 #include <chrono>
-#include <functional>
 #include <iostream>
-#include <map>
 #include <memory>
+#include <optional>
 #include <random>
-#include <sstream>
 
 namespace {
 
@@ -60,15 +60,6 @@ struct Breakdown {
     substeps += s.substeps;
   }
 };
-
-/// The entries of a comma-separated list.
-std::vector<std::string> split_list(const std::string& text) {
-  std::vector<std::string> out;
-  std::stringstream stream(text);
-  for (std::string item; std::getline(stream, item, ',');)
-    if (!item.empty()) out.push_back(item);
-  return out;
-}
 
 std::unique_ptr<Body> make_body(const body::BodyModel& model, const body::Betas& beta, const body::Motion& motion,
                                 double t0, const model::BodyLayerOptions& layer_options,
@@ -105,36 +96,41 @@ struct Arguments {
   reduced::ReducedOptions tuned;  // solver settings from the command line
 };
 
-/// Reads the options (pairs of name and value); false after a message on an unknown one.
-bool parse_arguments(int argc, char** argv, Arguments& a) {
+/// Reads the command line into `a`; nothing to run, otherwise the exit status (bench_options.hpp).
+std::optional<int> parse_arguments(int argc, char** argv, Arguments& a) {
+  CLI::App app{
+      "Frames per second of the reduced model for one body on one thread (per integrator × mass) and for a "
+      "crowd of bodies with random shapes on T threads, with the per-frame breakdown.",
+      "bench_reduced"};
+  bench::use_bench_defaults(app);
   reduced::ReducedOptions& tuned = a.tuned;
-  const std::map<std::string, std::function<void(const char*)>> setters = {
-      {"--mesh", [&](const char* v) { a.mesh = v; }},
-      {"--handles", [&](const char* v) { a.handles = std::stoi(v); }},
-      {"--cubature", [&](const char* v) { a.cubature = std::stoi(v); }},
-      {"--frames", [&](const char* v) { a.frames = std::stoi(v); }},
-      {"--crowd", [&](const char* v) { a.crowd = std::stoi(v); }},
-      {"--threads", [&](const char* v) { a.threads = std::stoi(v); }},
-      {"--motion", [&](const char* v) { a.motion_name = v; }},
-      {"--integrators", [&](const char* v) { a.integrator_list = v; }},
-      {"--masses", [&](const char* v) { a.mass_list = v; }},
-      {"--out", [&](const char* v) { a.out = v; }},
-      {"--step-tolerance", [&](const char* v) { tuned.step_tolerance = std::stod(v); }},
-      {"--gradient-rtol", [&](const char* v) { tuned.gradient_rtol = std::stod(v); }},
-      {"--refresh-ratio", [&](const char* v) { tuned.refresh_ratio = std::stod(v); }},
-      {"--predictor-order", [&](const char* v) { tuned.predictor_order = std::stoi(v); }},
-      {"--guard-exponent", [&](const char* v) { tuned.guard_exponent = std::stod(v); }},
-      {"--guard-energy", [&](const char* v) { tuned.guard_energy = std::stod(v); }},
-      {"--guard", [&](const char* v) { tuned.guard = std::stoi(v) != 0; }}};
-  for (int i = 1; i + 1 < argc; i += 2) {
-    const auto setter = setters.find(argv[i]);
-    if (setter == setters.end()) {
-      std::cerr << "bench_reduced: unknown option " << argv[i] << "\n";
-      return false;
-    }
-    setter->second(argv[i + 1]);
-  }
-  return true;
+  app.add_option("--mesh", a.mesh, "Layer resolution: coarse | default | fine")
+      ->check(bench::accepted_by("coarse|default|fine", meshing::parse_size_preset));
+  app.add_option("--handles", a.handles, "Point handles of the reduced model");
+  app.add_option("--cubature", a.cubature, "Cubature tets (0: every tet; -1: automatic)");
+  app.add_option("--frames", a.frames, "Frames of 1/60 s per run");
+  app.add_option("--crowd", a.crowd, "Bodies of the crowd (0: no crowd)");
+  app.add_option("--threads", a.threads, "Threads of the crowd (parallel over bodies)");
+  app.add_option("--motion", a.motion_name, "Procedural motion (sflsh motion list)");
+  app.add_option("--integrators", a.integrator_list,
+                 "Time integrators of the one-body runs, comma-separated: backward_euler | bdf2 | newmark (the crowd "
+                 "uses the first)");
+  app.add_option("--masses", a.mass_list,
+                 "Mass kinds of the one-body runs, comma-separated: lumped | consistent (the crowd uses the first)");
+  app.add_option("--step-tolerance", tuned.step_tolerance,
+                 "Newton stops when the distance left to the step's solution is below this [m]");
+  app.add_option("--gradient-rtol", tuned.gradient_rtol, "Newton stops when ‖∇Φ‖ ≤ rtol·‖∇Φ₀‖");
+  app.add_option("--refresh-ratio", tuned.refresh_ratio,
+                 "Refactor the Hessian when ‖∇Φ‖ falls by less than this per iteration");
+  app.add_option("--predictor-order", tuned.predictor_order, "Predictor: 1 (q + h q̇) | 2 (+ ½h² q̈)");
+  app.add_option_function<int>(
+      "--guard", [&tuned](int on) { tuned.guard = on != 0; },
+      "Guard the tets outside the cubature: 1 (default) | 0 (off)");
+  app.add_option("--guard-exponent", tuned.guard_exponent,
+                 "Guard: a tet whose Fung exponent passes this joins the cubature");
+  app.add_option("--guard-energy", tuned.guard_energy, "Guard: a tet whose Fung energy passes this joins [J]");
+  app.add_option("--out", a.out, "JSON file of the results");
+  return bench::parse_command_line(app, argc, argv);
 }
 
 /// What the runs share: the body model, the motion, the layer and reduced-model options, the integrators and masses.
@@ -160,9 +156,9 @@ Setup make_setup(const Arguments& a) {
   setup.layer_options.size = meshing::parse_size_preset(a.mesh);
   setup.options.point_handles = a.handles;
   setup.options.cubature = a.cubature;
-  for (const std::string& name : split_list(a.integrator_list))
+  for (const std::string& name : bench::split_list(a.integrator_list))
     setup.integrators.push_back(model::parse_integrator(name, "--integrators"));
-  for (const std::string& name : split_list(a.mass_list))
+  for (const std::string& name : bench::split_list(a.mass_list))
     setup.masses.push_back(model::parse_mass_kind(name, "--masses"));
   require(!setup.integrators.empty() && !setup.masses.empty(),
           "--integrators and --masses need at least one entry each");
@@ -322,7 +318,7 @@ nlohmann::json report_crowd(const Arguments& a, const Setup& setup, const CrowdR
 
 int main(int argc, char** argv) {
   Arguments a;
-  if (!parse_arguments(argc, argv, a)) return 2;
+  if (const std::optional<int> status = parse_arguments(argc, argv, a)) return *status;
   try {
     logger()->set_level(spdlog::level::warn);
     const Setup setup = make_setup(a);

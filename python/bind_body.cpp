@@ -95,21 +95,20 @@ py::array pose_array(const std::vector<body::Pose>& poses, py::handle owner) {
               {s * 72, s}, owner);
 }
 
-}  // namespace
+/// sflsh.Body's class object: a body model and the path it was read from.
+using PyBodyClass = py::class_<PyBody, std::shared_ptr<PyBody>>;
 
-void bind_body(py::module_& m) {
-  py::class_<PyBody, std::shared_ptr<PyBody>>(m, "Body",
-                                              "A body model in SMPL's layout: the open body (default) or an SMPL .npz; "
-                                              "Body.joint_names: the 24 joint names in SMPL's order")
-      .def(py::init([](const py::object& path) {
-             body::SubjectSelection selection;
-             if (!path.is_none()) selection.body_path = py::str(path).cast<std::string>();  // str or os.PathLike
-             auto b = std::make_shared<PyBody>();
-             b->path = selection.body_path;
-             b->model = body::load_selected_body(selection);
-             return b;
-           }),
-           py::arg("path") = py::none(), "Loads a body .npz (default: data/open_body.npz); errors as `--body PATH`")
+/// sflsh.Body's constructor and its read-only properties: names, sizes and the model's arrays.
+void bind_body_properties(PyBodyClass& c) {
+  c.def(py::init([](const py::object& path) {
+          body::SubjectSelection selection;
+          if (!path.is_none()) selection.body_path = py::str(path).cast<std::string>();  // str or os.PathLike
+          auto b = std::make_shared<PyBody>();
+          b->path = selection.body_path;
+          b->model = body::load_selected_body(selection);
+          return b;
+        }),
+        py::arg("path") = py::none(), "Loads a body .npz (default: data/open_body.npz); errors as `--body PATH`")
       .def_property_readonly(
           "name", [](const PyBody& b) { return b.model.name; }, "The body model's name ('open_body' for the open body)")
       .def_property_readonly(
@@ -146,13 +145,15 @@ void bind_body(py::module_& m) {
       .def_property_readonly_static(
           "joint_names",
           [](py::object) { return std::vector<std::string>(body::kJointNames.begin(), body::kJointNames.end()); },
-          "The 24 joint names in SMPL's order")
-      .def(
-          "shape",
-          [](const PyBody& b, const py::object& betas) {
-            return own(body::shaped_template(b.model, betas_from(betas)));
-          },
-          py::arg("betas") = py::none(), "T̄ + B_S(β): the shaped rest template (n × 3) [m]")
+          "The 24 joint names in SMPL's order");
+}
+
+/// sflsh.Body's methods: the shaped template, the rest joints and the posed vertices and joints.
+void bind_body_methods(PyBodyClass& c) {
+  c.def(
+       "shape",
+       [](const PyBody& b, const py::object& betas) { return own(body::shaped_template(b.model, betas_from(betas))); },
+       py::arg("betas") = py::none(), "T̄ + B_S(β): the shaped rest template (n × 3) [m]")
       .def(
           "joints",
           [](const PyBody& b, const py::object& betas) {
@@ -176,7 +177,19 @@ void bind_body(py::module_& m) {
       .def("__repr__", [](const PyBody& b) {
         return "<sflsh.Body '" + b.model.name + "': " + std::to_string(b.model.num_vertices()) + " vertices>";
       });
+}
 
+/// sflsh.Body, the parametric body in SMPL's layout.
+void bind_body_model_class(py::module_& m) {
+  PyBodyClass c(m, "Body",
+                "A body model in SMPL's layout: the open body (default) or an SMPL .npz; "
+                "Body.joint_names: the 24 joint names in SMPL's order");
+  bind_body_properties(c);
+  bind_body_methods(c);
+}
+
+/// sflsh.subjects(), sflsh.subject() and sflsh.motions(): the shipped subjects and the procedural motions.
+void bind_subject_and_motion_lists(py::module_& m) {
   m.def(
       "subjects",
       [] {
@@ -199,7 +212,10 @@ void bind_body(py::module_& m) {
         return names;
       },
       "The procedural motions (`sflsh motion list`)");
+}
 
+/// sflsh.Motion: poses, root translations and times of a procedural or AMASS motion.
+void bind_motion_class(py::module_& m) {
   py::class_<body::Motion, std::shared_ptr<body::Motion>>(m, "Motion",
                                                           "A motion: poses θ (T × 72) and root translations (T × 3)")
       .def(py::init([](const std::string& name_or_path, double fps, int frames, double time_offset) {
@@ -246,6 +262,14 @@ void bind_body(py::module_& m) {
       .def("__repr__", [](const body::Motion& mo) {
         return "<sflsh.Motion '" + mo.name + "': " + std::to_string(mo.num_frames()) + " frames>";
       });
+}
+
+}  // namespace
+
+void bind_body(py::module_& m) {
+  bind_body_model_class(m);
+  bind_subject_and_motion_lists(m);
+  bind_motion_class(m);
 }
 
 }  // namespace sflsh::python

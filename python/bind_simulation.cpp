@@ -1,5 +1,5 @@
 // sflsh.Simulation: one body along a motion with the reduced model or the full-space solver, stepped from Python
-// (scene::BodySimulation, the object `sflsh simulate` runs). Its keyword arguments are simulate's options with
+// (run::BodySimulation, the object `sflsh simulate` runs). Its keyword arguments are simulate's options with
 // '-' spelled '_' and the same defaults, visible in its signature; step(), run() and sigma() give the posed surface,
 // the soft-tissue displacement and σ, summary() the dictionary `sflsh simulate` writes as summary.json (without the
 // command-line header and "output"), and write() the run folder itself (simulation_write.cpp).
@@ -13,7 +13,7 @@
 #include <sflsh/core/error.hpp>
 #include <sflsh/fullspace/petsc_session.hpp>
 #include <sflsh/material/material_file.hpp>
-#include <sflsh/scene/body_simulation.hpp>
+#include <sflsh/run/body_simulation.hpp>
 
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
@@ -26,7 +26,7 @@ namespace sflsh::python {
 
 namespace {
 
-using scene::BodySimulation;
+using run::BodySimulation;
 
 /// PETSc (and MPI) for the full-space solver, started on first use and kept for the life of the process: PETSc
 /// objects of simulations still referenced when the interpreter exits must never outlive a PetscFinalize.
@@ -43,7 +43,7 @@ std::unique_ptr<PythonSimulation> make_simulation(
     bool gravity, double stiffness_scale, const std::string& mass, const std::string& integrator, int handles,
     int cubature, const std::string& cubature_weights, bool affine, double newton_tolerance, bool allow_long,
     bool record, bool energies) {
-  scene::BodyRunSettings s;
+  run::BodyRunSettings s;
   s.motion = motion;
   if (subject) s.subject.subject = *subject;
   s.subject.body_path = body_path_from(body);
@@ -78,7 +78,7 @@ std::unique_ptr<PythonSimulation> make_simulation(
   auto out = std::make_unique<PythonSimulation>();
   out->record = record;
   py::gil_scoped_release release;
-  out->simulation = std::make_unique<BodySimulation>(s, nullptr, 0, 1, scene::BodyRunReporting{false, false, {}, {}});
+  out->simulation = std::make_unique<BodySimulation>(s, nullptr, 0, 1, run::BodyRunReporting{false, false, {}, {}});
   if (record) out->states.push_back(out->simulation->state());
   return out;
 }
@@ -264,7 +264,7 @@ void bind_properties(py::class_<PythonSimulation>& c) {
 }  // namespace
 
 void bind_simulation(py::module_& m) {
-  const scene::BodyRunSettings d;  // the defaults of `sflsh simulate`
+  const run::BodyRunSettings d;  // the defaults of `sflsh simulate`
   py::class_<PythonSimulation> c(
       m, "Simulation",
       "One body along a motion (`sflsh simulate`), stepped from Python: step(), run(), sigma(), summary(), and "

@@ -1,8 +1,8 @@
 #pragma once
-// The object behind sflsh.Simulation: a scene::BodySimulation stepped from Python, and the state of every frame
+// The object behind sflsh.Simulation: a run::BodySimulation stepped from Python, and the state of every frame
 // solved so far (for Simulation.write, which writes the run folder `sflsh simulate` writes from them).
 #include <sflsh/model/problem.hpp>
-#include <sflsh/scene/body_simulation.hpp>
+#include <sflsh/run/body_simulation.hpp>
 
 #include <filesystem>
 #include <memory>
@@ -13,14 +13,14 @@
 namespace sflsh::python {
 
 struct PythonSimulation {
-  std::unique_ptr<scene::BodySimulation> simulation;
+  std::unique_ptr<run::BodySimulation> simulation;
   bool record = true;                ///< keep every frame's state for write()
   std::vector<model::State> states;  ///< frames 0 … frame() when recording
 
   /// Solves the next frame and records its state.
   void step();
-  scene::BodySimulation& operator*() { return *simulation; }
-  const scene::BodySimulation& operator*() const { return *simulation; }
+  run::BodySimulation& operator*() { return *simulation; }
+  const run::BodySimulation& operator*() const { return *simulation; }
 };
 
 /// How Simulation.write writes: `sflsh simulate`'s output options.

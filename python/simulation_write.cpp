@@ -18,12 +18,12 @@ void PythonSimulation::step() {
 }
 
 void write_run_folder(const PythonSimulation& python, const std::filesystem::path& dir, const WriteOptions& options) {
-  const scene::BodySimulation& sim = *python;
+  const run::BodySimulation& sim = *python;
   require(python.record, "write: the simulation was made with record=False and kept no frames to write");
   require(static_cast<int>(python.states.size()) == sim.frame() + 1, "write: {} recorded states for frames 0 … {}",
           python.states.size(), sim.frame());
   require(options.every >= 1, "--every must be at least 1, got {}", options.every);
-  scene::BodyRunSettings settings = sim.settings();
+  run::BodyRunSettings settings = sim.settings();
   settings.format = options.format;
   settings.write_layer = options.write_layer;
   settings.every = options.every;
@@ -33,7 +33,7 @@ void write_run_folder(const PythonSimulation& python, const std::filesystem::pat
       options.fields
           ? std::optional(model::resolve_frame_fields(*options.fields, "fields").value_or(model::frame_field_names()))
           : std::nullopt;  // the format's default
-  const model::SimulationWriterOptions writer_options = scene::frame_writer_options(settings);
+  const model::SimulationWriterOptions writer_options = run::frame_writer_options(settings);
   RunFolder run(dir);
   model::SimulationWriter writer(sim.layer(), &run, writer_options);
   const int frames = static_cast<int>(python.states.size());
@@ -50,7 +50,7 @@ void write_run_folder(const PythonSimulation& python, const std::filesystem::pat
   body["compression"] = vtk::to_string(writer_options.compression);
   body["layer_compression"] = vtk::to_string(writer_options.layer_compression);
   summary.update(body);
-  summary["output"] = scene::simulate_output_summary(settings, body);
+  summary["output"] = run::simulate_output_summary(settings, body);
   summary.erase("compression");
   summary.erase("layer_compression");
   write_json(run.stage("summary.json"), summary);

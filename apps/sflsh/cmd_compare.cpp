@@ -22,6 +22,7 @@
 #include <sflsh/model/simulation_output.hpp>
 #include <sflsh/reduced/reduced_model.hpp>
 #include <sflsh/reduced/reduced_solver.hpp>
+#include <sflsh/run/body_solver_factory.hpp>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -42,9 +43,9 @@ struct CompareOptions {
   int frames = 0;
   double fps = 60.0;
   int substeps = 1;
-  std::string mesh = "default";
+  std::string mesh{run::kDefaultMesh};
   LayerSettings layer;
-  std::string integrator = scene::BodyRunSettings().integrator;  ///< both solvers' (time_integrator.hpp)
+  std::string integrator = run::BodyRunSettings().integrator;  ///< both solvers' (time_integrator.hpp)
   std::string handles = "30,86,200";
   std::string cubature = "100,200,400";
   bool exact_cubature = false;
@@ -119,7 +120,7 @@ model::RowMatrixX3d posed_region(const model::BodyLayer& layer, const model::Row
 /// to the body model.
 struct CompareCase {
   const CompareOptions& opt;
-  model::Integrator integrator = model::Integrator::bdf2;
+  model::Integrator integrator = model::kDefaultIntegrator;
   std::vector<int> handle_sweep, cubature_sweep;
   body::BodyModel model;
   std::string subject_label;
@@ -135,6 +136,17 @@ struct CompareCase {
   explicit CompareCase(const CompareOptions& options) : opt(options) {}
   CompareCase(const CompareCase&) = delete;
   CompareCase& operator=(const CompareCase&) = delete;
+
+  /// The reduced solver of one configuration of the sweep (run/solver_choice.hpp).
+  run::SolverChoice reduced_choice(int handles, int cubature) const {
+    run::SolverChoice choice;
+    choice.kind = run::SolverKind::reduced;
+    choice.integrator = integrator;
+    choice.handles = handles;
+    choice.cubature = cubature;
+    choice.reduced_settings = opt.reduced;
+    return choice;
+  }
 
   model::FrameLoopOptions frame_loop() const {
     model::FrameLoopOptions loop;
@@ -186,8 +198,7 @@ std::vector<std::unique_ptr<Configuration>> build_configurations(const CompareCa
       auto config = std::make_unique<Configuration>();
       config->handles = handles;
       config->cubature_request = k;
-      config->model =
-          reduced::build_reduced_model(c.layer, reduced_model_options(c.opt.reduced, handles, k, c.opt.layer.cache));
+      config->model = run::make_reduced_model(c.layer, c.reduced_choice(handles, k), c.opt.layer.cache);
       configs.push_back(std::move(config));
     }
   return configs;
@@ -207,13 +218,14 @@ FullReference run_full_reference(const CompareCase& c, int rank) {
   FullReference full;
   full.u.reserve(c.motion.num_frames());
   full.posed.reserve(c.motion.num_frames());
-  fullspace::FullSpaceOptions options;
-  options.integrator = c.integrator;
-  fullspace::FullSpaceSolver solver(c.layer.problem, MPI_COMM_WORLD, options);
-  solver.initialize(model::initial_state(c.layer.problem, 0.0));
+  run::SolverChoice choice;
+  choice.integrator = c.integrator;
+  const run::BuiltSolver built =
+      run::make_body_solver(c.layer.problem, choice, model::initial_state(c.layer.problem, 0.0));
+  const fullspace::FullSpaceSolver& solver = *built.full;
   full.u.push_back(c.layer.surface_displacement(solver.state().x));
   Progress progress("full-space frames", static_cast<std::size_t>(c.steps), rank == 0);
-  full.total = model::run_frames(solver, c.frame_loop(), [&](int f, double, const model::StepStats&) {
+  full.total = model::run_frames(*built, c.frame_loop(), [&](int f, double, const model::StepStats&) {
     const model::State& state = solver.state();
     require(state.x.allFinite(), "compare: the full-space state at t = {} is not finite",
             c.motion.time(static_cast<std::size_t>(f)));
@@ -238,10 +250,10 @@ FullReference run_full_reference(const CompareCase& c, int rank) {
 /// subspace stays stable on its own points while the tets it does not sample deform freely.
 void run_configuration(Configuration& config, const CompareCase& c, const FullReference& full, Progress& progress) {
   const model::Problem& problem = c.layer.problem;
-  reduced::ReducedOptions options;
-  options.integrator = c.integrator;
-  reduced::ReducedSolver solver(problem, config.model.subspace, config.model.cubature, options);
-  solver.initialize(model::initial_state(problem, 0.0));
+  const run::BuiltSolver built =
+      run::make_body_solver(problem, c.reduced_choice(config.handles, config.cubature_request),
+                            model::initial_state(problem, 0.0), run::parts_of(config.model));
+  const reduced::ReducedSolver& solver = *built.reduced;
   model::DynamicsAmplitude amplitude(region_normals(c.layer));
   config.error_sq = Eigen::VectorXd::Zero(c.regions);
   // Named by the requested count (the per-function coverage may add a tet or two; every tet for exact cubature).
@@ -268,7 +280,7 @@ void run_configuration(Configuration& config, const CompareCase& c, const FullRe
     }
   };
   record(0);
-  const model::StepStats total = model::run_frames(solver, c.frame_loop(), [&](int f, double, const model::StepStats&) {
+  const model::StepStats total = model::run_frames(*built, c.frame_loop(), [&](int f, double, const model::StepStats&) {
     record(static_cast<std::size_t>(f));
     progress.advance();
   });

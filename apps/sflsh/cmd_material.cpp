@@ -86,7 +86,7 @@ void run_curve(CurveOptions opt, const Invocation& invocation) {
                      {"stress_at_strain_max_pa", curve.points.back().stress}});
   }
   summary["tests"] = tests;
-  summary["wall_time_s"] = seconds_since(t0);
+  set_total_seconds(summary, seconds_since(t0), true);
   write_json(run.stage("summary.json"), summary);
   run.commit();
   for (const material::MaterialCurve& curve : curves)

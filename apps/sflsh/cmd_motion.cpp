@@ -110,7 +110,7 @@ void run_motion_export(const MotionExportOptions& opt, const Invocation& invocat
   summary["output"] = {{"format", opt.format},
                        {"precision", xdmf ? opt.precision : "float64"},
                        {"compression", vtk::to_string(compression)}};
-  summary["wall_time_s"] = seconds_since(t0);
+  set_total_seconds(summary, seconds_since(t0), true);
   write_json(run.stage("summary.json"), summary);
   run.commit();
   logger()->info("wrote {} frames of '{}' for {} to {}/{}", motion.num_frames(), motion.name, subject_label, opt.out,

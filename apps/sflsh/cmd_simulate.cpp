@@ -80,7 +80,7 @@ void run_simulate(const SimulateOptions& opt, const Invocation& invocation, int 
   if (rank != 0) return;
   summary.update(body);
   summary["output"] =
-      opt.no_output ? nlohmann::json("summary.json only") : scene::simulate_output_summary(settings, body);
+      opt.no_output ? nlohmann::json("summary.json only") : run::simulate_output_summary(settings, body);
   summary.erase("compression");
   summary.erase("layer_compression");
   write_json(run->stage("summary.json"), summary);

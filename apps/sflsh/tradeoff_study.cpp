@@ -18,6 +18,7 @@
 #include <sflsh/fullspace/reference_integrator.hpp>
 #include <sflsh/model/simulation_output.hpp>
 #include <sflsh/reduced/reduced_solver.hpp>
+#include <sflsh/run/body_solver_factory.hpp>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -87,20 +88,19 @@ struct Measured {
   std::string invalid;      ///< why a reduced state left the material's range, or why the run failed
 };
 
-/// Runs one solver frame by frame. `advance(f, seconds)` integrates to frame f, adds its solve time to
-/// `seconds` and returns the state there. With `keep` the posed region surface is stored (the reference),
-/// with `ref` the error against it is summed. σ is that of simulate's summary: of the unposed skin
-/// displacement u (model::SimulationWriter), over frames 0..F.
-Measured track(const model::BodyLayer& layer, const body::Motion& motion, std::size_t frames,
-               const model::State& initial, const std::function<model::State(std::size_t, double&)>& advance,
-               bool check_range, ReferenceTrack* keep, const ReferenceTrack* ref) {
+/// Runs one solver through the frame loop (model/frame_loop.hpp) over `frames` frames of `substeps` steps each,
+/// summing the solve time. With `keep` the posed region surface is stored (the reference), with `ref` the error
+/// against it is summed. σ is that of simulate's summary: of the unposed skin displacement u
+/// (model::SimulationWriter), over frames 0..F.
+Measured track(const model::BodyLayer& layer, const body::Motion& motion, std::size_t frames, model::BodySolver& solver,
+               int substeps, bool check_range, ReferenceTrack* keep, const ReferenceTrack* ref) {
   const std::vector<int>& region = layer.mesh->region_surface.vertices;
   model::DynamicsAmplitude amplitude(region_normals(layer));
   Measured m;
   double soft_sq = 0.0;
-  for (std::size_t f = 0; f < frames; ++f) {
+  auto record = [&](std::size_t f) {
     const double t = motion.time(f);
-    const model::State state = f == 0 ? initial : advance(f, m.solve_seconds);
+    const model::State state = solver.current_state();
     require(state.x.allFinite(), "tradeoff: the state at t = {} is not finite", t);
     const RowMatrixX3d u = layer.surface_displacement(state.x);
     amplitude.add(u);
@@ -119,7 +119,15 @@ Measured track(const model::BodyLayer& layer, const body::Motion& motion, std::s
         m.invalid = fmt::format("at t = {:.4f} s: {}", t, e.what());
       }
     }
-  }
+  };
+  record(0);
+  model::FrameLoopOptions loop;
+  loop.frames = static_cast<int>(frames);
+  loop.fps = motion.fps;
+  loop.substeps = substeps;
+  m.solve_seconds = model::run_frames(solver, loop, [&](int f, double, const model::StepStats&) {
+                      record(static_cast<std::size_t>(f));
+                    }).seconds;
   m.sigma_mean = amplitude.sigma().mean();
   if (keep) {
     keep->soft_rms = std::sqrt(soft_sq / (static_cast<double>(region.size()) * static_cast<double>(frames - 1)));
@@ -227,43 +235,29 @@ Measured TradeoffStudy::run_full(const model::BodyLayer& layer, const std::strin
                                  int substeps, std::size_t frames, ReferenceTrack* keep, const ReferenceTrack* against,
                                  double& setup_seconds) const {
   const model::Problem problem = with_mass(layer.problem, mass, "--masses");
-  fullspace::FullSpaceOptions options;
-  options.integrator = model::parse_integrator(integrator, "--integrators");
+  run::SolverChoice choice;
+  choice.integrator = model::parse_integrator(integrator, "--integrators");
   const auto t0 = Clock::now();
   const model::State initial = model::initial_state(problem, 0.0);
-  fullspace::FullSpaceSolver solver(problem, MPI_COMM_WORLD, options);
-  solver.initialize(initial);
+  const run::BuiltSolver solver = run::make_body_solver(problem, choice, initial);
   setup_seconds = seconds_since(t0);
-  const double step = 1.0 / (motion_.fps * substeps);
-  return track(
-      layer, motion_, frames, initial,
-      [&](std::size_t, double& seconds) {
-        for (int k = 0; k < substeps; ++k) seconds += solver.step(step).seconds;
-        return solver.state();
-      },
-      false, keep, against);
+  return track(layer, motion_, frames, *solver, substeps, false, keep, against);
 }
 
 Measured TradeoffStudy::run_sundials_reference(const model::BodyLayer& layer, tradeoff::Row& row) {
   const model::Problem problem = with_mass(layer.problem, opt_.reference_mass, "--reference-mass");
   const auto t0 = Clock::now();
   const model::State initial = model::initial_state(problem, 0.0);
-  fullspace::ReferenceOptions ro;
-  ro.rtol = opt_.rtol;
-  ro.atol = opt_.atol;
-  fullspace::ReferenceIntegrator integrator(problem, ro);
-  integrator.initialize(initial);
+  run::SolverChoice choice;
+  choice.kind = run::SolverKind::sundials;
+  choice.sundials.rtol = opt_.rtol;
+  choice.sundials.atol = opt_.atol;
+  choice.step_rate = motion_.fps;  // steps end at the frame times f / fps exactly
+  const run::BuiltSolver solver = run::make_body_solver(problem, choice, initial);
   row.setup_seconds = layers_.at(opt_.reference_mesh).seconds + seconds_since(t0);
-  const Measured m = track(
-      layer, motion_, motion_.num_frames(), initial,
-      [&](std::size_t f, double& seconds) {
-        const double before = integrator.stats().seconds;
-        model::State s = integrator.advance_to(motion_.time(f));
-        seconds += integrator.stats().seconds - before;
-        return s;
-      },
-      false, &ref_, nullptr);
-  const fullspace::ReferenceStats& st = integrator.stats();
+  const Measured m = track(layer, motion_, motion_.num_frames(), *solver, 1, false, &ref_, nullptr);
+  const fullspace::ReferenceStats& st = solver.sundials->stats();
+  const fullspace::ReferenceOptions& ro = solver.sundials->options();
   reference_json_ = {{"integrator", "sundials"},
                      {"method", "ARKODE ARKStep, adaptive implicit SDIRK, KLU"},
                      {"rtol", opt_.rtol},
@@ -392,8 +386,13 @@ void TradeoffStudy::run_reduced_rows() {
     for (int handles : opt_.handles)
       for (int k : opt_.cubature) {
         const auto t0 = Clock::now();
-        const reduced::ReducedModel reduced_model = reduced::build_reduced_model(
-            built.layer, reduced_model_options(opt_.reduced, handles, k, opt_.layer.cache));
+        run::SolverChoice reduced_choice;
+        reduced_choice.kind = run::SolverKind::reduced;
+        reduced_choice.handles = handles;
+        reduced_choice.cubature = k;
+        reduced_choice.reduced_settings = opt_.reduced;
+        const reduced::ReducedModel reduced_model =
+            run::make_reduced_model(built.layer, reduced_choice, opt_.layer.cache);
         const double model_seconds = seconds_since(t0);
         for (const std::string& integrator : opt_.integrators)
           for (const std::string& mass : opt_.masses)
@@ -409,20 +408,14 @@ void TradeoffStudy::run_reduced_rows() {
               double setup_seconds = 0.0;  // stays 0 for a run that failed in its set-up
               add_row(row, [&] {
                 const model::Problem problem = with_mass(built.layer.problem, mass, "--masses");
-                reduced::ReducedOptions options;
-                options.integrator = model::parse_integrator(integrator, "--integrators");
+                run::SolverChoice choice = reduced_choice;
+                choice.integrator = model::parse_integrator(integrator, "--integrators");
                 const auto t1 = Clock::now();
                 const model::State initial = model::initial_state(problem, 0.0);
-                reduced::ReducedSolver solver(problem, reduced_model.subspace, reduced_model.cubature, options);
-                solver.initialize(initial);
+                const run::BuiltSolver solver =
+                    run::make_body_solver(problem, choice, initial, run::parts_of(reduced_model));
                 setup_seconds = built.seconds + model_seconds + seconds_since(t1);
-                return track(
-                    built.layer, motion_, motion_.num_frames(), initial,
-                    [&](std::size_t, double& seconds) {
-                      for (int s = 0; s < substeps; ++s) seconds += solver.step(row.step).seconds;
-                      return solver.full_state();
-                    },
-                    true, nullptr, &ref_);
+                return track(built.layer, motion_, motion_.num_frames(), *solver, substeps, true, nullptr, &ref_);
               });
               rows_.back().setup_seconds = setup_seconds;
             }
@@ -520,7 +513,7 @@ void TradeoffStudy::write(const Invocation& invocation, double started_seconds_a
                        {"markdown", "tradeoff.md"},
                        {"plot", png.empty() ? nlohmann::json(nullptr) : nlohmann::json(png)}};
   summary["units"] = {{"rms_error", "mm"}, {"seconds_per_frame", "s"}, {"setup_seconds", "s"}, {"step", "s"}};
-  summary["timings"] = {{"total_seconds", started_seconds_ago}};
+  set_total_seconds(summary, started_seconds_ago);
   write_json(run.stage("summary.json"), summary);
   run.commit();
   logger()->info("tradeoff: wrote {} ({} rows, {:.1f} s)", run.dir().string(), rows_.size(), started_seconds_ago);

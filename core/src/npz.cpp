@@ -254,7 +254,23 @@ Array make_string(const std::string& value) {
 
 Array make_scalar(double value) { return make_f64({}, {value}); }
 
-Array parse_npy(const std::vector<std::uint8_t>& buffer, const std::string& what) {
+namespace {
+
+/// Where a .npy header's text lies in the buffer: its byte offset and its length.
+struct NpyHeaderSpan {
+  std::size_t offset = 0;
+  std::size_t length = 0;
+};
+
+/// The three entries of a .npy header dictionary, as read from its text.
+struct NpyHeaderFields {
+  std::string descr;
+  bool fortran = false;
+  std::string shape_text;
+};
+
+/// Checks the magic and the format version of a .npy buffer and locates its header text.
+NpyHeaderSpan npy_header_span(const std::vector<std::uint8_t>& buffer, const std::string& what) {
   require(buffer.size() >= 10 && std::memcmp(buffer.data(), kMagic, 6) == 0,
           "{}: not a .npy array (no \\x93NUMPY magic in the first {} bytes), expected a NumPy array", what,
           std::min<std::size_t>(buffer.size(), 6));
@@ -273,24 +289,30 @@ Array parse_npy(const std::vector<std::uint8_t>& buffer, const std::string& what
   }
   require(header_len <= buffer.size() - offset, "{}: .npy header of {} bytes runs past the member's {} bytes", what,
           header_len, buffer.size());
-  const std::string header(reinterpret_cast<const char*>(buffer.data() + offset), header_len);
+  return {offset, header_len};
+}
 
+/// Finds 'descr', 'fortran_order' and 'shape' in a .npy header's text.
+NpyHeaderFields npy_header_fields(const std::string& header, const std::string& what) {
   static const std::regex descr_re(R"('descr'\s*:\s*'([^']*)')");
   static const std::regex order_re(R"('fortran_order'\s*:\s*(True|False))");
   static const std::regex shape_re(R"('shape'\s*:\s*\(([^)]*)\))");
+  NpyHeaderFields fields;
   std::smatch m;
   require(std::regex_search(header, m, descr_re),
           "{}: .npy header has no plain 'descr' (structured dtypes are not supported), {}", what, kSupportedDtypes);
-  const std::string descr = m[1];
+  fields.descr = m[1];
   require(std::regex_search(header, m, order_re), "{}: .npy header has no 'fortran_order', expected True or False",
           what);
-  const bool fortran = m[1] == "True";
+  fields.fortran = m[1] == "True";
   require(std::regex_search(header, m, shape_re), "{}: .npy header has no 'shape', expected a tuple such as (6890, 3)",
           what);
-  const std::string shape_text = m[1];
+  fields.shape_text = m[1];
+  return fields;
+}
 
-  Array a;
-  a.origin = what;
+/// Sets the kind and item size of `a` from a descr such as '<f8', refusing the dtypes we do not read.
+void npy_set_dtype(Array& a, const std::string& descr, const std::string& what) {
   require(descr.size() >= 3, "{}: dtype '{}' is not supported, {}", what, descr, kSupportedDtypes);
   const char byteorder = descr[0];
   a.kind = descr[1];
@@ -304,7 +326,10 @@ Array parse_npy(const std::vector<std::uint8_t>& buffer, const std::string& what
   require(supported_itemsize(a.kind, a.itemsize), "{}: dtype '{}' is not supported, {}", what, descr, kSupportedDtypes);
   require(byteorder != '>' || a.itemsize == 1 || a.kind == 'S',
           "{}: big-endian dtype '{}' is not supported, expected little-endian ('<{}')", what, descr, descr.substr(1));
+}
 
+/// Parses the inside of a shape tuple into `a.shape`; returns the element count, nullopt if it overflows.
+std::optional<std::size_t> npy_parse_shape(Array& a, const std::string& shape_text, const std::string& what) {
   std::size_t start = 0;
   std::size_t elements = 1;
   bool overflow = false;
@@ -325,41 +350,65 @@ Array parse_npy(const std::vector<std::uint8_t>& buffer, const std::string& what
     }
     start = comma + 1;
   }
+  if (overflow) return std::nullopt;
+  return elements;
+}
+
+/// The byte count of the array's data given its element count; nullopt when it exceeds 2^64 bytes.
+std::optional<std::size_t> npy_data_bytes(const Array& a, std::optional<std::size_t> elements) {
   std::size_t nbytes = 0;
-  overflow = overflow || __builtin_mul_overflow(elements, a.itemsize, &nbytes);
+  bool overflow = !elements.has_value() || __builtin_mul_overflow(*elements, a.itemsize, &nbytes);
   if (std::find(a.shape.begin(), a.shape.end(), std::size_t{0}) != a.shape.end()) {
     overflow = false;  // a zero extent makes the array empty whatever the other extents are
     nbytes = 0;
   }
-  const std::size_t data_offset = offset + header_len;
-  const std::size_t available = buffer.size() - data_offset;
-  require(!overflow, "{}: shape {} of dtype {} needs more than 2^64 bytes, the member has {}", what, a.shape_string(),
-          a.dtype(), available);
-  require(available >= nbytes, "{}: data truncated: shape {} of dtype {} needs {} bytes, the member has {}", what,
-          a.shape_string(), a.dtype(), nbytes, available);
-  a.bytes.assign(buffer.begin() + static_cast<std::ptrdiff_t>(data_offset),
-                 buffer.begin() + static_cast<std::ptrdiff_t>(data_offset + nbytes));
+  if (overflow) return std::nullopt;
+  return nbytes;
+}
 
-  if (fortran && a.shape.size() > 1) {  // transpose to C order
-    const std::size_t nd = a.shape.size();
-    std::vector<std::size_t> c_strides(nd), f_strides(nd);
-    c_strides[nd - 1] = 1;
-    for (std::size_t d = nd - 1; d-- > 0;) c_strides[d] = c_strides[d + 1] * a.shape[d + 1];
-    f_strides[0] = 1;
-    for (std::size_t d = 1; d < nd; ++d) f_strides[d] = f_strides[d - 1] * a.shape[d - 1];
-    std::vector<std::uint8_t> c_bytes(nbytes);
-    std::vector<std::size_t> idx(nd, 0);
-    for (std::size_t f = 0; f < a.size(); ++f) {
-      std::size_t rem = f, c = 0;
-      for (std::size_t d = 0; d < nd; ++d) {
-        const std::size_t i = (rem / f_strides[d]) % a.shape[d];
-        c += i * c_strides[d];
-      }
-      std::memcpy(c_bytes.data() + c * a.itemsize, a.bytes.data() + f * a.itemsize, a.itemsize);
-      (void)rem;
+/// Reorders the `nbytes` bytes of a Fortran-ordered array with more than one dimension into C order.
+void npy_fortran_to_c_order(Array& a, std::size_t nbytes) {
+  const std::size_t nd = a.shape.size();
+  std::vector<std::size_t> c_strides(nd), f_strides(nd);
+  c_strides[nd - 1] = 1;
+  for (std::size_t d = nd - 1; d-- > 0;) c_strides[d] = c_strides[d + 1] * a.shape[d + 1];
+  f_strides[0] = 1;
+  for (std::size_t d = 1; d < nd; ++d) f_strides[d] = f_strides[d - 1] * a.shape[d - 1];
+  std::vector<std::uint8_t> c_bytes(nbytes);
+  std::vector<std::size_t> idx(nd, 0);
+  for (std::size_t f = 0; f < a.size(); ++f) {
+    std::size_t rem = f, c = 0;
+    for (std::size_t d = 0; d < nd; ++d) {
+      const std::size_t i = (rem / f_strides[d]) % a.shape[d];
+      c += i * c_strides[d];
     }
-    a.bytes = std::move(c_bytes);
+    std::memcpy(c_bytes.data() + c * a.itemsize, a.bytes.data() + f * a.itemsize, a.itemsize);
+    (void)rem;
   }
+  a.bytes = std::move(c_bytes);
+}
+
+}  // namespace
+
+Array parse_npy(const std::vector<std::uint8_t>& buffer, const std::string& what) {
+  const NpyHeaderSpan span = npy_header_span(buffer, what);
+  const std::string header(reinterpret_cast<const char*>(buffer.data() + span.offset), span.length);
+  const NpyHeaderFields fields = npy_header_fields(header, what);
+
+  Array a;
+  a.origin = what;
+  npy_set_dtype(a, fields.descr, what);
+  const std::optional<std::size_t> nbytes = npy_data_bytes(a, npy_parse_shape(a, fields.shape_text, what));
+  const std::size_t data_offset = span.offset + span.length;
+  const std::size_t available = buffer.size() - data_offset;
+  require(nbytes.has_value(), "{}: shape {} of dtype {} needs more than 2^64 bytes, the member has {}", what,
+          a.shape_string(), a.dtype(), available);
+  require(available >= *nbytes, "{}: data truncated: shape {} of dtype {} needs {} bytes, the member has {}", what,
+          a.shape_string(), a.dtype(), *nbytes, available);
+  a.bytes.assign(buffer.begin() + static_cast<std::ptrdiff_t>(data_offset),
+                 buffer.begin() + static_cast<std::ptrdiff_t>(data_offset + *nbytes));
+
+  if (fields.fortran && a.shape.size() > 1) npy_fortran_to_c_order(a, *nbytes);  // transpose to C order
   return a;
 }
 

@@ -25,6 +25,11 @@ nlohmann::json read_json(const std::filesystem::path& path) {
   }
 }
 
+void set_total_seconds(nlohmann::json& summary, double seconds, bool legacy_wall_time_key) {
+  summary["timings"]["total_seconds"] = seconds;
+  if (legacy_wall_time_key) summary["wall_time_s"] = seconds;
+}
+
 nlohmann::json summary_header(const std::string& command, int argc, const char* const* argv) {
   nlohmann::json header;
   header["tool"] = "sflsh";

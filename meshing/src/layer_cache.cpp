@@ -203,9 +203,16 @@ void save_layer_mesh(const std::filesystem::path& path, const LayerMesh& mesh, c
              });
 }
 
-LayerMesh load_layer_mesh(const std::filesystem::path& path, std::string* key) {
-  const Loader in(path);
-  LayerMesh mesh;
+namespace {
+
+// How many nodes and tets the cached volume mesh has.
+struct CacheVolumeSize {
+  std::int64_t nodes = 0;
+  std::size_t tets = 0;
+};
+
+// Reads the cache's key (when asked for) and the mesh's descriptive fields; returns the body's vertex count.
+std::int64_t cache_read_metadata(const Loader& in, LayerMesh& mesh, std::string* key) {
   if (key) *key = in.text("key");
   mesh.body_name = in.text("body_name");
   mesh.region = in.text("region");
@@ -214,9 +221,11 @@ LayerMesh load_layer_mesh(const std::filesystem::path& path, std::string* key) {
   mesh.template_thickness = in.scalar("template_thickness");
   mesh.edge_length = in.scalar("edge_length");
   mesh.meshing_seconds = in.scalar("meshing_seconds");
-  const auto body_vertices = static_cast<std::int64_t>(in.scalar("body_vertices"));
+  return static_cast<std::int64_t>(in.scalar("body_vertices"));
+}
 
-  Region& region = mesh.region_surface;
+// Reads the region's names, vertices, faces, body faces and parts, checking every index.
+void cache_read_region_surface(const Loader& in, Region& region, std::int64_t body_vertices) {
   region.names = parse_region_names(in.text("region_names"));
   for (auto v : in.ints("region_vertices", 0)) {
     check_index(in, "region vertex", v, body_vertices);
@@ -238,11 +247,15 @@ LayerMesh load_layer_mesh(const std::filesystem::path& path, std::string* key) {
     check_index(in, "part", p, kNumParts);
     region.part.push_back(static_cast<Part>(p));
   }
+}
+
+// Reads the region's boundary loops, stored as their sizes and their concatenated local vertices.
+void cache_read_boundary_loops(const Loader& in, Region& region, std::int64_t count) {
   const auto loop_vertices = in.ints("loop_vertices", 0);
   std::size_t offset = 0;
   for (auto size : in.ints("loop_sizes", 0)) {
     require(size > 0 && offset + static_cast<std::size_t>(size) <= loop_vertices.size(),
-            "{}: corrupt layer mesh cache: boundary loop sizes do not match 'loop_vertices'", path.string());
+            "{}: corrupt layer mesh cache: boundary loop sizes do not match 'loop_vertices'", in.path().string());
     std::vector<int> loop;
     for (std::int64_t k = 0; k < size; ++k) {
       check_index(in, "loop vertex", loop_vertices[offset], count);
@@ -250,22 +263,28 @@ LayerMesh load_layer_mesh(const std::filesystem::path& path, std::string* key) {
     }
     region.boundary_loops.push_back(std::move(loop));
   }
+}
 
+// Reads the joint weights of the `count` region vertices.
+void cache_read_correspondence(const Loader& in, LayerMesh& mesh, std::int64_t count) {
   const auto correspondence = in.get("correspondence", 2, body::kNumJoints);
   require(static_cast<std::int64_t>(correspondence.shape[0]) == count,
-          "{}: corrupt layer mesh cache: 'correspondence' has {} rows, expected {}", path.string(),
+          "{}: corrupt layer mesh cache: 'correspondence' has {} rows, expected {}", in.path().string(),
           correspondence.shape[0], count);
   const auto c = correspondence.to_doubles();
   mesh.correspondence.joint_weights =
       Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(c.data(), count,
                                                                                                body::kNumJoints)
           .sparseView(1e-12);
+}
 
+// Reads the volume mesh's nodes, tets and node kinds.
+CacheVolumeSize cache_read_volume(const Loader& in, LayerMesh& mesh) {
   const auto nodes = in.get("nodes", 2, 3);
   const auto n = static_cast<std::int64_t>(nodes.shape[0]);
   const auto node_values = nodes.to_doubles();
   mesh.nodes = Eigen::Map<const RowMatrixX3d>(node_values.data(), n, 3);
-  require(mesh.nodes.allFinite(), "{}: corrupt layer mesh cache: 'nodes' has non-finite values", path.string());
+  require(mesh.nodes.allFinite(), "{}: corrupt layer mesh cache: 'nodes' has non-finite values", in.path().string());
   const auto tets = in.get("tets", 2, 4);
   const auto tet_values = tets.to_int64();
   mesh.tets.resize(static_cast<Eigen::Index>(tets.shape[0]), 4);
@@ -277,12 +296,17 @@ LayerMesh load_layer_mesh(const std::filesystem::path& path, std::string* key) {
     check_index(in, "node kind", k, 4);
     mesh.kind.push_back(static_cast<NodeKind>(k));
   }
+  return {n, tets.shape[0]};
+}
+
+// Reads each node's anchor on the region surface; every boundary node must have one.
+void cache_read_anchors(const Loader& in, LayerMesh& mesh, std::int64_t n, std::int64_t count) {
   const auto anchor_vertex = in.get("anchor_vertex", 2, 3).to_int64();
   const auto anchor_weight = in.get("anchor_weight", 2, 3).to_doubles();
   const auto anchor_depth = in.get("anchor_depth", 1).to_doubles();
   require(anchor_vertex.size() == static_cast<std::size_t>(3 * n) && anchor_weight.size() == anchor_vertex.size() &&
               anchor_depth.size() == static_cast<std::size_t>(n),
-          "{}: corrupt layer mesh cache: anchor arrays do not have one row per node", path.string());
+          "{}: corrupt layer mesh cache: anchor arrays do not have one row per node", in.path().string());
   mesh.anchor.resize(static_cast<std::size_t>(n));
   for (std::int64_t i = 0; i < n; ++i) {
     auto& a = mesh.anchor[static_cast<std::size_t>(i)];
@@ -294,30 +318,58 @@ LayerMesh load_layer_mesh(const std::filesystem::path& path, std::string* key) {
     }
     a.depth = anchor_depth[static_cast<std::size_t>(i)];
     require(a.valid() || mesh.kind[static_cast<std::size_t>(i)] == NodeKind::interior,
-            "{}: corrupt layer mesh cache: boundary node {} has no anchor", path.string(), i);
+            "{}: corrupt layer mesh cache: boundary node {} has no anchor", in.path().string(), i);
   }
-  for (auto p : in.ints("node_part", static_cast<std::size_t>(n))) {
+}
+
+// Reads the body part of each node and of each tet.
+void cache_read_parts(const Loader& in, LayerMesh& mesh, const CacheVolumeSize& volume) {
+  for (auto p : in.ints("node_part", static_cast<std::size_t>(volume.nodes))) {
     check_index(in, "node part", p, kNumParts);
     mesh.node_part.push_back(static_cast<Part>(p));
   }
-  for (auto p : in.ints("tet_part", tets.shape[0])) {
+  for (auto p : in.ints("tet_part", volume.tets)) {
     check_index(in, "tet part", p, kNumParts);
     mesh.tet_part.push_back(static_cast<Part>(p));
   }
+}
+
+// Reads the embedding of the `count` region vertices in the volume mesh (node, tet, barycentric coordinates).
+void cache_read_skin(const Loader& in, LayerMesh& mesh, const CacheVolumeSize& volume, std::int64_t count) {
   for (auto v : in.ints("skin_node", static_cast<std::size_t>(count))) {
-    if (v >= 0) check_index(in, "skin node", v, n);
+    if (v >= 0) check_index(in, "skin node", v, volume.nodes);
     mesh.skin.node.push_back(static_cast<int>(v));
   }
   for (auto t : in.ints("skin_tet", static_cast<std::size_t>(count))) {
-    check_index(in, "skin tet", t, static_cast<std::int64_t>(tets.shape[0]));
+    check_index(in, "skin tet", t, static_cast<std::int64_t>(volume.tets));
     mesh.skin.tet.push_back(static_cast<int>(t));
   }
   const auto bary = in.get("skin_bary", 2, 4).to_doubles();
   require(bary.size() == static_cast<std::size_t>(4 * count), "{}: corrupt layer mesh cache: 'skin_bary' rows",
-          path.string());
+          in.path().string());
   for (std::int64_t v = 0; v < count; ++v)
     mesh.skin.bary.emplace_back(bary[static_cast<std::size_t>(4 * v)], bary[static_cast<std::size_t>(4 * v + 1)],
                                 bary[static_cast<std::size_t>(4 * v + 2)], bary[static_cast<std::size_t>(4 * v + 3)]);
+}
+
+}  // namespace
+
+LayerMesh load_layer_mesh(const std::filesystem::path& path, std::string* key) {
+  const Loader in(path);
+  LayerMesh mesh;
+  const std::int64_t body_vertices = cache_read_metadata(in, mesh, key);
+
+  Region& region = mesh.region_surface;
+  cache_read_region_surface(in, region, body_vertices);
+  const auto count = static_cast<std::int64_t>(region.vertices.size());
+  cache_read_boundary_loops(in, region, count);
+
+  cache_read_correspondence(in, mesh, count);
+
+  const CacheVolumeSize volume = cache_read_volume(in, mesh);
+  cache_read_anchors(in, mesh, volume.nodes, count);
+  cache_read_parts(in, mesh, volume);
+  cache_read_skin(in, mesh, volume, count);
   return mesh;
 }
 

@@ -204,23 +204,32 @@ std::string region_key(const std::vector<std::string>& names) {
   return key;
 }
 
-Region select_region(const body::BodyModel& model, const std::vector<std::string>& names) {
-  const int n = static_cast<int>(model.num_vertices());
-  const auto& faces = model.faces;
-  // Parts asked for, and per vertex the weight of each part's joints.
+namespace {
+
+// The parts asked for by the region names, as a flag per part.
+std::vector<char> region_wanted_parts(const std::vector<std::string>& names) {
   std::vector<char> wanted(kNumParts, 0);
   for (const auto& name : names) {
     const auto parts = parts_of(name);
     require(!parts.empty(), "region: unknown name '{}'", name);
     for (Part p : parts) wanted[static_cast<int>(p)] = 1;
   }
+  return wanted;
+}
+
+// Per vertex the summed skinning weight of each part's joints (#V by kNumParts).
+Eigen::MatrixXd region_part_weights(const body::BodyModel& model, int n) {
   Eigen::MatrixXd part_weight = Eigen::MatrixXd::Zero(n, kNumParts);
   for (const auto& entry : part_table())
     for (const char* joint : entry.joints)
       part_weight.col(static_cast<int>(entry.part)) += model.weights.col(body::joint_index(joint));
+  return part_weight;
+}
 
-  // Score: summed weight of the wanted parts, smoothed by a few Jacobi sweeps of the uniform
-  // Laplacian (removes the staircase of per-vertex weights before thresholding).
+// Score: summed weight of the wanted parts, smoothed by a few Jacobi sweeps of the uniform
+// Laplacian (removes the staircase of per-vertex weights before thresholding).
+Eigen::VectorXd region_smoothed_score(const Eigen::MatrixXd& part_weight, const std::vector<char>& wanted,
+                                      const body::RowMatrixX3i& faces, int n) {
   Eigen::VectorXd score = Eigen::VectorXd::Zero(n);
   for (int p = 0; p < kNumParts; ++p)
     if (wanted[p]) score += part_weight.col(p);
@@ -240,7 +249,11 @@ Region select_region(const body::BodyModel& model, const std::vector<std::string
     }
     score = next;
   }
+  return score;
+}
 
+// The faces whose mean score exceeds ½, cleaned of teeth, notches, islands, holes and pinched vertices.
+std::vector<char> region_selected_faces(const Eigen::VectorXd& score, const body::RowMatrixX3i& faces, int n) {
   std::vector<char> selected(faces.rows(), 0);
   for (int f = 0; f < faces.rows(); ++f)
     selected[f] = (score(faces(f, 0)) + score(faces(f, 1)) + score(faces(f, 2))) / 3.0 > 0.5;
@@ -251,9 +264,12 @@ Region select_region(const body::BodyModel& model, const std::vector<std::string
     if (fix_pinched_vertices(selected, faces, n, neighbours) == 0) break;
   }
   clean_teeth(selected, neighbours);
+  return selected;
+}
 
-  Region region;
-  region.names = names;
+// Fills the region's vertices, local indices, faces (in local indices) and body faces from the selection.
+void region_gather_faces(Region& region, const std::vector<char>& selected, const body::RowMatrixX3i& faces, int n,
+                         const std::vector<std::string>& names) {
   region.local_of.assign(n, -1);
   std::vector<int> face_list;
   for (int f = 0; f < faces.rows(); ++f)
@@ -271,6 +287,10 @@ Region select_region(const body::BodyModel& model, const std::vector<std::string
   for (std::size_t i = 0; i < face_list.size(); ++i)
     for (int e = 0; e < 3; ++e) region.faces(static_cast<Eigen::Index>(i), e) = region.local_of[faces(face_list[i], e)];
   region.body_faces = face_list;
+}
+
+// Gives each region vertex the wanted part of largest weight.
+void region_assign_parts(Region& region, const Eigen::MatrixXd& part_weight, const std::vector<char>& wanted) {
   region.part.resize(region.vertices.size());
   for (std::size_t i = 0; i < region.vertices.size(); ++i) {
     int best = -1;
@@ -279,8 +299,10 @@ Region select_region(const body::BodyModel& model, const std::vector<std::string
         best = p;
     region.part[i] = static_cast<Part>(best);
   }
+}
 
-  // Boundary loops: directed boundary edges a → b of the region faces, chained.
+// Boundary loops: directed boundary edges a → b of the region faces, chained.
+void region_boundary_loops(Region& region, const std::vector<std::string>& names) {
   std::map<Edge, int> count;
   for (Eigen::Index f = 0; f < region.faces.rows(); ++f)
     for (int e = 0; e < 3; ++e) ++count[undirected(region.faces(f, e), region.faces(f, (e + 1) % 3))];
@@ -310,6 +332,24 @@ Region select_region(const body::BodyModel& model, const std::vector<std::string
             region.vertices[start]);
     region.boundary_loops.push_back(std::move(loop));
   }
+}
+
+}  // namespace
+
+Region select_region(const body::BodyModel& model, const std::vector<std::string>& names) {
+  const int n = static_cast<int>(model.num_vertices());
+  const auto& faces = model.faces;
+  // Parts asked for, and per vertex the weight of each part's joints.
+  const std::vector<char> wanted = region_wanted_parts(names);
+  const Eigen::MatrixXd part_weight = region_part_weights(model, n);
+  const Eigen::VectorXd score = region_smoothed_score(part_weight, wanted, faces, n);
+  const std::vector<char> selected = region_selected_faces(score, faces, n);
+
+  Region region;
+  region.names = names;
+  region_gather_faces(region, selected, faces, n, names);
+  region_assign_parts(region, part_weight, wanted);
+  region_boundary_loops(region, names);
   return region;
 }
 

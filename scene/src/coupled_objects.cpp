@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 namespace sflsh::scene::detail {
 
@@ -266,6 +267,83 @@ bool CoupledObjects::accept_substep(const RowMatrixX3d& P_end, const Eigen::Vect
   return accepted;
 }
 
+namespace {
+
+/// A sample's penalty contact with an obstacle at the substep's end (body frame).
+struct CoupledSampleContact {
+  double energy = 0.0;                   ///< u [J]
+  Vector6d gradient = Vector6d::Zero();  ///< ∂u/∂y
+  double phi = 0.0;                      ///< the sample's gap [m]
+  FrictionContact lagged;                ///< the friction contact it leaves to the next substep
+};
+
+/// A skin point's penalty contact with an object's shape at the substep's end (body frame).
+struct CoupledPointContact {
+  double energy = 0.0;                   ///< u [J]
+  Vector9d gradient = Vector9d::Zero();  ///< ∂u/∂(p, y)
+  PointGap gap;                          ///< φ, normal and closest point on the shape
+  FrictionContact lagged;                ///< the friction contact it leaves to the next substep
+};
+
+/// Clears the contact forces and energy of an object's report before a substep's are summed into it.
+void coupled_clear_contact_forces(RigidStepReport& r) {
+  r.obstacle_force.setZero();
+  r.surface_force.setZero();
+  r.rigid_surface_force.setZero();
+  r.surface_friction_force.setZero();
+  r.contact_energy = 0.0;
+}
+
+/// The contact of `sample` (its stiffness factored in) with `obstacle` at the frame; nullopt when it does not touch.
+std::optional<CoupledSampleContact> coupled_sample_contact(const Obstacle& obstacle, const RigidSample& sample,
+                                                           double margin, const ObjectFrame& frame) {
+  CoupledSampleContact c;
+  c.energy = sample_penalty(obstacle, sample, margin, frame, &c.gradient, nullptr);
+  if (!(c.energy > 0.0)) return std::nullopt;
+  Eigen::Vector3d n;
+  c.phi = sample_gap(obstacle, sample, frame, &n);
+  c.lagged.point = sample.point - sample.radius * (frame.R.transpose() * n);
+  c.lagged.normal = n;
+  c.lagged.normal_force = sample.stiffness * (margin - c.phi);
+  return c;
+}
+
+/// The contact of the skin point `p` of stiffness `k` [N/m] with `shape` at the frame; nullopt when it does not touch.
+std::optional<CoupledPointContact> coupled_point_contact(const Obstacle& shape, const Eigen::Vector3d& p, double k,
+                                                         double margin, const ObjectFrame& frame) {
+  CoupledPointContact c;
+  c.energy = point_penalty(shape, p, k, margin, frame, &c.gradient, nullptr);
+  if (!(c.energy > 0.0)) return std::nullopt;
+  c.gap = point_gap(shape, p, frame);
+  c.lagged.point = c.gap.local_closest;
+  c.lagged.normal = c.gap.normal;
+  c.lagged.normal_force = k * (margin - c.gap.phi);
+  return c;
+}
+
+/// Adds the friction of one lagged contact at the substep's end to the report (its work, its force on the object);
+/// returns −(its force on the point p).
+Eigen::Vector3d coupled_add_friction(const FrictionContact& contact, const Eigen::Vector3d& p,
+                                     const Eigen::Vector3d& p0, double mu, double epsilon, const ObjectFrame& frame,
+                                     RigidStepReport& r) {
+  Vector9d g = Vector9d::Zero();
+  r.friction_work += point_friction(contact, p, p0, mu, epsilon, frame, &g, nullptr);
+  r.surface_friction_force -= g.segment<3>(3);
+  return g.head<3>();
+}
+
+/// The new state (backward Euler): v = Δx/h, ω = θ/h since R R_nᵀ = exp([θ]×).
+RigidState coupled_next_state(const ObjectFrame& frame, const Vector6d& yo, double dt) {
+  RigidState next;
+  next.placement.x = frame.x;
+  next.placement.R = orthonormal(frame.R);
+  next.velocity = yo.head<3>() / dt;
+  next.angular_velocity = yo.tail<3>() / dt;
+  return next;
+}
+
+}  // namespace
+
 void CoupledObjects::commit_substep(const RowMatrixX3d& P_end, const Eigen::VectorXd& y) {
   const ScopedSeconds timer(seconds_);
   const RigidObjectParameters& prm = setup_.parameters;
@@ -279,54 +357,34 @@ void CoupledObjects::commit_substep(const RowMatrixX3d& P_end, const Eigen::Vect
     const ObjectFrame frame(object.state.placement, yo);
     RigidStepReport& r = object.report;
     // Forces on the object at the substep's end: −∂u/∂Δx of each contact [N].
-    r.obstacle_force.setZero();
-    r.surface_force.setZero();
-    r.rigid_surface_force.setZero();
-    r.surface_friction_force.setZero();
-    r.contact_energy = 0.0;
+    coupled_clear_contact_forces(r);
     double penetration = 0.0;
     std::vector<Lagged> lagged;
     for (std::size_t s = 0; s < object.samples.size(); ++s) {
       RigidSample sample = object.samples[s];
       sample.stiffness *= object.sample_factor[s];
       for (const Obstacle* obstacle : posed_) {
-        Vector6d g = Vector6d::Zero();
-        const double u = sample_penalty(*obstacle, sample, prm.margin, frame, &g, nullptr);
-        if (!(u > 0.0)) continue;
-        r.contact_energy += u;
-        r.obstacle_force -= g.head<3>();
-        Eigen::Vector3d n;
-        const double phi = sample_gap(*obstacle, sample, frame, &n);
-        penetration = std::max(penetration, -phi);
-        Lagged l;
-        l.kind = Kind::obstacle;
-        l.contact.point = sample.point - sample.radius * (frame.R.transpose() * n);
-        l.contact.normal = n;
-        l.contact.normal_force = sample.stiffness * (prm.margin - phi);
-        lagged.push_back(l);
+        const std::optional<CoupledSampleContact> c = coupled_sample_contact(*obstacle, sample, prm.margin, frame);
+        if (!c) continue;
+        r.contact_energy += c->energy;
+        r.obstacle_force -= c->gradient.head<3>();
+        penetration = std::max(penetration, -c->phi);
+        lagged.push_back(Lagged{Kind::obstacle, -1, c->lagged});
       }
     }
     auto touch = [&](const Eigen::Vector3d& p, double k, Kind kind, int id, bool soft) {
-      Vector9d g = Vector9d::Zero();
-      const double u = point_penalty(shape, p, k, prm.margin, frame, &g, nullptr);
-      if (!(u > 0.0)) return false;
-      r.contact_energy += u;
-      const Eigen::Vector3d f = -g.segment<3>(3);
+      const std::optional<CoupledPointContact> c = coupled_point_contact(shape, p, k, prm.margin, frame);
+      if (!c) return false;
+      r.contact_energy += c->energy;
+      const Eigen::Vector3d f = -c->gradient.segment<3>(3);
       r.surface_force += f;
       if (!soft) r.rigid_surface_force += f;
-      const PointGap gap = point_gap(shape, p, frame);
-      penetration = std::max(penetration, -gap.phi);
+      penetration = std::max(penetration, -c->gap.phi);
       if (kind == Kind::node) {
-        node_force_[static_cast<std::size_t>(id)] -= g.head<3>();
-        node_depth_[static_cast<std::size_t>(id)] = std::max(node_depth_[static_cast<std::size_t>(id)], -gap.phi);
+        node_force_[static_cast<std::size_t>(id)] -= c->gradient.head<3>();
+        node_depth_[static_cast<std::size_t>(id)] = std::max(node_depth_[static_cast<std::size_t>(id)], -c->gap.phi);
       }
-      Lagged l;
-      l.kind = kind;
-      l.id = id;
-      l.contact.point = gap.local_closest;
-      l.contact.normal = gap.normal;
-      l.contact.normal_force = k * (prm.margin - gap.phi);
-      lagged.push_back(l);
+      lagged.push_back(Lagged{kind, id, c->lagged});
       return true;
     };
     std::unordered_map<int, double> node_factor, rigid_factor;  // kept only while touching
@@ -350,23 +408,15 @@ void CoupledObjects::commit_substep(const RowMatrixX3d& P_end, const Eigen::Vect
                                                        : Eigen::Vector3d(rigid_end_.row(l.id).transpose());
         const Eigen::Vector3d p0 = l.kind == Kind::node ? Eigen::Vector3d(p_start_.row(c).transpose())
                                                         : Eigen::Vector3d(rigid_start_.row(l.id).transpose());
-        Vector9d g = Vector9d::Zero();
-        r.friction_work += point_friction(l.contact, p, p0, mu, epsilon_, frame, &g, nullptr);
-        r.surface_friction_force -= g.segment<3>(3);
-        if (l.kind == Kind::node) node_force_[static_cast<std::size_t>(l.id)] -= g.head<3>();
+        const Eigen::Vector3d g_p = coupled_add_friction(l.contact, p, p0, mu, epsilon_, frame, r);
+        if (l.kind == Kind::node) node_force_[static_cast<std::size_t>(l.id)] -= g_p;
       }
     r.max_penetration = std::max(r.max_penetration, penetration);
     r.unresolved = r.unresolved || penetration > prm.tolerance;
     object.node_factor = std::move(node_factor);
     object.rigid_factor = std::move(rigid_factor);
     object.lagged = std::move(lagged);
-    // The new state (backward Euler): v = Δx/h, ω = θ/h since R R_nᵀ = exp([θ]×).
-    RigidState next;
-    next.placement.x = frame.x;
-    next.placement.R = orthonormal(frame.R);
-    next.velocity = yo.head<3>() / dt_;
-    next.angular_velocity = yo.tail<3>() / dt_;
-    object.state = next;
+    object.state = coupled_next_state(frame, yo, dt_);
   }
 }
 

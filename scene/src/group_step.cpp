@@ -120,6 +120,98 @@ std::vector<std::size_t> GroupStep::touched_bodies(std::size_t b) const {
   return out;
 }
 
+namespace {
+
+// Where a cluster's exchanged surfaces lie in one stacked vector (3 entries per vertex, world).
+struct ClusterExchangeLayout {
+  std::vector<std::size_t> felt;     ///< cluster positions of the exchanged surfaces
+  std::vector<Eigen::Index> offset;  ///< where each felt surface starts; the last entry is the total size
+};
+
+// The surfaces some other body of the cluster feels (has a body-contact potential against): only they are
+// exchanged (a skinned body's potential-free solve reads no surface).
+ClusterExchangeLayout cluster_exchange_layout(const std::vector<std::size_t>& cluster,
+                                              const std::vector<std::unique_ptr<SceneBody>>& bodies,
+                                              const std::vector<BodyContact>& contact) {
+  const std::size_t n = cluster.size();
+  ClusterExchangeLayout layout;
+  std::vector<std::size_t>& felt = layout.felt;
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = 0; j < n; ++j)
+      if (j != i && contact[cluster[j]].bodies) {
+        felt.push_back(i);
+        break;
+      }
+  std::vector<Eigen::Index>& offset = layout.offset;
+  offset.assign(felt.size() + 1, 0);
+  for (std::size_t k = 0; k < felt.size(); ++k)
+    offset[k + 1] = offset[k] + 3 * static_cast<Eigen::Index>(bodies[cluster[felt[k]]]->model().num_vertices());
+  return layout;
+}
+
+// Copies the felt surfaces, `surface(i)` for cluster position i, into the stacked vector `stacked`.
+template <typename Surface>
+void cluster_exchange_stack(const ClusterExchangeLayout& layout, const Surface& surface, Eigen::VectorXd& stacked) {
+  const std::vector<Eigen::Index>& offset = layout.offset;
+  for (std::size_t k = 0; k < layout.felt.size(); ++k)
+    stacked.segment(offset[k], offset[k + 1] - offset[k]) =
+        Eigen::Map<const Eigen::VectorXd>(surface(layout.felt[k]).data(), offset[k + 1] - offset[k]);
+}
+
+// Copies the stacked vector `stacked` back into the felt surfaces of `surfaces` (per cluster position).
+void cluster_exchange_unstack(const ClusterExchangeLayout& layout, const Eigen::VectorXd& stacked,
+                              std::vector<RowMatrixX3d>& surfaces) {
+  const std::vector<Eigen::Index>& offset = layout.offset;
+  for (std::size_t k = 0; k < layout.felt.size(); ++k)
+    surfaces[layout.felt[k]] =
+        Eigen::Map<const RowMatrixX3d>(stacked.data() + offset[k], (offset[k + 1] - offset[k]) / 3, 3);
+}
+
+// The largest move of a surface vertex from x to y [m].
+double cluster_exchange_largest_move(const Eigen::VectorXd& x, const Eigen::VectorXd& y) {
+  double largest = 0.0;
+  for (Eigen::Index v = 0; v < x.size() / 3; ++v)
+    largest = std::max(largest, (y.segment<3>(3 * v) - x.segment<3>(3 * v)).norm());
+  return largest;
+}
+
+// Restart: the quasi-Newton model is dropped when kStall exchanges have not brought the residual norm below
+// kProgress of the best so far (a contact set that changed makes the old differences mislead it). Tracks the
+// residual norm `norm` in `best` and `since_best`; returns whether to restart now.
+bool cluster_exchange_stalled(double norm, double& best, int& since_best) {
+  constexpr int kStall = 4;
+  constexpr double kProgress = 0.9;
+  if (norm < kProgress * best) {
+    best = norm;
+    since_best = 0;
+  } else if (++since_best >= kStall) {
+    best = norm;
+    since_best = 0;
+    return true;
+  }
+  return false;
+}
+
+// Logs how a cluster's exchange ended at t1: a warning when it did not converge, the figures at debug level.
+void cluster_exchange_log(const ExchangeRecord& r, const std::vector<std::size_t>& cluster,
+                          const std::vector<std::unique_ptr<SceneBody>>& bodies, const ContactSpec& contact,
+                          double t1) {
+  if (!r.converged) {
+    std::string names;
+    for (std::size_t b : cluster) names += (names.empty() ? "" : ", ") + bodies[b]->name();
+    logger()->warn(
+        "body contact: bodies {} did not agree within [contact] max_exchanges = {} at t = {:.4f} s (surfaces "
+        "{:.3f} mm apart, tolerance {:.3f} mm; contact force changed {:.1f} %); the last solve is kept",
+        names, contact.max_exchanges, t1, 1e3 * r.surface_residual, 1e3 * contact.exchange_tolerance,
+        100.0 * r.force_change);
+  }
+  logger()->debug("body contact at t = {:.4f} s: {} exchanges, surfaces {:.4f} mm, residual penetration {:.3f} mm{}",
+                  t1, r.exchanges, 1e3 * r.surface_residual, 1e3 * r.residual_penetration,
+                  r.converged ? "" : " (not converged)");
+}
+
+}  // namespace
+
 // The exchange of a touching cluster within a step (body_exchange.hpp): x, the cluster's surfaces the bodies are
 // solved against (first: predicted), y = H(x), the surfaces they give. Converged when no vertex of y moved more
 // than exchange_tolerance from x and the cluster's summed contact force changed by at most kForceChange since
@@ -132,28 +224,15 @@ ExchangeRecord GroupStep::exchange_cluster(const std::vector<std::size_t>& clust
   constexpr double kForceFloor = 1e-3;   // [N] below which a summed contact force counts as none
   const double t1 = t0 + h;
   const std::size_t n = cluster.size();
-  // The surfaces some other body of the cluster feels (has a body-contact potential against): only they are
-  // exchanged (a skinned body's potential-free solve reads no surface).
-  std::vector<std::size_t> felt;
-  for (std::size_t i = 0; i < n; ++i)
-    for (std::size_t j = 0; j < n; ++j)
-      if (j != i && contact_[cluster[j]].bodies) {
-        felt.push_back(i);
-        break;
-      }
-  std::vector<Eigen::Index> offset(felt.size() + 1, 0);
-  for (std::size_t k = 0; k < felt.size(); ++k)
-    offset[k + 1] = offset[k] + 3 * static_cast<Eigen::Index>(bodies_[cluster[felt[k]]]->model().num_vertices());
-  Eigen::VectorXd x(offset.back()), y(offset.back());
-  for (std::size_t k = 0; k < felt.size(); ++k)
-    x.segment(offset[k], offset[k + 1] - offset[k]) =
-        Eigen::Map<const Eigen::VectorXd>(predicted[cluster[felt[k]]].data(), offset[k + 1] - offset[k]);
+  const ClusterExchangeLayout layout = cluster_exchange_layout(cluster, bodies_, contact_);
+  Eigen::VectorXd x(layout.offset.back()), y(layout.offset.back());
+  cluster_exchange_stack(
+      layout, [&](std::size_t i) -> const RowMatrixX3d& { return predicted[cluster[i]]; }, x);
   std::vector<RowMatrixX3d> out(n), seen(n);
   auto gather = [&]() {
     for (std::size_t i = 0; i < n; ++i) out[i] = bodies_[cluster[i]]->world_surface();
-    for (std::size_t k = 0; k < felt.size(); ++k)
-      y.segment(offset[k], offset[k + 1] - offset[k]) =
-          Eigen::Map<const Eigen::VectorXd>(out[felt[k]].data(), offset[k + 1] - offset[k]);
+    cluster_exchange_stack(
+        layout, [&](std::size_t i) -> const RowMatrixX3d& { return out[i]; }, y);
   };
   gather();
   double force = cluster_force(cluster), previous_force = -1.0;
@@ -162,25 +241,13 @@ ExchangeRecord GroupStep::exchange_cluster(const std::vector<std::size_t>& clust
   r.bodies = cluster;
   r.exchanges = 1;
   auto accelerator = std::make_unique<ExchangeAccelerator>(0.5);
-  // Restart: the quasi-Newton model is dropped when kStall exchanges have not brought the residual norm below
-  // kProgress of the best so far (a contact set that changed makes the old differences mislead it).
-  constexpr int kStall = 4;
-  constexpr double kProgress = 0.9;
   double best = std::numeric_limits<double>::infinity();
   int since_best = 0;
   bool penetration_known = false;
   for (;;) {
-    r.surface_residual = 0.0;
-    for (Eigen::Index v = 0; v < offset.back() / 3; ++v)
-      r.surface_residual = std::max(r.surface_residual, (y.segment<3>(3 * v) - x.segment<3>(3 * v)).norm());
-    const double norm = (y - x).norm();
-    if (norm < kProgress * best) {
-      best = norm;
-      since_best = 0;
-    } else if (++since_best >= kStall) {
+    r.surface_residual = cluster_exchange_largest_move(x, y);
+    if (cluster_exchange_stalled((y - x).norm(), best, since_best)) {
       accelerator = std::make_unique<ExchangeAccelerator>(0.5);
-      best = norm;
-      since_best = 0;
       ++r.restarts;
     }
     r.force_change = previous_force < 0.0 ? 0.0 : std::abs(force - previous_force) / std::max(force, kForceFloor);
@@ -199,8 +266,7 @@ ExchangeRecord GroupStep::exchange_cluster(const std::vector<std::size_t>& clust
     }
     if (r.exchanges >= scene_.contact.max_exchanges) break;
     x = accelerator->next(x, y);
-    for (std::size_t k = 0; k < felt.size(); ++k)
-      seen[felt[k]] = Eigen::Map<const RowMatrixX3d>(x.data() + offset[k], (offset[k + 1] - offset[k]) / 3, 3);
+    cluster_exchange_unstack(layout, x, seen);
     for (std::size_t i = 0; i < n; ++i) {
       restore_step_start(cluster[i]);
       see_bodies(
@@ -219,18 +285,7 @@ ExchangeRecord GroupStep::exchange_cluster(const std::vector<std::size_t>& clust
   }
   if (!penetration_known) r.residual_penetration = cluster_penetration(cluster, out);
   r.residual_penetration = std::max(0.0, r.residual_penetration);
-  if (!r.converged) {
-    std::string names;
-    for (std::size_t b : cluster) names += (names.empty() ? "" : ", ") + bodies_[b]->name();
-    logger()->warn(
-        "body contact: bodies {} did not agree within [contact] max_exchanges = {} at t = {:.4f} s (surfaces "
-        "{:.3f} mm apart, tolerance {:.3f} mm; contact force changed {:.1f} %); the last solve is kept",
-        names, scene_.contact.max_exchanges, t1, 1e3 * r.surface_residual, 1e3 * scene_.contact.exchange_tolerance,
-        100.0 * r.force_change);
-  }
-  logger()->debug("body contact at t = {:.4f} s: {} exchanges, surfaces {:.4f} mm, residual penetration {:.3f} mm{}",
-                  t1, r.exchanges, 1e3 * r.surface_residual, 1e3 * r.residual_penetration,
-                  r.converged ? "" : " (not converged)");
+  cluster_exchange_log(r, cluster, bodies_, scene_.contact, t1);
   return r;
 }
 

@@ -119,6 +119,130 @@ RigidStepReport RigidObject::step(double h, const std::vector<const Obstacle*>& 
               failure);
 }
 
+namespace {
+
+/// The surface points a rigid object's step can reach, with what its contacts need of each.
+struct RigidStepNearbyPoints {
+  std::vector<Eigen::Vector3d> points, moved;
+  std::vector<double> stiffness;
+  std::vector<char> rigid;
+  std::vector<std::pair<std::size_t, std::size_t>> origin;  // (surface, point) of each point
+};
+
+/// Broad phase: the surface points within `reach` of the object's position `x`, plus their own motion.
+RigidStepNearbyPoints rigid_step_nearby_points(const std::vector<SurfacePoints>& surfaces, const Eigen::Vector3d& x,
+                                               double reach) {
+  RigidStepNearbyPoints nearby;
+  for (std::size_t si = 0; si < surfaces.size(); ++si)
+    for (std::size_t i = 0; i < surfaces[si].end.size(); ++i) {
+      const SurfacePoints& s = surfaces[si];
+      const Eigen::Vector3d d = s.end[i] - s.start[i];
+      if ((s.end[i] - x).norm() < reach + d.norm()) {
+        nearby.points.push_back(s.end[i]);
+        nearby.moved.push_back(d);
+        nearby.stiffness.push_back(s.stiffness[i]);
+        nearby.rigid.push_back(s.rigid.empty() ? 0 : s.rigid[i]);
+        nearby.origin.emplace_back(si, i);
+      }
+    }
+  return nearby;
+}
+
+/// Friction contacts (point, other side's motion, normal, normal force) lagged from a placement.
+std::vector<FrictionContact> rigid_step_friction_contacts(const RigidPlacement& P,
+                                                          const RigidObstacleContactTerm& on_obstacles,
+                                                          const std::vector<const Obstacle*>& obstacles,
+                                                          const ObjectSurfaceContactTerm& on_surfaces,
+                                                          const RigidStepNearbyPoints& nearby, double delta) {
+  std::vector<FrictionContact> contacts;
+  for (std::size_t s = 0; s < on_obstacles.samples().size(); ++s)
+    for (std::size_t j = 0; j < obstacles.size(); ++j) {
+      Eigen::Vector3d n;
+      const double phi = on_obstacles.gap(P, s, j, &n);
+      if (!(phi < delta)) continue;
+      const RigidSample& sample = on_obstacles.samples()[s];
+      contacts.push_back({sample.point - sample.radius * P.R.transpose() * n, Eigen::Vector3d::Zero(), n,
+                          sample.stiffness * (delta - phi)});
+    }
+  for (std::size_t i = 0; i < nearby.points.size(); ++i) {
+    Eigen::Vector3d n;
+    const double phi = on_surfaces.gap(P, i, &n);
+    if (!(phi < delta)) continue;
+    const Eigen::Vector3d closest = P.R.transpose() * (nearby.points[i] - phi * n - P.x);  // on the object's surface
+    contacts.push_back({closest, nearby.moved[i], n, on_surfaces.stiffness(i) * (delta - phi), static_cast<int>(i)});
+  }
+  return contacts;
+}
+
+/// The friction each surface point exerts at the solution, for the other side's reaction.
+void rigid_step_surface_friction(const RigidFrictionTerm& friction, const RigidPlacement& placement,
+                                 const std::vector<SurfacePoints>& surfaces, const RigidStepNearbyPoints& nearby,
+                                 RigidStepReport& report) {
+  report.surface_friction.assign(surfaces.size(), {});
+  for (std::size_t si = 0; si < surfaces.size(); ++si)
+    report.surface_friction[si].assign(surfaces[si].end.size(), Eigen::Vector3d::Zero());
+  report.surface_friction_force.setZero();
+  const std::vector<Eigen::Vector3d> forces = friction.forces(placement);
+  for (std::size_t k = 0; k < forces.size(); ++k) {
+    const int source = friction.contacts()[k].source;
+    if (source < 0) continue;
+    const auto [si, i] = nearby.origin[static_cast<std::size_t>(source)];
+    report.surface_friction[si][i] += forces[k];
+    report.surface_friction_force += forces[k];
+  }
+}
+
+/// Penetration at the end: records the deepest in `report` and, when `stiffen`, stiffens every contact deeper
+/// than the tolerance; returns whether any was.
+bool rigid_step_stiffen_deep_contacts(RigidObstacleContactTerm& on_obstacles,
+                                      const std::vector<const Obstacle*>& obstacles,
+                                      ObjectSurfaceContactTerm& on_surfaces, std::size_t num_points,
+                                      const RigidPlacement& placement, const RigidObjectParameters& parameters,
+                                      bool stiffen, RigidStepReport& report) {
+  bool too_deep = false;
+  report.max_penetration = 0.0;
+  for (std::size_t s = 0; s < on_obstacles.samples().size(); ++s)
+    for (std::size_t j = 0; j < obstacles.size(); ++j) {
+      const double depth = -on_obstacles.gap(placement, s, j);
+      report.max_penetration = std::max(report.max_penetration, depth);
+      if (depth > parameters.tolerance) {
+        too_deep = true;
+        if (stiffen) on_obstacles.samples()[s].stiffness *= parameters.refinement_factor;
+      }
+    }
+  for (std::size_t i = 0; i < num_points; ++i) {
+    const double depth = -on_surfaces.gap(placement, i);
+    report.max_penetration = std::max(report.max_penetration, depth);
+    if (depth > parameters.tolerance) {
+      too_deep = true;
+      if (stiffen) on_surfaces.scale_stiffness(i, parameters.refinement_factor);
+    }
+  }
+  return too_deep;
+}
+
+/// The contact energy at the solution and the contact forces on the object: from the obstacles, from the
+/// surfaces, and the rigid surface points' share of the latter.
+void rigid_step_contact_forces(const RigidObstacleContactTerm& on_obstacles,
+                               const ObjectSurfaceContactTerm& on_surfaces, const RigidStepNearbyPoints& nearby,
+                               const RigidPlacement& placement, double delta, RigidStepReport& report) {
+  Vector6d g_obstacles = Vector6d::Zero(), g_surfaces = Vector6d::Zero();
+  report.contact_energy =
+      on_obstacles.evaluate(placement, &g_obstacles, nullptr) + on_surfaces.evaluate(placement, &g_surfaces, nullptr);
+  report.obstacle_force = -g_obstacles.head<3>();  // F = −∂u/∂x
+  report.surface_force = -g_surfaces.head<3>();
+  // The rigid points' share: u_i = ½ k_i (δ − φ_i)² pushes the object by −k_i (δ − φ_i) n_i (n_i: from the
+  // object's surface to the point).
+  for (std::size_t i = 0; i < nearby.points.size(); ++i) {
+    if (!nearby.rigid[i]) continue;
+    Eigen::Vector3d n;
+    const double phi = on_surfaces.gap(placement, i, &n);
+    if (phi < delta) report.rigid_surface_force -= on_surfaces.stiffness(i) * (delta - phi) * n;
+  }
+}
+
+}  // namespace
+
 RigidStepReport RigidObject::solve(double h, const std::vector<const Obstacle*>& obstacles,
                                    const std::vector<SurfacePoints>& surfaces) {
   const RigidPlacement start = state_.placement;
@@ -129,44 +253,10 @@ RigidStepReport RigidObject::solve(double h, const std::vector<const Obstacle*>&
   // Broad phase: surface points that can come within δ of the object in this step.
   const double reach = bounding_radius_ + delta + h * state_.velocity.norm() +
                        h * state_.angular_velocity.norm() * bounding_radius_ + 0.02;
-  std::vector<Eigen::Vector3d> points, moved;
-  std::vector<double> stiffness;
-  std::vector<char> rigid;
-  std::vector<std::pair<std::size_t, std::size_t>> origin;  // (surface, point) of each point
-  for (std::size_t si = 0; si < surfaces.size(); ++si)
-    for (std::size_t i = 0; i < surfaces[si].end.size(); ++i) {
-      const SurfacePoints& s = surfaces[si];
-      const Eigen::Vector3d d = s.end[i] - s.start[i];
-      if ((s.end[i] - start.x).norm() < reach + d.norm()) {
-        points.push_back(s.end[i]);
-        moved.push_back(d);
-        stiffness.push_back(s.stiffness[i]);
-        rigid.push_back(s.rigid.empty() ? 0 : s.rigid[i]);
-        origin.emplace_back(si, i);
-      }
-    }
-  ObjectSurfaceContactTerm on_surfaces(*shape_, points, stiffness, delta);
-
-  // Friction contacts (point, other side's motion, normal, normal force) lagged from a placement.
+  const RigidStepNearbyPoints nearby = rigid_step_nearby_points(surfaces, start.x, reach);
+  ObjectSurfaceContactTerm on_surfaces(*shape_, nearby.points, nearby.stiffness, delta);
   auto friction_at = [&](const RigidPlacement& P) {
-    std::vector<FrictionContact> contacts;
-    for (std::size_t s = 0; s < on_obstacles.samples().size(); ++s)
-      for (std::size_t j = 0; j < obstacles.size(); ++j) {
-        Eigen::Vector3d n;
-        const double phi = on_obstacles.gap(P, s, j, &n);
-        if (!(phi < delta)) continue;
-        const RigidSample& sample = on_obstacles.samples()[s];
-        contacts.push_back({sample.point - sample.radius * P.R.transpose() * n, Eigen::Vector3d::Zero(), n,
-                            sample.stiffness * (delta - phi)});
-      }
-    for (std::size_t i = 0; i < points.size(); ++i) {
-      Eigen::Vector3d n;
-      const double phi = on_surfaces.gap(P, i, &n);
-      if (!(phi < delta)) continue;
-      const Eigen::Vector3d closest = P.R.transpose() * (points[i] - phi * n - P.x);  // on the object's surface
-      contacts.push_back({closest, moved[i], n, on_surfaces.stiffness(i) * (delta - phi), static_cast<int>(i)});
-    }
-    return contacts;
+    return rigid_step_friction_contacts(P, on_obstacles, obstacles, on_surfaces, nearby, delta);
   };
 
   RigidNewtonSettings settings;
@@ -187,42 +277,13 @@ RigidStepReport RigidObject::solve(double h, const std::vector<const Obstacle*>&
       contacts = friction_at(placement);
       if (update == parameters_.friction_updates) {
         report.friction_work = friction.evaluate(placement, nullptr, nullptr);
-        // The friction each surface point exerts at the solution, for the other side's reaction.
-        report.surface_friction.assign(surfaces.size(), {});
-        for (std::size_t si = 0; si < surfaces.size(); ++si)
-          report.surface_friction[si].assign(surfaces[si].end.size(), Eigen::Vector3d::Zero());
-        report.surface_friction_force.setZero();
-        const std::vector<Eigen::Vector3d> forces = friction.forces(placement);
-        for (std::size_t k = 0; k < forces.size(); ++k) {
-          const int source = friction.contacts()[k].source;
-          if (source < 0) continue;
-          const auto [si, i] = origin[static_cast<std::size_t>(source)];
-          report.surface_friction[si][i] += forces[k];
-          report.surface_friction_force += forces[k];
-        }
+        rigid_step_surface_friction(friction, placement, surfaces, nearby, report);
       }
     }
     // Penetration at the end: stiffen what is deeper than the tolerance and solve again.
-    bool too_deep = false;
-    report.max_penetration = 0.0;
-    for (std::size_t s = 0; s < on_obstacles.samples().size(); ++s)
-      for (std::size_t j = 0; j < obstacles.size(); ++j) {
-        const double depth = -on_obstacles.gap(placement, s, j);
-        report.max_penetration = std::max(report.max_penetration, depth);
-        if (depth > parameters_.tolerance) {
-          too_deep = true;
-          if (refinement < parameters_.max_refinements)
-            on_obstacles.samples()[s].stiffness *= parameters_.refinement_factor;
-        }
-      }
-    for (std::size_t i = 0; i < points.size(); ++i) {
-      const double depth = -on_surfaces.gap(placement, i);
-      report.max_penetration = std::max(report.max_penetration, depth);
-      if (depth > parameters_.tolerance) {
-        too_deep = true;
-        if (refinement < parameters_.max_refinements) on_surfaces.scale_stiffness(i, parameters_.refinement_factor);
-      }
-    }
+    const bool too_deep =
+        rigid_step_stiffen_deep_contacts(on_obstacles, obstacles, on_surfaces, nearby.points.size(), placement,
+                                         parameters_, refinement < parameters_.max_refinements, report);
     if (!too_deep) break;
     if (refinement == parameters_.max_refinements) {
       report.unresolved = true;
@@ -234,19 +295,7 @@ RigidStepReport RigidObject::solve(double h, const std::vector<const Obstacle*>&
   }
   if (!placement.x.allFinite() || !placement.R.allFinite()) throw_error("NaN/Inf in the placement after the solve");
 
-  Vector6d g_obstacles = Vector6d::Zero(), g_surfaces = Vector6d::Zero();
-  report.contact_energy =
-      on_obstacles.evaluate(placement, &g_obstacles, nullptr) + on_surfaces.evaluate(placement, &g_surfaces, nullptr);
-  report.obstacle_force = -g_obstacles.head<3>();  // F = −∂u/∂x
-  report.surface_force = -g_surfaces.head<3>();
-  // The rigid points' share: u_i = ½ k_i (δ − φ_i)² pushes the object by −k_i (δ − φ_i) n_i (n_i: from the
-  // object's surface to the point).
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    if (!rigid[i]) continue;
-    Eigen::Vector3d n;
-    const double phi = on_surfaces.gap(placement, i, &n);
-    if (phi < delta) report.rigid_surface_force -= on_surfaces.stiffness(i) * (delta - phi) * n;
-  }
+  rigid_step_contact_forces(on_obstacles, on_surfaces, nearby, placement, delta, report);
   // v_{n+1} = (x_{n+1} − x_n)/h,  ω_{n+1} = log(R_{n+1} R_nᵀ)/h (world).
   state_.velocity = (placement.x - start.x) / h;
   state_.angular_velocity = rotation_log(placement.R * start.R.transpose()) / h;

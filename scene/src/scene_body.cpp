@@ -127,48 +127,46 @@ void SceneBody::start(bool inertia) {
   t_ = 0.0;
   if (!soft()) return;
   const model::Problem& problem = layer_->problem;
+  run::SolverChoice choice;
+  choice.kind = solver_ == SolverKind::reduced ? run::SolverKind::reduced : run::SolverKind::full;
+  choice.integrator = spec_.integrator;
+  choice.quasi_static = quasi_static_;
   if (solver_ == SolverKind::reduced) {
-    reduced::ReducedOptions options;
-    options.quasi_static = quasi_static_;
-    options.integrator = spec_.integrator;
-    options.coupled = coupled_;
-    options.local = local_basis();
+    choice.reduced.coupled = coupled_;
+    choice.reduced.local = local_basis();
     if (spec_.tracking) {
       require(!quasi_static_, "scene body '{}': skeleton = \"tracking\" needs inertia ([effects] inertia = true)",
               name());
-      options.root.enabled = true;
-      options.root.stiffness = spec_.tracking_stiffness;
-      options.root.damping = spec_.tracking_damping;
-      options.root.free_translation = spec_.free_root;
+      reduced::RootTrackingOptions& root = choice.reduced.root;
+      root.enabled = true;
+      root.stiffness = spec_.tracking_stiffness;
+      root.damping = spec_.tracking_damping;
+      root.free_translation = spec_.free_root;
       // The pivot: the posed pelvis, M_0(t) (J_0, 1) with J_0 regressed from the shaped template.
       const Eigen::Vector3d pelvis = body::regress_joints(*layer_->model, layer_->shaped).row(0).transpose();
-      options.root.pivot = [curve = layer_->curve, pelvis](double t) {
+      root.pivot = [curve = layer_->curve, pelvis](double t) {
         model::JointTransforms m;
         curve->transforms(t, m);
         return Eigen::Vector3d(m[0].leftCols<3>() * pelvis + m[0].col(3));
       };
-      options.root.joints = joint_tracking_options(spec_, *layer_);
+      root.joints = joint_tracking_options(spec_, *layer_);
     }
-    fast_ = std::make_unique<reduced::ReducedSolver>(problem, reduced_model_->subspace,
-                                                     local_ ? local_cubature_ : reduced_model_->cubature, options);
-    fast_->initialize(model::initial_state(problem, 0.0));
-  } else {
-    fullspace::FullSpaceOptions options;
-    options.quasi_static = quasi_static_;
-    options.integrator = spec_.integrator;
-    full_ = std::make_unique<fullspace::FullSpaceSolver>(problem, MPI_COMM_WORLD, options);
-    full_->initialize(model::initial_state(problem, 0.0));
   }
+  const run::ReducedParts parts =
+      reduced_model_
+          ? run::ReducedParts{&reduced_model_->subspace, local_ ? &local_cubature_ : &reduced_model_->cubature}
+          : run::ReducedParts{};
+  built_ = run::make_body_solver(problem, choice, model::initial_state(problem, 0.0), parts);
 }
 
 model::State SceneBody::state() const {
   require(soft(), "scene body '{}': a skinned body has no elastic state", name());
-  if (!fast_ && !full_) return model::initial_state(layer_->problem, t_);  // before start()
-  return fast_ ? fast_->full_state() : full_->state();
+  if (!built_.reduced && !built_.full) return model::initial_state(layer_->problem, t_);  // before start()
+  return built_.reduced ? built_.reduced->full_state() : built_.full->state();
 }
 
 Eigen::VectorXd SceneBody::positions() const {
-  if (fast_) return fast_->positions();
+  if (built_.reduced) return built_.reduced->positions();
   return state().x;
 }
 
@@ -223,8 +221,8 @@ void SceneBody::save_step_start() {
   s->t = t_;
   s->steps = steps;
   s->idle_steps = idle_steps;
-  if (fast_) s->reduced = fast_->checkpoint();
-  if (full_) s->full = full_->state();
+  if (built_.reduced) s->reduced = built_.reduced->checkpoint();
+  if (built_.full) s->full = built_.full->state();
   start_ = std::move(s);
 }
 
@@ -233,8 +231,8 @@ void SceneBody::restore_step_start() {
   t_ = start_->t;
   steps = start_->steps;
   idle_steps = start_->idle_steps;
-  if (fast_) fast_->restore(*start_->reduced);
-  if (full_) full_->initialize(*start_->full);
+  if (built_.reduced) built_.reduced->restore(*start_->reduced);
+  if (built_.full) built_.full->initialize(*start_->full);
 }
 
 void SceneBody::step(double t0, double h, EffectSeconds& seconds) {
@@ -248,19 +246,19 @@ void SceneBody::step(double t0, double h, EffectSeconds& seconds) {
     if (at_rest_this_step(t0, h)) {
       ++idle_steps;
       const model::State rest = model::initial_state(layer_->problem, t0 + h);
-      if (fast_)
-        fast_->initialize(rest);
+      if (built_.reduced)
+        built_.reduced->initialize(rest);
       else
-        full_->initialize(rest);
-    } else if (fast_) {
-      const model::StepStats st = fast_->step(h);
+        built_.full->initialize(rest);
+    } else if (built_.reduced) {
+      const model::StepStats st = built_.reduced->step(h);
       newton_iterations += st.newton_iterations;
       refinements += st.potential_refinements;
       failed_attempts += st.failed_attempts;
       seconds.inertia += st.inertia_seconds;
       seconds.elasticity += st.seconds - st.inertia_seconds - st.potential_seconds;
     } else {
-      const model::StepStats st = full_->step(h);
+      const model::StepStats st = built_.full->step(h);
       newton_iterations += st.newton_iterations;
       refinements += st.potential_refinements;
       failed_attempts += st.failed_attempts;
@@ -274,7 +272,7 @@ void SceneBody::step(double t0, double h, EffectSeconds& seconds) {
   solve_seconds += seconds_since(clock);
   if (tracking()) {
     // A step solved again (the body exchange restarts it from its start) replaces its row.
-    const Eigen::VectorXd& deviation = fast_->deviation();
+    const Eigen::VectorXd& deviation = built_.reduced->deviation();
     if (!deviation_history_.empty() && std::abs(deviation_history_.back().first - t_) < 1e-12)
       deviation_history_.back().second = deviation;
     else
@@ -284,12 +282,12 @@ void SceneBody::step(double t0, double h, EffectSeconds& seconds) {
 
 std::vector<reduced::Matrix34d> SceneBody::surface_deviation() const {
   if (!tracking()) return {};
-  return surface_deviation_maps(*fast_, *layer_);
+  return surface_deviation_maps(*built_.reduced, *layer_);
 }
 
 std::vector<reduced::Matrix34d> SceneBody::node_deviation() const {
   if (!tracking()) return {};
-  return node_deviation_maps(*fast_, *layer_);
+  return node_deviation_maps(*built_.reduced, *layer_);
 }
 
 namespace {
@@ -307,21 +305,21 @@ std::pair<double, double> largest(const std::vector<std::pair<double, Eigen::Vec
 // Over the steps as committed (deviation_history(): a step the body exchange solved again counts once).
 nlohmann::json SceneBody::skeleton_summary() const {
   if (!tracking()) return {{"skeleton", "prescribed"}};
-  const reduced::Vector6d r = fast_->root();
+  const reduced::Vector6d r = built_.reduced->root();
   nlohmann::json joints = nlohmann::json::array();
-  const reduced::SkeletonDeviation& skeleton = fast_->skeleton();
+  const reduced::SkeletonDeviation& skeleton = built_.reduced->skeleton();
   for (int j = 0; j < skeleton.num_joints(); ++j) {
     const auto sj = static_cast<std::size_t>(j);
     const Eigen::Index c = 6 + 3 * j;
     const auto [max_rotation, max_rotation_time] = largest(deviation_history_, c);
     joints.push_back({{"joint", body::kJointNames[static_cast<std::size_t>(skeleton.tracked()[sj])]},
-                      {"stiffness_n_m_per_rad", fast_->tracking_stiffness()[c]},
-                      {"damping_n_m_s_per_rad", fast_->tracking_damping()[c]},
-                      {"limit_rad", fast_->joint_limits()[j]},
-                      {"moment_of_inertia_kg_m2", fast_->joint_inertia()[j]},
+                      {"stiffness_n_m_per_rad", built_.reduced->tracking_stiffness()[c]},
+                      {"damping_n_m_s_per_rad", built_.reduced->tracking_damping()[c]},
+                      {"limit_rad", built_.reduced->joint_limits()[j]},
+                      {"moment_of_inertia_kg_m2", built_.reduced->joint_inertia()[j]},
                       {"max_rotation_rad", max_rotation},
                       {"max_rotation_time_s", max_rotation_time},
-                      {"final_rotation_rad", fast_->deviation().segment<3>(c).norm()}});
+                      {"final_rotation_rad", built_.reduced->deviation().segment<3>(c).norm()}});
   }
   const auto [max_rotation, max_rotation_time] = largest(deviation_history_, 0);
   const auto [max_displacement, max_displacement_time] = largest(deviation_history_, 3);
@@ -332,8 +330,10 @@ nlohmann::json SceneBody::skeleton_summary() const {
           {"root", spec_.free_root ? "free" : "tracked"},
           {"tracking_stiffness_n_per_m", spec_.tracking_stiffness},
           {"tracking_damping_n_s_per_m", spec_.tracking_damping},
-          {"root_stiffness", std::vector<double>(fast_->root_stiffness().data(), fast_->root_stiffness().data() + 6)},
-          {"root_damping", std::vector<double>(fast_->root_damping().data(), fast_->root_damping().data() + 6)},
+          {"root_stiffness",
+           std::vector<double>(built_.reduced->root_stiffness().data(), built_.reduced->root_stiffness().data() + 6)},
+          {"root_damping",
+           std::vector<double>(built_.reduced->root_damping().data(), built_.reduced->root_damping().data() + 6)},
           {"root_coordinates_units", "rotation x, y, z [N·m/rad | N·m·s/rad], translation x, y, z [N/m | N·s/m]"},
           {"max_root_displacement_m", max_displacement},
           {"max_root_displacement_time_s", max_displacement_time},

@@ -10,6 +10,7 @@
 #include <sflsh/model/simulation_output.hpp>
 #include <sflsh/reduced/reduced_model.hpp>
 #include <sflsh/reduced/reduced_solver.hpp>
+#include <sflsh/run/body_solver_factory.hpp>
 #include <sflsh/scene/scene_file.hpp>
 
 #include <Eigen/Geometry>
@@ -109,8 +110,8 @@ class SceneBody {
   double max_elastic_displacement() const;
   /// Whether the skeleton tracks its motion (skeleton = "tracking"), and its deviation from the motion now as affine
   /// maps in the body's own (posed) frame, per body vertex and per layer node (empty otherwise).
-  bool tracking() const { return fast_ && fast_->tracking(); }
-  const reduced::SkeletonDeviation& skeleton() const { return fast_->skeleton(); }  ///< tracking() only
+  bool tracking() const { return built_.reduced && built_.reduced->tracking(); }
+  const reduced::SkeletonDeviation& skeleton() const { return built_.reduced->skeleton(); }  ///< tracking() only
   std::vector<reduced::Matrix34d> surface_deviation() const;
   std::vector<reduced::Matrix34d> node_deviation() const;
   /// summary.json "skeleton" of a tracking body: the largest root displacement and rotation and when.
@@ -137,8 +138,7 @@ class SceneBody {
   std::unique_ptr<body::Poser> poser_;       ///< skinned bodies
   std::unique_ptr<model::BodyLayer> layer_;  ///< soft bodies
   std::optional<reduced::ReducedModel> reduced_model_;
-  std::unique_ptr<fullspace::FullSpaceSolver> full_;
-  std::unique_ptr<reduced::ReducedSolver> fast_;
+  run::BuiltSolver built_;  ///< the solver (run/body_solver_factory.hpp), from start()
   std::vector<int> vertex_node_;
   bool quasi_static_ = false;
   reduced::CoupledSystem* coupled_ = nullptr;

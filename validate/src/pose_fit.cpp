@@ -317,71 +317,121 @@ double scaled_temporal_weight(double temporal_weight, double scale, double first
   return temporal_weight * ratio * ratio;
 }
 
-/// One fit of every frame with the vertex weights `weights`; β fitted (from `initial_beta`) when `beta` is empty.
-PoseFitResult fit_motion_weighted(const body::BodyModel& model, const std::vector<RowMatrixX3d>& registered, double fps,
-                                  const std::optional<body::Betas>& beta, const body::Betas& initial_beta,
-                                  const PoseFitOptions& options, const Eigen::VectorXd& vertex_weight) {
-  const auto t0 = std::chrono::steady_clock::now();
+/// Frame indices of the warm-start chain: every c-th frame, at most 40 frames.
+std::vector<int> warm_start_chain(int T) {
+  const int chain_stride = std::max(1, T / 40);
+  std::vector<int> chain;
+  for (int t = 0; t < T; t += chain_stride) chain.push_back(t);
+  return chain;
+}
+
+/// Indices into a chain of `chain_size` frames, at most `shape_frames`, evenly spaced, first and last included.
+std::vector<int> shape_frame_picks(std::size_t chain_size, int shape_frames) {
+  const int k = std::min<int>(shape_frames, static_cast<int>(chain_size));
+  std::vector<int> picks;  // indices into the chain, evenly spaced, first and last included
+  for (int s = 0; s < k; ++s)
+    picks.push_back(
+        k == 1 ? 0
+               : static_cast<int>(std::lround(static_cast<double>(s) * static_cast<double>(chain_size - 1) / (k - 1))));
+  picks.erase(std::unique(picks.begin(), picks.end()), picks.end());
+  return picks;
+}
+
+/// The frames the shape fit uses and their warm-start poses.
+struct ShapeFrames {
+  std::vector<const RowMatrixX3d*> targets;
+  std::vector<PoseParameters> poses;
+};
+
+/// Warm starts for the shape frames at β = 0: a chain of pose fits over every c-th frame (≤ 40 frames),
+/// each from the previous one (a rest-pose start is fine for frame 0 but slow for a distant pose).
+ShapeFrames warm_start_shape_frames(const body::BodyModel& model, const std::vector<RowMatrixX3d>& registered,
+                                    const FitRows& rows, const PoseFitOptions& options, const body::Betas& beta) {
+  const std::vector<int> chain = warm_start_chain(static_cast<int>(registered.size()));
+  const std::vector<int> picks = shape_frame_picks(chain.size(), options.shape_frames);
+  ShapeFrames frames;
+  const RowMatrixX3d shaped = body::shaped_template(model, beta);
+  const body::JointPositions joints = body::regress_joints(model, shaped);
+  const PosedModel start_model(model, shaped, joints, options.world_from_body);
+  PoseParameters p =
+      rigid_initial_pose(shaped, joints.row(0).transpose(), registered.front(), rows.weights, options.world_from_body);
+  PoseFitOptions warm = options;  // only warm starts: a few evaluations each
+  warm.max_evaluations = std::min(options.max_evaluations, 20);
+  std::size_t next = 0;
+  for (std::size_t c = 0; c < chain.size() && next < picks.size(); ++c) {
+    const RowMatrixX3d& y = registered[static_cast<std::size_t>(chain[c])];
+    solve_frame(start_model, y, rows, warm, p);
+    if (static_cast<int>(c) == picks[next]) {
+      frames.targets.push_back(&y);
+      frames.poses.push_back(p);
+      ++next;
+    }
+  }
+  return frames;
+}
+
+/// Fits the shared β from `beta_start` by variable projection over the shape frames; records it in `result`.
+void fit_shared_beta(const body::BodyModel& model, const std::vector<RowMatrixX3d>& registered, const FitRows& rows,
+                     const PoseFitOptions& options, const body::Betas& beta_start, PoseFitResult& result) {
+  ShapeFrames frames = warm_start_shape_frames(model, registered, rows, options, result.beta);
+  ShapeResidual residual(model, frames.targets, rows, options, frames.poses);
+  Eigen::LevenbergMarquardt<ShapeResidual> lm(residual);
+  configure(lm, options, options.shape_evaluations);
+  Eigen::VectorXd x = beta_start;
+  const detail::LmOutcome outcome =
+      detail::minimize_until(lm, x, absolute_norm(options, rows.vertices.size() * frames.targets.size()));
+  require(outcome.status != Eigen::LevenbergMarquardtSpace::UserAsked && x.allFinite(),
+          "shape fit: the residual became non-finite (NaN/Inf)");
+  result.beta = x;
+  result.shape_iterations = static_cast<int>(lm.iterations());
+  result.shape_converged = outcome.converged();
+  if (!result.shape_converged)
+    logger()->warn("shape fit: β did not converge ({}, {} evaluations)", outcome.name(), lm.nfev());
+  logger()->debug("shape fit: {} iterations, {} evaluations ({})", lm.iterations(), lm.nfev(), outcome.name());
+}
+
+/// The temporal prior of frame t from the frames fitted so far in `motion`; from frame 2 on it also moves the warm
+/// start `parameters` to the prediction.
+TemporalPrior frame_temporal_prior(const body::Motion& motion, const PoseFitOptions& options, int t,
+                                   PoseParameters& parameters) {
+  TemporalPrior prior;
+  // θ_t − 2θ_{t−1} + θ_{t−2}: the prior pulls towards the constant-velocity prediction, which is also the
+  // warm start (trans included). Frame 1 has only θ_0 to go by (first difference), frame 0 its rigid start.
+  const auto& poses = motion.poses;
+  const auto& trans = motion.trans;
+  prior.active = true;
+  prior.scale = std::sqrt(options.temporal_weight);
+  if (t >= 2) {
+    const std::size_t a = static_cast<std::size_t>(t - 1), b = static_cast<std::size_t>(t - 2);
+    prior.prediction = 2.0 * poses[a] - poses[b];
+    parameters = pack_pose(prior.prediction, 2.0 * trans[a] - trans[b]);
+  } else {
+    prior.prediction = pose_of(parameters);
+  }
+  return prior;
+}
+
+/// Adds the fit of frame t (of T) to `result`: its report, its pose and translation, the RMS statistics.
+void record_frame_fit(const FrameFitReport& report, int t, int T, const PoseParameters& parameters,
+                      PoseFitResult& result) {
+  if (!report.converged) {
+    ++result.unconverged_frames;
+    logger()->warn("pose fit: frame {} did not converge ({}, {} evaluations, RMS {:.2f} mm)", t, report.status,
+                   report.evaluations, 1e3 * report.rms);
+  }
+  result.max_rms = std::max(result.max_rms, report.rms);
+  result.mean_rms += report.rms / T;
+  result.frames.push_back(report);
+  result.motion.poses.push_back(pose_of(parameters));
+  result.motion.trans.push_back(trans_of(parameters));
+}
+
+/// Fits the pose of every frame at `result.beta`, each warm-started from the previous one; fills `result.motion`.
+void fit_every_frame(const body::BodyModel& model, const std::vector<RowMatrixX3d>& registered, double fps,
+                     const FitRows& rows, const PoseFitOptions& options, PoseFitResult& result) {
   const Eigen::Index n = model.num_vertices();
   const auto T = static_cast<int>(registered.size());
-  const FitRows rows = fit_rows(vertex_weight, options);
   const Eigen::VectorXd& weights = rows.weights;  // for the rigid start
-
-  PoseFitResult result;
-  result.beta = beta.value_or(body::Betas::Zero());
-  result.beta_fitted = !beta.has_value();
-  const body::Betas beta_start = beta.value_or(initial_beta);
-
-  if (result.beta_fitted) {
-    // Warm starts for the shape frames at β = 0: a chain of pose fits over every c-th frame (≤ 40 frames),
-    // each from the previous one (a rest-pose start is fine for frame 0 but slow for a distant pose).
-    const int chain_stride = std::max(1, T / 40);
-    std::vector<int> chain;
-    for (int t = 0; t < T; t += chain_stride) chain.push_back(t);
-    const int k = std::min<int>(options.shape_frames, static_cast<int>(chain.size()));
-    std::vector<int> picks;  // indices into the chain, evenly spaced, first and last included
-    for (int s = 0; s < k; ++s)
-      picks.push_back(k == 1 ? 0
-                             : static_cast<int>(std::lround(static_cast<double>(s) *
-                                                            static_cast<double>(chain.size() - 1) / (k - 1))));
-    picks.erase(std::unique(picks.begin(), picks.end()), picks.end());
-    std::vector<const RowMatrixX3d*> targets;
-    std::vector<PoseParameters> poses;
-    {
-      const RowMatrixX3d shaped = body::shaped_template(model, result.beta);
-      const body::JointPositions joints = body::regress_joints(model, shaped);
-      const PosedModel start_model(model, shaped, joints, options.world_from_body);
-      PoseParameters p =
-          rigid_initial_pose(shaped, joints.row(0).transpose(), registered.front(), weights, options.world_from_body);
-      PoseFitOptions warm = options;  // only warm starts: a few evaluations each
-      warm.max_evaluations = std::min(options.max_evaluations, 20);
-      std::size_t next = 0;
-      for (std::size_t c = 0; c < chain.size() && next < picks.size(); ++c) {
-        const RowMatrixX3d& y = registered[static_cast<std::size_t>(chain[c])];
-        solve_frame(start_model, y, rows, warm, p);
-        if (static_cast<int>(c) == picks[next]) {
-          targets.push_back(&y);
-          poses.push_back(p);
-          ++next;
-        }
-      }
-    }
-    ShapeResidual residual(model, targets, rows, options, poses);
-    Eigen::LevenbergMarquardt<ShapeResidual> lm(residual);
-    configure(lm, options, options.shape_evaluations);
-    Eigen::VectorXd x = beta_start;
-    const detail::LmOutcome outcome =
-        detail::minimize_until(lm, x, absolute_norm(options, rows.vertices.size() * targets.size()));
-    require(outcome.status != Eigen::LevenbergMarquardtSpace::UserAsked && x.allFinite(),
-            "shape fit: the residual became non-finite (NaN/Inf)");
-    result.beta = x;
-    result.shape_iterations = static_cast<int>(lm.iterations());
-    result.shape_converged = outcome.converged();
-    if (!result.shape_converged)
-      logger()->warn("shape fit: β did not converge ({}, {} evaluations)", outcome.name(), lm.nfev());
-    logger()->debug("shape fit: {} iterations, {} evaluations ({})", lm.iterations(), lm.nfev(), outcome.name());
-  }
-
   const RowMatrixX3d shaped = body::shaped_template(model, result.beta);
   const body::JointPositions joints = body::regress_joints(model, shaped);
   const PosedModel posed_model(model, shaped, joints, options.world_from_body);
@@ -398,40 +448,33 @@ PoseFitResult fit_motion_weighted(const body::BodyModel& model, const std::vecto
   for (int t = 0; t < T; ++t) {
     const RowMatrixX3d& target = registered[static_cast<std::size_t>(t)];
     TemporalPrior prior;
-    if (use_prior) {
-      // θ_t − 2θ_{t−1} + θ_{t−2}: the prior pulls towards the constant-velocity prediction, which is also the
-      // warm start (trans included). Frame 1 has only θ_0 to go by (first difference), frame 0 its rigid start.
-      const auto& poses = result.motion.poses;
-      const auto& trans = result.motion.trans;
-      prior.active = true;
-      prior.scale = std::sqrt(options.temporal_weight);
-      if (t >= 2) {
-        const std::size_t a = static_cast<std::size_t>(t - 1), b = static_cast<std::size_t>(t - 2);
-        prior.prediction = 2.0 * poses[a] - poses[b];
-        parameters = pack_pose(prior.prediction, 2.0 * trans[a] - trans[b]);
-      } else {
-        prior.prediction = pose_of(parameters);
-      }
-    }
+    if (use_prior) prior = frame_temporal_prior(result.motion, options, t, parameters);
     FrameFitReport report =
         solve_frame(posed_model, target, rows, options, parameters, prior);  // warm start from frame t − 1
     report.frame = t;
     const RowMatrixX3d v = posed_model.posed(parameters);
     report.rms = rms_over(v, target, nullptr);
     report.rms_rigid = rms_over(v, target, &soft);
-    if (!report.converged) {
-      ++result.unconverged_frames;
-      logger()->warn("pose fit: frame {} did not converge ({}, {} evaluations, RMS {:.2f} mm)", t, report.status,
-                     report.evaluations, 1e3 * report.rms);
-    }
-    result.max_rms = std::max(result.max_rms, report.rms);
-    result.mean_rms += report.rms / T;
-    result.frames.push_back(report);
-    result.motion.poses.push_back(pose_of(parameters));
-    result.motion.trans.push_back(trans_of(parameters));
+    record_frame_fit(report, t, T, parameters, result);
     progress.advance();
   }
   progress.finish();
+}
+
+/// One fit of every frame with the vertex weights `weights`; β fitted (from `initial_beta`) when `beta` is empty.
+PoseFitResult fit_motion_weighted(const body::BodyModel& model, const std::vector<RowMatrixX3d>& registered, double fps,
+                                  const std::optional<body::Betas>& beta, const body::Betas& initial_beta,
+                                  const PoseFitOptions& options, const Eigen::VectorXd& vertex_weight) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const FitRows rows = fit_rows(vertex_weight, options);
+
+  PoseFitResult result;
+  result.beta = beta.value_or(body::Betas::Zero());
+  result.beta_fitted = !beta.has_value();
+  const body::Betas beta_start = beta.value_or(initial_beta);
+
+  if (result.beta_fitted) fit_shared_beta(model, registered, rows, options, beta_start, result);
+  fit_every_frame(model, registered, fps, rows, options, result);
   result.seconds = seconds_since(t0);
   return result;
 }

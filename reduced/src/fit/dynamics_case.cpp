@@ -6,6 +6,7 @@
 #include <sflsh/reduced/dynamics_sensitivity.hpp>
 #include <sflsh/reduced/reduced_sensitivity.hpp>
 #include <sflsh/reduced/young_map.hpp>
+#include <sflsh/run/body_solver_factory.hpp>
 
 #include <chrono>
 
@@ -48,8 +49,9 @@ CaseDynamics DynamicsCase::simulate(const LayerParameterization& parameterizatio
   try {
     const model::Problem problem =
         parameterization.problem(*layer_, kappa, options_, nullptr, &shaped_layer(parameterization));
-    ReducedSolver integrator(problem, model.subspace, model.cubature, options);
-    integrator.initialize(model::initial_state(problem, 0.0));
+    const run::BuiltSolver built = run::make_body_solver(problem, run::reduced_choice(options),
+                                                         model::initial_state(problem, 0.0), run::parts_of(model));
+    const ReducedSolver& integrator = *built.reduced;
     const double setup_seconds = seconds_since(start);
     model::DynamicsAmplitude amplitude(normals_);
     // The attached nodes carry no elastic displacement (x_D = X), so u = (B ⊗ I₃) q; the skin embedding is
@@ -61,7 +63,7 @@ CaseDynamics DynamicsCase::simulate(const LayerParameterization& parameterizatio
     model::FrameLoopOptions loop;
     loop.frames = frames_;
     loop.fps = fps_;
-    model::run_frames(integrator, loop, [&](int, double, const model::StepStats&) { add_frame(); });
+    model::run_frames(*built, loop, [&](int, double, const model::StepStats&) { add_frame(); });
     CaseDynamics out;
     out.sigma_normal = 1e3 * amplitude.sigma_normal();
     out.sigma_tangent = 1e3 * amplitude.sigma_tangent();

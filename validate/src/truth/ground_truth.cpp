@@ -5,6 +5,7 @@
 #include <sflsh/fullspace/fullspace_solver.hpp>
 #include <sflsh/fullspace/reference_integrator.hpp>
 #include <sflsh/model/simulation_output.hpp>
+#include <sflsh/run/body_solver_factory.hpp>
 #include <sflsh/validate/ground_truth.hpp>
 #include <sflsh/validate/true_material.hpp>
 
@@ -36,8 +37,13 @@ GroundTruthCase simulate_ground_truth(const model::BodyLayer& layer, const body:
   out.truth = options.truth.fingerprint();
   meshing::RowMatrixX3d rest_skin;
   const model::Problem problem = parameterization.problem_from_field(layer, out.kappa, layer_options, &rest_skin);
-  fullspace::FullSpaceSolver solver(problem, MPI_COMM_SELF);
-  solver.initialize(model::initial_state(problem, 0.0));
+  run::SolverChoice choice;
+  // The fit's synthetic truth keeps the paper's backward Euler (its reduced runs take theirs from the experiment's
+  // ReducedOptions, also backward Euler); the masses are the layer options'.
+  choice.integrator = model::Integrator::backward_euler;
+  const run::BuiltSolver built =
+      run::make_body_solver(problem, choice, model::initial_state(problem, 0.0), {}, MPI_COMM_SELF);
+  const fullspace::FullSpaceSolver& solver = *built.full;
   const std::vector<int>& region = layer.mesh->region_surface.vertices;
   const meshing::RowMatrixX3d all_normals = model::vertex_normals(layer.shaped, layer.model->faces);
   meshing::RowMatrixX3d normals(static_cast<Eigen::Index>(region.size()), 3);
@@ -55,7 +61,7 @@ GroundTruthCase simulate_ground_truth(const model::BodyLayer& layer, const body:
   loop.frames = static_cast<int>(motion.num_frames());
   loop.fps = motion.fps;
   try {
-    const model::StepStats total = model::run_frames(solver, loop, [&](int f, double, const model::StepStats&) {
+    const model::StepStats total = model::run_frames(*built, loop, [&](int f, double, const model::StepStats&) {
       record(motion.time(static_cast<std::size_t>(f)));
     });
     out.newton_iterations += total.newton_iterations;

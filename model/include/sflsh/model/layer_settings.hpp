@@ -14,13 +14,18 @@
 
 namespace sflsh::model {
 
+/// Material control points without a material file, and the soft tissue's density [kg/m³], wherever a layer is
+/// described (the command line, Python, a scene's [[body]]).
+inline constexpr int kDefaultControlPoints = 12;
+inline constexpr double kDefaultDensity = 1000.0;
+
 /// The layer's mesher and material (the resolution is chosen per run).
 struct LayerSettings {
   std::string mesher = "layered";
   std::string material;  ///< TOML path; empty: the project defaults at control_points
-  int control_points = 12;
-  std::string cache;        ///< empty: $SFLSH_CACHE or ~/.cache/sflsh
-  double density = 1000.0;  ///< [kg/m³]
+  int control_points = kDefaultControlPoints;
+  std::string cache;                 ///< empty: $SFLSH_CACHE or ~/.cache/sflsh
+  double density = kDefaultDensity;  ///< [kg/m³]
   bool gravity = false;
   double stiffness_scale = 1.0;  ///< multiplies Y_t and Y_n
   /// lumped | consistent (mass.hpp); consistent unless told (kDefaultMassKind; the paper's: lumped)

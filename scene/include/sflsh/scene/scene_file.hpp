@@ -4,8 +4,10 @@
 // Every error names the file and line: unknown keys, missing keys, wrong types, impossible values.
 #include <sflsh/core/vtk_io.hpp>
 #include <sflsh/core/xdmf_series.hpp>
+#include <sflsh/model/layer_settings.hpp>
 #include <sflsh/model/mass.hpp>
 #include <sflsh/model/time_integrator.hpp>
+#include <sflsh/run/run_defaults.hpp>
 
 #include <Eigen/Core>
 
@@ -67,12 +69,13 @@ struct BodySpec {
   std::vector<SceneKeyframe> approach;
   Placement placement;
   SolverKind solver = SolverKind::reduced;
-  std::string mesh = "coarse";  ///< coarse | default | fine
-  std::string material;         ///< material file; empty: the defaults at control_points
-  int control_points = 12;
-  int handles = 30;         ///< reduced: point handles
-  int cubature = -1;        ///< reduced: −1 auto, 0 every tet
-  double density = 1000.0;  ///< [kg/m³]
+  // Unset keys take the body run's defaults (run/run_defaults.hpp, docs/body_run.md), as `sflsh simulate` does.
+  std::string mesh{run::kDefaultMesh};  ///< coarse | default | fine
+  std::string material;                 ///< material file; empty: the defaults at control_points
+  int control_points = model::kDefaultControlPoints;
+  int handles = run::kDefaultHandles;       ///< reduced: point handles
+  int cubature = run::kDefaultCubature;     ///< reduced: −1 auto, 0 every tet
+  double density = model::kDefaultDensity;  ///< [kg/m³]
   double stiffness_scale = 1.0;
   /// `integrator` (docs/integrators.md); a tracking skeleton without one takes the paper's backward Euler
   model::Integrator integrator = model::kDefaultIntegrator;
@@ -168,11 +171,11 @@ struct CrowdSpec {
   int columns = 5;
   std::string shape_model;  ///< shape-model file; empty: data/shape_models/default.toml
   SolverKind solver = SolverKind::reduced;
-  std::string mesh = "coarse";
-  int handles = 30;
+  std::string mesh{run::kDefaultMesh};  ///< the body run's defaults (run/run_defaults.hpp), as a [[body]]
+  int handles = run::kDefaultHandles;
   model::Integrator integrator = model::kDefaultIntegrator;  ///< `integrator`
   model::MassKind mass = model::kDefaultMassKind;            ///< `mass`
-  int cubature = -1;
+  int cubature = run::kDefaultCubature;
 };
 
 struct OutputSpec {

@@ -11,12 +11,12 @@
 #include <sflsh/reduced/reduced_model.hpp>
 #include <sflsh/reduced/reduced_settings.hpp>
 #include <sflsh/reduced/reduced_solver.hpp>
-#include <sflsh/scene/body_simulation.hpp>
+#include <sflsh/run/body_simulation.hpp>
 
 #include <algorithm>
 #include <cmath>
 
-namespace sflsh::scene {
+namespace sflsh::run {
 
 namespace {
 
@@ -32,14 +32,26 @@ void check_body_run_work(const BodyRunSettings& opt, double frames) {
 
 }  // namespace
 
+SolverChoice solver_choice(const BodyRunSettings& opt) {
+  SolverChoice choice;
+  // The SUNDIALS reference is not offered here (`sflsh tradeoff --reference sundials` runs it).
+  require(opt.solver == "full" || opt.solver == "reduced", "--solver {}: expected full or reduced", opt.solver);
+  choice.kind = parse_solver_kind(opt.solver, "--solver");
+  choice.integrator = model::parse_integrator(opt.integrator, "--integrator");
+  choice.handles = opt.handles;
+  choice.cubature = opt.cubature;
+  choice.reduced_settings.cubature_weights = opt.cubature_weights;
+  choice.reduced_settings.affine = opt.affine;
+  choice.newton_tolerance = opt.newton_tolerance;
+  check_solver_choice(choice);
+  return choice;
+}
+
 BodySimulation::BodySimulation(const BodyRunSettings& opt, RunFolder* frames_to, int rank, int size,
                                const BodyRunReporting& reporting)
     : settings_(opt), reporting_(reporting), rank_(rank), size_(size), t_start_(Clock::now()) {
-  require(opt.solver == "full" || opt.solver == "reduced", "--solver {}: expected full or reduced", opt.solver);
-  // Both bounds in every message (issue 45); 10⁶ as a scene's integer keys, 10⁴ fps as a scene's fps.
-  require(opt.handles >= 1 && opt.handles <= 1'000'000, "--handles must be an integer in [1, 10⁶], got {}",
-          opt.handles);
-  require(opt.cubature >= -1, "--cubature must be −1 (auto), 0 (every tet) or a tet count, got {}", opt.cubature);
+  (void)solver_choice(opt);  // the solver's settings checked before anything is loaded
+  // Both bounds in every message (issue 45); 10⁴ fps as a scene's fps.
   require(opt.fps > 0.0 && opt.fps <= 1e4, "--fps must be in (0, 10000] frames per second, got {}", opt.fps);
   require(opt.substeps >= 1 && opt.substeps <= 1'000'000, "--substeps must be an integer in [1, 10⁶], got {}",
           opt.substeps);
@@ -72,32 +84,14 @@ BodySimulation::BodySimulation(const BodyRunSettings& opt, RunFolder* frames_to,
       motion_.num_frames(), motion_.fps, opt.substeps, model::to_string(integrator),
       model::to_string(problem.mass_kind), size);
 
-  const bool use_reduced = opt.solver == "reduced";
-  require(!use_reduced || size == 1, "--solver reduced runs on one process (got {}); parallelize over bodies instead",
-          size);
+  const SolverChoice choice = solver_choice(opt);
+  require(choice.kind != SolverKind::reduced || size == 1,
+          "--solver reduced runs on one process (got {}); parallelize over bodies instead", size);
   const auto t_model = Clock::now();
-  if (use_reduced) {
-    reduced::ReducedSettings reduced_settings;
-    reduced_settings.cubature_weights = opt.cubature_weights;
-    reduced_settings.affine = opt.affine;
-    reduced_model_ = std::make_unique<reduced::ReducedModel>(reduced::build_reduced_model(
-        *layer_, reduced::reduced_model_options(reduced_settings, opt.handles, opt.cubature, opt.layer.cache)));
-    reduced::ReducedOptions solver_options;
-    solver_options.integrator = integrator;
-    require(opt.newton_tolerance > 0.0 && std::isfinite(opt.newton_tolerance),
-            "--newton-tolerance must be a positive length in metres, got {}", opt.newton_tolerance);
-    solver_options.step_tolerance = opt.newton_tolerance;
-    fast_ = std::make_unique<reduced::ReducedSolver>(problem, reduced_model_->subspace, reduced_model_->cubature,
-                                                     solver_options);
-    fast_->initialize(model::initial_state(problem, 0.0));
-    solver_ = fast_.get();
-  } else {
-    fullspace::FullSpaceOptions solver_options;
-    solver_options.integrator = integrator;
-    full_ = std::make_unique<fullspace::FullSpaceSolver>(problem, MPI_COMM_WORLD, solver_options);
-    full_->initialize(model::initial_state(problem, 0.0));
-    solver_ = full_.get();
-  }
+  if (choice.kind == SolverKind::reduced)
+    reduced_model_ = std::make_unique<reduced::ReducedModel>(make_reduced_model(*layer_, choice, opt.layer.cache));
+  solver_ = make_body_solver(problem, choice, model::initial_state(problem, 0.0),
+                             reduced_model_ ? parts_of(*reduced_model_) : ReducedParts{});
   model_seconds_ = seconds_since(t_model);
   if (reporting.on_setup)
     reporting.on_setup({{"tets", problem.num_tets()},
@@ -125,7 +119,7 @@ const model::StepStats& BodySimulation::step() {
   loop.fps = motion_.fps;
   loop.substeps = settings_.substeps;
   const model::Problem& problem = layer_->problem;
-  model::run_frames(*solver_, loop, [&](int frame, double, const model::StepStats& st) {
+  model::run_frames(*solver_.solver, loop, [&](int frame, double, const model::StepStats& st) {
     const auto f = static_cast<std::size_t>(frame);
     const auto t_output = Clock::now();
     const bool written = model::is_written_frame(frame, num_frames(), settings_.every);
@@ -170,4 +164,4 @@ model::RowMatrixX3d BodySimulation::skinned_surface() const {
   return layer_->posed_surface_from_displacement(model::RowMatrixX3d::Zero(region, 3), time());
 }
 
-}  // namespace sflsh::scene
+}  // namespace sflsh::run

@@ -16,6 +16,8 @@
 #include <sflsh/model/simulation_output.hpp>
 #include <sflsh/model/step_stats.hpp>
 #include <sflsh/model/time_integrator.hpp>
+#include <sflsh/run/body_solver_factory.hpp>
+#include <sflsh/run/solver_choice.hpp>
 
 #include <nlohmann/json.hpp>
 
@@ -33,10 +35,11 @@ namespace sflsh::fullspace {
 class FullSpaceSolver;
 }
 
-namespace sflsh::scene {
+namespace sflsh::run {
 
-/// The settings of one body run (the options of `sflsh simulate` without --scene, --out, --no-output). The
-/// messages of refused settings name the command-line options.
+/// The settings of one body run (the options of `sflsh simulate` without --scene, --out, --no-output, the keywords
+/// of Python's Simulation) as text, with the project's run defaults (solver_choice.hpp). The messages of refused
+/// settings name the command-line options.
 struct BodyRunSettings {
   std::string solver = "full";  ///< full | reduced
   body::SubjectSelection subject;
@@ -44,8 +47,8 @@ struct BodyRunSettings {
   int frames = 0;      ///< 0: the motion's length
   double fps = 60.0;
   int substeps = 1;
-  std::string mesh = "default";  ///< coarse | default | fine
-  model::LayerSettings layer;    ///< mesher, material, cache, density, gravity, stiffness, mass
+  std::string mesh{kDefaultMesh};  ///< coarse | default | fine
+  model::LayerSettings layer;      ///< mesher, material, cache, density, gravity, stiffness, mass
   /// A material held in memory (the Python module's Material), used instead of layer.material when set.
   std::shared_ptr<const material::MaterialFile> material_data;
   /// backward_euler | bdf2 | newmark; bdf2 unless told (model::kDefaultIntegrator; the paper's: backward_euler)
@@ -66,12 +69,12 @@ struct BodyRunSettings {
   /// of `motion export` with all its arrays, as before xdmf became the default).
   std::optional<std::vector<std::string>> fields;
   // Reduced model.
-  int handles = 86;
-  int cubature = -1;                      ///< −1 auto, 0 every tet, else a tet count
+  int handles = kDefaultHandles;
+  int cubature = kDefaultCubature;        ///< −1 auto, 0 every tet, else a tet count
   std::string cubature_weights = "nnls";  ///< nnls | voronoi
   bool affine = false;
-  double newton_tolerance = 1e-5;  ///< [m] reduced::ReducedOptions::step_tolerance
-  bool allow_long = false;         ///< run even when the work estimate exceeds WorkLimits (--allow-long)
+  double newton_tolerance = kDefaultNewtonTolerance;  ///< [m] reduced::ReducedOptions::step_tolerance
+  bool allow_long = false;  ///< run even when the work estimate exceeds WorkLimits (--allow-long)
 };
 
 /// How a run reports while it runs.
@@ -152,9 +155,7 @@ class BodySimulation {
   std::optional<material::MaterialFile> material_file_;
   std::unique_ptr<model::BodyLayer> layer_;
   std::unique_ptr<reduced::ReducedModel> reduced_model_;
-  std::unique_ptr<fullspace::FullSpaceSolver> full_;
-  std::unique_ptr<reduced::ReducedSolver> fast_;
-  model::BodySolver* solver_ = nullptr;
+  BuiltSolver solver_;
   model::SimulationWriterOptions writer_options_;
   std::unique_ptr<model::SimulationWriter> writer_;
   /// Declared after the writer its jobs refer to: destroyed first (pending writes dropped, a running one awaited).
@@ -170,6 +171,10 @@ class BodySimulation {
   bool finished_output_ = false;
 };
 
+/// The solver of these settings (solver, integrator, handles, cubature, cubature weights, affine, Newton tolerance),
+/// checked; the messages name the command-line options.
+SolverChoice solver_choice(const BodyRunSettings& settings);
+
 /// Runs one body to the end of its motion: a BodySimulation stepped through every frame with a progress line,
 /// returning summary.json of `sflsh simulate` without its header and "output" entries (empty on ranks other
 /// than 0). Throws sflsh::Error with a one-line message on bad settings or when a step fails.
@@ -184,4 +189,4 @@ nlohmann::json simulate_output_summary(const BodyRunSettings& settings, const nl
 /// command line's and Python's names checked, errors naming --format, --precision, --compression, --fields).
 model::SimulationWriterOptions frame_writer_options(const BodyRunSettings& settings);
 
-}  // namespace sflsh::scene
+}  // namespace sflsh::run

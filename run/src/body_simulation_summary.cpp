@@ -8,9 +8,9 @@
 #include <sflsh/model/time_integrator.hpp>
 #include <sflsh/reduced/reduced_model.hpp>
 #include <sflsh/reduced/reduced_solver.hpp>
-#include <sflsh/scene/body_simulation.hpp>
+#include <sflsh/run/body_simulation.hpp>
 
-namespace sflsh::scene {
+namespace sflsh::run {
 
 namespace {}  // namespace
 
@@ -35,7 +35,7 @@ nlohmann::json BodySimulation::summary() const {
                        {"projected_retries", total_.projected_retries},
                        {"truncated_solves", total_.truncated_solves}};
   // The full-space CG's preconditioner as PETSc names it (automatic depends on the size and the process count).
-  if (full_) summary["solver"]["preconditioner"] = full_->preconditioner_type();
+  if (solver_.full) summary["solver"]["preconditioner"] = solver_.full->preconditioner_type();
   summary["body"] = body::body_label(settings_.subject);
   summary["subject"] = subject_label_;
   summary["beta"] = std::vector<double>(beta_.data(), beta_.data() + beta_.size());
@@ -58,25 +58,26 @@ nlohmann::json BodySimulation::summary() const {
         {"affine", settings_.affine},
         {"coordinates", reduced_model_->subspace.num_dofs()},
         {"basis_nonzeros", reduced_model_->subspace.basis.nonZeros()},
-        {"cubature", fast_->cubature().size()},
+        {"cubature", solver_.reduced->cubature().size()},
         {"cubature_model", reduced_model_->cubature.size()},
-        {"cubature_added", fast_->cubature_added()},
+        {"cubature_added", solver_.reduced->cubature_added()},
         {"cubature_method", reduced_model_->cubature.method},
         {"stiffness_ratio_max", reduced_model_->cubature.stiffness_ratio_max},
         {"stiffness_ratio_min", reduced_model_->cubature.stiffness_ratio_min},
-        {"guard", fast_->guard() ? nlohmann::json{{"exponent_limit", fast_->guard()->exponent_limit()},
-                                                  {"energy_limit_j", fast_->guard()->energy_limit()},
-                                                  {"smallest_tet_exponent_limit", fast_->guard()->smallest_tet_limit()},
-                                                  {"guarded_tets", fast_->guard()->num_guarded()},
-                                                  {"checks", fast_->guard()->checks()},
-                                                  {"per_tet_passes", fast_->guard()->tet_passes()},
-                                                  {"renewals", fast_->guard()->full_checks()},
-                                                  {"clusters", fast_->guard()->num_clusters()},
-                                                  {"cluster_renewals", fast_->guard()->cluster_renewals()},
-                                                  {"exact_evaluations", fast_->guard()->exact_evaluations()},
-                                                  {"pass_seconds", fast_->guard()->pass_seconds()},
-                                                  {"renew_seconds", fast_->guard()->renew_seconds()}}
-                                 : nlohmann::json(nullptr)},
+        {"guard", solver_.reduced->guard()
+                      ? nlohmann::json{{"exponent_limit", solver_.reduced->guard()->exponent_limit()},
+                                       {"energy_limit_j", solver_.reduced->guard()->energy_limit()},
+                                       {"smallest_tet_exponent_limit", solver_.reduced->guard()->smallest_tet_limit()},
+                                       {"guarded_tets", solver_.reduced->guard()->num_guarded()},
+                                       {"checks", solver_.reduced->guard()->checks()},
+                                       {"per_tet_passes", solver_.reduced->guard()->tet_passes()},
+                                       {"renewals", solver_.reduced->guard()->full_checks()},
+                                       {"clusters", solver_.reduced->guard()->num_clusters()},
+                                       {"cluster_renewals", solver_.reduced->guard()->cluster_renewals()},
+                                       {"exact_evaluations", solver_.reduced->guard()->exact_evaluations()},
+                                       {"pass_seconds", solver_.reduced->guard()->pass_seconds()},
+                                       {"renew_seconds", solver_.reduced->guard()->renew_seconds()}}
+                      : nlohmann::json(nullptr)},
         {"newton_tolerance_m", settings_.newton_tolerance},
         {"cache", reduced_model_->cache_outcome},
         {"factorizations", total_.factorizations},
@@ -163,4 +164,4 @@ nlohmann::json simulate_output_summary(const BodyRunSettings& settings, const nl
   return output;
 }
 
-}  // namespace sflsh::scene
+}  // namespace sflsh::run
