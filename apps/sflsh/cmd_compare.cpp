@@ -516,14 +516,10 @@ void register_compare_commands(CLI::App& app, const Invocation& invocation) {
   add_subject_options(*cmd, opt->subject);
   cmd->add_option("--motion", opt->motion, "Motion: a procedural name (sflsh motion list) or an AMASS .npz path")
       ->required();
-  cmd->add_option("--frames", opt->frames, "Number of frames (0: the motion's length)");
-  cmd->add_option("--fps", opt->fps, "Frame rate (and motion sampling)")->capture_default_str();
-  cmd->add_option("--substeps", opt->substeps, "Integrator steps per frame for both solvers");
+  add_frame_options(*cmd, opt->frames, opt->fps, opt->substeps);
   add_integrator_option(*cmd, opt->integrator);
   add_mass_option(*cmd, opt->layer);
-  cmd->add_option("--mesh", opt->mesh, "Layer resolution: coarse | default | fine")
-      ->capture_default_str()
-      ->check(CLI::IsMember({"coarse", "default", "fine"}));
+  add_mesh_option(*cmd, opt->mesh);
   cmd->add_option("--handles", opt->handles, "Sweep of point-handle counts, comma-separated (plus the bone handles)")
       ->capture_default_str();
   cmd->add_option("--cubature", opt->cubature,

@@ -2,6 +2,7 @@
 // open body's train and test subjects over the motions with a hidden, smoothly shape-dependent material —
 // written as DYNA-layout HDF5 (groundtruth.h5) with the true parameters beside it (truth/).
 #include "commands.hpp"
+#include "layer_setup.hpp"
 
 #include <sflsh/core/log.hpp>
 #include <sflsh/core/summary.hpp>
@@ -36,7 +37,7 @@ void register_groundtruth_commands(CLI::App& app, const Invocation& invocation) 
                   "5 train + 5 test subjects, 5 motions, 60 frames)")
       ->check(CLI::IsMember({"quick", "paper"}));
   cmd->add_option("--out", o->out, "Output folder")->required();
-  cmd->add_option("--mesh", o->mesh, "Layer mesh size: coarse | default | fine (default coarse)");
+  add_mesh_option(*cmd, o->mesh);
   cmd->add_option("--frames", o->frames, "Frames per motion (0 = the motions' default length)")
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--subjects", o->subjects,

@@ -1,5 +1,6 @@
 // sflsh material show: the heterogeneous material fields of a subject's layer, for ParaView.
 #include "commands.hpp"
+#include "layer_setup.hpp"
 
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
@@ -157,9 +158,7 @@ void add_material_show_command(CLI::App& material, const Invocation& invocation)
   cmd->add_option("--mesher", opt->mesher, "Layer mesher: cgal | gmsh | layered")
       ->check(CLI::IsMember({"cgal", "gmsh", "layered"}))
       ->capture_default_str();
-  cmd->add_option("--mesh,--size", opt->size, "Layer resolution: coarse | default | fine (--size: older spelling)")
-      ->check(CLI::IsMember({"coarse", "default", "fine"}))
-      ->capture_default_str();
+  add_mesh_option(*cmd, opt->size, true);
   cmd->add_option("--cache", opt->cache, "Cache folder for template meshes (default $SFLSH_CACHE or ~/.cache/sflsh)");
   cmd->add_option("--out", opt->out, "Output folder")->required();
   cmd->callback([opt, invocation] { run_show(*opt, invocation); });

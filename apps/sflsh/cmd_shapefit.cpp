@@ -1,6 +1,7 @@
 // sflsh shapefit: the shape regression of SFLSH eqs. 1, 4, 5 on material files, without simulation
 // (reduced/shape_regression.hpp, docs/fit.md "sflsh shapefit").
 #include "commands.hpp"
+#include "layer_setup.hpp"
 
 #include <sflsh/body/subjects.hpp>
 #include <sflsh/core/atomic_file.hpp>
@@ -292,9 +293,7 @@ void register_shapefit_commands(CLI::App& app, const Invocation& invocation) {
                   "one-se (largest λ within one standard error of the least CV error) | min (the least)")
       ->check(CLI::IsMember({"one-se", "one-standard-error", "min", "minimum"}))
       ->capture_default_str();
-  cmd->add_option("--mesh,--size", opt->mesh, "Layer mesh whose φ_i and areas define Q_i: coarse | default | fine")
-      ->check(CLI::IsMember({"coarse", "default", "fine"}))
-      ->capture_default_str();
+  add_mesh_option(*cmd, opt->mesh, true);  // the layer whose φ_i and areas define Q_i
   cmd->add_option("--mesher", opt->mesher, "Layer mesher: cgal | gmsh | layered")
       ->check(CLI::IsMember({"cgal", "gmsh", "layered"}))
       ->capture_default_str();

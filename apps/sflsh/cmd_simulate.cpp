@@ -112,12 +112,9 @@ void register_simulate_commands(CLI::App& app, const Invocation& invocation) {
   cmd->add_option("--threads", opt->threads, "Scenes: threads for bodies that do not interact (0: all cores)");
   cmd->add_option("--motion", opt->body.motion,
                   "Motion: a procedural name (sflsh motion list) or an AMASS .npz path (required without --scene)");
-  cmd->add_option("--frames", opt->body.frames, "Number of frames (0: the motion's length)");
-  cmd->add_option("--fps", opt->body.fps, "Frame rate of the output (and of the motion sampling)");
-  cmd->add_option("--substeps", opt->body.substeps, "Integrator steps per frame (step = 1 / (fps · substeps))");
+  add_frame_options(*cmd, opt->body.frames, opt->body.fps, opt->body.substeps);
   add_integrator_option(*cmd, opt->body.integrator);
-  cmd->add_option("--mesh", opt->body.mesh, "Layer resolution: coarse | default | fine")
-      ->check(CLI::IsMember({"coarse", "default", "fine"}));
+  add_mesh_option(*cmd, opt->body.mesh);
   add_layer_options(*cmd, opt->body.layer);
   add_mass_option(*cmd, opt->body.layer);
   cmd->add_flag("--energies", opt->body.energies,

@@ -309,9 +309,7 @@ void register_sweep_commands(CLI::App& app, const Invocation& invocation) {
       ->capture_default_str();
   cmd->add_option("--motions", opt->motions, "Motions, comma-separated: procedural names, AMASS .npz paths, or all")
       ->capture_default_str();
-  cmd->add_option("--frames", opt->base.frames, "Frames per run (the rest state included)")->capture_default_str();
-  cmd->add_option("--fps", opt->base.fps, "Frame rate (and motion sampling)")->capture_default_str();
-  cmd->add_option("--substeps", opt->base.substeps, "Integrator steps per frame")->capture_default_str();
+  add_frame_options(*cmd, opt->base.frames, opt->base.fps, opt->base.substeps);
   cmd->add_flag("--allow-long", opt->base.allow_long,
                 "Run cases whose work estimate exceeds the limits of docs/scenes.md (\"Input limits\")");
   cmd->add_option("--threads", opt->threads,

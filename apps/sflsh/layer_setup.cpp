@@ -20,6 +20,21 @@ void add_mass_option(CLI::App& cmd, LayerSettings& s) {
                  "node); docs/integrators.md");
 }
 
+void add_mesh_option(CLI::App& cmd, std::string& mesh, bool size_alias) {
+  cmd.add_option(size_alias ? "--mesh,--size" : "--mesh", mesh,
+                 size_alias ? "Layer resolution: coarse | default | fine (--size: older spelling)"
+                            : "Layer resolution: coarse | default | fine")
+      ->check(CLI::IsMember({"coarse", "default", "fine"}))
+      ->capture_default_str();
+}
+
+void add_frame_options(CLI::App& cmd, int& frames, double& fps, int& substeps) {
+  cmd.add_option("--frames", frames, "Number of frames, the rest state included (0: the motion's length)")
+      ->capture_default_str();
+  cmd.add_option("--fps", fps, "Frame rate of the output and of the motion's sampling [1/s]")->capture_default_str();
+  cmd.add_option("--substeps", substeps, "Solver steps per frame (step = 1 / (fps · substeps))")->capture_default_str();
+}
+
 void add_reduced_options(CLI::App& cmd, ReducedSettings& s) {
   cmd.add_option("--cubature-weights", s.cubature_weights, "nnls (training-free force matching) | voronoi")
       ->check(CLI::IsMember({"nnls", "voronoi"}));

@@ -35,6 +35,11 @@ using reduced::ReducedSettings;
 void add_layer_options(CLI::App& cmd, LayerSettings& settings);
 /// --mass lumped|consistent (the commands that choose the inertia; the others keep lumped).
 void add_mass_option(CLI::App& cmd, LayerSettings& settings);
+/// --mesh coarse|default|fine: one layer resolution (`size_alias`: also the older spelling --size).
+void add_mesh_option(CLI::App& cmd, std::string& mesh, bool size_alias = false);
+/// --frames, --fps, --substeps of a body run: `frames` output frames (the rest state included; 0 the motion's length
+/// where a command allows it) at `fps`, each `substeps` solver steps.
+void add_frame_options(CLI::App& cmd, int& frames, double& fps, int& substeps);
 /// --cubature-weights, --affine.
 void add_reduced_options(CLI::App& cmd, ReducedSettings& settings);
 

@@ -18,7 +18,8 @@ namespace sflsh::scene {
 namespace {
 
 /// A ball of `radius` pressed from `start` to `press` in 0.4 s and held (`frames` at 60 fps), on the coarse layer with
-/// the scene's default handles; `contact` extra [contact] lines.
+/// the shipped press scenes' 30 handles (data/scenes/belly_press.toml; docs/contact.md measures with them); `contact`
+/// extra [contact] lines.
 std::string press_scene(const std::string& solver, double radius, const Eigen::Vector3d& start,
                         const Eigen::Vector3d& press, int frames, const std::string& contact = "") {
   return fmt::format(R"([scene]
@@ -34,6 +35,7 @@ name = "subject"
 motion = "rest"
 solver = "{2}"
 mesh = "coarse"
+handles = 30
 [[object]]
 name = "ball"
 shape = "sphere"

@@ -1,5 +1,5 @@
 // Free objects in the body's solve: when, and how they are set up (object_coupling_setup.hpp).
-#include "object_coupling_setup.hpp"
+#include "objects/object_coupling_setup.hpp"
 
 #include <sflsh/core/error.hpp>
 #include <sflsh/scene/contact_potential.hpp>

@@ -1,7 +1,7 @@
 // What a scene writes (scene_output.hpp).
-#include "scene_output.hpp"
+#include "runner/scene_output.hpp"
 
-#include "body_skeleton.hpp"
+#include "bodies/body_skeleton.hpp"
 
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/scoped_seconds.hpp>

@@ -1,7 +1,7 @@
 // A group's step with the exchange between touching bodies (group_step.hpp).
-#include "group_step.hpp"
+#include "bodies/group_step.hpp"
 
-#include "body_exchange.hpp"
+#include "contact/body_exchange.hpp"
 
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>

@@ -1,6 +1,6 @@
 // One body of a scene (scene_internal.hpp).
-#include "body_skeleton.hpp"
-#include "scene_internal.hpp"
+#include "bodies/body_skeleton.hpp"
+#include "bodies/scene_internal.hpp"
 
 #include <sflsh/body/subjects.hpp>
 #include <sflsh/core/error.hpp>

@@ -1,8 +1,8 @@
 #pragma once
 // Internal to the scene runner: a soft body's contact (its potentials against the objects and the other
 // bodies), the per-node skin areas that weight them, and the contact fields of its frames.
-#include "scene_internal.hpp"
-#include "scene_objects.hpp"
+#include "bodies/scene_internal.hpp"
+#include "objects/scene_objects.hpp"
 
 #include <sflsh/core/vtk_io.hpp>
 #include <sflsh/scene/contact_potential.hpp>

@@ -1,4 +1,4 @@
-#include "local_region.hpp"
+#include "contact/local_region.hpp"
 
 #include <sflsh/core/error.hpp>
 

@@ -1,5 +1,5 @@
 // The scene's free rigid objects (free_objects.hpp).
-#include "free_objects.hpp"
+#include "objects/free_objects.hpp"
 
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/scoped_seconds.hpp>

@@ -1,7 +1,7 @@
 // A soft body's contact in a scene (scene_contact.hpp).
-#include "scene_contact.hpp"
+#include "contact/scene_contact.hpp"
 
-#include "coupled_objects.hpp"
+#include "objects/coupled_objects.hpp"
 
 #include <algorithm>
 #include <limits>

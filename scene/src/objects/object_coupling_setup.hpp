@@ -1,11 +1,11 @@
 #pragma once
 // Internal to the scene runner: whether the scene's free objects can be solved in the body's Newton solve
 // (coupled_objects.hpp), and building them for it.
-#include "coupled_objects.hpp"
-#include "free_objects.hpp"
-#include "scene_contact.hpp"
-#include "scene_internal.hpp"
-#include "scene_objects.hpp"
+#include "objects/coupled_objects.hpp"
+#include "objects/free_objects.hpp"
+#include "contact/scene_contact.hpp"
+#include "bodies/scene_internal.hpp"
+#include "objects/scene_objects.hpp"
 
 #include <memory>
 #include <string>

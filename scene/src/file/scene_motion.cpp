@@ -1,6 +1,6 @@
 // A scene body's motion: the named motion (or the still rest pose), started `motion_offset` seconds in, with
 // the approach keyframes added to its root translation (scene_internal.hpp).
-#include "scene_internal.hpp"
+#include "bodies/scene_internal.hpp"
 
 #include <sflsh/core/error.hpp>
 

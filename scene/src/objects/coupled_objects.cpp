@@ -1,5 +1,5 @@
 // The scene's free rigid objects inside one reduced body's Newton solve (coupled_objects.hpp).
-#include "coupled_objects.hpp"
+#include "objects/coupled_objects.hpp"
 
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/scoped_seconds.hpp>

@@ -1,5 +1,5 @@
 // A [crowd] expanded into bodies (crowd.hpp).
-#include "crowd.hpp"
+#include "bodies/crowd.hpp"
 
 #include <sflsh/core/error.hpp>
 #include <sflsh/meshing/region.hpp>

@@ -1,15 +1,15 @@
 // Running a scene (scene_runner.hpp): bodies, objects, contact on demand, stepping, output and summary.
-#include "body_exchange.hpp"
-#include "body_groups.hpp"
-#include "crowd.hpp"
-#include "free_objects.hpp"
-#include "group_step.hpp"
-#include "local_region.hpp"
-#include "object_coupling_setup.hpp"
-#include "scene_contact.hpp"
-#include "scene_internal.hpp"
-#include "scene_objects.hpp"
-#include "scene_output.hpp"
+#include "contact/body_exchange.hpp"
+#include "bodies/body_groups.hpp"
+#include "bodies/crowd.hpp"
+#include "objects/free_objects.hpp"
+#include "bodies/group_step.hpp"
+#include "contact/local_region.hpp"
+#include "objects/object_coupling_setup.hpp"
+#include "contact/scene_contact.hpp"
+#include "bodies/scene_internal.hpp"
+#include "objects/scene_objects.hpp"
+#include "runner/scene_output.hpp"
 
 #include <sflsh/body/body_io.hpp>
 #include <sflsh/core/background_jobs.hpp>

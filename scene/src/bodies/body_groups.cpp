@@ -1,5 +1,5 @@
 // Bodies that can touch each other in a step (body_groups.hpp).
-#include "body_groups.hpp"
+#include "bodies/body_groups.hpp"
 
 #include <numeric>
 

@@ -3,8 +3,8 @@
 // contact"): the contact nodes an object reaches during the scene, found before the run from the body's skinned
 // motion (its rest shape posed at sampled times) and each object's motion — a fixed or prescribed object at its pose
 // of each sample, a free object along its ballistic path from its start until it first meets the skin.
-#include "scene_internal.hpp"
-#include "scene_objects.hpp"
+#include "bodies/scene_internal.hpp"
+#include "objects/scene_objects.hpp"
 
 #include <vector>
 

@@ -1,5 +1,5 @@
 // Strict .obj reading (obj_file.hpp).
-#include "obj_file.hpp"
+#include "file/obj_file.hpp"
 
 #include <sflsh/core/error.hpp>
 

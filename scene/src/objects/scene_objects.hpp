@@ -1,7 +1,7 @@
 #pragma once
 // Internal to the scene runner: the scene's rigid objects (shape + world motion) and their copies placed in a
 // body's frame for its contact potential.
-#include "scene_internal.hpp"
+#include "bodies/scene_internal.hpp"
 
 #include <sflsh/scene/contact_potential.hpp>
 #include <sflsh/scene/obstacle.hpp>

@@ -7,7 +7,7 @@
 // nodes and areas as the body's ContactPotential), the skin outside the soft layer (carried by the skeleton,
 // frozen in the solve) likewise, and smoothed Coulomb friction on all of them with the normal force, normal and
 // contact point lagged by one substep. The contact impulse is then one force with two sides.
-#include "scene_internal.hpp"
+#include "bodies/scene_internal.hpp"
 
 #include <sflsh/reduced/coupled_system.hpp>
 #include <sflsh/scene/object_coupling_terms.hpp>

@@ -1,5 +1,5 @@
 // The scene's rigid objects (scene_objects.hpp).
-#include "scene_objects.hpp"
+#include "objects/scene_objects.hpp"
 
 #include <sflsh/core/error.hpp>
 #include <sflsh/scene/rigid_body.hpp>

@@ -4,7 +4,7 @@
 // mesh, sign((q − c)·N) is the inside/outside sign when N is the face normal (face region), the sum of
 // the two face normals (edge region) or Σ_f α_f n_f with α_f the angle of face f at the vertex (vertex).
 // Files are read with VTK's readers (IOGeometry: .obj/.stl, IOPLY: .ply).
-#include "obj_file.hpp"
+#include "file/obj_file.hpp"
 
 #include <sflsh/core/error.hpp>
 #include <sflsh/scene/obstacle.hpp>

@@ -1,4 +1,4 @@
-#include "body_skeleton.hpp"
+#include "bodies/body_skeleton.hpp"
 
 #include <sflsh/body/body_model.hpp>
 #include <sflsh/body/skinning.hpp>

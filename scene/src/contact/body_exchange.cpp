@@ -1,5 +1,5 @@
 // The exchange of surfaces between touching bodies (body_exchange.hpp).
-#include "body_exchange.hpp"
+#include "contact/body_exchange.hpp"
 
 #include <sflsh/core/error.hpp>
 
