@@ -16,6 +16,7 @@
 #include <sflsh/fullspace/fullspace_solver.hpp>
 #include <sflsh/fullspace/reference_integrator.hpp>
 #include <sflsh/fullspace/verify_problem.hpp>
+#include <sflsh/run/body_solver_factory.hpp>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -136,19 +137,20 @@ VerifyRun run_stepping(const VerifyOptions& opt, const fullspace::VerifyProblem&
                        long steps, const std::string& integrator_name, int size, Progress& progress) {
   VerifyRun run;
   const bool dynamic = problem.dynamic();
-  fullspace::FullSpaceOptions options;
-  options.quasi_static = !dynamic;
-  options.threads = opt.threads;
-  options.preconditioner = opt.preconditioner;
-  options.integrator = stepping_integrator(spec.integrator);
-  fullspace::FullSpaceSolver integrator(problem, MPI_COMM_WORLD, options);
+  run::SolverChoice choice;
+  choice.quasi_static = !dynamic;
+  choice.integrator = stepping_integrator(spec.integrator);
+  choice.full.threads = opt.threads;
+  choice.full.preconditioner = opt.preconditioner;
   model::State state = model::initial_state(problem, 0.0);
   if (!dynamic) {
     state.w.setZero();  // a static problem starts at equilibrium with the drives at t = 0
-  } else if (options.integrator == model::Integrator::newmark) {
+  } else if (choice.integrator == model::Integrator::newmark) {
     state.a = model::initial_acceleration(problem, state);  // p̈(0) from the equations of motion
   }
-  integrator.initialize(state);
+  const run::BuiltSolver built = run::make_body_solver(problem, choice, state);
+  fullspace::FullSpaceSolver& integrator = *built.full;
+  // Steps of the problem's own length (not frames of a motion): this loop, not model::run_frames.
   run.records.push_back({0.0, state.x});
   long newton = 0, linear = 0, builds = 0;
   for (long k = 1; k <= steps; ++k) {

@@ -2,6 +2,7 @@
 #include <sflsh/core/chart.hpp>
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/virtual_display.hpp>
+#include <sflsh/core/window_png.hpp>
 
 #include <fmt/format.h>
 #include <vtkAutoInit.h>
@@ -12,7 +13,6 @@
 #include <vtkContextView.h>
 #include <vtkDoubleArray.h>
 #include <vtkNew.h>
-#include <vtkPNGWriter.h>
 #include <vtkPen.h>
 #include <vtkPlot.h>
 #include <vtkPlotPoints.h>
@@ -20,8 +20,6 @@
 #include <vtkRenderer.h>
 #include <vtkTable.h>
 #include <vtkTextProperty.h>
-#include <vtkUnsignedCharArray.h>
-#include <vtkWindowToImageFilter.h>
 
 #include <algorithm>
 #include <cmath>
@@ -153,23 +151,7 @@ void write_chart_png(const std::filesystem::path& path, const Chart& chart) {
   }
 
   view->Render();
-  vtkNew<vtkWindowToImageFilter> grab;
-  grab->SetInput(view->GetRenderWindow());
-  grab->ReadFrontBufferOff();
-  grab->Update();
-  // Into memory, then to the file with checked writes, so a full disk is an error naming the file (issue 45).
-  vtkNew<vtkPNGWriter> writer;
-  writer->WriteToMemoryOn();
-  writer->SetInputConnection(grab->GetOutputPort());
-  writer->Write();
-  vtkUnsignedCharArray* png = writer->GetResult();
-  require(writer->GetErrorCode() == 0 && png != nullptr && png->GetNumberOfValues() > 0, "{}: PNG encoding failed",
-          path.string());
-  write_atomically(path, [&](const std::filesystem::path& tmp) {
-    write_file_checked(tmp, path,
-                       std::string_view(reinterpret_cast<const char*>(png->GetPointer(0)),
-                                        static_cast<std::size_t>(png->GetNumberOfValues())));
-  });
+  write_window_png(*view->GetRenderWindow(), path);
 }
 
 }  // namespace sflsh::chart

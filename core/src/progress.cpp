@@ -1,5 +1,6 @@
 #include <sflsh/core/log.hpp>
 #include <sflsh/core/progress.hpp>
+#include <sflsh/core/scoped_seconds.hpp>
 
 #include <fmt/format.h>
 #include <unistd.h>
@@ -43,7 +44,7 @@ void Progress::draw() {
     if (decile == last_decile_) return;
   }
   last_decile_ = decile;
-  const double elapsed = std::chrono::duration<double>(now - start_).count();
+  const double elapsed = seconds_between(start_, now);
   const std::size_t worked = done_ - skipped_;
   const double rate = elapsed > 0 ? static_cast<double>(worked) / elapsed : 0.0;
   const std::string eta = rate > 0

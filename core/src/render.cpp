@@ -3,6 +3,7 @@
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/render.hpp>
 #include <sflsh/core/virtual_display.hpp>
+#include <sflsh/core/window_png.hpp>
 
 #include <vtkActor.h>
 #include <vtkCamera.h>
@@ -12,7 +13,6 @@
 #include <vtkLight.h>
 #include <vtkLookupTable.h>
 #include <vtkNew.h>
-#include <vtkPNGWriter.h>
 #include <vtkPointData.h>
 #include <vtkPoints.h>
 #include <vtkPolyData.h>
@@ -24,8 +24,6 @@
 #include <vtkScalarBarActor.h>
 #include <vtkTextActor.h>
 #include <vtkTextProperty.h>
-#include <vtkUnsignedCharArray.h>
-#include <vtkWindowToImageFilter.h>
 
 #include <algorithm>
 #include <cmath>
@@ -194,27 +192,11 @@ void frame_camera(vtkRenderer* renderer, const std::string& name, double b[6], d
   renderer->ResetCameraClippingRange();
 }
 
-void write_window_png(const std::filesystem::path& path, vtkRenderWindow* window) {
+void render_window_png(const std::filesystem::path& path, vtkRenderWindow* window) {
   window->SetOffScreenRendering(1);
   window->SetMultiSamples(4);
   window->Render();
-  vtkNew<vtkWindowToImageFilter> grab;
-  grab->SetInput(window);
-  grab->ReadFrontBufferOff();
-  grab->Update();
-  // Into memory, then to the file with checked writes, so a full disk is an error naming the file (issue 45).
-  vtkNew<vtkPNGWriter> writer;
-  writer->WriteToMemoryOn();
-  writer->SetInputConnection(grab->GetOutputPort());
-  writer->Write();
-  vtkUnsignedCharArray* png = writer->GetResult();
-  require(writer->GetErrorCode() == 0 && png != nullptr && png->GetNumberOfValues() > 0, "{}: PNG encoding failed",
-          path.string());
-  write_atomically(path, [&](const std::filesystem::path& tmp) {
-    write_file_checked(tmp, path,
-                       std::string_view(reinterpret_cast<const char*>(png->GetPointer(0)),
-                                        static_cast<std::size_t>(png->GetNumberOfValues())));
-  });
+  write_window_png(*window, path);
 }
 
 /// The box of the surfaces' points (offsets applied).
@@ -283,7 +265,7 @@ void draw(const std::filesystem::path& path, const std::vector<Panel>& panels, c
     frame_camera(renderer, view.name, b, static_cast<double>(panel_width) / panel_height);
     window->AddRenderer(renderer);
   }
-  write_window_png(path, window);
+  render_window_png(path, window);
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 #include <sflsh/core/atomic_file.hpp>
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/virtual_display.hpp>
+#include <sflsh/core/window_png.hpp>
 #include <sflsh/material/curves.hpp>
 
 #include <vtkAxis.h>
@@ -11,15 +12,12 @@
 #include <vtkContextView.h>
 #include <vtkDoubleArray.h>
 #include <vtkNew.h>
-#include <vtkPNGWriter.h>
 #include <vtkPen.h>
 #include <vtkPlot.h>
 #include <vtkRenderWindow.h>
 #include <vtkRenderer.h>
 #include <vtkTable.h>
 #include <vtkTextProperty.h>
-#include <vtkUnsignedCharArray.h>
-#include <vtkWindowToImageFilter.h>
 
 #include <array>
 #include <cstdlib>
@@ -78,23 +76,7 @@ void plot_curves_png(const std::filesystem::path& path, const std::vector<Materi
   }
 
   view->Render();
-  vtkNew<vtkWindowToImageFilter> grab;
-  grab->SetInput(view->GetRenderWindow());
-  grab->ReadFrontBufferOff();
-  grab->Update();
-  // Into memory, then to the file with checked writes, so a full disk is an error naming the file (issue 45).
-  vtkNew<vtkPNGWriter> writer;
-  writer->WriteToMemoryOn();
-  writer->SetInputConnection(grab->GetOutputPort());
-  writer->Write();
-  vtkUnsignedCharArray* png = writer->GetResult();
-  require(writer->GetErrorCode() == 0 && png != nullptr && png->GetNumberOfValues() > 0, "{}: PNG encoding failed",
-          path.string());
-  write_atomically(path, [&](const std::filesystem::path& tmp) {
-    write_file_checked(tmp, path,
-                       std::string_view(reinterpret_cast<const char*>(png->GetPointer(0)),
-                                        static_cast<std::size_t>(png->GetNumberOfValues())));
-  });
+  write_window_png(*view->GetRenderWindow(), path);
 }
 
 }  // namespace sflsh::material

@@ -3,9 +3,9 @@
 // first solved against the others predicted; then each touching cluster exchanges its end-of-step surfaces
 // until they agree (body_exchange.hpp), each body solved again from its start-of-step state. The result does
 // not depend on the order of the bodies.
+#include "bodies/scene_internal.hpp"
 #include "contact/body_exchange.hpp"
 #include "contact/scene_contact.hpp"
-#include "bodies/scene_internal.hpp"
 
 #include <functional>
 #include <memory>

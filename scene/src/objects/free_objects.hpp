@@ -5,8 +5,8 @@
 // and predicted at the step's end). The bodies then solve against the object's new pose in their own
 // ContactPotential, so both sides of the contact are implicit; the exchange is staggered once per step.
 // The energy balance, contact forces and penetration go into summary.json → free_objects.
-#include "contact/scene_contact.hpp"
 #include "bodies/scene_internal.hpp"
+#include "contact/scene_contact.hpp"
 #include "objects/scene_objects.hpp"
 
 #include <sflsh/core/summary.hpp>

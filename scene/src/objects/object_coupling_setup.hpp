@@ -1,10 +1,10 @@
 #pragma once
 // Internal to the scene runner: whether the scene's free objects can be solved in the body's Newton solve
 // (coupled_objects.hpp), and building them for it.
+#include "bodies/scene_internal.hpp"
+#include "contact/scene_contact.hpp"
 #include "objects/coupled_objects.hpp"
 #include "objects/free_objects.hpp"
-#include "contact/scene_contact.hpp"
-#include "bodies/scene_internal.hpp"
 #include "objects/scene_objects.hpp"
 
 #include <memory>

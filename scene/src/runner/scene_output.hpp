@@ -4,8 +4,8 @@
 // that open the whole scene at once: scene.pvd (every body and the objects, in the world, per written frame)
 // and scene_dynamics.pvd (every soft body's σ map where it stands). With [output] format = "xdmf" the series
 // are <name>.xmf + <name>.h5 and there are no collections (ParaView's .pvd reader opens VTK XML files only).
-#include "contact/scene_contact.hpp"
 #include "bodies/scene_internal.hpp"
+#include "contact/scene_contact.hpp"
 #include "objects/scene_objects.hpp"
 
 #include <sflsh/core/background_jobs.hpp>

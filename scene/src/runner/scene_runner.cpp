@@ -1,13 +1,13 @@
 // Running a scene (scene_runner.hpp): bodies, objects, contact on demand, stepping, output and summary.
-#include "contact/body_exchange.hpp"
 #include "bodies/body_groups.hpp"
 #include "bodies/crowd.hpp"
-#include "objects/free_objects.hpp"
 #include "bodies/group_step.hpp"
-#include "contact/local_region.hpp"
-#include "objects/object_coupling_setup.hpp"
-#include "contact/scene_contact.hpp"
 #include "bodies/scene_internal.hpp"
+#include "contact/body_exchange.hpp"
+#include "contact/local_region.hpp"
+#include "contact/scene_contact.hpp"
+#include "objects/free_objects.hpp"
+#include "objects/object_coupling_setup.hpp"
 #include "objects/scene_objects.hpp"
 #include "runner/scene_output.hpp"
 
