@@ -50,14 +50,13 @@ SolverChoice solver_choice(const BodyRunSettings& opt) {
 BodySimulation::BodySimulation(const BodyRunSettings& opt, RunFolder* frames_to, int rank, int size,
                                const BodyRunReporting& reporting)
     : settings_(opt), reporting_(reporting), rank_(rank), size_(size), t_start_(Clock::now()) {
-  (void)solver_choice(opt);  // the solver's settings checked before anything is loaded
+  choice_ = solver_choice(opt);  // the solver's settings parsed and checked once, before anything is loaded
   // Both bounds in every message (issue 45); 10⁴ fps as a scene's fps.
   require(opt.fps > 0.0 && opt.fps <= 1e4, "--fps must be in (0, 10000] frames per second, got {}", opt.fps);
   require(opt.substeps >= 1 && opt.substeps <= 1'000'000, "--substeps must be an integer in [1, 10⁶], got {}",
           opt.substeps);
   require(opt.frames >= 0, "--frames must be non-negative, got {}", opt.frames);
   model::check_layer_settings(opt.layer);
-  const model::Integrator integrator = model::parse_integrator(opt.integrator, "--integrator");
 
   body_ = std::make_unique<body::BodyModel>(body::load_selected_body(opt.subject));
   beta_ = body::selected_betas(opt.subject, subject_label_, "simulate");
@@ -81,10 +80,10 @@ BodySimulation::BodySimulation(const BodyRunSettings& opt, RunFolder* frames_to,
       reporting.log_details ? spdlog::level::info : spdlog::level::debug,
       "simulate: {} nodes ({} free), {} tets, {} frames at {} fps, {} substep(s), {} + {} mass, {} process(es)",
       problem.num_nodes(), problem.num_nodes() - static_cast<int>(problem.dirichlet.dof.size() / 3), problem.num_tets(),
-      motion_.num_frames(), motion_.fps, opt.substeps, model::to_string(integrator),
+      motion_.num_frames(), motion_.fps, opt.substeps, model::to_string(choice_.integrator),
       model::to_string(problem.mass_kind), size);
 
-  const SolverChoice choice = solver_choice(opt);
+  const SolverChoice& choice = choice_;
   require(choice.kind != SolverKind::reduced || size == 1,
           "--solver reduced runs on one process (got {}); parallelize over bodies instead", size);
   const auto t_model = Clock::now();

@@ -15,7 +15,7 @@ namespace sflsh::run {
 namespace {}  // namespace
 
 nlohmann::json BodySimulation::summary() const {
-  const model::Integrator integrator = model::parse_integrator(settings_.integrator, "--integrator");
+  const model::Integrator integrator = choice_.integrator;
   const double h = 1.0 / (motion_.fps * settings_.substeps);
   nlohmann::json summary = nlohmann::json::object();
   summary["compression"] = vtk::to_string(writer_options_.compression);

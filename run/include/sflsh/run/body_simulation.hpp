@@ -144,6 +144,7 @@ class BodySimulation {
  private:
   using Clock = std::chrono::steady_clock;
   BodyRunSettings settings_;
+  SolverChoice choice_;  ///< settings_'s solver, parsed once (solver_choice)
   BodyRunReporting reporting_;
   int rank_ = 0;
   int size_ = 1;
