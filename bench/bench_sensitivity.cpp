@@ -80,7 +80,7 @@ SensitivityRun sensitivity_run(const model::Problem& problem, const reduced::Red
   SensitivityRun run;
   const auto t = Clock::now();
   for (int f = 0; f < frames; ++f) {
-    const reduced::SensitivityStepStats s = sensitivity.step(h);
+    const reduced::SensitivityStepStats s = sensitivity.step_with_sensitivity(h);
     run.solve += s.seconds;
     run.young += s.young_seconds;
     run.history += s.history_seconds;

@@ -119,10 +119,10 @@ CaseDynamics DynamicsCase::simulate_with_sensitivity(const LayerParameterization
       amplitude.add(skin.displacement_of(integrator.q()), skin.skin_basis(), dq);
     };
     add_frame();
-    for (int f = 1; f < frames_; ++f) {
-      integrator.step(1.0 / fps_);
-      add_frame();
-    }
+    model::FrameLoopOptions loop;
+    loop.frames = frames_;
+    loop.fps = fps_;
+    model::run_frames(integrator, loop, [&](int, double, const model::StepStats&) { add_frame(); });
     if (integrator.integrator().cubature_added() > 0)
       logger()->debug("{} / {}: the guard grew the cubature by {} tet(s) in the differentiated run", subject_, motion_,
                       integrator.integrator().cubature_added());

@@ -177,7 +177,7 @@ void SensitivityIntegrator::follow_cubature(const std::vector<double>& weights, 
   weights_ = weights;
 }
 
-SensitivityStepStats SensitivityIntegrator::step(double h) {
+SensitivityStepStats SensitivityIntegrator::step_with_sensitivity(double h) {
   require(valid_, "sensitivity: the integrator is not initialized or an earlier step failed; call initialize()");
   SensitivityStepStats stats;
   stats.step = integrator_.step(h);  // on failure the state (and S) are unchanged
@@ -191,6 +191,11 @@ SensitivityStepStats SensitivityIntegrator::step(double h) {
   valid_ = true;
   stats.seconds = seconds_since(start);
   return stats;
+}
+
+model::StepStats SensitivityIntegrator::step(double h) {
+  last_ = step_with_sensitivity(h);
+  return last_.step;
 }
 
 SensitivityResult simulate_with_sensitivities(const model::Problem& problem, const Subspace& subspace,
@@ -209,7 +214,7 @@ SensitivityResult simulate_with_sensitivities(const model::Problem& problem, con
   };
   record();
   for (int f = 0; f < frames; ++f) {
-    const SensitivityStepStats s = integrator.step(h);
+    const SensitivityStepStats s = integrator.step_with_sensitivity(h);
     out.sensitivity_seconds += s.seconds;
     out.newton_iterations += s.step.newton_iterations;
     record();

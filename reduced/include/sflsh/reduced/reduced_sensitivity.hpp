@@ -52,7 +52,9 @@ struct RestDirections {
   Eigen::VectorXd depth;                          ///< the retargeter's harmonic depth per node
 };
 
-class SensitivityIntegrator {
+/// Also a model::BodySolver, so that the frame loop (model/frame_loop.hpp) steps it like any body solver; step()
+/// then keeps the sensitivity statistics of the last step (last_sensitivity_stats()).
+class SensitivityIntegrator final : public model::BodySolver {
  public:
   /// @param[in] young_map  W (cubature.size() × N): Y of cubature tet c = Σ_i W(c, i) Y_i, for both Y_t and Y_n
   ///                       (young_map.hpp); the problem's tet materials must be the ones these Y give.
@@ -76,7 +78,12 @@ class SensitivityIntegrator {
   /// (naming the time) when the step fails, when H is not positive definite at a converged state, when a
   /// sensitivity is not finite, or when the guard grew the cubature and there are no young rows; the
   /// sensitivities are then invalid until initialize().
-  SensitivityStepStats step(double h);
+  SensitivityStepStats step_with_sensitivity(double h);
+  /// step_with_sensitivity(h) through the body-solver interface: its solver statistics.
+  model::StepStats step(double h) override;
+  const SensitivityStepStats& last_sensitivity_stats() const { return last_; }
+  model::State current_state() const override { return integrator_.current_state(); }
+  Eigen::VectorXd positions() const override { return integrator_.positions(); }
 
   double time() const { return integrator_.time(); }
   const Eigen::VectorXd& q() const { return integrator_.q(); }
@@ -109,6 +116,7 @@ class SensitivityIntegrator {
   Eigen::MatrixXd sensitivity_, previous_;
   double t_current_ = 0.0, t_previous_ = 0.0;
   bool has_previous_ = false;
+  SensitivityStepStats last_;
 };
 
 /// The outputs at frames 0..frames: q and dq/dY per frame (frame 0 is the initial state, S = 0).
