@@ -450,6 +450,41 @@ class SceneRun {
     return ran;
   }
 
+  /// summary.json's entry of body b (name, solver, subject, motion, placement, model, its steps and dynamics when
+  /// soft, its contact), its contact counters added to `tally`.
+  nlohmann::json body_summary(std::size_t b, detail::ContactTally& tally) const {
+    const SceneBody& body = *bodies_[b];
+    const BodyContact& c = contact_[b];
+    nlohmann::json j = {{"name", body.name()},
+                        {"solver_requested", solver_name(body.spec().solver)},
+                        {"solver", solver_name(body.solver())},
+                        {"subject", body.subject_label()},
+                        {"beta", std::vector<double>(body.beta().data(), body.beta().data() + body.beta().size())},
+                        {"motion", body.motion().name},
+                        {"motion_offset", body.spec().motion_offset},
+                        {"placement",
+                         {{"position",
+                           {body.spec().placement.position.x(), body.spec().placement.position.y(),
+                            body.spec().placement.position.z()}},
+                          {"yaw_degrees", body.spec().placement.yaw_degrees}}},
+                        {"model", body.model_info},
+                        {"setup_seconds", body.setup_seconds}};
+    if (body.soft()) {
+      j["integrator"] = std::string(model::to_string(body.spec().integrator));
+      j["mass"] = std::string(model::to_string(body.spec().mass));
+      j["steps"] = body.steps;
+      j["idle_steps"] = body.idle_steps;
+      j["newton_iterations"] = body.newton_iterations;
+      j["failed_attempts"] = body.failed_attempts;
+      j["contact_refinements"] = body.refinements;
+      j["solve_seconds"] = body.solve_seconds;
+      j["dynamics"] = output_->dynamics_summary(b);
+      if (body.solver() == SolverKind::reduced) j["skeleton"] = body.skeleton_summary();
+    }
+    if (nlohmann::json contact = detail::contact_summary(c, tally); !contact.empty()) j["contact"] = contact;
+    return j;
+  }
+
   nlohmann::json make_summary(double setup_seconds, double loop_seconds, double total_seconds, double h) const {
     nlohmann::json s = options_.header.is_object() ? options_.header : nlohmann::json::object();
     s["scene"] = {{"file", scene_.file.string()},
@@ -469,37 +504,11 @@ class SceneRun {
     nlohmann::json bodies = nlohmann::json::array();
     for (std::size_t b = 0; b < bodies_.size(); ++b) {
       const SceneBody& body = *bodies_[b];
-      const BodyContact& c = contact_[b];
-      nlohmann::json j = {{"name", body.name()},
-                          {"solver_requested", solver_name(body.spec().solver)},
-                          {"solver", solver_name(body.solver())},
-                          {"subject", body.subject_label()},
-                          {"beta", std::vector<double>(body.beta().data(), body.beta().data() + body.beta().size())},
-                          {"motion", body.motion().name},
-                          {"motion_offset", body.spec().motion_offset},
-                          {"placement",
-                           {{"position",
-                             {body.spec().placement.position.x(), body.spec().placement.position.y(),
-                              body.spec().placement.position.z()}},
-                            {"yaw_degrees", body.spec().placement.yaw_degrees}}},
-                          {"model", body.model_info},
-                          {"setup_seconds", body.setup_seconds}};
       if (body.soft()) {
         ++soft;
         solved_steps += body.steps - body.idle_steps;
-        j["integrator"] = std::string(model::to_string(body.spec().integrator));
-        j["mass"] = std::string(model::to_string(body.spec().mass));
-        j["steps"] = body.steps;
-        j["idle_steps"] = body.idle_steps;
-        j["newton_iterations"] = body.newton_iterations;
-        j["failed_attempts"] = body.failed_attempts;
-        j["contact_refinements"] = body.refinements;
-        j["solve_seconds"] = body.solve_seconds;
-        j["dynamics"] = output_->dynamics_summary(b);
-        if (body.solver() == SolverKind::reduced) j["skeleton"] = body.skeleton_summary();
       }
-      if (nlohmann::json contact = detail::contact_summary(c, tally); !contact.empty()) j["contact"] = contact;
-      bodies.push_back(j);
+      bodies.push_back(body_summary(b, tally));
     }
     s["bodies"] = bodies;
     nlohmann::json objects = nlohmann::json::array();
