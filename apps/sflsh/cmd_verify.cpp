@@ -16,6 +16,7 @@
 #include <sflsh/fullspace/fullspace_solver.hpp>
 #include <sflsh/fullspace/reference_integrator.hpp>
 #include <sflsh/fullspace/verify_problem.hpp>
+#include <sflsh/model/frame_loop.hpp>
 #include <sflsh/run/body_solver_factory.hpp>
 
 #include <fmt/format.h>
@@ -23,6 +24,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <sstream>
 
@@ -83,8 +85,9 @@ struct VerifyRun {
 long step_count(const VerifyOptions& opt, const fullspace::VerifyProblem& spec, const model::Problem& problem) {
   check_work(verify_work(spec, problem), WorkLimits{}, opt.allow_long,
              fmt::format("{}: time.duration / time.step (and record.every)", opt.problem));
-  require(spec.duration / spec.step < 1e15, "{}: time.step: {} s gives more than 1e15 steps over time.duration = {} s",
-          opt.problem, spec.step, spec.duration);
+  require(spec.duration / spec.step < std::numeric_limits<int>::max(),
+          "{}: time.step: {} s gives more than {} steps over time.duration = {} s", opt.problem, spec.step,
+          std::numeric_limits<int>::max(), spec.duration);
   const auto steps = static_cast<long>(std::llround(spec.duration / spec.step));
   require(std::abs(static_cast<double>(steps) * spec.step - spec.duration) <= 1e-9 * std::max(1.0, spec.duration),
           "{}: time.duration = {} is not a whole number of steps of {}", opt.problem, spec.duration, spec.step);
@@ -150,11 +153,13 @@ VerifyRun run_stepping(const VerifyOptions& opt, const fullspace::VerifyProblem&
   }
   const run::BuiltSolver built = run::make_body_solver(problem, choice, state);
   fullspace::FullSpaceSolver& integrator = *built.full;
-  // Steps of the problem's own length (not frames of a motion): this loop, not model::run_frames.
+  // Steps of the problem's own length, not frames of a motion: the frame loop with a fixed step, one step a frame.
   run.records.push_back({0.0, state.x});
   long newton = 0, linear = 0, builds = 0;
-  for (long k = 1; k <= steps; ++k) {
-    const model::StepStats st = integrator.step(spec.step);
+  model::FrameLoopOptions loop;
+  loop.frames = static_cast<int>(steps) + 1;
+  loop.step = spec.step;
+  model::run_frames(integrator, loop, [&](int k, double, const model::StepStats& st) {
     newton += st.newton_iterations;
     linear += st.linear_iterations;
     builds += st.preconditioner_builds;
@@ -165,7 +170,7 @@ VerifyRun run_stepping(const VerifyOptions& opt, const fullspace::VerifyProblem&
                          {"seconds", st.seconds}});
     if (k % spec.record_every == 0) run.records.push_back({integrator.state().t, integrator.state().x});
     progress.advance();
-  }
+  });
   run.solver = {{"integrator", integrator_name},
                 {"processes", size},
                 {"threads_per_process", integrator.assembly_threads()},

@@ -31,16 +31,20 @@ void accumulate(StepStats& total, const StepStats& step) {
 
 StepStats run_frames(BodySolver& solver, const FrameLoopOptions& options,
                      const std::function<void(int frame, double t, const StepStats& stats)>& on_frame) {
-  require(options.fps > 0.0 && std::isfinite(options.fps), "frame loop: fps must be positive, got {}", options.fps);
+  const bool fixed_step = options.step != 0.0;
+  require(fixed_step || (options.fps > 0.0 && std::isfinite(options.fps)), "frame loop: fps must be positive, got {}",
+          options.fps);
+  require(!fixed_step || (options.step > 0.0 && std::isfinite(options.step)),
+          "frame loop: the fixed step must be positive, got {} s", options.step);
   require(options.substeps >= 1, "frame loop: substeps must be ≥ 1, got {}", options.substeps);
   require(options.first_frame >= 1, "frame loop: the first frame solved is ≥ 1, got {}", options.first_frame);
-  const double h = 1.0 / (options.fps * options.substeps);
+  const double h = fixed_step ? options.step : 1.0 / (options.fps * options.substeps);
   StepStats total;
   for (int f = options.first_frame; f < options.frames; ++f) {
     StepStats frame;
     for (int k = 0; k < options.substeps; ++k) accumulate(frame, solver.step(h));
     accumulate(total, frame);
-    if (on_frame) on_frame(f, f / options.fps, frame);
+    if (on_frame) on_frame(f, fixed_step ? f * options.substeps * h : f / options.fps, frame);
   }
   return total;
 }

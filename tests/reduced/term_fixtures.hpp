@@ -26,7 +26,7 @@ inline void check_derivatives(const ReducedTerm& term, const Eigen::VectorXd& q,
   constexpr double h = 1e-7;
   constexpr double kTolerance = 1e-6;
   Eigen::VectorXd g = Eigen::VectorXd::Zero(n);
-  term.add_gradient(q, g);
+  EXPECT_TRUE(term.add_gradient(q, g)) << term.name() << ": gradient refused";
   Eigen::VectorXd g_fd(n);
   Eigen::MatrixXd H_fd(n, n);
   for (Eigen::Index k = 0; k < n; ++k) {
@@ -42,7 +42,7 @@ inline void check_derivatives(const ReducedTerm& term, const Eigen::VectorXd& q,
   const double g_scale = std::max(g.cwiseAbs().maxCoeff(), 1e-12);
   EXPECT_LE((g - g_fd).cwiseAbs().maxCoeff() / g_scale, kTolerance) << term.name() << ": gradient";
   Eigen::MatrixXd H = Eigen::MatrixXd::Zero(n, n);
-  term.add_hessian(q, H);
+  EXPECT_TRUE(term.add_hessian(q, H)) << term.name() << ": Hessian refused";
   if (exact_hessian) {
     const double H_scale = std::max(H_fd.cwiseAbs().maxCoeff(), 1e-12);
     EXPECT_LE((H - H_fd).cwiseAbs().maxCoeff() / H_scale, kTolerance) << term.name() << ": Hessian";

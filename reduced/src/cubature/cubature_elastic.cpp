@@ -141,6 +141,8 @@ void CubatureElastic::add_hessian(const Eigen::VectorXd& q, Eigen::MatrixXd& hes
     const material::OrthotropicFung& m =
         problem_.tet_material[static_cast<std::size_t>(point_tet_[static_cast<std::size_t>(p)])];
     material::Matrix9d D = material::eval_ortho_fung(deformation_gradient(p, q), m, true).dPdF;
+    if (!D.allFinite())
+      throw_error("cubature point {} (tet {}): dP/dF is not finite", p, point_tet_[static_cast<std::size_t>(p)]);
     if (projection != material::HessianProjection::kNone) D = material::project_psd(D);
     D *= w;
     const int begin = offset_[static_cast<std::size_t>(p)], count = offset_[static_cast<std::size_t>(p) + 1] - begin;

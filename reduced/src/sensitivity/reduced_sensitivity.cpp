@@ -2,6 +2,7 @@
 // (reduced_sensitivity.hpp has the derivation; docs/reduced.md, "Sensitivities").
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/scoped_seconds.hpp>
+#include <sflsh/model/frame_loop.hpp>
 #include <sflsh/reduced/reduced_sensitivity.hpp>
 #include <sflsh/reduced/young_derivative.hpp>
 
@@ -213,12 +214,14 @@ SensitivityResult simulate_with_sensitivities(const model::Problem& problem, con
     out.dq_dyoung.push_back(integrator.dq_dyoung());
   };
   record();
-  for (int f = 0; f < frames; ++f) {
-    const SensitivityStepStats s = integrator.step_with_sensitivity(h);
-    out.sensitivity_seconds += s.seconds;
-    out.newton_iterations += s.step.newton_iterations;
+  model::FrameLoopOptions loop;
+  loop.frames = frames + 1;  // the start is frame 0
+  loop.step = h;
+  model::run_frames(integrator, loop, [&](int, double, const model::StepStats& stats) {
+    out.sensitivity_seconds += integrator.last_sensitivity_stats().seconds;
+    out.newton_iterations += stats.newton_iterations;
     record();
-  }
+  });
   out.seconds = seconds_since(t0);
   return out;
 }

@@ -15,16 +15,18 @@ using model::kInfinity;
 
 double HeadTerm::value(const Eigen::VectorXd& x) const { return inner_.value(x.head(size_)); }
 
-void HeadTerm::add_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& gradient) const {
+bool HeadTerm::add_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& gradient) const {
   Eigen::VectorXd head = Eigen::VectorXd::Zero(size_);
-  inner_.add_gradient(x.head(size_), head);
+  const bool ok = inner_.add_gradient(x.head(size_), head);
   gradient.head(size_) += head;
+  return ok;
 }
 
-void HeadTerm::add_hessian(const Eigen::VectorXd& x, Eigen::MatrixXd& hessian) const {
+bool HeadTerm::add_hessian(const Eigen::VectorXd& x, Eigen::MatrixXd& hessian) const {
   Eigen::MatrixXd head = Eigen::MatrixXd::Zero(size_, size_);
-  inner_.add_hessian(x.head(size_), head);
+  const bool ok = inner_.add_hessian(x.head(size_), head);
   hessian.topLeftCorner(size_, size_) += head;
+  return ok;
 }
 
 RootInertiaTerm::RootInertiaTerm(const ReducedInertia& inertia, const Subspace& subspace,
@@ -88,7 +90,7 @@ double RootInertiaTerm::value(const Eigen::VectorXd& x) const {
 }
 
 // Σ_i m (∂y/∂r)ᵀ y over the nodes is Σ_b Σ_k ∂D_b/∂r_k : W_b with the per-bone moments W_b = Σ_i m ω_ib y [p; 1]ᵀ.
-void RootInertiaTerm::add_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& gradient) const {
+bool RootInertiaTerm::add_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& gradient) const {
   const DeviationFrame frame = skeleton_.frame(x, offset_, pose_.pivot, pose_.centres, false);
   meshing::RowMatrixX3d p;
   gather(x, p);
@@ -112,9 +114,10 @@ void RootInertiaTerm::add_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& gr
     for (std::size_t k = 0; k < bone.coordinates.size(); ++k)
       gradient[offset_ + bone.coordinates[k]] += w * bone.first[k].cwiseProduct(weighted[b]).sum();
   }
+  return gradient.allFinite();
 }
 
-void RootInertiaTerm::add_hessian(const Eigen::VectorXd& x, Eigen::MatrixXd& hessian) const {
+bool RootInertiaTerm::add_hessian(const Eigen::VectorXd& x, Eigen::MatrixXd& hessian) const {
   const DeviationFrame frame = skeleton_.frame(x, offset_, pose_.pivot, pose_.centres, true);
   meshing::RowMatrixX3d p;
   gather(x, p);
@@ -203,6 +206,7 @@ void RootInertiaTerm::add_hessian(const Eigen::VectorXd& x, Eigen::MatrixXd& hes
   hessian.block(0, offset_, offset_, size) += mixed;
   hessian.block(offset_, 0, size, offset_) += mixed.transpose();
   hessian.block(offset_, offset_, size, size) += w * deviation;
+  return true;
 }
 
 void RootTrackingTerm::set_step(const Eigen::VectorXd& stiffness, const Eigen::VectorXd& damping,
@@ -232,7 +236,7 @@ double RootTrackingTerm::value(const Eigen::VectorXd& x) const {
   return value;
 }
 
-void RootTrackingTerm::add_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& gradient) const {
+bool RootTrackingTerm::add_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& gradient) const {
   const Eigen::VectorXd r = x.segment(offset_, size_);
   gradient.segment(offset_, size_) += stiffness_.cwiseProduct(r) + damping_rate_.cwiseProduct(r - previous_);
   for (Eigen::Index j = 0; j < limit_.size(); ++j) {
@@ -240,10 +244,11 @@ void RootTrackingTerm::add_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& g
     const double n = phi.norm(), over = n - limit_[j];
     if (over > 0.0) gradient.segment<3>(offset_ + 6 + 3 * j) += limit_stiffness_[j] * over / n * phi;
   }
+  return gradient.allFinite();
 }
 
 // The limit's Hessian k[(1 − a/n) I + (a/n) φφᵀ/n²] for n = |φ| > a.
-void RootTrackingTerm::add_hessian(const Eigen::VectorXd& x, Eigen::MatrixXd& hessian) const {
+bool RootTrackingTerm::add_hessian(const Eigen::VectorXd& x, Eigen::MatrixXd& hessian) const {
   hessian.block(offset_, offset_, size_, size_).diagonal() += stiffness_ + damping_rate_;
   for (Eigen::Index j = 0; j < limit_.size(); ++j) {
     const Eigen::Vector3d phi = x.segment<3>(offset_ + 6 + 3 * j);
@@ -253,6 +258,7 @@ void RootTrackingTerm::add_hessian(const Eigen::VectorXd& x, Eigen::MatrixXd& he
     hessian.block<3, 3>(offset_ + 6 + 3 * j, offset_ + 6 + 3 * j) +=
         limit_stiffness_[j] * ((1.0 - ratio) * Eigen::Matrix3d::Identity() + ratio * phi * phi.transpose() / (n * n));
   }
+  return true;
 }
 
 double RootPotentialTerm::value(const Eigen::VectorXd& x) const {
@@ -261,14 +267,16 @@ double RootPotentialTerm::value(const Eigen::VectorXd& x) const {
   return std::isfinite(energy) ? energy : kInfinity;
 }
 
-void RootPotentialTerm::add_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& gradient) const {
+bool RootPotentialTerm::add_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& gradient) const {
   const DeviationFrame frame = skeleton_.frame(x, offset_, pose_.pivot, pose_.centres, false);
   potentials_.add_gradient(x, inertia_, gradient, &frame);
+  return gradient.allFinite();
 }
 
-void RootPotentialTerm::add_hessian(const Eigen::VectorXd& x, Eigen::MatrixXd& hessian) const {
+bool RootPotentialTerm::add_hessian(const Eigen::VectorXd& x, Eigen::MatrixXd& hessian) const {
   const DeviationFrame frame = skeleton_.frame(x, offset_, pose_.pivot, pose_.centres, true);
   potentials_.add_hessian(x, inertia_, hessian, &frame);
+  return true;
 }
 
 }  // namespace sflsh::reduced

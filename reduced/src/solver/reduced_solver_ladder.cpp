@@ -16,38 +16,19 @@ class ReducedSolver::Ladder final : public model::LadderSolver {
   Ladder(ReducedSolver& solver, double h) : solver_(solver), h_(h) {}
   double time() const override { return solver_.t_; }
   void save() override {
-    t_ = solver_.t_;
-    q_ = solver_.q_;
-    rate_ = solver_.q_rate_;
-    rate_previous_ = solver_.q_rate_previous_;
-    rate_dt_ = solver_.rate_dt_;
-    rate_steps_ = solver_.rate_steps_;
-    deviation_ = solver_.deviation_;
-    pose_ = solver_.pose_;
+    solver_.save_state(saved_, false);
     history_saved_ = false;
     solver_.substeps_.clear();
     if (solver_.options_.coupled) solver_.options_.coupled->save();
   }
   void restore() override {
-    solver_.t_ = t_;
-    solver_.q_ = q_;
-    solver_.q_rate_ = rate_;
-    solver_.q_rate_previous_ = rate_previous_;
-    solver_.rate_dt_ = rate_dt_;
-    solver_.rate_steps_ = rate_steps_;
-    solver_.deviation_ = deviation_;
-    solver_.pose_ = pose_;
-    if (history_saved_) {
-      solver_.history_ = history_;
-      solver_.carried_history_ = carried_history_;
-    }
-    solver_.substeps_.clear();
+    solver_.restore_state(saved_, history_saved_);
     if (solver_.options_.coupled) solver_.options_.coupled->restore();
   }
   bool attempt(double dt, material::HessianProjection hessian, model::StepStats& stats, std::string& reason) override {
-    if (!history_saved_ && solver_.t_ == t_ && dt < 0.75 * h_) {  // the first substep of a split rung
-      history_ = solver_.history_;
-      carried_history_ = solver_.carried_history_;
+    if (!history_saved_ && solver_.t_ == saved_.t && dt < 0.75 * h_) {  // the first substep of a split rung
+      saved_.history = solver_.history_;
+      saved_.carried_history = solver_.carried_history_;
       history_saved_ = true;
     }
     int startup = 0;
@@ -59,13 +40,7 @@ class ReducedSolver::Ladder final : public model::LadderSolver {
  private:
   ReducedSolver& solver_;
   double h_;
-  double t_ = 0.0;
-  Eigen::VectorXd q_, rate_, rate_previous_;
-  double rate_dt_ = 0.0;
-  int rate_steps_ = 0;
-  model::PosedHistory history_, carried_history_;
-  Eigen::VectorXd deviation_;
-  DeviationPose pose_;
+  StepState saved_;
   bool history_saved_ = false;
 };
 

@@ -210,13 +210,12 @@ bool ReducedSolver::substep_gradient(const Substep& s, const Eigen::VectorXd& q,
   gradient.setZero();
   for (const Substep::Term& term : s.terms()) {
     const auto clock = Clock::now();
-    try {
-      term.term->add_gradient(q, gradient);
-    } catch (const Error& e) {
-      reason = e.what();
+    const bool ok = term.term->add_gradient(q, gradient);
+    *term.seconds += seconds_since(clock);
+    if (!ok) {
+      reason = fmt::format("the {} term's gradient is not finite or out of the material's range", term.term->name());
       return false;
     }
-    *term.seconds += seconds_since(clock);
   }
   return true;
 }
@@ -227,17 +226,13 @@ bool ReducedSolver::factorize(const Substep& s, const Eigen::VectorXd& q, Eigen:
   for (std::size_t k = 0; k < terms.size(); ++k) {
     const Substep::Term& term = terms[k];
     const auto clock = Clock::now();
-    try {
-      if (k == 0) {
-        term.term->hessian(q, hessian);  // assigns (the inertia term copies its constant JᵀMJ/ĥ²)
-      } else {
-        term.term->add_hessian(q, hessian);
-      }
-    } catch (const Error& e) {
-      reason = e.what();
+    // The first term assigns (the inertia term copies its constant JᵀMJ/ĥ²), the others add.
+    const bool ok = k == 0 ? term.term->hessian(q, hessian) : term.term->add_hessian(q, hessian);
+    *term.seconds += seconds_since(clock);
+    if (!ok) {
+      reason = fmt::format("the {} term's Hessian is not finite or out of the material's range", term.term->name());
       return false;
     }
-    *term.seconds += seconds_since(clock);
   }
   const auto clock = Clock::now();
   // A local patch's block is a mesh's (sparse): factored by the Schur complement on the other coordinates.

@@ -67,7 +67,7 @@ double CoupledTerm::value(const Eigen::VectorXd& x) const {
   return system_.evaluate(candidate_positions(x), x.segment(offset_, system_.size()), nullptr, false);
 }
 
-void CoupledTerm::add_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& gradient) const {
+bool CoupledTerm::add_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& gradient) const {
   CoupledDerivatives d;
   meshing::RowMatrixX3d posed;
   system_.evaluate(candidate_positions(x, &posed), x.segment(offset_, system_.size()), &d, false);
@@ -88,9 +88,10 @@ void CoupledTerm::add_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& gradie
     for (SparseRowMatrix::InnerIterator it(subspace_.basis, node); it; ++it)
       gradient.segment<3>(3 * it.col()) += it.value() * pulled;
   }
+  return gradient.allFinite();
 }
 
-void CoupledTerm::add_hessian(const Eigen::VectorXd& x, Eigen::MatrixXd& hessian) const {
+bool CoupledTerm::add_hessian(const Eigen::VectorXd& x, Eigen::MatrixXd& hessian) const {
   CoupledDerivatives d;
   const Eigen::Index size = system_.size();
   meshing::RowMatrixX3d posed;
@@ -132,6 +133,7 @@ void CoupledTerm::add_hessian(const Eigen::VectorXd& x, Eigen::MatrixXd& hessian
       hessian.block(offset_, s, size, 3) += si.value() * mixed.transpose();
     }
   }
+  return true;
 }
 
 bool CoupledTerm::accept(const Eigen::VectorXd& x) {

@@ -33,12 +33,12 @@ double LocalElasticTerm::value(const Eigen::VectorXd& q) const {
   }
 }
 
-void LocalElasticTerm::add_gradient(const Eigen::VectorXd& q, Eigen::VectorXd& gradient) const {
-  exact_.add_gradient(q, gradient);
+bool LocalElasticTerm::add_gradient(const Eigen::VectorXd& q, Eigen::VectorXd& gradient) const {
+  return evaluates([&] { exact_.add_gradient(q, gradient); }) && gradient.allFinite();
 }
 
-void LocalElasticTerm::add_hessian(const Eigen::VectorXd& q, Eigen::MatrixXd& hessian) const {
-  exact_.add_hessian(q, hessian, projection_);
+bool LocalElasticTerm::add_hessian(const Eigen::VectorXd& q, Eigen::MatrixXd& hessian) const {
+  return evaluates([&] { exact_.add_hessian(q, hessian, projection_); });
 }
 
 }  // namespace sflsh::reduced

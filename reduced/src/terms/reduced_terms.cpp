@@ -22,12 +22,12 @@ double ReducedElasticTerm::value(const Eigen::VectorXd& q) const {
   }
 }
 
-void ReducedElasticTerm::add_gradient(const Eigen::VectorXd& q, Eigen::VectorXd& gradient) const {
-  elastic_.add_gradient(q, gradient);
+bool ReducedElasticTerm::add_gradient(const Eigen::VectorXd& q, Eigen::VectorXd& gradient) const {
+  return evaluates([&] { elastic_.add_gradient(q, gradient); }) && gradient.allFinite();
 }
 
-void ReducedElasticTerm::add_hessian(const Eigen::VectorXd& q, Eigen::MatrixXd& hessian) const {
-  elastic_.add_hessian(q, hessian, projection_);
+bool ReducedElasticTerm::add_hessian(const Eigen::VectorXd& q, Eigen::MatrixXd& hessian) const {
+  return evaluates([&] { elastic_.add_hessian(q, hessian, projection_); });  // throws on a non-finite dP/dF
 }
 
 void ReducedInertiaTerm::set_step(const Eigen::VectorXd& p_tilde, double h_eff) {
@@ -37,16 +37,30 @@ void ReducedInertiaTerm::set_step(const Eigen::VectorXd& p_tilde, double h_eff) 
 
 double ReducedInertiaTerm::value(const Eigen::VectorXd& q) const { return linear_.dot(q) + 0.5 * q.dot(hessian_ * q); }
 
-void ReducedInertiaTerm::add_gradient(const Eigen::VectorXd& q, Eigen::VectorXd& gradient) const {
+bool ReducedInertiaTerm::add_gradient(const Eigen::VectorXd& q, Eigen::VectorXd& gradient) const {
   gradient += linear_;
   gradient.noalias() += hessian_ * q;
+  return gradient.allFinite();
 }
 
-void ReducedInertiaTerm::add_hessian(const Eigen::VectorXd&, Eigen::MatrixXd& hessian) const { hessian += hessian_; }
+bool ReducedInertiaTerm::add_hessian(const Eigen::VectorXd&, Eigen::MatrixXd& hessian) const {
+  hessian += hessian_;
+  return true;
+}
 
 double ReducedPotentialTerm::value(const Eigen::VectorXd& q) const {
   const double energy = potentials_.energy(q, inertia_);
   return std::isfinite(energy) ? energy : kInfinity;
+}
+
+bool ReducedPotentialTerm::add_gradient(const Eigen::VectorXd& q, Eigen::VectorXd& gradient) const {
+  potentials_.add_gradient(q, inertia_, gradient);
+  return gradient.allFinite();
+}
+
+bool ReducedPotentialTerm::add_hessian(const Eigen::VectorXd& q, Eigen::MatrixXd& hessian) const {
+  potentials_.add_hessian(q, inertia_, hessian);
+  return true;
 }
 
 }  // namespace sflsh::reduced

@@ -1,7 +1,9 @@
 #pragma once
-// The one frame loop of every body simulation (simulate, scenes, compare, tradeoff, ground truth, the fit):
-// frames 1 … F−1 of a motion at `fps`, each as `substeps` solver steps, the step statistics summed per frame,
-// and a callback per finished frame (which writes, measures or records what its command needs).
+// The one frame loop of every body simulation (simulate, compare, tradeoff, ground truth, the fit and its
+// sensitivities, verify): frames 1 … F−1 of a motion at `fps`, each as `substeps` solver steps, the step statistics
+// summed per frame, and a callback per finished frame (which writes, measures or records what its command needs).
+// A run of a problem's own fixed step (verify, the sensitivity runs) passes `step` instead of fps. Scenes step all
+// their bodies together per frame (scene/src/runner/scene_runner.cpp) with the same body solvers.
 #include <sflsh/model/problem.hpp>
 #include <sflsh/model/step_stats.hpp>
 
@@ -30,9 +32,12 @@ struct FrameLoopOptions {
   double fps = 60.0;    ///< [1/s]
   int substeps = 1;     ///< solver steps per frame
   int first_frame = 1;  ///< resume from here (the solver holds frame first_frame − 1)
+  /// A fixed solver step h [s] instead of 1/(fps · substeps) (fps is then unused); frame f ends at f · substeps · h.
+  double step = 0.0;
 };
 
-/// Runs the frames; `on_frame(frame, t, stats)` after each (t [s] = frame / fps, stats summed over its steps).
+/// Runs the frames; `on_frame(frame, t, stats)` after each (t [s] = frame / fps, or frame · substeps · step; stats
+/// summed over its steps).
 /// Returns the statistics summed over every frame.
 StepStats run_frames(BodySolver& solver, const FrameLoopOptions& options,
                      const std::function<void(int frame, double t, const StepStats& stats)>& on_frame);

@@ -32,8 +32,8 @@ class CoupledTerm final : public ReducedTerm {
   void begin(double t0, double dt, const meshing::RowMatrixX3d& p_start, const DeviationFrame* start = nullptr,
              const DeviationPose& pose = {});
   double value(const Eigen::VectorXd& x) const override;
-  void add_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& gradient) const override;
-  void add_hessian(const Eigen::VectorXd& x, Eigen::MatrixXd& hessian) const override;
+  bool add_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& gradient) const override;
+  bool add_hessian(const Eigen::VectorXd& x, Eigen::MatrixXd& hessian) const override;
   /// The system's accept_substep and commit_substep at x.
   bool accept(const Eigen::VectorXd& x);
   void commit(const Eigen::VectorXd& x);

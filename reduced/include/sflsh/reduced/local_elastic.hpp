@@ -24,8 +24,8 @@ class LocalElasticTerm final : public ReducedTerm {
   /// x_D per node (3N), as CubatureElastic::set_prescribed_state.
   void set_prescribed_state(const Eigen::VectorXd& x_prescribed) { exact_.set_prescribed_state(x_prescribed); }
   double value(const Eigen::VectorXd& q) const override;
-  void add_gradient(const Eigen::VectorXd& q, Eigen::VectorXd& gradient) const override;
-  void add_hessian(const Eigen::VectorXd& q, Eigen::MatrixXd& hessian) const override;
+  bool add_gradient(const Eigen::VectorXd& q, Eigen::VectorXd& gradient) const override;
+  bool add_hessian(const Eigen::VectorXd& q, Eigen::MatrixXd& hessian) const override;
   /// The patch's energy at q [J] (throws like CubatureElastic::energy).
   double energy(const Eigen::VectorXd& q) const { return exact_.energy(q); }
   int num_tets() const { return exact_.num_points(); }

@@ -161,15 +161,23 @@ class ReducedSolver final : public model::BodySolver {
   /// The substeps of the last successful step(), in order (empty unless options.record_substeps).
   const std::vector<ReducedSubstep>& last_substeps() const { return substeps_; }
 
-  /// The whole state a step starts from (time, q, the predictor's rates, the posed history, the reusable
-  /// factorization), so that a step can be solved again from the same start with other potentials' obstacles
-  /// (the scene's body-contact exchanges). The cubature the guard grew is kept on restore (it only grows).
-  struct Checkpoint {
+  /// What a step changes: time, q, the predictor's rates, the tracking skeleton's deviation and the centres it turns
+  /// about, the posed histories. The robustness ladder puts it back before it tries a step again; a checkpoint holds
+  /// it with the reusable factorization.
+  struct StepState {
     double t = 0.0;
     Eigen::VectorXd q, rate, rate_previous;
     double rate_dt = 0.0;
     int rate_steps = 0;
-    model::PosedHistory history;
+    Eigen::VectorXd deviation;
+    DeviationPose pose;
+    model::PosedHistory history, carried_history;
+  };
+  /// The whole state a step starts from (the step state and the reusable factorization), so that a step can be
+  /// solved again from the same start with other potentials' obstacles (the scene's body-contact exchanges). The
+  /// cubature the guard grew is kept on restore (it only grows).
+  struct Checkpoint {
+    StepState state;
     NewtonFactor factor;
     bool factor_valid = false;
     double factor_h = 0.0;
@@ -181,6 +189,9 @@ class ReducedSolver final : public model::BodySolver {
 
  private:
   class Ladder;  ///< the solver on the model's robustness ladder (model/step_ladder.hpp)
+  /// Copies the step state out and back; the posed histories only `with_histories` (several vectors per node).
+  void save_state(StepState& state, bool with_histories) const;
+  void restore_state(const StepState& state, bool with_histories);
   /// x_D at t: the rest state with the attached nodes' prescribed values. Without drives that is the rest state at
   /// every t: a reference to it, with no pass over the nodes; with drives `storage` is filled and returned.
   const Eigen::VectorXd& prescribed_state(double t, Eigen::VectorXd& storage) const;

@@ -7,8 +7,10 @@
 //   ReducedGravityTerm    −gᵀM p(q) = const + c_gᵀ q
 //   ReducedPotentialTerm  Σ_k u_k(p_{n_k}(q)) over the node potentials' candidates of the substep
 //   (reduced_potentials.hpp)
-// Values leave out the constants in q (the inertia and gravity terms are exactly quadratic and linear in q). The
-// finite-difference harness in tests/reduced runs over every term.
+// Values leave out the constants in q (the inertia and gravity terms are exactly quadratic and linear in q). A term
+// reports failure as the full-space model's terms do (model/terms.hpp): +∞ for the value, false from add_gradient
+// and add_hessian. The finite-difference harness in tests/reduced runs over every term.
+#include <sflsh/core/error.hpp>
 #include <sflsh/material/psd_projection.hpp>
 #include <sflsh/reduced/cubature_elastic.hpp>
 #include <sflsh/reduced/reduced_inertia.hpp>
@@ -26,14 +28,27 @@ class ReducedTerm {
   virtual std::string_view name() const = 0;
   /// The value at q [J] (up to a constant); +∞ where the term refuses the state (Fung exponent over its cap).
   virtual double value(const Eigen::VectorXd& q) const = 0;
-  /// Adds ∂/∂q [N] to `gradient` (3S); throws sflsh::Error naming the cause where the term cannot be evaluated.
-  virtual void add_gradient(const Eigen::VectorXd& q, Eigen::VectorXd& gradient) const = 0;
-  /// Adds ∂²/∂q² [N/m] to `hessian` (3S × 3S, full symmetric); throws like add_gradient.
-  virtual void add_hessian(const Eigen::VectorXd& q, Eigen::MatrixXd& hessian) const = 0;
+  /// Adds ∂/∂q [N] to `gradient` (3S); false when some contribution is not finite or out of the material's range.
+  virtual bool add_gradient(const Eigen::VectorXd& q, Eigen::VectorXd& gradient) const = 0;
+  /// Adds ∂²/∂q² [N/m] to `hessian` (3S × 3S, full symmetric); false like add_gradient.
+  virtual bool add_hessian(const Eigen::VectorXd& q, Eigen::MatrixXd& hessian) const = 0;
   /// Sets `hessian` to ∂²/∂q² (3S × 3S): what the first term of a sum does instead of adding to zeros.
-  virtual void hessian(const Eigen::VectorXd& q, Eigen::MatrixXd& hessian) const {
+  virtual bool hessian(const Eigen::VectorXd& q, Eigen::MatrixXd& hessian) const {
     hessian.setZero(q.size(), q.size());
-    add_hessian(q, hessian);
+    return add_hessian(q, hessian);
+  }
+
+ protected:
+  /// Runs `add` (an evaluation that throws sflsh::Error where the material or a coupled system refuses the state)
+  /// and says whether it went through: the terms' one way from a thrown refusal to the bool of add_gradient.
+  template <class Add>
+  static bool evaluates(Add&& add) {
+    try {
+      add();
+      return true;
+    } catch (const Error&) {
+      return false;
+    }
   }
 };
 
@@ -44,8 +59,8 @@ class ReducedElasticTerm final : public ReducedTerm {
   /// The Hessian of the next add_hessian calls: exact (kNone) or with dP/dF projected to PSD.
   void set_projection(material::HessianProjection projection) { projection_ = projection; }
   double value(const Eigen::VectorXd& q) const override;
-  void add_gradient(const Eigen::VectorXd& q, Eigen::VectorXd& gradient) const override;
-  void add_hessian(const Eigen::VectorXd& q, Eigen::MatrixXd& hessian) const override;
+  bool add_gradient(const Eigen::VectorXd& q, Eigen::VectorXd& gradient) const override;
+  bool add_hessian(const Eigen::VectorXd& q, Eigen::MatrixXd& hessian) const override;
 
  private:
   const CubatureElastic& elastic_;
@@ -61,9 +76,12 @@ class ReducedInertiaTerm final : public ReducedTerm {
   void set_step(const Eigen::VectorXd& p_tilde, double h_eff);
   const Eigen::MatrixXd& mass_hessian() const { return hessian_; }
   double value(const Eigen::VectorXd& q) const override;
-  void add_gradient(const Eigen::VectorXd& q, Eigen::VectorXd& gradient) const override;
-  void add_hessian(const Eigen::VectorXd& q, Eigen::MatrixXd& hessian) const override;
-  void hessian(const Eigen::VectorXd&, Eigen::MatrixXd& hessian) const override { hessian = hessian_; }
+  bool add_gradient(const Eigen::VectorXd& q, Eigen::VectorXd& gradient) const override;
+  bool add_hessian(const Eigen::VectorXd& q, Eigen::MatrixXd& hessian) const override;
+  bool hessian(const Eigen::VectorXd&, Eigen::MatrixXd& hessian) const override {
+    hessian = hessian_;
+    return true;
+  }
 
  private:
   const ReducedInertia& inertia_;
@@ -78,8 +96,11 @@ class ReducedGravityTerm final : public ReducedTerm {
   /// c_g at the inertia's current time (call after its set_time).
   void update() { linear_ = inertia_.gravity_linear_term(); }
   double value(const Eigen::VectorXd& q) const override { return linear_.dot(q); }
-  void add_gradient(const Eigen::VectorXd&, Eigen::VectorXd& gradient) const override { gradient += linear_; }
-  void add_hessian(const Eigen::VectorXd&, Eigen::MatrixXd&) const override {}  // linear
+  bool add_gradient(const Eigen::VectorXd&, Eigen::VectorXd& gradient) const override {
+    gradient += linear_;
+    return true;
+  }
+  bool add_hessian(const Eigen::VectorXd&, Eigen::MatrixXd&) const override { return true; }  // linear
 
  private:
   const ReducedInertia& inertia_;
@@ -93,12 +114,8 @@ class ReducedPotentialTerm final : public ReducedTerm {
       : potentials_(potentials), inertia_(inertia) {}
   std::string_view name() const override { return "potential"; }
   double value(const Eigen::VectorXd& q) const override;
-  void add_gradient(const Eigen::VectorXd& q, Eigen::VectorXd& gradient) const override {
-    potentials_.add_gradient(q, inertia_, gradient);
-  }
-  void add_hessian(const Eigen::VectorXd& q, Eigen::MatrixXd& hessian) const override {
-    potentials_.add_hessian(q, inertia_, hessian);
-  }
+  bool add_gradient(const Eigen::VectorXd& q, Eigen::VectorXd& gradient) const override;
+  bool add_hessian(const Eigen::VectorXd& q, Eigen::MatrixXd& hessian) const override;
 
  private:
   const ReducedPotentials& potentials_;

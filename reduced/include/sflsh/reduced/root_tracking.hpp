@@ -76,8 +76,8 @@ class HeadTerm final : public ReducedTerm {
   HeadTerm(const ReducedTerm& inner, Eigen::Index size) : inner_(inner), size_(size) {}
   std::string_view name() const override { return inner_.name(); }
   double value(const Eigen::VectorXd& x) const override;
-  void add_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& gradient) const override;
-  void add_hessian(const Eigen::VectorXd& x, Eigen::MatrixXd& hessian) const override;
+  bool add_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& gradient) const override;
+  bool add_hessian(const Eigen::VectorXd& x, Eigen::MatrixXd& hessian) const override;
 
  private:
   const ReducedTerm& inner_;
@@ -95,8 +95,8 @@ class RootInertiaTerm final : public ReducedTerm {
   void set_step(const Eigen::VectorXd& p_tilde, const Eigen::VectorXd& carried_tilde,
                 const meshing::RowMatrixX3d& carried_posed, const DeviationPose& pose, double h_eff);
   double value(const Eigen::VectorXd& x) const override;
-  void add_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& gradient) const override;
-  void add_hessian(const Eigen::VectorXd& x, Eigen::MatrixXd& hessian) const override;
+  bool add_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& gradient) const override;
+  bool add_hessian(const Eigen::VectorXd& x, Eigen::MatrixXd& hessian) const override;
 
  private:
   /// Every node's undeviated posed position p_i(q) (inertia nodes, then carried).
@@ -127,8 +127,8 @@ class RootTrackingTerm final : public ReducedTerm {
   void set_step(const Eigen::VectorXd& stiffness, const Eigen::VectorXd& damping, const Eigen::VectorXd& previous,
                 double h, const Eigen::VectorXd& limit = {}, const Eigen::VectorXd& limit_stiffness = {});
   double value(const Eigen::VectorXd& x) const override;
-  void add_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& gradient) const override;
-  void add_hessian(const Eigen::VectorXd& x, Eigen::MatrixXd& hessian) const override;
+  bool add_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& gradient) const override;
+  bool add_hessian(const Eigen::VectorXd& x, Eigen::MatrixXd& hessian) const override;
 
  private:
   Eigen::Index offset_, size_;
@@ -143,8 +143,8 @@ class RootPotentialTerm final : public ReducedTerm {
   std::string_view name() const override { return "potential"; }
   void set_pose(const DeviationPose& pose) { pose_ = pose; }
   double value(const Eigen::VectorXd& x) const override;
-  void add_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& gradient) const override;
-  void add_hessian(const Eigen::VectorXd& x, Eigen::MatrixXd& hessian) const override;
+  bool add_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& gradient) const override;
+  bool add_hessian(const Eigen::VectorXd& x, Eigen::MatrixXd& hessian) const override;
 
  private:
   const ReducedPotentials& potentials_;
