@@ -37,7 +37,7 @@ void register_groundtruth_commands(CLI::App& app, const Invocation& invocation) 
                   "5 train + 5 test subjects, 5 motions, 60 frames)")
       ->check(CLI::IsMember({"quick", "paper"}));
   cmd->add_option("--out", o->out, "Output folder")->required();
-  add_mesh_option(*cmd, o->mesh);
+  add_mesh_option(*cmd, o->mesh, false, "preset: coarse");  // empty: the preset's
   cmd->add_option("--frames", o->frames, "Frames per motion (0 = the motions' default length)")
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--subjects", o->subjects,

@@ -2,6 +2,7 @@
 // the λ sweep, parameter covariance, parameter recovery) on synthetic ground truth from the full-space
 // solver. Runs in parallel with mpirun -n P (simulations are shared among ranks) and --threads T per rank.
 #include "commands.hpp"
+#include "layer_setup.hpp"
 
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
@@ -94,7 +95,7 @@ void register_validate_commands(CLI::App& app, const Invocation& invocation) {
   cmd->add_option("--preset", o->preset, "quick (minutes) or paper (the full configuration)")
       ->check(CLI::IsMember({"quick", "paper"}));
   cmd->add_option("--out", o->out, "Output folder")->required();
-  cmd->add_option("--mesh", o->mesh, "Layer mesh size: coarse | default | fine (preset: coarse)");
+  add_mesh_option(*cmd, o->mesh, false, "preset: coarse");  // empty: the preset's
   cmd->add_option("--handles", o->handles, "Point handles of the reduced model")->check(CLI::PositiveNumber);
   cmd->add_option("--cubature", o->cubature, "Cubature tets (0 = every tet, -1 = auto)")
       ->check(CLI::Range(-1, 1 << 30));

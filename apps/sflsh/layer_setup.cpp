@@ -20,10 +20,11 @@ void add_mass_option(CLI::App& cmd, LayerSettings& s) {
                  "node); docs/integrators.md");
 }
 
-void add_mesh_option(CLI::App& cmd, std::string& mesh, bool size_alias) {
-  cmd.add_option(size_alias ? "--mesh,--size" : "--mesh", mesh,
-                 size_alias ? "Layer resolution: coarse | default | fine (--size: older spelling)"
-                            : "Layer resolution: coarse | default | fine")
+void add_mesh_option(CLI::App& cmd, std::string& mesh, bool size_alias, std::string_view when_unset) {
+  std::string help = size_alias ? "Layer resolution: coarse | default | fine (--size: older spelling)"
+                                : "Layer resolution: coarse | default | fine";
+  if (!when_unset.empty()) help += " (" + std::string(when_unset) + ")";
+  cmd.add_option(size_alias ? "--mesh,--size" : "--mesh", mesh, help)
       ->check(CLI::IsMember({"coarse", "default", "fine"}))
       ->capture_default_str();
 }

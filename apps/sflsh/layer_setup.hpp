@@ -16,6 +16,7 @@
 #include <chrono>
 #include <optional>
 #include <string>
+#include <string_view>
 
 namespace sflsh::app {
 
@@ -35,8 +36,10 @@ using reduced::ReducedSettings;
 void add_layer_options(CLI::App& cmd, LayerSettings& settings);
 /// --mass lumped|consistent (the commands that choose the inertia; the others keep lumped).
 void add_mass_option(CLI::App& cmd, LayerSettings& settings);
-/// --mesh coarse|default|fine: one layer resolution (`size_alias`: also the older spelling --size).
-void add_mesh_option(CLI::App& cmd, std::string& mesh, bool size_alias = false);
+/// --mesh coarse|default|fine: one layer resolution (`size_alias`: also the older spelling --size). `when_unset`: for a
+/// command whose `mesh` stays empty when --mesh is not given, what it takes then (e.g. "preset: coarse"), shown in
+/// parentheses in the help.
+void add_mesh_option(CLI::App& cmd, std::string& mesh, bool size_alias = false, std::string_view when_unset = {});
 /// --frames, --fps, --substeps of a body run: `frames` output frames (the rest state included; 0 the motion's length
 /// where a command allows it) at `fps`, each `substeps` solver steps.
 void add_frame_options(CLI::App& cmd, int& frames, double& fps, int& substeps);
