@@ -53,7 +53,7 @@ void write_run_folder(const PythonSimulation& python, const std::filesystem::pat
   summary["output"] = run::simulate_output_summary(settings, body);
   summary.erase("compression");
   summary.erase("layer_compression");
-  write_json(run.stage("summary.json"), summary);
+  write_summary(run, summary, sim.seconds());
   run.commit();
 }
 

@@ -115,6 +115,7 @@ struct ExportOptions {
 };
 
 void run_export(const ExportOptions& opt, const Invocation& invocation) {
+  const auto t0 = std::chrono::steady_clock::now();
   const body::BodyModel model = load_selected_body(opt.subject);
   std::string label;
   const body::Betas beta = selected_betas(opt.subject, label);
@@ -135,7 +136,7 @@ void run_export(const ExportOptions& opt, const Invocation& invocation) {
   for (int k = 0; k < body::kNumJoints; ++k)
     jl[body::kJointNames[static_cast<std::size_t>(k)]] = {joints(k, 0), joints(k, 1), joints(k, 2)};
   summary["joints_m"] = jl;
-  write_json(run.stage("summary.json"), summary);
+  write_summary(run, summary, seconds_since(t0));
   run.commit();
   logger()->info("wrote {}/body.vtp ({})", opt.out, label);
 }
@@ -162,6 +163,7 @@ std::vector<std::string> split_list(const std::string& text) {
 }
 
 void run_render(const RenderOptions& opt, const Invocation& invocation) {
+  const auto t0 = std::chrono::steady_clock::now();
   const body::BodyModel model = load_selected_body(opt.subject);
   std::vector<std::pair<std::string, body::Betas>> bodies;
   if (!opt.subjects.empty()) {
@@ -227,7 +229,7 @@ void run_render(const RenderOptions& opt, const Invocation& invocation) {
   }
   nlohmann::json summary = summary_header("body render", invocation.argc, invocation.argv);
   summary["files"] = files;
-  write_json(run.stage("summary.json"), summary);
+  write_summary(run, summary, seconds_since(t0));
   run.commit();
   logger()->info("wrote {} pictures to {}", files.size(), opt.out);
 }

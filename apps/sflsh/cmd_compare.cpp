@@ -444,7 +444,7 @@ nlohmann::json compare_summary(const CompareCase& c, const FullReference& full, 
 
 /// Writes the run folder at once: compare.vtp, tradeoff.csv / .md / .png and summary.json.
 void write_compare_folder(const CompareCase& c, const FullReference& full, const CompareReport& report,
-                          const Invocation& invocation, int size, nlohmann::json timings) {
+                          const Invocation& invocation, int size, nlohmann::json timings, double total_seconds) {
   RunFolder run(c.opt.out);
   vtk::write_surface(run.stage("compare.vtp"), c.layer.shaped, c.model.faces, report.fields);
   compare::write_tradeoff_csv(run.stage("tradeoff.csv"), report.rows);
@@ -472,7 +472,7 @@ void write_compare_folder(const CompareCase& c, const FullReference& full, const
   }
   nlohmann::json summary = compare_summary(c, full, report, invocation, size, png);
   summary["timings"] = std::move(timings);
-  write_json(run.stage("summary.json"), summary);
+  write_summary(run, summary, total_seconds);
   run.commit();
 }
 
@@ -498,9 +498,8 @@ void run_compare(const CompareOptions& opt, const Invocation& invocation, int ra
   const CompareReport report = make_report(c, full, configs);
   // Everything is computed: the run folder appears at once.
   write_compare_folder(c, full, report, invocation, size,
-                       {{"build_seconds", c.build_seconds},
-                        {"models_seconds", models_seconds},
-                        {"total_seconds", seconds_since(t_start)}});
+                       {{"build_seconds", c.build_seconds}, {"models_seconds", models_seconds}},
+                       seconds_since(t_start));
   logger()->info("compare: wrote {} ({} configurations, {:.1f} s)", opt.out, configs.size(), seconds_since(t_start));
 }
 

@@ -86,8 +86,7 @@ void run_curve(CurveOptions opt, const Invocation& invocation) {
                      {"stress_at_strain_max_pa", curve.points.back().stress}});
   }
   summary["tests"] = tests;
-  set_total_seconds(summary, seconds_since(t0), true);
-  write_json(run.stage("summary.json"), summary);
+  write_summary(run, summary, seconds_since(t0), {.wall_time_s = true});
   run.commit();
   for (const material::MaterialCurve& curve : curves)
     logger()->info("{:<17} stress at strain {:+.2f}: {:.6g} Pa", material::curve_test_name(curve.test),

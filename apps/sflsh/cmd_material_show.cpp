@@ -132,8 +132,7 @@ void run_show(const ShowOptions& opt, const Invocation& invocation) {
   summary["tet_ranges"] = ranges;
   summary["basis_active_set_iterations"] = basis.total_iterations();
   summary["files"] = {"surface.vtp", "layer.vtu", "control_points.vtp", "material.toml"};
-  set_total_seconds(summary, seconds_since(t0), true);
-  write_json(run.stage("summary.json"), summary);
+  write_summary(run, summary, seconds_since(t0), {.wall_time_s = true});
   run.commit();
   logger()->info("material of {}: {} control points, {} tets → {}", subject_label, count, mesh.num_tets(), opt.out);
 }

@@ -163,10 +163,9 @@ void run_mesh(const MeshOptions& opt, const Invocation& invocation) {
   summary["timings_s"] = {{"template_mesh", template_meshing_seconds},
                           {"template_load_or_build", mesh_seconds},
                           {"factorization", factor_seconds},
-                          {"retarget", layer.seconds},
-                          {"total", seconds_since(t0)}};
+                          {"retarget", layer.seconds}};
   summary["files"] = {"layer.vtu", "outer.vtp", "inner.vtp"};
-  write_json(run.stage("summary.json"), summary);
+  write_summary(run, summary, seconds_since(t0), {.timings_s_total = true});
   run.commit();
   logger()->info("layer for {} (h = {}): {} tets, min dihedral {:.1f}°, retarget {:.3f} s → {}", subject_label,
                  opt.thickness, subject.mesh->num_tets(), layer.quality.min_dihedral_deg, layer.seconds, opt.out);

@@ -70,6 +70,7 @@ nlohmann::json vector_json(const Eigen::VectorXd& v) { return std::vector<double
 /// `sflsh metrics --synthesize MOTION --out DIR`: DIR/soft_motion.h5 (dataset SYNTH_<motion>), DIR/truth.csv
 /// (the known σ per vertex, the layout of metrics.csv) and DIR/summary.json (the spec and the known means).
 void run_synthesize(const MetricsOptions& opt, const Invocation& invocation) {
+  const auto t_start = std::chrono::steady_clock::now();
   require(!opt.out.empty(), "metrics: --out DIR is required");
   validate::SyntheticSoftMotion spec;
   spec.motion = opt.synthesize;
@@ -101,7 +102,7 @@ void run_synthesize(const MetricsOptions& opt, const Invocation& invocation) {
                           {"radius_mm", 1e3 * spec.radius},
                           {"moving_vertices", s.moving_vertices.size()}};
   summary["truth"] = validate::dynamics_summary(s.truth);
-  write_json(run.stage("summary.json"), summary);
+  write_summary(run, summary, seconds_since(t_start));
   run.commit();
   logger()->info(
       "metrics: wrote {} frames of {} with {} mm at {} Hz on {}: known mean σ {:.3f} mm over the soft region",
@@ -204,9 +205,8 @@ void run_metrics(const MetricsOptions& opt, const Invocation& invocation) {
                     {"frames", per_frame}};
   summary["dynamics"] = validate::dynamics_summary(dynamics);
   summary["output"] = {{"surface", "metrics.vtp"}, {"table", "metrics.csv"}, {"motion", "motion.npz"}};
-  summary["timings"] = {
-      {"fit_seconds", fit.seconds}, {"metrics_seconds", metrics_seconds}, {"total_seconds", seconds_since(t_start)}};
-  write_json(run.stage("summary.json"), summary);
+  summary["timings"] = {{"fit_seconds", fit.seconds}, {"metrics_seconds", metrics_seconds}};
+  write_summary(run, summary, seconds_since(t_start));
   run.commit();
   logger()->info(
       "metrics: mean σ = {:.2f} mm over the soft region ({:.2f} mm over all vertices); fit RMS {:.2f} mm (max {:.2f}), "

@@ -110,8 +110,7 @@ void run_motion_export(const MotionExportOptions& opt, const Invocation& invocat
   summary["output"] = {{"format", opt.format},
                        {"precision", xdmf ? opt.precision : "float64"},
                        {"compression", vtk::to_string(compression)}};
-  set_total_seconds(summary, seconds_since(t0), true);
-  write_json(run.stage("summary.json"), summary);
+  write_summary(run, summary, seconds_since(t0), {.wall_time_s = true});
   run.commit();
   logger()->info("wrote {} frames of '{}' for {} to {}/{}", motion.num_frames(), motion.name, subject_label, opt.out,
                  xdmf ? "body.xmf" : "body.pvd");

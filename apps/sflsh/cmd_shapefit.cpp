@@ -261,8 +261,7 @@ void run_shapefit(const ShapefitOptions& opt, const Invocation& invocation) {
   std::vector<std::string> files = {"shape_model.toml", "cross_validation.csv", "lambda_sweep.csv"};
   if (std::filesystem::exists(run.stage("lambda_sweep.png"))) files.push_back("lambda_sweep.png");
   summary["files"] = files;
-  set_total_seconds(summary, seconds_since(t0), true);
-  write_json(run.stage("summary.json"), summary);
+  write_summary(run, summary, seconds_since(t0), {.wall_time_s = true});
   run.commit();
   logger()->info("shapefit: {} subjects, {} control points, {} regularizer, λ = {:g} → {}", subjects.size(),
                  data.num_controls(), reduced::regularizer_key(regularizer_kind), sweep.choice.lambda, opt.out);

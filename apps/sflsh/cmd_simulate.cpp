@@ -8,6 +8,7 @@
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
 #include <sflsh/core/run_folder.hpp>
+#include <sflsh/core/scoped_seconds.hpp>
 #include <sflsh/core/summary.hpp>
 #include <sflsh/model/simulation_output.hpp>
 #include <sflsh/scene/scene_file.hpp>
@@ -16,6 +17,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include <chrono>
 #include <memory>
 #include <optional>
 
@@ -65,6 +67,7 @@ void run_scene_file(const SimulateOptions& opt, const Invocation& invocation, in
 }
 
 void run_simulate(const SimulateOptions& opt, const Invocation& invocation, int rank, int size) {
+  const auto t_start = std::chrono::steady_clock::now();
   require(opt.every >= 1, "--every must be at least 1, got {}", opt.every);
   if (!opt.scene.empty()) return run_scene_file(opt, invocation, rank);
   require(!opt.body.motion.empty(), "simulate: --motion is required (or give a scene with --scene FILE)");
@@ -83,7 +86,7 @@ void run_simulate(const SimulateOptions& opt, const Invocation& invocation, int 
       opt.no_output ? nlohmann::json("summary.json only") : run::simulate_output_summary(settings, body);
   summary.erase("compression");
   summary.erase("layer_compression");
-  write_json(run->stage("summary.json"), summary);
+  write_summary(*run, summary, seconds_since(t_start));
   run->commit();
   logger()->info("simulated {} frames in {:.1f} s ({:.3f} s per frame); mean σ = {:.2f} mm",
                  summary["motion"]["frames"].get<long>(), summary["timings"]["solve_seconds"].get<double>(),

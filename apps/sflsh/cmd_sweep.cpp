@@ -247,10 +247,9 @@ nlohmann::json write_sweep_report(RunFolder& folder, const SweepOptions& opt, co
   summary["runs"] = runs.size();
   summary["failures"] = failures.size();
   summary["failed_runs"] = failures;
-  summary["timings"] = {{"wall_seconds", wall_seconds}};
   summary["output"] = {{"table", "sweep.csv"}, {"markdown", "sweep.md"}};
   summary["units"] = {{"sigma", "mm"}, {"seconds", "s"}, {"fps", "output frames per second of solve time"}};
-  write_json(folder.stage("summary.json"), summary);
+  write_summary(folder, summary, wall_seconds, {.timings_wall_seconds = true});
   return counts;
 }
 

@@ -244,8 +244,7 @@ void run_verify(const VerifyOptions& opt, const Invocation& invocation, int rank
   summary["mass"] = mass_name;
   summary["solver"] = result.solver;
   summary["steps"] = result.steps;
-  summary["seconds"] = seconds_since(t_start);
-  write_json(run.stage("summary.json"), summary);
+  write_summary(run, summary, seconds_since(t_start), {.seconds = true});
   run.commit();
   logger()->info("wrote {} samples of {} nodes to {}/history.csv", result.records.size(), record_nodes.size(), opt.out);
 }

@@ -513,8 +513,7 @@ void TradeoffStudy::write(const Invocation& invocation, double started_seconds_a
                        {"markdown", "tradeoff.md"},
                        {"plot", png.empty() ? nlohmann::json(nullptr) : nlohmann::json(png)}};
   summary["units"] = {{"rms_error", "mm"}, {"seconds_per_frame", "s"}, {"setup_seconds", "s"}, {"step", "s"}};
-  set_total_seconds(summary, started_seconds_ago);
-  write_json(run.stage("summary.json"), summary);
+  write_summary(run, summary, started_seconds_ago);
   run.commit();
   logger()->info("tradeoff: wrote {} ({} rows, {:.1f} s)", run.dir().string(), rows_.size(), started_seconds_ago);
 }

@@ -1,5 +1,6 @@
 #include <sflsh/core/atomic_file.hpp>
 #include <sflsh/core/error.hpp>
+#include <sflsh/core/run_folder.hpp>
 #include <sflsh/core/summary.hpp>
 
 #include <ctime>
@@ -25,9 +26,17 @@ nlohmann::json read_json(const std::filesystem::path& path) {
   }
 }
 
-void set_total_seconds(nlohmann::json& summary, double seconds, bool legacy_wall_time_key) {
+void set_total_seconds(nlohmann::json& summary, double seconds, SummaryAliases aliases) {
   summary["timings"]["total_seconds"] = seconds;
-  if (legacy_wall_time_key) summary["wall_time_s"] = seconds;
+  if (aliases.wall_time_s) summary["wall_time_s"] = seconds;
+  if (aliases.seconds) summary["seconds"] = seconds;
+  if (aliases.timings_s_total) summary["timings_s"]["total"] = seconds;
+  if (aliases.timings_wall_seconds) summary["timings"]["wall_seconds"] = seconds;
+}
+
+void write_summary(RunFolder& run, nlohmann::json& summary, double total_seconds, SummaryAliases aliases) {
+  set_total_seconds(summary, total_seconds, aliases);
+  write_json(run.stage("summary.json"), summary);
 }
 
 nlohmann::json summary_header(const std::string& command, int argc, const char* const* argv) {

@@ -3,6 +3,7 @@
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/progress.hpp>
 #include <sflsh/core/scoped_seconds.hpp>
+#include <sflsh/core/summary.hpp>
 #include <sflsh/core/vtk_io.hpp>
 #include <sflsh/fullspace/fullspace_solver.hpp>
 #include <sflsh/model/time_integrator.hpp>
@@ -13,6 +14,8 @@
 namespace sflsh::run {
 
 namespace {}  // namespace
+
+double BodySimulation::seconds() const { return seconds_since(t_start_); }
 
 nlohmann::json BodySimulation::summary() const {
   const model::Integrator integrator = choice_.integrator;
@@ -100,8 +103,8 @@ nlohmann::json BodySimulation::summary() const {
                         {"writer_seconds", jobs_ ? jobs_->busy_seconds() : 0.0},
                         {"writer_wait_seconds", jobs_ ? jobs_->waited_seconds() : 0.0},
                         {"frames_per_second", total_.seconds > 0 ? steps / total_.seconds : 0.0},
-                        {"seconds_per_frame", steps > 0 ? total_.seconds / steps : 0.0},
-                        {"total_seconds", seconds_since(t_start_)}};
+                        {"seconds_per_frame", steps > 0 ? total_.seconds / steps : 0.0}};
+  set_total_seconds(summary, seconds());
   return summary;
 }
 

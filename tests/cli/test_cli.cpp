@@ -80,6 +80,7 @@ TEST_F(Cli, MotionExportWritesOneFramePerStepInVertexOrder) {
   EXPECT_EQ(summary["motion"]["frames"], 6);
   EXPECT_EQ(summary["motion"]["fps"], 60.0);
   EXPECT_EQ(summary["command"], "motion export");
+  EXPECT_EQ(summary.at("timings").at("total_seconds"), summary.at("wall_time_s"));  // the older name, kept as an alias
 }
 
 TEST_F(Cli, MotionExportAsACompactXdmfSeriesHoldsTheSameFrames) {

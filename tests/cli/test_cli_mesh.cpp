@@ -48,6 +48,8 @@ TEST(CliMesh, WritesTheLayerSurfacesAndSummary) {
   EXPECT_TRUE(summary["quality_template"].contains("min_dihedral_deg"));
   EXPECT_GT(summary["quality"]["thickness_max_m"].get<double>(), summary["quality"]["thickness_min_m"].get<double>());
   EXPECT_TRUE(summary["timings_s"].contains("retarget"));
+  // The run time under its one name and under mesh's older one (an alias for one release, docs/output.md).
+  EXPECT_EQ(summary.at("timings").at("total_seconds"), summary.at("timings_s").at("total"));
   // The outer surface has one point per skin vertex of the region.
   EXPECT_EQ(sflsh::vtk::read_points(out / "outer.vtp").rows(), summary["skin_vertices"].get<long>());
   // Every array says its unit; part and node_kind come with the names of their values.

@@ -201,4 +201,42 @@ TEST(Summary, JsonRoundTripAndParseErrors) {
               ::testing::ThrowsMessage<Error>(::testing::HasSubstr("bad.json: invalid JSON")));
 }
 
+// write_summary: the run time under its one name, timings.total_seconds, beside the command's other timings, the
+// older names a command asks for with the same value, and summary.json staged with the run's other files.
+TEST(Summary, WriteSummarySetsTheRunTimeAndItsAliases) {
+  const auto scratch = sflsh::testing::scratch_dir();
+  const char* argv[] = {"sflsh", "mesh"};
+  nlohmann::json s = summary_header("mesh", 2, argv);
+  s["timings"] = {{"fit_seconds", 1.5}};
+  s["timings_s"] = {{"retarget", 0.25}};
+  {
+    RunFolder run(scratch / "run");
+    write_summary(run, s, 2.5,
+                  {.wall_time_s = true, .seconds = true, .timings_s_total = true, .timings_wall_seconds = true});
+    EXPECT_FALSE(std::filesystem::exists(scratch / "run" / "summary.json"));  // staged until commit()
+    run.commit();
+  }
+  const nlohmann::json written = read_json(scratch / "run" / "summary.json");
+  EXPECT_EQ(written, s);  // the caller keeps the summary that was written
+  EXPECT_EQ(written["command"], "mesh");
+  EXPECT_EQ(written["timings"]["total_seconds"], 2.5);
+  EXPECT_EQ(written["timings"]["fit_seconds"], 1.5);  // the other timings are kept
+  EXPECT_EQ(written["timings_s"]["retarget"], 0.25);
+  EXPECT_EQ(written["wall_time_s"], 2.5);
+  EXPECT_EQ(written["seconds"], 2.5);
+  EXPECT_EQ(written["timings_s"]["total"], 2.5);
+  EXPECT_EQ(written["timings"]["wall_seconds"], 2.5);
+
+  // Without aliases only timings.total_seconds names the run time.
+  nlohmann::json plain = summary_header("body export", 2, argv);
+  {
+    RunFolder run(scratch / "plain");
+    write_summary(run, plain, 0.75);
+    run.commit();
+  }
+  const nlohmann::json only = read_json(scratch / "plain" / "summary.json");
+  EXPECT_EQ(only["timings"], (nlohmann::json{{"total_seconds", 0.75}}));
+  for (const char* alias : {"wall_time_s", "seconds", "timings_s"}) EXPECT_FALSE(only.contains(alias)) << alias;
+}
+
 }  // namespace sflsh

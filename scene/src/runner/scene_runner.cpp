@@ -103,14 +103,17 @@ class SceneRun {
     progress.finish();
     const double loop_seconds = seconds_since(t_loop);
     output_->finish();
-    nlohmann::json summary = make_summary(setup_seconds, loop_seconds, seconds_since(t_start), h);
+    const double total_seconds = seconds_since(t_start);
+    nlohmann::json summary = make_summary(setup_seconds, loop_seconds, h);
     if (jobs) {
       summary["timings"]["writer_seconds"] = jobs->busy_seconds();
       summary["timings"]["writer_wait_seconds"] = jobs->waited_seconds();
     }
     if (run) {
-      write_json(run->stage("summary.json"), summary);
+      write_summary(*run, summary, total_seconds);
       run->commit();
+    } else {  // no folder (no --out, or a rank other than 0): the returned summary has the run time all the same
+      set_total_seconds(summary, total_seconds);
     }
     return summary;
   }
@@ -485,7 +488,7 @@ class SceneRun {
     return j;
   }
 
-  nlohmann::json make_summary(double setup_seconds, double loop_seconds, double total_seconds, double h) const {
+  nlohmann::json make_summary(double setup_seconds, double loop_seconds, double h) const {
     nlohmann::json s = options_.header.is_object() ? options_.header : nlohmann::json::object();
     s["scene"] = {{"file", scene_.file.string()},
                   {"name", scene_.name},
@@ -543,8 +546,7 @@ class SceneRun {
                     {"output_seconds", output_seconds_},
                     {"posing_seconds", output_->posing_seconds()},
                     {"penetration_check_seconds", check_seconds_},
-                    {"frames_per_second", loop_seconds > 0 ? (frames_ - 1) / loop_seconds : 0.0},
-                    {"total_seconds", total_seconds}};
+                    {"frames_per_second", loop_seconds > 0 ? (frames_ - 1) / loop_seconds : 0.0}};
     s["output"] = {{"every", every_},
                    {"compression", vtk::to_string(scene_.output.compression)},
                    {"layer_compression", vtk::to_string(scene_.output.layer_compression)},

@@ -460,8 +460,7 @@ nlohmann::json run_validation(const ValidateConfig& requested, const std::filesy
   summary["threads"] = pool.threads();
   if (pool.rank() == 0) {
     report.write(run, summary);
-    summary["seconds"] = seconds_since(start);
-    write_json(run.stage("summary.json"), summary);
+    write_summary(run, summary, seconds_since(start), {.seconds = true});
     run.commit();
   }
   return summary;
@@ -494,8 +493,7 @@ nlohmann::json run_ground_truth(const ValidateConfig& config, const std::filesys
   if (pool.rank() == 0) {
     write_ground_truth_files(run, setup.model, *first.layer().mesh, truth_pointers(truth), setup.bounds,
                              true_material(config));
-    summary["seconds"] = seconds_since(start);
-    write_json(run.stage("summary.json"), summary);
+    write_summary(run, summary, seconds_since(start), {.seconds = true});
     run.commit();
   }
   return summary;

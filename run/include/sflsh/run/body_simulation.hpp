@@ -138,6 +138,8 @@ class BodySimulation {
   const reduced::ReducedModel* reduced_model() const { return reduced_model_.get(); }
   /// Wall time of the last step() call [s]: the solver's steps and the frame's recording (σ, energies, output).
   double last_step_seconds() const { return last_step_seconds_; }
+  /// Wall time since the simulation was made [s] (summary()'s timings.total_seconds).
+  double seconds() const;
   /// The statistics summed over every frame so far.
   const model::StepStats& total() const { return total_; }
 
