@@ -25,7 +25,7 @@ void add_mesh_option(CLI::App& cmd, std::string& mesh, bool size_alias, std::str
                                 : "Layer resolution: coarse | default | fine";
   if (!when_unset.empty()) help += " (" + std::string(when_unset) + ")";
   cmd.add_option(size_alias ? "--mesh,--size" : "--mesh", mesh, help)
-      ->check(CLI::IsMember({"coarse", "default", "fine"}))
+      ->check(CLI::IsMember({"coarse", "default", "medium", "fine"}))  // medium: default's older name
       ->capture_default_str();
 }
 
