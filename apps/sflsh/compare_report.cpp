@@ -108,14 +108,9 @@ void write_tradeoff_png(const std::filesystem::path& path, const std::string& ti
   require(!c.series.empty(), "plot: no reduced configuration to draw");
   for (const TradeoffRow& r : rows) {
     if (r.reduced || r.seconds_per_frame <= 0.0) continue;
-    chart::Series s;  // the reference has no error: its cost is a vertical line
-    s.label = fmt::format("full space (reference): {:.3g} s/frame", r.seconds_per_frame);
-    s.x = {r.seconds_per_frame, r.seconds_per_frame};
-    s.y = {0.7 * y_lo, 1.4 * y_hi};
-    s.line = chart::Line::dashed;
-    s.marker = chart::Marker::none;
-    s.color = {60, 60, 60};
-    c.series.push_back(std::move(s));
+    // The reference has no error: its cost is a vertical line.
+    c.series.push_back(chart::vertical_line(fmt::format("full space (reference): {:.3g} s/frame", r.seconds_per_frame),
+                                            r.seconds_per_frame, 0.7 * y_lo, 1.4 * y_hi, {60, 60, 60}));
   }
   chart::write_chart_png(path, c);
 }

@@ -176,14 +176,9 @@ void write_png(const std::filesystem::path& path, const std::string& title, cons
   }
   for (const Row& r : rows) {
     if (!is_reference(r) || !(r.seconds_per_frame > 0.0)) continue;
-    chart::Series s;  // the reference has no error: its cost is a vertical line
-    s.label = fmt::format("{}: {:.3g} s/frame", r.label(), r.seconds_per_frame);
-    s.x = {r.seconds_per_frame, r.seconds_per_frame};
-    s.y = {0.7 * y_lo, 1.4 * y_hi};
-    s.line = chart::Line::dashed;
-    s.marker = chart::Marker::none;
-    s.color = {90, 90, 90};
-    c.series.push_back(std::move(s));
+    // The reference has no error: its cost is a vertical line.
+    c.series.push_back(chart::vertical_line(fmt::format("{}: {:.3g} s/frame", r.label(), r.seconds_per_frame),
+                                            r.seconds_per_frame, 0.7 * y_lo, 1.4 * y_hi, {90, 90, 90}));
   }
   chart::write_chart_png(path, c);
 }

@@ -2,6 +2,7 @@
 // muparser drives, and the full-space Problem they define.
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/input_file.hpp>
+#include <sflsh/core/toml_reader.hpp>
 #include <sflsh/fullspace/verify_problem.hpp>
 #include <sflsh/material/parameters.hpp>
 
@@ -83,14 +84,9 @@ class Reader {
   /// Every key of `table` must be one of `allowed`; `prefix` is "" or "material." etc.
   void check_keys(const toml::table& table, std::initializer_list<std::string_view> allowed,
                   const std::string& prefix) const {
-    for (const auto& [key, node] : table) {
-      bool known = false;
-      for (const std::string_view a : allowed) known = known || key.str() == a;
-      if (known) continue;
-      std::string list;
-      for (const std::string_view a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
-      fail(node, prefix + std::string(key.str()), "unknown key (expected one of {})", list);
-    }
+    for (const auto& [key, node] : table)
+      if (!is_one_of(key.str(), allowed))
+        fail(node, prefix + std::string(key.str()), "unknown key (expected one of {})", joined(allowed));
   }
 
   const toml::node& required(const toml::table& table, std::string_view key, const std::string& prefix) const {

@@ -74,17 +74,7 @@ ShapedLayer Retargeter::shape(const body::Betas& beta) const {
 }
 
 Eigen::MatrixXd Retargeter::column_coordinates(const LayerGeometry& geometry) const {
-  Eigen::MatrixXd values = Eigen::MatrixXd::Zero(mesh_.num_nodes(), 3);
-  for (int i = 0; i < mesh_.num_nodes(); ++i) {
-    const auto& anchor = mesh_.anchor[static_cast<std::size_t>(i)];
-    if (!anchor.valid()) continue;
-    for (int k = 0; k < 3; ++k) {
-      const int v = anchor.vertex[k];
-      const double w = anchor.weight(k);
-      values.block<1, 3>(i, 0) += w * geometry.thickness(v) * (geometry.skeleton.row(v) - geometry.skin.row(v));
-    }
-  }
-  return values;
+  return layer_coordinates(geometry).rightCols<3>();
 }
 
 RowMatrixX3d Retargeter::node_derivative(const ShapedLayer& shaped, const Eigen::VectorXd& dthickness) const {

@@ -57,24 +57,13 @@ PoseSample steady_dance(double t) {
   set_joint(steady.theta, kNeck, rot_y(-kNeckShare * twist));
 
   // Feet planted flat at their rest places (the knees bend forward, toward +Z).
-  for (const Side side : {Side::kLeft, Side::kRight}) {
-    const LegIkResult leg = solve_leg_ik(side, pelvis, steady.trans, nominal_rest_ankle(side),
-                                         Eigen::Quaterniond::Identity(), Eigen::Vector3d::UnitZ());
-    const bool left = side == Side::kLeft;
-    set_joint(steady.theta, left ? kLeftHip : kRightHip, leg.hip);
-    set_joint(steady.theta, left ? kLeftKnee : kRightKnee, rot_x(leg.knee_flexion));
-    set_joint(steady.theta, left ? kLeftAnkle : kRightAnkle, leg.ankle);
-  }
+  plant_feet(steady.theta, pelvis, steady.trans);
 
   // Arms in opposition: the left arm forward while the right goes back.
   ArmAngles arm;
   arm.down = kArmsDown;
-  arm.swing = kArmSwing * swing;
-  arm.elbow_flexion = kElbow + kElbowSwing * swing;
-  set_arm(steady.theta, Side::kLeft, arm);
-  arm.swing = -kArmSwing * swing;
-  arm.elbow_flexion = kElbow - kElbowSwing * swing;
-  set_arm(steady.theta, Side::kRight, arm);
+  arm.elbow_flexion = kElbow;
+  set_arms_in_opposition(steady.theta, arm, kArmSwing * swing, kElbowSwing * swing);
   return steady;
 }
 

@@ -64,12 +64,8 @@ PoseSample sample_running_on_spot(double t) {
   const double a = lift_right - lift_left;
   ArmAngles arm;
   arm.down = kArmsDown;
-  arm.swing = kArmSwing * a;
-  arm.elbow_flexion = kElbow + kElbowSwing * a;
-  set_arm(steady.theta, Side::kLeft, arm);
-  arm.swing = -kArmSwing * a;
-  arm.elbow_flexion = kElbow - kElbowSwing * a;
-  set_arm(steady.theta, Side::kRight, arm);
+  arm.elbow_flexion = kElbow;
+  set_arms_in_opposition(steady.theta, arm, kArmSwing * a, kElbowSwing * a);
   set_joint(steady.theta, kSpine1, rot_x(kTrunkLean));
   set_joint(steady.theta, kSpine3, rot_y(-kChestTwist * a));  // left shoulder forward with the left arm
 

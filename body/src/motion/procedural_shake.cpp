@@ -63,14 +63,7 @@ PoseSample sample_shake_hips(double t) {
   steady.trans = (s1 + s2 + s3) - chest + Eigen::Vector3d(0.0, -kHipsCrouch, 0.0);
 
   // Feet stay planted where they are in the rest pose (two-bone IK on the nominal leg).
-  for (const Side side : {Side::kLeft, Side::kRight}) {
-    const LegIkResult leg = solve_leg_ik(side, pelvis, steady.trans, nominal_rest_ankle(side),
-                                         Eigen::Quaterniond::Identity(), Eigen::Vector3d::UnitZ());
-    const bool left = side == Side::kLeft;
-    set_joint(steady.theta, left ? kLeftHip : kRightHip, leg.hip);
-    set_joint(steady.theta, left ? kLeftKnee : kRightKnee, rot_x(leg.knee_flexion));
-    set_joint(steady.theta, left ? kLeftAnkle : kRightAnkle, leg.ankle);
-  }
+  plant_feet(steady.theta, pelvis, steady.trans);
   hang_arms(steady.theta, 0.0, 0.0);
   return scaled_from_rest(steady, ease_in(t, kEaseInSeconds).v);
 }

@@ -71,8 +71,29 @@ void set_arm(Pose& theta, Side side, const ArmAngles& arm) {
   set_joint(theta, elbow, rot_y(-s * arm.elbow_flexion));
 }
 
+void set_arms_in_opposition(Pose& theta, ArmAngles arm, double swing, double elbow_swing) {
+  const double base_swing = arm.swing, base_elbow = arm.elbow_flexion;
+  arm.swing = base_swing + swing;
+  arm.elbow_flexion = base_elbow + elbow_swing;
+  set_arm(theta, Side::kLeft, arm);
+  arm.swing = base_swing - swing;
+  arm.elbow_flexion = base_elbow - elbow_swing;
+  set_arm(theta, Side::kRight, arm);
+}
+
 Eigen::Vector3d nominal_rest_ankle(Side side) {
   return {sign(side) * NominalLeg::hip_offset_x, NominalLeg::hip_offset_y - NominalLeg::thigh - NominalLeg::shank, 0.0};
+}
+
+void plant_feet(Pose& theta, const Eigen::Quaterniond& pelvis, const Eigen::Vector3d& pelvis_world) {
+  for (const Side side : {Side::kLeft, Side::kRight}) {
+    const LegIkResult leg = solve_leg_ik(side, pelvis, pelvis_world, nominal_rest_ankle(side),
+                                         Eigen::Quaterniond::Identity(), Eigen::Vector3d::UnitZ());
+    const bool left = side == Side::kLeft;
+    set_joint(theta, left ? kLeftHip : kRightHip, leg.hip);
+    set_joint(theta, left ? kLeftKnee : kRightKnee, rot_x(leg.knee_flexion));
+    set_joint(theta, left ? kLeftAnkle : kRightAnkle, leg.ankle);
+  }
 }
 
 LegIkResult solve_leg_ik(Side side, const Eigen::Quaterniond& pelvis, const Eigen::Vector3d& pelvis_world,

@@ -109,6 +109,9 @@ struct ArmAngles {
 /// R_y(∓protraction) R_x(−swing) R_z(∓down) and the shoulder joint takes what the collar leaves;
 /// elbow = R_y(∓flexion). Upper signs for the left arm.
 void set_arm(Pose& theta, Side side, const ArmAngles& arm);
+/// Both arms swinging in opposition: the left arm at `arm` with its swing and elbow flexion moved by +`swing` and
+/// +`elbow_swing`, the right one by −`swing` and −`elbow_swing` [rad].
+void set_arms_in_opposition(Pose& theta, ArmAngles arm, double swing, double elbow_swing);
 
 /// Pose of a leg whose ankle is placed by two-bone inverse kinematics on the nominal leg.
 struct LegIkResult {
@@ -125,6 +128,9 @@ LegIkResult solve_leg_ik(Side side, const Eigen::Quaterniond& pelvis, const Eige
 
 /// Rest position of an ankle relative to the pelvis joint on the nominal leg (straight legs).
 Eigen::Vector3d nominal_rest_ankle(Side side);
+/// Both feet planted flat at their rest places for a pelvis of global rotation `pelvis` at `pelvis_world`: the hips,
+/// knees (bending toward +Z) and ankles by solve_leg_ik.
+void plant_feet(Pose& theta, const Eigen::Quaterniond& pelvis, const Eigen::Vector3d& pelvis_world);
 /// Hip-height drop [m] of a leg with hip flexion κ/2 and knee flexion κ (ankle under the hip):
 /// 2 l (1 − cos(κ/2)) with l = thigh = shank.
 double leg_drop(double knee_flexion);

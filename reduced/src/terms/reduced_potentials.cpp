@@ -94,62 +94,62 @@ bool ReducedPotentials::begin(double t0, double dt, const meshing::RowMatrixX3d&
   return active();
 }
 
-double ReducedPotentials::energy(const Eigen::VectorXd& q, const ReducedInertia& inertia,
-                                 const DeviationFrame* root) const {
-  double sum = 0.0;
+template <class Visit>
+void ReducedPotentials::each_candidate(const Eigen::VectorXd& q, const ReducedInertia& inertia,
+                                       const DeviationFrame* root, Visit&& visit) const {
   for (const Term& term : terms_)
     for (std::size_t c = 0; c < term.active.size(); ++c) {
       const int a = term.active[c];
-      const Eigen::Vector3d p = posed(q, inertia, a);
       const int node = active_nodes_[static_cast<std::size_t>(a)];
-      sum += term.potential->evaluate(static_cast<int>(c), root ? root->apply(node, p) : p, nullptr, nullptr);
+      const Eigen::Vector3d p = posed(q, inertia, a);
+      visit(term, static_cast<int>(c), a, node, p, root ? root->apply(node, p) : p);
     }
+}
+
+double ReducedPotentials::energy(const Eigen::VectorXd& q, const ReducedInertia& inertia,
+                                 const DeviationFrame* root) const {
+  double sum = 0.0;
+  each_candidate(q, inertia, root,
+                 [&](const Term& term, int c, int, int, const Eigen::Vector3d&, const Eigen::Vector3d& at) {
+                   sum += term.potential->evaluate(c, at, nullptr, nullptr);
+                 });
   return sum;
 }
 
 void ReducedPotentials::add_gradient(const Eigen::VectorXd& q, const ReducedInertia& inertia, Eigen::VectorXd& gradient,
                                      const DeviationFrame* root) const {
-  for (const Term& term : terms_) {
-    for (std::size_t c = 0; c < term.active.size(); ++c) {
-      const int a = term.active[c];
-      const auto sa = static_cast<std::size_t>(a);
-      const int node = active_nodes_[sa];
-      Eigen::Vector3d g;
-      const Eigen::Vector3d p = posed(q, inertia, a);
-      term.potential->evaluate(static_cast<int>(c), root ? root->apply(node, p) : p, &g, nullptr);
-      if (root) {
-        add_deviation_node_gradient(subspace_, *root, node, inertia.frame().A[sa], p, g, gradient);
-        continue;
-      }
-      const Eigen::Vector3d pulled = inertia.frame().A[sa].transpose() * g;  // A_kᵀ ∇u_k
-      for (SparseRowMatrix::InnerIterator it(subspace_.basis, node); it; ++it)
-        gradient.segment<3>(3 * it.col()) += it.value() * pulled;
-    }
-  }
+  each_candidate(q, inertia, root,
+                 [&](const Term& term, int c, int a, int node, const Eigen::Vector3d& p, const Eigen::Vector3d& at) {
+                   Eigen::Vector3d g;
+                   term.potential->evaluate(c, at, &g, nullptr);
+                   const Eigen::Matrix3d& A = inertia.frame().A[static_cast<std::size_t>(a)];
+                   if (root) {
+                     add_deviation_node_gradient(subspace_, *root, node, A, p, g, gradient);
+                     return;
+                   }
+                   const Eigen::Vector3d pulled = A.transpose() * g;  // A_kᵀ ∇u_k
+                   for (SparseRowMatrix::InnerIterator it(subspace_.basis, node); it; ++it)
+                     gradient.segment<3>(3 * it.col()) += it.value() * pulled;
+                 });
 }
 
 void ReducedPotentials::add_hessian(const Eigen::VectorXd& q, const ReducedInertia& inertia, Eigen::MatrixXd& hessian,
                                     const DeviationFrame* root) const {
-  for (const Term& term : terms_) {
-    for (std::size_t c = 0; c < term.active.size(); ++c) {
-      const int a = term.active[c];
-      const auto sa = static_cast<std::size_t>(a);
-      const int node = active_nodes_[sa];
-      Eigen::Vector3d g;
-      Eigen::Matrix3d H;
-      const Eigen::Vector3d p = posed(q, inertia, a);
-      term.potential->evaluate(static_cast<int>(c), root ? root->apply(node, p) : p, &g, &H);
-      if (root) {
-        add_deviation_node_blocks(subspace_, *root, node, inertia.frame().A[sa], p, g, H, hessian);
-        continue;
-      }
-      const Eigen::Matrix3d& A = inertia.frame().A[sa];
-      const Eigen::Matrix3d block = A.transpose() * H * A;  // A_kᵀ ∇²u_k A_k
-      for (SparseRowMatrix::InnerIterator si(subspace_.basis, node); si; ++si)
-        for (SparseRowMatrix::InnerIterator ri(subspace_.basis, node); ri; ++ri)
-          hessian.block<3, 3>(3 * si.col(), 3 * ri.col()) += si.value() * ri.value() * block;
-    }
-  }
+  each_candidate(q, inertia, root,
+                 [&](const Term& term, int c, int a, int node, const Eigen::Vector3d& p, const Eigen::Vector3d& at) {
+                   Eigen::Vector3d g;
+                   Eigen::Matrix3d H;
+                   term.potential->evaluate(c, at, &g, &H);
+                   const Eigen::Matrix3d& A = inertia.frame().A[static_cast<std::size_t>(a)];
+                   if (root) {
+                     add_deviation_node_blocks(subspace_, *root, node, A, p, g, H, hessian);
+                     return;
+                   }
+                   const Eigen::Matrix3d block = A.transpose() * H * A;  // A_kᵀ ∇²u_k A_k
+                   for (SparseRowMatrix::InnerIterator si(subspace_.basis, node); si; ++si)
+                     for (SparseRowMatrix::InnerIterator ri(subspace_.basis, node); ri; ++ri)
+                       hessian.block<3, 3>(3 * si.col(), 3 * ri.col()) += si.value() * ri.value() * block;
+                 });
 }
 
 bool ReducedPotentials::accept(const Eigen::VectorXd& q, const ReducedInertia& inertia, const DeviationFrame* root) {

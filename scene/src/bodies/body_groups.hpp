@@ -5,6 +5,7 @@
 // step of all bodies as one group.
 #include <sflsh/scene/obstacle.hpp>
 
+#include <array>
 #include <cstddef>
 #include <vector>
 
@@ -17,6 +18,11 @@ struct BodyReach {
   Aabb box;
   double pad = 0.0;  ///< [m]
 };
+
+/// The connected components of items 0 … n − 1 joined by `links` (union-find: boost's disjoint sets), each
+/// ascending, listed in the order of their first item.
+std::vector<std::vector<std::size_t>> connected_components(std::size_t n,
+                                                           const std::vector<std::array<std::size_t, 2>>& links);
 
 /// Bodies i, j are linked when box_i and box_j are at most `reach` + pad_i + pad_j apart [m]; the groups are
 /// the linked components, each ascending, listed in the order of their first body.

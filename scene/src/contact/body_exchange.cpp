@@ -1,12 +1,14 @@
 // The exchange of surfaces between touching bodies (body_exchange.hpp).
 #include "contact/body_exchange.hpp"
 
+#include "bodies/body_groups.hpp"
+
 #include <sflsh/core/error.hpp>
 
 #include <Eigen/QR>
 
 #include <algorithm>
-#include <numeric>
+#include <array>
 
 namespace sflsh::scene {
 
@@ -51,29 +53,16 @@ std::vector<std::vector<std::size_t>> touching_clusters(const std::vector<std::s
                                                         const std::vector<std::vector<std::size_t>>& touches) {
   const std::size_t n = group.size();
   require(touches.size() == n, "exchange: {} touch lists for {} bodies", touches.size(), n);
-  std::vector<std::size_t> parent(n);
-  std::iota(parent.begin(), parent.end(), std::size_t{0});
-  auto root = [&](std::size_t i) {
-    while (parent[i] != i) i = parent[i] = parent[parent[i]];
-    return i;
-  };
+  std::vector<std::array<std::size_t, 2>> links;
   for (std::size_t i = 0; i < n; ++i)
     for (std::size_t o : touches[i]) {
       const auto it = std::find(group.begin(), group.end(), o);
       if (it == group.end()) continue;  // out of the group: out of reach
-      const std::size_t a = root(i), b = root(static_cast<std::size_t>(it - group.begin()));
-      if (a != b) parent[std::max(a, b)] = std::min(a, b);
+      links.push_back({i, static_cast<std::size_t>(it - group.begin())});
     }
-  std::vector<std::vector<std::size_t>> clusters;
-  std::vector<std::size_t> cluster_of_root(n, n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::size_t r = root(i);
-    if (cluster_of_root[r] == n) {
-      cluster_of_root[r] = clusters.size();
-      clusters.emplace_back();
-    }
-    clusters[cluster_of_root[r]].push_back(group[i]);
-  }
+  std::vector<std::vector<std::size_t>> clusters = detail::connected_components(n, links);
+  for (auto& c : clusters)
+    for (std::size_t& member : c) member = group[member];
   clusters.erase(std::remove_if(clusters.begin(), clusters.end(), [](const auto& c) { return c.size() < 2; }),
                  clusters.end());
   for (auto& c : clusters) std::sort(c.begin(), c.end());

@@ -10,6 +10,7 @@
 #include <array>
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace sflsh::chart {
@@ -34,6 +35,19 @@ struct Chart {
   int width = 900, height = 600;
   std::vector<Series> series;
 };
+
+/// A dashed vertical line at x from y_lo to y_hi without markers: a value without a y, such as a reference's cost on
+/// an error–time chart.
+inline Series vertical_line(std::string label, double x, double y_lo, double y_hi, std::array<unsigned char, 3> color) {
+  Series s;
+  s.label = std::move(label);
+  s.x = {x, x};
+  s.y = {y_lo, y_hi};
+  s.line = Line::dashed;
+  s.marker = Marker::none;
+  s.color = color;
+  return s;
+}
 
 /// A distinguishable colour for index i (cycles through 8).
 std::array<unsigned char, 3> palette(std::size_t i);

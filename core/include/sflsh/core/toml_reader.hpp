@@ -22,6 +22,20 @@
 
 namespace sflsh {
 
+/// Whether `key` is one of `allowed` (a table's known keys).
+inline bool is_one_of(std::string_view key, std::initializer_list<std::string_view> allowed) {
+  for (const std::string_view a : allowed)
+    if (key == a) return true;
+  return false;
+}
+
+/// `allowed` as "a, b, c" for an error message.
+inline std::string joined(std::initializer_list<std::string_view> allowed) {
+  std::string list;
+  for (const std::string_view a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
+  return list;
+}
+
 class TomlReader {
  public:
   explicit TomlReader(std::filesystem::path path) : path_(std::move(path)) {}
@@ -64,14 +78,9 @@ class TomlReader {
   /// Every key of `table` must be one of `allowed`.
   void check_keys(const toml::table& table, std::initializer_list<std::string_view> allowed,
                   std::string_view context) const {
-    for (const auto& [key, node] : table) {
-      bool known = false;
-      for (const std::string_view a : allowed) known = known || key.str() == a;
-      if (known) continue;
-      std::string list;
-      for (const std::string_view a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
-      throw_error("{}: unknown key '{}'{} (expected {})", at(node), key.str(), context, list);
-    }
+    for (const auto& [key, node] : table)
+      if (!is_one_of(key.str(), allowed))
+        throw_error("{}: unknown key '{}'{} (expected {})", at(node), key.str(), context, joined(allowed));
   }
 
   const toml::node& required(const toml::table& table, std::string_view key, std::string_view context) const {

@@ -63,6 +63,11 @@ class ReducedPotentials {
   };
   /// Posed position of active node a (before the root deviation).
   Eigen::Vector3d posed(const Eigen::VectorXd& q, const ReducedInertia& inertia, int a) const;
+  /// Calls visit(term, c, a, node, p, at) for candidate c of every term: a its active index, node its mesh node,
+  /// p its posed position and `at` where the potential sees it (p deviated by the root, or p).
+  template <class Visit>
+  void each_candidate(const Eigen::VectorXd& q, const ReducedInertia& inertia, const DeviationFrame* root,
+                      Visit&& visit) const;
 
   const Subspace& subspace_;
   const std::vector<int>& active_nodes_;
