@@ -89,6 +89,13 @@ def rel(a, b):
     return abs(a - b) / scale if scale > 0 else 0.0
 
 
+def only_ignored(value):
+    """Whether a JSON table holds nothing but ignored keys (at any depth)."""
+    if not isinstance(value, dict):
+        return False
+    return all(IGNORED_KEY.search(k) or only_ignored(v) for k, v in value.items())
+
+
 def json_diff(a, b, key=""):
     """Largest relative difference over the numeric leaves of two JSON values, and the key where it is."""
     if isinstance(a, dict) and isinstance(b, dict):
@@ -97,6 +104,8 @@ def json_diff(a, b, key=""):
             if IGNORED_KEY.search(k):
                 continue
             if k not in a or k not in b:
+                if only_ignored(a.get(k, b.get(k))):
+                    continue  # e.g. a "timings" table that one side gained: nothing in it is a result
                 return (math.inf, f"{key}.{k} (on one side only)")
             worst = max(worst, json_diff(a[k], b[k], f"{key}.{k}"))
         return worst

@@ -135,6 +135,19 @@ int ReferenceIntegrator::Impl::prepare(double t_eval, const double* x) {
   return 0;
 }
 
+int ReferenceIntegrator::Impl::refusal() {
+  try {
+    throw;
+  } catch (const Error& error) {
+    // A Fung exponent beyond the cap, a non-finite F, …: the state is broken, retry with a smaller step.
+    last_rhs_problem = error.what();
+    return 1;
+  } catch (const std::exception& error) {
+    last_rhs_problem = error.what();
+    return -1;
+  }
+}
+
 int ReferenceIntegrator::Impl::rhs(double t_eval, const double* yv, double* ydot) {
   try {
     if (const int status = prepare(t_eval, yv); status != 0) return status;
@@ -171,13 +184,8 @@ int ReferenceIntegrator::Impl::rhs(double t_eval, const double* yv, double* ydot
       return 1;
     }
     return 0;
-  } catch (const Error& error) {
-    // A Fung exponent beyond the cap, a non-finite F, …: the state is broken, retry with a smaller step.
-    last_rhs_problem = error.what();
-    return 1;
-  } catch (const std::exception& error) {
-    last_rhs_problem = error.what();
-    return -1;
+  } catch (...) {
+    return refusal();
   }
 }
 
@@ -238,12 +246,8 @@ int ReferenceIntegrator::Impl::jacobian(double t_eval, const double* yv) {
       return 1;
     }
     return 0;
-  } catch (const Error& error) {
-    last_rhs_problem = error.what();
-    return 1;
-  } catch (const std::exception& error) {
-    last_rhs_problem = error.what();
-    return -1;
+  } catch (...) {
+    return refusal();
   }
 }
 

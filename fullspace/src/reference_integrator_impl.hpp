@@ -95,6 +95,9 @@ struct ReferenceIntegrator::Impl {
   /// The frame, its rate, x with the prescribed values and du/dt at time t into the scratch members.
   /// Returns 0 or −1 (unrecoverable: non-finite forcing, bad input) with the reason in last_rhs_problem.
   int prepare(double t_eval, const double* x);
+  /// Inside a catch block: ARKODE's status for the exception in flight, 1 (recoverable: a smaller step) for an
+  /// sflsh::Error, −1 for any other, with its message in last_rhs_problem.
+  int refusal();
   int rhs(double t_eval, const double* yv, double* ydot);
   /// J = ∂f/∂y into `values` (on the fixed pattern).
   int jacobian(double t_eval, const double* yv);

@@ -178,11 +178,11 @@ void SceneReader::read_effects(const toml::node& node, Effects& effects) const {
 
 void SceneReader::read_contact(const toml::node& node, ContactSpec& contact) const {
   const toml::table& t = table(node, "contact");
-  check_keys(
-      t,
-      {"stiffness", "tolerance", "margin", "max_refinements", "max_exchanges", "exchange_tolerance", "body_exchange",
-       "object_coupling", "local_resolution", "local_spacing", "local_depth", "local_reach", "local_free_objects"},
-      " in [contact]");
+  check_keys(t,
+             {"stiffness", "tolerance", "margin", "max_refinements", "max_exchanges", "exchange_tolerance",
+              "body_exchange", "object_coupling", "local_resolution", "local_spacing", "local_depth", "local_reach",
+              "local_free_objects", "local_max_nodes"},
+             " in [contact]");
   if (const toml::node* n = t.get("stiffness")) contact.stiffness = non_negative(*n, "stiffness", " in [contact]");
   if (const toml::node* n = t.get("tolerance")) contact.tolerance = positive(*n, "tolerance", " in [contact]");
   if (const toml::node* n = t.get("margin")) contact.margin = non_negative(*n, "margin", " in [contact]");
