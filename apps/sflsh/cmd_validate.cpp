@@ -33,6 +33,7 @@ struct ValidateOptions {
   bool no_cross_validation = false;
   bool no_lambda_warm_start = false;
   std::string lambda_rule = "one-se";
+  int lambda_extensions = -1;  ///< -1: the preset's
   int fit_groups = 1;
   std::string jacobian = "exact";
   std::vector<std::string> dyna;
@@ -67,6 +68,7 @@ void run_validate(const ValidateOptions& o, const Invocation& invocation) {
   if (!o.test_motions.empty()) config.test_motions = o.test_motions;
   if (o.no_cross_validation) config.cross_validation = false;
   if (o.no_lambda_warm_start) config.lambda_warm_start = false;
+  if (o.lambda_extensions >= 0) config.lambda_extensions = o.lambda_extensions;
   config.lambda_rule = validate::parse_lambda_rule(o.lambda_rule, "validate: --lambda-rule");
   config.fit_groups = o.fit_groups;
   config.jacobian = o.jacobian;
@@ -145,6 +147,10 @@ void register_validate_commands(CLI::App& app, const Invocation& invocation) {
                   "dσ/dq: exact (sensitivities, thickness through the retarget; default), hybrid (thickness columns "
                   "by differences) or fd (differences of every column, the paper's method)")
       ->check(CLI::IsMember({"exact", "hybrid", "fd"}));
+  cmd->add_option("--lambda-extensions", o->lambda_extensions,
+                  "At most this many λs added half a decade beyond a grid's end while the CV error is least there "
+                  "(0: the grids as given; preset: quick 2, paper 6)")
+      ->check(CLI::Range(0, 24));
   cmd->add_option("--lambda-rule", o->lambda_rule,
                   "How λ is chosen from the sweep: one-se (the largest λ whose mean CV error is within one standard "
                   "error of the least; default) or min (the least CV error, the paper's)")

@@ -65,6 +65,26 @@ TEST(LambdaChoice, NoFiniteErrorFailsNamingTheSweep) {
   }
 }
 
+// The automatic grid (shapefit --lambdas auto, validate --lambda-extensions) grows by half a decade at the end where
+// the error is least, stops once the least error is inside, at its bounds, or for a one-λ grid.
+TEST(LambdaChoice, AGridGrowsAtTheEndWhereTheErrorIsLeast) {
+  const std::vector<validate::LambdaScore> falling{{0.1, {3.0, 3.2}}, {1.0, {2.0, 2.2}}, {10.0, {1.0, 1.2}}};
+  ASSERT_TRUE(validate::lambda_beyond_grid(falling).has_value());
+  EXPECT_NEAR(*validate::lambda_beyond_grid(falling), 10.0 * std::sqrt(10.0), 1e-12);
+  EXPECT_FALSE(validate::lambda_sweep_bracketed(falling));
+  const std::vector<validate::LambdaScore> rising{{0.1, {1.0}}, {1.0, {2.0}}, {10.0, {3.0}}};
+  EXPECT_NEAR(*validate::lambda_beyond_grid(rising), 0.1 / std::sqrt(10.0), 1e-15);
+  const std::vector<validate::LambdaScore> bracketed{{0.1, {2.0}}, {1.0, {1.0}}, {10.0, {3.0}}};
+  EXPECT_FALSE(validate::lambda_beyond_grid(bracketed).has_value());
+  EXPECT_TRUE(validate::lambda_sweep_bracketed(bracketed));
+  // A missing fold is left out of its λ's mean; a λ without any never is the least.
+  const std::vector<validate::LambdaScore> gap{{0.1, {kNaN}}, {1.0, {1.0}}, {10.0, {3.0}}};
+  EXPECT_TRUE(validate::lambda_sweep_bracketed(gap));
+  EXPECT_FALSE(validate::lambda_beyond_grid({{1.0, {1.0}}}).has_value());        // one λ: a choice, not a sweep
+  EXPECT_FALSE(validate::lambda_beyond_grid(rising, 0.1).has_value());           // already at the floor
+  EXPECT_FALSE(validate::lambda_beyond_grid(falling, 1e-12, 10.0).has_value());  // … or the ceiling
+}
+
 TEST(LambdaChoice, RuleNamesParseAndRoundTrip) {
   EXPECT_EQ(validate::parse_lambda_rule("one-se", "x"), validate::LambdaRule::one_standard_error);
   EXPECT_EQ(validate::parse_lambda_rule("one-standard-error", "x"), validate::LambdaRule::one_standard_error);

@@ -61,4 +61,36 @@ LambdaChoice choose_lambda(const std::vector<LambdaScore>& sweep, LambdaRule rul
   return choice;
 }
 
+namespace {
+
+/// The index of the least finite mean error (the first of equals); nothing when no λ has one.
+std::optional<std::size_t> least_mean(const std::vector<LambdaScore>& ascending) {
+  std::optional<std::size_t> least;
+  double least_error = 0.0;
+  for (std::size_t k = 0; k < ascending.size(); ++k) {
+    const double mean = mean_of_finite(ascending[k].fold_errors);
+    if (std::isfinite(mean) && (!least || mean < least_error)) {
+      least = k;
+      least_error = mean;
+    }
+  }
+  return least;
+}
+
+}  // namespace
+
+std::optional<double> lambda_beyond_grid(const std::vector<LambdaScore>& ascending, double floor, double ceiling) {
+  const std::optional<std::size_t> least = least_mean(ascending);
+  if (ascending.size() < 2 || !least) return std::nullopt;
+  if (*least == 0 && ascending.front().lambda > floor * 1.0001) return ascending.front().lambda / kHalfDecade;
+  if (*least + 1 == ascending.size() && ascending.back().lambda < ceiling / 1.0001)
+    return ascending.back().lambda * kHalfDecade;
+  return std::nullopt;
+}
+
+bool lambda_sweep_bracketed(const std::vector<LambdaScore>& ascending) {
+  const std::optional<std::size_t> least = least_mean(ascending);
+  return least && *least > 0 && *least + 1 < ascending.size();
+}
+
 }  // namespace sflsh::reduced

@@ -15,10 +15,6 @@ namespace {
 
 using BetaMatrix = Eigen::Matrix<double, Eigen::Dynamic, body::kNumBetas>;  // S × 10, one β per row
 
-constexpr double kGridFloor = 1e-12;                // the auto grid never extends below …
-constexpr double kGridCeiling = 1e12;               // … or above these
-constexpr double kHalfDecade = 3.1622776601683795;  // √10
-
 }  // namespace
 
 void check_shape_regression(const ShapeRegressionData& data, const ShapeRegularizer& regularizer) {
@@ -137,27 +133,18 @@ ShapeLambdaSweep sweep_shape_regression(const ShapeRegressionData& data, const S
   lambdas.erase(std::unique(lambdas.begin(), lambdas.end()), lambdas.end());
   for (double lambda : lambdas) sweep.scores.push_back(cross_validate_shape_regression(data, regularizer, lambda));
 
-  auto least_index = [&] {
-    std::size_t least = 0;
-    for (std::size_t k = 1; k < sweep.scores.size(); ++k)
-      if (mean_of_finite(sweep.scores[k].fold_errors) < mean_of_finite(sweep.scores[least].fold_errors)) least = k;
-    return least;
-  };
   while (extend) {
-    const std::size_t least = least_index();
-    if (least == 0 && sweep.scores.front().lambda > kGridFloor * 1.0001) {
-      const double lambda = sweep.scores.front().lambda / kHalfDecade;
-      sweep.scores.insert(sweep.scores.begin(), cross_validate_shape_regression(data, regularizer, lambda));
-    } else if (least + 1 == sweep.scores.size() && sweep.scores.back().lambda < kGridCeiling / 1.0001) {
-      const double lambda = sweep.scores.back().lambda * kHalfDecade;
-      sweep.scores.push_back(cross_validate_shape_regression(data, regularizer, lambda));
+    const std::optional<double> lambda = lambda_beyond_grid(sweep.scores);
+    if (!lambda) break;
+    LambdaScore score = cross_validate_shape_regression(data, regularizer, *lambda);
+    if (*lambda < sweep.scores.front().lambda) {
+      sweep.scores.insert(sweep.scores.begin(), std::move(score));
     } else {
-      break;
+      sweep.scores.push_back(std::move(score));
     }
     ++sweep.extensions;
   }
-  const std::size_t least = least_index();
-  sweep.bracketed = least > 0 && least + 1 < sweep.scores.size();
+  sweep.bracketed = lambda_sweep_bracketed(sweep.scores);
   sweep.choice = choose_lambda(sweep.scores, rule, fmt::format("shapefit ({})", regularizer_key(regularizer.kind)));
   return sweep;
 }

@@ -18,6 +18,7 @@ ValidateConfig ValidateConfig::from_preset(const std::string& name) {
     // iterations 27 of 28 hit the cap (docs/fit.md, "When a stage stops").
     c.iterations = 40;
     c.lambdas = {0.01, 1.0};
+    c.lambda_extensions = 2;
     c.point_handles = 30;
   } else if (name == "paper") {
     c.train_subjects = {"OPEN_TRAIN_1", "OPEN_TRAIN_2", "OPEN_TRAIN_3", "OPEN_TRAIN_4", "OPEN_TRAIN_5"};
@@ -31,6 +32,7 @@ ValidateConfig ValidateConfig::from_preset(const std::string& name) {
     // lower the loss by < 1 % each and the sweep's CV error stays within 1 % over λ (docs/fit.md).
     c.warm_iterations = 3;
     c.lambdas = {0.001, 0.01, 0.1, 1.0, 10.0};
+    c.lambda_extensions = 6;
     c.point_handles = 86;
   } else {
     throw_error("validate: unknown preset '{}' (expected quick or paper)", name);
@@ -60,6 +62,7 @@ nlohmann::json ValidateConfig::to_json() const {
   j["lambdas_l2"] = lambdas_for("l2");
   j["lambdas_ours"] = lambdas_for("ours");
   j["cross_validation"] = cross_validation;
+  j["lambda_extensions"] = lambda_extensions;
   j["lambda_rule"] = lambda_rule_name(lambda_rule);
   j["lambda_warm_start"] = lambda_warm_start;
   j["warm_iterations"] = warm_iterations;

@@ -14,6 +14,7 @@
 #include <sflsh/meshing/layer_cache.hpp>
 #include <sflsh/meshing/region.hpp>
 #include <sflsh/reduced/elasticity_fit.hpp>
+#include <sflsh/reduced/lambda_choice.hpp>
 #include <sflsh/validate/dyna_file.hpp>
 #include <sflsh/validate/dynamics_metrics.hpp>
 #include <sflsh/validate/experiments.hpp>
@@ -22,7 +23,9 @@
 
 #include <algorithm>
 #include <chrono>
+#include <functional>
 #include <map>
+#include <optional>
 #include <set>
 
 namespace sflsh::validate {
@@ -306,6 +309,28 @@ struct FitSpecs {
 /// Independent fits (the optimal targets, SFLSH §3), then leave-one-out cross-validation and the λ sweep (§6.2,
 /// Fig. 5): one chain per (regularizer, left-out subject), λ from the largest down; with the warm start each smaller
 /// λ continues from the previous one's result at the last stage (a regularization path).
+/// The leave-one-out fit of regularizer `tag` at λ without subject `left_out`; `warm` continues from the previous fit
+/// of its chain (FitRunner), `from` (when given) from that fit's result directly.
+ChainFit leave_one_out_fit(const FitSpecs& specs, Regularizer reg, const std::string& tag, double lambda,
+                           const std::string& left_out, bool warm, const reduced::FitResult* from = nullptr) {
+  const ValidateConfig& config = specs.config;
+  std::vector<std::string> rest;
+  for (const std::string& s : config.train_subjects)
+    if (s != left_out) rest.push_back(s);
+  reduced::FitSpec spec =
+      specs.spec(fmt::format("cv_{}_lambda{:g}_without_{}", tag, lambda, left_out), FitKind::shape, reg, lambda, rest);
+  if ((warm || from) && config.warm_iterations > 0) spec.iterations = config.warm_iterations;
+  if (from) {
+    spec.warm_start = from->p;
+    spec.warm_start_from = from->name;
+  }
+  return {fmt::format("cv/{}/{:g}/{}", tag, lambda, left_out), std::move(spec),
+          specs.targets(rest, config.train_motions), warm};
+}
+
+/// Independent fits (the optimal targets, SFLSH §3), then leave-one-out cross-validation and the λ sweep (§6.2,
+/// Fig. 5): one chain per (regularizer, left-out subject), λ from the largest down; with the warm start each smaller
+/// λ continues from the previous one's result at the last stage (a regularization path).
 std::vector<FitChain> independent_and_leave_one_out_chains(const FitSpecs& specs) {
   const ValidateConfig& config = specs.config;
   std::vector<FitChain> chains;
@@ -318,22 +343,52 @@ std::vector<FitChain> independent_and_leave_one_out_chains(const FitSpecs& specs
     std::vector<double> sweep = config.lambdas_for(tag);
     std::sort(sweep.begin(), sweep.end(), std::greater<>());
     for (const std::string& left_out : config.train_subjects) {
-      std::vector<std::string> rest;
-      for (const std::string& s : config.train_subjects)
-        if (s != left_out) rest.push_back(s);
       FitChain chain;
-      for (double lambda : sweep) {
-        reduced::FitSpec spec = specs.spec(fmt::format("cv_{}_lambda{:g}_without_{}", tag, lambda, left_out),
-                                           FitKind::shape, reg, lambda, rest);
-        const bool warm = config.lambda_warm_start && !chain.empty();
-        if (warm && config.warm_iterations > 0) spec.iterations = config.warm_iterations;
-        chain.push_back({fmt::format("cv/{}/{:g}/{}", tag, lambda, left_out), std::move(spec),
-                         specs.targets(rest, config.train_motions), warm});
-      }
+      for (double lambda : sweep)
+        chain.push_back(
+            leave_one_out_fit(specs, reg, tag, lambda, left_out, config.lambda_warm_start && !chain.empty()));
       chains.push_back(std::move(chain));
     }
   }
   return chains;
+}
+
+/// The automatic extension of the λ grids (config.lambda_extensions, reduced/lambda_choice.hpp): while a
+/// regularizer's cross-validation error is least at an end of its grid, the λ half a decade beyond that end gets its
+/// leave-one-out fits (below the grid continuing from the fits at its smallest λ when the sweep is warm-started, above
+/// it from the start, as the sweep's chains do) and `evaluate` scores them. `config` (the one `specs` and `report`
+/// read) gets the grown grids. Returns the λs added per regularizer.
+std::map<std::string, std::vector<double>> extend_lambda_grids(ValidateConfig& config, const FitSpecs& specs,
+                                                               const FitRunner& runner, Report& report,
+                                                               const std::function<void()>& evaluate) {
+  std::map<std::string, std::vector<double>> added;
+  for (int round = 0; round < config.lambda_extensions; ++round) {
+    std::vector<FitChain> chains;
+    for (const auto& [reg, tag] : kRegularizers) {
+      const std::optional<double> lambda = reduced::lambda_beyond_grid(report.lambda_scores(tag));
+      if (!lambda) continue;
+      std::vector<double> grid = config.lambdas_for(tag);
+      std::sort(grid.begin(), grid.end());
+      const bool below = *lambda < grid.front();
+      for (const std::string& left_out : config.train_subjects) {
+        const reduced::FitResult* from =
+            below && config.lambda_warm_start
+                ? &report.fits.at(fmt::format("cv/{}/{:g}/{}", tag, grid.front(), left_out))
+                : nullptr;
+        chains.push_back({leave_one_out_fit(specs, reg, tag, *lambda, left_out, false, from)});
+      }
+      grid.push_back(*lambda);
+      std::sort(grid.begin(), grid.end());
+      config.lambdas_of[tag] = grid;
+      added[tag].push_back(*lambda);
+      logger()->info("validate: the CV error of {} is least at an end of its grid; adding λ = {:g}", tag, *lambda);
+    }
+    if (chains.empty()) break;
+    runner.run(fmt::format("λ grid extension {}", round + 1), chains, report.fits);
+    report.config.lambdas_of = config.lambdas_of;
+    evaluate();
+  }
+  return added;
 }
 
 Report make_report(const ValidateConfig& config, const Setup& setup,
@@ -431,8 +486,13 @@ nlohmann::json run_validation(const ValidateConfig& requested, const std::filesy
   for (const auto& [reg, tag] : kRegularizers) best_lambda[tag] = config.lambdas_for(tag).front();
   runner.run("independent and leave-one-out fits", chains, report.fits);
   // Evaluate everything fitted so far, then pick λ per regularizer from the cross-validation errors.
-  report.evaluate(pool, reduced_model, context.reduced, cases);
-  if (config.cross_validation) choose_lambdas(report, best_lambda);
+  const auto evaluate = [&] { report.evaluate(pool, reduced_model, context.reduced, cases); };
+  evaluate();
+  std::map<std::string, std::vector<double>> lambdas_added;
+  if (config.cross_validation) {
+    lambdas_added = extend_lambda_grids(config, specs, runner, report, evaluate);
+    choose_lambdas(report, best_lambda);
+  }
   // Full optimizations on every train subject (SFLSH §6.3) and their generalization (§6.4).
   chains.clear();
   for (const auto& [reg, tag] : kRegularizers)
@@ -440,11 +500,13 @@ nlohmann::json run_validation(const ValidateConfig& requested, const std::filesy
         {{"full/" + tag, specs.spec("full_" + tag, FitKind::shape, reg, best_lambda.at(tag), config.train_subjects),
           specs.targets(config.train_subjects, config.train_motions), false}});
   runner.run("full fits", chains, report.fits);
-  report.evaluate(pool, reduced_model, context.reduced, cases);
+  evaluate();
   report.best = best_lambda;
 
   nlohmann::json summary = header;
-  summary["config"] = config.to_json();
+  summary["config"] = config.to_json();  // with the grids as extended
+  summary["lambdas_added"] = nlohmann::json::object();
+  for (const auto& [tag, added] : lambdas_added) summary["lambdas_added"][tag] = added;
   summary["bounds"] = {{"thickness", {bounds.thickness.min, bounds.thickness.max}},
                        {"young_tangent", {bounds.young_tangent.min, bounds.young_tangent.max}},
                        {"young_normal", {bounds.young_normal.min, bounds.young_normal.max}}};

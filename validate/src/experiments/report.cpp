@@ -124,15 +124,21 @@ double Report::truth_entry(const std::string& subject, const std::vector<std::st
   return mean_of_finite(v);
 }
 
-LambdaChoice Report::choose_lambda(const std::string& tag) const {
+std::vector<LambdaScore> Report::lambda_scores(const std::string& tag) const {
+  std::vector<double> grid = config.lambdas_for(tag);
+  std::sort(grid.begin(), grid.end());
   std::vector<LambdaScore> sweep;
-  for (double lambda : config.lambdas_for(tag)) {
+  for (double lambda : grid) {
     LambdaScore score{lambda, {}};
     for (const std::string& s : config.train_subjects)
       score.fold_errors.push_back(table_error(fmt::format("cv/{}/{:g}/{}", tag, lambda, s), s, config.train_motions));
     sweep.push_back(std::move(score));
   }
-  return validate::choose_lambda(sweep, config.lambda_rule, fmt::format("validate: regularizer {}", tag));
+  return sweep;
+}
+
+LambdaChoice Report::choose_lambda(const std::string& tag) const {
+  return validate::choose_lambda(lambda_scores(tag), config.lambda_rule, fmt::format("validate: regularizer {}", tag));
 }
 
 std::string Report::lambda_text(const std::string& tag) const {
@@ -325,7 +331,7 @@ void Report::write_lambda_sweep(RunFolder& run, nlohmann::json& summary) const {
     if (!bracketed[tag].get<bool>())
       logger()->warn(
           "validate: the cross-validation error of {} does not rise on both sides of its least λ = {:g} "
-          "(grid {:g} … {:g}): widen --lambdas-{}",
+          "(grid {:g} … {:g}): widen --lambdas-{} or raise --lambda-extensions",
           tag, grid[least], grid.front(), grid.back(), tag);
   }
   summary["lambda_sweep_bracketed"] = bracketed;

@@ -45,6 +45,8 @@ struct Report {
   /// λ for "l2" / "ours" by config.lambda_rule from the cross-validation errors (train motions of the left-out
   /// subjects), one fold per train subject.
   LambdaChoice choose_lambda(const std::string& tag) const;
+  /// The leave-one-out errors of "l2" / "ours" per λ of its grid, in ascending λ.
+  std::vector<LambdaScore> lambda_scores(const std::string& tag) const;
   /// Writes every report file into the run folder and adds their key numbers to `summary`.
   void write(RunFolder& run, nlohmann::json& summary) const;
 

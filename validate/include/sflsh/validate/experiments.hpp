@@ -46,6 +46,10 @@ struct ValidateConfig {
   /// The grid of regularizer `tag`, ascending as given.
   const std::vector<double>& lambdas_for(const std::string& tag) const;
   bool cross_validation = true;
+  /// At most this many λs added to each regularizer's grid, half a decade beyond its end, while the cross-validation
+  /// error is least at that end (the sweep has not found its minimum; reduced/lambda_choice.hpp). 0: the grid as
+  /// given; a one-λ grid is never extended.
+  int lambda_extensions = 0;
   /// How λ is chosen from the sweep: the largest within one standard error of the least error (default), or the
   /// least error (the paper's; lambda_choice.hpp).
   LambdaRule lambda_rule = LambdaRule::one_standard_error;
