@@ -154,9 +154,7 @@ void add_material_show_command(CLI::App& material, const Invocation& invocation)
                   "Number of control points N when no --material is given (1, 12, 24, 84, …)")
       ->capture_default_str();
   cmd->add_flag("--phi", opt->phi, "Also write the basis functions φ_i as point data of surface.vtp");
-  cmd->add_option("--mesher", opt->mesher, "Layer mesher: cgal | gmsh | layered")
-      ->check(CLI::IsMember({"cgal", "gmsh", "layered"}))
-      ->capture_default_str();
+  add_mesher_option(*cmd, opt->mesher);
   add_mesh_option(*cmd, opt->size, true);
   cmd->add_option("--cache", opt->cache, "Cache folder for template meshes (default $SFLSH_CACHE or ~/.cache/sflsh)");
   cmd->add_option("--out", opt->out, "Output folder")->required();

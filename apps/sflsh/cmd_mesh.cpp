@@ -1,5 +1,6 @@
 // sflsh mesh: the soft-tissue layer as a tet mesh, retargeted to a subject and thickness.
 #include "commands.hpp"
+#include "layer_setup.hpp"
 
 #include <sflsh/core/error.hpp>
 #include <sflsh/core/log.hpp>
@@ -180,14 +181,8 @@ void register_mesh_commands(CLI::App& app, const Invocation& invocation) {
   add_body_option(*cmd, opt->subject);
   add_subject_options(*cmd, opt->subject);
   cmd->add_option("--thickness", opt->thickness, "Thickness fraction h of the layer, 0 < h < 1")->capture_default_str();
-  cmd->add_option("--mesher", opt->mesher, "Tet mesher: cgal | gmsh | layered (extruded prisms, valid for any h)")
-      ->check(CLI::IsMember({"cgal", "gmsh", "layered"}))
-      ->capture_default_str();
-  cmd->add_option(
-         "--mesh,--size", opt->size,
-         "Layer resolution preset: coarse (~10k tets) | default (~50k) | fine (~200k) (--size: older spelling)")
-      ->check(CLI::IsMember({"coarse", "default", "fine"}))
-      ->capture_default_str();
+  add_mesher_option(*cmd, opt->mesher, "layered: extruded prisms, valid for any h");
+  add_mesh_option(*cmd, opt->size, true, "coarse ~10k tets, default ~50k, fine ~200k");
   cmd->add_option("--region", opt->region, "Comma-separated parts: torso, upper_arms, thighs, left_upper_arm, …")
       ->capture_default_str();
   cmd->add_option("--cache", opt->cache, "Cache folder for template meshes (default $SFLSH_CACHE or ~/.cache/sflsh)");

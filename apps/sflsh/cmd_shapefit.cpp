@@ -293,9 +293,7 @@ void register_shapefit_commands(CLI::App& app, const Invocation& invocation) {
       ->check(CLI::IsMember({"one-se", "one-standard-error", "min", "minimum"}))
       ->capture_default_str();
   add_mesh_option(*cmd, opt->mesh, true);  // the layer whose φ_i and areas define Q_i
-  cmd->add_option("--mesher", opt->mesher, "Layer mesher: cgal | gmsh | layered")
-      ->check(CLI::IsMember({"cgal", "gmsh", "layered"}))
-      ->capture_default_str();
+  add_mesher_option(*cmd, opt->mesher);
   cmd->add_option("--region", opt->region, "Comma-separated parts of the layer: torso, upper_arms, thighs, …")
       ->capture_default_str();
   cmd->add_option("--cache", opt->cache, "Cache folder for template meshes (default $SFLSH_CACHE or ~/.cache/sflsh)");

@@ -3,8 +3,7 @@
 namespace sflsh::app {
 
 void add_layer_options(CLI::App& cmd, LayerSettings& s) {
-  cmd.add_option("--mesher", s.mesher, "Layer mesher: layered | cgal | gmsh")
-      ->check(CLI::IsMember({"layered", "cgal", "gmsh"}));
+  add_mesher_option(cmd, s.mesher);
   cmd.add_option("--material", s.material, "Material file (TOML); default: the project defaults at --control-points");
   cmd.add_option("--control-points", s.control_points, "Control points N when no --material is given");
   cmd.add_option("--cache", s.cache,
@@ -20,10 +19,16 @@ void add_mass_option(CLI::App& cmd, LayerSettings& s) {
                  "node); docs/integrators.md");
 }
 
-void add_mesh_option(CLI::App& cmd, std::string& mesh, bool size_alias, std::string_view when_unset) {
+void add_mesher_option(CLI::App& cmd, std::string& mesher, std::string_view detail) {
+  std::string help = "Layer mesher: layered | cgal | gmsh";
+  if (!detail.empty()) help += " (" + std::string(detail) + ")";
+  cmd.add_option("--mesher", mesher, help)->check(CLI::IsMember({"layered", "cgal", "gmsh"}))->capture_default_str();
+}
+
+void add_mesh_option(CLI::App& cmd, std::string& mesh, bool size_alias, std::string_view detail) {
   std::string help = size_alias ? "Layer resolution: coarse | default | fine (--size: older spelling)"
                                 : "Layer resolution: coarse | default | fine";
-  if (!when_unset.empty()) help += " (" + std::string(when_unset) + ")";
+  if (!detail.empty()) help += " (" + std::string(detail) + ")";
   cmd.add_option(size_alias ? "--mesh,--size" : "--mesh", mesh, help)
       ->check(CLI::IsMember({"coarse", "default", "medium", "fine"}))  // medium: default's older name
       ->capture_default_str();

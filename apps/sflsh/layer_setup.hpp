@@ -36,10 +36,12 @@ using reduced::ReducedSettings;
 void add_layer_options(CLI::App& cmd, LayerSettings& settings);
 /// --mass lumped|consistent (the commands that choose the inertia; the others keep lumped).
 void add_mass_option(CLI::App& cmd, LayerSettings& settings);
-/// --mesh coarse|default|fine: one layer resolution (`size_alias`: also the older spelling --size). `when_unset`: for a
-/// command whose `mesh` stays empty when --mesh is not given, what it takes then (e.g. "preset: coarse"), shown in
-/// parentheses in the help.
-void add_mesh_option(CLI::App& cmd, std::string& mesh, bool size_alias = false, std::string_view when_unset = {});
+/// --mesher layered|cgal|gmsh: the layer's tet mesher; `detail`, when given, is added to the help in parentheses.
+void add_mesher_option(CLI::App& cmd, std::string& mesher, std::string_view detail = {});
+/// --mesh coarse|default|fine: one layer resolution (`size_alias`: also the older spelling --size). `detail`, when
+/// given, is added to the help in parentheses: e.g. what a command whose `mesh` stays empty when --mesh is not given
+/// takes then ("preset: coarse"), or the sizes' tet counts.
+void add_mesh_option(CLI::App& cmd, std::string& mesh, bool size_alias = false, std::string_view detail = {});
 /// --frames, --fps, --substeps of a body run: `frames` output frames (the rest state included; 0 the motion's length
 /// where a command allows it) at `fps`, each `substeps` solver steps.
 void add_frame_options(CLI::App& cmd, int& frames, double& fps, int& substeps);
