@@ -64,11 +64,7 @@ class Reader : public TomlReader {
     check_keys(root, {"version", "body", "subject", "betas", "poisson", "saturation", "bounds", "control_point"}, "");
     MaterialFile file;
     file.source = path().string();
-    if (const toml::node* version = root.get("version")) {
-      const auto value = version->value_exact<std::int64_t>();
-      require(value.has_value() && *value == kMaterialFileVersion,
-              "{}: 'version' must be the integer {} (this reader's format)", at(*version), kMaterialFileVersion);
-    }
+    if (const toml::node* version = root.get("version")) check_version(*version, kMaterialFileVersion);
     file.body = string_value(required(root, "body", ""), "body");
     file.subject = string_value(required(root, "subject", ""), "subject");
     if (const toml::node* betas = root.get("betas")) {

@@ -110,10 +110,7 @@ class Reader : public TomlReader {
     check_keys(root, {"version", "body", "poisson", "saturation", "bounds", "basis", "fit", "control_point"}, "");
     ShapeModelFile file;
     file.source = path().string();
-    const toml::node& version = required(root, "version", "");
-    const auto value = version.value_exact<std::int64_t>();
-    require(value.has_value() && *value == kShapeModelFileVersion,
-            "{}: 'version' must be the integer {} (this reader's format)", at(version), kShapeModelFileVersion);
+    check_version(required(root, "version", ""), kShapeModelFileVersion);
     file.body = string_value(required(root, "body", ""), "body");
     const toml::node& poisson = required(root, "poisson", "");
     file.poisson = number(poisson, "poisson", "");

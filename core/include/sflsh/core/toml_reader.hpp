@@ -75,6 +75,13 @@ class TomlReader {
     return value;
   }
 
+  /// A file's `version` node must be the integer `expected` (the reader's format).
+  void check_version(const toml::node& version, std::int64_t expected) const {
+    const auto value = version.value_exact<std::int64_t>();
+    require(value.has_value() && *value == expected, "{}: 'version' must be the integer {} (this reader's format)",
+            at(version), expected);
+  }
+
   /// Every key of `table` must be one of `allowed`.
   void check_keys(const toml::table& table, std::initializer_list<std::string_view> allowed,
                   std::string_view context) const {
