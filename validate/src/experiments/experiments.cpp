@@ -391,6 +391,17 @@ std::map<std::string, std::vector<double>> extend_lambda_grids(ValidateConfig& c
   return added;
 }
 
+/// The full optimizations on every train subject (SFLSH §6.3), one per regularizer at its chosen λ.
+std::vector<FitChain> full_fit_chains(const FitSpecs& specs, const std::map<std::string, double>& best_lambda) {
+  const ValidateConfig& config = specs.config;
+  std::vector<FitChain> chains;
+  for (const auto& [reg, tag] : kRegularizers)
+    chains.push_back(
+        {{"full/" + tag, specs.spec("full_" + tag, FitKind::shape, reg, best_lambda.at(tag), config.train_subjects),
+          specs.targets(config.train_subjects, config.train_motions), false}});
+  return chains;
+}
+
 Report make_report(const ValidateConfig& config, const Setup& setup,
                    const std::map<std::string, GroundTruthCase>& truth,
                    const reduced::LayerParameterization& parameterization, const model::BodyLayer& layer) {
@@ -481,10 +492,9 @@ nlohmann::json run_validation(const ValidateConfig& requested, const std::filesy
   // The fits run as chains (fit_chains.hpp), shared among fit groups of MPI ranks with --fit-groups.
   const FitRunner runner(context, config.fit_groups, config.threads);
   // Independent fits: the optimal targets (SFLSH §3).
-  std::vector<FitChain> chains = independent_and_leave_one_out_chains(specs);
   std::map<std::string, double> best_lambda;
   for (const auto& [reg, tag] : kRegularizers) best_lambda[tag] = config.lambdas_for(tag).front();
-  runner.run("independent and leave-one-out fits", chains, report.fits);
+  runner.run("independent and leave-one-out fits", independent_and_leave_one_out_chains(specs), report.fits);
   // Evaluate everything fitted so far, then pick λ per regularizer from the cross-validation errors.
   const auto evaluate = [&] { report.evaluate(pool, reduced_model, context.reduced, cases); };
   evaluate();
@@ -494,12 +504,7 @@ nlohmann::json run_validation(const ValidateConfig& requested, const std::filesy
     choose_lambdas(report, best_lambda);
   }
   // Full optimizations on every train subject (SFLSH §6.3) and their generalization (§6.4).
-  chains.clear();
-  for (const auto& [reg, tag] : kRegularizers)
-    chains.push_back(
-        {{"full/" + tag, specs.spec("full_" + tag, FitKind::shape, reg, best_lambda.at(tag), config.train_subjects),
-          specs.targets(config.train_subjects, config.train_motions), false}});
-  runner.run("full fits", chains, report.fits);
+  runner.run("full fits", full_fit_chains(specs, best_lambda), report.fits);
   evaluate();
   report.best = best_lambda;
 

@@ -7,6 +7,9 @@
 #include <sflsh/validate/experiments.hpp>
 #include <sflsh/validate/ground_truth.hpp>
 
+#include <fmt/format.h>
+
+#include <cmath>
 #include <functional>
 #include <map>
 #include <memory>
@@ -14,6 +17,9 @@
 #include <tuple>
 
 namespace sflsh::validate {
+
+/// A table cell of the report's CSV and Markdown: the value with 3 decimals, empty when not finite.
+inline std::string cell(double v) { return std::isfinite(v) ? fmt::format("{:.3f}", v) : ""; }
 
 struct Evaluation {
   Eigen::VectorXd sigma;    ///< per region vertex [mm]
