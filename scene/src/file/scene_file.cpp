@@ -68,25 +68,20 @@ Scene SceneReader::read() const {
   if (const toml::node* node = root.get("effects")) read_effects(*node, scene.effects);
   if (const toml::node* node = root.get("contact")) read_contact(*node, scene.contact);
   if (const toml::node* node = root.get("output")) read_output(*node, scene.output);
+  // Bodies and objects share one name space.
   std::set<std::string> names;
-  if (const toml::node* node = root.get("body")) {
+  const auto read_named = [&](const char* key, auto reader, auto& out) {
+    const toml::node* node = root.get(key);
+    if (!node) return;
     const toml::array* list = node->as_array();
-    require(list != nullptr, "{}: 'body' must be an array of tables ([[body]])", at(*node));
+    require(list != nullptr, "{}: '{}' must be an array of tables ([[{}]])", at(*node), key, key);
     for (std::size_t i = 0; i < list->size(); ++i) {
-      scene.bodies.push_back(read_body((*list)[i], i));
-      require(names.insert(scene.bodies.back().name).second, "{}: the name '{}' is used twice", at((*list)[i]),
-              scene.bodies.back().name);
+      out.push_back((this->*reader)((*list)[i], i));
+      require(names.insert(out.back().name).second, "{}: the name '{}' is used twice", at((*list)[i]), out.back().name);
     }
-  }
-  if (const toml::node* node = root.get("object")) {
-    const toml::array* list = node->as_array();
-    require(list != nullptr, "{}: 'object' must be an array of tables ([[object]])", at(*node));
-    for (std::size_t i = 0; i < list->size(); ++i) {
-      scene.objects.push_back(read_object((*list)[i], i));
-      require(names.insert(scene.objects.back().name).second, "{}: the name '{}' is used twice", at((*list)[i]),
-              scene.objects.back().name);
-    }
-  }
+  };
+  read_named("body", &SceneReader::read_body, scene.bodies);
+  read_named("object", &SceneReader::read_object, scene.objects);
   if (const toml::node* node = root.get("crowd")) scene.crowd = read_crowd(*node);
   check_scene(root, scene);
   return scene;
